@@ -1,0 +1,250 @@
+#include "models/hw_config.hpp"
+
+namespace tbdr {
+
+// Declares a parameter whose key is the HwConfig member path, so key and member cannot drift apart.
+#define TBDR_PARAM(path) #path, [](HwConfig& c) -> auto& { return c.path; }
+
+namespace {
+
+constexpr double kKiB = 1024.0;
+constexpr double kMiB = 1024.0 * 1024.0;
+
+ParamRegistry<HwConfig> make_registry() {
+  ParamRegistry<HwConfig> r;
+  // The defaults describe one complete GPU: a PowerVR Series6XT-class part (GX6450-like: 4 USCs,
+  // 32x32 tiles, 128 bits per pixel on chip) with LPDDR3-1600. configs/ holds the other presets.
+  const std::string mesa = "Mesa src/imagination/common/device_info (GX6250/GX6650 tables)";
+  const std::string design = "DESIGN.md hardware model";
+
+  r.section("gpu", "Whole-GPU identity, core clock and rendering mode");
+  r.add(TBDR_PARAM(gpu.name), std::string("Series6XT-class (GX6450-like), LPDDR3-1600"))
+      .doc("Label stored with every run").source("preset label");
+  r.add(TBDR_PARAM(gpu.core_clock_mhz), 600.0).unit("MHz").range(50, 3000)
+      .doc("Core clock of geometry, tiler, ISP, USC, texture and writeback units")
+      .source("Series6XT parts ship at 450-850 MHz (" + design + ")");
+  r.add(TBDR_PARAM(gpu.mode), std::string("tbdr")).choices({"tbdr", "tbr", "imr"})
+      .doc("tbdr: binning + tag-buffer HSR; tbr: binning, early-Z only (Mali-like); imr: no binning, "
+           "framebuffer in DRAM behind caches")
+      .source(design);
+
+  r.section("geometry", "Vertex fetch, vertex shading, clip/cull and viewport transform");
+  r.add(TBDR_PARAM(geometry.primitives_per_clock), 1.0).unit("primitives/clock").range(0.01, 64)
+      .doc("Clip, cull and setup throughput").source("no public figure; one triangle per clock is typical");
+  r.add(TBDR_PARAM(geometry.vertex_fetch_bytes_per_clock), 32.0).unit("bytes/clock").range(1, 4096)
+      .doc("Vertex attribute fetch bandwidth into the vertex pipeline").source("no public figure");
+  r.add(TBDR_PARAM(geometry.vertex_cache_entries), 32).unit("vertices").range(0, 4096)
+      .doc("Post-transform vertex cache (FIFO) entries; indexed re-use within it is not re-shaded")
+      .source("no public figure; 32 is common in the literature");
+  r.add(TBDR_PARAM(geometry.vertex_shader_alu_ops), 24).unit("ops/vertex").range(0, 100000)
+      .doc("Vertex shader ALU ops per shaded vertex (transform, normal, varyings)")
+      .source("a 4x4 transform (16 FMA) plus normal transform and outputs");
+  r.add(TBDR_PARAM(geometry.subpixel_bits), 8).unit("bits").range(0, 12)
+      .doc("Fractional bits of fixed-point screen coordinates").source("PowerVR uses 8 (" + design + ")");
+
+  r.section("tiling", "Binning of primitives into tiles and the parameter buffer in DRAM");
+  r.add(TBDR_PARAM(tiling.tile_width), 32).unit("pixels").range(4, 256)
+      .doc("Tile width").source(mesa + ": tile_size_x = 32 on Series6XT");
+  r.add(TBDR_PARAM(tiling.tile_height), 32).unit("pixels").range(4, 256)
+      .doc("Tile height").source(mesa + ": tile_size_y = 32 on Series6XT");
+  r.add(TBDR_PARAM(tiling.binning), std::string("exact")).choices({"exact", "bbox"})
+      .doc("Tile/triangle overlap test: exact edge test or bounding box only").source("design choice");
+  r.add(TBDR_PARAM(tiling.tile_order), std::string("morton")).choices({"row_major", "morton"})
+      .doc("Order in which tiles are dispatched to the ISP").source("design choice");
+  r.add(TBDR_PARAM(tiling.primitives_per_clock), 1.0).unit("primitives/clock").range(0.01, 64)
+      .doc("Tiling engine throughput").source("no public figure");
+  r.add(TBDR_PARAM(tiling.pb_capacity_bytes), static_cast<std::int64_t>(32 * kMiB)).unit("bytes")
+      .range(64 * kKiB, 4096 * kMiB)
+      .doc("Parameter buffer capacity; when binning exceeds it a partial render flushes")
+      .source("driver-sized free list; no fixed public figure");
+  r.add(TBDR_PARAM(tiling.pb_page_bytes), 4096).unit("bytes").range(256, 1 << 20)
+      .doc("Parameter buffer allocation granule").source("4 KB pages (" + design + ")");
+  r.add(TBDR_PARAM(tiling.region_header_bytes), 6).unit("bytes").range(0, 64)
+      .doc("Region header per tile").source("about 5-6 B per tile (" + design + ")");
+  r.add(TBDR_PARAM(tiling.control_stream_block_bytes), 128).unit("bytes").range(16, 4096)
+      .doc("Control stream allocation block").source("128 B blocks (" + design + ")");
+  r.add(TBDR_PARAM(tiling.control_stream_entry_bytes), 8).unit("bytes").range(1, 64)
+      .doc("Control stream entry: primitive block pointer plus primitive mask").source("no public figure");
+  r.add(TBDR_PARAM(tiling.prim_block_max_vertices), 64).unit("vertices").range(3, 1024)
+      .doc("Vertices per primitive block").source("at most 64 (" + design + ")");
+  r.add(TBDR_PARAM(tiling.prim_block_max_primitives), 128).unit("primitives").range(1, 4096)
+      .doc("Primitives per primitive block").source("no public figure");
+  r.add(TBDR_PARAM(tiling.prim_block_header_bytes), 16).unit("bytes").range(0, 256)
+      .doc("Primitive block header (state word, counts, base address)").source("no public figure");
+  r.add(TBDR_PARAM(tiling.pb_vertex_position_bytes), 10).unit("bytes").range(1, 64)
+      .doc("Screen-space position (x, y fixed point, z, 1/w) per vertex before compression")
+      .source("about 10 B per vertex uncompressed (" + design + ")");
+  r.add(TBDR_PARAM(tiling.pb_varying_bytes), 4).unit("bytes/varying").range(0, 16)
+      .doc("Bytes per scalar varying written with each vertex").source("FP32 varyings");
+  r.add(TBDR_PARAM(tiling.pb_compression_ratio), 1.0).range(0.05, 1.0)
+      .doc("Compressed / uncompressed size of primitive block vertex data").source("no public figure; 1 = off");
+  r.add(TBDR_PARAM(tiling.prim_index_bytes), 3).unit("bytes/primitive").range(0, 16)
+      .doc("Per-primitive index data inside a block (3 x 6-bit indices + flags)")
+      .source("64-vertex blocks need 6-bit indices");
+  r.add(TBDR_PARAM(tiling.macrotiles), 16).unit("macrotiles").range(1, 256)
+      .doc("Macrotiles a render is divided into (partial renders free memory per macrotile)")
+      .source("16 macrotiles per render (" + design + ")");
+
+  r.section("isp", "Image synthesis processor: rasterisation, depth/stencil, tag-buffer HSR");
+  r.add(TBDR_PARAM(isp.tiles_in_flight), 4).unit("tiles").range(1, 64)
+      .doc("Tiles the ISP processes concurrently").source(mesa + ": isp_max_tiles_in_flight = 4 (GX6250), 8 (GX6650)");
+  r.add(TBDR_PARAM(isp.raster_pipes), 1).unit("pipes").range(1, 16)
+      .doc("Raster pipes").source(mesa + ": num_raster_pipes = 1 (GX6250)");
+  r.add(TBDR_PARAM(isp.samples_per_clock), 32).unit("samples/clock").range(1, 1024)
+      .doc("Depth/stencil tested samples per clock per raster pipe")
+      .source("no public figure; 16-32 is a reasonable start (" + design + ")");
+  r.add(TBDR_PARAM(isp.tag_buffers), 2).unit("buffers").range(1, 16)
+      .doc("Tag buffers per tile (layered flushing for punch-through / translucent)")
+      .source("PowerVR patents US8446409, US10210596");
+  r.add(TBDR_PARAM(isp.tag_bits), 32).unit("bits").range(8, 64)
+      .doc("Bits per tag (triangle id) per sample").source("no public figure");
+  r.add(TBDR_PARAM(isp.depth_stencil_bytes_per_sample), 4).unit("bytes").range(2, 8)
+      .doc("On-chip depth/stencil per sample (D24S8); stored to DRAM only on partial renders")
+      .source("D24S8");
+
+  r.section("usc", "Unified shading clusters: fragment, vertex and compute shading");
+  r.add(TBDR_PARAM(usc.count), 4).unit("USCs").range(1, 64)
+      .doc("Shader clusters").source("Series6XT: GX6240 2, GX6450 4, GX6650 6 (" + design + ")");
+  r.add(TBDR_PARAM(usc.lanes), 16).unit("lanes").range(1, 128)
+      .doc("SIMD lanes per USC").source("16 lanes (" + design + ")");
+  r.add(TBDR_PARAM(usc.alu_ops_per_lane_per_clock), 2.0).unit("ops/lane/clock").range(0.25, 16)
+      .doc("FP32 ALU ops per lane per clock").source("up to 2 FP32 ops per lane per clock (" + design + ")");
+  r.add(TBDR_PARAM(usc.tasks_in_flight), 56).unit("tasks").range(1, 4096)
+      .doc("Tasks (32-wide thread groups) resident across the USCs").source(mesa + ": max_usc_tasks = 56");
+  r.add(TBDR_PARAM(usc.task_queue_entries), 32).unit("tasks").range(1, 4096)
+      .doc("Queue between the ISP/TSP and the USCs; full queue stalls the ISP").source(mesa + ": usc_slots = 32");
+
+  r.section("texture", "Texture processing units");
+  r.add(TBDR_PARAM(texture.units), 2).unit("TPUs").range(1, 64)
+      .doc("Texture units (two USCs share one)").source("two USCs share a texture unit (" + design + ")");
+  r.add(TBDR_PARAM(texture.texels_per_clock), 4.0).unit("texels/clock").range(0.25, 256)
+      .doc("Filtered texels per clock per texture unit").source("4 bilinear texels per clock (" + design + ")");
+  r.add(TBDR_PARAM(texture.texels_per_fetch), 4).unit("texels").range(1, 64)
+      .doc("Texels read per texture fetch (4 = bilinear)").source("bilinear filtering");
+  r.add(TBDR_PARAM(texture.bytes_per_texel), 4).unit("bytes").range(1, 16)
+      .doc("Bytes per texel in memory (RGBA8 uncompressed)").source("RGBA8");
+
+  r.section("pls", "On-chip tile memory and pixel local storage");
+  r.add(TBDR_PARAM(pls.tile_buffer_bits_per_pixel), 128).unit("bits/pixel").range(32, 2048)
+      .doc("On-chip color/PLS storage per pixel (depth kept separately)")
+      .source("128 bits on low-end, 256 on high-end parts (" + design + ")");
+  r.add(TBDR_PARAM(pls.max_pls_bytes_per_pixel), 16).unit("bytes/pixel").range(16, 256)
+      .doc("Largest pixel local storage a shader may declare")
+      .source("EXT_shader_pixel_local_storage guarantees at least 16 bytes");
+  r.add(TBDR_PARAM(pls.over_budget), std::string("smaller_tiles")).choices({"smaller_tiles", "spill"})
+      .doc("When a pass needs more bytes per pixel than the tile buffer holds: render smaller "
+           "effective tiles (more tiles, more per-tile overhead) or spill the excess to DRAM")
+      .source("design choice; see docs/hardware-model.md");
+
+  r.section("writeback", "Pixel back end: stores tiles that must leave the chip");
+  r.add(TBDR_PARAM(writeback.compression_ratio), 1.0).range(0.05, 1.0)
+      .doc("Compressed / uncompressed bytes of stored attachments (PVRIC/AFBC); 1 = off")
+      .source("lossless framebuffer compression saves up to 50 % (" + design + ")");
+  r.add(TBDR_PARAM(writeback.bytes_per_clock), 32.0).unit("bytes/clock").range(1, 4096)
+      .doc("Pixel back end write throughput").source("no public figure");
+
+  r.section("cache", "Caches of the memory hierarchy");
+  r.section("cache.texture", "Texture cache (per GPU, shared by the texture units)");
+  r.add(TBDR_PARAM(cache.texture.size_bytes), static_cast<std::int64_t>(16 * kKiB)).unit("bytes").range(1024, 64 * kMiB)
+      .doc("Capacity").source("no public figure");
+  r.add(TBDR_PARAM(cache.texture.ways), 4).unit("ways").range(1, 64).doc("Associativity").source("no public figure");
+  r.add(TBDR_PARAM(cache.texture.line_bytes), 64).unit("bytes").range(16, 1024)
+      .doc("Line size").source(mesa + ": slc_cache_line_size_bits = 512");
+  r.add(TBDR_PARAM(cache.texture.hit_latency_cycles), 4).unit("cycles").range(1, 1000)
+      .doc("Hit latency").source("no public figure");
+  r.section("cache.vertex", "Vertex and parameter buffer cache (geometry fetch, ISP primitive fetch)");
+  r.add(TBDR_PARAM(cache.vertex.size_bytes), static_cast<std::int64_t>(16 * kKiB)).unit("bytes").range(1024, 64 * kMiB)
+      .doc("Capacity").source("no public figure");
+  r.add(TBDR_PARAM(cache.vertex.ways), 4).unit("ways").range(1, 64).doc("Associativity").source("no public figure");
+  r.add(TBDR_PARAM(cache.vertex.line_bytes), 64).unit("bytes").range(16, 1024)
+      .doc("Line size").source(mesa + ": slc_cache_line_size_bits = 512");
+  r.add(TBDR_PARAM(cache.vertex.hit_latency_cycles), 4).unit("cycles").range(1, 1000)
+      .doc("Hit latency").source("no public figure");
+  r.section("cache.slc", "System level cache in front of DRAM");
+  r.add(TBDR_PARAM(cache.slc.size_bytes), static_cast<std::int64_t>(128 * kKiB)).unit("bytes").range(1024, 256 * kMiB)
+      .doc("Capacity").source("no public figure for Series6XT");
+  r.add(TBDR_PARAM(cache.slc.ways), 8).unit("ways").range(1, 64).doc("Associativity").source("no public figure");
+  r.add(TBDR_PARAM(cache.slc.line_bytes), 64).unit("bytes").range(16, 1024)
+      .doc("Line size").source(mesa + ": slc_cache_line_size_bits = 512");
+  r.add(TBDR_PARAM(cache.slc.hit_latency_cycles), 20).unit("cycles").range(1, 1000)
+      .doc("Hit latency").source("no public figure");
+
+  r.section("dram", "External memory: channels, banks, row buffers, timing, queues");
+  r.add(TBDR_PARAM(dram.name), std::string("LPDDR3-1600 2x32")).doc("Label").source("preset label");
+  r.add(TBDR_PARAM(dram.channels), 2).unit("channels").range(1, 32)
+      .doc("Independent channels").source("two 32-bit LPDDR3 channels give 12.8 GB/s");
+  r.add(TBDR_PARAM(dram.banks), 8).unit("banks").range(1, 64)
+      .doc("Banks per channel").source("LPDDR3: 8 banks (JESD209-3)");
+  r.add(TBDR_PARAM(dram.row_bytes), 4096).unit("bytes").range(256, 65536)
+      .doc("Row (page) size per bank").source("LPDDR3 x32 page size 4 KB (JESD209-3)");
+  r.add(TBDR_PARAM(dram.burst_bytes), 32).unit("bytes").range(8, 1024)
+      .doc("Bytes per burst (BL8 on a 32-bit channel)").source("LPDDR3 BL8 x32");
+  r.add(TBDR_PARAM(dram.bandwidth_gbps), 12.8).unit("GB/s").range(0.1, 4096)
+      .doc("Peak bandwidth of all channels together").source("LPDDR3 about 12.8 GB/s (" + design + ")");
+  r.add(TBDR_PARAM(dram.clock_mhz), 800.0).unit("MHz").range(50, 8000)
+      .doc("DRAM command clock").source("LPDDR3-1600: 800 MHz");
+  r.add(TBDR_PARAM(dram.t_rcd_ns), 18.0).unit("ns").range(0, 1000)
+      .doc("Activate to read/write").source("LPDDR3 tRCD 18 ns");
+  r.add(TBDR_PARAM(dram.t_rp_ns), 18.0).unit("ns").range(0, 1000)
+      .doc("Precharge").source("LPDDR3 tRPpb 18 ns");
+  r.add(TBDR_PARAM(dram.t_cl_ns), 15.0).unit("ns").range(0, 1000)
+      .doc("Read latency (RL)").source("LPDDR3-1600 RL=12 at 800 MHz");
+  r.add(TBDR_PARAM(dram.controller_latency_ns), 30.0).unit("ns").range(0, 10000)
+      .doc("Memory controller and interconnect latency each way").source("no public figure");
+  r.add(TBDR_PARAM(dram.read_queue_entries), 32).unit("requests").range(1, 4096)
+      .doc("Read queue per channel").source("no public figure");
+  r.add(TBDR_PARAM(dram.write_queue_entries), 32).unit("requests").range(1, 4096)
+      .doc("Write queue per channel").source("no public figure");
+  r.add(TBDR_PARAM(dram.address_mapping), std::string("row_bank_channel_column"))
+      .choices({"row_bank_channel_column", "row_channel_bank_column"})
+      .doc("Physical address bit order, most significant first").source("design choice");
+
+  r.section("energy", "Energy per access and static power");
+  r.add(TBDR_PARAM(energy.dram_read_pj_per_bit), 5.1).unit("pJ/bit").range(0, 1000)
+      .doc("DRAM read energy per bit (core)").source("DRAMPower LPDDR3-1600 memspec (" + design + ")");
+  r.add(TBDR_PARAM(energy.dram_write_pj_per_bit), 5.9).unit("pJ/bit").range(0, 1000)
+      .doc("DRAM write energy per bit (core)").source("DRAMPower LPDDR3-1600 memspec (" + design + ")");
+  r.add(TBDR_PARAM(energy.dram_io_pj_per_bit), 0.0).unit("pJ/bit").range(0, 1000)
+      .doc("DRAM I/O energy per bit transferred").source("not in the LPDDR3 core figure; LPDDR4 about 3.2");
+  r.add(TBDR_PARAM(energy.dram_activate_precharge_nj), 4.3).unit("nJ").range(0, 1000)
+      .doc("Energy of one activate + precharge pair").source("DRAMPower LPDDR3-1600 memspec (" + design + ")");
+  r.add(TBDR_PARAM(energy.tile_buffer_pj_per_byte), 1.25).unit("pJ/byte").range(0, 1000)
+      .doc("On-chip tile buffer access").source("Horowitz ISSCC 2014: 8 KB SRAM 1.25 pJ/B");
+  r.add(TBDR_PARAM(energy.tag_buffer_pj_per_byte), 1.25).unit("pJ/byte").range(0, 1000)
+      .doc("Tag buffer and on-chip depth access").source("Horowitz ISSCC 2014: 8 KB SRAM 1.25 pJ/B");
+  r.add(TBDR_PARAM(energy.texture_cache_pj_per_byte), 2.5).unit("pJ/byte").range(0, 1000)
+      .doc("Texture cache access").source("Horowitz ISSCC 2014: 32 KB SRAM 2.5 pJ/B");
+  r.add(TBDR_PARAM(energy.vertex_cache_pj_per_byte), 2.5).unit("pJ/byte").range(0, 1000)
+      .doc("Vertex / parameter buffer cache access").source("Horowitz ISSCC 2014: 32 KB SRAM 2.5 pJ/B");
+  r.add(TBDR_PARAM(energy.slc_pj_per_byte), 12.5).unit("pJ/byte").range(0, 1000)
+      .doc("System level cache access").source("Horowitz ISSCC 2014: 1 MB SRAM 12.5 pJ/B");
+  r.add(TBDR_PARAM(energy.alu_op_pj), 2.0).unit("pJ/op").range(0, 1000)
+      .doc("One FP32 ALU op including operand delivery")
+      .source("Horowitz ISSCC 2014 (45 nm): FP32 add 0.9 pJ, mult 3.7 pJ");
+  r.add(TBDR_PARAM(energy.texel_pj), 8.0).unit("pJ/texel").range(0, 1000)
+      .doc("Filtering one texel (address, weights, blend)").source("no public figure; about 4 FP32 ops");
+  r.add(TBDR_PARAM(energy.static_power_mw), 100.0).unit("mW").range(0, 100000)
+      .doc("Leakage and clock tree of the whole GPU while a frame runs").source("no public figure");
+  return r;
+}
+
+}  // namespace
+
+#undef TBDR_PARAM
+
+const ParamRegistry<HwConfig>& hw_params() {
+  static const ParamRegistry<HwConfig> registry = make_registry();
+  return registry;
+}
+
+ResolvedConfig resolve_config(const std::vector<std::string>& config_files,
+                              const std::vector<std::string>& overrides) {
+  const auto& reg = hw_params();
+  ResolvedConfig rc;
+  rc.params = reg.table().resolve(config_files, overrides);
+  rc.hw = reg.build(rc.params);
+  rc.hash = reg.table().hash(rc.params);
+  return rc;
+}
+
+}  // namespace tbdr

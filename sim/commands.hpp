@@ -1,0 +1,27 @@
+#pragma once
+// The sub-command entry points and the option helpers they share (see CliCommand in sim/cli.hpp).
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include <boost/program_options/options_description.hpp>
+#include <boost/program_options/variables_map.hpp>
+
+#include "models/hw_config.hpp"
+
+namespace tbdr {
+
+int cmd_params(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
+/// Adds the hardware configuration options every simulating command takes: --config, --set.
+void add_config_options(boost::program_options::options_description& desc);
+/// Resolves the configuration from those options (InputError on any bad input).
+ResolvedConfig config_from_options(const boost::program_options::variables_map& vm);
+/// Parses `args` against `desc` (unknown options and stray positionals are UsageErrors); returns
+/// false when --help was given (help already printed to `out`).
+bool parse_command_options(const std::string& command, const std::vector<std::string>& args,
+                           const boost::program_options::options_description& desc,
+                           const boost::program_options::positional_options_description* positional,
+                           boost::program_options::variables_map& vm, std::ostream& out);
+
+}  // namespace tbdr

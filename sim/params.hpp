@@ -1,0 +1,145 @@
+#pragma once
+// Parameters: every hardware parameter is declared exactly once (key, type, default, unit, range or
+// choices, doc, source) in a ParamRegistry bound to the plain struct the units read on their hot
+// paths. Resolution layers the declared defaults, config files (INI, read by
+// Boost.Program_options) and --set overrides, and remembers where each value came from.
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace tbdr {
+
+/// The value of one parameter: integer, real, boolean, or text (free text or one of a choice list).
+using ParamValue = std::variant<std::int64_t, double, bool, std::string>;
+
+/// The kind of value a parameter holds.
+enum class ParamType : std::uint8_t { Int, Real, Bool, Text, Choice };
+const char* to_string(ParamType t);
+
+/// Canonical text of a value (shortest round-trip for reals, "true"/"false" for booleans).
+std::string format_param_value(const ParamValue& v);
+
+/// One declared parameter: everything `tbdrsim params` prints and everything validation needs.
+struct ParamDecl {
+  std::string key;            ///< "section.name", e.g. "isp.samples_per_clock"
+  ParamType type = ParamType::Int;
+  ParamValue default_value;
+  std::string unit;           ///< "MHz", "bytes", "pJ/bit", "" for dimensionless
+  std::string doc;            ///< one line
+  std::string source;         ///< where the default comes from (document, vendor table), or why
+  double min = -std::numeric_limits<double>::infinity();  ///< inclusive, Int/Real only
+  double max = std::numeric_limits<double>::infinity();   ///< inclusive, Int/Real only
+  std::vector<std::string> choices;                       ///< Choice only
+
+  std::string section() const;     ///< key up to the last '.'
+  std::string range_text() const;  ///< "[1, 1024]", "one of a|b|c", "true|false", "any text"
+  /// Parses and validates text for this parameter; on failure returns false and sets `why`
+  /// to what was expected.
+  bool parse(const std::string& text, ParamValue& out, std::string& why) const;
+};
+
+/// Where a resolved value came from: the declaration, a config file line, or a --set argument.
+struct ParamOrigin {
+  std::string text = "default";  ///< "default", "configs/x.ini:12", "--set isp.tag_buffers=4"
+};
+
+/// A fully resolved parameter set: one value and one origin per declaration, in declaration order.
+struct ResolvedParams {
+  std::vector<ParamValue> values;
+  std::vector<ParamOrigin> origins;
+  std::string config_name = "default";  ///< stem of the last config file, or "default"
+};
+
+/// The list of declarations, independent of the struct they bind to.
+class ParamTable {
+ public:
+  /// Fluent setter returned by ParamTable::declare for the optional attributes.
+  class Builder {
+   public:
+    explicit Builder(ParamDecl& d) : d_(d) {}
+    Builder& unit(std::string u) { d_.unit = std::move(u); return *this; }
+    Builder& doc(std::string s) { d_.doc = std::move(s); return *this; }
+    Builder& source(std::string s) { d_.source = std::move(s); return *this; }
+    Builder& range(double lo, double hi) { d_.min = lo; d_.max = hi; return *this; }
+    Builder& choices(std::vector<std::string> c) { d_.type = ParamType::Choice; d_.choices = std::move(c); return *this; }
+
+   private:
+    ParamDecl& d_;
+  };
+
+  /// Declares a parameter; throws std::logic_error on a duplicate key or a default outside its range.
+  Builder declare(std::string key, ParamType type, ParamValue default_value);
+  /// Declares a section so its name is known (and documented) even before it has keys.
+  void section(std::string name, std::string doc);
+
+  const std::vector<ParamDecl>& decls() const { return decls_; }
+  const std::vector<std::pair<std::string, std::string>>& sections() const { return sections_; }
+  /// Index of a key, or -1.
+  int find(const std::string& key) const;
+  bool has_section(const std::string& name) const;
+
+  /// The defaults, every origin "default".
+  ResolvedParams defaults() const;
+  /// Applies one INI file (Boost.Program_options parser) on top of `p`. Unknown section or key,
+  /// malformed line, duplicate key, bad value: InputError naming file:line, key, value, expectation.
+  void apply_config_file(ResolvedParams& p, const std::string& path) const;
+  /// Applies one "section.key=value" override. Errors name the --set argument.
+  void apply_override(ResolvedParams& p, const std::string& assignment) const;
+  /// Defaults, then every file in order, then every override in order.
+  ResolvedParams resolve(const std::vector<std::string>& config_files,
+                         const std::vector<std::string>& overrides) const;
+  /// Hash of the canonical "key=value" lines of every parameter (the run's config hash).
+  std::string hash(const ResolvedParams& p) const;
+
+ private:
+  void check_default(const ParamDecl& d) const;
+  std::vector<ParamDecl> decls_;
+  std::vector<std::pair<std::string, std::string>> sections_;
+};
+
+/// A ParamTable bound to a plain struct `Config`: each declaration also knows how to write its
+/// value into the struct member it configures, so units read members, never strings.
+template <class Config>
+class ParamRegistry {
+ public:
+  /// A member accessor, e.g. [](Config& c) -> auto& { return c.isp.samples_per_clock; }.
+  template <class T>
+  using Accessor = T& (*)(Config&);
+
+  ParamTable::Builder add(std::string key, std::int64_t& (*acc)(Config&), std::int64_t def) {
+    binders_.push_back([acc](Config& c, const ParamValue& v) { acc(c) = std::get<std::int64_t>(v); });
+    return table_.declare(std::move(key), ParamType::Int, def);
+  }
+  ParamTable::Builder add(std::string key, double& (*acc)(Config&), double def) {
+    binders_.push_back([acc](Config& c, const ParamValue& v) { acc(c) = std::get<double>(v); });
+    return table_.declare(std::move(key), ParamType::Real, def);
+  }
+  ParamTable::Builder add(std::string key, bool& (*acc)(Config&), bool def) {
+    binders_.push_back([acc](Config& c, const ParamValue& v) { acc(c) = std::get<bool>(v); });
+    return table_.declare(std::move(key), ParamType::Bool, def);
+  }
+  /// Text parameters; call .choices({...}) on the result to restrict them.
+  ParamTable::Builder add(std::string key, std::string& (*acc)(Config&), std::string def) {
+    binders_.push_back([acc](Config& c, const ParamValue& v) { acc(c) = std::get<std::string>(v); });
+    return table_.declare(std::move(key), ParamType::Text, std::move(def));
+  }
+  void section(std::string name, std::string doc) { table_.section(std::move(name), std::move(doc)); }
+
+  const ParamTable& table() const { return table_; }
+  /// Writes every resolved value into a fresh Config.
+  Config build(const ResolvedParams& p) const {
+    Config c{};
+    for (std::size_t i = 0; i < binders_.size(); ++i) binders_[i](c, p.values[i]);
+    return c;
+  }
+
+ private:
+  ParamTable table_;
+  std::vector<std::function<void(Config&, const ParamValue&)>> binders_;
+};
+
+}  // namespace tbdr

@@ -1,0 +1,123 @@
+// Parameters: declarations, INI files through Boost.Program_options, --set overrides, errors.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "models/hw_config.hpp"
+#include "sim/errors.hpp"
+
+namespace tbdr {
+namespace {
+
+std::string write_temp(const std::string& name, const std::string& text) {
+  const auto dir = std::filesystem::temp_directory_path() / "tbdrsim_test_params";
+  std::filesystem::create_directories(dir);
+  const auto path = (dir / name).string();
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string error_of(const std::vector<std::string>& files, const std::vector<std::string>& sets) {
+  try {
+    resolve_config(files, sets);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Params, EveryDeclarationIsCompleteAndItsDefaultValid) {
+  const auto& table = hw_params().table();
+  ASSERT_GE(table.decls().size(), 60u);
+  for (const auto& d : table.decls()) {
+    EXPECT_FALSE(d.doc.empty()) << d.key;
+    EXPECT_FALSE(d.source.empty()) << d.key;
+    EXPECT_NE(d.key.find('.'), std::string::npos) << d.key;
+    EXPECT_TRUE(table.has_section(d.section())) << d.key;
+  }
+  // defaults() validates every default against its own range.
+  EXPECT_NO_THROW(table.defaults());
+}
+
+TEST(Params, DefaultsDescribeTheSeries6xtPreset) {
+  const ResolvedConfig rc = resolve_config({}, {});
+  EXPECT_EQ(rc.hw.tiling.tile_width, 32);
+  EXPECT_EQ(rc.hw.tiling.tile_height, 32);
+  EXPECT_EQ(rc.hw.usc.count, 4);
+  EXPECT_EQ(rc.hw.pls.tile_buffer_bits_per_pixel, 128);
+  EXPECT_DOUBLE_EQ(rc.hw.energy.dram_read_pj_per_bit, 5.1);
+  EXPECT_EQ(rc.hw.gpu.mode, "tbdr");
+  EXPECT_EQ(rc.params.config_name, "default");
+  for (const auto& o : rc.params.origins) EXPECT_EQ(o.text, "default");
+}
+
+TEST(Params, FileThenSetLayeringAndOrigins) {
+  const auto a = write_temp("a.ini", "# preset A\n[tiling]\ntile_width = 16\ntile_height=16\n\n[usc]\ncount = 6 # GX6650\n");
+  const auto b = write_temp("b.ini", "[usc]\ncount = 2\n[gpu]\nmode = tbr\n");
+  const ResolvedConfig rc = resolve_config({a, b}, {"usc.count=8", "dram.bandwidth_gbps=34"});
+  EXPECT_EQ(rc.hw.tiling.tile_width, 16);
+  EXPECT_EQ(rc.hw.usc.count, 8);
+  EXPECT_EQ(rc.hw.gpu.mode, "tbr");
+  EXPECT_DOUBLE_EQ(rc.hw.dram.bandwidth_gbps, 34.0);
+  const auto& t = hw_params().table();
+  EXPECT_EQ(rc.params.origins[static_cast<std::size_t>(t.find("tiling.tile_width"))].text, a + ":3");
+  EXPECT_EQ(rc.params.origins[static_cast<std::size_t>(t.find("gpu.mode"))].text, b + ":4");
+  EXPECT_EQ(rc.params.origins[static_cast<std::size_t>(t.find("usc.count"))].text, "--set usc.count=8");
+  EXPECT_EQ(rc.params.config_name, "b");
+  EXPECT_NE(rc.hash, resolve_config({}, {}).hash);
+  EXPECT_EQ(rc.hash, resolve_config({a, b}, {"usc.count=8", "dram.bandwidth_gbps=34"}).hash);
+}
+
+TEST(Params, MisspeltKeyNamesFileLineAndSuggestion) {
+  const auto f = write_temp("typo.ini", "[isp]\ntiles_in_flight = 8\nsampels_per_clock = 16\n");
+  const std::string e = error_of({f}, {});
+  EXPECT_NE(e.find(f + ":3"), std::string::npos) << e;
+  EXPECT_NE(e.find("isp.sampels_per_clock"), std::string::npos) << e;
+  EXPECT_NE(e.find("did you mean 'isp.samples_per_clock'"), std::string::npos) << e;
+}
+
+TEST(Params, UnknownSectionWrongTypeAndRangeAreErrors) {
+  const auto s = write_temp("sec.ini", "[gpu]\ncore_clock_mhz = 700\n[shader]\nlanes = 16\n");
+  EXPECT_NE(error_of({s}, {}).find(s + ":3: unknown section [shader]"), std::string::npos) << error_of({s}, {});
+  const auto t = write_temp("type.ini", "[usc]\ncount = four\n");
+  const std::string te = error_of({t}, {});
+  EXPECT_NE(te.find(t + ":2"), std::string::npos) << te;
+  EXPECT_NE(te.find("'four'"), std::string::npos) << te;
+  EXPECT_NE(te.find("an integer in [1, 64]"), std::string::npos) << te;
+  const auto r = write_temp("range.ini", "[writeback]\ncompression_ratio = 1.5\n");
+  EXPECT_NE(error_of({r}, {}).find("[0.05, 1]"), std::string::npos) << error_of({r}, {});
+  const auto c = write_temp("choice.ini", "[gpu]\nmode = deferred\n");
+  EXPECT_NE(error_of({c}, {}).find("one of tbdr|tbr|imr"), std::string::npos);
+  const auto m = write_temp("malformed.ini", "[gpu]\ncore_clock_mhz 700\n");
+  EXPECT_NE(error_of({m}, {}).find(m + ":2: expected 'key = value'"), std::string::npos) << error_of({m}, {});
+  const auto d = write_temp("dup.ini", "[gpu]\ncore_clock_mhz = 700\ncore_clock_mhz = 800\n");
+  EXPECT_NE(error_of({d}, {}).find(d + ":3: key 'gpu.core_clock_mhz' set twice"), std::string::npos);
+  EXPECT_NE(error_of({"/nonexistent/x.ini"}, {}).find("/nonexistent/x.ini: cannot open"), std::string::npos);
+}
+
+TEST(Params, SetErrorsNameTheArgumentAndTheRange) {
+  const std::string e = error_of({}, {"isp.samples_per_clock=-3"});
+  EXPECT_NE(e.find("--set isp.samples_per_clock=-3"), std::string::npos) << e;
+  EXPECT_NE(e.find("[1, 1024]"), std::string::npos) << e;
+  EXPECT_NE(error_of({}, {"isp.samples_per_clock"}).find("expected section.key=value"), std::string::npos);
+  EXPECT_NE(error_of({}, {"nosuch.key=1"}).find("unknown section 'nosuch'"), std::string::npos);
+  EXPECT_NE(error_of({}, {"dram.bandwidth_gbps=nan"}).find("finite number"), std::string::npos);
+  EXPECT_NE(error_of({}, {"usc.count=4.5"}).find("an integer"), std::string::npos);
+  EXPECT_NE(error_of({}, {"pls.tile_buffer_bits_per_pixel=128bits"}).find("an integer"), std::string::npos);
+}
+
+TEST(Params, ShippedPresetsLoad) {
+  const std::string dir = std::string(TBDRSIM_SOURCE_DIR) + "/configs/";
+  for (const char* name : {"series6xt_gx6450.ini", "mobile_16x16_lpddr4x.ini"}) {
+    EXPECT_NO_THROW(resolve_config({dir + name}, {})) << name;
+  }
+  const ResolvedConfig m = resolve_config({dir + "mobile_16x16_lpddr4x.ini"}, {});
+  EXPECT_EQ(m.hw.tiling.tile_width, 16);
+  EXPECT_EQ(m.hw.pls.tile_buffer_bits_per_pixel, 256);
+  const ResolvedConfig s = resolve_config({dir + "series6xt_gx6450.ini"}, {});
+  EXPECT_EQ(s.hash, resolve_config({}, {}).hash) << "the first preset is the declared defaults";
+}
+
+}  // namespace
+}  // namespace tbdr
