@@ -1,0 +1,169 @@
+#pragma once
+// Simulated time: Tick (integer picoseconds, the event queue's clock), Cycles (a count of clock
+// cycles of one domain) and ClockDomain (an exact, drift-free conversion between the two).
+//
+// Tick and Cycles are distinct strong types: adding a Tick to a Cycles, or passing one where the
+// other is expected, does not compile. The only bridge is a ClockDomain, because the length of a
+// cycle depends on whose clock it is (a 600 MHz core cycle is 1666.67 ps, an 1866 MHz DRAM cycle
+// 535.91 ps). Frequencies are stored as integer Hz and conversions use 128-bit integer arithmetic,
+// so cycle n of any domain lands on the same tick no matter how long the simulation has run.
+// (Common clocks reduce to a small fraction, e.g. 600 MHz = 5000/3 ps per cycle, and convert with
+// 64-bit arithmetic; 128-bit division is the fallback for awkward frequencies.)
+#include <compare>
+#include <cstdint>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace tbdr {
+
+/// A point in (or span of) simulated time, in integer picoseconds; the event queue's time base.
+class Tick {
+ public:
+  constexpr Tick() = default;
+  constexpr explicit Tick(std::int64_t ps) : ps_(ps) {}
+
+  static constexpr Tick zero() { return Tick{0}; }
+  static constexpr Tick max() { return Tick{INT64_MAX}; }
+  static constexpr Tick from_ns(std::int64_t ns) { return Tick{ns * 1000}; }
+  static constexpr Tick from_us(std::int64_t us) { return Tick{us * 1'000'000}; }
+
+  constexpr std::int64_t ps() const { return ps_; }
+  /// For reports only: the tick in seconds as a double.
+  constexpr double seconds() const { return static_cast<double>(ps_) * 1e-12; }
+
+  friend constexpr auto operator<=>(Tick, Tick) = default;
+  friend constexpr Tick operator+(Tick a, Tick b) { return Tick{a.ps_ + b.ps_}; }
+  friend constexpr Tick operator-(Tick a, Tick b) { return Tick{a.ps_ - b.ps_}; }
+  friend constexpr Tick operator*(Tick a, std::int64_t k) { return Tick{a.ps_ * k}; }
+  friend constexpr Tick operator*(std::int64_t k, Tick a) { return Tick{a.ps_ * k}; }
+  constexpr Tick& operator+=(Tick b) { ps_ += b.ps_; return *this; }
+  constexpr Tick& operator-=(Tick b) { ps_ -= b.ps_; return *this; }
+
+ private:
+  std::int64_t ps_ = 0;
+};
+
+/// A count of clock cycles of some ClockDomain; converts to Tick only through that domain.
+class Cycles {
+ public:
+  constexpr Cycles() = default;
+  constexpr explicit Cycles(std::int64_t n) : n_(n) {}
+
+  constexpr std::int64_t count() const { return n_; }
+
+  friend constexpr auto operator<=>(Cycles, Cycles) = default;
+  friend constexpr Cycles operator+(Cycles a, Cycles b) { return Cycles{a.n_ + b.n_}; }
+  friend constexpr Cycles operator-(Cycles a, Cycles b) { return Cycles{a.n_ - b.n_}; }
+  friend constexpr Cycles operator*(Cycles a, std::int64_t k) { return Cycles{a.n_ * k}; }
+  friend constexpr Cycles operator*(std::int64_t k, Cycles a) { return Cycles{a.n_ * k}; }
+  constexpr Cycles& operator+=(Cycles b) { n_ += b.n_; return *this; }
+  constexpr Cycles& operator-=(Cycles b) { n_ -= b.n_; return *this; }
+  constexpr Cycles& operator++() { ++n_; return *this; }
+  constexpr Cycles operator++(int) { Cycles old = *this; ++n_; return old; }
+
+ private:
+  std::int64_t n_ = 0;
+};
+
+/// A named clock (core, memory, ...) with an exact integer frequency; maps cycles <-> ticks.
+///
+/// Cycle n of the domain starts at real time n / f. Ticks are integer picoseconds, so the edge is
+/// placed on the first tick at or after it: tick_of(n) = ceil(n * 1e12 / f). (Rounding up rather
+/// than down is what makes the round trip exact: cycles_at(tick_of(n)) == n for every n, given
+/// f <= 1 THz. With rounding down, cycle 1 of an 1866 MHz clock would start at 535 ps, where
+/// only 0.998 cycles have elapsed.) All edges are computed from cycle 0, never by adding a
+/// rounded period repeatedly, so there is no drift: 1866e6 DRAM cycles are exactly 1e12 ps.
+class ClockDomain {
+ public:
+  static constexpr std::int64_t kPsPerSecond = 1'000'000'000'000;
+
+  /// frequency_hz must be in (0, 1e12]: a period of at least one tick.
+  ClockDomain(std::string name, std::int64_t frequency_hz) : name_(std::move(name)), hz_(frequency_hz) {
+    if (hz_ <= 0 || hz_ > kPsPerSecond) {
+      throw std::invalid_argument("clock domain '" + name_ + "': frequency " + std::to_string(hz_) +
+                                  " Hz is outside (0, 1 THz]");
+    }
+    const std::int64_t g = std::gcd(kPsPerSecond, hz_);
+    num_ = static_cast<std::uint64_t>(kPsPerSecond / g);
+    den_ = static_cast<std::uint64_t>(hz_ / g);
+    fast_ = num_ <= UINT64_MAX / den_;
+  }
+  /// Convenience for configs that give MHz: rounds to the nearest integer Hz (1866 -> 1866000000).
+  static ClockDomain from_mhz(std::string name, double mhz) {
+    const double hz = mhz * 1e6;
+    if (!(hz >= 0.5) || hz > static_cast<double>(kPsPerSecond)) {
+      throw std::invalid_argument("clock domain '" + name + "': frequency " + std::to_string(mhz) +
+                                  " MHz is outside (0, 1e6 MHz]");
+    }
+    return ClockDomain(std::move(name), static_cast<std::int64_t>(hz + 0.5));
+  }
+
+  const std::string& name() const { return name_; }
+  std::int64_t frequency_hz() const { return hz_; }
+  /// For reports only: the (generally non-integer) period in picoseconds.
+  double period_ps() const { return static_cast<double>(kPsPerSecond) / static_cast<double>(hz_); }
+
+  /// The tick at which cycle n starts: ceil(n * 1e12 / f). n must be >= 0.
+  Tick tick_of(Cycles n) const {
+    if (n.count() < 0) throw std::domain_error("clock domain '" + name_ + "': negative cycle index");
+    const auto cycles = static_cast<std::uint64_t>(n.count());
+    if (fast_) {
+      // n = q*den + r: tick = q*num + ceil(r*num/den), with r*num < den*num < 2^64.
+      const std::uint64_t q = cycles / den_, r = cycles % den_;
+      std::uint64_t ps;
+      if (__builtin_mul_overflow(q, num_, &ps) || __builtin_add_overflow(ps, (r * num_ + den_ - 1) / den_, &ps) ||
+          ps > static_cast<std::uint64_t>(INT64_MAX)) {
+        throw_overflow(n);
+      }
+      return Tick{static_cast<std::int64_t>(ps)};
+    }
+    const U128 ps = (static_cast<U128>(cycles) * num_ + den_ - 1) / den_;
+    if (ps > static_cast<U128>(INT64_MAX)) throw_overflow(n);
+    return Tick{static_cast<std::int64_t>(ps)};
+  }
+
+  /// Whole cycles elapsed at tick t (the index of the cycle in progress): floor(t * f / 1e12).
+  Cycles cycles_at(Tick t) const {
+    if (t.ps() < 0) throw std::domain_error("clock domain '" + name_ + "': negative tick");
+    const auto ps = static_cast<std::uint64_t>(t.ps());
+    if (fast_) {
+      // t = q*num + r: cycles = q*den + floor(r*den/num), with r*den < den*num < 2^64.
+      const std::uint64_t q = ps / num_, r = ps % num_;
+      return Cycles{static_cast<std::int64_t>(q * den_ + r * den_ / num_)};  // <= t, so it fits
+    }
+    return Cycles{static_cast<std::int64_t>(static_cast<U128>(ps) * den_ / num_)};
+  }
+
+  /// The first cycle boundary at or after t (t itself when t is an edge).
+  Tick next_edge(Tick t) const {
+    const Cycles n = cycles_at(t);
+    const Tick edge = tick_of(n);  // <= t by construction
+    return edge == t ? t : tick_of(n + Cycles{1});
+  }
+
+  /// The first cycle boundary strictly after t.
+  Tick edge_after(Tick t) const { return tick_of(cycles_at(t) + Cycles{1}); }
+
+  /// The edge n cycles after the current-or-next edge of t: when a unit acting at `now` is done
+  /// after a latency of n cycles. after(now, Cycles{0}) == next_edge(now).
+  Tick after(Tick now, Cycles n) const { return tick_of(cycles_at(next_edge(now)) + n); }
+
+ private:
+  __extension__ typedef unsigned __int128 U128;
+
+  [[noreturn]] void throw_overflow(Cycles n) const {
+    throw std::overflow_error("clock domain '" + name_ + "': cycle " + std::to_string(n.count()) +
+                              " is beyond the representable tick range");
+  }
+
+  std::string name_;
+  std::int64_t hz_;
+  // One cycle is exactly num_/den_ ps (1e12/f reduced: 600 MHz -> 5000/3, 1866 MHz -> 500000/933).
+  std::uint64_t num_ = 1;
+  std::uint64_t den_ = 1;
+  bool fast_ = true;  // num_ * den_ fits 64 bits: conversions need no 128-bit division
+};
+
+}  // namespace tbdr
