@@ -36,7 +36,8 @@ struct TextureInfo {
   int height = 0;
   int channels = 0;
   bool missing = false;  ///< file absent: counted with 0 bytes and a warning
-  /// Bytes resident in GPU memory: width*height*4 (RGBA8) plus a full mip chain (x4/3).
+  /// Bytes resident in GPU memory: RGBA8 (4 bytes per texel) with a full mip chain, the exact
+  /// sum over levels down to 1x1 (about x4/3 of the base level); 0 when missing.
   std::uint64_t gpu_bytes() const;
 };
 
@@ -60,7 +61,8 @@ struct SubMesh {
   std::vector<glm::vec2> uvs;           ///< same count as positions (zeros if absent)
   std::vector<std::uint32_t> indices;   ///< triangle list, 3 per triangle, all < positions.size()
   std::uint32_t vertex_stride_bytes = 32;  ///< bytes the vertex fetch reads per vertex (attribute layout)
-  std::uint32_t index_bytes = 4;        ///< bytes per index in the source buffer (1, 2 or 4)
+  std::uint32_t index_bytes = 4;        ///< bytes per index in the source buffer (1, 2 or 4); 0 for a
+                                        ///< non-indexed draw (indices are then generated 0..n-1)
   std::uint32_t triangle_count() const { return static_cast<std::uint32_t>(indices.size() / 3); }
 };
 
@@ -95,5 +97,12 @@ struct Scene {
   std::uint64_t triangle_count() const; ///< over instances
   std::uint64_t vertex_count() const;   ///< over instances
 };
+
+/// Recomputes scene.bounds from every instance's transformed vertices (zero bounds when empty).
+void update_bounds(Scene& scene);
+
+/// The alpha a material's fragment has at texture coordinate uv: base_color.a times the alpha
+/// mask (when the material has one). A punch-through fragment survives when this is >= alpha_cutoff.
+float material_alpha(const Scene& scene, const Material& material, glm::vec2 uv);
 
 }  // namespace tbdr
