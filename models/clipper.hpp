@@ -38,7 +38,7 @@
 namespace tbdr {
 
 /// Which faces the fixed-function culling discards (double-sided materials use None); the
-/// trace's pipeline CullMode maps onto it.
+/// trace's pipeline FaceCull maps onto it.
 enum class FaceCull : std::uint8_t { None, Back, Front };
 const char* to_string(FaceCull m);
 

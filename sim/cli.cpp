@@ -17,6 +17,9 @@ const std::vector<CliCommand>& cli_commands() {
       {"params", "List every hardware parameter (default, unit, range, doc), or the resolved values of a "
                  "configuration and where each came from",
        cmd_params},
+      {"scene", "Describe a scene: scene info atrium[:detail] | FILE.gltf/.glb", cmd_scene},
+      {"trace", "Generate the command trace of a technique for a scene, lights, camera and resolution", cmd_trace},
+      {"run", "Replay a trace on a hardware configuration and write the run to a results database", cmd_run},
   };
   return commands;
 }

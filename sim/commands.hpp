@@ -11,6 +11,9 @@
 
 namespace tbdr {
 
+int cmd_scene(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+int cmd_trace(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_params(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
 /// Adds the hardware configuration options every simulating command takes: --config, --set.

@@ -10,6 +10,7 @@
 namespace tbdr {
 
 /// The declaration of a statistic: stored once per name in the database's stat_defs table.
+/// The strings must have static storage (string literals).
 struct StatDef {
   const char* name;
   const char* unit;
@@ -60,7 +61,7 @@ class StatBase {
   virtual void reset() = 0;
 
  private:
-  const StatDef& def_;
+  const StatDef def_;  ///< copied: the strings are literals with static storage
 };
 
 /// An event count (samples, bytes, primitives): a plain 64-bit integer.

@@ -1,0 +1,409 @@
+#include "models/geometry_unit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <mutex>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "models/clipper.hpp"
+
+namespace tbdr {
+
+const char* to_string(HsrClass c) {
+  switch (c) {
+    case HsrClass::Opaque: return "opaque";
+    case HsrClass::PunchThrough: return "punch_through";
+    case HsrClass::Translucent: return "translucent";
+  }
+  return "?";
+}
+
+void PixelCounters::resize(std::size_t pixels) {
+  rasterised_samples.assign(pixels, 0);
+  shaded.assign(pixels, 0);
+  lights_evaluated.assign(pixels, 0);
+  triangle_id.assign(pixels, 0);
+}
+
+CameraXform CameraXform::from(const Camera& camera, float aspect) {
+  CameraXform x;
+  x.view = camera.view();
+  x.proj = camera.projection(aspect);
+  x.view_proj = x.proj * x.view;
+  x.eye = camera.eye;
+  x.near_plane = camera.near_plane;
+  return x;
+}
+
+PixelRect light_screen_rect(const Light& light, const CameraXform& camera, const Viewport& viewport) {
+  const PixelRect full{0, 0, viewport.width_px, viewport.height_px};
+  const glm::vec3 c = glm::vec3(camera.view * glm::vec4(light.position, 1.0f));
+  const float r = light.radius;
+  // View space looks down -z; visible points have z < -near.
+  if (c.z - r >= -camera.near_plane) return {};  // wholly behind the near plane
+  if (c.z + r > -camera.near_plane) return full;  // crosses it: conservative
+  float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
+  for (int i = 0; i < 8; ++i) {
+    const glm::vec4 p(c.x + ((i & 1) ? r : -r), c.y + ((i & 2) ? r : -r), c.z + ((i & 4) ? r : -r), 1.0f);
+    const glm::vec4 clip = camera.proj * p;
+    const float nx = clip.x / clip.w, ny = clip.y / clip.w;
+    // Pixel coordinates, y down (as the rasteriser's viewport transform).
+    const float px = (nx * 0.5f + 0.5f) * static_cast<float>(viewport.width_px);
+    const float py = (0.5f - ny * 0.5f) * static_cast<float>(viewport.height_px);
+    x0 = std::min(x0, px);
+    x1 = std::max(x1, px);
+    y0 = std::min(y0, py);
+    y1 = std::max(y1, py);
+  }
+  const auto clampi = [](float v, int lo, int hi) {
+    if (!(v > static_cast<float>(lo))) return lo;
+    if (v > static_cast<float>(hi)) return hi;
+    return static_cast<int>(v);
+  };
+  // One pixel of margin on each side keeps the rectangle conservative under rounding.
+  PixelRect rect{clampi(std::floor(x0) - 1.0f, 0, viewport.width_px), clampi(std::floor(y0) - 1.0f, 0, viewport.height_px),
+                 clampi(std::ceil(x1) + 1.0f, 0, viewport.width_px), clampi(std::ceil(y1) + 1.0f, 0, viewport.height_px)};
+  return rect.empty() ? PixelRect{} : rect;
+}
+
+HsrClass hsr_class_of(const PipelineState& pipeline, const ShaderDesc& shader, const Scene* scene,
+                      std::uint32_t material) {
+  if (pipeline.blend != BlendMode::Off) return HsrClass::Translucent;
+  switch (pipeline.alpha) {
+    case AlphaOverride::Opaque: return HsrClass::Opaque;
+    case AlphaOverride::PunchThrough: return HsrClass::PunchThrough;
+    case AlphaOverride::Translucent: return HsrClass::Translucent;
+    case AlphaOverride::Material: break;
+  }
+  if (shader.discard) return HsrClass::PunchThrough;
+  if (scene && material != kNoMaterial) {
+    switch (scene->materials[material].alpha_mode) {
+      case AlphaMode::Opaque: return HsrClass::Opaque;
+      case AlphaMode::PunchThrough: return HsrClass::PunchThrough;
+      case AlphaMode::Translucent: return HsrClass::Translucent;
+    }
+  }
+  return HsrClass::Opaque;
+}
+
+/// What every primitive of one object shares.
+struct GeometryUnit::Emit {
+  std::uint32_t draw = 0;
+  std::uint32_t object = 0;
+  std::uint32_t material = kNoMaterial;
+  std::int32_t proxy_light = -1;
+  HsrClass hsr = HsrClass::Opaque;
+  std::uint32_t varyings = 0;
+  ClipConfig clip;
+};
+
+GeometryUnit::GeometryUnit(const HwConfig& hw, const Scene* scene, const std::vector<Light>& lights,
+                           const CameraXform& camera, const Viewport& viewport)
+    : hw_(hw), scene_(scene), lights_(lights), camera_(camera), viewport_(viewport) {}
+
+namespace {
+
+FaceCull face_cull_of(CullMode m) {
+  switch (m) {
+    case CullMode::None: return FaceCull::None;
+    case CullMode::Back: return FaceCull::Back;
+    case CullMode::Front: return FaceCull::Front;
+  }
+  return FaceCull::None;
+}
+
+/// Counts vertex shader invocations of an index stream through a FIFO post-transform cache.
+class VertexCacheFifo {
+ public:
+  explicit VertexCacheFifo(std::size_t entries) : slots_(entries, kEmpty) {}
+  /// True on a miss (the vertex is shaded and inserted).
+  bool access(std::uint32_t index) {
+    if (slots_.empty()) return true;
+    for (auto s : slots_) {
+      if (s == index) return false;
+    }
+    slots_[next_] = index;
+    next_ = (next_ + 1) % slots_.size();
+    return true;
+  }
+
+ private:
+  static constexpr std::uint32_t kEmpty = 0xffffffffu;
+  std::vector<std::uint32_t> slots_;
+  std::size_t next_ = 0;
+};
+
+bool sphere_touches_box(const Light& l, const glm::vec3& lo, const glm::vec3& hi) {
+  const glm::vec3 q = glm::clamp(l.position, lo, hi);
+  const glm::vec3 d = q - l.position;
+  return glm::dot(d, d) <= l.radius * l.radius;
+}
+
+std::vector<glm::vec3> make_icosphere(std::uint32_t level) {
+  const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+  std::vector<glm::vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                              {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  for (auto& p : v) p = glm::normalize(p);
+  std::vector<glm::uvec3> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                               {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                               {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (std::uint32_t l = 0; l < level; ++l) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
+    auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
+      const auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      v.push_back(glm::normalize(v[a] + v[b]));
+      const auto idx = static_cast<std::uint32_t>(v.size() - 1);
+      mid[key] = idx;
+      return idx;
+    };
+    std::vector<glm::uvec3> nf;
+    for (const auto& tri : f) {
+      const std::uint32_t a = midpoint(tri.x, tri.y), b = midpoint(tri.y, tri.z), c = midpoint(tri.z, tri.x);
+      nf.push_back({tri.x, a, c});
+      nf.push_back({tri.y, b, a});
+      nf.push_back({tri.z, c, b});
+      nf.push_back({a, b, c});
+    }
+    f = std::move(nf);
+  }
+  // Scale so every face plane is at distance >= 1: the polyhedron encloses the unit sphere.
+  float min_dist = 1.0f;
+  for (const auto& tri : f) {
+    const glm::vec3 n = glm::normalize(glm::cross(v[tri.y] - v[tri.x], v[tri.z] - v[tri.x]));
+    min_dist = std::min(min_dist, std::abs(glm::dot(n, v[tri.x])));
+  }
+  std::vector<glm::vec3> out;
+  out.reserve(f.size() * 3);
+  for (const auto& tri : f) {
+    // Outward-facing, counter-clockwise seen from outside (front faces).
+    out.push_back(v[tri.x] / min_dist);
+    out.push_back(v[tri.y] / min_dist);
+    out.push_back(v[tri.z] / min_dist);
+  }
+  return out;
+}
+
+}  // namespace
+
+const std::vector<glm::vec3>& GeometryUnit::icosphere(std::uint32_t subdivisions) {
+  static std::mutex m;
+  static std::map<std::uint32_t, std::vector<glm::vec3>> cache;
+  std::lock_guard<std::mutex> lock(m);
+  auto it = cache.find(subdivisions);
+  if (it == cache.end()) it = cache.emplace(subdivisions, make_icosphere(subdivisions)).first;
+  return it->second;
+}
+
+void GeometryUnit::emit_triangle(const Emit& e, const glm::vec4 clip[3], const glm::vec3 world[3],
+                                 const glm::vec3 normal[3], const glm::vec2 uv[3], const std::uint64_t keys[3],
+                                 std::vector<Primitive>& out, GeometryStats& stats) const {
+  ClipStats cs;
+  thread_local std::vector<ScreenTriangle> screen;
+  screen.clear();
+  const ClipTriangle ct{clip[0], clip[1], clip[2]};
+  clip_and_cull(ct, e.clip, cs, screen);
+  stats.primitives_in += cs.in;
+  stats.culled_frustum += cs.culled_frustum;
+  stats.culled_backface += cs.culled_backface;
+  stats.culled_zero_area += cs.culled_zero_area;
+  stats.clipped += cs.clipped;
+  for (const ScreenTriangle& st : screen) {
+    Primitive p;
+    p.setup = setup_triangle(st, viewport_);
+    if (p.setup.empty) continue;  // covers no pixel of the viewport
+    p.draw = e.draw;
+    p.object = e.object;
+    p.material = e.material;
+    p.proxy_light = e.proxy_light;
+    p.hsr = e.hsr;
+    p.varyings = e.varyings;
+    for (int i = 0; i < 3; ++i) {
+      p.world[i] = world[i];
+      p.normal[i] = normal[i];
+      p.uv[i] = uv[i];
+      // A vertex made by clipping is new; an original vertex keeps its identity for block re-use.
+      const glm::vec3 b = st.bary[i];
+      int orig = -1;
+      for (int k = 0; k < 3; ++k) {
+        if (b[k] == 1.0f) orig = k;
+      }
+      p.vertex_key[i] = orig >= 0 ? keys[orig] : (0x8000000000000000ull | (out.size() * 3 + i));
+    }
+    out.push_back(p);
+    ++stats.primitives_out;
+  }
+}
+
+void GeometryUnit::run_draw(const DrawContext& draw, std::uint32_t draw_index, std::vector<Primitive>& out,
+                            std::vector<std::vector<std::uint32_t>>& object_lights, GeometryStats& stats,
+                            DramTraffic& dram) const {
+  ++stats.draws;
+  if (draw.cmd->geometry == GeometryKind::Scene) {
+    draw_scene(draw, draw_index, out, object_lights, stats, dram);
+  } else {
+    draw_generated(draw, draw_index, out, object_lights, stats, dram);
+  }
+}
+
+void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index, std::vector<Primitive>& out,
+                              std::vector<std::vector<std::uint32_t>>& object_lights, GeometryStats& stats,
+                              DramTraffic& dram) const {
+  const DrawCmd& cmd = *draw.cmd;
+  const bool wants_object_lists = draw.shader->light_source == LightSource::ObjectList;
+  std::vector<glm::vec4> clip;
+  std::vector<glm::vec3> world, normal;
+  for (std::size_t ii = 0; ii < scene_->instances.size(); ++ii) {
+    const Instance& inst = scene_->instances[ii];
+    const SubMesh& sm = scene_->submeshes[inst.submesh];
+    const Material& mat = scene_->materials[sm.material];
+    if (!cmd.submesh.empty() && sm.name != cmd.submesh) continue;
+    if (!cmd.material.empty() && mat.name != cmd.material) continue;
+    if (cmd.submesh.empty() && cmd.material.empty()) {
+      const bool keep = cmd.subset == SceneSubset::All ||
+                        (cmd.subset == SceneSubset::Opaque && mat.alpha_mode == AlphaMode::Opaque) ||
+                        (cmd.subset == SceneSubset::Masked && mat.alpha_mode == AlphaMode::PunchThrough) ||
+                        (cmd.subset == SceneSubset::Blended && mat.alpha_mode == AlphaMode::Translucent);
+      if (!keep) continue;
+    }
+    Emit e;
+    e.draw = draw_index;
+    e.object = static_cast<std::uint32_t>(object_lights.size());
+    e.material = sm.material;
+    e.hsr = hsr_class_of(*draw.pipeline, *draw.shader, scene_, sm.material);
+    e.varyings = draw.shader->varyings;
+    e.clip.viewport = viewport_;
+    e.clip.cull = mat.double_sided ? FaceCull::None : face_cull_of(draw.pipeline->cull);
+
+    // Transform every vertex of the instance once (what the vertex shader computes).
+    const glm::mat4 mvp = camera_.view_proj * inst.world;
+    const glm::mat3 nrm = glm::transpose(glm::inverse(glm::mat3(inst.world)));
+    const std::size_t nv = sm.positions.size();
+    clip.resize(nv);
+    world.resize(nv);
+    normal.resize(nv);
+    glm::vec3 lo(1e30f), hi(-1e30f);
+    for (std::size_t v = 0; v < nv; ++v) {
+      const glm::vec4 p(sm.positions[v], 1.0f);
+      clip[v] = mvp * p;
+      world[v] = glm::vec3(inst.world * p);
+      normal[v] = glm::normalize(nrm * sm.normals[v]);
+      lo = glm::min(lo, world[v]);
+      hi = glm::max(hi, world[v]);
+    }
+    std::vector<std::uint32_t> touching;
+    if (wants_object_lists) {
+      for (std::uint32_t l : draw.lights) {
+        if (sphere_touches_box(lights_[l], lo, hi)) touching.push_back(l);
+      }
+    }
+    object_lights.push_back(std::move(touching));
+
+    // Vertex fetch and shading: indices through the post-transform cache.
+    VertexCacheFifo cache(static_cast<std::size_t>(hw_.geometry.vertex_cache_entries));
+    std::uint64_t shaded = 0;
+    for (std::uint32_t idx : sm.indices) {
+      if (sm.index_bytes == 0 || cache.access(idx)) ++shaded;
+    }
+    const std::uint64_t index_bytes = std::uint64_t{sm.index_bytes} * sm.indices.size();
+    const std::uint64_t vertex_bytes = shaded * sm.vertex_stride_bytes;
+    stats.vertices_shaded += shaded;
+    stats.vertex_alu_ops += shaded * static_cast<std::uint64_t>(hw_.geometry.vertex_shader_alu_ops);
+    stats.vertex_fetch_bytes += vertex_bytes;
+    stats.index_fetch_bytes += index_bytes;
+    dram.read(DramClass::Vertices, vertex_bytes);
+    dram.read(DramClass::Indices, index_bytes);
+
+    const std::uint64_t key_base = std::uint64_t{e.object} << 32;
+    for (std::size_t t = 0; t + 2 < sm.indices.size(); t += 3) {
+      const std::uint32_t i0 = sm.indices[t], i1 = sm.indices[t + 1], i2 = sm.indices[t + 2];
+      const glm::vec4 c[3] = {clip[i0], clip[i1], clip[i2]};
+      const glm::vec3 w[3] = {world[i0], world[i1], world[i2]};
+      const glm::vec3 n[3] = {normal[i0], normal[i1], normal[i2]};
+      const glm::vec2 uv[3] = {sm.uvs[i0], sm.uvs[i1], sm.uvs[i2]};
+      const std::uint64_t keys[3] = {key_base | i0, key_base | i1, key_base | i2};
+      emit_triangle(e, c, w, n, uv, keys, out, stats);
+    }
+  }
+}
+
+void GeometryUnit::draw_generated(const DrawContext& draw, std::uint32_t draw_index, std::vector<Primitive>& out,
+                                  std::vector<std::vector<std::uint32_t>>& object_lights, GeometryStats& stats,
+                                  DramTraffic& dram) const {
+  const DrawCmd& cmd = *draw.cmd;
+  Emit e;
+  e.draw = draw_index;
+  e.hsr = hsr_class_of(*draw.pipeline, *draw.shader, nullptr, kNoMaterial);
+  e.varyings = draw.shader->varyings;
+  e.clip.viewport = viewport_;
+  e.clip.cull = face_cull_of(draw.pipeline->cull);
+  constexpr std::uint64_t kPositionBytes = 16;  // generated vertices: one vec4 position each
+  const glm::vec3 zero3[3] = {};
+  const glm::vec2 zero2[3] = {};
+
+  auto account = [&](std::uint64_t vertices) {
+    stats.vertices_shaded += vertices;
+    stats.vertex_alu_ops += vertices * static_cast<std::uint64_t>(hw_.geometry.vertex_shader_alu_ops);
+    stats.vertex_fetch_bytes += vertices * kPositionBytes;
+    dram.read(DramClass::Vertices, vertices * kPositionBytes);
+  };
+
+  if (cmd.geometry == GeometryKind::Fullscreen) {
+    // One triangle covering the viewport, at depth 0.5 (z_ndc = 0); shaders read what lies beneath.
+    e.object = static_cast<std::uint32_t>(object_lights.size());
+    object_lights.push_back(draw.lights);
+    e.clip.cull = FaceCull::None;
+    const glm::vec4 c[3] = {{-1, -1, 0, 1}, {3, -1, 0, 1}, {-1, 3, 0, 1}};
+    const std::uint64_t base = std::uint64_t{e.object} << 32;
+    const std::uint64_t keys[3] = {base, base | 1, base | 2};
+    account(3);
+    emit_triangle(e, c, zero3, zero3, zero2, keys, out, stats);
+    return;
+  }
+
+  for (std::uint32_t l : draw.lights) {
+    const Light& light = lights_[l];
+    e.object = static_cast<std::uint32_t>(object_lights.size());
+    object_lights.push_back({l});
+    e.proxy_light = static_cast<std::int32_t>(l);
+    const std::uint64_t base = std::uint64_t{e.object} << 32;
+    if (cmd.geometry == GeometryKind::LightSpheres) {
+      const auto& ico = icosphere(cmd.subdivisions);
+      account(ico.size());
+      for (std::size_t t = 0; t + 2 < ico.size(); t += 3) {
+        glm::vec4 c[3];
+        glm::vec3 w[3];
+        for (int k = 0; k < 3; ++k) {
+          w[k] = light.position + ico[t + k] * light.radius;
+          c[k] = camera_.view_proj * glm::vec4(w[k], 1.0f);
+        }
+        const std::uint64_t keys[3] = {base | t, base | (t + 1), base | (t + 2)};
+        emit_triangle(e, c, w, zero3, zero2, keys, out, stats);
+      }
+    } else {  // LightQuads: a screen-aligned quad bounding the sphere's projection, at its nearest depth
+      const PixelRect r = light_screen_rect(light, camera_, viewport_);
+      if (r.empty()) continue;
+      const glm::vec3 cv = glm::vec3(camera_.view * glm::vec4(light.position, 1.0f));
+      const float z_near_view = std::min(cv.z + light.radius, -camera_.near_plane * 1.0001f);
+      const glm::vec4 zc = camera_.proj * glm::vec4(0.0f, 0.0f, z_near_view, 1.0f);
+      const float w = zc.w;
+      auto ndc_x = [&](int px) { return (2.0f * static_cast<float>(px) / static_cast<float>(viewport_.width_px) - 1.0f) * w; };
+      auto ndc_y = [&](int py) { return (1.0f - 2.0f * static_cast<float>(py) / static_cast<float>(viewport_.height_px)) * w; };
+      const glm::vec4 q[4] = {{ndc_x(r.x0), ndc_y(r.y1), zc.z, w}, {ndc_x(r.x1), ndc_y(r.y1), zc.z, w},
+                              {ndc_x(r.x1), ndc_y(r.y0), zc.z, w}, {ndc_x(r.x0), ndc_y(r.y0), zc.z, w}};
+      account(4);
+      e.clip.cull = FaceCull::None;
+      const glm::vec4 a[3] = {q[0], q[1], q[2]};
+      const glm::vec4 b[3] = {q[0], q[2], q[3]};
+      const std::uint64_t ka[3] = {base, base | 1, base | 2};
+      const std::uint64_t kb[3] = {base, base | 2, base | 3};
+      emit_triangle(e, a, zero3, zero3, zero2, ka, out, stats);
+      emit_triangle(e, b, zero3, zero3, zero2, kb, out, stats);
+    }
+  }
+}
+
+}  // namespace tbdr

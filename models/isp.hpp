@@ -1,0 +1,69 @@
+#pragma once
+// The ISP (image synthesis processor): per tile, rasterises the tile's primitives in submission
+// order, runs the depth and stencil tests against on-chip depth/stencil, and removes hidden
+// surfaces with a tag buffer that holds one primitive id per sample. Opaque primitives only
+// overwrite tags; punch-through primitives flush the tags they cover (all tags with a single tag
+// buffer) to the TSP, are shaded, and write depth only for samples that survive their alpha
+// test; translucent primitives flush the tags they cover and are shaded with blending at once.
+// What is left in the tag buffer is shaded when the tile ends. In tbr/imr modes there is no tag
+// buffer: every fragment that passes early depth testing is shaded immediately.
+#include <cstdint>
+#include <vector>
+
+#include "models/render_state.hpp"
+#include "models/tsp.hpp"
+#include "sim/stats.hpp"
+
+namespace tbdr {
+
+/// Statistics of the ISP.
+struct IspStats {
+  StatGroup group;
+  Counter tiles{group, {"tiles_rendered", "tiles", "Tile renders (each sub-tile of a split tile counts)"}};
+  Counter primitives_fetched{group, {"primitives_fetched", "primitives", "Primitives read from tile lists and set up"}};
+  Counter samples_rasterised{group, {"samples_rasterised", "samples", "Samples covered by rasterised primitives"}};
+  Counter depth_test_failed{group, {"depth_test_failed_samples", "samples", "Samples failing the depth test"}};
+  Counter stencil_test_failed{group, {"stencil_test_failed_samples", "samples", "Samples failing the stencil test"}};
+  Counter hsr_removed{group, {"hsr_removed_samples", "samples", "Samples whose pending tag was overwritten before shading"}};
+  Counter tag_flushes{group, {"tag_flushes", "flushes", "Mid-tile tag buffer flushes forced by punch-through or translucent primitives"}};
+  Counter tag_flushed_samples{group, {"tag_flushed_samples", "samples", "Samples sent to the TSP by mid-tile flushes"}};
+  Counter punch_through_samples{group, {"punch_through_samples", "samples", "Punch-through samples passing depth test"}};
+  Counter translucent_samples{group, {"translucent_samples", "samples", "Translucent samples passing depth test"}};
+  Counter depth_read_bytes{group, {"depth_buffer_read_bytes", "bytes", "On-chip depth/stencil bytes read by tests"}};
+  Counter depth_write_bytes{group, {"depth_buffer_write_bytes", "bytes", "On-chip depth/stencil bytes written"}};
+  Counter tag_read_bytes{group, {"tag_buffer_read_bytes", "bytes", "Tag buffer bytes read (flushes)"}};
+  Counter tag_write_bytes{group, {"tag_buffer_write_bytes", "bytes", "Tag buffer bytes written"}};
+  explicit IspStats(std::string scope) : group(std::move(scope)) {}
+};
+
+/// The ISP of one GPU, working on one tile at a time.
+class Isp {
+ public:
+  Isp(RenderContext& ctx, Tsp& tsp);
+  /// Renders the primitives of `prims` (indices into ctx.prims) inside `rect`; depth/stencil and
+  /// color contents are read and written in the frame images (loaded/stored by TileMemory).
+  void render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& prims, IspStats& isp, TspStats& tsp);
+
+ private:
+  struct PendingSample {
+    std::uint32_t tag;
+    std::int32_t x, y;
+    std::uint32_t bit;
+  };
+  /// Shades the tags of the samples selected by `select` (all valid tags when null).
+  void flush(const PixelRect& rect, const std::vector<std::uint8_t>* select, bool mid_tile, IspStats& isp, TspStats& tsp);
+  /// Merges consecutive samples of one pixel into ShadePixels (samples are in raster order).
+  static void build_batch(const PendingSample* begin, const PendingSample* end, std::vector<ShadePixel>& batch);
+
+  RenderContext& ctx_;
+  Tsp& tsp_;
+  std::vector<std::uint32_t> tags_;
+  std::vector<PendingSample> pending_;
+  std::vector<PendingSample> flush_samples_;
+  std::vector<float> pending_depth_;
+  std::vector<std::uint8_t> select_;
+  std::vector<ShadePixel> batch_;
+  std::vector<std::uint32_t> alive_;
+};
+
+}  // namespace tbdr

@@ -1,0 +1,148 @@
+#include "models/tile_memory.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace tbdr {
+
+DramClass traffic_class_of(AttachmentUsage u) {
+  switch (u) {
+    case AttachmentUsage::Color: return DramClass::Color;
+    case AttachmentUsage::Depth: return DramClass::DepthStencil;
+    case AttachmentUsage::Gbuffer: return DramClass::Gbuffer;
+    case AttachmentUsage::Visibility: return DramClass::Visibility;
+  }
+  return DramClass::Other;
+}
+
+namespace {
+
+bool is_resolve_target(const PassDesc& pass, const Attachment& a) {
+  for (const auto& o : pass.attachments) {
+    if (o.resolve == a.name) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats) : ctx_(ctx), stats_(stats) {
+  const PassDesc& pass = *ctx.pass;
+  for (const auto& a : pass.attachments) {
+    if (is_depth_format(a.format) || is_resolve_target(pass, a)) continue;  // depth lives in the ISP
+    need_ += a.bytes_per_pixel();
+  }
+  need_ += pass.pls_bytes_per_pixel();
+  budget_ = static_cast<std::uint32_t>(ctx.hw->pls.tile_buffer_bits_per_pixel / 8);
+  if (need_ > budget_) {
+    if (ctx.hw->pls.over_budget == "spill") {
+      spill_per_pixel_ = need_ - budget_;
+    } else {
+      split_ = static_cast<int>((need_ + budget_ - 1) / budget_);
+    }
+  }
+  stats_.need_bytes_per_pixel += need_;
+  stats_.budget_bytes_per_pixel += budget_;
+  stats_.split_factor += static_cast<std::uint64_t>(split_);
+}
+
+std::vector<PixelRect> TileMemory::strips(const PixelRect& tile) const {
+  if (split_ <= 1) return {tile};
+  std::vector<PixelRect> out;
+  const int h = tile.height();
+  const int strip = std::max(1, (h + split_ - 1) / split_);
+  for (int y = tile.y0; y < tile.y1; y += strip) out.push_back({tile.x0, y, tile.x1, std::min(tile.y1, y + strip)});
+  return out;
+}
+
+std::uint64_t TileMemory::attachment_bytes(const Attachment& a, const PixelRect& r) const {
+  const std::uint64_t pixels = static_cast<std::uint64_t>(r.width()) * static_cast<std::uint64_t>(r.height());
+  if (is_depth_format(a.format)) return pixels * a.samples * static_cast<std::uint64_t>(ctx_.hw->isp.depth_stencil_bytes_per_sample);
+  return pixels * a.bytes_per_pixel();
+}
+
+void TileMemory::begin_tile(const PixelRect& r, bool resumed, DramTraffic& dram) {
+  const double ratio = ctx_.hw->writeback.compression_ratio;
+  const int W = ctx_.viewport.width_px;
+  for (const auto& a : ctx_.pass->attachments) {
+    AttachmentImage& img = ctx_.images->attachments.at(a.name);
+    const std::uint64_t bytes = attachment_bytes(a, r);
+    if (ctx_.framebuffer_in_dram) {
+      // imr: the attachment lives in DRAM; a clear writes it there, a load has nothing to do.
+      if (a.load == LoadOp::Clear && !a.transient) dram.write(traffic_class_of(a.usage), bytes);
+      if (a.load == LoadOp::Load) continue;
+    } else if (resumed) {
+      const auto b = static_cast<std::uint64_t>(std::ceil(static_cast<double>(bytes) * ratio));
+      dram.read(traffic_class_of(a.usage), b);
+      stats_.partial_reload_bytes += b;
+      continue;
+    }
+    if (a.load == LoadOp::Load && !a.transient) {
+      stats_.load_bytes += bytes;
+      dram.read(traffic_class_of(a.usage), static_cast<std::uint64_t>(std::ceil(static_cast<double>(bytes) * ratio)));
+      continue;
+    }
+    if (a.load == LoadOp::Load && a.transient) continue;  // memoryless: nothing to load
+    // clear (and don't care, made deterministic): initialise the tile's samples
+    if (a.load == LoadOp::Clear) stats_.clear_bytes += bytes;
+    const std::size_t S = img.samples;
+    for (int y = r.y0; y < r.y1; ++y) {
+      const std::size_t b = (static_cast<std::size_t>(y) * W + static_cast<std::size_t>(r.x0)) * S;
+      const std::size_t e = (static_cast<std::size_t>(y) * W + static_cast<std::size_t>(r.x1)) * S;
+      if (is_depth_format(a.format)) {
+        std::fill(img.depth.begin() + static_cast<std::ptrdiff_t>(b), img.depth.begin() + static_cast<std::ptrdiff_t>(e), 1.0f);
+        std::fill(img.stencil.begin() + static_cast<std::ptrdiff_t>(b), img.stencil.begin() + static_cast<std::ptrdiff_t>(e), 0);
+      } else {
+        std::fill(img.color.begin() + static_cast<std::ptrdiff_t>(b), img.color.begin() + static_cast<std::ptrdiff_t>(e), glm::vec4(0.0f));
+      }
+    }
+  }
+  if (spill_per_pixel_ > 0) {
+    const std::uint64_t b = spill_per_pixel_ * static_cast<std::uint64_t>(r.width()) * static_cast<std::uint64_t>(r.height());
+    dram.read(DramClass::Spill, b);
+    stats_.spill_bytes += b;
+  }
+}
+
+void TileMemory::end_tile(const PixelRect& r, bool partial, DramTraffic& dram) {
+  const double ratio = ctx_.hw->writeback.compression_ratio;
+  const int W = ctx_.viewport.width_px;
+  for (const auto& a : ctx_.pass->attachments) {
+    const std::uint64_t bytes = attachment_bytes(a, r);
+    if (ctx_.framebuffer_in_dram && a.resolve.empty()) continue;  // imr: already in DRAM
+    const auto compressed = static_cast<std::uint64_t>(std::ceil(static_cast<double>(bytes) * ratio));
+    if (partial) {
+      // The tile buffer is needed for the next render: everything leaves the chip, transient or not.
+      dram.write(traffic_class_of(a.usage), compressed);
+      stats_.partial_store_bytes += compressed;
+      continue;
+    }
+    if (!a.resolve.empty()) {
+      // Average the samples into the resolve target (its own store op books the traffic).
+      AttachmentImage& src = ctx_.images->attachments.at(a.name);
+      AttachmentImage& dst = ctx_.images->attachments.at(a.resolve);
+      const std::size_t S = src.samples;
+      for (int y = r.y0; y < r.y1; ++y) {
+        for (int x = r.x0; x < r.x1; ++x) {
+          const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
+          glm::vec4 sum(0.0f);
+          for (std::size_t s = 0; s < S; ++s) sum += src.color[p * S + s];
+          dst.color[p] = sum / static_cast<float>(S);
+        }
+      }
+      stats_.resolved_samples += static_cast<std::uint64_t>(r.width()) * static_cast<std::uint64_t>(r.height()) * S;
+    }
+    if (a.store == StoreOp::Store && !a.transient) {
+      stats_.store_bytes += bytes;
+      stats_.writeback_dram_bytes += compressed;
+      dram.write(traffic_class_of(a.usage), compressed);
+    }
+  }
+  if (spill_per_pixel_ > 0 && !partial) {
+    const std::uint64_t b = spill_per_pixel_ * static_cast<std::uint64_t>(r.width()) * static_cast<std::uint64_t>(r.height());
+    dram.write(DramClass::Spill, b);
+    stats_.spill_bytes += b;
+  }
+}
+
+}  // namespace tbdr

@@ -1,0 +1,64 @@
+#pragma once
+// On-chip tile memory and pixel local storage: how many bytes per pixel a pass keeps on chip
+// (its color-like attachments at their sample count, plus PLS) against the configured budget,
+// the load ops at the start of a tile (clear / load from DRAM / don't care), the store ops and
+// the writeback at its end (with the framebuffer compression ratio), the resolve of multisampled
+// attachments, and the stores and reloads of a partial render. Transient attachments never
+// touch DRAM. A pass over budget pays per pls.over_budget: `smaller_tiles` renders each tile as
+// several strips that fit (each strip re-reads the tile's parameter buffer data and re-rasterises
+// its primitives), `spill` writes and reads back the excess bytes of every pixel through DRAM.
+#include <cstdint>
+#include <vector>
+
+#include "models/render_state.hpp"
+#include "models/traffic.hpp"
+#include "sim/stats.hpp"
+
+namespace tbdr {
+
+/// Statistics of tile memory and writeback.
+struct TileMemoryStats {
+  StatGroup group;
+  Counter need_bytes_per_pixel{group, {"onchip_need_bytes_per_pixel", "bytes/pixel", "Tile memory the pass needs per pixel (attachments x samples + PLS)"}};
+  Counter budget_bytes_per_pixel{group, {"onchip_budget_bytes_per_pixel", "bytes/pixel", "Tile memory available per pixel"}};
+  Counter split_factor{group, {"tile_split_factor", "strips", "Strips each tile is rendered in to fit the budget (1 = fits)"}};
+  Counter load_bytes{group, {"tile_load_bytes", "bytes", "Attachment bytes loaded from DRAM into tile memory (uncompressed)"}};
+  Counter clear_bytes{group, {"tile_clear_bytes", "bytes", "Tile memory bytes initialised by clear load ops"}};
+  Counter store_bytes{group, {"tile_store_bytes", "bytes", "Attachment bytes written back from tile memory (uncompressed)"}};
+  Counter writeback_dram_bytes{group, {"writeback_dram_bytes", "bytes", "Bytes the writeback sent to DRAM after compression"}};
+  Counter partial_store_bytes{group, {"partial_render_store_bytes", "bytes", "Bytes stored to DRAM at partial renders"}};
+  Counter partial_reload_bytes{group, {"partial_render_reload_bytes", "bytes", "Bytes reloaded after partial renders"}};
+  Counter spill_bytes{group, {"spill_bytes", "bytes", "Bytes spilled to DRAM and read back (pls.over_budget = spill)"}};
+  Counter resolved_samples{group, {"resolved_samples", "samples", "Multisampled samples averaged into resolve targets"}};
+  explicit TileMemoryStats(std::string scope) : group(std::move(scope)) {}
+};
+
+/// The DRAM traffic class of an attachment usage.
+DramClass traffic_class_of(AttachmentUsage u);
+
+/// Tile memory of one pass.
+class TileMemory {
+ public:
+  /// Computes the pass's on-chip needs against the budget and records them in `stats`.
+  TileMemory(RenderContext& ctx, TileMemoryStats& stats);
+
+  std::uint32_t need_bytes_per_pixel() const { return need_; }
+  std::uint32_t budget_bytes_per_pixel() const { return budget_; }
+  /// The strips a tile is rendered in (one strip when the pass fits).
+  std::vector<PixelRect> strips(const PixelRect& tile) const;
+  /// Start of a tile render: load ops, or the reload of what a partial render stored.
+  void begin_tile(const PixelRect& rect, bool resumed_after_partial, DramTraffic& dram);
+  /// End of a tile render: store ops (partial = a partial render: everything goes to DRAM).
+  void end_tile(const PixelRect& rect, bool partial, DramTraffic& dram);
+
+ private:
+  std::uint64_t attachment_bytes(const Attachment& a, const PixelRect& r) const;
+  RenderContext& ctx_;
+  TileMemoryStats& stats_;
+  std::uint32_t need_ = 0;
+  std::uint32_t budget_ = 0;
+  int split_ = 1;
+  std::uint32_t spill_per_pixel_ = 0;
+};
+
+}  // namespace tbdr

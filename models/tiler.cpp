@@ -1,0 +1,156 @@
+#include "models/tiler.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace tbdr {
+
+Tiler::Tiler(const HwConfig& hw, const Viewport& viewport, const SamplePattern& pattern)
+    : hw_(hw),
+      pattern_(pattern),
+      test_(hw.tiling.binning == "bbox" ? TileTest::BoundingBox : TileTest::Exact),
+      tile_w_(static_cast<int>(hw.tiling.tile_width)),
+      tile_h_(static_cast<int>(hw.tiling.tile_height)),
+      tiles_x_((viewport.width_px + tile_w_ - 1) / tile_w_),
+      tiles_y_((viewport.height_px + tile_h_ - 1) / tile_h_),
+      viewport_(viewport),
+      tiles_(static_cast<std::size_t>(tiles_x_) * static_cast<std::size_t>(tiles_y_)) {}
+
+PixelRect Tiler::tile_rect(int t) const {
+  const int tx = t % tiles_x_, ty = t / tiles_x_;
+  return intersect({tx * tile_w_, ty * tile_h_, (tx + 1) * tile_w_, (ty + 1) * tile_h_},
+                   {0, 0, viewport_.width_px, viewport_.height_px});
+}
+
+std::uint64_t Tiler::block_bytes(std::uint32_t vertices, std::uint32_t prims, std::uint32_t varyings) const {
+  const auto& t = hw_.tiling;
+  const double vertex_bytes = static_cast<double>(t.pb_vertex_position_bytes + t.pb_varying_bytes * varyings);
+  const double compressed = std::ceil(vertex_bytes * vertices * t.pb_compression_ratio);
+  return static_cast<std::uint64_t>(t.prim_block_header_bytes) + static_cast<std::uint64_t>(compressed) +
+         static_cast<std::uint64_t>(t.prim_index_bytes) * prims;
+}
+
+std::uint64_t Tiler::allocated_with(std::uint64_t extra_block_bytes, std::uint64_t extra_ctrl_blocks) const {
+  const auto page = static_cast<std::uint64_t>(hw_.tiling.pb_page_bytes);
+  const std::uint64_t open_bytes = open_ ? block_bytes(static_cast<std::uint32_t>(open_keys_.size()), open_prims_, open_varyings_) : 0;
+  const std::uint64_t data = closed_block_bytes_ + open_bytes + extra_block_bytes;
+  const std::uint64_t ctrl = (ctrl_blocks_ + extra_ctrl_blocks) * static_cast<std::uint64_t>(hw_.tiling.control_stream_block_bytes);
+  const std::uint64_t headers = static_cast<std::uint64_t>(hw_.tiling.region_header_bytes) * tiles_.size();
+  auto pages = [page](std::uint64_t b) { return (b + page - 1) / page * page; };
+  return pages(data) + pages(ctrl) + pages(headers);
+}
+
+std::uint64_t Tiler::allocated_bytes() const { return allocated_with(0, 0); }
+
+void Tiler::close_block() {
+  if (!open_) return;
+  block_sizes_.push_back(block_bytes(static_cast<std::uint32_t>(open_keys_.size()), open_prims_, open_varyings_));
+  closed_block_bytes_ += block_sizes_.back();
+  block_vertices_total_ += open_keys_.size();
+  open_ = false;
+  open_keys_.clear();
+  open_prims_ = 0;
+}
+
+bool Tiler::bin(std::uint32_t index, const Primitive& p, TilerStats& stats) {
+  touched_.clear();
+  for_each_overlapped_tile(p.setup, tile_w_, tile_h_, test_, pattern_,
+                           [&](int tx, int ty) { touched_.push_back(ty * tiles_x_ + tx); });
+  if (touched_.empty()) return true;  // covers no sample: dropped, nothing written
+
+  // Which primitive block the primitive joins.
+  std::uint32_t new_keys = 0;
+  std::uint64_t keys[3];
+  for (int i = 0; i < 3; ++i) {
+    keys[i] = p.vertex_key[i];
+    bool seen = std::find(open_keys_.begin(), open_keys_.end(), keys[i]) != open_keys_.end();
+    for (int j = 0; j < i && !seen; ++j) seen = keys[j] == keys[i];
+    if (!seen) ++new_keys;
+  }
+  const bool fits = open_ && open_draw_ == p.draw &&
+                    open_prims_ < static_cast<std::uint32_t>(hw_.tiling.prim_block_max_primitives) &&
+                    open_keys_.size() + new_keys <= static_cast<std::size_t>(hw_.tiling.prim_block_max_vertices);
+  const std::uint32_t block_id = static_cast<std::uint32_t>(block_sizes_.size()) + (open_ && !fits ? 1u : 0u);
+
+  // Control stream growth.
+  const auto entry = static_cast<std::uint64_t>(hw_.tiling.control_stream_entry_bytes);
+  const auto cblock = static_cast<std::uint64_t>(hw_.tiling.control_stream_block_bytes);
+  auto blocks_for = [&](std::uint64_t entries) { return (entries * entry + cblock - 1) / cblock; };
+  std::uint64_t extra_ctrl = 0;
+  for (int t : touched_) {
+    const auto& tb = tiles_[static_cast<std::size_t>(t)];
+    if (tb.blocks.empty() || tb.blocks.back() != block_id) {
+      extra_ctrl += blocks_for(tb.blocks.size() + 1) - blocks_for(tb.blocks.size());
+    }
+  }
+  // Capacity check with the primitive's vertex data included (a new block adds its header).
+  const std::uint64_t vertex_bytes = block_bytes(fits ? static_cast<std::uint32_t>(open_keys_.size()) + new_keys : 3,
+                                                 fits ? open_prims_ + 1 : 1, p.varyings) -
+                                     (fits ? block_bytes(static_cast<std::uint32_t>(open_keys_.size()), open_prims_, p.varyings) : 0);
+  const auto capacity = static_cast<std::uint64_t>(hw_.tiling.pb_capacity_bytes);
+  if (binned_ > 0 && allocated_with(vertex_bytes, extra_ctrl) > capacity) return false;
+
+  if (!fits) {
+    close_block();
+    open_ = true;
+    open_draw_ = p.draw;
+    open_varyings_ = p.varyings;
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (std::find(open_keys_.begin(), open_keys_.end(), keys[i]) == open_keys_.end()) open_keys_.push_back(keys[i]);
+  }
+  ++open_prims_;
+  for (int t : touched_) {
+    auto& tb = tiles_[static_cast<std::size_t>(t)];
+    tb.prims.push_back(index);
+    if (tb.blocks.empty() || tb.blocks.back() != block_id) {
+      ctrl_blocks_ += blocks_for(tb.blocks.size() + 1) - blocks_for(tb.blocks.size());
+      tb.blocks.push_back(block_id);
+      ++stats.control_stream_entries;
+    }
+  }
+  ++binned_;
+  ++stats.primitives_binned;
+  stats.tile_references += touched_.size();
+  return true;
+}
+
+void Tiler::finish_render(TilerStats& stats, DramTraffic& dram) {
+  close_block();
+  const std::uint64_t ctrl_bytes = ctrl_blocks_ * static_cast<std::uint64_t>(hw_.tiling.control_stream_block_bytes);
+  const std::uint64_t headers = static_cast<std::uint64_t>(hw_.tiling.region_header_bytes) * tiles_.size();
+  stats.primitive_blocks += block_sizes_.size();
+  stats.pb_vertices += block_vertices_total_;
+  stats.pb_primitive_block_bytes += closed_block_bytes_;
+  stats.pb_control_stream_bytes += ctrl_bytes;
+  stats.pb_region_header_bytes += headers;
+  stats.pb_bytes_written += closed_block_bytes_ + ctrl_bytes + headers;
+  const std::uint64_t alloc = allocated_bytes();
+  if (alloc > stats.pb_peak_allocated_bytes.value()) stats.pb_peak_allocated_bytes += alloc - stats.pb_peak_allocated_bytes.value();
+  dram.write(DramClass::ParameterBuffer, closed_block_bytes_ + ctrl_bytes + headers);
+}
+
+std::uint64_t Tiler::tile_read_bytes(int t) const {
+  const auto& tb = tiles_[static_cast<std::size_t>(t)];
+  std::uint64_t bytes = static_cast<std::uint64_t>(hw_.tiling.region_header_bytes) +
+                        tb.blocks.size() * static_cast<std::uint64_t>(hw_.tiling.control_stream_entry_bytes);
+  for (std::uint32_t b : tb.blocks) bytes += block_sizes_[b];
+  return bytes;
+}
+
+void Tiler::reset() {
+  for (auto& tb : tiles_) {
+    tb.prims.clear();
+    tb.blocks.clear();
+  }
+  block_sizes_.clear();
+  open_ = false;
+  open_keys_.clear();
+  open_prims_ = 0;
+  closed_block_bytes_ = 0;
+  ctrl_blocks_ = 0;
+  binned_ = 0;
+  block_vertices_total_ = 0;
+}
+
+}  // namespace tbdr

@@ -1,0 +1,98 @@
+#pragma once
+// The tiler: bins every primitive into the tiles it overlaps and writes the parameter buffer with
+// its real byte layout: primitive blocks (at most N vertices of screen-space vertex data plus
+// per-primitive index data), per-tile control streams in fixed-size blocks listing the primitive
+// blocks that touch the tile, and one region header per tile, allocated in pages. When the next
+// primitive would not fit in the configured capacity, bin() refuses it and the caller runs a
+// partial render.
+#include <cstdint>
+#include <vector>
+
+#include "models/hw_config.hpp"
+#include "models/rasterizer.hpp"
+#include "models/render_state.hpp"
+#include "models/traffic.hpp"
+#include "sim/stats.hpp"
+
+namespace tbdr {
+
+/// Statistics of the tiler and the parameter buffer.
+struct TilerStats {
+  StatGroup group;
+  Counter primitives_binned{group, {"primitives_binned", "primitives", "Primitives written to the parameter buffer"}};
+  Counter tile_references{group, {"tile_references", "references", "Sum over primitives of the tiles each touches"}};
+  Counter primitive_blocks{group, {"primitive_blocks", "blocks", "Primitive blocks written"}};
+  Counter pb_vertices{group, {"pb_vertices", "vertices", "Vertices written into primitive blocks"}};
+  Counter control_stream_entries{group, {"control_stream_entries", "entries", "Control stream entries (tile x primitive block)"}};
+  Counter pb_primitive_block_bytes{group, {"pb_primitive_block_bytes", "bytes", "Primitive block bytes written"}};
+  Counter pb_control_stream_bytes{group, {"pb_control_stream_bytes", "bytes", "Control stream bytes allocated (whole blocks)"}};
+  Counter pb_region_header_bytes{group, {"pb_region_header_bytes", "bytes", "Region header bytes written"}};
+  Counter pb_bytes_written{group, {"pb_bytes_written", "bytes", "Parameter buffer bytes written in all"}};
+  Counter pb_bytes_read{group, {"pb_bytes_read", "bytes", "Parameter buffer bytes read back by the ISP"}};
+  Counter pb_peak_allocated_bytes{group, {"pb_peak_allocated_bytes", "bytes", "Largest page-rounded parameter buffer use of one render"}};
+  Counter partial_renders{group, {"partial_renders", "renders", "Renders forced by a full parameter buffer"}};
+  explicit TilerStats(std::string scope) : group(std::move(scope)) {}
+};
+
+/// The tiling engine and the parameter buffer of one render.
+class Tiler {
+ public:
+  Tiler(const HwConfig& hw, const Viewport& viewport, const SamplePattern& pattern);
+
+  int tiles_x() const { return tiles_x_; }
+  int tiles_y() const { return tiles_y_; }
+  int tile_count() const { return tiles_x_ * tiles_y_; }
+  int tile_width() const { return tile_w_; }
+  int tile_height() const { return tile_h_; }
+  /// Pixel rectangle of tile t (clipped to the viewport).
+  PixelRect tile_rect(int t) const;
+
+  /// Bins primitive `index` of the render's primitive table. Returns false, binning nothing, when
+  /// the page-rounded parameter buffer would exceed its capacity: the caller renders what is
+  /// binned (a partial render), calls reset(), and bins the primitive again.
+  bool bin(std::uint32_t index, const Primitive& p, TilerStats& stats);
+  /// Closes the open primitive block and books the render's parameter buffer writes and region
+  /// headers (call once per render, before the tiles are rendered).
+  void finish_render(TilerStats& stats, DramTraffic& dram);
+  /// Primitives binned into tile t, in submission order.
+  const std::vector<std::uint32_t>& tile_primitives(int t) const { return tiles_[static_cast<std::size_t>(t)].prims; }
+  /// Parameter buffer bytes the ISP reads to render tile t: region header, control stream and
+  /// every primitive block it references.
+  std::uint64_t tile_read_bytes(int t) const;
+  /// True when nothing has been binned since the last reset.
+  bool empty() const { return binned_ == 0; }
+  /// Frees the parameter buffer after a render.
+  void reset();
+  /// Current page-rounded allocation.
+  std::uint64_t allocated_bytes() const;
+
+ private:
+  struct TileBin {
+    std::vector<std::uint32_t> prims;
+    std::vector<std::uint32_t> blocks;  ///< primitive blocks referenced, in order (control stream entries)
+  };
+  std::uint64_t block_bytes(std::uint32_t vertices, std::uint32_t prims, std::uint32_t varyings) const;
+  std::uint64_t allocated_with(std::uint64_t extra_block_bytes, std::uint64_t extra_ctrl_blocks) const;
+  void close_block();
+
+  const HwConfig& hw_;
+  SamplePattern pattern_;
+  TileTest test_;
+  int tile_w_, tile_h_, tiles_x_, tiles_y_;
+  Viewport viewport_;
+  std::vector<TileBin> tiles_;
+  std::vector<std::uint64_t> block_sizes_;  ///< bytes of each closed block
+  // The open primitive block.
+  std::vector<std::uint64_t> open_keys_;
+  std::uint32_t open_prims_ = 0;
+  std::uint32_t open_draw_ = 0;
+  std::uint32_t open_varyings_ = 0;
+  bool open_ = false;
+  std::uint64_t closed_block_bytes_ = 0;
+  std::uint64_t ctrl_blocks_ = 0;  ///< control stream blocks allocated over all tiles
+  std::uint64_t binned_ = 0;
+  std::uint64_t block_vertices_total_ = 0;
+  std::vector<int> touched_;  ///< scratch
+};
+
+}  // namespace tbdr

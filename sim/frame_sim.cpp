@@ -1,0 +1,366 @@
+#include "sim/frame_sim.hpp"
+
+#include <algorithm>
+#include <map>
+#include <memory>
+#include <stdexcept>
+
+#include "models/geometry_unit.hpp"
+#include "models/isp.hpp"
+#include "models/tile_memory.hpp"
+#include "models/tiler.hpp"
+#include "models/tsp.hpp"
+#include "sim/errors.hpp"
+
+namespace tbdr {
+
+namespace {
+
+/// Statistics of one pass, one group per unit.
+struct PassStats {
+  GeometryStats geometry;
+  TilerStats tiler;
+  IspStats isp;
+  TspStats tsp;
+  TileMemoryStats tile_memory;
+  DramTraffic dram;
+  explicit PassStats(const std::string& prefix)
+      : geometry(prefix + "/geometry"),
+        tiler(prefix + "/tiler"),
+        isp(prefix + "/isp"),
+        tsp(prefix + "/tsp"),
+        tile_memory(prefix + "/tile_memory") {}
+  void collect(std::vector<StatRecord>& out) const {
+    geometry.group.collect(out);
+    tiler.group.collect(out);
+    isp.group.collect(out);
+    tsp.group.collect(out);
+    tile_memory.group.collect(out);
+  }
+};
+
+void collect_dram(const std::string& prefix, const DramTraffic& dram, std::vector<StatRecord>& out) {
+  std::uint64_t r = 0, w = 0;
+  for (std::size_t c = 0; c < kDramClassCount; ++c) {
+    const std::string scope = prefix + "/dram." + to_string(static_cast<DramClass>(c));
+    out.push_back({scope, "read_bytes", static_cast<double>(dram.read_bytes[c]), "bytes", "DRAM bytes read for this traffic class"});
+    out.push_back({scope, "write_bytes", static_cast<double>(dram.write_bytes[c]), "bytes", "DRAM bytes written for this traffic class"});
+    r += dram.read_bytes[c];
+    w += dram.write_bytes[c];
+  }
+  out.push_back({prefix + "/dram", "read_bytes", static_cast<double>(r), "bytes", "DRAM bytes read, all classes"});
+  out.push_back({prefix + "/dram", "write_bytes", static_cast<double>(w), "bytes", "DRAM bytes written, all classes"});
+}
+
+/// Tile indices in the configured dispatch order.
+std::vector<int> tile_order(int tiles_x, int tiles_y, const std::string& order) {
+  std::vector<int> out;
+  out.reserve(static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y));
+  if (order == "morton") {
+    std::vector<std::pair<std::uint64_t, int>> keyed;
+    for (int ty = 0; ty < tiles_y; ++ty) {
+      for (int tx = 0; tx < tiles_x; ++tx) {
+        std::uint64_t key = 0;
+        for (int b = 0; b < 16; ++b) {
+          key |= (static_cast<std::uint64_t>((tx >> b) & 1) << (2 * b)) | (static_cast<std::uint64_t>((ty >> b) & 1) << (2 * b + 1));
+        }
+        keyed.push_back({key, ty * tiles_x + tx});
+      }
+    }
+    std::sort(keyed.begin(), keyed.end());
+    for (const auto& k : keyed) out.push_back(k.second);
+  } else {
+    for (int t = 0; t < tiles_x * tiles_y; ++t) out.push_back(t);
+  }
+  return out;
+}
+
+/// Builds the per-32px-tile light candidate lists used to compute colors quickly and exactly.
+void build_light_tiles(RenderContext& ctx) {
+  ctx.light_tile_px = 32;
+  ctx.light_tiles_x = (ctx.viewport.width_px + ctx.light_tile_px - 1) / ctx.light_tile_px;
+  const int ty_n = (ctx.viewport.height_px + ctx.light_tile_px - 1) / ctx.light_tile_px;
+  ctx.light_tiles.assign(static_cast<std::size_t>(ctx.light_tiles_x) * static_cast<std::size_t>(ty_n), {});
+  for (std::uint32_t l = 0; l < ctx.lights->size(); ++l) {
+    const PixelRect r = light_screen_rect((*ctx.lights)[l], ctx.camera, ctx.viewport);
+    if (r.empty()) continue;
+    for (int ty = r.y0 / ctx.light_tile_px; ty <= (r.y1 - 1) / ctx.light_tile_px; ++ty) {
+      for (int tx = r.x0 / ctx.light_tile_px; tx <= (r.x1 - 1) / ctx.light_tile_px; ++tx) {
+        ctx.light_tiles[static_cast<std::size_t>(ty * ctx.light_tiles_x + tx)].push_back(l);
+      }
+    }
+  }
+}
+
+bool is_resolve_target(const PassDesc& pass, const Attachment& a) {
+  for (const auto& o : pass.attachments) {
+    if (o.resolve == a.name) return true;
+  }
+  return false;
+}
+
+class FrameSimulator {
+ public:
+  FrameSimulator(const Trace& trace, const std::string& path, const Scene& scene, const HwConfig& hw)
+      : trace_(trace), path_(path), scene_(scene), hw_(hw) {}
+
+  FrameResult run() {
+    const auto& f = trace_.frame;
+    viewport_ = Viewport{f.width, f.height, static_cast<int>(hw_.geometry.subpixel_bits)};
+    try {
+      validate_viewport(viewport_);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(path_, f.line, e.what());
+    }
+    if (!trace_.scene.content_hash.empty() && trace_.scene.content_hash != scene_.content_hash) {
+      throw InputError(path_, trace_.scene.line,
+                       "scene content hash " + trace_.scene.content_hash + " does not match the loaded scene '" +
+                           scene_.source + "' (" + scene_.content_hash + "); regenerate the trace for this scene");
+    }
+    camera_ = CameraXform::from(trace_.camera, static_cast<float>(f.width) / static_cast<float>(f.height));
+    result_.images.width = f.width;
+    result_.images.height = f.height;
+    result_.images.counters.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height));
+
+    int pass_index = 0;
+    std::uint64_t dispatches = 0;
+    for (const auto& cmd : trace_.commands) {
+      if (const auto* pass = std::get_if<PassDesc>(&cmd)) {
+        run_pass(*pass, pass_index++);
+      } else if (const auto* d = std::get_if<DispatchCmd>(&cmd)) {
+        ++dispatches;
+        throw InputError(path_, d->line, "compute kernel '" + d->kernel + "' is not supported by this tbdrsim version");
+      }
+      // Barriers order work; in the functional model every command completes before the next.
+    }
+    // Frame totals: sums over passes per unit (gauges take the largest pass value).
+    std::map<std::pair<std::string, std::string>, StatRecord> totals;
+    std::vector<std::pair<std::string, std::string>> order;
+    for (const auto& r : result_.stats) {
+      const auto slash = r.scope.find('/');
+      const std::string unit = r.scope.substr(slash + 1);
+      if (unit.rfind("dram", 0) == 0) continue;
+      const auto key = std::make_pair(unit, r.name);
+      auto it = totals.find(key);
+      if (it == totals.end()) {
+        StatRecord t = r;
+        t.scope = "frame/" + unit;
+        totals.emplace(key, t);
+        order.push_back(key);
+      } else if (r.name.rfind("onchip_", 0) == 0 || r.name == "tile_split_factor" || r.name == "pb_peak_allocated_bytes") {
+        it->second.value = std::max(it->second.value, r.value);
+      } else {
+        it->second.value += r.value;
+      }
+    }
+    for (const auto& k : order) result_.stats.push_back(totals.at(k));
+    collect_dram("frame", result_.dram, result_.stats);
+    auto frame_stat = [&](const char* name, double v, const char* unit, const char* desc) {
+      result_.stats.push_back({"frame/frame", name, v, unit, desc});
+    };
+    frame_stat("width", f.width, "pixels", "Frame width");
+    frame_stat("height", f.height, "pixels", "Frame height");
+    frame_stat("samples_per_pixel", f.samples, "samples", "MSAA samples per pixel of the trace");
+    frame_stat("lights", static_cast<double>(trace_.lights.size()), "lights", "Lights in the trace");
+    frame_stat("passes", pass_index, "passes", "Render passes replayed");
+    frame_stat("dispatches", static_cast<double>(dispatches), "dispatches", "Compute dispatches replayed");
+    frame_stat("scene_triangles", static_cast<double>(scene_.triangle_count()), "triangles", "Triangles in the scene");
+    return std::move(result_);
+  }
+
+ private:
+  void prepare_attachments(const PassDesc& pass, RenderContext& ctx) {
+    int samples = -1;
+    for (const auto& a : pass.attachments) {
+      if (is_resolve_target(pass, a)) {
+        if (a.samples != 1) throw InputError(path_, a.line, "resolve target '" + a.name + "' must have 1 sample");
+        continue;
+      }
+      if (samples < 0) samples = static_cast<int>(a.samples);
+      if (static_cast<int>(a.samples) != samples) {
+        throw InputError(path_, a.line, "attachment '" + a.name + "' has " + std::to_string(a.samples) +
+                                            " samples but the pass's other attachments have " + std::to_string(samples));
+      }
+    }
+    if (samples < 0) samples = trace_.frame.samples;
+    try {
+      ctx.pattern = standard_sample_pattern(samples, viewport_.subpixel_bits);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(path_, pass.line, e.what());
+    }
+    const std::size_t pixels = static_cast<std::size_t>(viewport_.width_px) * static_cast<std::size_t>(viewport_.height_px);
+    for (const auto& a : pass.attachments) {
+      auto it = result_.images.attachments.find(a.name);
+      if (it == result_.images.attachments.end()) {
+        AttachmentImage img;
+        img.format = a.format;
+        img.samples = a.samples;
+        img.usage = a.usage;
+        if (is_depth_format(a.format)) {
+          img.depth.assign(pixels * a.samples, 1.0f);
+          img.stencil.assign(pixels * a.samples, 0);
+        } else {
+          img.color.assign(pixels * a.samples, glm::vec4(0.0f));
+        }
+        it = result_.images.attachments.emplace(a.name, std::move(img)).first;
+      } else if (it->second.format != a.format || it->second.samples != a.samples) {
+        throw InputError(path_, a.line, "attachment '" + a.name + "' was declared earlier with another format or sample count");
+      }
+      if (a.load == LoadOp::Load && !a.transient && !it->second.defined) {
+        throw InputError(path_, a.line, "attachment '" + a.name + "' is loaded but no earlier pass stored it");
+      }
+    }
+    for (const Attachment* a : pass.color_targets()) ctx.color_targets.push_back(&result_.images.attachments.at(a->name));
+    if (const Attachment* d = pass.depth_attachment()) ctx.depth = &result_.images.attachments.at(d->name);
+  }
+
+  void resolve_draws(const PassDesc& pass, RenderContext& ctx) {
+    const auto n_lights = static_cast<std::uint32_t>(trace_.lights.size());
+    for (std::size_t i = 0; i < pass.draws.size(); ++i) {
+      const DrawCmd& cmd = pass.draws[i];
+      DrawContext d;
+      d.cmd = &cmd;
+      d.pass_draw_index = static_cast<std::uint32_t>(i);
+      d.pipeline = trace_.find_pipeline(cmd.pipeline);
+      if (!d.pipeline) throw InputError(path_, cmd.line, "unknown pipeline '" + cmd.pipeline + "'");
+      d.shader = trace_.find_shader(d.pipeline->shader);
+      if (!d.shader) throw InputError(path_, d.pipeline->line, "unknown shader '" + d.pipeline->shader + "'");
+      switch (d.shader->light_source) {
+        case LightSource::TileList:
+        case LightSource::ClusterList:
+        case LightSource::PlsStack:
+          throw InputError(path_, d.shader->line,
+                           std::string("light source '") + to_string(d.shader->light_source) +
+                               "' is not supported by this tbdrsim version");
+        default: break;
+      }
+      if (d.shader->color_outputs > ctx.color_targets.size()) {
+        throw InputError(path_, cmd.line, "shader '" + d.shader->name + "' writes " + std::to_string(d.shader->color_outputs) +
+                                              " color outputs but pass '" + pass.name + "' has " +
+                                              std::to_string(ctx.color_targets.size()) + " color attachments");
+      }
+      d.light_selected.assign(n_lights, 0);
+      for (std::uint32_t l = 0; l < n_lights; ++l) {
+        if (cmd.lights.contains(l)) {
+          d.lights.push_back(l);
+          d.light_selected[l] = 1;
+        }
+      }
+      ctx.draws.push_back(std::move(d));
+    }
+  }
+
+  void run_pass(const PassDesc& pass, int index) {
+    const std::string prefix = "pass" + std::to_string(index) + "." + pass.name;
+    auto ps = std::make_unique<PassStats>(prefix);
+    RenderContext ctx;
+    ctx.hw = &hw_;
+    ctx.scene = &scene_;
+    ctx.lights = &trace_.lights;
+    ctx.camera = camera_;
+    ctx.viewport = viewport_;
+    ctx.pass = &pass;
+    ctx.images = &result_.images;
+    ctx.defer_shading = hw_.gpu.mode == "tbdr";
+    ctx.framebuffer_in_dram = hw_.gpu.mode == "imr";
+    prepare_attachments(pass, ctx);
+    resolve_draws(pass, ctx);
+    build_light_tiles(ctx);
+
+    // imr has no binning: the whole frame is one "tile" and nothing goes through a parameter buffer.
+    HwConfig hw = hw_;
+    if (ctx.framebuffer_in_dram) {
+      hw.tiling.tile_width = viewport_.width_px;
+      hw.tiling.tile_height = viewport_.height_px;
+      hw.tiling.pb_capacity_bytes = std::int64_t{1} << 62;
+    }
+    ctx.hw = &hw;
+    GeometryUnit geometry(hw, &scene_, trace_.lights, camera_, viewport_);
+    Tiler tiler(hw, viewport_, ctx.pattern);
+    TileMemory tile_memory(ctx, ps->tile_memory);
+    Tsp tsp(ctx);
+    Isp isp(ctx, tsp);
+    const std::vector<int> order = tile_order(tiler.tiles_x(), tiler.tiles_y(), hw.tiling.tile_order);
+    std::vector<std::uint8_t> resumed(static_cast<std::size_t>(tiler.tile_count()), 0);
+    DramTraffic& dram = ps->dram;
+
+    auto render = [&](bool partial) {
+      DramTraffic pb;
+      tiler.finish_render(ps->tiler, pb);
+      if (!ctx.framebuffer_in_dram) dram += pb;
+      for (int t : order) {
+        const auto& prims = tiler.tile_primitives(t);
+        if (partial && prims.empty()) continue;  // untouched: nothing to render yet
+        const std::uint64_t pb_read = prims.empty() ? 0 : tiler.tile_read_bytes(t);
+        for (const PixelRect& r : tile_memory.strips(tiler.tile_rect(t))) {
+          tile_memory.begin_tile(r, resumed[static_cast<std::size_t>(t)] != 0, dram);
+          isp.render_tile(r, prims, ps->isp, ps->tsp);
+          tile_memory.end_tile(r, partial, dram);
+          if (!ctx.framebuffer_in_dram) {
+            ps->tiler.pb_bytes_read += pb_read;
+            dram.read(DramClass::ParameterBuffer, pb_read);
+          }
+        }
+        if (partial) resumed[static_cast<std::size_t>(t)] = 1;
+      }
+      tiler.reset();
+      ctx.prims.clear();
+    };
+
+    std::vector<Primitive> staged;
+    for (std::uint32_t i = 0; i < ctx.draws.size(); ++i) {
+      staged.clear();
+      geometry.run_draw(ctx.draws[i], i, staged, ctx.object_lights, ps->geometry, dram);
+      for (const Primitive& p : staged) {
+        ctx.prims.push_back(p);
+        if (!tiler.bin(static_cast<std::uint32_t>(ctx.prims.size() - 1), ctx.prims.back(), ps->tiler)) {
+          ctx.prims.pop_back();
+          ++ps->tiler.partial_renders;
+          render(true);
+          ctx.prims.push_back(p);
+          tiler.bin(0, ctx.prims.back(), ps->tiler);
+        }
+      }
+    }
+    render(false);
+    if (ctx.framebuffer_in_dram) {
+      // The depth and color accesses of an immediate-mode GPU go to DRAM (caches come with the timing model).
+      dram.read(DramClass::DepthStencil, ps->isp.depth_read_bytes.value());
+      dram.write(DramClass::DepthStencil, ps->isp.depth_write_bytes.value());
+      dram.read(DramClass::Color, ps->tsp.tile_buffer_read_bytes.value());
+      dram.write(DramClass::Color, ps->tsp.tile_buffer_write_bytes.value());
+    }
+    for (const auto& a : pass.attachments) {
+      AttachmentImage& img = result_.images.attachments.at(a.name);
+      img.defined = a.store == StoreOp::Store && !a.transient;
+      if (img.defined && a.usage == AttachmentUsage::Color) result_.final_color = a.name;
+    }
+    ps->collect(result_.stats);
+    collect_dram(prefix, dram, result_.stats);
+    PassSummary summary;
+    summary.name = pass.name;
+    summary.primitives = ps->geometry.primitives_out.value();
+    summary.shaded_samples = ps->tsp.shaded_samples.value();
+    summary.partial_renders = ps->tiler.partial_renders.value();
+    summary.dram = dram;
+    result_.passes.push_back(summary);
+    result_.dram += dram;
+  }
+
+  const Trace& trace_;
+  const std::string& path_;
+  const Scene& scene_;
+  const HwConfig& hw_;
+  Viewport viewport_;
+  CameraXform camera_;
+  FrameResult result_;
+};
+
+}  // namespace
+
+FrameResult simulate_frame(const Trace& trace, const std::string& trace_path, const Scene& scene, const HwConfig& hw) {
+  FrameSimulator sim(trace, trace_path, scene, hw);
+  return sim.run();
+}
+
+}  // namespace tbdr
