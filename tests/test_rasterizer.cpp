@@ -189,7 +189,7 @@ TEST_P(RasterWatertight, GridOfTrianglePairsCoversRectOnce) {
   expect_covers_rect_once(tris, vp, samples, x0, y0, x1, y1);
 }
 
-INSTANTIATE_TEST_SUITE_P(Samples, RasterWatertight, ::testing::Values(1, 2, 4, 8, 16));
+INSTANTIATE_TEST_SUITE_P(RasterMsaa, RasterWatertight, ::testing::Values(1, 2, 4, 8, 16));
 
 TEST(RasterSamplePattern, StandardPositionsInFixedPoint) {
   const SamplePattern p1 = standard_sample_pattern(1, 8);
