@@ -1,0 +1,321 @@
+// The functional TBDR pipeline on small synthetic scenes whose counts can be worked out by hand:
+// tag-buffer HSR, punch-through and translucent flushes, writeback, partial renders.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "models/hw_config.hpp"
+#include "sim/frame_sim.hpp"
+#include "sim/trace.hpp"
+#include "workloads/lights.hpp"
+#include "workloads/scene_library.hpp"
+#include "workloads/technique.hpp"
+
+namespace tbdr {
+namespace {
+
+constexpr int kSize = 64;  // 64x64 pixels = 4 tiles of 32x32 on the default GPU
+const float kTan30 = std::tan(glm::radians(30.0f));
+
+/// World x at depth d that projects to pixel column px (camera at the origin looking down -z,
+/// 60 degree field of view, square frame).
+float world_x(float px, float d) { return (px / (kSize / 2.0f) - 1.0f) * d * kTan30; }
+
+/// Adds a camera-facing quad at depth `d` spanning pixel columns [px0, px1) (the full height and
+/// beyond), with uv running 0..1 across it.
+void add_quad(Scene& s, const std::string& name, float d, float px0, float px1, std::uint32_t material) {
+  SubMesh m;
+  m.name = name;
+  m.material = material;
+  const float x0 = world_x(px0, d), x1 = world_x(px1, d), y = d * kTan30 * 1.5f;
+  m.positions = {{x0, -y, -d}, {x1, -y, -d}, {x1, y, -d}, {x0, y, -d}};
+  m.normals.assign(4, glm::vec3(0, 0, 1));
+  m.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  m.indices = {0, 1, 2, 0, 2, 3};
+  m.index_bytes = 2;
+  s.submeshes.push_back(m);
+  s.instances.push_back({static_cast<std::uint32_t>(s.submeshes.size() - 1), glm::mat4(1.0f), name});
+}
+
+Scene base_scene() {
+  Scene s;
+  s.name = "synthetic";
+  s.source = "synthetic";
+  Material opaque;
+  opaque.name = "opaque";
+  opaque.base_color = {0.8f, 0.5f, 0.3f, 1.0f};
+  Material masked;
+  masked.name = "masked";
+  masked.alpha_mode = AlphaMode::PunchThrough;
+  masked.alpha_cutoff = 0.5f;
+  masked.alpha_mask = 0;
+  Material glass;
+  glass.name = "glass";
+  glass.alpha_mode = AlphaMode::Translucent;
+  glass.base_color = {0.2f, 0.4f, 0.9f, 0.5f};
+  s.materials = {opaque, masked, glass};
+  // 2x1 mask: the left half of the uv range is transparent, the right half opaque.
+  s.alpha_masks.push_back(AlphaMask{2, 1, {0, 255}});
+  return s;
+}
+
+Trace base_trace() {
+  Trace t;
+  t.frame = {kSize, kSize, 1, 0};
+  t.camera.eye = {0, 0, 0};
+  t.camera.target = {0, 0, -1};
+  t.camera.up = {0, 1, 0};
+  t.camera.fov_y_deg = 60;
+  t.camera.near_plane = 0.5f;
+  t.camera.far_plane = 50;
+  ShaderDesc sh;
+  sh.name = "lit";
+  sh.alu_ops = 10;
+  sh.tex_fetches = 1;
+  sh.varyings = 8;
+  sh.color_outputs = 1;
+  t.shaders.push_back(sh);
+  PipelineState opaque;
+  opaque.name = "opaque";
+  opaque.shader = "lit";
+  PipelineState blend = opaque;
+  blend.name = "blend";
+  blend.depth_write = false;
+  blend.blend = BlendMode::Alpha;
+  t.pipelines = {opaque, blend};
+  return t;
+}
+
+PassDesc base_pass() {
+  PassDesc p;
+  p.name = "main";
+  Attachment color;
+  color.name = "color";
+  color.format = Format::Rgba8;
+  Attachment depth;
+  depth.name = "depth";
+  depth.format = Format::D24s8;
+  depth.usage = AttachmentUsage::Depth;
+  depth.store = StoreOp::DontCare;
+  depth.transient = true;
+  p.attachments = {color, depth};
+  return p;
+}
+
+DrawCmd draw_of(const std::string& submesh, const std::string& pipeline = "opaque") {
+  DrawCmd d;
+  d.pipeline = pipeline;
+  d.submesh = submesh;
+  return d;
+}
+
+double stat(const FrameResult& f, const std::string& scope, const std::string& name) {
+  for (const auto& r : f.stats) {
+    if (r.scope == scope && r.name == name) return r.value;
+  }
+  ADD_FAILURE() << "no statistic " << scope << " " << name;
+  return -1;
+}
+
+FrameResult run(const Scene& s, const std::vector<DrawCmd>& draws, const std::vector<std::string>& sets = {}) {
+  Trace t = base_trace();
+  PassDesc p = base_pass();
+  p.draws = draws;
+  t.commands.push_back(p);
+  const ResolvedConfig rc = resolve_config({}, sets);
+  return simulate_frame(t, "synthetic.trace", s, rc.hw);
+}
+
+TEST(PipelineHsr, OpaqueShadingIsIndependentOfSubmissionOrder) {
+  // Three overlapping opaque quads at depths 2, 3, 4 covering columns [0,40), [12,52), [24,64).
+  Scene s = base_scene();
+  add_quad(s, "near", 2, 0, 40, 0);
+  add_quad(s, "mid", 3, 12, 52, 0);
+  add_quad(s, "far", 4, 24, 64, 0);
+  const FrameResult f2b = run(s, {draw_of("near"), draw_of("mid"), draw_of("far")});
+  const FrameResult b2f = run(s, {draw_of("far"), draw_of("mid"), draw_of("near")});
+  // Every pixel is covered by at least one quad: a TBDR shades each exactly once, whatever the order.
+  const double covered = kSize * kSize;
+  EXPECT_EQ(stat(f2b, "frame/tsp", "shaded_samples"), covered);
+  EXPECT_EQ(stat(b2f, "frame/tsp", "shaded_samples"), covered);
+  EXPECT_EQ(stat(f2b, "frame/tsp", "shader_invocations"), covered);
+  EXPECT_EQ(stat(b2f, "frame/tsp", "shader_invocations"), covered);
+  // Rasterised: 40+40+40 columns of 64 rows. Front to back the hidden ones fail the depth test;
+  // back to front they pass it and overwrite pending tags (removed by HSR instead of shaded).
+  const double rasterised = 3 * 40 * kSize;
+  EXPECT_EQ(stat(f2b, "frame/isp", "samples_rasterised"), rasterised);
+  EXPECT_EQ(stat(f2b, "frame/isp", "depth_test_failed_samples"), rasterised - covered);
+  EXPECT_EQ(stat(f2b, "frame/isp", "hsr_removed_samples"), 0);
+  EXPECT_EQ(stat(b2f, "frame/isp", "depth_test_failed_samples"), 0);
+  EXPECT_EQ(stat(b2f, "frame/isp", "hsr_removed_samples"), rasterised - covered);
+  // Identical images.
+  EXPECT_EQ(f2b.images.attachments.at("color").color, b2f.images.attachments.at("color").color);
+  // The same trace on a tbr GPU (early-Z only) overshades back to front.
+  const FrameResult tbr = run(s, {draw_of("far"), draw_of("mid"), draw_of("near")}, {"gpu.mode=tbr"});
+  EXPECT_EQ(stat(tbr, "frame/tsp", "shaded_samples"), rasterised);
+}
+
+TEST(PipelineHsr, PunchThroughFlushesTagsAndWritesDepthAfterTheAlphaTest) {
+  // An opaque quad at depth 5 behind a punch-through quad at depth 3, both covering the frame.
+  // The mask kills the punch-through quad's left half (32 of 64 columns).
+  Scene s = base_scene();
+  add_quad(s, "wall", 5, -32, 96, 0);
+  add_quad(s, "leaves", 3, -32, 96, 1);  // uv 0.5 at column 32: columns < 32 transparent
+  const double tile = 32 * 32, frame = kSize * kSize;
+  {
+    // Opaque first: each of the 4 tiles holds 1024 wall tags when the leaves arrive; they pass the
+    // depth test everywhere, so the wall's tags are flushed and shaded (1024 per tile; with one tag
+    // buffer the first leaf triangle in a tile flushes the whole tile: 4 flushes), then the leaves
+    // are shaded (4096) and write depth only on the right half.
+    const FrameResult f = run(s, {draw_of("wall"), draw_of("leaves")}, {"isp.tag_buffers=1"});
+    EXPECT_EQ(stat(f, "frame/isp", "tag_flushes"), 4);
+    EXPECT_EQ(stat(f, "frame/isp", "tag_flushed_samples"), 4 * tile);
+    EXPECT_EQ(stat(f, "frame/isp", "punch_through_samples"), frame);
+    EXPECT_EQ(stat(f, "frame/tsp", "shader_invocations"), 2 * frame);
+    EXPECT_EQ(stat(f, "frame/tsp", "alpha_test_killed_samples"), frame / 2);
+    EXPECT_EQ(stat(f, "frame/tsp", "shaded_samples"), frame + frame / 2);
+  }
+  {
+    // Punch-through first: nothing to flush; the leaves are shaded (4096) and write depth on the
+    // right half, so the wall fails the depth test there (2048) and only its left half is shaded.
+    const FrameResult f = run(s, {draw_of("leaves"), draw_of("wall")});
+    EXPECT_EQ(stat(f, "frame/isp", "tag_flushes"), 0);
+    EXPECT_EQ(stat(f, "frame/isp", "depth_test_failed_samples"), frame / 2);
+    EXPECT_EQ(stat(f, "frame/tsp", "shader_invocations"), frame + frame / 2);
+    // Both orders give the same picture.
+    const FrameResult g = run(s, {draw_of("wall"), draw_of("leaves")});
+    EXPECT_EQ(f.images.attachments.at("color").color, g.images.attachments.at("color").color);
+  }
+}
+
+TEST(PipelineHsr, TranslucentFlushesOnlyWhatItCoversWithLayeredTagBuffers) {
+  // far opaque quad (depth 5, whole frame), then glass (depth 2, columns [0,16)), then a near
+  // opaque quad (depth 3, columns [16,64)).
+  Scene s = base_scene();
+  add_quad(s, "far", 5, -32, 96, 0);
+  add_quad(s, "glass", 2, -32, 16, 2);
+  add_quad(s, "near", 3, 16, 96, 0);
+  const std::vector<DrawCmd> draws = {draw_of("far"), draw_of("glass", "blend"), draw_of("near")};
+  // One tag buffer: in the two left tiles the glass forces a flush of all 1024 far tags, then the
+  // glass (16x32 = 512) is shaded, then the near quad's 512 samples are shaded at the end of the
+  // tile: 2048 per left tile. Right tiles: the near quad overwrites all far tags: 1024 each.
+  const FrameResult one = run(s, draws, {"isp.tag_buffers=1"});
+  EXPECT_EQ(stat(one, "frame/isp", "tag_flushes"), 2);
+  EXPECT_EQ(stat(one, "frame/isp", "tag_flushed_samples"), 2 * 1024);
+  EXPECT_EQ(stat(one, "frame/isp", "translucent_samples"), 2 * 512);
+  EXPECT_EQ(stat(one, "frame/tsp", "blended_samples"), 2 * 512);
+  EXPECT_EQ(stat(one, "frame/tsp", "shader_invocations"), 2 * 2048 + 2 * 1024);
+  // Two tag buffers: the glass flushes only the 512 tags it covers; the near quad then overwrites
+  // the far tags of columns [16,32) before they are shaded: 1536 per left tile.
+  // Each glass triangle flushes the tags it covers, so a tile both triangles reach flushes twice.
+  const FrameResult two = run(s, draws, {"isp.tag_buffers=2"});
+  EXPECT_GE(stat(two, "frame/isp", "tag_flushes"), 2);
+  EXPECT_LE(stat(two, "frame/isp", "tag_flushes"), 4);
+  EXPECT_EQ(stat(two, "frame/isp", "tag_flushed_samples"), 2 * 512);
+  EXPECT_EQ(stat(two, "frame/tsp", "shader_invocations"), 2 * 1536 + 2 * 1024);
+  EXPECT_EQ(one.images.attachments.at("color").color, two.images.attachments.at("color").color);
+}
+
+TEST(PipelineWriteback, PlainForwardWritesColorOnceAndDepthNeverLeavesTheChip) {
+  const Scene atrium = load_scene("atrium:1");
+  TraceSetup setup;
+  setup.scene = &atrium;
+  setup.scene_spec = "atrium:1";
+  setup.camera = atrium_viewpoint("entrance", atrium);
+  LightSetSpec spec;
+  spec.count = 32;
+  setup.lights = generate_lights(atrium, spec);
+  setup.width = 320;
+  setup.height = 180;
+  const Trace t = generate_trace("plain_forward", setup);
+  const FrameResult f = simulate_frame(t, "pf.trace", atrium, resolve_config({}, {}).hw);
+  EXPECT_EQ(f.dram.writes(DramClass::Color), 320u * 180u * 4u);
+  EXPECT_EQ(f.dram.reads(DramClass::Color), 0u);
+  EXPECT_EQ(f.dram.reads(DramClass::DepthStencil), 0u);
+  EXPECT_EQ(f.dram.writes(DramClass::DepthStencil), 0u);
+  EXPECT_GT(f.dram.writes(DramClass::ParameterBuffer), 0u);
+  EXPECT_GT(f.dram.reads(DramClass::ParameterBuffer), 0u);
+  EXPECT_GT(stat(f, "frame/isp", "tag_flushes"), 0) << "the atrium's cut-out foliage forces flushes";
+  EXPECT_GT(stat(f, "frame/tsp", "alpha_test_killed_samples"), 0);
+  EXPECT_GT(stat(f, "frame/isp", "translucent_samples"), 0) << "the atrium's glass is blended";
+  // Framebuffer compression scales the color writeback.
+  const FrameResult c = simulate_frame(t, "pf.trace", atrium, resolve_config({}, {"writeback.compression_ratio=0.5"}).hw);
+  EXPECT_EQ(c.dram.writes(DramClass::Color), 320u * 180u * 2u);
+}
+
+TEST(PipelinePartialRender, SmallParameterBufferForcesPartialRendersWithDepthTraffic) {
+  // An 80x80 grid of small quads (12800 triangles, 6561 vertices of 10 + 8x4 bytes in the
+  // parameter buffer: about 280 KB) in front of a full-frame quad.
+  Scene s = base_scene();
+  add_quad(s, "back", 6, -32, 96, 0);
+  SubMesh grid;
+  grid.name = "grid";
+  grid.material = 0;
+  const int n = 80;
+  const float d = 3, h = d * kTan30;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      grid.positions.push_back({-h + 2 * h * i / n, -h + 2 * h * j / n, -d});
+      grid.normals.push_back({0, 0, 1});
+      grid.uvs.push_back({0, 0});
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const std::uint32_t a = static_cast<std::uint32_t>(j * (n + 1) + i), b = a + 1, c = a + n + 1, e = c + 1;
+      grid.indices.insert(grid.indices.end(), {a, b, e, a, e, c});
+    }
+  }
+  s.submeshes.push_back(grid);
+  s.instances.push_back({static_cast<std::uint32_t>(s.submeshes.size() - 1), glm::mat4(1.0f), "grid"});
+  const std::vector<DrawCmd> draws = {draw_of("back"), draw_of("grid")};
+  const FrameResult big = run(s, draws);
+  const FrameResult small = run(s, draws, {"tiling.pb_capacity_bytes=65536"});
+  EXPECT_EQ(stat(big, "frame/tiler", "partial_renders"), 0);
+  EXPECT_GE(stat(small, "frame/tiler", "partial_renders"), 1);
+  EXPECT_EQ(big.dram.writes(DramClass::DepthStencil), 0u);
+  // Every tile a partial render stores (depth 4 B/pixel) is reloaded once by the next render.
+  EXPECT_GT(small.dram.writes(DramClass::DepthStencil), 0u);
+  EXPECT_EQ(small.dram.writes(DramClass::DepthStencil), small.dram.reads(DramClass::DepthStencil));
+  EXPECT_EQ(small.dram.writes(DramClass::DepthStencil) % (32 * 32 * 4), 0u);
+  EXPECT_EQ(stat(small, "frame/tile_memory", "partial_render_store_bytes"),
+            static_cast<double>(small.dram.writes(DramClass::DepthStencil) * 2));  // depth + rgba8 color
+  // Same picture; HSR cannot work across a partial render, so shading can only grow.
+  EXPECT_EQ(big.images.attachments.at("color").color, small.images.attachments.at("color").color);
+  EXPECT_GE(stat(small, "frame/tsp", "shaded_samples"), stat(big, "frame/tsp", "shaded_samples"));
+  EXPECT_LE(stat(small, "frame/tiler", "pb_peak_allocated_bytes"), 65536);
+}
+
+TEST(PipelineTileMemory, OverBudgetPassSplitsTilesOrSpills) {
+  Scene s = base_scene();
+  add_quad(s, "wall", 5, -32, 96, 0);
+  Trace t = base_trace();
+  PassDesc p = base_pass();
+  // 3 rgba16f G-buffer-like targets = 24 B/pixel against the default 16 B/pixel (128 bits).
+  for (const char* name : {"g0", "g1"}) {
+    Attachment a;
+    a.name = name;
+    a.format = Format::Rgba16f;
+    a.usage = AttachmentUsage::Gbuffer;
+    a.store = StoreOp::DontCare;
+    a.transient = true;
+    p.attachments.push_back(a);
+  }
+  p.attachments[0].format = Format::Rgba16f;
+  p.draws = {draw_of("wall")};
+  t.commands.push_back(p);
+  const FrameResult split = simulate_frame(t, "t", s, resolve_config({}, {}).hw);
+  EXPECT_EQ(stat(split, "frame/tile_memory", "onchip_need_bytes_per_pixel"), 24);
+  EXPECT_EQ(stat(split, "frame/tile_memory", "tile_split_factor"), 2);
+  EXPECT_EQ(stat(split, "frame/isp", "tiles_rendered"), 8);  // 4 tiles x 2 strips
+  const FrameResult fits = simulate_frame(t, "t", s, resolve_config({}, {"pls.tile_buffer_bits_per_pixel=256"}).hw);
+  EXPECT_EQ(stat(fits, "frame/isp", "tiles_rendered"), 4);
+  EXPECT_LT(fits.dram.reads(DramClass::ParameterBuffer), split.dram.reads(DramClass::ParameterBuffer));
+  const FrameResult spill = simulate_frame(t, "t", s, resolve_config({}, {"pls.over_budget=spill"}).hw);
+  EXPECT_EQ(spill.dram.writes(DramClass::Spill), 8u * kSize * kSize);
+  EXPECT_EQ(spill.dram.reads(DramClass::Spill), 8u * kSize * kSize);
+}
+
+}  // namespace
+}  // namespace tbdr
