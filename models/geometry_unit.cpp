@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <limits>
 #include <mutex>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -256,6 +257,8 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
   const bool wants_object_lists = draw.shader->light_source == LightSource::ObjectList;
   std::vector<glm::vec4> clip;
   std::vector<glm::vec3> world, normal;
+  // The instances this draw submits; translucent ones back to front, as an application sorts them.
+  std::vector<std::pair<float, std::size_t>> selected;
   for (std::size_t ii = 0; ii < scene_->instances.size(); ++ii) {
     const Instance& inst = scene_->instances[ii];
     const SubMesh& sm = scene_->submeshes[inst.submesh];
@@ -269,6 +272,23 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
                         (cmd.subset == SceneSubset::Blended && mat.alpha_mode == AlphaMode::Translucent);
       if (!keep) continue;
     }
+    float key = -std::numeric_limits<float>::max();  // opaque and punch-through first, in scene order
+    if (hsr_class_of(*draw.pipeline, *draw.shader, scene_, sm.material) == HsrClass::Translucent && !sm.positions.empty()) {
+      glm::vec3 lo(sm.positions[0]), hi(sm.positions[0]);
+      for (const auto& p : sm.positions) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+      }
+      const glm::vec3 c = glm::vec3(camera_.view * inst.world * glm::vec4((lo + hi) * 0.5f, 1.0f));
+      key = c.z;  // more negative = farther: drawn first
+    }
+    selected.push_back({key, ii});
+  }
+  std::stable_sort(selected.begin(), selected.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [depth_key, ii] : selected) {
+    const Instance& inst = scene_->instances[ii];
+    const SubMesh& sm = scene_->submeshes[inst.submesh];
+    const Material& mat = scene_->materials[sm.material];
     Emit e;
     e.draw = draw_index;
     e.object = static_cast<std::uint32_t>(object_lights.size());
