@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -12,11 +13,19 @@
 
 #include "models/hw_config.hpp"
 #include "models/rasterizer.hpp"
+#include "models/shading.hpp"
+#include "models/traffic.hpp"
 #include "sim/trace.hpp"
 #include "workloads/camera.hpp"
 #include "workloads/scene.hpp"
 
 namespace tbdr {
+
+struct TileLightGrid;
+struct ClusterGrid;
+struct DepthBounds;
+struct ViewFrustum;
+struct AttachmentImage;
 
 /// The camera as the units use it: matrices and the eye position.
 struct CameraXform {
@@ -41,6 +50,11 @@ inline constexpr std::uint32_t kNoMaterial = std::numeric_limits<std::uint32_t>:
 /// A draw resolved against the trace and the scene: what every unit needs to know about it.
 struct DrawContext {
   const DrawCmd* cmd = nullptr;
+  const AttachmentImage* surface_source = nullptr;  ///< generated geometry: where the pixel's surface is stored
+  const TileLightGrid* tile_grid = nullptr;         ///< light_source=tile_list: the grid it reads
+  const ClusterGrid* cluster_grid = nullptr;        ///< light_source=cluster_list: the grid it reads
+  /// Stored images the shader samples at its own pixel (reads=): bytes per invocation per DRAM class.
+  std::vector<std::pair<DramClass, std::uint32_t>> per_pixel_reads;
   const PipelineState* pipeline = nullptr;
   const ShaderDesc* shader = nullptr;
   std::vector<std::uint32_t> lights;  ///< indices of the lights the draw selects
@@ -73,7 +87,29 @@ struct AttachmentImage {
   std::vector<glm::vec4> color;       ///< width*height*samples, color-like formats
   std::vector<float> depth;           ///< width*height*samples, depth formats
   std::vector<std::uint8_t> stencil;  ///< width*height*samples, depth formats
+  /// G-buffer / visibility attachments: the surface each pixel's data stands for (kept in the
+  /// first such attachment a shader writes; width*height*samples) and whether it was written.
+  std::vector<SurfacePoint> surface;
+  std::vector<std::uint8_t> surface_valid;
 };
+
+/// Pixel local storage of one pass, functionally: per pixel the stored surface, a light
+/// accumulator and a stack of light indices (see docs/kernels.md).
+struct PlsState {
+  std::uint32_t stack_capacity = 0;      ///< light indices a pixel's PLS holds
+  std::vector<SurfacePoint> surface;     ///< width*height
+  std::vector<std::uint8_t> valid;       ///< 1 when the surface is defined
+  std::vector<glm::vec3> accum;          ///< light accumulator
+  std::vector<std::uint32_t> stack;      ///< width*height*stack_capacity light indices
+  std::vector<std::uint16_t> stack_count;
+  std::vector<std::uint8_t> overflow;    ///< 1 when more lights were pushed than fit
+};
+
+/// A 1-sample color image written by a compute kernel (a `buffer ... content=image`).
+struct ImageBuffer {
+  std::vector<glm::vec4> color;  ///< width*height
+};
+
 
 /// Per-pixel observations for the images written with --images.
 struct PixelCounters {
@@ -89,6 +125,11 @@ struct FrameImages {
   int width = 0;
   int height = 0;
   std::map<std::string, AttachmentImage> attachments;
+  std::map<std::string, ImageBuffer> image_buffers;                   ///< by buffer name
+  std::map<std::string, std::shared_ptr<TileLightGrid>> tile_grids;   ///< by tile_grid buffer name
+  std::map<std::string, std::shared_ptr<ClusterGrid>> cluster_grids;  ///< by cluster_grid / used_clusters buffer name
+  std::map<std::string, std::shared_ptr<DepthBounds>> depth_bounds;   ///< by depth_bounds buffer name
+  std::map<std::string, std::uint64_t> buffer_bytes_written;          ///< bytes a dispatch wrote per buffer
   PixelCounters counters;
 };
 
@@ -113,6 +154,10 @@ struct RenderContext {
   std::vector<Primitive> prims;               ///< the render's primitives (parameter buffer contents)
   std::vector<AttachmentImage*> color_targets;  ///< images the shaders' color outputs write, in order
   AttachmentImage* depth = nullptr;           ///< the pass's depth attachment image, or nullptr
+  PlsState* pls = nullptr;                    ///< the pass's pixel local storage, or nullptr
+  DramTraffic* dram = nullptr;                ///< the pass's DRAM traffic (shader image reads)
+  const ViewFrustum* frustum = nullptr;  ///< for cluster lookups
+  std::uint32_t frame_prim_base = 0;      ///< added to a primitive's index to make a frame-unique id
   /// Lights whose screen rectangle overlaps each shading tile (an exact-result acceleration of
   /// the image computation only; what a technique is charged for comes from its light source).
   int light_tile_px = 32;

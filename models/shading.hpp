@@ -19,6 +19,8 @@ struct SurfacePoint {
   glm::vec3 normal{0.0f, 1.0f, 0.0f};  ///< world space, unit length, facing the viewer side
   glm::vec3 albedo{1.0f};    ///< linear RGB base color
   float alpha = 1.0f;        ///< coverage / opacity
+  std::uint32_t material = 0xffffffffu;  ///< scene material (visibility-buffer work lists)
+  std::uint32_t triangle = 0xffffffffu;  ///< frame-unique primitive id (visibility-buffer re-fetch)
 };
 
 /// Constants of the shading model.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 
+#include "models/light_lists.hpp"
 #include "models/shading.hpp"
 
 namespace tbdr {
@@ -11,19 +12,14 @@ Tsp::Tsp(RenderContext& ctx) : ctx_(ctx) {}
 
 namespace {
 
-/// Lights a fragment of this primitive evaluates, per its shader's light source.
-std::uint64_t lights_per_fragment(const RenderContext& ctx, const Primitive& p, const DrawContext& d) {
-  switch (d.shader->light_source) {
-    case LightSource::None: return 0;
-    case LightSource::All: return d.lights.size();
-    case LightSource::ObjectList: return ctx.object_lights[p.object].size();
-    case LightSource::Proxy: return p.proxy_light >= 0 ? 1 : 0;
-    case LightSource::TileList:
-    case LightSource::ClusterList:
-    case LightSource::PlsStack: break;
-  }
-  return 0;
-}
+/// The lights one fragment evaluates: either an explicit list, or "every selected light" (whose
+/// contributions are summed through the exact screen-tile candidates).
+struct FragmentLights {
+  const std::vector<std::uint32_t>* list = nullptr;  ///< explicit list, or null
+  std::int32_t single = -1;                          ///< one light (proxy)
+  bool all_selected = false;                         ///< every light of the draw's selection
+  std::uint64_t count = 0;                           ///< lights charged
+};
 
 }  // namespace
 
@@ -34,6 +30,10 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   const DrawContext& d = ctx_.draws[p.draw];
   const ShaderDesc& sh = *d.shader;
   const HwConfig& hw = *ctx_.hw;
+  const int W = ctx_.viewport.width_px;
+  const int S = ctx_.pattern.count;
+  const auto& lights = *ctx_.lights;
+  const glm::vec3 eye = ctx_.camera.eye;
 
   // Quads: 2x2 pixel blocks aligned to even coordinates; every lane of a launched quad runs.
   quad_seen_.clear();
@@ -43,37 +43,37 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   }
   std::sort(quad_seen_.begin(), quad_seen_.end());
   const auto quads = static_cast<std::uint64_t>(std::unique(quad_seen_.begin(), quad_seen_.end()) - quad_seen_.begin());
-  const std::uint64_t lanes = quads * 4;
-  const std::uint64_t n_lights = lights_per_fragment(ctx_, p, d);
+  const std::uint64_t helpers = quads * 4 - pixels.size();
   stats.invocations += pixels.size();
   stats.quads += quads;
-  stats.helper_lanes += lanes - pixels.size();
-  stats.alu_ops += lanes * (sh.alu_ops + std::uint64_t{sh.light_alu_ops} * n_lights);
-  stats.texture_fetches += lanes * sh.tex_fetches;
-  stats.texels += lanes * sh.tex_fetches * static_cast<std::uint64_t>(hw.texture.texels_per_fetch);
-  stats.light_evaluations += pixels.size() * n_lights;
+  stats.helper_lanes += helpers;
+  stats.texture_fetches += quads * 4 * sh.tex_fetches;
+  stats.texels += quads * 4 * sh.tex_fetches * static_cast<std::uint64_t>(hw.texture.texels_per_fetch);
 
-  const bool has_surface = p.material != kNoMaterial && ctx_.scene != nullptr;
-  const Material* mat = has_surface ? &ctx_.scene->materials[p.material] : nullptr;
+  const bool from_triangle = p.material != kNoMaterial && ctx_.scene != nullptr;
+  const Material* mat = from_triangle ? &ctx_.scene->materials[p.material] : nullptr;
   const AlphaMask* mask_tex =
       (mat && mat->alpha_mask >= 0) ? &ctx_.scene->alpha_masks[static_cast<std::size_t>(mat->alpha_mask)] : nullptr;
+  const bool pls_reads = ctx_.pls && (sh.pls == PlsAccess::Read || sh.pls == PlsAccess::ReadWrite);
+  const bool pls_writes = ctx_.pls && (sh.pls == PlsAccess::Write || sh.pls == PlsAccess::ReadWrite);
   const int bits = p.setup.subpixel_bits;
   const std::int64_t half = std::int64_t{1} << (bits - 1);
   const std::uint32_t outputs = std::min<std::uint32_t>(sh.color_outputs, static_cast<std::uint32_t>(ctx_.color_targets.size()));
   std::uint32_t out_bytes_per_sample = 0;
   for (std::uint32_t o = 0; o < outputs; ++o) out_bytes_per_sample += bytes_per_sample(ctx_.color_targets[o]->format);
-  AttachmentImage* target = outputs > 0 ? ctx_.color_targets[0] : nullptr;
   const BlendMode blend = d.pipeline->blend;
-  const auto& lights = *ctx_.lights;
-  const int W = ctx_.viewport.width_px;
-  const int S = ctx_.pattern.count;
   if (alive) alive->assign(pixels.size(), 0);
+  std::uint64_t light_sum = 0;
 
   for (std::size_t i = 0; i < pixels.size(); ++i) {
     const ShadePixel& px = pixels[i];
+    const std::size_t pixel = static_cast<std::size_t>(px.y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(px.x);
     std::uint32_t write_mask = px.mask;
+
+    // The surface this fragment shades.
     SurfacePoint s;
-    if (has_surface) {
+    bool have_surface = false;
+    if (from_triangle) {
       const glm::vec3 b = perspective_barycentrics(p.setup, (std::int64_t{px.x} << bits) + half, (std::int64_t{px.y} << bits) + half);
       s.position = p.world[0] * b.x + p.world[1] * b.y + p.world[2] * b.z;
       glm::vec3 n = p.normal[0] * b.x + p.normal[1] * b.y + p.normal[2] * b.z;
@@ -83,6 +83,9 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       s.normal = n;
       s.albedo = glm::vec3(mat->base_color);
       s.alpha = mat->base_color.w;
+      s.material = p.material;
+      s.triangle = ctx_.frame_prim_base + prim_index;
+      have_surface = true;
       if (p.hsr == HsrClass::PunchThrough) {
         const glm::vec2 uv = p.uv[0] * b.x + p.uv[1] * b.y + p.uv[2] * b.z;
         const float a = s.alpha * (mask_tex ? mask_tex->sample(uv) : 1.0f);
@@ -91,37 +94,119 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
           write_mask = 0;
         }
       }
+    } else if (d.surface_source) {
+      const std::size_t k = pixel * d.surface_source->samples;
+      if (d.surface_source->surface_valid[k]) {
+        s = d.surface_source->surface[k];
+        have_surface = true;
+      }
+    } else if (pls_reads && ctx_.pls->valid[pixel]) {
+      s = ctx_.pls->surface[pixel];
+      have_surface = true;
     }
     if (alive) (*alive)[i] = write_mask;
-    const std::size_t pixel = static_cast<std::size_t>(px.y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(px.x);
+
+    // The lights it evaluates.
+    FragmentLights fl;
+    switch (sh.light_source) {
+      case LightSource::None: break;
+      case LightSource::All:
+        fl.all_selected = true;
+        fl.count = d.lights.size();
+        break;
+      case LightSource::ObjectList:
+        fl.list = &ctx_.object_lights[p.object];
+        fl.count = fl.list->size();
+        break;
+      case LightSource::Proxy:
+        fl.single = p.proxy_light;
+        fl.count = p.proxy_light >= 0 ? 1 : 0;
+        break;
+      case LightSource::TileList:
+        fl.list = &d.tile_grid->at_pixel(px.x, px.y);
+        fl.count = fl.list->size();
+        break;
+      case LightSource::ClusterList:
+        if (have_surface) {
+          const std::size_t c = d.cluster_grid->cluster_of(px.x, px.y, ctx_.frustum->distance_of(s.position));
+          fl.list = &d.cluster_grid->lists[c];
+          fl.count = fl.list->size();
+          if (!d.cluster_grid->used[c]) stats.unassigned_cluster_fragments += 1;
+        }
+        break;
+      case LightSource::PlsStack:
+        if (ctx_.pls && ctx_.pls->overflow[pixel]) {
+          fl.all_selected = true;
+          fl.count = d.lights.size();
+          stats.light_stack_overflow_fragments += 1;
+        } else if (ctx_.pls) {
+          fl.count = ctx_.pls->stack_count[pixel];
+        }
+        break;
+    }
+    light_sum += fl.count;
+    for (const auto& [cls, bytes] : d.per_pixel_reads) ctx_.dram->read(cls, bytes);
+    stats.alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * fl.count;
+    stats.light_evaluations += fl.count;
     ctx_.images->counters.shaded[pixel] += 1;
-    ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(n_lights);
-    if (write_mask == 0 || target == nullptr) continue;
+    ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(fl.count);
+    if (write_mask == 0) continue;
     ctx_.images->counters.triangle_id[pixel] = prim_index + 1;
 
-    glm::vec3 color(0.0f);
-    if (has_surface) {
-      color = ShadingModel::ambient(s);
-      const glm::vec3 eye = ctx_.camera.eye;
-      switch (sh.light_source) {
-        case LightSource::All: {
-          const auto& cand = ctx_.light_tiles[static_cast<std::size_t>((px.y / ctx_.light_tile_px) * ctx_.light_tiles_x +
-                                                                       px.x / ctx_.light_tile_px)];
-          for (std::uint32_t l : cand) {
-            if (d.light_selected[l]) color += ShadingModel::light_contribution(s, eye, lights[l]);
-          }
-          break;
+    // Sum of the evaluated lights' contributions at the surface.
+    auto lighting = [&]() {
+      glm::vec3 c(0.0f);
+      if (!have_surface) return c;
+      if (fl.all_selected) {
+        const auto& cand = ctx_.light_tiles[static_cast<std::size_t>((px.y / ctx_.light_tile_px) * ctx_.light_tiles_x +
+                                                                     px.x / ctx_.light_tile_px)];
+        for (std::uint32_t l : cand) {
+          if (d.light_selected[l]) c += ShadingModel::light_contribution(s, eye, lights[l]);
         }
-        case LightSource::ObjectList:
-          for (std::uint32_t l : ctx_.object_lights[p.object]) color += ShadingModel::light_contribution(s, eye, lights[l]);
-          break;
-        case LightSource::Proxy:
-          if (p.proxy_light >= 0) color += ShadingModel::light_contribution(s, eye, lights[static_cast<std::size_t>(p.proxy_light)]);
-          break;
-        default: break;
+      } else if (fl.list) {
+        for (std::uint32_t l : *fl.list) c += ShadingModel::light_contribution(s, eye, lights[l]);
+      } else if (fl.single >= 0) {
+        c += ShadingModel::light_contribution(s, eye, lights[static_cast<std::size_t>(fl.single)]);
+      } else if (sh.light_source == LightSource::PlsStack && ctx_.pls) {
+        const std::uint32_t* st = ctx_.pls->stack.data() + pixel * ctx_.pls->stack_capacity;
+        for (std::uint32_t k = 0; k < ctx_.pls->stack_count[pixel]; ++k) {
+          c += ShadingModel::light_contribution(s, eye, lights[st[k]]);
+        }
       }
+      return c;
+    };
+
+    // Pixel local storage effects of shaders without color outputs.
+    if (pls_writes && outputs == 0) {
+      if (from_triangle) {
+        ctx_.pls->surface[pixel] = s;
+        ctx_.pls->valid[pixel] = 1;
+        ctx_.pls->accum[pixel] = glm::vec3(0.0f);
+        ctx_.pls->stack_count[pixel] = 0;
+        ctx_.pls->overflow[pixel] = 0;
+      } else if (sh.light_source == LightSource::Proxy) {
+        if (have_surface) ctx_.pls->accum[pixel] += lighting();
+      } else if (p.proxy_light >= 0) {
+        auto& n = ctx_.pls->stack_count[pixel];
+        if (n < ctx_.pls->stack_capacity) {
+          ctx_.pls->stack[pixel * ctx_.pls->stack_capacity + n] = static_cast<std::uint32_t>(p.proxy_light);
+          ++n;
+        } else {
+          ctx_.pls->overflow[pixel] = 1;
+        }
+      }
+      stats.pls_bytes_accessed += ctx_.pls->stack_capacity > 0 ? 4 : 0;
     }
-    const glm::vec4 src(color, s.alpha);
+    if (outputs == 0) continue;
+
+    // Color outputs.
+    glm::vec3 lit(0.0f);
+    if (have_surface) {
+      lit = lighting();
+      if (blend != BlendMode::Add) lit += ShadingModel::ambient(s);
+      if (pls_reads && ctx_.pls->valid[pixel]) lit += ctx_.pls->accum[pixel];
+    }
+    const glm::vec4 src(lit, have_surface ? s.alpha : 0.0f);
     const auto written = static_cast<std::uint64_t>(std::popcount(write_mask));
     stats.shaded_samples += written;
     stats.tile_buffer_write_bytes += written * out_bytes_per_sample;
@@ -129,18 +214,44 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       stats.blended_samples += written;
       stats.tile_buffer_read_bytes += written * out_bytes_per_sample;
     }
-    glm::vec4* dst = target->color.data() + pixel * static_cast<std::size_t>(S);
-    for (int smp = 0; smp < S; ++smp) {
-      if (!(write_mask & (1u << smp))) continue;
-      switch (blend) {
-        case BlendMode::Off: dst[smp] = src; break;
-        case BlendMode::Add: dst[smp] += glm::vec4(glm::vec3(src), 0.0f); break;
-        case BlendMode::Alpha:
-          dst[smp] = glm::vec4(glm::vec3(src) * src.w + glm::vec3(dst[smp]) * (1.0f - src.w), src.w + dst[smp].w * (1.0f - src.w));
-          break;
+    bool surface_stored = false;
+    for (std::uint32_t o = 0; o < outputs; ++o) {
+      AttachmentImage* target = ctx_.color_targets[o];
+      if (target->usage == AttachmentUsage::Color) {
+        glm::vec4* dst = target->color.data() + pixel * static_cast<std::size_t>(S);
+        for (int smp = 0; smp < S; ++smp) {
+          if (!(write_mask & (1u << smp))) continue;
+          switch (blend) {
+            case BlendMode::Off: dst[smp] = src; break;
+            case BlendMode::Add: dst[smp] += glm::vec4(glm::vec3(src), 0.0f); break;
+            case BlendMode::Alpha:
+              dst[smp] = glm::vec4(glm::vec3(src) * src.w + glm::vec3(dst[smp]) * (1.0f - src.w),
+                                   src.w + dst[smp].w * (1.0f - src.w));
+              break;
+          }
+        }
+      } else if (!surface_stored && have_surface) {
+        // G-buffer / visibility: the first such target keeps the surface the data stands for.
+        if (target->surface.empty()) {
+          target->surface.assign(target->color.size(), SurfacePoint{});
+          target->surface_valid.assign(target->color.size(), 0);
+        }
+        for (int smp = 0; smp < S; ++smp) {
+          if (!(write_mask & (1u << smp))) continue;
+          target->surface[pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(smp)] = s;
+          target->surface_valid[pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(smp)] = 1;
+        }
+        surface_stored = true;
       }
     }
+    // Writing a color output makes the pixel's PLS undefined (EXT_shader_pixel_local_storage).
+    if (ctx_.pls) {
+      ctx_.pls->valid[pixel] = 0;
+      ctx_.pls->stack_count[pixel] = 0;
+    }
   }
+  // Helper lanes run the same code (their light loops as long as the batch's average fragment).
+  stats.alu_ops += helpers * sh.alu_ops + (helpers * std::uint64_t{sh.light_alu_ops} * light_sum) / pixels.size();
 }
 
 }  // namespace tbdr

@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <map>
 #include <memory>
+#include <set>
 #include <stdexcept>
 
+#include "models/compute_unit.hpp"
 #include "models/geometry_unit.hpp"
+#include "models/light_lists.hpp"
 #include "models/isp.hpp"
 #include "models/tile_memory.hpp"
 #include "models/tiler.hpp"
@@ -92,6 +95,20 @@ void build_light_tiles(RenderContext& ctx) {
   }
 }
 
+DramClass dram_class_of_buffer(TrafficClass t) {
+  switch (t) {
+    case TrafficClass::LightData: return DramClass::LightData;
+    case TrafficClass::LightLists: return DramClass::LightLists;
+    case TrafficClass::Gbuffer: return DramClass::Gbuffer;
+    case TrafficClass::Color: return DramClass::Color;
+    case TrafficClass::Depth: return DramClass::DepthStencil;
+    case TrafficClass::Visibility: return DramClass::Visibility;
+    case TrafficClass::WorkLists: return DramClass::WorkLists;
+    case TrafficClass::Other: return DramClass::Other;
+  }
+  return DramClass::Other;
+}
+
 bool is_resolve_target(const PassDesc& pass, const Attachment& a) {
   for (const auto& o : pass.attachments) {
     if (o.resolve == a.name) return true;
@@ -118,6 +135,7 @@ class FrameSimulator {
                            scene_.source + "' (" + scene_.content_hash + "); regenerate the trace for this scene");
     }
     camera_ = CameraXform::from(trace_.camera, static_cast<float>(f.width) / static_cast<float>(f.height));
+    frustum_ = ViewFrustum::from(trace_.camera, f.width, f.height);
     result_.images.width = f.width;
     result_.images.height = f.height;
     result_.images.counters.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height));
@@ -128,8 +146,7 @@ class FrameSimulator {
       if (const auto* pass = std::get_if<PassDesc>(&cmd)) {
         run_pass(*pass, pass_index++);
       } else if (const auto* d = std::get_if<DispatchCmd>(&cmd)) {
-        ++dispatches;
-        throw InputError(path_, d->line, "compute kernel '" + d->kernel + "' is not supported by this tbdrsim version");
+        run_dispatch_cmd(*d, static_cast<int>(dispatches++));
       }
       // Barriers order work; in the functional model every command completes before the next.
     }
@@ -225,15 +242,7 @@ class FrameSimulator {
       if (!d.pipeline) throw InputError(path_, cmd.line, "unknown pipeline '" + cmd.pipeline + "'");
       d.shader = trace_.find_shader(d.pipeline->shader);
       if (!d.shader) throw InputError(path_, d.pipeline->line, "unknown shader '" + d.pipeline->shader + "'");
-      switch (d.shader->light_source) {
-        case LightSource::TileList:
-        case LightSource::ClusterList:
-        case LightSource::PlsStack:
-          throw InputError(path_, d.shader->line,
-                           std::string("light source '") + to_string(d.shader->light_source) +
-                               "' is not supported by this tbdrsim version");
-        default: break;
-      }
+      resolve_draw_inputs(pass, cmd, d);
       if (d.shader->color_outputs > ctx.color_targets.size()) {
         throw InputError(path_, cmd.line, "shader '" + d.shader->name + "' writes " + std::to_string(d.shader->color_outputs) +
                                               " color outputs but pass '" + pass.name + "' has " +
@@ -248,6 +257,93 @@ class FrameSimulator {
       }
       ctx.draws.push_back(std::move(d));
     }
+  }
+
+  /// Where a draw's shader finds its surface, its light lists and what it samples from DRAM.
+  void resolve_draw_inputs(const PassDesc& pass, const DrawCmd& cmd, DrawContext& d) {
+    auto surfaces_of = [&](const std::string& n) -> const AttachmentImage* {
+      auto it = result_.images.attachments.find(n);
+      if (it == result_.images.attachments.end()) return nullptr;
+      const auto u = it->second.usage;
+      return (u == AttachmentUsage::Gbuffer || u == AttachmentUsage::Visibility) ? &it->second : nullptr;
+    };
+    if (cmd.geometry != GeometryKind::Scene) {
+      for (const auto& n : cmd.fetch) {
+        if (!d.surface_source) d.surface_source = surfaces_of(n);
+      }
+      for (const auto& n : cmd.reads) {
+        if (!d.surface_source) d.surface_source = surfaces_of(n);
+      }
+      if (d.surface_source && d.surface_source->surface.empty()) {
+        throw InputError(path_, cmd.line, "the G-buffer or visibility attachment this draw reads holds no surface: no shader wrote it");
+      }
+    }
+    auto find_grid = [&](BufferContent content) -> std::string {
+      for (const auto& n : cmd.reads) {
+        const BufferDesc* b = trace_.find_buffer(n);
+        if (b && b->content == content) return n;
+      }
+      return {};
+    };
+    if (d.shader->light_source == LightSource::TileList) {
+      auto it = result_.images.tile_grids.find(find_grid(BufferContent::TileGrid));
+      if (it == result_.images.tile_grids.end()) {
+        throw InputError(path_, cmd.line, "light_source=tile_list needs a tile_grid buffer written by tile_light_cull in reads=");
+      }
+      d.tile_grid = it->second.get();
+    }
+    if (d.shader->light_source == LightSource::ClusterList) {
+      auto it = result_.images.cluster_grids.find(find_grid(BufferContent::ClusterGrid));
+      if (it == result_.images.cluster_grids.end()) {
+        throw InputError(path_, cmd.line, "light_source=cluster_list needs a cluster_grid buffer written by cluster_light_assign in reads=");
+      }
+      d.cluster_grid = it->second.get();
+    }
+    if (d.shader->light_source == LightSource::PlsStack && pass.pls.empty()) {
+      throw InputError(path_, cmd.line, "light_source=pls_stack needs pixel local storage in pass '" + pass.name + "'");
+    }
+    // Stored images sampled at the shaded pixel: booked per invocation (texture reads).
+    for (const auto& n : cmd.reads) {
+      auto it = result_.images.attachments.find(n);
+      if (it == result_.images.attachments.end()) continue;
+      const AttachmentImage& img = it->second;
+      const std::uint32_t bps = is_depth_format(img.format) ? static_cast<std::uint32_t>(hw_.isp.depth_stencil_bytes_per_sample)
+                                                             : bytes_per_sample(img.format);
+      d.per_pixel_reads.push_back({traffic_class_of(img.usage), bps * img.samples});
+    }
+  }
+
+  void run_dispatch_cmd(const DispatchCmd& d, int index) {
+    const std::string prefix = "dispatch" + std::to_string(index) + "." + d.kernel;
+    ComputeStats stats(prefix + "/compute");
+    DramTraffic dram;
+    ComputeContext cc;
+    cc.hw = &hw_;
+    cc.trace = &trace_;
+    cc.trace_path = &path_;
+    cc.scene = &scene_;
+    cc.images = &result_.images;
+    cc.frustum = frustum_;
+    cc.camera = camera_;
+    cc.viewport = viewport_;
+    RenderContext tmp;
+    tmp.lights = &trace_.lights;
+    tmp.camera = camera_;
+    tmp.viewport = viewport_;
+    build_light_tiles(tmp);
+    cc.light_tile_px = tmp.light_tile_px;
+    cc.light_tiles_x = tmp.light_tiles_x;
+    cc.light_tiles = &tmp.light_tiles;
+    std::string image;
+    run_dispatch(cc, d, stats, dram, image);
+    if (!image.empty()) result_.final_color = image;
+    stats.group.collect(result_.stats);
+    collect_dram(prefix, dram, result_.stats);
+    PassSummary summary;
+    summary.name = prefix;
+    summary.dram = dram;
+    result_.passes.push_back(summary);
+    result_.dram += dram;
   }
 
   void run_pass(const PassDesc& pass, int index) {
@@ -266,6 +362,35 @@ class FrameSimulator {
     prepare_attachments(pass, ctx);
     resolve_draws(pass, ctx);
     build_light_tiles(ctx);
+    ctx.frustum = &frustum_;
+    ctx.dram = &ps->dram;
+    ctx.frame_prim_base = prim_base_;
+    PlsState pls;
+    if (!pass.pls.empty()) {
+      const std::size_t pixels = static_cast<std::size_t>(viewport_.width_px) * static_cast<std::size_t>(viewport_.height_px);
+      const std::uint32_t bytes = pass.pls_bytes_per_pixel();
+      pls.stack_capacity = bytes > 4 ? (bytes - 4) / 2 : 0;
+      pls.surface.assign(pixels, SurfacePoint{});
+      pls.valid.assign(pixels, 0);
+      pls.accum.assign(pixels, glm::vec3(0.0f));
+      pls.stack.assign(pixels * pls.stack_capacity, 0);
+      pls.stack_count.assign(pixels, 0);
+      pls.overflow.assign(pixels, 0);
+      ctx.pls = &pls;
+    }
+    // Buffers the draws read (lights, light lists): booked once per pass (re-reads hit on chip).
+    {
+      std::set<std::string> seen;
+      for (const auto& dc : pass.draws) {
+        for (const auto& n : dc.reads) {
+          const BufferDesc* b = trace_.find_buffer(n);
+          if (!b || !seen.insert(n).second) continue;
+          auto w = result_.images.buffer_bytes_written.find(n);
+          const std::uint64_t bytes = w == result_.images.buffer_bytes_written.end() ? b->bytes : w->second;
+          ps->dram.read(dram_class_of_buffer(b->traffic), bytes);
+        }
+      }
+    }
 
     // imr has no binning: the whole frame is one "tile" and nothing goes through a parameter buffer.
     HwConfig hw = hw_;
@@ -304,6 +429,7 @@ class FrameSimulator {
         if (partial) resumed[static_cast<std::size_t>(t)] = 1;
       }
       tiler.reset();
+      ctx.frame_prim_base += static_cast<std::uint32_t>(ctx.prims.size());
       ctx.prims.clear();
     };
 
@@ -323,6 +449,7 @@ class FrameSimulator {
       }
     }
     render(false);
+    prim_base_ = ctx.frame_prim_base;
     if (ctx.framebuffer_in_dram) {
       // The depth and color accesses of an immediate-mode GPU go to DRAM (caches come with the timing model).
       dram.read(DramClass::DepthStencil, ps->isp.depth_read_bytes.value());
@@ -353,6 +480,8 @@ class FrameSimulator {
   const HwConfig& hw_;
   Viewport viewport_;
   CameraXform camera_;
+  ViewFrustum frustum_;
+  std::uint32_t prim_base_ = 0;
   FrameResult result_;
 };
 

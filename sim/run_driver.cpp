@@ -69,9 +69,10 @@ std::vector<std::string> write_frame_images(const FrameResult& frame, const std:
       save("attachment_" + name + ".png", color_to_image(img.color, w, h));
     }
   }
-  if (!frame.final_color.empty()) {
-    const AttachmentImage& img = frame.images.attachments.at(frame.final_color);
-    save("color.png", color_to_image(img.color, w, h));
+  if (auto it = frame.images.attachments.find(frame.final_color); it != frame.images.attachments.end()) {
+    save("color.png", color_to_image(it->second.color, w, h));
+  } else if (auto ib = frame.images.image_buffers.find(frame.final_color); ib != frame.images.image_buffers.end()) {
+    save("color.png", color_to_image(ib->second.color, w, h));
   }
   save("triangle_id.png", ids_to_image(frame.images.counters.triangle_id, w, h, 0));
   auto heat = [&](const std::vector<std::uint32_t>& v, const std::string& file, const std::string& title,

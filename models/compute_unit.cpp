@@ -1,0 +1,479 @@
+#include "models/compute_unit.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <set>
+
+#include "models/geometry_unit.hpp"
+#include "models/shading.hpp"
+#include "models/tile_memory.hpp"
+#include "sim/errors.hpp"
+
+namespace tbdr {
+
+namespace {
+
+// ALU costs of the kernels' inner steps (documented in docs/kernels.md).
+constexpr std::uint64_t kSphereVolumeTestOps = 24;  // 4 plane dot products + 2 depth compares
+constexpr std::uint64_t kDepthReduceOps = 2;        // min and max per sample
+constexpr std::uint64_t kClusterIndexOps = 12;      // view depth, log/slice, tile index per sample
+constexpr std::uint64_t kWorkListOps = 4;           // material lookup and append per pixel
+constexpr std::uint64_t kRefetchVertexBytes = 32;   // position, normal, uv per re-fetched vertex
+constexpr std::uint64_t kTileGridEntryBytes = 8;    // offset + count per tile or cluster
+constexpr std::uint64_t kLightIndexBytes = 4;       // one light index
+
+const std::vector<std::string> kKernels = {"depth_bounds",   "tile_light_cull",      "cluster_flag",      "cluster_light_assign",
+                                           "deferred_shade", "tiled_deferred_shade", "vbuffer_worklists", "vbuffer_shade"};
+
+DramClass dram_class_of(TrafficClass t) {
+  switch (t) {
+    case TrafficClass::LightData: return DramClass::LightData;
+    case TrafficClass::LightLists: return DramClass::LightLists;
+    case TrafficClass::Gbuffer: return DramClass::Gbuffer;
+    case TrafficClass::Color: return DramClass::Color;
+    case TrafficClass::Depth: return DramClass::DepthStencil;
+    case TrafficClass::Visibility: return DramClass::Visibility;
+    case TrafficClass::WorkLists: return DramClass::WorkLists;
+    case TrafficClass::Other: return DramClass::Other;
+  }
+  return DramClass::Other;
+}
+
+/// A dispatch being run: its parameters, inputs and outputs, with errors at its trace line.
+class Dispatch {
+ public:
+  Dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStats& stats, DramTraffic& dram)
+      : ctx_(ctx), cmd_(cmd), stats_(stats), dram_(dram) {}
+
+  [[noreturn]] void fail(const std::string& msg) const {
+    throw InputError(*ctx_.trace_path, cmd_.line, "kernel '" + cmd_.kernel + "': " + msg);
+  }
+  void allow(std::initializer_list<const char*> keys) {
+    for (const auto& [k, v] : cmd_.params) {
+      bool ok = false;
+      for (const char* a : keys) ok = ok || k == a;
+      if (!ok) {
+        std::string known;
+        for (const char* a : keys) known += (known.empty() ? "" : ", ") + std::string(a);
+        fail("unknown parameter '" + k + "' (known: " + (known.empty() ? "none" : known) + ")");
+      }
+    }
+  }
+  int get_int(const char* key, int def, int lo, int hi) const {
+    auto it = cmd_.params.find(key);
+    if (it == cmd_.params.end()) return def;
+    int v = 0;
+    const auto& t = it->second;
+    auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (r.ec != std::errc{} || r.ptr != t.data() + t.size() || v < lo || v > hi) {
+      fail("parameter " + std::string(key) + "='" + t + "' is not an integer in [" + std::to_string(lo) + ", " +
+           std::to_string(hi) + "]");
+    }
+    return v;
+  }
+  float get_float(const char* key, float def, float lo, float hi) const {
+    auto it = cmd_.params.find(key);
+    if (it == cmd_.params.end()) return def;
+    float v = 0;
+    const auto& t = it->second;
+    auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (r.ec != std::errc{} || r.ptr != t.data() + t.size() || !(v >= lo && v <= hi)) {
+      fail("parameter " + std::string(key) + "='" + t + "' is not a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    }
+    return v;
+  }
+  std::string get_choice(const char* key, const std::string& def, std::initializer_list<const char*> choices) const {
+    auto it = cmd_.params.find(key);
+    if (it == cmd_.params.end()) return def;
+    for (const char* c : choices) {
+      if (it->second == c) return it->second;
+    }
+    std::string known;
+    for (const char* c : choices) known += (known.empty() ? "" : "|") + std::string(c);
+    fail("parameter " + std::string(key) + "='" + it->second + "' is not one of " + known);
+  }
+  const ShaderDesc& shader() const {
+    auto it = cmd_.params.find("shader");
+    if (it == cmd_.params.end()) fail("parameter shader=NAME is required");
+    const ShaderDesc* s = ctx_.trace->find_shader(it->second);
+    if (!s) fail("unknown shader '" + it->second + "'");
+    return *s;
+  }
+
+  /// A read attachment image of the given kind (depth, or with stored surfaces).
+  const AttachmentImage* read_depth() const {
+    for (const auto& n : cmd_.reads) {
+      auto it = ctx_.images->attachments.find(n);
+      if (it != ctx_.images->attachments.end() && is_depth_format(it->second.format)) return &it->second;
+    }
+    return nullptr;
+  }
+  const AttachmentImage* read_surfaces() const {
+    for (const auto& n : cmd_.reads) {
+      auto it = ctx_.images->attachments.find(n);
+      if (it != ctx_.images->attachments.end() && !it->second.surface.empty()) return &it->second;
+    }
+    return nullptr;
+  }
+  /// The first buffer in `names` holding `content`, or "".
+  std::string buffer_with(const std::vector<std::string>& names, BufferContent content) const {
+    for (const auto& n : names) {
+      const BufferDesc* b = ctx_.trace->find_buffer(n);
+      if (b && b->content == content) return n;
+    }
+    return {};
+  }
+
+  /// Books the DRAM reads of every input: images at their full size, buffers at their declared
+  /// size except light lists and grids, which are booked at the size their producer wrote.
+  void charge_reads() {
+    const std::uint64_t pixels = static_cast<std::uint64_t>(ctx_.viewport.width_px) * static_cast<std::uint64_t>(ctx_.viewport.height_px);
+    for (const auto& n : cmd_.reads) {
+      if (auto it = ctx_.images->attachments.find(n); it != ctx_.images->attachments.end()) {
+        const AttachmentImage& img = it->second;
+        const std::uint64_t bps = is_depth_format(img.format) ? static_cast<std::uint64_t>(ctx_.hw->isp.depth_stencil_bytes_per_sample)
+                                                                : bytes_per_sample(img.format);
+        dram_.read(traffic_class_of(img.usage), pixels * img.samples * bps);
+        continue;
+      }
+      const BufferDesc* b = ctx_.trace->find_buffer(n);
+      if (!b) continue;
+      dram_.read(dram_class_of(b->traffic), written_bytes(n, b->bytes));
+    }
+  }
+  /// Books a write of `bytes` to buffer `name` and remembers the size for later readers.
+  void charge_write(const std::string& name, std::uint64_t bytes) {
+    const BufferDesc* b = ctx_.trace->find_buffer(name);
+    const DramClass c = b ? dram_class_of(b->traffic) : DramClass::Other;
+    dram_.write(c, bytes);
+    ctx_.images->buffer_bytes_written[name] = bytes;
+  }
+  std::uint64_t written_bytes(const std::string& name, std::uint64_t declared) const {
+    auto it = ctx_.images->buffer_bytes_written.find(name);
+    return it == ctx_.images->buffer_bytes_written.end() ? declared : it->second;
+  }
+
+  const ComputeContext& ctx_;
+  const DispatchCmd& cmd_;
+  ComputeStats& stats_;
+  DramTraffic& dram_;
+};
+
+/// The lights touching a screen rectangle's volume between two distances, using the light's
+/// screen rectangle as a first test (what a hierarchical kernel computes).
+void cull_lights(const ComputeContext& ctx, const std::vector<PixelRect>& light_rects, const PixelRect& rect, float d0,
+                 float d1, std::vector<std::uint32_t>& out) {
+  const auto& lights = ctx.trace->lights;
+  for (std::uint32_t l = 0; l < lights.size(); ++l) {
+    const PixelRect& lr = light_rects[l];
+    if (lr.empty() || intersect(lr, rect).empty()) continue;
+    if (sphere_touches_tile_volume(ctx.frustum, lights[l], rect, d0, d1)) out.push_back(l);
+  }
+}
+
+std::vector<PixelRect> light_rects(const ComputeContext& ctx) {
+  std::vector<PixelRect> r;
+  for (const auto& l : ctx.trace->lights) r.push_back(light_screen_rect(l, ctx.camera, ctx.viewport));
+  return r;
+}
+
+/// Sum of the contributions of `list` (or every light via the exact candidates) at a surface.
+glm::vec3 shade_surface(const ComputeContext& ctx, const SurfacePoint& s, int x, int y, const std::vector<std::uint32_t>* list) {
+  glm::vec3 c = ShadingModel::ambient(s);
+  const auto& lights = ctx.trace->lights;
+  if (list) {
+    for (std::uint32_t l : *list) c += ShadingModel::light_contribution(s, ctx.camera.eye, lights[l]);
+  } else {
+    const auto& cand = (*ctx.light_tiles)[static_cast<std::size_t>((y / ctx.light_tile_px) * ctx.light_tiles_x + x / ctx.light_tile_px)];
+    for (std::uint32_t l : cand) c += ShadingModel::light_contribution(s, ctx.camera.eye, lights[l]);
+  }
+  return c;
+}
+
+}  // namespace
+
+const std::vector<std::string>& kernel_names() { return kKernels; }
+
+void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStats& stats, DramTraffic& dram,
+                  std::string& image_written) {
+  Dispatch k(ctx, cmd, stats, dram);
+  const int W = ctx.viewport.width_px, H = ctx.viewport.height_px;
+  const std::uint64_t pixels = static_cast<std::uint64_t>(W) * static_cast<std::uint64_t>(H);
+  const auto n_lights = static_cast<std::uint64_t>(ctx.trace->lights.size());
+  ++stats.dispatches;
+  stats.workgroups += cmd.group_count();
+  stats.threads += cmd.group_count() * cmd.group_size[0] * cmd.group_size[1] * cmd.group_size[2];
+  k.charge_reads();
+
+  auto tiles_of = [&](int tile_px, int& tx, int& ty) {
+    tx = (W + tile_px - 1) / tile_px;
+    ty = (H + tile_px - 1) / tile_px;
+  };
+  auto write_image = [&](const std::string& name, ImageBuffer&& img) {
+    ctx.images->image_buffers[name] = std::move(img);
+    k.charge_write(name, pixels * 4);  // rgba8 output
+    image_written = name;
+  };
+
+  if (cmd.kernel == "depth_bounds") {
+    k.allow({"tile_px"});
+    const int tile_px = k.get_int("tile_px", 16, 1, 1024);
+    const AttachmentImage* depth = k.read_depth();
+    if (!depth) k.fail("needs a depth image in reads=");
+    const std::string out = k.buffer_with(cmd.writes, BufferContent::DepthBounds);
+    if (out.empty()) k.fail("needs a depth_bounds buffer in writes=");
+    auto b = std::make_shared<DepthBounds>(DepthBounds::compute(ctx.frustum, *depth, tile_px));
+    stats.alu_ops += pixels * depth->samples * kDepthReduceOps;
+    k.charge_write(out, b->min_distance.size() * 8);
+    ctx.images->depth_bounds[out] = b;
+    return;
+  }
+
+  if (cmd.kernel == "tile_light_cull" || cmd.kernel == "tiled_deferred_shade") {
+    const bool shade = cmd.kernel == "tiled_deferred_shade";
+    if (shade) {
+      k.allow({"tile_px", "max_lights_per_tile", "bounds", "shader"});
+    } else {
+      k.allow({"tile_px", "max_lights_per_tile", "bounds"});
+    }
+    const int tile_px = k.get_int("tile_px", 16, 1, 1024);
+    const int cap = k.get_int("max_lights_per_tile", 0, 0, 1 << 20);
+    const std::string bounds_mode = k.get_choice("bounds", "minmax", {"minmax", "max", "none"});
+    auto grid = std::make_shared<TileLightGrid>();
+    grid->tile_px = tile_px;
+    tiles_of(tile_px, grid->tiles_x, grid->tiles_y);
+    grid->max_lights_per_tile = static_cast<std::uint32_t>(cap);
+    const std::size_t tiles = static_cast<std::size_t>(grid->tiles_x) * static_cast<std::size_t>(grid->tiles_y);
+    grid->lists.assign(tiles, {});
+    // Depth bounds: from a depth_bounds buffer, else computed here from a depth image.
+    std::shared_ptr<DepthBounds> bounds;
+    const std::string bname = k.buffer_with(cmd.reads, BufferContent::DepthBounds);
+    if (!bname.empty()) {
+      auto it = ctx.images->depth_bounds.find(bname);
+      if (it == ctx.images->depth_bounds.end()) k.fail("depth_bounds buffer '" + bname + "' was not written by a depth_bounds dispatch");
+      if (it->second->tile_px != tile_px) k.fail("depth_bounds buffer '" + bname + "' has another tile size");
+      bounds = it->second;
+    } else if (const AttachmentImage* depth = k.read_depth(); depth && bounds_mode != "none") {
+      bounds = std::make_shared<DepthBounds>(DepthBounds::compute(ctx.frustum, *depth, tile_px));
+      stats.alu_ops += pixels * depth->samples * kDepthReduceOps;
+    }
+    const auto rects = light_rects(ctx);
+    for (int ty = 0; ty < grid->tiles_y; ++ty) {
+      for (int tx = 0; tx < grid->tiles_x; ++tx) {
+        const std::size_t t = static_cast<std::size_t>(ty * grid->tiles_x + tx);
+        float d0 = 0.0f, d1 = 1e30f;
+        if (bounds) {
+          if (bounds->min_distance[t] > bounds->max_distance[t]) continue;  // nothing visible: empty list
+          d1 = bounds->max_distance[t] * 1.001f;
+          if (bounds_mode == "minmax") d0 = bounds->min_distance[t] * 0.999f;
+        }
+        const PixelRect rect = intersect({tx * tile_px, ty * tile_px, (tx + 1) * tile_px, (ty + 1) * tile_px}, {0, 0, W, H});
+        cull_lights(ctx, rects, rect, d0, d1, grid->lists[t]);
+        if (cap > 0 && grid->lists[t].size() > static_cast<std::size_t>(cap)) ++grid->overflowed_tiles;
+      }
+    }
+    stats.light_volume_tests += tiles * n_lights;
+    stats.alu_ops += tiles * n_lights * kSphereVolumeTestOps;
+    stats.list_entries += grid->total_entries();
+    stats.list_overflows += grid->overflowed_tiles;
+    if (!shade) {
+      const std::string gname = k.buffer_with(cmd.writes, BufferContent::TileGrid);
+      const std::string lname = k.buffer_with(cmd.writes, BufferContent::LightIndexList);
+      if (gname.empty() || lname.empty()) k.fail("needs a tile_grid and a light_index_list buffer in writes=");
+      k.charge_write(gname, tiles * kTileGridEntryBytes);
+      k.charge_write(lname, grid->total_entries() * kLightIndexBytes);
+      ctx.images->tile_grids[gname] = grid;
+      return;
+    }
+    // Andersson's single pass: shade every pixel from its tile's list (kept in group-shared memory).
+    const ShaderDesc& sh = k.shader();
+    const AttachmentImage* surfaces = k.read_surfaces();
+    if (!surfaces) k.fail("needs a G-buffer image (written by a pass) in reads=");
+    const std::string out = k.buffer_with(cmd.writes, BufferContent::Image);
+    if (out.empty()) k.fail("needs an image buffer in writes=");
+    ImageBuffer img;
+    img.color.assign(pixels, glm::vec4(0.0f));
+    for (int y = 0; y < H; ++y) {
+      for (int x = 0; x < W; ++x) {
+        const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
+        if (!surfaces->surface_valid[p * surfaces->samples]) continue;
+        const auto& list = grid->at_pixel(x, y);
+        img.color[p] = glm::vec4(shade_surface(ctx, surfaces->surface[p * surfaces->samples], x, y, &list), 1.0f);
+        ++stats.shaded_pixels;
+        stats.light_evaluations += list.size();
+        stats.alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * list.size();
+        ctx.images->counters.lights_evaluated[p] += static_cast<std::uint32_t>(list.size());
+        ctx.images->counters.shaded[p] += 1;
+      }
+    }
+    stats.texture_fetches += pixels * sh.tex_fetches;
+    write_image(out, std::move(img));
+    return;
+  }
+
+  if (cmd.kernel == "cluster_flag" || cmd.kernel == "cluster_light_assign") {
+    const bool assign = cmd.kernel == "cluster_light_assign";
+    if (assign) {
+      k.allow({"tile_px", "slices", "slicing", "min_depth", "dense"});
+    } else {
+      k.allow({"tile_px", "slices", "slicing", "min_depth"});
+    }
+    const int tile_px = k.get_int("tile_px", 64, 1, 1024);
+    const int slices = k.get_int("slices", 16, 1, 4096);
+    const Slicing slicing = k.get_choice("slicing", "log", {"log", "cubical"}) == "log" ? Slicing::Log : Slicing::Cubical;
+    const float min_depth = k.get_float("min_depth", ctx.frustum.near_plane, 0.0f, 1e6f);
+    auto grid = std::make_shared<ClusterGrid>();
+    grid->configure(ctx.frustum, tile_px, slices, slicing, min_depth);
+    const std::size_t clusters = grid->used.size();
+    if (!assign) {
+      const AttachmentImage* depth = k.read_depth();
+      if (!depth) k.fail("needs a depth image in reads=");
+      const std::string out = k.buffer_with(cmd.writes, BufferContent::UsedClusters);
+      if (out.empty()) k.fail("needs a used_clusters buffer in writes=");
+      for (int y = 0; y < H; ++y) {
+        for (int x = 0; x < W; ++x) {
+          const std::size_t p = (static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x)) * depth->samples;
+          for (std::size_t s = 0; s < depth->samples; ++s) {
+            const float d = depth->depth[p + s];
+            if (d < 1.0f) grid->used[grid->cluster_of(x, y, ctx.frustum.distance_of_window_depth(d))] = 1;
+          }
+        }
+      }
+      stats.alu_ops += pixels * depth->samples * kClusterIndexOps;
+      stats.clusters_used += grid->used_count();
+      k.charge_write(out, clusters / 8 + grid->used_count() * 4);  // flags + compact list of used clusters
+      ctx.images->cluster_grids[out] = grid;
+      return;
+    }
+    const bool dense_param = k.get_choice("dense", "no", {"yes", "no"}) == "yes";
+    const std::string used_name = k.buffer_with(cmd.reads, BufferContent::UsedClusters);
+    if (!dense_param && !used_name.empty()) {
+      auto it = ctx.images->cluster_grids.find(used_name);
+      if (it == ctx.images->cluster_grids.end()) k.fail("used_clusters buffer '" + used_name + "' was not written by cluster_flag");
+      const ClusterGrid& f = *it->second;
+      if (f.tile_px != grid->tile_px || f.slices != grid->slices || f.slicing != grid->slicing) {
+        k.fail("cluster geometry differs from the cluster_flag dispatch that wrote '" + used_name + "'");
+      }
+      grid->used = f.used;
+    } else {
+      std::fill(grid->used.begin(), grid->used.end(), 1);
+    }
+    const auto rects = light_rects(ctx);
+    const auto& lights = ctx.trace->lights;
+    for (std::uint32_t l = 0; l < lights.size(); ++l) {
+      const PixelRect& lr = rects[l];
+      if (lr.empty()) continue;
+      const float dist = ctx.frustum.distance_of(lights[l].position);
+      const int s0 = grid->slice_of(std::max(0.0f, dist - lights[l].radius));
+      const int s1 = grid->slice_of(dist + lights[l].radius);
+      for (int s = s0; s <= s1; ++s) {
+        float d0 = 0, d1 = 0;
+        grid->slice_range(s, d0, d1);
+        for (int ty = lr.y0 / tile_px; ty <= (lr.y1 - 1) / tile_px; ++ty) {
+          for (int tx = lr.x0 / tile_px; tx <= (lr.x1 - 1) / tile_px; ++tx) {
+            const std::size_t c = grid->index(tx, ty, s);
+            if (!grid->used[c]) continue;
+            const PixelRect rect = intersect({tx * tile_px, ty * tile_px, (tx + 1) * tile_px, (ty + 1) * tile_px}, {0, 0, W, H});
+            if (sphere_touches_tile_volume(ctx.frustum, lights[l], rect, d0, d1)) grid->lists[c].push_back(l);
+          }
+        }
+      }
+    }
+    const std::uint64_t processed = grid->used_count();
+    stats.light_volume_tests += processed * n_lights;
+    stats.alu_ops += processed * n_lights * kSphereVolumeTestOps;
+    stats.list_entries += grid->total_entries();
+    const std::string gname = k.buffer_with(cmd.writes, BufferContent::ClusterGrid);
+    const std::string lname = k.buffer_with(cmd.writes, BufferContent::LightIndexList);
+    if (gname.empty() || lname.empty()) k.fail("needs a cluster_grid and a light_index_list buffer in writes=");
+    k.charge_write(gname, clusters * kTileGridEntryBytes);
+    k.charge_write(lname, grid->total_entries() * kLightIndexBytes);
+    ctx.images->cluster_grids[gname] = grid;
+    return;
+  }
+
+  if (cmd.kernel == "deferred_shade" || cmd.kernel == "vbuffer_shade") {
+    k.allow({"shader", "tile_px"});
+    const ShaderDesc& sh = k.shader();
+    const AttachmentImage* surfaces = k.read_surfaces();
+    if (!surfaces) k.fail("needs a G-buffer or visibility image (written by a pass) in reads=");
+    const std::string out = k.buffer_with(cmd.writes, BufferContent::Image);
+    if (out.empty()) k.fail("needs an image buffer in writes=");
+    const TileLightGrid* tgrid = nullptr;
+    const ClusterGrid* cgrid = nullptr;
+    if (sh.light_source == LightSource::TileList) {
+      const std::string g = k.buffer_with(cmd.reads, BufferContent::TileGrid);
+      auto it = ctx.images->tile_grids.find(g);
+      if (g.empty() || it == ctx.images->tile_grids.end()) k.fail("light_source=tile_list needs a tile_grid written by tile_light_cull in reads=");
+      tgrid = it->second.get();
+    } else if (sh.light_source == LightSource::ClusterList) {
+      const std::string g = k.buffer_with(cmd.reads, BufferContent::ClusterGrid);
+      auto it = ctx.images->cluster_grids.find(g);
+      if (g.empty() || it == ctx.images->cluster_grids.end()) k.fail("light_source=cluster_list needs a cluster_grid written by cluster_light_assign in reads=");
+      cgrid = it->second.get();
+    } else if (sh.light_source != LightSource::All) {
+      k.fail(std::string("light_source '") + to_string(sh.light_source) + "' cannot be used by a compute kernel");
+    }
+    const bool vbuffer = cmd.kernel == "vbuffer_shade";
+    const int tile_px = k.get_int("tile_px", 16, 1, 1024);
+    std::set<std::pair<std::size_t, std::uint32_t>> refetched;  // (tile, triangle)
+    ImageBuffer img;
+    img.color.assign(pixels, glm::vec4(0.0f));
+    for (int y = 0; y < H; ++y) {
+      for (int x = 0; x < W; ++x) {
+        const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
+        if (!surfaces->surface_valid[p * surfaces->samples]) continue;
+        const SurfacePoint& s = surfaces->surface[p * surfaces->samples];
+        const std::vector<std::uint32_t>* list = nullptr;
+        std::uint64_t count = n_lights;
+        if (tgrid) list = &tgrid->at_pixel(x, y);
+        if (cgrid) list = &cgrid->lists[cgrid->cluster_of(x, y, ctx.frustum.distance_of(s.position))];
+        if (list) count = list->size();
+        img.color[p] = glm::vec4(shade_surface(ctx, s, x, y, list), 1.0f);
+        ++stats.shaded_pixels;
+        stats.light_evaluations += count;
+        stats.alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * count;
+        ctx.images->counters.lights_evaluated[p] += static_cast<std::uint32_t>(count);
+        ctx.images->counters.shaded[p] += 1;
+        if (vbuffer) refetched.insert({static_cast<std::size_t>((y / tile_px) * ((W + tile_px - 1) / tile_px) + x / tile_px), s.triangle});
+      }
+    }
+    stats.texture_fetches += stats.shaded_pixels.value() ? pixels * sh.tex_fetches : 0;
+    if (vbuffer) {
+      // Each tile re-fetches the three vertices of every triangle it shades (Burns & Hunt).
+      stats.refetched_vertices += refetched.size() * 3;
+      dram.read(DramClass::Vertices, refetched.size() * 3 * kRefetchVertexBytes);
+    }
+    write_image(out, std::move(img));
+    return;
+  }
+
+  if (cmd.kernel == "vbuffer_worklists") {
+    k.allow({"tile_px"});
+    const int tile_px = k.get_int("tile_px", 16, 1, 1024);
+    const AttachmentImage* vis = k.read_surfaces();
+    if (!vis) k.fail("needs a visibility image (written by a pass) in reads=");
+    const std::string out = k.buffer_with(cmd.writes, BufferContent::WorkLists);
+    if (out.empty()) k.fail("needs a work_lists buffer in writes=");
+    std::set<std::pair<std::size_t, std::uint32_t>> entries;  // (tile, material)
+    for (int y = 0; y < H; ++y) {
+      for (int x = 0; x < W; ++x) {
+        const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
+        if (!vis->surface_valid[p * vis->samples]) continue;
+        entries.insert({static_cast<std::size_t>((y / tile_px) * ((W + tile_px - 1) / tile_px) + x / tile_px),
+                        vis->surface[p * vis->samples].material});
+      }
+    }
+    stats.alu_ops += pixels * kWorkListOps;
+    stats.work_list_entries += entries.size();
+    k.charge_write(out, entries.size() * 8);  // (tile, material) entry of 8 bytes
+    return;
+  }
+
+  std::string known;
+  for (const auto& n : kKernels) known += (known.empty() ? "" : ", ") + n;
+  k.fail("unknown kernel (known: " + known + ")");
+}
+
+}  // namespace tbdr

@@ -1,0 +1,138 @@
+#include "models/light_lists.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace tbdr {
+
+ViewFrustum ViewFrustum::from(const Camera& camera, int width_px, int height_px) {
+  ViewFrustum f;
+  f.view = camera.view();
+  f.tan_half_y = std::tan(glm::radians(camera.fov_y_deg) * 0.5f);
+  f.tan_half_x = f.tan_half_y * static_cast<float>(width_px) / static_cast<float>(height_px);
+  f.near_plane = camera.near_plane;
+  f.far_plane = camera.far_plane;
+  f.width_px = width_px;
+  f.height_px = height_px;
+  return f;
+}
+
+float ViewFrustum::distance_of_window_depth(float depth01) const {
+  const double n = near_plane, fa = far_plane;
+  const double z_ndc = 2.0 * static_cast<double>(depth01) - 1.0;
+  return static_cast<float>((2.0 * n * fa) / ((fa + n) - z_ndc * (fa - n)));
+}
+
+float ViewFrustum::distance_of(const glm::vec3& world) const { return -(view * glm::vec4(world, 1.0f)).z; }
+
+bool sphere_touches_tile_volume(const ViewFrustum& f, const Light& light, const PixelRect& rect, float d0, float d1) {
+  const glm::vec3 c = glm::vec3(f.view * glm::vec4(light.position, 1.0f));
+  const float r = light.radius;
+  const float dist = -c.z;
+  if (dist + r < d0 || dist - r > d1) return false;
+  // NDC extents of the rectangle (y up in NDC, rows grow downwards).
+  const float ax = (2.0f * static_cast<float>(rect.x0) / static_cast<float>(f.width_px) - 1.0f) * f.tan_half_x;
+  const float bx = (2.0f * static_cast<float>(rect.x1) / static_cast<float>(f.width_px) - 1.0f) * f.tan_half_x;
+  const float ay = (1.0f - 2.0f * static_cast<float>(rect.y1) / static_cast<float>(f.height_px)) * f.tan_half_y;
+  const float by = (1.0f - 2.0f * static_cast<float>(rect.y0) / static_cast<float>(f.height_px)) * f.tan_half_y;
+  // Inside: x >= ax*(-z), x <= bx*(-z), y >= ay*(-z), y <= by*(-z). Signed distances to the planes.
+  auto outside = [&](glm::vec3 n) { return glm::dot(glm::normalize(n), c) < -r; };
+  if (outside({1.0f, 0.0f, ax})) return false;
+  if (outside({-1.0f, 0.0f, -bx})) return false;
+  if (outside({0.0f, 1.0f, ay})) return false;
+  if (outside({0.0f, -1.0f, -by})) return false;
+  return true;
+}
+
+DepthBounds DepthBounds::compute(const ViewFrustum& f, const AttachmentImage& depth, int tile_px) {
+  DepthBounds b;
+  b.tile_px = tile_px;
+  b.tiles_x = (f.width_px + tile_px - 1) / tile_px;
+  b.tiles_y = (f.height_px + tile_px - 1) / tile_px;
+  const std::size_t n = static_cast<std::size_t>(b.tiles_x) * static_cast<std::size_t>(b.tiles_y);
+  b.min_distance.assign(n, 1e30f);
+  b.max_distance.assign(n, -1e30f);
+  const std::size_t S = depth.samples;
+  for (int y = 0; y < f.height_px; ++y) {
+    for (int x = 0; x < f.width_px; ++x) {
+      const std::size_t t = static_cast<std::size_t>((y / tile_px) * b.tiles_x + x / tile_px);
+      const std::size_t p = (static_cast<std::size_t>(y) * static_cast<std::size_t>(f.width_px) + static_cast<std::size_t>(x)) * S;
+      for (std::size_t s = 0; s < S; ++s) {
+        const float d = depth.depth[p + s];
+        if (!(d < 1.0f)) continue;
+        const float dist = f.distance_of_window_depth(d);
+        b.min_distance[t] = std::min(b.min_distance[t], dist);
+        b.max_distance[t] = std::max(b.max_distance[t], dist);
+      }
+    }
+  }
+  return b;
+}
+
+std::uint64_t TileLightGrid::total_entries() const {
+  std::uint64_t n = 0;
+  for (const auto& l : lists) n += l.size();
+  return n;
+}
+
+std::uint64_t ClusterGrid::used_count() const {
+  std::uint64_t n = 0;
+  for (auto u : used) n += u;
+  return n;
+}
+
+std::uint64_t ClusterGrid::total_entries() const {
+  std::uint64_t n = 0;
+  for (const auto& l : lists) n += l.size();
+  return n;
+}
+
+void ClusterGrid::configure(const ViewFrustum& f, int tile_px_, int slices_, Slicing s, float min_depth_) {
+  tile_px = tile_px_;
+  tiles_x = (f.width_px + tile_px - 1) / tile_px;
+  tiles_y = (f.height_px + tile_px - 1) / tile_px;
+  slicing = s;
+  near_plane = f.near_plane;
+  far_plane = f.far_plane;
+  min_depth = std::max(min_depth_, f.near_plane);
+  if (s == Slicing::Cubical) {
+    slice_ratio = 1.0f + 2.0f * f.tan_half_y * static_cast<float>(tile_px) / static_cast<float>(f.height_px);
+    // As many slices as reach the far plane, at most slices_.
+    const int needed = 1 + static_cast<int>(std::ceil(std::log(far_plane / min_depth) / std::log(slice_ratio)));
+    slices = std::max(1, std::min(slices_, needed));
+  } else {
+    slices = slices_;
+  }
+  const std::size_t n = static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y) * static_cast<std::size_t>(slices);
+  used.assign(n, 0);
+  lists.assign(n, {});
+}
+
+int ClusterGrid::slice_of(float d) const {
+  int k = 0;
+  if (slicing == Slicing::Log) {
+    if (d <= near_plane) return 0;
+    k = static_cast<int>(std::floor(std::log(d / near_plane) / std::log(far_plane / near_plane) * slices));
+  } else {
+    if (d <= min_depth) return 0;
+    k = 1 + static_cast<int>(std::floor(std::log(d / min_depth) / std::log(slice_ratio)));
+  }
+  return std::clamp(k, 0, slices - 1);
+}
+
+void ClusterGrid::slice_range(int k, float& d0, float& d1) const {
+  if (slicing == Slicing::Log) {
+    d0 = near_plane * std::pow(far_plane / near_plane, static_cast<float>(k) / slices);
+    d1 = near_plane * std::pow(far_plane / near_plane, static_cast<float>(k + 1) / slices);
+  } else {
+    d0 = k == 0 ? 0.0f : min_depth * std::pow(slice_ratio, static_cast<float>(k - 1));
+    d1 = min_depth * std::pow(slice_ratio, static_cast<float>(k));
+  }
+  if (k == 0) d0 = 0.0f;
+  if (k == slices - 1) d1 = 1e30f;  // the last slice takes everything beyond
+  // Guard against float rounding at slice boundaries: widen slightly (conservative).
+  d0 *= 0.999f;
+  d1 *= 1.001f;
+}
+
+}  // namespace tbdr
