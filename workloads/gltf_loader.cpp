@@ -201,6 +201,11 @@ const char* mode_name(int mode) {
   }
 }
 
+/// Accessors larger than this (elements) are rejected before anything is allocated.
+constexpr std::size_t max_accessor_elements = std::size_t{1} << 28;
+/// Alpha masks are decoded only up to this many texels (a 8192 x 8192 texture).
+constexpr std::size_t max_mask_texels = std::size_t{1} << 26;
+
 // Reads one component as a double (exact for every glTF component type).
 double read_component(const unsigned char* p, int ct, bool normalized) {
   switch (ct) {
@@ -299,7 +304,8 @@ void precheck_json(const std::string& file, const nlohmann::json& j) {
       std::uint64_t off = 0, len = 0;
       if (v.contains("byteOffset") && v["byteOffset"].is_number_unsigned()) off = v["byteOffset"].get<std::uint64_t>();
       if (v.contains("byteLength") && v["byteLength"].is_number_unsigned()) len = v["byteLength"].get<std::uint64_t>();
-      if (off + len > buffer_bytes[static_cast<std::size_t>(b)]) {
+      const std::uint64_t blen = buffer_bytes[static_cast<std::size_t>(b)];
+      if (off > blen || len > blen - off) {
         throw InputError(file, what + ": bytes [" + std::to_string(off) + ", " + std::to_string(off + len) +
                                    ") lie outside buffer " + std::to_string(b) + " (" +
                                    std::to_string(buffer_bytes[static_cast<std::size_t>(b)]) + " bytes)");
@@ -391,7 +397,7 @@ const unsigned char* Converter::view_range(int view_index, std::size_t byte_offs
   const std::string bv_desc = "bufferView " + std::to_string(view_index) + quoted_name(bv.name);
   check_index(bv.buffer, m_.buffers.size(), bv_desc, "buffer");
   const tinygltf::Buffer& buf = m_.buffers[static_cast<std::size_t>(bv.buffer)];
-  if (bv.byteOffset + bv.byteLength > buf.data.size()) {
+  if (bv.byteOffset > buf.data.size() || bv.byteLength > buf.data.size() - bv.byteOffset) {
     fail(bv_desc + ": bytes [" + std::to_string(bv.byteOffset) + ", " + std::to_string(bv.byteOffset + bv.byteLength) +
          ") lie outside buffer " + std::to_string(bv.buffer) + quoted_name(buf.name) + " (" +
          std::to_string(buf.data.size()) + " bytes)");
@@ -405,10 +411,18 @@ const unsigned char* Converter::view_range(int view_index, std::size_t byte_offs
     stride = bv.byteStride;
   }
   if (count > 0) {
-    const std::size_t end = byte_offset + stride * (count - 1) + elem_bytes;
-    if (end > bv.byteLength) {
+    // offset + stride*(count-1) + element <= view length, without overflowing.
+    const bool fits = byte_offset <= bv.byteLength && elem_bytes <= bv.byteLength - byte_offset &&
+                      (count - 1) <= (bv.byteLength - byte_offset - elem_bytes) / stride;
+    if (!fits) {
+      const long double end = static_cast<long double>(byte_offset) +
+                              static_cast<long double>(stride) * static_cast<long double>(count - 1) +
+                              static_cast<long double>(elem_bytes);
+      std::ostringstream need;
+      need.precision(20);
+      need << end;
       fail(desc + ": " + std::to_string(count) + " elements of " + std::to_string(elem_bytes) + " bytes (stride " +
-           std::to_string(stride) + ") from byte " + std::to_string(byte_offset) + " need " + std::to_string(end) +
+           std::to_string(stride) + ") from byte " + std::to_string(byte_offset) + " need " + need.str() +
            " bytes, but " + bv_desc + " has " + std::to_string(bv.byteLength));
     }
   }
@@ -424,12 +438,17 @@ std::vector<Out> Converter::read_accessor(int acc_index, const std::string& desc
   if (cb == 0) fail(desc + ": invalid componentType " + std::to_string(acc.componentType));
   if (nc == 0) fail(desc + ": invalid type " + std::to_string(acc.type));
   if (acc.count == 0) fail(desc + ": count is 0");
+  if (acc.count > max_accessor_elements) {
+    fail(desc + ": count " + std::to_string(acc.count) + " exceeds the supported " +
+         std::to_string(max_accessor_elements) + " elements");
+  }
   const std::size_t elem = static_cast<std::size_t>(cb) * static_cast<std::size_t>(nc);
   if (element_bytes) *element_bytes = elem;
+  std::size_t stride = 0;
+  const unsigned char* base =
+      acc.bufferView >= 0 ? view_range(acc.bufferView, acc.byteOffset, acc.count, elem, true, desc, &stride) : nullptr;
   std::vector<Out> out(acc.count * static_cast<std::size_t>(nc), Out{});
-  if (acc.bufferView >= 0) {
-    std::size_t stride = 0;
-    const unsigned char* base = view_range(acc.bufferView, acc.byteOffset, acc.count, elem, true, desc, &stride);
+  if (base != nullptr) {
     for (std::size_t i = 0; i < acc.count; ++i) {
       const unsigned char* p = base + i * stride;
       for (int c = 0; c < nc; ++c) {
@@ -507,7 +526,12 @@ int Converter::alpha_mask_for_image(int image, const std::string& material_desc)
   if (it != mask_cache_.end()) return it->second;
   int result = -1;
   const tinygltf::Image& img = m_.images[static_cast<std::size_t>(image)];
-  if (!img.image.empty()) {
+  const auto header = parse_image_header(img.image.data(), img.image.size());
+  if (header && static_cast<std::size_t>(header->width) * static_cast<std::size_t>(header->height) > max_mask_texels) {
+    scene_.warnings.push_back(material_desc + ": base color image " + std::to_string(image) + " is too large (" +
+                              std::to_string(header->width) + "x" + std::to_string(header->height) +
+                              ") to decode as an alpha mask; alpha test uses the factor's alpha");
+  } else if (!img.image.empty()) {
     int w = 0, h = 0, comp = 0;
     stbi_uc* px = stbi_load_from_memory(img.image.data(), static_cast<int>(img.image.size()), &w, &h, &comp, 4);
     if (px == nullptr) {
@@ -638,10 +662,8 @@ void Converter::convert_primitive(int mesh, int prim_index, std::vector<std::uin
     }
     const int cb = component_bytes(acc.componentType);
     const int nc = type_components(acc.type);
-    if (cb == 0 || nc == 0) {
-      fail(desc + ": invalid componentType " + std::to_string(acc.componentType) + " or type " +
-           std::to_string(acc.type));
-    }
+    if (cb == 0) fail(desc + ": invalid componentType " + std::to_string(acc.componentType));
+    if (nc == 0) fail(desc + ": invalid type " + std::to_string(acc.type));
     stride_bytes += static_cast<std::uint32_t>(cb * nc);
   }
 
@@ -895,19 +917,25 @@ glm::mat4 Converter::local_matrix(int node_index) const {
   return m;
 }
 
-void Converter::place_node(int node_index, const glm::mat4& parent) {
-  const tinygltf::Node& node = m_.nodes[static_cast<std::size_t>(node_index)];
-  const glm::mat4 world = parent * local_matrix(node_index);
-  if (node.mesh >= 0) {
-    for (std::uint32_t sm : mesh_submeshes(node.mesh)) {
-      Instance inst;
-      inst.submesh = sm;
-      inst.world = world;
-      inst.node = node.name.empty() ? "node " + std::to_string(node_index) : node.name;
-      scene_.instances.push_back(std::move(inst));
+void Converter::place_node(int root, const glm::mat4& parent) {
+  // Depth-first, children in order, with an explicit stack (node chains can be deep).
+  std::vector<std::pair<int, glm::mat4>> stack = {{root, parent}};
+  while (!stack.empty()) {
+    const auto [node_index, parent_world] = stack.back();
+    stack.pop_back();
+    const tinygltf::Node& node = m_.nodes[static_cast<std::size_t>(node_index)];
+    const glm::mat4 world = parent_world * local_matrix(node_index);
+    if (node.mesh >= 0) {
+      for (std::uint32_t sm : mesh_submeshes(node.mesh)) {
+        Instance inst;
+        inst.submesh = sm;
+        inst.world = world;
+        inst.node = node.name.empty() ? "node " + std::to_string(node_index) : node.name;
+        scene_.instances.push_back(std::move(inst));
+      }
     }
+    for (auto it = node.children.rbegin(); it != node.children.rend(); ++it) stack.emplace_back(*it, world);
   }
-  for (int c : node.children) place_node(c, world);
 }
 
 void Converter::run() {

@@ -131,6 +131,7 @@ std::vector<std::string> split_ws(const std::string& line) {
   std::size_t i = 0;
   while (i < line.size()) {
     while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
+    if (i < line.size() && line[i] == '#') break;  // a word starting with # comments out the rest
     const std::size_t start = i;
     while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
     if (i > start) out.push_back(line.substr(start, i - start));
@@ -211,7 +212,7 @@ LightSet read_light_file(const std::string& path) {
   while (std::getline(in, line)) {
     ++line_no;
     const std::vector<std::string> tok = split_ws(line);
-    if (tok.empty() || tok[0][0] == '#') continue;
+    if (tok.empty()) continue;
     if (!header) {
       if (tok[0] != "tbdrsim-lights") {
         throw InputError(path, line_no, "expected the header 'tbdrsim-lights 1', got '" + tok[0] + "'");
