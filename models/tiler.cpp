@@ -138,7 +138,33 @@ std::uint64_t Tiler::tile_read_bytes(int t) const {
   return bytes;
 }
 
+std::vector<ByteRange> Tiler::tile_read_ranges(int t) const {
+  std::vector<ByteRange> out;
+  const auto header = static_cast<std::uint64_t>(hw_.tiling.region_header_bytes);
+  const auto entry = static_cast<std::uint64_t>(hw_.tiling.control_stream_entry_bytes);
+  out.push_back({header * static_cast<std::uint64_t>(t), header});
+  // Control streams laid out tile after tile, after the region headers.
+  std::uint64_t ctrl = header * tiles_.size();
+  for (int i = 0; i < t; ++i) ctrl += tiles_[static_cast<std::size_t>(i)].blocks.size() * entry;
+  const auto& tb = tiles_[static_cast<std::size_t>(t)];
+  if (!tb.blocks.empty()) out.push_back({ctrl, tb.blocks.size() * entry});
+  // Primitive blocks after all control streams.
+  std::uint64_t data_base = header * tiles_.size();
+  for (const auto& other : tiles_) data_base += other.blocks.size() * entry;
+  if (block_offsets_.size() != block_sizes_.size()) {
+    block_offsets_.assign(block_sizes_.size(), 0);
+    std::uint64_t o = 0;
+    for (std::size_t b = 0; b < block_sizes_.size(); ++b) {
+      block_offsets_[b] = o;
+      o += block_sizes_[b];
+    }
+  }
+  for (std::uint32_t b : tb.blocks) out.push_back({data_base + block_offsets_[b], block_sizes_[b]});
+  return out;
+}
+
 void Tiler::reset() {
+  block_offsets_.clear();
   for (auto& tb : tiles_) {
     tb.prims.clear();
     tb.blocks.clear();

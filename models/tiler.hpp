@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "models/frame_work.hpp"
 #include "models/hw_config.hpp"
 #include "models/rasterizer.hpp"
 #include "models/render_state.hpp"
@@ -59,6 +60,9 @@ class Tiler {
   /// Parameter buffer bytes the ISP reads to render tile t: region header, control stream and
   /// every primitive block it references.
   std::uint64_t tile_read_bytes(int t) const;
+  /// The parameter buffer ranges the ISP reads for tile t (offsets in the parameter buffer:
+  /// region headers first, then the control streams tile by tile, then the primitive blocks).
+  std::vector<ByteRange> tile_read_ranges(int t) const;
   /// True when nothing has been binned since the last reset.
   bool empty() const { return binned_ == 0; }
   /// Frees the parameter buffer after a render.
@@ -82,6 +86,7 @@ class Tiler {
   Viewport viewport_;
   std::vector<TileBin> tiles_;
   std::vector<std::uint64_t> block_sizes_;  ///< bytes of each closed block
+  mutable std::vector<std::uint64_t> block_offsets_;  ///< cumulative offsets (built on first use)
   // The open primitive block.
   std::vector<std::uint64_t> open_keys_;
   std::uint32_t open_prims_ = 0;

@@ -140,6 +140,11 @@ class FrameSimulator {
     result_.images.height = f.height;
     result_.images.counters.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height));
 
+    result_.work.width = f.width;
+    result_.work.height = f.height;
+    result_.work.tile_width = static_cast<int>(hw_.tiling.tile_width);
+    result_.work.tile_height = static_cast<int>(hw_.tiling.tile_height);
+    result_.work.tiles_x = (f.width + result_.work.tile_width - 1) / result_.work.tile_width;
     int pass_index = 0;
     std::uint64_t dispatches = 0;
     for (const auto& cmd : trace_.commands) {
@@ -336,6 +341,16 @@ class FrameSimulator {
     cc.light_tiles = &tmp.light_tiles;
     std::string image;
     run_dispatch(cc, d, stats, dram, image);
+    CommandWork cw;
+    cw.name = prefix;
+    cw.is_dispatch = true;
+    cw.depends_on_previous = true;  // a dispatch follows a barrier on what it reads
+    cw.compute_alu_ops = stats.alu_ops.value();
+    cw.compute_threads = stats.threads.value();
+    cw.compute_texels = stats.texture_fetches.value() * static_cast<std::uint64_t>(hw_.texture.texels_per_fetch);
+    cw.read_bytes = dram.read_bytes;
+    cw.write_bytes = dram.write_bytes;
+    result_.work.commands.push_back(std::move(cw));
     if (!image.empty()) result_.final_color = image;
     stats.group.collect(result_.stats);
     collect_dram(prefix, dram, result_.stats);
@@ -391,6 +406,7 @@ class FrameSimulator {
         }
       }
     }
+    const DramTraffic pass_buffer_reads = ps->dram;
 
     // imr has no binning: the whole frame is one "tile" and nothing goes through a parameter buffer.
     HwConfig hw = hw_;
@@ -409,25 +425,89 @@ class FrameSimulator {
     std::vector<std::uint8_t> resumed(static_cast<std::size_t>(tiler.tile_count()), 0);
     DramTraffic& dram = ps->dram;
 
+    CommandWork cw;
+    cw.name = prefix;
+    cw.read_bytes = pass_buffer_reads.read_bytes;  // buffers read once per pass, at its start
+    for (const auto& a : pass.attachments) {
+      if (a.load == LoadOp::Load && !a.transient) cw.depends_on_previous = true;
+    }
+    for (const auto& dc : pass.draws) {
+      if (!dc.reads.empty()) cw.depends_on_previous = true;
+    }
+    // Snapshots of the binning counters at the start of each render.
+    BinningWork base;
+    auto binning_now = [&]() {
+      BinningWork b;
+      b.vertices_shaded = ps->geometry.vertices_shaded.value();
+      b.vertex_alu_ops = ps->geometry.vertex_alu_ops.value();
+      b.vertex_fetch_bytes = ps->geometry.vertex_fetch_bytes.value();
+      b.index_fetch_bytes = ps->geometry.index_fetch_bytes.value();
+      b.primitives_in = ps->geometry.primitives_in.value();
+      b.primitives_binned = ps->tiler.primitives_binned.value();
+      b.tile_references = ps->tiler.tile_references.value();
+      return b;
+    };
+
     auto render = [&](bool partial) {
+      RenderWork rw;
+      rw.partial = partial;
+      const BinningWork now = binning_now();
+      rw.binning.vertices_shaded = now.vertices_shaded - base.vertices_shaded;
+      rw.binning.vertex_alu_ops = now.vertex_alu_ops - base.vertex_alu_ops;
+      rw.binning.vertex_fetch_bytes = now.vertex_fetch_bytes - base.vertex_fetch_bytes;
+      rw.binning.index_fetch_bytes = now.index_fetch_bytes - base.index_fetch_bytes;
+      rw.binning.primitives_in = now.primitives_in - base.primitives_in;
+      rw.binning.primitives_binned = now.primitives_binned - base.primitives_binned;
+      rw.binning.tile_references = now.tile_references - base.tile_references;
+      base = now;
       DramTraffic pb;
       tiler.finish_render(ps->tiler, pb);
-      if (!ctx.framebuffer_in_dram) dram += pb;
+      if (!ctx.framebuffer_in_dram) {
+        dram += pb;
+        rw.binning.pb_write_bytes = pb.writes(DramClass::ParameterBuffer);
+      }
       for (int t : order) {
         const auto& prims = tiler.tile_primitives(t);
         if (partial && prims.empty()) continue;  // untouched: nothing to render yet
         const std::uint64_t pb_read = prims.empty() ? 0 : tiler.tile_read_bytes(t);
         for (const PixelRect& r : tile_memory.strips(tiler.tile_rect(t))) {
+          const DramTraffic before = dram;
+          const std::uint64_t s0 = ps->isp.samples_rasterised.value(), p0 = ps->isp.primitives_fetched.value();
+          const std::uint64_t i0 = ps->tsp.invocations.value(), q0 = ps->tsp.quads.value(), a0 = ps->tsp.alu_ops.value();
+          const std::uint64_t x0 = ps->tsp.texels.value();
+          const std::uint64_t tb0 = ps->tsp.tile_buffer_read_bytes.value() + ps->tsp.tile_buffer_write_bytes.value();
+          const std::uint64_t tg0 = ps->isp.tag_read_bytes.value() + ps->isp.tag_write_bytes.value();
+          const std::uint64_t d0 = ps->isp.depth_read_bytes.value() + ps->isp.depth_write_bytes.value();
           tile_memory.begin_tile(r, resumed[static_cast<std::size_t>(t)] != 0, dram);
           isp.render_tile(r, prims, ps->isp, ps->tsp);
           tile_memory.end_tile(r, partial, dram);
+          TileWork tw;
+          tw.tile_x = t % tiler.tiles_x();
+          tw.tile_y = t / tiler.tiles_x();
+          tw.rect = r;
+          for (std::size_t c = 0; c < kDramClassCount; ++c) {
+            tw.load_bytes[c] = dram.read_bytes[c] - before.read_bytes[c];
+            tw.store_bytes[c] = dram.write_bytes[c] - before.write_bytes[c];
+          }
+          tw.primitives = ps->isp.primitives_fetched.value() - p0;
+          tw.samples = ps->isp.samples_rasterised.value() - s0;
+          tw.invocations = ps->tsp.invocations.value() - i0;
+          tw.quads = ps->tsp.quads.value() - q0;
+          tw.alu_ops = ps->tsp.alu_ops.value() - a0;
+          tw.texels = ps->tsp.texels.value() - x0;
+          tw.tile_buffer_bytes = ps->tsp.tile_buffer_read_bytes.value() + ps->tsp.tile_buffer_write_bytes.value() - tb0;
+          tw.tag_bytes = ps->isp.tag_read_bytes.value() + ps->isp.tag_write_bytes.value() - tg0;
+          tw.depth_bytes = ps->isp.depth_read_bytes.value() + ps->isp.depth_write_bytes.value() - d0;
           if (!ctx.framebuffer_in_dram) {
             ps->tiler.pb_bytes_read += pb_read;
             dram.read(DramClass::ParameterBuffer, pb_read);
+            if (!prims.empty()) tw.pb_reads = tiler.tile_read_ranges(t);
           }
+          rw.tiles.push_back(std::move(tw));
         }
         if (partial) resumed[static_cast<std::size_t>(t)] = 1;
       }
+      cw.renders.push_back(std::move(rw));
       tiler.reset();
       ctx.frame_prim_base += static_cast<std::uint32_t>(ctx.prims.size());
       ctx.prims.clear();
@@ -462,6 +542,15 @@ class FrameSimulator {
       img.defined = a.store == StoreOp::Store && !a.transient;
       if (img.defined && a.usage == AttachmentUsage::Color) result_.final_color = a.name;
     }
+    if (ctx.framebuffer_in_dram) {
+      // imr: the framebuffer accesses happen during shading; book them on the one "tile".
+      auto& tw = cw.renders.back().tiles.back();
+      tw.load_bytes[static_cast<std::size_t>(DramClass::DepthStencil)] += ps->isp.depth_read_bytes.value();
+      tw.store_bytes[static_cast<std::size_t>(DramClass::DepthStencil)] += ps->isp.depth_write_bytes.value();
+      tw.load_bytes[static_cast<std::size_t>(DramClass::Color)] += ps->tsp.tile_buffer_read_bytes.value();
+      tw.store_bytes[static_cast<std::size_t>(DramClass::Color)] += ps->tsp.tile_buffer_write_bytes.value();
+    }
+    result_.work.commands.push_back(std::move(cw));
     ps->collect(result_.stats);
     collect_dram(prefix, dram, result_.stats);
     PassSummary summary;

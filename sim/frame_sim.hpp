@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "models/frame_work.hpp"
 #include "models/hw_config.hpp"
 #include "models/render_state.hpp"
 #include "models/traffic.hpp"
@@ -30,7 +31,8 @@ struct FrameResult {
   std::vector<PassSummary> passes;
   DramTraffic dram;                ///< whole frame, per class
   FrameImages images;
-  std::string final_color;         ///< name of the last stored color attachment ("" if none)
+  std::string final_color;         ///< name of the last stored color attachment or image buffer ("" if none)
+  FrameWork work;                  ///< what the timing model schedules
 };
 
 /// Replays `trace` on `scene` with the hardware `hw`. Input problems (an unsupported kernel or

@@ -1,0 +1,85 @@
+#pragma once
+// The work a frame is made of, as the functional pipeline measured it, in the form the timing
+// model schedules: per render (a pass, or a part of it cut by a partial render) the binning work,
+// then per tile the parameter-buffer reads, tile loads, rasterisation, shading and stores; per
+// dispatch its compute and memory traffic. Every number here is a count the functional units
+// computed; the timing model only decides when each piece runs.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "models/rasterizer.hpp"
+#include "models/traffic.hpp"
+
+namespace tbdr {
+
+/// A contiguous DRAM range an operation reads or writes (offset within its region).
+struct ByteRange {
+  std::uint64_t offset = 0;
+  std::uint64_t bytes = 0;
+};
+
+/// One tile render (a strip, when the pass is split to fit tile memory).
+struct TileWork {
+  int tile_x = 0;
+  int tile_y = 0;
+  PixelRect rect;
+  std::vector<ByteRange> pb_reads;        ///< parameter buffer ranges read by the ISP
+  std::array<std::uint64_t, kDramClassCount> load_bytes{};   ///< tile loads (load ops, partial reloads, spill) and shader image reads
+  std::array<std::uint64_t, kDramClassCount> store_bytes{};  ///< tile stores (store ops, partial stores, spill)
+  std::uint64_t primitives = 0;           ///< primitives fetched and set up
+  std::uint64_t samples = 0;              ///< samples rasterised and depth tested
+  std::uint64_t invocations = 0;          ///< fragment shader invocations
+  std::uint64_t quads = 0;
+  std::uint64_t alu_ops = 0;              ///< fragment ALU ops (helpers included)
+  std::uint64_t texels = 0;
+  std::uint64_t tile_buffer_bytes = 0;    ///< on-chip tile buffer bytes read + written
+  std::uint64_t tag_bytes = 0;            ///< tag buffer bytes read + written
+  std::uint64_t depth_bytes = 0;          ///< on-chip depth/stencil bytes read + written
+};
+
+/// Binning work of one render: geometry processing and the parameter buffer writes.
+struct BinningWork {
+  std::uint64_t vertices_shaded = 0;
+  std::uint64_t vertex_alu_ops = 0;
+  std::uint64_t vertex_fetch_bytes = 0;
+  std::uint64_t index_fetch_bytes = 0;
+  std::uint64_t primitives_in = 0;
+  std::uint64_t primitives_binned = 0;
+  std::uint64_t tile_references = 0;
+  std::uint64_t pb_write_bytes = 0;
+};
+
+/// One render: binning, then its tiles in dispatch order.
+struct RenderWork {
+  BinningWork binning;
+  std::vector<TileWork> tiles;
+  bool partial = false;
+};
+
+/// A pass or a dispatch, in trace order.
+struct CommandWork {
+  std::string name;            ///< "pass0.main" / "dispatch1.tile_light_cull"
+  bool is_dispatch = false;
+  bool depends_on_previous = false;  ///< reads something an earlier command produced
+  std::vector<RenderWork> renders;   ///< passes
+  std::array<std::uint64_t, kDramClassCount> read_bytes{};   ///< dispatch traffic; for passes, buffers read once at the start
+  std::array<std::uint64_t, kDramClassCount> write_bytes{};  ///< dispatch traffic
+  // dispatches
+  std::uint64_t compute_alu_ops = 0;
+  std::uint64_t compute_threads = 0;
+  std::uint64_t compute_texels = 0;
+};
+
+/// The whole frame's work.
+struct FrameWork {
+  int width = 0;
+  int height = 0;
+  int tile_width = 0;
+  int tile_height = 0;
+  int tiles_x = 0;
+  std::vector<CommandWork> commands;
+};
+
+}  // namespace tbdr
