@@ -89,6 +89,46 @@ std::vector<std::string> write_frame_images(const FrameResult& frame, const std:
   return written;
 }
 
+void time_frame(const HwConfig& hw, FrameResult& frame, TimingResult& timing, EnergyBreakdown& energy) {
+  timing = run_timing(hw, frame.work);
+  auto& st = frame.stats;
+  st.push_back({"frame/timing", "frame_cycles", timing.frame_cycles, "cycles", "Frame time in core clock cycles"});
+  st.push_back({"frame/timing", "frame_time_ms", timing.frame_time_ps * 1e-9, "ms", "Frame time"});
+  st.push_back({"frame/timing", "timing_events", static_cast<double>(timing.events), "events", "Events the timing model executed"});
+  for (const auto& c : timing.commands) {
+    st.push_back({c.name + "/timing", "start_cycle", c.start_cycle, "cycles", "Cycle the command's first work started"});
+    st.push_back({c.name + "/timing", "binning_end_cycle", c.binning_end_cycle, "cycles", "Cycle its last binning finished (passes)"});
+    st.push_back({c.name + "/timing", "end_cycle", c.end_cycle, "cycles", "Cycle its last tile or compute work finished"});
+  }
+  for (const auto& u : timing.units) {
+    const std::string scope = "frame/unit." + u.name;
+    const double idle = std::max(0.0, timing.frame_cycles - u.busy_cycles - u.stalled_cycles);
+    st.push_back({scope, "busy_cycles", u.busy_cycles, "cycles", "Cycles the unit was working"});
+    st.push_back({scope, "stalled_cycles", u.stalled_cycles, "cycles", "Cycles the unit waited for a full queue downstream or for memory"});
+    st.push_back({scope, "idle_cycles", idle, "cycles", "Cycles the unit had nothing to do"});
+    st.push_back({scope, "utilization", timing.frame_cycles > 0 ? u.busy_cycles / timing.frame_cycles : 0.0, "ratio",
+                  "Busy cycles / frame cycles"});
+  }
+  for (auto& r : timing.memory_stats) st.push_back(r);
+  energy = compute_energy(hw, st, timing.frame_time_ps);
+  energy.collect(st);
+}
+
+std::string write_tile_cycles_image(const FrameResult& frame, const TimingResult& timing, const std::string& dir) {
+  const int tw = frame.work.tile_width, th = frame.work.tile_height;
+  const int tx = (frame.images.width + tw - 1) / tw, ty = (frame.images.height + th - 1) / th;
+  std::vector<double> cycles(static_cast<std::size_t>(tx) * static_cast<std::size_t>(ty), 0.0);
+  for (const auto& t : timing.tiles) {
+    if (t.tile_x < tx && t.tile_y < ty) cycles[static_cast<std::size_t>(t.tile_y * tx + t.tile_x)] += t.cycles;
+  }
+  HeatmapSpec spec;
+  spec.title = "Tile cycles";
+  spec.unit = "cycles per tile, summed over passes (fetch to writeback)";
+  const std::string path = (std::filesystem::path(dir) / "heat_tile_cycles.png").string();
+  write_png(path, heatmap_tiles_to_image(cycles, tx, ty, tw, th, frame.images.width, frame.images.height, spec));
+  return path;
+}
+
 RunOutcome run_one(const RunRequest& req) {
   namespace fs = std::filesystem;
   RunOutcome outcome;
@@ -106,10 +146,16 @@ RunOutcome run_one(const RunRequest& req) {
   const auto t_sim = std::chrono::steady_clock::now();
   outcome.frame = simulate_frame(trace, req.trace_path, scene, req.config.hw);
   outcome.wall_seconds = seconds_since(t_sim);
+  const auto t_timing = std::chrono::steady_clock::now();
+  time_frame(req.config.hw, outcome.frame, outcome.timing, outcome.energy);
+  outcome.timing_seconds = seconds_since(t_timing);
   outcome.technique = trace.technique.empty() ? "custom" : trace.technique;
   outcome.scene = scene.source;
 
-  if (!req.images_dir.empty()) outcome.images_written = write_frame_images(outcome.frame, req.images_dir);
+  if (!req.images_dir.empty()) {
+    outcome.images_written = write_frame_images(outcome.frame, req.images_dir);
+    outcome.images_written.push_back(write_tile_cycles_image(outcome.frame, outcome.timing, req.images_dir));
+  }
 
   RunRecord rec;
   rec.started_at = started;
@@ -129,7 +175,9 @@ RunOutcome run_one(const RunRequest& req) {
     rec.params.push_back({table.decls()[i].key, format_param_value(req.config.params.values[i]), req.config.params.origins[i].text});
   }
   rec.stats = outcome.frame.stats;
-  rec.stats.push_back({"frame/host", "simulation_wall_seconds", outcome.wall_seconds, "s", "Host wall time of the simulation"});
+  rec.stats.push_back({"frame/host", "simulation_wall_seconds", outcome.wall_seconds, "s", "Host wall time of the functional simulation"});
+  rec.stats.push_back({"frame/host", "timing_wall_seconds", outcome.timing_seconds, "s", "Host wall time of the timing and energy models"});
+  rec.tiles = outcome.timing.tiles;
   ResultsDb db(req.db_path);
   outcome.run_id = db.write_run(rec);
   return outcome;
@@ -150,7 +198,10 @@ void print_run_summary(const RunOutcome& o, std::ostream& out) {
   out << "  shaded: " << shaded << " invocations (" << stat_text(shaded / pixels) << " per pixel), "
       << find_stat(f, "frame/tsp", "shaded_quads") << " quads, " << find_stat(f, "frame/tsp", "helper_lanes")
       << " helper lanes, " << find_stat(f, "frame/tsp", "light_evaluations") << " light evaluations\n";
-  out << "  DRAM MB read/written per class:\n";
+  out << "  frame: " << stat_text(find_stat(f, "frame/timing", "frame_cycles")) << " cycles, "
+      << stat_text(find_stat(f, "frame/timing", "frame_time_ms")) << " ms, energy " << stat_text(find_stat(f, "frame/energy", "total_mj"))
+      << " mJ (timing model " << stat_text(o.timing_seconds) << " s)\n";
+  out << "  DRAM MB read/written per class (requested by the units, before caches):\n";
   for (std::size_t c = 0; c < kDramClassCount; ++c) {
     if (f.dram.read_bytes[c] == 0 && f.dram.write_bytes[c] == 0) continue;
     out << "    " << std::left << std::setw(18) << to_string(static_cast<DramClass>(c)) << std::right << std::setw(10)

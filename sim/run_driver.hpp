@@ -7,6 +7,8 @@
 #include <string>
 
 #include "models/hw_config.hpp"
+#include "models/energy.hpp"
+#include "models/timing_model.hpp"
 #include "sim/frame_sim.hpp"
 
 namespace tbdr {
@@ -27,7 +29,10 @@ struct RunOutcome {
   std::string scene;
   double wall_seconds = 0;       ///< simulation only (trace read and scene load excluded)
   double load_seconds = 0;       ///< trace read and scene load
+  double timing_seconds = 0;     ///< host time of the timing model
   FrameResult frame;
+  TimingResult timing;
+  EnergyBreakdown energy;
   std::vector<std::string> images_written;
 };
 
@@ -40,5 +45,11 @@ void print_run_summary(const RunOutcome& outcome, std::ostream& out);
 
 /// Writes the frame's images (final color, depth, triangle ids, heat maps) into `dir`.
 std::vector<std::string> write_frame_images(const FrameResult& frame, const std::string& dir);
+/// Writes the heat map of cycles per tile (summed over the frame's passes).
+std::string write_tile_cycles_image(const FrameResult& frame, const TimingResult& timing, const std::string& dir);
+
+/// Runs the timing and energy models on a functional frame and appends their statistics
+/// (frame/timing, <command>/timing, frame/unit.*, mem/*, frame/energy) to frame.stats.
+void time_frame(const HwConfig& hw, FrameResult& frame, TimingResult& timing, EnergyBreakdown& energy);
 
 }  // namespace tbdr

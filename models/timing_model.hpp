@@ -1,0 +1,67 @@
+#pragma once
+// The cycle-approximate timing model: schedules the frame's work (models/frame_work.hpp, measured
+// by the functional pipeline) on the GPU's units as resources with throughput, latency and
+// bounded queues, in the discrete-event kernel, with every DRAM access going through the caches
+// and the banked DRAM at real addresses (models/memory_system.hpp).
+//
+// Units and their service times (cycles of the core clock):
+//   binning engine (geometry + tiler): max(vertex ALU ops / USC ALU rate, primitives in /
+//     geometry.primitives_per_clock, primitives binned / tiling.primitives_per_clock), while its
+//     vertex/index reads and parameter-buffer writes stream through memory;
+//   tile fetch (DMA): a tile's parameter-buffer reads and tile loads, up to isp.tiles_in_flight
+//     tiles at once;
+//   ISP: max(primitives, samples / (isp.samples_per_clock x isp.raster_pipes)) per tile, one tile
+//     at a time, in the configured tile order;
+//   USCs: max(ALU ops / (usc.count x usc.lanes x usc.alu_ops_per_lane_per_clock), texels /
+//     (texture.units x texture.texels_per_clock)) per tile or dispatch; the ISP stalls when the
+//     USCs' queue (usc.tasks_in_flight tasks of 32 threads, in tiles) is full;
+//   pixel back end: stored bytes / writeback.bytes_per_clock, while the stores stream to memory.
+// Phases: a render's tiles start when its binning is done; binning of the next pass overlaps the
+// tiles of the current one (two parameter buffers), but after a partial render the next binning
+// waits (the parameter buffer is only freed when its tiles are done); a command that reads what
+// an earlier one produced waits for all earlier work.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "models/frame_work.hpp"
+#include "models/hw_config.hpp"
+#include "models/traffic.hpp"
+#include "sim/results_db.hpp"
+#include "sim/stats.hpp"
+
+namespace tbdr {
+
+/// Busy, stalled and idle time of one unit over the frame.
+struct UnitTime {
+  std::string name;
+  double busy_cycles = 0;
+  double stalled_cycles = 0;
+};
+
+/// Start and end of a command (pass or dispatch).
+struct CommandTime {
+  std::string name;
+  double start_cycle = 0;
+  double binning_end_cycle = 0;
+  double end_cycle = 0;
+};
+
+/// What the timing model measured.
+struct TimingResult {
+  double frame_cycles = 0;
+  double frame_time_ps = 0;
+  std::vector<CommandTime> commands;
+  std::vector<UnitTime> units;
+  DramTraffic issued;                 ///< bytes the units requested, per class (before caches)
+  DramTraffic dram;                   ///< bytes DRAM transferred, per class (after caches)
+  double memory_energy_pj = 0;        ///< caches + DRAM
+  std::vector<StatRecord> memory_stats;  ///< caches, DRAM, clients
+  std::vector<TileRecord> tiles;      ///< per tile: cycles, samples, DRAM bytes
+  std::uint64_t events = 0;
+};
+
+/// Runs the timing model over a frame's work.
+TimingResult run_timing(const HwConfig& hw, const FrameWork& work);
+
+}  // namespace tbdr
