@@ -131,10 +131,11 @@ ParamRegistry<HwConfig> make_registry() {
   r.add(TBDR_PARAM(pls.max_pls_bytes_per_pixel), 16).unit("bytes/pixel").range(16, 256)
       .doc("Largest pixel local storage a shader may declare")
       .source("EXT_shader_pixel_local_storage guarantees at least 16 bytes");
-  r.add(TBDR_PARAM(pls.over_budget), std::string("smaller_tiles")).choices({"smaller_tiles", "spill"})
-      .doc("When a pass needs more bytes per pixel than the tile buffer holds: render smaller "
-           "effective tiles (more tiles, more per-tile overhead) or spill the excess to DRAM")
-      .source("design choice; see docs/hardware-model.md");
+  r.add(TBDR_PARAM(pls.over_budget), std::string("spill")).choices({"spill", "smaller_tiles"})
+      .doc("When a pass needs more bytes per pixel than the tile buffer holds: spill the excess share of "
+           "tile-buffer accesses to memory, or render each tile in strips that fit")
+      .source("Mesa src/imagination pvr_mrt.h: render targets beyond the output registers go to memory "
+              "tile buffers (USC_MRT_RESOURCE_TYPE_MEMORY)");
 
   r.section("writeback", "Pixel back end: stores tiles that must leave the chip");
   r.add(TBDR_PARAM(writeback.compression_ratio), 1.0).range(0.05, 1.0)
@@ -189,6 +190,10 @@ ParamRegistry<HwConfig> make_registry() {
       .doc("Precharge").source("LPDDR3 tRPpb 18 ns");
   r.add(TBDR_PARAM(dram.t_cl_ns), 15.0).unit("ns").range(0, 1000)
       .doc("Read latency (RL)").source("LPDDR3-1600 RL=12 at 800 MHz");
+  r.add(TBDR_PARAM(dram.t_ras_ns), 42.0).unit("ns").range(0, 1000)
+      .doc("Activate to precharge, minimum row active time").source("LPDDR3 tRAS 42 ns (JESD209-3); LPDDR4 42 ns");
+  r.add(TBDR_PARAM(dram.t_wr_ns), 15.0).unit("ns").range(0, 1000)
+      .doc("Write recovery: end of write data to precharge").source("LPDDR3 tWR 15 ns (JESD209-3); LPDDR4 18 ns");
   r.add(TBDR_PARAM(dram.controller_latency_ns), 30.0).unit("ns").range(0, 10000)
       .doc("Memory controller and interconnect latency each way").source("no public figure");
   r.add(TBDR_PARAM(dram.read_queue_entries), 32).unit("requests").range(1, 4096)

@@ -115,6 +115,8 @@ struct DramParams {
   double t_rcd_ns = 0;
   double t_rp_ns = 0;
   double t_cl_ns = 0;
+  double t_ras_ns = 0;
+  double t_wr_ns = 0;
   double controller_latency_ns = 0;
   std::int64_t read_queue_entries = 0;
   std::int64_t write_queue_entries = 0;

@@ -36,7 +36,7 @@ TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats) : ctx_(ctx), 
   budget_ = static_cast<std::uint32_t>(ctx.hw->pls.tile_buffer_bits_per_pixel / 8);
   if (need_ > budget_) {
     if (ctx.hw->pls.over_budget == "spill") {
-      spill_per_pixel_ = need_ - budget_;
+      spill_fraction_ = static_cast<double>(need_ - budget_) / static_cast<double>(need_);
     } else {
       split_ = static_cast<int>((need_ + budget_ - 1) / budget_);
     }
@@ -97,11 +97,15 @@ void TileMemory::begin_tile(const PixelRect& r, bool resumed, DramTraffic& dram)
       }
     }
   }
-  if (spill_per_pixel_ > 0) {
-    const std::uint64_t b = spill_per_pixel_ * static_cast<std::uint64_t>(r.width()) * static_cast<std::uint64_t>(r.height());
-    dram.read(DramClass::Spill, b);
-    stats_.spill_bytes += b;
-  }
+}
+
+void TileMemory::spill(std::uint64_t read_bytes, std::uint64_t write_bytes, DramTraffic& dram) {
+  if (spill_fraction_ <= 0.0) return;
+  const auto w = static_cast<std::uint64_t>(std::llround(spill_fraction_ * static_cast<double>(write_bytes)));
+  const auto r = static_cast<std::uint64_t>(std::llround(spill_fraction_ * static_cast<double>(read_bytes))) + w;
+  dram.write(DramClass::Spill, w);
+  dram.read(DramClass::Spill, r);
+  stats_.spill_bytes += w + r;
 }
 
 void TileMemory::end_tile(const PixelRect& r, bool partial, DramTraffic& dram) {
@@ -137,11 +141,6 @@ void TileMemory::end_tile(const PixelRect& r, bool partial, DramTraffic& dram) {
       stats_.writeback_dram_bytes += compressed;
       dram.write(traffic_class_of(a.usage), compressed);
     }
-  }
-  if (spill_per_pixel_ > 0 && !partial) {
-    const std::uint64_t b = spill_per_pixel_ * static_cast<std::uint64_t>(r.width()) * static_cast<std::uint64_t>(r.height());
-    dram.write(DramClass::Spill, b);
-    stats_.spill_bytes += b;
   }
 }
 

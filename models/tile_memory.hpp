@@ -4,9 +4,12 @@
 // the load ops at the start of a tile (clear / load from DRAM / don't care), the store ops and
 // the writeback at its end (with the framebuffer compression ratio), the resolve of multisampled
 // attachments, and the stores and reloads of a partial render. Transient attachments never
-// touch DRAM. A pass over budget pays per pls.over_budget: `smaller_tiles` renders each tile as
-// several strips that fit (each strip re-reads the tile's parameter buffer data and re-rasterises
-// its primitives), `spill` writes and reads back the excess bytes of every pixel through DRAM.
+// touch DRAM. A pass over budget pays per pls.over_budget: `spill` (the default, as the Mesa
+// PowerVR driver places render targets that do not fit the USC output registers in memory-backed
+// "tile buffers", USC_MRT_RESOURCE_TYPE_MEMORY) sends the share of every shader tile-buffer access
+// that exceeds the budget to DRAM, and reads the spilled writes back at the end of the tile;
+// `smaller_tiles` renders each tile as several strips that fit (each strip re-reads the tile's
+// parameter buffer data and re-rasterises its primitives).
 #include <cstdint>
 #include <vector>
 
@@ -28,7 +31,7 @@ struct TileMemoryStats {
   Counter writeback_dram_bytes{group, {"writeback_dram_bytes", "bytes", "Bytes the writeback sent to DRAM after compression"}};
   Counter partial_store_bytes{group, {"partial_render_store_bytes", "bytes", "Bytes stored to DRAM at partial renders"}};
   Counter partial_reload_bytes{group, {"partial_render_reload_bytes", "bytes", "Bytes reloaded after partial renders"}};
-  Counter spill_bytes{group, {"spill_bytes", "bytes", "Bytes spilled to DRAM and read back (pls.over_budget = spill)"}};
+  Counter spill_bytes{group, {"spill_bytes", "bytes", "Tile buffer bytes spilled to DRAM and read back (pls.over_budget = spill)"}};
   Counter resolved_samples{group, {"resolved_samples", "samples", "Multisampled samples averaged into resolve targets"}};
   explicit TileMemoryStats(std::string scope) : group(std::move(scope)) {}
 };
@@ -50,6 +53,11 @@ class TileMemory {
   void begin_tile(const PixelRect& rect, bool resumed_after_partial, DramTraffic& dram);
   /// End of a tile render: store ops (partial = a partial render: everything goes to DRAM).
   void end_tile(const PixelRect& rect, bool partial, DramTraffic& dram);
+  /// Books the spill of one tile render: the over-budget share of the shaders' tile buffer
+  /// reads and writes goes to DRAM, plus the read-back of the spilled writes.
+  void spill(std::uint64_t tile_buffer_read_bytes, std::uint64_t tile_buffer_write_bytes, DramTraffic& dram);
+  /// Share of tile buffer accesses that go to memory (0 when the pass fits or tiles are split).
+  double spill_fraction() const { return spill_fraction_; }
 
  private:
   std::uint64_t attachment_bytes(const Attachment& a, const PixelRect& r) const;
@@ -58,7 +66,7 @@ class TileMemory {
   std::uint32_t need_ = 0;
   std::uint32_t budget_ = 0;
   int split_ = 1;
-  std::uint32_t spill_per_pixel_ = 0;
+  double spill_fraction_ = 0;
 };
 
 }  // namespace tbdr

@@ -408,19 +408,34 @@ class TimingSim final : public Unit {
       const double usc_cycles = std::max(static_cast<double>(t.alu_ops) / alu_rate_, static_cast<double>(t.texels) / tex_rate_);
       const Tick usc_end = reserve(usc_, isp_end, usc_cycles);
       usc_ends_.push_back(usc_end);
-      std::uint64_t store = 0;
-      for (auto b : t.store_bytes) store += b;
-      const Tick pbe_end = reserve(pbe_, usc_end, static_cast<double>(store) / hw_.writeback.bytes_per_clock);
-      eq_.schedule(usc_end, [this, i, pbe_end] { start_store(i, pbe_end); });
+      eq_.schedule(usc_end, [this, i] {
+        store_queue_.push_back(i);
+        pump_stores();
+      });
     }
   }
 
-  void start_store(std::size_t i, Tick pbe_end) {
+  /// The pixel back end writes one tile at a time: its stores stream to memory while it formats
+  /// them at writeback.bytes_per_clock; the next tile's stores start when both are done.
+  void pump_stores() {
+    if (store_busy_ || store_queue_.empty()) return;
+    const std::size_t i = store_queue_.front();
+    store_queue_.pop_front();
+    store_busy_ = true;
     const TileWork& t = render_->tiles[i];
+    std::uint64_t store = 0;
+    for (auto b : t.store_bytes) store += b;
+    const Tick pbe_end = reserve(pbe_, eq_.now(), static_cast<double>(store) / hw_.writeback.bytes_per_clock);
     auto pending = std::make_shared<int>(1);
     auto finish = [this, i, pbe_end, pending]() {
       if (--*pending > 0) return;
-      eq_.schedule(std::max(eq_.now(), pbe_end), [this, i] { tile_done(i); });
+      const Tick end = std::max(eq_.now(), pbe_end);
+      if (end > pbe_end) pbe_.stalled_cycles += cycles_of(end) - cycles_of(pbe_end);
+      eq_.schedule(end, [this, i] {
+        store_busy_ = false;
+        tile_done(i);
+        pump_stores();
+      });
     };
     std::uint64_t offset = 0;
     for (std::size_t c = 0; c < kDramClassCount; ++c) {
@@ -478,6 +493,8 @@ class TimingSim final : public Unit {
   std::vector<TileState> tiles_;
   std::size_t next_dispatch_ = 0, next_isp_ = 0, tiles_done_ = 0, in_flight_ = 0;
   std::deque<Tick> usc_ends_;
+  std::deque<std::size_t> store_queue_;
+  bool store_busy_ = false;
 };
 
 void MemStream::add(std::uint64_t addr, std::uint64_t bytes) {

@@ -479,7 +479,9 @@ class FrameSimulator {
           const std::uint64_t tg0 = ps->isp.tag_read_bytes.value() + ps->isp.tag_write_bytes.value();
           const std::uint64_t d0 = ps->isp.depth_read_bytes.value() + ps->isp.depth_write_bytes.value();
           tile_memory.begin_tile(r, resumed[static_cast<std::size_t>(t)] != 0, dram);
+          const std::uint64_t tbr0 = ps->tsp.tile_buffer_read_bytes.value(), tbw0 = ps->tsp.tile_buffer_write_bytes.value();
           isp.render_tile(r, prims, ps->isp, ps->tsp);
+          tile_memory.spill(ps->tsp.tile_buffer_read_bytes.value() - tbr0, ps->tsp.tile_buffer_write_bytes.value() - tbw0, dram);
           tile_memory.end_tile(r, partial, dram);
           TileWork tw;
           tw.tile_x = t % tiler.tiles_x();

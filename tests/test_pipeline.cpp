@@ -11,104 +11,12 @@
 #include "workloads/lights.hpp"
 #include "workloads/scene_library.hpp"
 #include "workloads/technique.hpp"
+#include "synthetic_scene.hpp"
 
 namespace tbdr {
 namespace {
 
-constexpr int kSize = 64;  // 64x64 pixels = 4 tiles of 32x32 on the default GPU
-const float kTan30 = std::tan(glm::radians(30.0f));
-
-/// World x at depth d that projects to pixel column px (camera at the origin looking down -z,
-/// 60 degree field of view, square frame).
-float world_x(float px, float d) { return (px / (kSize / 2.0f) - 1.0f) * d * kTan30; }
-
-/// Adds a camera-facing quad at depth `d` spanning pixel columns [px0, px1) (the full height and
-/// beyond), with uv running 0..1 across it.
-void add_quad(Scene& s, const std::string& name, float d, float px0, float px1, std::uint32_t material) {
-  SubMesh m;
-  m.name = name;
-  m.material = material;
-  const float x0 = world_x(px0, d), x1 = world_x(px1, d), y = d * kTan30 * 1.5f;
-  m.positions = {{x0, -y, -d}, {x1, -y, -d}, {x1, y, -d}, {x0, y, -d}};
-  m.normals.assign(4, glm::vec3(0, 0, 1));
-  m.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-  m.indices = {0, 1, 2, 0, 2, 3};
-  m.index_bytes = 2;
-  s.submeshes.push_back(m);
-  s.instances.push_back({static_cast<std::uint32_t>(s.submeshes.size() - 1), glm::mat4(1.0f), name});
-}
-
-Scene base_scene() {
-  Scene s;
-  s.name = "synthetic";
-  s.source = "synthetic";
-  Material opaque;
-  opaque.name = "opaque";
-  opaque.base_color = {0.8f, 0.5f, 0.3f, 1.0f};
-  Material masked;
-  masked.name = "masked";
-  masked.alpha_mode = AlphaMode::PunchThrough;
-  masked.alpha_cutoff = 0.5f;
-  masked.alpha_mask = 0;
-  Material glass;
-  glass.name = "glass";
-  glass.alpha_mode = AlphaMode::Translucent;
-  glass.base_color = {0.2f, 0.4f, 0.9f, 0.5f};
-  s.materials = {opaque, masked, glass};
-  // 2x1 mask: the left half of the uv range is transparent, the right half opaque.
-  s.alpha_masks.push_back(AlphaMask{2, 1, {0, 255}});
-  return s;
-}
-
-Trace base_trace() {
-  Trace t;
-  t.frame = {kSize, kSize, 1, 0};
-  t.camera.eye = {0, 0, 0};
-  t.camera.target = {0, 0, -1};
-  t.camera.up = {0, 1, 0};
-  t.camera.fov_y_deg = 60;
-  t.camera.near_plane = 0.5f;
-  t.camera.far_plane = 50;
-  ShaderDesc sh;
-  sh.name = "lit";
-  sh.alu_ops = 10;
-  sh.tex_fetches = 1;
-  sh.varyings = 8;
-  sh.color_outputs = 1;
-  t.shaders.push_back(sh);
-  PipelineState opaque;
-  opaque.name = "opaque";
-  opaque.shader = "lit";
-  PipelineState blend = opaque;
-  blend.name = "blend";
-  blend.depth_write = false;
-  blend.blend = BlendMode::Alpha;
-  t.pipelines = {opaque, blend};
-  return t;
-}
-
-PassDesc base_pass() {
-  PassDesc p;
-  p.name = "main";
-  Attachment color;
-  color.name = "color";
-  color.format = Format::Rgba8;
-  Attachment depth;
-  depth.name = "depth";
-  depth.format = Format::D24s8;
-  depth.usage = AttachmentUsage::Depth;
-  depth.store = StoreOp::DontCare;
-  depth.transient = true;
-  p.attachments = {color, depth};
-  return p;
-}
-
-DrawCmd draw_of(const std::string& submesh, const std::string& pipeline = "opaque") {
-  DrawCmd d;
-  d.pipeline = pipeline;
-  d.submesh = submesh;
-  return d;
-}
+using namespace synthetic;
 
 double stat(const FrameResult& f, const std::string& scope, const std::string& name) {
   for (const auto& r : f.stats) {
@@ -305,16 +213,21 @@ TEST(PipelineTileMemory, OverBudgetPassSplitsTilesOrSpills) {
   p.attachments[0].format = Format::Rgba16f;
   p.draws = {draw_of("wall")};
   t.commands.push_back(p);
-  const FrameResult split = simulate_frame(t, "t", s, resolve_config({}, {}).hw);
+  const FrameResult split = simulate_frame(t, "t", s, resolve_config({}, {"pls.over_budget=smaller_tiles"}).hw);
   EXPECT_EQ(stat(split, "frame/tile_memory", "onchip_need_bytes_per_pixel"), 24);
   EXPECT_EQ(stat(split, "frame/tile_memory", "tile_split_factor"), 2);
   EXPECT_EQ(stat(split, "frame/isp", "tiles_rendered"), 8);  // 4 tiles x 2 strips
   const FrameResult fits = simulate_frame(t, "t", s, resolve_config({}, {"pls.tile_buffer_bits_per_pixel=256"}).hw);
   EXPECT_EQ(stat(fits, "frame/isp", "tiles_rendered"), 4);
   EXPECT_LT(fits.dram.reads(DramClass::ParameterBuffer), split.dram.reads(DramClass::ParameterBuffer));
-  const FrameResult spill = simulate_frame(t, "t", s, resolve_config({}, {"pls.over_budget=spill"}).hw);
-  EXPECT_EQ(spill.dram.writes(DramClass::Spill), 8u * kSize * kSize);
-  EXPECT_EQ(spill.dram.reads(DramClass::Spill), 8u * kSize * kSize);
+  EXPECT_EQ(fits.dram.writes(DramClass::Spill), 0u);
+  // Spill (the default): a third of the 24 B/pixel is over the 16 B budget, so a third of the
+  // shader's tile buffer writes (4096 pixels x 8 B of its one rgba16f output) go to DRAM and are
+  // read back at the end of the tile: 4 tiles x round(8192 / 3) = 4 x 2731 bytes each way.
+  const FrameResult spill = simulate_frame(t, "t", s, resolve_config({}, {}).hw);
+  EXPECT_EQ(stat(spill, "frame/isp", "tiles_rendered"), 4);
+  EXPECT_EQ(spill.dram.writes(DramClass::Spill), 4u * 2731u);
+  EXPECT_EQ(spill.dram.reads(DramClass::Spill), 4u * 2731u);
 }
 
 }  // namespace

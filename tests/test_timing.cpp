@@ -1,0 +1,218 @@
+// The timing and energy models: roofline bounds, conservation, determinism, the on-chip cliff.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "models/hw_config.hpp"
+#include "sim/frame_sim.hpp"
+#include "sim/run_driver.hpp"
+#include "synthetic_scene.hpp"
+
+namespace tbdr {
+namespace {
+
+using namespace synthetic;
+
+double stat(const std::vector<StatRecord>& st, const std::string& scope, const std::string& name) {
+  for (const auto& r : st) {
+    if (r.scope == scope && r.name == name) return r.value;
+  }
+  ADD_FAILURE() << "no statistic " << scope << " " << name;
+  return -1;
+}
+
+struct Timed {
+  FrameResult frame;
+  TimingResult timing;
+  EnergyBreakdown energy;
+};
+
+Timed run_timed(const Trace& t, const Scene& s, const std::vector<std::string>& sets) {
+  const HwConfig hw = resolve_config({}, sets).hw;
+  Timed r;
+  r.frame = simulate_frame(t, "t.trace", s, hw);
+  time_frame(hw, r.frame, r.timing, r.energy);
+  return r;
+}
+
+/// A frame of `size` x `size` pixels.
+Trace frame_of(int size) {
+  Trace t = base_trace();
+  t.frame.width = size;
+  t.frame.height = size;
+  return t;
+}
+
+TEST(TimingRoofline, FillBoundFrameMatchesTheRasterRate) {
+  // 64 opaque full-frame quads front to back at 256x256: every layer is rasterised and depth
+  // tested (64 x 65536 samples), only the front one is shaded (1 ALU op). Bound:
+  //   cycles = samples / (isp.samples_per_clock x isp.raster_pipes) = 4194304 / 32 = 131072.
+  Scene s = base_scene();
+  Trace t = frame_of(256);
+  t.shaders[0].alu_ops = 1;
+  t.shaders[0].tex_fetches = 0;
+  PassDesc p = base_pass();
+  for (int i = 0; i < 64; ++i) {
+    const std::string name = "layer" + std::to_string(i);
+    add_quad(s, name, 2.0f + 0.1f * static_cast<float>(i), -256, 512, 0);
+    p.draws.push_back(draw_of(name));
+  }
+  t.commands.push_back(p);
+  const Timed r = run_timed(t, s, {});
+  const double samples = stat(r.frame.stats, "frame/isp", "samples_rasterised");
+  ASSERT_EQ(samples, 64.0 * 65536);
+  const double bound = samples / 32.0;
+  EXPECT_NEAR(r.timing.frame_cycles, bound, 0.05 * bound) << "fill bound " << bound;
+}
+
+TEST(TimingRoofline, AluBoundFrameMatchesTheUscRate) {
+  // One full-frame quad, 4000 ALU ops per fragment, 256x256 (no helper lanes: whole quads).
+  // Bound: cycles = 65536 x 4000 / (usc.count 4 x lanes 16 x 2 ops per clock) = 2048000.
+  Scene s = base_scene();
+  Trace t = frame_of(256);
+  t.shaders[0].alu_ops = 4000;
+  t.shaders[0].tex_fetches = 0;
+  add_quad(s, "wall", 3, -256, 512, 0);
+  PassDesc p = base_pass();
+  p.draws = {draw_of("wall")};
+  t.commands.push_back(p);
+  const Timed r = run_timed(t, s, {});
+  // The quad's two triangles split the 2x2 quads along its diagonal: each launches those quads,
+  // so 256 helper lanes run the shader too.
+  EXPECT_EQ(stat(r.frame.stats, "frame/tsp", "helper_lanes"), 256);
+  EXPECT_EQ(stat(r.frame.stats, "frame/tsp", "fragment_alu_ops"), (65536.0 + 256) * 4000);
+  const double bound = (65536.0 + 256) * 4000 / (4 * 16 * 2);
+  EXPECT_NEAR(r.timing.frame_cycles, bound, 0.05 * bound) << "ALU bound " << bound;
+}
+
+TEST(TimingRoofline, StoreBoundFrameMatchesDramBandwidth) {
+  // One cheap full-frame quad at 512x512 writing 8 rgba32f targets that are all stored:
+  // 512 x 512 x 128 B = 33554432 B. Bound: bytes / dram.bandwidth_gbps (12.8 GB/s) = 2.6214 ms
+  // = 1572864 cycles at 600 MHz (the pixel back end alone would need 1048576 cycles).
+  Scene s = base_scene();
+  Trace t = frame_of(512);
+  t.shaders[0].alu_ops = 1;
+  t.shaders[0].tex_fetches = 0;
+  t.shaders[0].color_outputs = 8;
+  add_quad(s, "wall", 3, -512, 1024, 0);
+  PassDesc p = base_pass();
+  p.attachments[0].format = Format::Rgba32f;
+  for (int i = 1; i < 8; ++i) {
+    Attachment a = p.attachments[0];
+    a.name = "mrt" + std::to_string(i);
+    p.attachments.push_back(a);
+  }
+  p.draws = {draw_of("wall")};
+  t.commands.push_back(p);
+  const Timed r = run_timed(t, s, {"pls.tile_buffer_bits_per_pixel=2048"});
+  ASSERT_EQ(r.frame.dram.writes(DramClass::Color), 512u * 512u * 128u);
+  const double bound = 512.0 * 512 * 128 / 12.8e9 * 600e6;
+  EXPECT_NEAR(r.timing.frame_cycles, bound, 0.05 * bound) << "DRAM bound " << bound;
+}
+
+Trace atrium_like(Scene& s) {
+  // A small frame with opaque, punch-through and translucent layers (the functional tests' scene).
+  s = base_scene();
+  add_quad(s, "far", 5, -32, 96, 0);
+  add_quad(s, "leaves", 3, -32, 96, 1);
+  add_quad(s, "glass", 2, -32, 40, 2);
+  Trace t = base_trace();
+  PassDesc p = base_pass();
+  p.draws = {draw_of("far"), draw_of("leaves"), draw_of("glass", "blend")};
+  t.commands.push_back(p);
+  return t;
+}
+
+TEST(TimingConservation, IssuedBytesEqualFunctionalBytesPerClass) {
+  Scene s;
+  const Trace t = atrium_like(s);
+  for (const char* budget : {"pls.tile_buffer_bits_per_pixel=128", "tiling.pb_capacity_bytes=65536"}) {
+    const Timed r = run_timed(t, s, {budget});
+    for (std::size_t c = 0; c < kDramClassCount; ++c) {
+      EXPECT_EQ(r.timing.issued.read_bytes[c], r.frame.dram.read_bytes[c]) << to_string(static_cast<DramClass>(c));
+      EXPECT_EQ(r.timing.issued.write_bytes[c], r.frame.dram.write_bytes[c]) << to_string(static_cast<DramClass>(c));
+    }
+  }
+}
+
+TEST(TimingConservation, EnergyIsTheSumOfCountersTimesUnitCosts) {
+  Scene s;
+  const Trace t = atrium_like(s);
+  const Timed r = run_timed(t, s, {});
+  const HwConfig hw = resolve_config({}, {}).hw;
+  const auto& st = r.frame.stats;
+  const double tile = (stat(st, "frame/tsp", "tile_buffer_read_bytes") + stat(st, "frame/tsp", "tile_buffer_write_bytes") +
+                       stat(st, "frame/tile_memory", "tile_load_bytes") + stat(st, "frame/tile_memory", "tile_store_bytes") +
+                       stat(st, "frame/tile_memory", "tile_clear_bytes") + stat(st, "frame/tsp", "pls_bytes_accessed")) *
+                      hw.energy.tile_buffer_pj_per_byte;
+  const double tag = (stat(st, "frame/isp", "tag_buffer_read_bytes") + stat(st, "frame/isp", "tag_buffer_write_bytes") +
+                      stat(st, "frame/isp", "depth_buffer_read_bytes") + stat(st, "frame/isp", "depth_buffer_write_bytes")) *
+                     hw.energy.tag_buffer_pj_per_byte;
+  const double alu = (stat(st, "frame/tsp", "fragment_alu_ops") + stat(st, "frame/geometry", "vertex_alu_ops")) * hw.energy.alu_op_pj;
+  const double tex = stat(st, "frame/tsp", "texels_filtered") * hw.energy.texel_pj;
+  const double dram_bits_read = stat(st, "mem/dram", "read_bytes") * 8, dram_bits_written = stat(st, "mem/dram", "write_bytes") * 8;
+  const double dram = dram_bits_read * hw.energy.dram_read_pj_per_bit + dram_bits_written * hw.energy.dram_write_pj_per_bit +
+                      (dram_bits_read + dram_bits_written) * hw.energy.dram_io_pj_per_bit +
+                      stat(st, "mem/dram", "activates") * hw.energy.dram_activate_precharge_nj * 1000.0;
+  const double statics = hw.energy.static_power_mw * r.timing.frame_time_ps * 1e-3;
+  const double caches = stat(st, "mem", "cache_energy_pj");
+  EXPECT_NEAR(stat(st, "mem/dram", "energy_pj"), dram, 1e-6 * dram);
+  const double total = tile + tag + alu + tex + dram + statics + caches;
+  EXPECT_NEAR(stat(st, "frame/energy", "total_pj"), total, 1e-9 * total);
+  EXPECT_GT(tile, 0);
+  EXPECT_GT(tag, 0);
+  EXPECT_GT(dram, 0);
+}
+
+TEST(TimingDeterminism, SameRunTwiceGivesIdenticalFigures) {
+  Scene s;
+  const Trace t = atrium_like(s);
+  const Timed a = run_timed(t, s, {});
+  const Timed b = run_timed(t, s, {});
+  EXPECT_EQ(a.timing.frame_cycles, b.timing.frame_cycles);
+  EXPECT_EQ(a.timing.events, b.timing.events);
+  ASSERT_EQ(a.timing.tiles.size(), b.timing.tiles.size());
+  for (std::size_t i = 0; i < a.timing.tiles.size(); ++i) EXPECT_EQ(a.timing.tiles[i], b.timing.tiles[i]);
+  ASSERT_EQ(a.frame.stats.size(), b.frame.stats.size());
+  for (std::size_t i = 0; i < a.frame.stats.size(); ++i) {
+    if (a.frame.stats[i].scope == "frame/host") continue;
+    EXPECT_EQ(a.frame.stats[i].value, b.frame.stats[i].value) << a.frame.stats[i].scope << " " << a.frame.stats[i].name;
+  }
+}
+
+TEST(TimingCliff, GbufferPassPastTheOnChipBudgetJumps) {
+  // A G-buffer pass writing k 32-bit targets, all stored (96 .. 288 bits per pixel), over the
+  // default 128-bit on-chip budget, 512x512, one cheap full-frame layer: the frame is bound by the
+  // stores, which grow by 4 B/pixel per step. Past the budget the over-budget share of every
+  // tile-buffer access spills to DRAM as well, so the step across the budget is much larger.
+  Scene s = base_scene();
+  add_quad(s, "wall", 3, -512, 1024, 0);
+  std::vector<double> cycles;
+  for (int k = 3; k <= 9; ++k) {
+    Trace t = frame_of(512);
+    t.shaders[0].alu_ops = 4;
+    t.shaders[0].tex_fetches = 0;
+    t.shaders[0].color_outputs = static_cast<std::uint32_t>(k);
+    PassDesc p = base_pass();
+    for (int i = 1; i < k; ++i) {
+      Attachment a = p.attachments[0];
+      a.name = "g" + std::to_string(i);
+      a.usage = AttachmentUsage::Gbuffer;
+      p.attachments.push_back(a);
+    }
+    p.draws = {draw_of("wall")};
+    t.commands.push_back(p);
+    cycles.push_back(run_timed(t, s, {}).timing.frame_cycles);
+  }
+  for (std::size_t i = 0; i < cycles.size(); ++i) {
+    std::printf("[ cliff    ] %3zu bits/pixel: %.3f ms\n", 96 + 32 * i, cycles[i] / 600e3);
+  }
+  const double step_below = cycles[1] - cycles[0];  // 96 -> 128 bits: both fit
+  const double step_across = cycles[2] - cycles[1];  // 128 -> 160 bits: crosses the budget
+  EXPECT_GT(step_below, 0);
+  EXPECT_GT(step_across, 1.5 * step_below);
+}
+
+}  // namespace
+}  // namespace tbdr
