@@ -1,0 +1,74 @@
+#pragma once
+// The simulated physical address space: every buffer the GPU touches (vertex and index buffers,
+// textures, attachments, the parameter buffer, light lists, compute buffers) is given a named,
+// page-aligned region with a DRAM traffic class. Allocation is a bump allocator, so the same
+// allocation order always gives the same addresses (runs are reproducible and addresses can be
+// compared across techniques). Addresses only matter to the timing model (cache sets, DRAM
+// channel/bank/row); no data is stored.
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+#include "models/traffic.hpp"
+
+namespace tbdr {
+
+/// One allocated region of the simulated address space.
+struct AddressRegion {
+  std::string name;
+  std::uint64_t base = 0;        ///< first byte, a multiple of the alignment it was allocated with
+  std::uint64_t size_bytes = 0;  ///< bytes requested
+  std::uint64_t reserved_bytes = 0;  ///< bytes reserved (size rounded up to whole pages, at least one)
+  DramClass cls = DramClass::Other;
+
+  std::uint64_t end() const { return base + size_bytes; }
+  bool contains(std::uint64_t addr) const { return addr >= base && addr < base + reserved_bytes; }
+};
+
+/// A deterministic bump allocator of named, page-aligned regions, each with a traffic class.
+class AddressSpace {
+ public:
+  static constexpr std::uint64_t kDefaultPageBytes = 4096;
+
+  /// `page_bytes` (a power of two) is the allocation granule; the first region starts at
+  /// `base` rounded up to a page, and address 0 is never handed out (base defaults to one page).
+  explicit AddressSpace(std::uint64_t page_bytes = kDefaultPageBytes, std::uint64_t base = kDefaultPageBytes);
+
+  /// Allocates `size_bytes` (rounded up to whole pages, at least one page) aligned to
+  /// max(page, align_bytes) (align_bytes: 0 or a power of two). Returns the base address.
+  /// Throws std::invalid_argument on an empty or duplicate name or a bad alignment.
+  std::uint64_t allocate(std::string name, std::uint64_t size_bytes, DramClass cls, std::uint64_t align_bytes = 0);
+
+  /// The region with that name, or nullptr.
+  const AddressRegion* find(std::string_view name) const;
+  /// The region with that name; throws std::out_of_range when there is none.
+  const AddressRegion& region(std::string_view name) const;
+  /// Base address of a named region; throws std::out_of_range when there is none.
+  std::uint64_t base_of(std::string_view name) const { return region(name).base; }
+  /// The region whose reserved pages contain `addr`, or nullptr (binary search).
+  const AddressRegion* region_at(std::uint64_t addr) const;
+  /// Traffic class of the region containing `addr`; DramClass::Other outside every region.
+  DramClass class_at(std::uint64_t addr) const;
+
+  /// Regions in allocation (= address) order.
+  const std::vector<AddressRegion>& regions() const { return regions_; }
+  std::uint64_t page_bytes() const { return page_bytes_; }
+  /// First address after the last region (the next allocation starts at or after it).
+  std::uint64_t top() const { return top_; }
+  /// Sum of reserved bytes of every region.
+  std::uint64_t reserved_bytes() const { return reserved_; }
+  /// Forgets every region; the next allocation starts at the base again.
+  void clear();
+
+ private:
+  std::uint64_t page_bytes_;
+  std::uint64_t base_;
+  std::uint64_t top_;
+  std::uint64_t reserved_ = 0;
+  std::vector<AddressRegion> regions_;
+  std::unordered_map<std::string, std::size_t> by_name_;
+};
+
+}  // namespace tbdr

@@ -1,0 +1,177 @@
+#include "models/cache.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace tbdr {
+
+namespace {
+
+bool is_pow2(std::uint64_t v) { return v != 0 && (v & (v - 1)) == 0; }
+
+unsigned log2_exact(std::uint64_t v) {
+  unsigned s = 0;
+  while ((std::uint64_t{1} << s) < v) ++s;
+  return s;
+}
+
+}  // namespace
+
+Cache::Cache(std::string scope, const CacheParams& p, double pj_per_byte, bool write_allocate)
+    : pj_per_byte_(pj_per_byte), write_allocate_(write_allocate), stats_(scope) {
+  if (p.line_bytes <= 0 || !is_pow2(static_cast<std::uint64_t>(p.line_bytes))) {
+    throw std::invalid_argument("cache '" + scope + "': line_bytes must be a power of two");
+  }
+  if (p.ways <= 0 || p.size_bytes <= 0 || p.size_bytes % (p.ways * p.line_bytes) != 0) {
+    throw std::invalid_argument("cache '" + scope + "': size_bytes must be a positive multiple of ways x line_bytes");
+  }
+  if (p.hit_latency_cycles < 0) throw std::invalid_argument("cache '" + scope + "': negative hit latency");
+  line_bytes_ = static_cast<std::uint64_t>(p.line_bytes);
+  line_shift_ = log2_exact(line_bytes_);
+  ways_ = static_cast<std::uint32_t>(p.ways);
+  const std::int64_t sets = p.size_bytes / (p.ways * p.line_bytes);
+  if (sets > static_cast<std::int64_t>(UINT32_MAX / ways_)) throw std::invalid_argument("cache '" + scope + "': too many lines");
+  sets_ = static_cast<std::uint32_t>(sets);
+  sets_pow2_ = is_pow2(sets_);
+  set_mask_ = sets_ - 1;
+  hit_latency_cycles_ = p.hit_latency_cycles;
+  const std::size_t lines = static_cast<std::size_t>(sets_) * ways_;
+  tags_.assign(lines, kInvalid);
+  stamps_.assign(lines, 0);
+  dirty_.assign(lines, 0);
+  cls_.assign(lines, DramClass::Other);
+  fill_.assign(lines, kNoFill);
+  for (std::size_t c = 0; c < kDramClassCount; ++c) {
+    class_stats_[c] = std::make_unique<CacheClassStats>(scope + ".class." + to_string(static_cast<DramClass>(c)));
+  }
+}
+
+CacheAccess Cache::access(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Allocation alloc) {
+  const std::uint64_t line = addr >> line_shift_;
+  const std::uint32_t base = set_of(line) * ways_;
+  const std::uint64_t* tags = tags_.data() + base;
+  CacheClassStats& cs = *class_stats_[static_cast<std::size_t>(cls)];
+  const std::uint64_t stamp = ++clock_;
+  CacheAccess r;
+
+  if (is_write) {
+    ++stats_.writes;
+    stats_.write_bytes += bytes;
+  } else {
+    ++stats_.reads;
+    stats_.read_bytes += bytes;
+  }
+
+  // One pass over the set: the hit, or else the least recently used way (empty ways have stamp 0
+  // and are taken first).
+  const std::uint64_t* stamps = stamps_.data() + base;
+  std::uint32_t lru = 0;
+  for (std::uint32_t w = 0; w < ways_; ++w) {
+    if (tags[w] == line) {
+      const std::uint32_t slot = base + w;
+      stamps_[slot] = stamp;
+      if (is_write) {
+        dirty_[slot] = 1;
+        cls_[slot] = cls;
+        ++stats_.write_hits;
+        ++cs.write_hits;
+      } else {
+        ++stats_.read_hits;
+        ++cs.read_hits;
+      }
+      r.hit = true;
+      r.slot = slot;
+      return r;
+    }
+    if (stamps[w] < stamps[lru]) lru = w;
+  }
+
+  if (is_write) {
+    ++stats_.write_misses;
+    ++cs.write_misses;
+  } else {
+    ++stats_.read_misses;
+    ++cs.read_misses;
+  }
+  if (alloc == Allocation::NoAllocate || (is_write && !write_allocate_)) {
+    ++stats_.bypasses;
+    return r;
+  }
+  const std::uint32_t victim = base + lru;
+  if (tags_[victim] != kInvalid) {
+    if (dirty_[victim]) {
+      r.writeback = true;
+      r.victim_addr = tags_[victim] << line_shift_;
+      r.victim_cls = cls_[victim];
+      ++stats_.dirty_evictions;
+      stats_.writeback_bytes += line_bytes_;
+    } else {
+      ++stats_.clean_evictions;
+    }
+  }
+  tags_[victim] = line;
+  stamps_[victim] = stamp;
+  dirty_[victim] = is_write ? 1 : 0;
+  cls_[victim] = cls;
+  fill_[victim] = kNoFill;
+  if (is_write) {
+    ++stats_.write_allocations;
+  } else {
+    ++stats_.fills;
+    stats_.fill_bytes += line_bytes_;
+  }
+  r.allocated = true;
+  r.slot = victim;
+  return r;
+}
+
+bool Cache::probe(std::uint64_t addr) const {
+  const std::uint64_t line = addr >> line_shift_;
+  const std::uint32_t base = set_of(line) * ways_;
+  for (std::uint32_t w = 0; w < ways_; ++w) {
+    if (tags_[base + w] == line) return true;
+  }
+  return false;
+}
+
+bool Cache::is_dirty(std::uint64_t addr) const {
+  const std::uint64_t line = addr >> line_shift_;
+  const std::uint32_t base = set_of(line) * ways_;
+  for (std::uint32_t w = 0; w < ways_; ++w) {
+    if (tags_[base + w] == line) return dirty_[base + w] != 0;
+  }
+  return false;
+}
+
+void Cache::invalidate_all() {
+  std::fill(tags_.begin(), tags_.end(), kInvalid);
+  std::fill(stamps_.begin(), stamps_.end(), 0);
+  std::fill(dirty_.begin(), dirty_.end(), 0);
+  std::fill(fill_.begin(), fill_.end(), kNoFill);
+}
+
+void Cache::update_derived_stats() {
+  const std::uint64_t accesses = stats_.reads.value() + stats_.writes.value();
+  const std::uint64_t hits = stats_.read_hits.value() + stats_.write_hits.value();
+  stats_.hit_rate.set(accesses == 0 ? 0.0 : static_cast<double>(hits) / static_cast<double>(accesses));
+  stats_.energy_pj.set(energy_pj());
+}
+
+double Cache::energy_pj() const {
+  const std::uint64_t bytes = stats_.read_bytes.value() + stats_.write_bytes.value() + stats_.fill_bytes.value() +
+                              stats_.writeback_bytes.value();
+  return static_cast<double>(bytes) * pj_per_byte_;
+}
+
+void Cache::collect(std::vector<StatRecord>& out) {
+  update_derived_stats();
+  stats_.group.collect(out);
+  for (const auto& cs : class_stats_) cs->group.collect(out);
+}
+
+void Cache::reset_stats() {
+  stats_.group.reset();
+  for (auto& cs : class_stats_) cs->group.reset();
+}
+
+}  // namespace tbdr

@@ -1,0 +1,167 @@
+#pragma once
+// A set-associative cache with true LRU replacement, write-back and write-allocate (optionally
+// write-no-allocate, and per-access streaming that never allocates). It models tags only: it
+// answers hit or miss, installs lines, and reports the dirty line a fill evicted so the caller can
+// write it back to the next level. Timing lives in MemorySystem; this class is the state machine
+// and its statistics, shared by the timed and the functional paths.
+//
+// Hot path: tags, LRU stamps, dirty bits and classes are flat arrays indexed by
+// set * ways + way (a "slot"); a lookup scans one set's `ways` tags. True LRU keeps one 64-bit
+// access stamp per line and evicts the smallest (invalid lines have stamp 0, so they go first).
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "models/hw_config.hpp"
+#include "models/traffic.hpp"
+#include "sim/stats.hpp"
+
+namespace tbdr {
+
+/// Whether a missing line is installed by this access.
+enum class Allocation : std::uint8_t {
+  Allocate,    ///< normal: read misses allocate; write misses allocate if the cache is write-allocate
+  NoAllocate,  ///< streaming: hits are served (and writes make the line dirty), misses bypass
+};
+
+/// What one cache access did.
+struct CacheAccess {
+  static constexpr std::uint32_t kNoSlot = UINT32_MAX;
+  bool hit = false;
+  bool allocated = false;        ///< a miss installed the line
+  bool writeback = false;        ///< the installed line evicted a dirty line (victim_addr, victim_cls)
+  DramClass victim_cls = DramClass::Other;
+  std::uint64_t victim_addr = 0;  ///< first byte of the evicted dirty line
+  std::uint32_t slot = kNoSlot;   ///< slot of the line hit or installed (kNoSlot on a bypassed miss)
+};
+
+/// Per-traffic-class hit and miss counts of one cache.
+struct CacheClassStats {
+  StatGroup group;
+  Counter read_hits{group, {"read_hits", "accesses", "Read accesses of this class that hit"}};
+  Counter read_misses{group, {"read_misses", "accesses", "Read accesses of this class that missed"}};
+  Counter write_hits{group, {"write_hits", "accesses", "Write accesses of this class that hit"}};
+  Counter write_misses{group, {"write_misses", "accesses", "Write accesses of this class that missed"}};
+  explicit CacheClassStats(std::string scope) : group(std::move(scope)) {}
+};
+
+/// Statistics of one cache.
+struct CacheStats {
+  StatGroup group;
+  Counter reads{group, {"reads", "accesses", "Read accesses"}};
+  Counter writes{group, {"writes", "accesses", "Write accesses"}};
+  Counter read_hits{group, {"read_hits", "accesses", "Read accesses that hit"}};
+  Counter read_misses{group, {"read_misses", "accesses", "Read accesses that missed"}};
+  Counter write_hits{group, {"write_hits", "accesses", "Write accesses that hit"}};
+  Counter write_misses{group, {"write_misses", "accesses", "Write accesses that missed"}};
+  Counter bypasses{group, {"bypasses", "accesses", "Misses that did not allocate (streaming or write-no-allocate)"}};
+  Counter fills{group, {"fills", "lines", "Lines installed by read misses (fetched from the next level)"}};
+  Counter write_allocations{group, {"write_allocations", "lines", "Lines installed by write misses without a fetch"}};
+  Counter clean_evictions{group, {"clean_evictions", "lines", "Valid clean lines replaced"}};
+  Counter dirty_evictions{group, {"dirty_evictions", "lines", "Dirty lines replaced (each one written back)"}};
+  Counter flush_writebacks{group, {"flush_writebacks", "lines", "Dirty lines written back by flushes"}};
+  Counter read_bytes{group, {"read_bytes", "bytes", "Bytes read by requesters (hits and misses)"}};
+  Counter write_bytes{group, {"write_bytes", "bytes", "Bytes written by requesters (hits and misses)"}};
+  Counter fill_bytes{group, {"fill_bytes", "bytes", "Bytes installed by read-miss fills"}};
+  Counter writeback_bytes{group, {"writeback_bytes", "bytes", "Bytes of dirty lines written back (evictions and flushes)"}};
+  Accumulator hit_rate{group, {"hit_rate", "ratio", "Hits / accesses (derived at collection)"}};
+  Accumulator energy_pj{group, {"energy_pj", "pJ", "SRAM energy: (read + write + fill + writeback bytes) x pJ/byte"}};
+  explicit CacheStats(std::string scope) : group(std::move(scope)) {}
+};
+
+/// A set-associative, true-LRU, write-back cache (tags only).
+class Cache {
+ public:
+  /// Geometry from `p` (line_bytes a power of two, size a multiple of ways x line; otherwise
+  /// std::invalid_argument). `scope` names the statistics ("mem/cache.texture"); `pj_per_byte` is
+  /// the SRAM access energy used for the energy statistic.
+  Cache(std::string scope, const CacheParams& p, double pj_per_byte = 0.0, bool write_allocate = true);
+  Cache(const Cache&) = delete;
+  Cache& operator=(const Cache&) = delete;
+
+  /// One access of `bytes` (within one line) at `addr`; updates LRU, dirty bits and statistics.
+  CacheAccess access(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls,
+                     Allocation alloc = Allocation::Allocate);
+  /// True if the line holding `addr` is present; changes nothing.
+  bool probe(std::uint64_t addr) const;
+  /// True if the line holding `addr` is present and dirty; changes nothing.
+  bool is_dirty(std::uint64_t addr) const;
+  /// Writes back every dirty line: calls fn(line_addr, cls) for each (in slot order) and marks it
+  /// clean. Returns the number of lines written back.
+  template <class Fn>
+  std::uint64_t flush(Fn&& fn);
+  /// Drops every line (dirty data is discarded: call flush first to keep it).
+  void invalidate_all();
+
+  /// Per-line user tag for the timing model (the pending fill of a line being fetched);
+  /// reset to kNoFill whenever the slot is (re)allocated.
+  static constexpr std::uint32_t kNoFill = UINT32_MAX;
+  std::uint32_t fill_of(std::uint32_t slot) const { return fill_[slot]; }
+  void set_fill(std::uint32_t slot, std::uint32_t fill) { fill_[slot] = fill; }
+  /// Line address (first byte) held by a slot.
+  std::uint64_t slot_addr(std::uint32_t slot) const { return tags_[slot] << line_shift_; }
+
+  std::uint64_t line_bytes() const { return line_bytes_; }
+  std::uint64_t line_addr(std::uint64_t addr) const { return addr & ~(line_bytes_ - 1); }
+  std::uint32_t sets() const { return sets_; }
+  std::uint32_t ways() const { return ways_; }
+  std::uint64_t size_bytes() const { return static_cast<std::uint64_t>(sets_) * ways_ * line_bytes_; }
+  std::int64_t hit_latency_cycles() const { return hit_latency_cycles_; }
+  bool write_allocate() const { return write_allocate_; }
+
+  CacheStats& stats() { return stats_; }
+  const CacheStats& stats() const { return stats_; }
+  const CacheClassStats& class_stats(DramClass c) const { return *class_stats_[static_cast<std::size_t>(c)]; }
+  /// SRAM energy so far: (read + write + fill + writeback bytes) x pJ/byte.
+  double energy_pj() const;
+  /// Sets the derived statistics (hit rate, energy).
+  void update_derived_stats();
+  /// Derived statistics, then every group (main, then one per traffic class) appended to `out`.
+  void collect(std::vector<StatRecord>& out);
+  /// Zeroes the statistics (not the contents).
+  void reset_stats();
+
+ private:
+  static constexpr std::uint64_t kInvalid = UINT64_MAX;
+  std::uint32_t set_of(std::uint64_t line) const {
+    return static_cast<std::uint32_t>(sets_pow2_ ? (line & set_mask_) : (line % sets_));
+  }
+
+  std::uint64_t line_bytes_;
+  unsigned line_shift_;
+  std::uint32_t ways_;
+  std::uint32_t sets_;
+  std::uint64_t set_mask_;  // sets_ - 1 (used when sets_pow2_)
+  bool sets_pow2_;
+  std::int64_t hit_latency_cycles_;
+  double pj_per_byte_;
+  bool write_allocate_;
+  std::uint64_t clock_ = 0;  // LRU stamp source: incremented per access
+
+  std::vector<std::uint64_t> tags_;    // line address (addr >> line_shift_), kInvalid when empty
+  std::vector<std::uint64_t> stamps_;  // last access stamp, 0 when empty
+  std::vector<std::uint8_t> dirty_;
+  std::vector<DramClass> cls_;         // class of the line's data (allocating access or last writer)
+  std::vector<std::uint32_t> fill_;    // timing model's pending fill id, kNoFill when none
+
+  CacheStats stats_;
+  std::array<std::unique_ptr<CacheClassStats>, kDramClassCount> class_stats_;
+};
+
+template <class Fn>
+std::uint64_t Cache::flush(Fn&& fn) {
+  std::uint64_t n = 0;
+  for (std::uint32_t s = 0; s < tags_.size(); ++s) {
+    if (tags_[s] == kInvalid || !dirty_[s]) continue;
+    dirty_[s] = 0;
+    ++n;
+    ++stats_.flush_writebacks;
+    stats_.writeback_bytes += line_bytes_;
+    fn(tags_[s] << line_shift_, cls_[s]);
+  }
+  return n;
+}
+
+}  // namespace tbdr

@@ -1,0 +1,453 @@
+#include "models/dram.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace tbdr {
+
+namespace {
+
+bool is_pow2(std::uint64_t v) { return v != 0 && (v & (v - 1)) == 0; }
+
+unsigned log2_exact(std::uint64_t v) {
+  unsigned s = 0;
+  while ((std::uint64_t{1} << s) < v) ++s;
+  return s;
+}
+
+constexpr std::int64_t kNever = INT64_MAX;
+
+}  // namespace
+
+Tick DramTiming::transfer(std::uint32_t bursts) const {
+  return Tick{std::max<std::int64_t>(1, std::llround(static_cast<double>(bursts) * burst_ps))};
+}
+
+double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint64_t write_bytes,
+                      std::uint64_t activates) {
+  const double read_bits = 8.0 * static_cast<double>(read_bytes);
+  const double write_bits = 8.0 * static_cast<double>(write_bytes);
+  return read_bits * e.dram_read_pj_per_bit + write_bits * e.dram_write_pj_per_bit +
+         (read_bits + write_bits) * e.dram_io_pj_per_bit +
+         static_cast<double>(activates) * (e.dram_activate_precharge_nj * 1000.0);
+}
+
+Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::string scope)
+    : name_(scope), eq_(eq), energy_(e), clock_(ClockDomain::from_mhz("dram", p.clock_mhz)), stats_(scope) {
+  const auto bad = [&](const std::string& why) { throw std::invalid_argument("dram '" + scope + "': " + why); };
+  if (p.channels < 1 || p.channels > 1024) bad("channels must be in [1, 1024]");
+  if (p.banks < 1 || p.banks > 64) bad("banks must be in [1, 64]");
+  if (p.burst_bytes < 1 || p.row_bytes < p.burst_bytes || p.row_bytes % p.burst_bytes != 0) {
+    bad("row_bytes must be a positive multiple of burst_bytes");
+  }
+  if (!(p.bandwidth_gbps > 0)) bad("bandwidth_gbps must be positive");
+  if (p.read_queue_entries < 1 || p.write_queue_entries < 1) bad("queues need at least one entry");
+  if (p.address_mapping == "row_bank_channel_column") {
+    mapping_ = DramMapping::RowBankChannelColumn;
+  } else if (p.address_mapping == "row_channel_bank_column") {
+    mapping_ = DramMapping::RowChannelBankColumn;
+  } else {
+    bad("unknown address_mapping '" + p.address_mapping + "'");
+  }
+  row_bytes_ = static_cast<std::uint64_t>(p.row_bytes);
+  burst_bytes_ = static_cast<std::uint32_t>(p.burst_bytes);
+  banks_ = static_cast<std::uint32_t>(p.banks);
+  read_cap_ = static_cast<std::size_t>(p.read_queue_entries);
+  write_cap_ = static_cast<std::size_t>(p.write_queue_entries);
+  write_high_ = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(static_cast<double>(write_cap_) * kWriteHighWatermark)));
+  write_low_ = std::min(write_high_ - 1, static_cast<std::size_t>(static_cast<double>(write_cap_) * kWriteLowWatermark));
+
+  timing_.t_rcd_cycles = ns_to_cycles(p.t_rcd_ns);
+  timing_.t_rp_cycles = ns_to_cycles(p.t_rp_ns);
+  timing_.t_cl_cycles = ns_to_cycles(p.t_cl_ns);
+  timing_.t_ras_cycles = ns_to_cycles(p.t_ras_ns);
+  timing_.t_wr_cycles = ns_to_cycles(p.t_wr_ns);
+  timing_.controller = Tick{std::llround(p.controller_latency_ns * 1000.0)};
+  // bytes / (GB/s) = ns; one channel carries bandwidth_gbps / channels.
+  timing_.burst_ps = static_cast<double>(burst_bytes_) * 1000.0 / (p.bandwidth_gbps / static_cast<double>(p.channels));
+
+  pow2_map_ = is_pow2(row_bytes_) && is_pow2(static_cast<std::uint64_t>(p.channels)) && is_pow2(banks_);
+  row_shift_ = log2_exact(row_bytes_);
+  ch_shift_ = log2_exact(static_cast<std::uint64_t>(p.channels));
+  bank_shift_ = log2_exact(banks_);
+
+  channels_.resize(static_cast<std::size_t>(p.channels));
+  for (std::size_t c = 0; c < channels_.size(); ++c) {
+    Channel& ch = channels_[c];
+    ch.readq.reserve(read_cap_);
+    ch.writeq.reserve(write_cap_);
+    ch.banks.resize(banks_);
+    ch.stats = std::make_unique<DramChannelStats>(scope + ".ch" + std::to_string(c));
+  }
+  for (std::size_t c = 0; c < kDramClassCount; ++c) {
+    class_stats_[c] = std::make_unique<DramClassStats>(scope + ".class." + to_string(static_cast<DramClass>(c)));
+  }
+}
+
+std::int64_t Dram::ns_to_cycles(double ns) const {
+  // ceil(ns * f), with a tolerance so that 18 ns at 1 GHz is 18 cycles, not 19.
+  const double cycles = ns * static_cast<double>(clock_.frequency_hz()) * 1e-9;
+  return std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(cycles - 1e-6)));
+}
+
+DramCoord Dram::map(std::uint64_t addr) const {
+  DramCoord d;
+  const auto nch = static_cast<std::uint64_t>(channels_.size());
+  std::uint64_t x;
+  if (pow2_map_) {
+    d.column = static_cast<std::uint32_t>(addr & (row_bytes_ - 1));
+    x = addr >> row_shift_;
+    if (mapping_ == DramMapping::RowBankChannelColumn) {
+      d.channel = static_cast<std::uint32_t>(x & (nch - 1));
+      x >>= ch_shift_;
+      d.bank = static_cast<std::uint32_t>(x & (banks_ - 1));
+      d.row = x >> bank_shift_;
+    } else {
+      d.bank = static_cast<std::uint32_t>(x & (banks_ - 1));
+      x >>= bank_shift_;
+      d.channel = static_cast<std::uint32_t>(x & (nch - 1));
+      d.row = x >> ch_shift_;
+    }
+    return d;
+  }
+  d.column = static_cast<std::uint32_t>(addr % row_bytes_);
+  x = addr / row_bytes_;
+  if (mapping_ == DramMapping::RowBankChannelColumn) {
+    d.channel = static_cast<std::uint32_t>(x % nch);
+    x /= nch;
+    d.bank = static_cast<std::uint32_t>(x % banks_);
+    d.row = x / banks_;
+  } else {
+    d.bank = static_cast<std::uint32_t>(x % banks_);
+    x /= banks_;
+    d.channel = static_cast<std::uint32_t>(x % nch);
+    d.row = x / nch;
+  }
+  return d;
+}
+
+void Dram::account_activate(Channel& ch, RowOutcome o, DramClass cls) {
+  ++stats_.activates;
+  ++ch.stats->activates;
+  ++class_stats_[static_cast<std::size_t>(cls)]->activates;
+  if (o == RowOutcome::Conflict) {
+    ++stats_.precharges;
+    ++ch.stats->precharges;
+  }
+}
+
+void Dram::account_request(Channel& ch, RowOutcome o, bool is_write, DramClass cls, std::uint32_t bytes) {
+  DramClassStats& cs = *class_stats_[static_cast<std::size_t>(cls)];
+  DramChannelStats& chs = *ch.stats;
+  if (is_write) {
+    ++stats_.writes;
+    stats_.write_bytes += bytes;
+    ++cs.writes;
+    cs.write_bytes += bytes;
+    ++chs.writes;
+  } else {
+    ++stats_.reads;
+    stats_.read_bytes += bytes;
+    ++cs.reads;
+    cs.read_bytes += bytes;
+    ++chs.reads;
+  }
+  chs.bytes += bytes;
+  if (o == RowOutcome::Hit) {
+    ++stats_.row_hits;
+    ++chs.row_hits;
+    return;
+  }
+  ++stats_.row_misses;
+  ++chs.row_misses;
+  if (o == RowOutcome::Empty) {
+    ++stats_.row_empty;
+  } else {
+    ++stats_.row_conflicts;
+  }
+}
+
+RowOutcome Dram::access_functional(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls) {
+  const DramCoord d = map(addr);
+  Channel& ch = channels_[d.channel];
+  Bank& b = ch.banks[d.bank];
+  const RowOutcome o = outcome(b, d.row);
+  if (o != RowOutcome::Hit) {
+    b.open_row = static_cast<std::int64_t>(d.row);
+    account_activate(ch, o, cls);
+  }
+  account_request(ch, o, is_write, cls, transfer_bytes(bytes));
+  return o;
+}
+
+bool Dram::can_accept(std::uint64_t addr, bool is_write) const {
+  const Channel& ch = channels_[map(addr).channel];
+  return is_write ? ch.writeq.size() < write_cap_ : ch.readq.size() < read_cap_;
+}
+
+bool Dram::enqueue(DramRequest&& req) {
+  if (req.bytes == 0) throw std::invalid_argument("dram: request of 0 bytes");
+  const DramCoord d = map(req.addr);
+  if (d.column + static_cast<std::uint64_t>(req.bytes) > row_bytes_) {
+    throw std::invalid_argument("dram: request of " + std::to_string(req.bytes) + " bytes at " +
+                                std::to_string(req.addr) + " crosses a row boundary");
+  }
+  Channel& ch = channels_[d.channel];
+  std::vector<Entry>& q = req.is_write ? ch.writeq : ch.readq;
+  if (q.size() >= (req.is_write ? write_cap_ : read_cap_)) {
+    ++stats_.rejected;
+    if (req.is_write) {
+      ++ch.stats->write_queue_full;
+    } else {
+      ++ch.stats->read_queue_full;
+    }
+    return false;
+  }
+  const Tick now = eq_.now();
+  note_occupancy(ch, now);
+  Entry e;
+  e.on_complete = std::move(req.on_complete);
+  e.enqueued = now;
+  e.arrival = now + timing_.controller;
+  e.row = d.row;
+  e.bank = d.bank;
+  e.bytes = transfer_bytes(req.bytes);
+  e.cls = req.cls;
+  e.is_write = req.is_write;
+  const Tick arrival = e.arrival;
+  q.push_back(std::move(e));
+  if (!any_timed_) {
+    any_timed_ = true;
+    first_enqueue_ = now;
+  }
+  ++in_flight_;
+  kick(d.channel, arrival);
+  return true;
+}
+
+void Dram::note_occupancy(Channel& ch, Tick now) {
+  const auto dt = static_cast<std::uint64_t>((now - ch.occupancy_since).ps());
+  ch.read_occupancy_ps += ch.readq.size() * dt;
+  ch.write_occupancy_ps += ch.writeq.size() * dt;
+  ch.occupancy_since = now;
+}
+
+void Dram::kick(std::uint32_t c, Tick at) {
+  Channel& ch = channels_[c];
+  const Tick edge = clock_.next_edge(std::max(at, eq_.now()));
+  if (eq_.is_pending(ch.wakeup)) {
+    if (ch.wakeup_at <= edge) return;
+    eq_.cancel(ch.wakeup);
+  }
+  ch.wakeup_at = edge;
+  ch.wakeup = eq_.schedule(edge, Priority::UnitOperate, [this, c] { wakeup(c); });
+}
+
+bool Dram::prepare(Channel& ch, std::vector<Entry>& q, std::int64_t n, Tick now) {
+  // Banks whose open row an arrived request still wants: closing it now would turn those row hits
+  // into misses (FR-FCFS serves row hits first).
+  std::uint64_t wanted = 0;
+  for (const Entry& e : q) {
+    if (e.arrival > now) break;
+    if (ch.banks[e.bank].open_row == static_cast<std::int64_t>(e.row)) wanted |= std::uint64_t{1} << e.bank;
+  }
+  const bool starving = ch.oldest_bypassed >= kStarvationCap;
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    Entry& e = q[i];
+    if (e.arrival > now) break;
+    Bank& b = ch.banks[e.bank];
+    if (b.open_row == static_cast<std::int64_t>(e.row)) continue;
+    if (((wanted >> e.bank) & 1) != 0 && !(i == 0 && starving)) continue;
+    const RowOutcome o = b.open_row < 0 ? RowOutcome::Empty : RowOutcome::Conflict;
+    // Precharge when the bank allows it (tRAS after its activate, the last data out, tWR after the
+    // last write), activate tRP later; the column command may follow tRCD after the activate.
+    const std::int64_t t_act = o == RowOutcome::Empty ? std::max(n, b.act_ready)
+                                                      : std::max(n, b.pre_ready) + timing_.t_rp_cycles;
+    b.open_row = static_cast<std::int64_t>(e.row);
+    b.act_ready = t_act;
+    b.col_ready = t_act + timing_.t_rcd_cycles;
+    b.pre_ready = t_act + timing_.t_ras_cycles;
+    e.outcome = o;
+    account_activate(ch, o, e.cls);
+    if (i == 0) ch.oldest_bypassed = 0;
+    return true;
+  }
+  return false;
+}
+
+int Dram::pick(Channel& ch, const std::vector<Entry>& q, std::int64_t n, Tick now, std::int64_t* next_ready) {
+  // A column command may issue once its bank allows it and its data (RL later) would start no
+  // more than one DRAM cycle before the data bus frees; issuing earlier would only park a request
+  // that FR-FCFS could still reorder.
+  const std::int64_t bus_c = ch.bus_free > now ? clock_.cycles_at(ch.bus_free).count() : n;
+  const std::int64_t bus_ready = bus_c - timing_.t_cl_cycles;
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    const Entry& e = q[i];
+    if (e.arrival > now) break;
+    const Bank& b = ch.banks[e.bank];
+    if (b.open_row != static_cast<std::int64_t>(e.row)) continue;
+    const std::int64_t issue = std::max(b.col_ready, bus_ready);
+    if (issue <= n) return static_cast<int>(i);  // the oldest row hit that can go now
+    *next_ready = std::min(*next_ready, issue);
+  }
+  return -1;
+}
+
+void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::int64_t n) {
+  Channel& ch = channels_[c];
+  const Tick now = eq_.now();
+  note_occupancy(ch, now);
+  Entry e = std::move(q[i]);
+  q.erase(q.begin() + static_cast<std::ptrdiff_t>(i));
+
+  Bank& b = ch.banks[e.bank];
+  b.col_ready = n + 1;
+  const Tick data_natural = clock_.tick_of(Cycles{n + timing_.t_cl_cycles});
+  const Tick start = std::max(data_natural, ch.bus_free);
+  const Tick duration = timing_.transfer(e.bytes / burst_bytes_);
+  const Tick end = start + duration;
+  ch.bus_free = end;
+  const std::int64_t end_c = cycle_ceil(end);
+  b.pre_ready = std::max(b.pre_ready, e.is_write ? end_c + timing_.t_wr_cycles : end_c);
+
+  account_request(ch, e.outcome, e.is_write, e.cls, e.bytes);
+  ch.stats->busy_ps += static_cast<std::uint64_t>(duration.ps());
+  timed_bytes_ += e.bytes;
+  const Tick done = end + timing_.controller;
+  if (!e.is_write) {
+    stats_.read_latency_ps += static_cast<std::uint64_t>((done - e.enqueued).ps());
+    ++timed_reads_;
+  }
+
+  std::uint32_t slot;
+  if (free_done_.empty()) {
+    slot = static_cast<std::uint32_t>(done_.size());
+    done_.emplace_back();
+  } else {
+    slot = free_done_.back();
+    free_done_.pop_back();
+  }
+  done_[slot] = std::move(e.on_complete);
+  eq_.schedule(done, Priority::DramResponse, [this, slot] { complete(slot); });
+}
+
+void Dram::complete(std::uint32_t slot) {
+  EventCallback cb = std::move(done_[slot]);
+  done_[slot].reset();
+  free_done_.push_back(slot);
+  --in_flight_;
+  ++stats_.completed;
+  last_completion_ = eq_.now();
+  if (cb) cb();
+}
+
+void Dram::wakeup(std::uint32_t c) {
+  Channel& ch = channels_[c];
+  const Tick now = eq_.now();
+  const std::int64_t n = clock_.cycles_at(now).count();
+  const bool reads_arrived = !ch.readq.empty() && ch.readq.front().arrival <= now;
+  const bool writes_arrived = !ch.writeq.empty() && ch.writeq.front().arrival <= now;
+  if (!ch.draining && ch.writeq.size() >= write_high_) {
+    ch.draining = true;
+    ++ch.stats->write_drains;
+  } else if (ch.draining && ch.writeq.size() <= write_low_) {
+    ch.draining = false;
+  }
+  std::vector<Entry>* q = nullptr;
+  if (writes_arrived && (ch.draining || !reads_arrived)) {
+    q = &ch.writeq;
+  } else if (reads_arrived) {
+    q = &ch.readq;
+  }
+
+  std::int64_t next = kNever;
+  bool freed = false;
+  if (q != nullptr) {
+    const bool prepared = prepare(ch, *q, n, now);
+    const Entry& oldest = q->front();
+    const bool oldest_needs_row = ch.banks[oldest.bank].open_row != static_cast<std::int64_t>(oldest.row);
+    const int i = pick(ch, *q, n, now, &next);
+    if (i >= 0) {
+      if (i == 0) {
+        ch.oldest_bypassed = 0;
+      } else if (oldest_needs_row) {
+        ++ch.oldest_bypassed;
+      }
+      commit(c, *q, static_cast<std::size_t>(i), n);
+      freed = true;
+    }
+    // One row command and one column command per DRAM cycle; look again next cycle after either.
+    if (prepared || freed || next == kNever) next = n + 1;
+  }
+  for (const std::vector<Entry>* qq : {&ch.readq, &ch.writeq}) {
+    if (!qq->empty() && qq->front().arrival > now) next = std::min(next, cycle_ceil(qq->front().arrival));
+  }
+  if (next != kNever && (!ch.readq.empty() || !ch.writeq.empty())) {
+    kick(c, clock_.tick_of(Cycles{std::max(next, n + 1)}));
+  }
+  if (freed && space_cb_) space_cb_(c);
+}
+
+DramTraffic Dram::traffic() const {
+  DramTraffic t;
+  for (std::size_t c = 0; c < kDramClassCount; ++c) {
+    t.read_bytes[c] = class_stats_[c]->read_bytes.value();
+    t.write_bytes[c] = class_stats_[c]->write_bytes.value();
+  }
+  return t;
+}
+
+double Dram::energy_pj() const {
+  return dram_energy_pj(energy_, stats_.read_bytes.value(), stats_.write_bytes.value(), stats_.activates.value());
+}
+
+double Dram::energy_pj(DramClass c) const {
+  const DramClassStats& cs = *class_stats_[static_cast<std::size_t>(c)];
+  return dram_energy_pj(energy_, cs.read_bytes.value(), cs.write_bytes.value(), cs.activates.value());
+}
+
+void Dram::update_derived_stats() {
+  const Tick now = eq_.now();
+  const double elapsed_ps = static_cast<double>(now.ps());
+  for (Channel& ch : channels_) {
+    note_occupancy(ch, now);
+    DramChannelStats& s = *ch.stats;
+    s.read_queue_occupancy.set(elapsed_ps > 0 ? static_cast<double>(ch.read_occupancy_ps) / elapsed_ps : 0.0);
+    s.write_queue_occupancy.set(elapsed_ps > 0 ? static_cast<double>(ch.write_occupancy_ps) / elapsed_ps : 0.0);
+    s.utilization.set(elapsed_ps > 0 ? static_cast<double>(s.busy_ps.value()) / elapsed_ps : 0.0);
+  }
+  const std::uint64_t requests = stats_.reads.value() + stats_.writes.value();
+  stats_.row_hit_rate.set(requests == 0 ? 0.0 : static_cast<double>(stats_.row_hits.value()) / static_cast<double>(requests));
+  stats_.avg_read_latency_ns.set(
+      timed_reads_ == 0 ? 0.0 : static_cast<double>(stats_.read_latency_ps.value()) * 1e-3 / static_cast<double>(timed_reads_));
+  const std::int64_t window_ps = (last_completion_ - first_enqueue_).ps();
+  stats_.achieved_bandwidth_gbps.set(window_ps <= 0 ? 0.0 : static_cast<double>(timed_bytes_) * 1000.0 / static_cast<double>(window_ps));
+  const double read_bits = 8.0 * static_cast<double>(stats_.read_bytes.value());
+  const double write_bits = 8.0 * static_cast<double>(stats_.write_bytes.value());
+  stats_.energy_read_pj.set(read_bits * energy_.dram_read_pj_per_bit);
+  stats_.energy_write_pj.set(write_bits * energy_.dram_write_pj_per_bit);
+  stats_.energy_io_pj.set((read_bits + write_bits) * energy_.dram_io_pj_per_bit);
+  stats_.energy_activate_pj.set(static_cast<double>(stats_.activates.value()) * (energy_.dram_activate_precharge_nj * 1000.0));
+  stats_.energy_pj.set(energy_pj());
+  for (std::size_t c = 0; c < kDramClassCount; ++c) class_stats_[c]->energy_pj.set(energy_pj(static_cast<DramClass>(c)));
+}
+
+void Dram::collect(std::vector<StatRecord>& out) {
+  update_derived_stats();
+  stats_.group.collect(out);
+  for (const Channel& ch : channels_) ch.stats->group.collect(out);
+  for (const auto& cs : class_stats_) cs->group.collect(out);
+}
+
+std::string Dram::stall_reason() const {
+  std::string s = std::to_string(in_flight_) + " requests in flight;";
+  for (std::size_t c = 0; c < channels_.size(); ++c) {
+    const Channel& ch = channels_[c];
+    s += " ch" + std::to_string(c) + ": " + std::to_string(ch.readq.size()) + " reads, " +
+         std::to_string(ch.writeq.size()) + " writes queued" + (ch.draining ? " (draining writes)" : "") + ";";
+  }
+  return s;
+}
+
+}  // namespace tbdr

@@ -1,0 +1,297 @@
+#pragma once
+// The external DRAM: channels x banks, one row buffer per bank under an open-page policy, read and
+// write queues per channel with an FR-FCFS scheduler (row hits first, then oldest; writes drained
+// in bursts between watermarks), JEDEC-style timing (tRCD, tRP, RL, tRAS, tWR, data-bus time from
+// the channel bandwidth, controller latency) and energy per bit and per activate (DRAMPower-style
+// figures from [energy]). See docs/memory-model.md for the equations.
+//
+// Two ways in:
+//  - timed: enqueue() a line-sized request; the controller schedules it on the event queue and
+//    calls its on_complete at the exact tick the data (or write acknowledgement) is back. A full
+//    queue refuses the request (backpressure): the caller keeps it and retries, e.g. from the
+//    space callback.
+//  - functional: access_functional() updates the row buffers and every byte, row and energy count
+//    without timing, for the fast path.
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "models/hw_config.hpp"
+#include "models/traffic.hpp"
+#include "sim/event_queue.hpp"
+#include "sim/run_loop.hpp"
+#include "sim/stats.hpp"
+#include "sim/time.hpp"
+
+namespace tbdr {
+
+/// One transfer between the chip and DRAM (normally one cache line; never crossing a row).
+struct DramRequest {
+  std::uint64_t addr = 0;
+  std::uint32_t bytes = 0;  ///< rounded up to whole bursts by the controller
+  bool is_write = false;
+  DramClass cls = DramClass::Other;
+  EventCallback on_complete;  ///< run at the completion tick (Priority::DramResponse); may be empty
+};
+
+/// Physical address bit order of dram.address_mapping, most significant field first.
+enum class DramMapping : std::uint8_t {
+  RowBankChannelColumn,  ///< consecutive rows' worth of bytes alternate channels, then banks
+  RowChannelBankColumn,  ///< consecutive rows' worth of bytes alternate banks, then channels
+};
+
+/// Where an address lands in the DRAM.
+struct DramCoord {
+  std::uint32_t channel = 0;
+  std::uint32_t bank = 0;
+  std::uint64_t row = 0;
+  std::uint32_t column = 0;  ///< byte offset within the row
+};
+
+/// The DRAM timing the controller uses, converted from the [dram] parameters.
+struct DramTiming {
+  std::int64_t t_rcd_cycles = 0;  ///< activate -> column command
+  std::int64_t t_rp_cycles = 0;   ///< precharge -> activate
+  std::int64_t t_cl_cycles = 0;   ///< column command -> first data (reads and writes)
+  std::int64_t t_ras_cycles = 0;  ///< activate -> precharge
+  std::int64_t t_wr_cycles = 0;   ///< end of write data -> precharge
+  Tick controller{0};             ///< controller + interconnect latency, each way
+  double burst_ps = 0;            ///< data-bus time of one burst on one channel
+  Tick transfer(std::uint32_t bursts) const;
+};
+
+/// How a request found its bank's row buffer.
+enum class RowOutcome : std::uint8_t {
+  Hit,       ///< the row was open: column command only
+  Empty,     ///< no row open: activate + column
+  Conflict,  ///< another row open: precharge + activate + column
+};
+
+/// DRAM energy in pJ of the given transfers and activates, with the [energy] unit costs:
+/// read_bits*read_pj + write_bits*write_pj + (read_bits+write_bits)*io_pj + activates*act_nj*1000.
+/// The single formula behind every DRAM energy statistic (total, per class, per component).
+double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint64_t write_bytes,
+                      std::uint64_t activates);
+
+/// Whole-DRAM statistics.
+struct DramStats {
+  StatGroup group;
+  Counter reads{group, {"reads", "requests", "Read requests served"}};
+  Counter writes{group, {"writes", "requests", "Write requests served"}};
+  Counter read_bytes{group, {"read_bytes", "bytes", "Bytes read (whole bursts)"}};
+  Counter write_bytes{group, {"write_bytes", "bytes", "Bytes written (whole bursts)"}};
+  Counter row_hits{group, {"row_hits", "requests", "Requests that found their row open"}};
+  Counter row_misses{group, {"row_misses", "requests", "Requests that needed an activate (empty + conflict)"}};
+  Counter row_empty{group, {"row_misses_empty", "requests", "Row misses to a bank with no open row"}};
+  Counter row_conflicts{group, {"row_conflicts", "requests", "Row misses that closed another open row"}};
+  Counter activates{group, {"activates", "commands", "Activate commands"}};
+  Counter precharges{group, {"precharges", "commands", "Precharge commands"}};
+  Counter rejected{group, {"queue_full_rejections", "requests", "Requests refused because their queue was full"}};
+  Counter completed{group, {"completed", "requests", "Timed requests completed"}};
+  Counter read_latency_ps{group, {"read_latency_total_ps", "ps", "Sum of timed read latencies (enqueue to data back)"}};
+  Accumulator row_hit_rate{group, {"row_hit_rate", "ratio", "Row hits / requests"}};
+  Accumulator avg_read_latency_ns{group, {"avg_read_latency_ns", "ns", "Mean timed read latency, enqueue to data back"}};
+  Accumulator achieved_bandwidth_gbps{group, {"achieved_bandwidth_gbps", "GB/s", "Timed bytes / (last completion - first enqueue)"}};
+  Accumulator energy_read_pj{group, {"energy_read_pj", "pJ", "Read core energy: read bits x dram_read_pj_per_bit"}};
+  Accumulator energy_write_pj{group, {"energy_write_pj", "pJ", "Write core energy: write bits x dram_write_pj_per_bit"}};
+  Accumulator energy_io_pj{group, {"energy_io_pj", "pJ", "I/O energy: (read + write bits) x dram_io_pj_per_bit"}};
+  Accumulator energy_activate_pj{group, {"energy_activate_pj", "pJ", "Activates x dram_activate_precharge_nj x 1000"}};
+  Accumulator energy_pj{group, {"energy_pj", "pJ", "Total DRAM energy (read + write + I/O + activate/precharge)"}};
+  explicit DramStats(std::string scope) : group(std::move(scope)) {}
+};
+
+/// Statistics of one DRAM channel.
+struct DramChannelStats {
+  StatGroup group;
+  Counter reads{group, {"reads", "requests", "Read requests served"}};
+  Counter writes{group, {"writes", "requests", "Write requests served"}};
+  Counter bytes{group, {"bytes", "bytes", "Bytes transferred (both directions)"}};
+  Counter row_hits{group, {"row_hits", "requests", "Requests that found their row open"}};
+  Counter row_misses{group, {"row_misses", "requests", "Requests that needed an activate"}};
+  Counter activates{group, {"activates", "commands", "Activate commands"}};
+  Counter precharges{group, {"precharges", "commands", "Precharge commands"}};
+  Counter busy_ps{group, {"busy_ps", "ps", "Time the data bus was transferring"}};
+  Counter read_queue_full{group, {"read_queue_full", "requests", "Reads refused: read queue full"}};
+  Counter write_queue_full{group, {"write_queue_full", "requests", "Writes refused: write queue full"}};
+  Counter write_drains{group, {"write_drains", "drains", "Times the write queue reached the high watermark"}};
+  Accumulator read_queue_occupancy{group, {"read_queue_occupancy_avg", "requests", "Time-averaged read queue occupancy (from tick 0)"}};
+  Accumulator write_queue_occupancy{group, {"write_queue_occupancy_avg", "requests", "Time-averaged write queue occupancy (from tick 0)"}};
+  Accumulator utilization{group, {"utilization", "ratio", "busy_ps / elapsed ps (from tick 0)"}};
+  explicit DramChannelStats(std::string scope) : group(std::move(scope)) {}
+};
+
+/// DRAM statistics of one traffic class.
+struct DramClassStats {
+  StatGroup group;
+  Counter reads{group, {"reads", "requests", "Read requests of this class"}};
+  Counter writes{group, {"writes", "requests", "Write requests of this class"}};
+  Counter read_bytes{group, {"read_bytes", "bytes", "DRAM bytes read for this traffic class"}};
+  Counter write_bytes{group, {"write_bytes", "bytes", "DRAM bytes written for this traffic class"}};
+  Counter activates{group, {"activates", "commands", "Activates caused by requests of this class"}};
+  Accumulator energy_pj{group, {"energy_pj", "pJ", "DRAM energy of this class (its bytes and its activates)"}};
+  explicit DramClassStats(std::string scope) : group(std::move(scope)) {}
+};
+
+/// The DRAM devices and their memory controller.
+class Dram final : public Unit {
+ public:
+  /// Write-drain watermarks, as fractions of dram.write_queue_entries: writes are served before
+  /// reads from when the write queue reaches the high mark until it falls to the low mark (and
+  /// whenever no read is waiting). Fixed design constants (Ramulator's defaults are similar).
+  static constexpr double kWriteHighWatermark = 0.75;
+  static constexpr double kWriteLowWatermark = 0.25;
+  /// FR-FCFS starvation cap: after this many younger requests were served ahead of the oldest
+  /// ready one, the oldest goes next even if it is not a row hit.
+  static constexpr std::uint32_t kStarvationCap = 16;
+
+  /// Validates the parameters (std::invalid_argument on an inconsistent geometry).
+  Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::string scope = "dram");
+  Dram(const Dram&) = delete;
+  Dram& operator=(const Dram&) = delete;
+
+  /// Timed: queues a request; false (and nothing changes but the rejection count) when its
+  /// channel's read or write queue is full. The request enters the queue now, is eligible for
+  /// scheduling after the controller latency, and completes controller latency after its data.
+  /// Throws std::invalid_argument for a request of 0 bytes or one that crosses a row.
+  /// `req` is moved from only when it is accepted: on false the caller still owns it and retries.
+  bool enqueue(DramRequest&& req);
+  /// Whether enqueue() would accept a request for `addr` now.
+  bool can_accept(std::uint64_t addr, bool is_write) const;
+  /// Called (after the scheduler step that freed it) whenever a queue slot frees on a channel.
+  void set_space_callback(std::function<void(std::uint32_t channel)> cb) { space_cb_ = std::move(cb); }
+
+  /// Functional: the same row-buffer and statistics update as a timed request, without timing.
+  RowOutcome access_functional(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls);
+
+  /// Address mapping.
+  DramCoord map(std::uint64_t addr) const;
+  std::uint32_t channel_of(std::uint64_t addr) const { return map(addr).channel; }
+  /// Bytes a request of `bytes` transfers: whole bursts.
+  std::uint32_t transfer_bytes(std::uint32_t bytes) const {
+    return static_cast<std::uint32_t>((bytes + burst_bytes_ - 1) / burst_bytes_ * burst_bytes_);
+  }
+
+  const DramTiming& timing() const { return timing_; }
+  const ClockDomain& clock() const { return clock_; }
+  DramMapping mapping() const { return mapping_; }
+  std::uint32_t channels() const { return static_cast<std::uint32_t>(channels_.size()); }
+  std::uint32_t banks() const { return banks_; }
+  std::uint64_t row_bytes() const { return row_bytes_; }
+  std::uint32_t burst_bytes() const { return burst_bytes_; }
+  std::size_t read_queue_size(std::uint32_t channel) const { return channels_[channel].readq.size(); }
+  std::size_t write_queue_size(std::uint32_t channel) const { return channels_[channel].writeq.size(); }
+  /// Requests accepted (timed) and not yet completed.
+  std::uint64_t in_flight() const { return in_flight_; }
+
+  const DramStats& stats() const { return stats_; }
+  const DramChannelStats& channel_stats(std::uint32_t c) const { return *channels_[c].stats; }
+  const DramClassStats& class_stats(DramClass c) const { return *class_stats_[static_cast<std::size_t>(c)]; }
+  /// Bytes per class so far, in the shape the rest of the simulator uses.
+  DramTraffic traffic() const;
+  /// Energy so far (same formula and operation order as the statistics).
+  double energy_pj() const;
+  double energy_pj(DramClass c) const;
+  /// Sets the derived statistics (energy, rates, averages up to now()).
+  void update_derived_stats();
+  /// Derived statistics, then the groups (whole DRAM, channels, classes) appended to `out`.
+  void collect(std::vector<StatRecord>& out);
+
+  // Unit (run-loop watchdog)
+  std::string_view name() const override { return name_; }
+  bool has_pending_work() const override { return in_flight_ != 0; }
+  std::uint64_t progress() const override { return stats_.completed.value(); }
+  std::string stall_reason() const override;
+
+ private:
+  struct Entry {
+    EventCallback on_complete;
+    Tick enqueued{0};
+    Tick arrival{0};  // eligible for scheduling from this tick
+    std::uint64_t row = 0;
+    std::uint32_t bank = 0;
+    std::uint32_t bytes = 0;  // whole bursts
+    DramClass cls = DramClass::Other;
+    bool is_write = false;
+    RowOutcome outcome = RowOutcome::Hit;  // Empty/Conflict once a row was opened for this request
+  };
+  struct Bank {
+    std::int64_t open_row = -1;  // -1: precharged
+    std::int64_t act_ready = 0;  // earliest activate (cycle)
+    std::int64_t col_ready = 0;  // earliest column command (cycle)
+    std::int64_t pre_ready = 0;  // earliest precharge (cycle)
+  };
+  struct Channel {
+    std::vector<Entry> readq;
+    std::vector<Entry> writeq;
+    std::vector<Bank> banks;
+    Tick bus_free{0};
+    bool draining = false;
+    std::uint32_t oldest_bypassed = 0;
+    EventId wakeup;
+    Tick wakeup_at{0};
+    Tick occupancy_since{0};
+    std::uint64_t read_occupancy_ps = 0;   // integral of read queue size over time
+    std::uint64_t write_occupancy_ps = 0;  // integral of write queue size over time
+    std::unique_ptr<DramChannelStats> stats;
+  };
+
+  RowOutcome outcome(const Bank& b, std::uint64_t row) const {
+    return b.open_row == static_cast<std::int64_t>(row) ? RowOutcome::Hit
+           : b.open_row < 0                           ? RowOutcome::Empty
+                                                      : RowOutcome::Conflict;
+  }
+  // Statistics of a row opened (activate, and precharge for a conflict) for a request of `cls`.
+  void account_activate(Channel& ch, RowOutcome o, DramClass cls);
+  // Statistics of a request served (bytes; a row hit or miss as recorded when its row was opened).
+  void account_request(Channel& ch, RowOutcome o, bool is_write, DramClass cls, std::uint32_t bytes);
+  void note_occupancy(Channel& ch, Tick now);
+  void kick(std::uint32_t c, Tick at);
+  void wakeup(std::uint32_t c);
+  // Opens (precharge + activate) the row of the oldest arrived request whose bank holds another
+  // row that no arrived request still wants; true if it did.
+  bool prepare(Channel& ch, std::vector<Entry>& q, std::int64_t n, Tick now);
+  // Index of the oldest arrived request whose column command can issue at cycle n, or -1 (then
+  // *next_ready is lowered to the first cycle at which a waiting row hit can issue).
+  int pick(Channel& ch, const std::vector<Entry>& q, std::int64_t n, Tick now, std::int64_t* next_ready);
+  void commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::int64_t n);
+  void complete(std::uint32_t slot);
+  std::int64_t ns_to_cycles(double ns) const;
+  std::int64_t cycle_ceil(Tick t) const { return clock_.cycles_at(clock_.next_edge(t)).count(); }
+
+  std::string name_;
+  EventQueue& eq_;
+  EnergyParams energy_;
+  ClockDomain clock_;
+  DramTiming timing_;
+  DramMapping mapping_;
+  std::uint64_t row_bytes_;
+  std::uint32_t burst_bytes_;
+  std::uint32_t banks_;
+  std::size_t read_cap_;
+  std::size_t write_cap_;
+  std::size_t write_high_;
+  std::size_t write_low_;
+  // Fast mapping when row size, channels and banks are powers of two.
+  bool pow2_map_ = false;
+  unsigned row_shift_ = 0, ch_shift_ = 0, bank_shift_ = 0;
+
+  std::vector<Channel> channels_;
+  std::vector<EventCallback> done_;        // on_complete of requests in flight, by slot
+  std::vector<std::uint32_t> free_done_;
+  std::uint64_t in_flight_ = 0;
+  bool any_timed_ = false;
+  Tick first_enqueue_{0};
+  Tick last_completion_{0};
+  std::uint64_t timed_bytes_ = 0;
+  std::uint64_t timed_reads_ = 0;
+  std::function<void(std::uint32_t)> space_cb_;
+
+  DramStats stats_;
+  std::array<std::unique_ptr<DramClassStats>, kDramClassCount> class_stats_;
+};
+
+}  // namespace tbdr

@@ -1,0 +1,444 @@
+#include "models/memory_system.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace tbdr {
+
+namespace {
+
+// Calls fn(addr, bytes) for each piece of [addr, addr + bytes) that lies within one line.
+template <class Fn>
+void for_each_line(std::uint64_t addr, std::uint64_t bytes, std::uint64_t line_bytes, Fn&& fn) {
+  const std::uint64_t end = addr + bytes;
+  while (addr < end) {
+    const std::uint64_t next = (addr & ~(line_bytes - 1)) + line_bytes;
+    const std::uint64_t n = std::min(next, end) - addr;
+    fn(addr, static_cast<std::uint32_t>(n));
+    addr += n;
+  }
+}
+
+}  // namespace
+
+const char* to_string(Client c) {
+  switch (c) {
+    case Client::Geometry: return "geometry";
+    case Client::Tiler: return "tiler";
+    case Client::Isp: return "isp";
+    case Client::Texture: return "texture";
+    case Client::PixelBackEnd: return "pixel_back_end";
+    case Client::Compute: return "compute";
+    case Client::Count: break;
+  }
+  return "?";
+}
+
+MemorySystem::MemorySystem(const HwConfig& hw, EventQueue& eq, std::string scope, MemorySystemOptions opt)
+    : name_(scope),
+      eq_(eq),
+      core_(ClockDomain::from_mhz("core", hw.gpu.core_clock_mhz)),
+      caches_enabled_(opt.caches_enabled),
+      energy_(hw.energy),
+      texture_(std::make_unique<Cache>(scope + "/cache.texture", hw.cache.texture, hw.energy.texture_cache_pj_per_byte)),
+      vertex_(std::make_unique<Cache>(scope + "/cache.vertex", hw.cache.vertex, hw.energy.vertex_cache_pj_per_byte)),
+      slc_(std::make_unique<Cache>(scope + "/cache.slc", hw.cache.slc, hw.energy.slc_pj_per_byte)),
+      dram_(hw.dram, hw.energy, eq, scope + "/dram"),
+      burst_bytes_(static_cast<std::uint32_t>(hw.dram.burst_bytes)),
+      overflow_(dram_.channels()),
+      overflow_cap_(std::max<std::size_t>(1, opt.overflow_entries)),
+      stats_(scope) {
+  if (dram_.row_bytes() % slc_->line_bytes() != 0) {
+    throw std::invalid_argument("memory system: dram.row_bytes must be a multiple of cache.slc.line_bytes");
+  }
+  if (caches_enabled_) {
+    routes_[static_cast<std::size_t>(Client::Geometry)] = {vertex_.get(), Allocation::Allocate};
+    routes_[static_cast<std::size_t>(Client::Isp)] = {vertex_.get(), Allocation::Allocate};
+    routes_[static_cast<std::size_t>(Client::Texture)] = {texture_.get(), Allocation::Allocate};
+  }
+  routes_[static_cast<std::size_t>(Client::PixelBackEnd)].slc_alloc = Allocation::NoAllocate;
+  for (std::size_t c = 0; c < kClientCount; ++c) {
+    client_stats_[c] = std::make_unique<MemoryClientStats>(scope + "/client." + to_string(static_cast<Client>(c)));
+  }
+  dram_.set_space_callback([this](std::uint32_t c) { drain_overflow(c); });
+}
+
+// ---------------------------------------------------------------------------------------------
+// Entry points
+
+bool MemorySystem::issue(Client client, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls,
+                         EventCallback on_complete) {
+  if (bytes == 0) throw std::invalid_argument("memory system: request of 0 bytes");
+  MemoryClientStats& cs = *client_stats_[static_cast<std::size_t>(client)];
+  if (!can_accept()) {
+    ++cs.rejected;
+    return false;
+  }
+  if (is_write) {
+    ++cs.writes;
+    cs.write_bytes += bytes;
+  } else {
+    ++cs.reads;
+    cs.read_bytes += bytes;
+  }
+  std::uint32_t t;
+  if (free_txns_.empty()) {
+    t = static_cast<std::uint32_t>(txns_.size());
+    txns_.emplace_back();
+  } else {
+    t = free_txns_.back();
+    free_txns_.pop_back();
+  }
+  const Tick now = eq_.now();
+  Txn& x = txns_[t];
+  x.on_complete = std::move(on_complete);
+  x.issued = now;
+  x.remaining = 1;  // guard while the parts are being issued; becomes the part resolved at once
+  x.client = client;
+  ++live_txns_;
+
+  issuing_txn_ = t;
+  sync_cycles_ = -1;
+  access<true>(client, addr, bytes, is_write, cls, t);
+  issuing_txn_ = UINT32_MAX;
+  if (sync_cycles_ >= 0) {
+    deliver_later(Waiter{t, 0, WaiterKind::Txn}, core_.after(now, Cycles{sync_cycles_}));
+  } else {
+    part_done(t);  // every part waits on a fill: drop the guard
+  }
+  return true;
+}
+
+void MemorySystem::access_functional(Client client, std::uint64_t addr, std::uint32_t bytes, bool is_write,
+                                     DramClass cls) {
+  if (bytes == 0) return;
+  MemoryClientStats& cs = *client_stats_[static_cast<std::size_t>(client)];
+  ++cs.functional;
+  if (is_write) {
+    ++cs.writes;
+    cs.write_bytes += bytes;
+  } else {
+    ++cs.reads;
+    cs.read_bytes += bytes;
+  }
+  access<false>(client, addr, bytes, is_write, cls, 0);
+}
+
+void MemorySystem::notify_when_ready(EventCallback cb) {
+  if (can_accept()) {
+    eq_.schedule(eq_.now(), Priority::Default, std::move(cb));
+  } else {
+    ready_waiters_.push_back(std::move(cb));
+  }
+}
+
+void MemorySystem::flush(EventCallback on_done) {
+  ++stats_.flushes;
+  if (on_done) flush_done_.push_back(std::move(on_done));
+  flushing_ = true;
+  ++flush_outstanding_;  // guard while the writebacks are being issued
+  flush_caches<true>();
+  flushing_ = false;
+  if (--flush_outstanding_ == 0) {
+    std::vector<EventCallback> cbs = std::move(flush_done_);
+    flush_done_.clear();
+    for (EventCallback& cb : cbs) eq_.schedule(eq_.now(), Priority::Default, std::move(cb));
+  }
+}
+
+void MemorySystem::flush_functional() {
+  ++stats_.flushes;
+  flush_caches<false>();
+}
+
+template <bool kTimed>
+void MemorySystem::flush_caches() {
+  if (!caches_enabled_) return;
+  for (Cache* l1 : {texture_.get(), vertex_.get()}) {
+    l1->flush([&](std::uint64_t a, DramClass c) {
+      slc_range<kTimed>(Allocation::Allocate, a, l1->line_bytes(), true, c, Waiter{});
+    });
+  }
+  slc_->flush([&](std::uint64_t a, DramClass c) {
+    dram_write_line<kTimed>(a, static_cast<std::uint32_t>(slc_->line_bytes()), c);
+  });
+}
+
+// ---------------------------------------------------------------------------------------------
+// The walk through the levels (shared by the timed and functional paths)
+
+template <bool kTimed>
+void MemorySystem::access(Client client, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls,
+                          std::uint32_t txn) {
+  const Route& r = routes_[static_cast<std::size_t>(client)];
+  const Waiter w{txn, 0, kTimed ? WaiterKind::Txn : WaiterKind::None};
+  if (r.l1 != nullptr) {
+    Cache& l1 = *r.l1;
+    for_each_line(addr, bytes, l1.line_bytes(), [&](std::uint64_t a, std::uint32_t n) {
+      l1_access<kTimed>(l1, a, n, is_write, cls, w);
+    });
+  } else {
+    slc_range<kTimed>(r.slc_alloc, addr, bytes, is_write, cls, w);
+  }
+}
+
+template <bool kTimed>
+void MemorySystem::l1_access(Cache& l1, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls,
+                             Waiter w) {
+  const CacheAccess a = l1.access(addr, bytes, is_write, cls, Allocation::Allocate);
+  if (a.writeback) slc_range<kTimed>(Allocation::Allocate, a.victim_addr, l1.line_bytes(), true, a.victim_cls, Waiter{});
+  w.extra_cycles += static_cast<std::uint32_t>(l1.hit_latency_cycles());
+  if (is_write) {
+    if (!a.hit && !a.allocated) {  // write-no-allocate L1: the write goes on to the SLC
+      slc_range<kTimed>(Allocation::Allocate, addr, bytes, true, cls, w);
+      return;
+    }
+    if constexpr (kTimed) ready(w);  // write-allocate without a fetch (whole-line write-validate)
+    return;
+  }
+  if (a.hit) {
+    if constexpr (kTimed) {
+      const std::uint32_t f = l1.fill_of(a.slot);
+      if (f != Cache::kNoFill) {
+        ++stats_.merged_misses;
+        attach(f, w);
+      } else {
+        ready(w);
+      }
+    }
+    return;
+  }
+  // Read miss: the line was allocated; fetch all of it from the SLC.
+  Waiter below{};
+  if constexpr (kTimed) {
+    const std::uint32_t f = new_fill(&l1, a.slot);
+    l1.set_fill(a.slot, f);
+    attach(f, w);
+    below = Waiter{f, 0, WaiterKind::Fill};
+  }
+  slc_range<kTimed>(Allocation::Allocate, l1.line_addr(addr), l1.line_bytes(), false, cls, below);
+}
+
+template <bool kTimed>
+void MemorySystem::slc_range(Allocation alloc, std::uint64_t addr, std::uint64_t bytes, bool is_write, DramClass cls,
+                             Waiter w) {
+  for_each_line(addr, bytes, slc_->line_bytes(), [&](std::uint64_t a, std::uint32_t n) {
+    slc_access<kTimed>(alloc, a, n, is_write, cls, w);
+  });
+}
+
+template <bool kTimed>
+void MemorySystem::slc_access(Allocation alloc, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls,
+                              Waiter w) {
+  if (!caches_enabled_) {
+    dram_bypass<kTimed>(addr, bytes, is_write, cls, w);
+    return;
+  }
+  Cache& slc = *slc_;
+  const CacheAccess a = slc.access(addr, bytes, is_write, cls, alloc);
+  if (a.writeback) dram_write_line<kTimed>(a.victim_addr, static_cast<std::uint32_t>(slc.line_bytes()), a.victim_cls);
+  w.extra_cycles += static_cast<std::uint32_t>(slc.hit_latency_cycles());
+  if (is_write) {
+    if (!a.hit && !a.allocated) dram_bypass<kTimed>(addr, bytes, true, cls, Waiter{});  // streaming store
+    if constexpr (kTimed) ready(w);  // writes are posted
+    return;
+  }
+  if (a.hit) {
+    if constexpr (kTimed) {
+      const std::uint32_t f = slc.fill_of(a.slot);
+      if (f != Cache::kNoFill) {
+        ++stats_.merged_misses;
+        attach(f, w);
+      } else {
+        ready(w);
+      }
+    }
+    return;
+  }
+  if (!a.allocated) {  // streaming read miss: fetch the bursts, install nothing
+    dram_bypass<kTimed>(addr, bytes, false, cls, w);
+    return;
+  }
+  const std::uint64_t line = slc.line_addr(addr);
+  const auto line_bytes = static_cast<std::uint32_t>(slc.line_bytes());
+  if constexpr (kTimed) {
+    const std::uint32_t f = new_fill(&slc, a.slot);
+    slc.set_fill(a.slot, f);
+    attach(f, w);
+    ++fills_[f].parts;
+    send(DramRequest{line, line_bytes, false, cls, [this, f] { complete_fill(f); }});
+  } else {
+    dram_.access_functional(line, line_bytes, false, cls);
+  }
+}
+
+template <bool kTimed>
+void MemorySystem::dram_bypass(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Waiter w) {
+  const std::uint64_t start = addr / burst_bytes_ * burst_bytes_;
+  const std::uint64_t end = (addr + bytes + burst_bytes_ - 1) / burst_bytes_ * burst_bytes_;
+  const auto n = static_cast<std::uint32_t>(end - start);
+  if constexpr (!kTimed) {
+    dram_.access_functional(start, n, is_write, cls);
+  } else if (is_write) {
+    dram_write_line<true>(start, n, cls);
+    ready(w);  // posted
+  } else {
+    const std::uint32_t f = new_fill(nullptr, 0);
+    attach(f, w);
+    ++fills_[f].parts;
+    send(DramRequest{start, n, false, cls, [this, f] { complete_fill(f); }});
+  }
+}
+
+template <bool kTimed>
+void MemorySystem::dram_write_line(std::uint64_t addr, std::uint32_t bytes, DramClass cls) {
+  if constexpr (!kTimed) {
+    dram_.access_functional(addr, bytes, true, cls);
+  } else {
+    DramRequest r{addr, bytes, true, cls, {}};
+    if (flushing_) {
+      ++flush_outstanding_;
+      r.on_complete = [this] {
+        if (--flush_outstanding_ == 0) {
+          std::vector<EventCallback> cbs = std::move(flush_done_);
+          flush_done_.clear();
+          for (EventCallback& cb : cbs) cb();
+        }
+      };
+    }
+    send(std::move(r));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Completion bookkeeping (timed path only)
+
+void MemorySystem::ready(Waiter w) {
+  switch (w.kind) {
+    case WaiterKind::None: return;
+    case WaiterKind::Txn:
+      if (w.id == issuing_txn_) {  // resolved while its issue() runs: one event for all such parts
+        sync_cycles_ = std::max<std::int64_t>(sync_cycles_, w.extra_cycles);
+        return;
+      }
+      ++txns_[w.id].remaining;
+      break;
+    case WaiterKind::Fill: ++fills_[w.id].parts; break;
+  }
+  deliver_later(w, core_.after(eq_.now(), Cycles{w.extra_cycles}));
+}
+
+void MemorySystem::attach(std::uint32_t fill, Waiter w) {
+  switch (w.kind) {
+    case WaiterKind::None: return;
+    case WaiterKind::Txn: ++txns_[w.id].remaining; break;
+    case WaiterKind::Fill: ++fills_[w.id].parts; break;
+  }
+  fills_[fill].waiters.push_back(w);
+}
+
+std::uint32_t MemorySystem::new_fill(Cache* cache, std::uint32_t slot) {
+  std::uint32_t f;
+  if (free_fills_.empty()) {
+    f = static_cast<std::uint32_t>(fills_.size());
+    fills_.emplace_back();
+  } else {
+    f = free_fills_.back();
+    free_fills_.pop_back();
+  }
+  Fill& x = fills_[f];
+  x.cache = cache;
+  x.slot = slot;
+  x.parts = 0;
+  x.waiters.clear();
+  return f;
+}
+
+void MemorySystem::complete_fill(std::uint32_t f) {
+  Fill& x = fills_[f];
+  if (--x.parts != 0) return;
+  // The line may have been replaced while it was being fetched: then its slot names another fill.
+  if (x.cache != nullptr && x.cache->fill_of(x.slot) == f) x.cache->set_fill(x.slot, Cache::kNoFill);
+  const Tick now = eq_.now();
+  for (const Waiter& w : x.waiters) deliver_later(w, core_.after(now, Cycles{w.extra_cycles}));
+  x.waiters.clear();
+  free_fills_.push_back(f);
+}
+
+void MemorySystem::deliver_later(Waiter w, Tick when) {
+  const std::uint32_t id = w.id;
+  if (w.kind == WaiterKind::Txn) {
+    eq_.schedule(when, Priority::CacheResponse, [this, id] { part_done(id); });
+  } else {
+    eq_.schedule(when, Priority::CacheResponse, [this, id] { complete_fill(id); });
+  }
+}
+
+void MemorySystem::part_done(std::uint32_t t) {
+  Txn& x = txns_[t];
+  if (--x.remaining != 0) return;
+  MemoryClientStats& cs = *client_stats_[static_cast<std::size_t>(x.client)];
+  ++cs.completed;
+  cs.latency_ps += static_cast<std::uint64_t>((eq_.now() - x.issued).ps());
+  EventCallback cb = std::move(x.on_complete);
+  x.on_complete.reset();
+  free_txns_.push_back(t);
+  --live_txns_;
+  ++completed_;
+  if (cb) cb();
+}
+
+void MemorySystem::send(DramRequest&& req) {
+  auto& q = overflow_[dram_.channel_of(req.addr)][req.is_write ? 1 : 0];
+  if (q.empty() && dram_.enqueue(std::move(req))) return;
+  q.push_back(std::move(req));
+  ++overflow_count_;
+  ++stats_.dram_overflows;
+  if (q.size() == overflow_cap_) ++overflow_full_;
+}
+
+void MemorySystem::drain_overflow(std::uint32_t channel) {
+  for (auto& q : overflow_[channel]) {
+    while (!q.empty() && dram_.enqueue(std::move(q.front()))) {
+      if (q.size() == overflow_cap_) --overflow_full_;
+      q.pop_front();
+      --overflow_count_;
+    }
+  }
+  if (overflow_full_ == 0 && !ready_waiters_.empty()) {
+    std::vector<EventCallback> ws = std::move(ready_waiters_);
+    ready_waiters_.clear();
+    for (EventCallback& cb : ws) eq_.schedule(eq_.now(), Priority::Default, std::move(cb));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Statistics
+
+double MemorySystem::energy_pj() const {
+  return texture_->energy_pj() + vertex_->energy_pj() + slc_->energy_pj() + dram_.energy_pj();
+}
+
+void MemorySystem::collect(std::vector<StatRecord>& out) {
+  const double caches = texture_->energy_pj() + vertex_->energy_pj() + slc_->energy_pj();
+  stats_.cache_energy_pj.set(caches);
+  stats_.dram_energy_pj.set(dram_.energy_pj());
+  stats_.energy_pj.set(energy_pj());
+  stats_.group.collect(out);
+  for (auto& cs : client_stats_) {
+    const std::uint64_t n = cs->completed.value();
+    cs->avg_latency_ns.set(n == 0 ? 0.0 : static_cast<double>(cs->latency_ps.value()) * 1e-3 / static_cast<double>(n));
+    cs->group.collect(out);
+  }
+  texture_->collect(out);
+  vertex_->collect(out);
+  slc_->collect(out);
+  dram_.collect(out);
+}
+
+std::string MemorySystem::stall_reason() const {
+  return std::to_string(live_txns_) + " requests in flight, " + std::to_string(overflow_count_) +
+         " DRAM requests waiting for queue space; dram: " + dram_.stall_reason();
+}
+
+}  // namespace tbdr

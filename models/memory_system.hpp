@@ -1,0 +1,241 @@
+#pragma once
+// The memory system as the GPU units see it (a DRAMsim3-style facade): per-client L1 caches
+// (texture cache; vertex / parameter-buffer cache), the system level cache (SLC) in front of
+// DRAM, and the DRAM controller, all on one event queue. A unit calls issue() with a byte range;
+// the facade splits it into lines, walks each line through the client's L1 (if any), the SLC and
+// DRAM, and calls the unit back once every line is done. The functional fast path,
+// access_functional(), makes exactly the same cache decisions and DRAM byte counts without timing.
+//
+// Routing (Client -> levels):
+//   Geometry      vertex/index fetch       vertex cache -> SLC -> DRAM
+//   Tiler         parameter buffer writes  SLC (write-allocate) -> DRAM
+//   Isp           parameter buffer reads   vertex cache -> SLC -> DRAM
+//   Texture       texel fetch              texture cache -> SLC -> DRAM
+//   PixelBackEnd  tile loads/stores        SLC, streaming (misses bypass to DRAM) -> DRAM
+//   Compute       buffers                  SLC -> DRAM
+// See docs/memory-model.md.
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "models/address_space.hpp"
+#include "models/cache.hpp"
+#include "models/dram.hpp"
+#include "models/hw_config.hpp"
+#include "models/traffic.hpp"
+#include "sim/event_queue.hpp"
+#include "sim/run_loop.hpp"
+#include "sim/stats.hpp"
+#include "sim/time.hpp"
+
+namespace tbdr {
+
+/// A GPU unit that issues memory requests; selects the path through the caches.
+enum class Client : std::uint8_t {
+  Geometry,      ///< vertex and index fetch, through the vertex cache
+  Tiler,         ///< parameter buffer writes: no L1, through the SLC
+  Isp,           ///< parameter buffer reads, through the vertex cache
+  Texture,       ///< texture fetch, through the texture cache
+  PixelBackEnd,  ///< tile loads and stores: streaming through the SLC (no allocation on a miss)
+  Compute,       ///< compute buffers: no L1, through the SLC
+  Count
+};
+inline constexpr std::size_t kClientCount = static_cast<std::size_t>(Client::Count);
+/// Statistics name of a client ("texture", ...).
+const char* to_string(Client c);
+
+/// Construction options that are not hardware parameters.
+struct MemorySystemOptions {
+  /// false: no cache at all; every access goes straight to DRAM in whole bursts (for tests and
+  /// for "what if there were no caches" studies).
+  bool caches_enabled = true;
+  /// DRAM requests the memory system holds per channel and direction when that channel's DRAM
+  /// queue is full (the SLC miss / interconnect queue in front of the controller). issue()
+  /// refuses new requests while any of these holds this many or more. 0: refuse as soon as any
+  /// DRAM queue overflows. With 32-entry DRAM queues and a 4 KiB channel interleave, an in-order
+  /// stream needs about 32 here to keep both channels busy (see docs/memory-model.md).
+  std::uint32_t overflow_entries = 32;
+};
+
+/// Requests of one client as issued to the memory system.
+struct MemoryClientStats {
+  StatGroup group;
+  Counter reads{group, {"reads", "requests", "Read requests accepted"}};
+  Counter writes{group, {"writes", "requests", "Write requests accepted"}};
+  Counter read_bytes{group, {"read_bytes", "bytes", "Bytes read by accepted requests"}};
+  Counter write_bytes{group, {"write_bytes", "bytes", "Bytes written by accepted requests"}};
+  Counter rejected{group, {"rejected", "requests", "issue() calls refused (backpressure); the unit retries"}};
+  Counter completed{group, {"completed", "requests", "Timed requests completed"}};
+  Counter latency_ps{group, {"latency_total_ps", "ps", "Sum of timed request latencies (issue to callback)"}};
+  Counter functional{group, {"functional_accesses", "requests", "Requests made through the functional path"}};
+  Accumulator avg_latency_ns{group, {"avg_latency_ns", "ns", "Mean timed request latency"}};
+  explicit MemoryClientStats(std::string scope) : group(std::move(scope)) {}
+};
+
+/// Statistics of the memory system as a whole.
+struct MemorySystemStats {
+  StatGroup group;
+  Counter dram_overflows{group, {"dram_overflows", "requests", "DRAM requests held back because their DRAM queue was full"}};
+  Counter merged_misses{group, {"merged_misses", "accesses", "Accesses that found their line already being fetched and waited for it"}};
+  Counter flushes{group, {"flushes", "flushes", "Cache flushes (dirty lines written back)"}};
+  Accumulator cache_energy_pj{group, {"cache_energy_pj", "pJ", "Energy of the texture, vertex and system level caches"}};
+  Accumulator dram_energy_pj{group, {"dram_energy_pj", "pJ", "DRAM energy"}};
+  Accumulator energy_pj{group, {"energy_pj", "pJ", "Caches + DRAM energy"}};
+  explicit MemorySystemStats(std::string scope) : group(std::move(scope)) {}
+};
+
+/// Caches + DRAM behind one interface, in timed and functional flavours.
+class MemorySystem final : public Unit {
+ public:
+  /// Builds the caches from hw.cache.*, the DRAM from hw.dram/hw.energy, the core clock from
+  /// hw.gpu.core_clock_mhz. Statistics scopes are "<scope>", "<scope>/client.<name>",
+  /// "<scope>/cache.<name>", "<scope>/dram...".
+  MemorySystem(const HwConfig& hw, EventQueue& eq, std::string scope = "mem", MemorySystemOptions opt = {});
+  MemorySystem(const MemorySystem&) = delete;
+  MemorySystem& operator=(const MemorySystem&) = delete;
+
+  /// Timed access of [addr, addr + bytes). False (and nothing happens but a `rejected` count)
+  /// while the memory system is backpressured: the caller keeps the request, counts its stall and
+  /// retries (notify_when_ready tells it when). Otherwise `on_complete` runs once, at the tick the
+  /// last line of the range is back (reads) or accepted (writes are posted). Throws on bytes == 0.
+  bool issue(Client client, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls,
+             EventCallback on_complete = {});
+  /// Functional access: the same cache and DRAM state and statistics updates, no events.
+  void access_functional(Client client, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls);
+
+  /// Whether issue() would accept a request now.
+  bool can_accept() const { return overflow_full_ == 0; }
+  /// Runs `cb` (as an event) as soon as issue() can accept again; at once if it can now.
+  void notify_when_ready(EventCallback cb);
+
+  /// Timed: writes back every dirty line (L1s into the SLC, then the SLC to DRAM); `on_done` runs
+  /// when DRAM has completed the last write. Lines stay valid and become clean.
+  void flush(EventCallback on_done = {});
+  /// Functional flush: the same writebacks, counted without timing.
+  void flush_functional();
+
+  /// The L1 a client goes through (nullptr: none).
+  Cache* l1_of(Client c) const { return routes_[static_cast<std::size_t>(c)].l1; }
+  Cache& texture_cache() { return *texture_; }
+  Cache& vertex_cache() { return *vertex_; }
+  Cache& slc() { return *slc_; }
+  Dram& dram() { return dram_; }
+  const Dram& dram() const { return dram_; }
+  AddressSpace& address_space() { return space_; }
+  const ClockDomain& core_clock() const { return core_; }
+  bool caches_enabled() const { return caches_enabled_; }
+
+  /// DRAM bytes per traffic class so far.
+  DramTraffic traffic() const { return dram_.traffic(); }
+  /// Caches + DRAM energy so far, pJ.
+  double energy_pj() const;
+  /// Timed requests accepted and not yet completed.
+  std::uint64_t requests_in_flight() const { return live_txns_; }
+  const MemoryClientStats& client_stats(Client c) const { return *client_stats_[static_cast<std::size_t>(c)]; }
+  const MemorySystemStats& stats() const { return stats_; }
+  /// Every statistic of the memory system (derived ones updated first) appended to `out`.
+  void collect(std::vector<StatRecord>& out);
+
+  // Unit (run-loop watchdog)
+  std::string_view name() const override { return name_; }
+  bool has_pending_work() const override { return live_txns_ != 0 || overflow_count_ != 0 || dram_.in_flight() != 0; }
+  std::uint64_t progress() const override { return completed_ + dram_.progress(); }
+  std::string stall_reason() const override;
+
+ private:
+  enum class WaiterKind : std::uint8_t { None, Txn, Fill };
+  // Who waits for data at a level, and the core cycles to add when it arrives there.
+  struct Waiter {
+    std::uint32_t id = 0;
+    std::uint32_t extra_cycles = 0;
+    WaiterKind kind = WaiterKind::None;
+  };
+  // One issue() call in flight.
+  struct Txn {
+    EventCallback on_complete;
+    Tick issued{0};
+    std::uint32_t remaining = 0;  // outstanding parts
+    Client client = Client::Geometry;
+  };
+  // A line being fetched into `cache` (nullptr: a streaming read that allocates nothing).
+  struct Fill {
+    std::vector<Waiter> waiters;
+    Cache* cache = nullptr;
+    std::uint32_t slot = 0;
+    std::uint32_t parts = 0;  // outstanding sources (DRAM reads, SLC responses)
+  };
+  // The path of a client.
+  struct Route {
+    Cache* l1 = nullptr;
+    Allocation slc_alloc = Allocation::Allocate;
+  };
+
+  template <bool kTimed>
+  void access(Client client, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, std::uint32_t txn);
+  template <bool kTimed>
+  void l1_access(Cache& l1, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Waiter w);
+  // [addr, addr + bytes) may span several SLC lines.
+  template <bool kTimed>
+  void slc_range(Allocation alloc, std::uint64_t addr, std::uint64_t bytes, bool is_write, DramClass cls, Waiter w);
+  template <bool kTimed>
+  void slc_access(Allocation alloc, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Waiter w);
+  // Straight to DRAM (streaming miss or no caches), whole bursts.
+  template <bool kTimed>
+  void dram_bypass(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Waiter w);
+  template <bool kTimed>
+  void dram_write_line(std::uint64_t addr, std::uint32_t bytes, DramClass cls);
+
+  void ready(Waiter w);                    // data available at the waiter's level now
+  void attach(std::uint32_t fill, Waiter w);  // data available when `fill` completes
+  std::uint32_t new_fill(Cache* cache, std::uint32_t slot);
+  void complete_fill(std::uint32_t fill);
+  void part_done(std::uint32_t txn);
+  void deliver_later(Waiter w, Tick when);
+  void send(DramRequest&& req);
+  void drain_overflow(std::uint32_t channel);
+  template <bool kTimed>
+  void flush_caches();
+
+  std::string name_;
+  EventQueue& eq_;
+  ClockDomain core_;
+  bool caches_enabled_;
+  EnergyParams energy_;
+  AddressSpace space_;
+  std::unique_ptr<Cache> texture_;
+  std::unique_ptr<Cache> vertex_;
+  std::unique_ptr<Cache> slc_;
+  Dram dram_;
+  std::array<Route, kClientCount> routes_{};
+  std::uint32_t burst_bytes_;
+
+  std::vector<Txn> txns_;
+  std::vector<std::uint32_t> free_txns_;
+  std::uint64_t live_txns_ = 0;
+  std::uint64_t completed_ = 0;
+  std::vector<Fill> fills_;
+  std::vector<std::uint32_t> free_fills_;
+  // While issue() runs: the transaction and the longest latency of its parts resolved at once.
+  std::uint32_t issuing_txn_ = UINT32_MAX;
+  std::int64_t sync_cycles_ = -1;
+
+  // DRAM requests refused by a full DRAM queue, per channel and direction, in order.
+  std::vector<std::array<std::deque<DramRequest>, 2>> overflow_;
+  std::uint64_t overflow_count_ = 0;  // requests in all overflow queues
+  std::uint32_t overflow_full_ = 0;   // overflow queues at or above their cap
+  std::size_t overflow_cap_;
+  std::vector<EventCallback> ready_waiters_;
+  // Timed flush in progress: outstanding DRAM writes (+1 while the flush is being issued).
+  bool flushing_ = false;
+  std::uint64_t flush_outstanding_ = 0;
+  std::vector<EventCallback> flush_done_;
+
+  MemorySystemStats stats_;
+  std::array<std::unique_ptr<MemoryClientStats>, kClientCount> client_stats_;
+};
+
+}  // namespace tbdr

@@ -1,0 +1,966 @@
+// Tests for the memory system models: the address space (models/address_space), the
+// set-associative cache (models/cache), the DRAM controller (models/dram) and the facade that
+// ties them together (models/memory_system). Expected figures are worked out by hand in the
+// comments; the DRAM tests use a 1 GHz DRAM clock so that every timing parameter is a whole
+// number of nanoseconds and of cycles.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <iostream>
+#include <memory>
+#include <utility>
+#include <random>
+#include <vector>
+
+#include "models/address_space.hpp"
+#include "models/cache.hpp"
+#include "models/dram.hpp"
+#include "models/hw_config.hpp"
+#include "models/memory_system.hpp"
+#include "sim/event_queue.hpp"
+#include "sim/time.hpp"
+
+namespace tbdr {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Helpers
+
+/// The declared defaults with DRAM timing in whole nanoseconds at a 1 GHz DRAM clock and a 1 GHz
+/// core: tRCD 18, tRP 18, RL 15, tRAS 42, tWR 15 cycles; controller 30 ns each way; 2 channels
+/// of 6.4 GB/s, so a 64 B line occupies a channel's data bus for exactly 10 ns.
+HwConfig test_config() {
+  HwConfig hw = resolve_config({}, {}).hw;
+  hw.gpu.core_clock_mhz = 1000;
+  hw.dram.clock_mhz = 1000;
+  hw.dram.channels = 2;
+  hw.dram.banks = 8;
+  hw.dram.row_bytes = 4096;
+  hw.dram.burst_bytes = 32;
+  hw.dram.bandwidth_gbps = 12.8;
+  hw.dram.t_rcd_ns = 18;
+  hw.dram.t_rp_ns = 18;
+  hw.dram.t_cl_ns = 15;
+  hw.dram.t_ras_ns = 42;
+  hw.dram.t_wr_ns = 15;
+  hw.dram.controller_latency_ns = 30;
+  hw.dram.read_queue_entries = 32;
+  hw.dram.write_queue_entries = 32;
+  hw.dram.address_mapping = "row_bank_channel_column";
+  return hw;
+}
+
+constexpr std::int64_t kNs = 1000;  // ps
+
+/// Feeds DRAM requests in order, retrying a refused one when the DRAM reports free space, and
+/// records each request's completion tick. With `per_channel`, there is one in-order stream per
+/// channel (a source with several independent streams, which a full channel does not block).
+class DramFeeder {
+ public:
+  DramFeeder(Dram& dram, EventQueue& eq, bool per_channel = false)
+      : dram_(dram), eq_(eq), per_channel_(per_channel), pending_(per_channel ? dram.channels() : 1) {
+    dram_.set_space_callback([this](std::uint32_t) { pump(); });
+  }
+  /// Queues a request (sent in order within its stream).
+  void add(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls) {
+    pending_[per_channel_ ? dram_.channel_of(addr) : 0].push_back({addr, bytes, is_write, cls, done_.size()});
+    done_.push_back(Tick{-1});
+  }
+  void pump() {
+    for (auto& q : pending_) {
+      while (!q.empty()) {
+        const Item& it = q.front();
+        const std::size_t i = it.index;
+        DramRequest r{it.addr, it.bytes, it.is_write, it.cls, [this, i] { done_[i] = eq_.now(); }};
+        if (!dram_.enqueue(std::move(r))) {
+          ++refused_;
+          break;
+        }
+        q.pop_front();
+      }
+    }
+  }
+  const std::vector<Tick>& done() const { return done_; }
+  Tick last_done() const {
+    Tick t{0};
+    for (Tick d : done_) t = std::max(t, d);
+    return t;
+  }
+  std::uint64_t refused() const { return refused_; }
+  bool all_done() const {
+    for (Tick t : done_) {
+      if (t.ps() < 0) return false;
+    }
+    for (const auto& q : pending_) {
+      if (!q.empty()) return false;
+    }
+    return true;
+  }
+
+ private:
+  struct Item {
+    std::uint64_t addr;
+    std::uint32_t bytes;
+    bool is_write;
+    DramClass cls;
+    std::size_t index;
+  };
+  Dram& dram_;
+  EventQueue& eq_;
+  bool per_channel_;
+  std::vector<std::deque<Item>> pending_;
+  std::vector<Tick> done_;
+  std::uint64_t refused_ = 0;
+};
+
+// ---------------------------------------------------------------------------------------------
+// AddressSpace
+
+TEST(AddressSpaceTest, PageAlignedBumpAllocation) {
+  AddressSpace as;  // 4 KiB pages, first region at 4096
+  EXPECT_EQ(as.allocate("vb", 100, DramClass::Vertices), 4096u);
+  EXPECT_EQ(as.allocate("tex", 5000, DramClass::Textures), 8192u);      // 2 pages reserved
+  EXPECT_EQ(as.allocate("pb", 0, DramClass::ParameterBuffer), 16384u);  // empty still gets a page
+  EXPECT_EQ(as.allocate("color", 64, DramClass::Color, 65536), 65536u);  // explicit alignment
+  EXPECT_EQ(as.top(), 65536u + 4096u);
+  EXPECT_EQ(as.reserved_bytes(), 4096u + 8192u + 4096u + 4096u);
+  for (const AddressRegion& r : as.regions()) EXPECT_EQ(r.base % 4096, 0u) << r.name;
+}
+
+TEST(AddressSpaceTest, LookupByNameAndAddress) {
+  AddressSpace as;
+  as.allocate("vb", 100, DramClass::Vertices);
+  as.allocate("tex", 5000, DramClass::Textures);
+  EXPECT_EQ(as.base_of("tex"), 8192u);
+  EXPECT_EQ(as.region("vb").size_bytes, 100u);
+  EXPECT_EQ(as.find("nope"), nullptr);
+  EXPECT_THROW(as.region("nope"), std::out_of_range);
+  EXPECT_EQ(as.region_at(8192 + 4999)->name, "tex");
+  EXPECT_EQ(as.region_at(8192 + 8191)->name, "tex");  // reserved tail page
+  EXPECT_EQ(as.region_at(8192 + 8192), nullptr);
+  EXPECT_EQ(as.region_at(0), nullptr);
+  EXPECT_EQ(as.class_at(4096 + 99), DramClass::Vertices);
+  EXPECT_EQ(as.class_at(1), DramClass::Other);
+}
+
+TEST(AddressSpaceTest, RejectsBadRequests) {
+  AddressSpace as;
+  as.allocate("a", 1, DramClass::Other);
+  EXPECT_THROW(as.allocate("a", 1, DramClass::Other), std::invalid_argument);
+  EXPECT_THROW(as.allocate("", 1, DramClass::Other), std::invalid_argument);
+  EXPECT_THROW(as.allocate("b", 1, DramClass::Other, 3000), std::invalid_argument);
+  EXPECT_THROW(AddressSpace(3000), std::invalid_argument);
+}
+
+TEST(AddressSpaceTest, DeterministicAndClearable) {
+  const auto build = [](AddressSpace& as) {
+    std::vector<std::uint64_t> bases;
+    for (int i = 0; i < 20; ++i) {
+      bases.push_back(as.allocate("r" + std::to_string(i), static_cast<std::uint64_t>(i * 3000 + 1),
+                                  static_cast<DramClass>(i % static_cast<int>(kDramClassCount))));
+    }
+    return bases;
+  };
+  AddressSpace a, b;
+  const auto first = build(a);
+  EXPECT_EQ(first, build(b));
+  a.clear();
+  EXPECT_EQ(a.regions().size(), 0u);
+  EXPECT_EQ(first, build(a));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cache
+
+// 256 B, 2 ways, 64 B lines: 2 sets. Line n = addr / 64 goes to set n % 2.
+CacheParams tiny_cache() { return CacheParams{256, 2, 64, 3}; }
+constexpr std::uint64_t A = 0, B = 128, C = 256, D = 64;  // A, B, C: set 0; D: set 1
+
+TEST(CacheTest, HitMissAndLruEviction) {
+  Cache c("t", tiny_cache());
+  ASSERT_EQ(c.sets(), 2u);
+  ASSERT_EQ(c.ways(), 2u);
+  const auto rd = [&](std::uint64_t a) { return c.access(a, 4, false, DramClass::Textures); };
+  EXPECT_FALSE(rd(A).hit);  // set0: A
+  EXPECT_FALSE(rd(B).hit);  // set0: A B
+  EXPECT_TRUE(rd(A).hit);   // A most recent; B is LRU
+  CacheAccess r = rd(C);    // evicts B
+  EXPECT_FALSE(r.hit);
+  EXPECT_TRUE(r.allocated);
+  EXPECT_FALSE(r.writeback);
+  EXPECT_FALSE(c.probe(B));
+  EXPECT_TRUE(c.probe(A));
+  EXPECT_FALSE(rd(B).hit);  // evicts A (C used more recently)
+  EXPECT_FALSE(c.probe(A));
+  EXPECT_TRUE(rd(C).hit);   // B is now LRU
+  EXPECT_FALSE(rd(A).hit);  // evicts B
+  EXPECT_FALSE(c.probe(B));
+  EXPECT_FALSE(rd(D).hit);  // set 1, no eviction
+  EXPECT_TRUE(c.probe(A) && c.probe(C) && c.probe(D));
+
+  const CacheStats& s = c.stats();
+  EXPECT_EQ(s.reads.value(), 8u);
+  EXPECT_EQ(s.read_hits.value(), 2u);
+  EXPECT_EQ(s.read_misses.value(), 6u);
+  EXPECT_EQ(s.fills.value(), 6u);
+  EXPECT_EQ(s.clean_evictions.value(), 3u);
+  EXPECT_EQ(s.dirty_evictions.value(), 0u);
+  EXPECT_EQ(s.read_bytes.value(), 8u * 4u);
+  EXPECT_EQ(s.fill_bytes.value(), 6u * 64u);
+  EXPECT_EQ(c.class_stats(DramClass::Textures).read_misses.value(), 6u);
+  EXPECT_EQ(c.class_stats(DramClass::Color).read_misses.value(), 0u);
+}
+
+TEST(CacheTest, FourWayTrueLru) {
+  Cache c("t", CacheParams{256, 4, 64, 1});  // one set of 4 ways
+  for (std::uint64_t l : {0, 1, 2, 3}) c.access(l * 64, 64, false, DramClass::Other);
+  // Touch 0 and 2: LRU order (oldest first) is 1, 3, 0, 2.
+  c.access(0, 64, false, DramClass::Other);
+  c.access(2 * 64, 64, false, DramClass::Other);
+  c.access(4 * 64, 64, false, DramClass::Other);  // evicts 1
+  EXPECT_FALSE(c.probe(1 * 64));
+  c.access(5 * 64, 64, false, DramClass::Other);  // evicts 3
+  EXPECT_FALSE(c.probe(3 * 64));
+  c.access(6 * 64, 64, false, DramClass::Other);  // evicts 0
+  EXPECT_FALSE(c.probe(0));
+  EXPECT_TRUE(c.probe(2 * 64) && c.probe(4 * 64) && c.probe(5 * 64) && c.probe(6 * 64));
+}
+
+TEST(CacheTest, DirtyWritebackAndFlush) {
+  Cache c("t", tiny_cache());
+  CacheAccess r = c.access(A, 16, true, DramClass::Color);  // write miss: allocate, no fetch
+  EXPECT_FALSE(r.hit);
+  EXPECT_TRUE(r.allocated);
+  EXPECT_TRUE(c.is_dirty(A));
+  EXPECT_EQ(c.stats().write_allocations.value(), 1u);
+  EXPECT_EQ(c.stats().fills.value(), 0u);
+  c.access(B, 4, false, DramClass::Textures);
+  r = c.access(C, 4, false, DramClass::Textures);  // evicts A, which is dirty
+  EXPECT_TRUE(r.writeback);
+  EXPECT_EQ(r.victim_addr, A);
+  EXPECT_EQ(r.victim_cls, DramClass::Color);
+  EXPECT_EQ(c.stats().dirty_evictions.value(), 1u);
+  EXPECT_EQ(c.stats().writeback_bytes.value(), 64u);
+
+  EXPECT_TRUE(c.access(B, 8, true, DramClass::Gbuffer).hit);  // write hit: B dirty, class of the writer
+  std::vector<std::pair<std::uint64_t, DramClass>> wb;
+  EXPECT_EQ(c.flush([&](std::uint64_t a, DramClass k) { wb.push_back({a, k}); }), 1u);
+  ASSERT_EQ(wb.size(), 1u);
+  EXPECT_EQ(wb[0].first, B);
+  EXPECT_EQ(wb[0].second, DramClass::Gbuffer);
+  EXPECT_FALSE(c.is_dirty(B));
+  EXPECT_TRUE(c.probe(B));  // flushed lines stay valid
+  EXPECT_EQ(c.flush([&](std::uint64_t, DramClass) { FAIL(); }), 0u);
+  EXPECT_EQ(c.stats().writeback_bytes.value(), 128u);
+  c.invalidate_all();
+  EXPECT_FALSE(c.probe(B));
+}
+
+TEST(CacheTest, StreamingAndWriteNoAllocate) {
+  Cache c("t", tiny_cache());
+  CacheAccess r = c.access(A, 64, false, DramClass::Color, Allocation::NoAllocate);
+  EXPECT_FALSE(r.hit);
+  EXPECT_FALSE(r.allocated);
+  EXPECT_EQ(r.slot, CacheAccess::kNoSlot);
+  EXPECT_FALSE(c.probe(A));
+  c.access(A, 64, false, DramClass::Color);  // now present
+  EXPECT_TRUE(c.access(A, 64, true, DramClass::Color, Allocation::NoAllocate).hit);  // streaming hits are served
+  EXPECT_TRUE(c.is_dirty(A));
+  EXPECT_EQ(c.stats().bypasses.value(), 1u);
+
+  Cache wna("wna", tiny_cache(), 0.0, /*write_allocate=*/false);
+  EXPECT_FALSE(wna.access(B, 4, true, DramClass::Color).allocated);
+  EXPECT_FALSE(wna.probe(B));
+  EXPECT_TRUE(wna.access(B, 4, false, DramClass::Color).allocated);  // reads still allocate
+}
+
+TEST(CacheTest, NonPowerOfTwoSetsAndBadGeometry) {
+  Cache c("t", CacheParams{192, 1, 64, 1});  // 3 sets, direct mapped: lines 0 and 3 collide
+  EXPECT_EQ(c.sets(), 3u);
+  c.access(0, 4, false, DramClass::Other);
+  c.access(64, 4, false, DramClass::Other);
+  c.access(3 * 64, 4, false, DramClass::Other);
+  EXPECT_FALSE(c.probe(0));
+  EXPECT_TRUE(c.probe(64));
+  EXPECT_THROW(Cache("bad", CacheParams{256, 2, 48, 1}), std::invalid_argument);
+  EXPECT_THROW(Cache("bad", CacheParams{200, 2, 64, 1}), std::invalid_argument);
+  EXPECT_THROW(Cache("bad", CacheParams{256, 0, 64, 1}), std::invalid_argument);
+}
+
+TEST(CacheTest, EnergyAndCollect) {
+  Cache c("mem/cache.t", tiny_cache(), 2.5);
+  c.access(A, 4, false, DramClass::Textures);  // 4 read bytes + 64 fill bytes
+  c.access(A, 4, true, DramClass::Textures);   // 4 write bytes
+  EXPECT_DOUBLE_EQ(c.energy_pj(), (4 + 64 + 4) * 2.5);
+  std::vector<StatRecord> out;
+  c.collect(out);
+  ASSERT_FALSE(out.empty());
+  EXPECT_EQ(out.front().scope, "mem/cache.t");
+  bool saw_class = false;
+  for (const StatRecord& r : out) saw_class |= r.scope == "mem/cache.t.class.textures";
+  EXPECT_TRUE(saw_class);
+}
+
+// ---------------------------------------------------------------------------------------------
+// DRAM
+
+TEST(DramTest, AddressMappings) {
+  EventQueue eq;
+  HwConfig hw = test_config();
+  {
+    Dram d(hw.dram, hw.energy, eq);  // row | bank | channel | column
+    EXPECT_EQ(d.map(100).channel, 0u);
+    EXPECT_EQ(d.map(100).column, 100u);
+    EXPECT_EQ(d.map(4096).channel, 1u);
+    EXPECT_EQ(d.map(4096).bank, 0u);
+    EXPECT_EQ(d.map(2 * 4096).channel, 0u);
+    EXPECT_EQ(d.map(2 * 4096).bank, 1u);
+    EXPECT_EQ(d.map(16 * 4096).row, 1u);
+    EXPECT_EQ(d.map(16 * 4096).bank, 0u);
+  }
+  hw.dram.address_mapping = "row_channel_bank_column";
+  {
+    Dram d(hw.dram, hw.energy, eq);  // row | channel | bank | column
+    EXPECT_EQ(d.map(4096).channel, 0u);
+    EXPECT_EQ(d.map(4096).bank, 1u);
+    EXPECT_EQ(d.map(8 * 4096).channel, 1u);
+    EXPECT_EQ(d.map(8 * 4096).bank, 0u);
+    EXPECT_EQ(d.map(16 * 4096 + 7).row, 1u);
+    EXPECT_EQ(d.map(16 * 4096 + 7).column, 7u);
+  }
+  hw.dram.channels = 3;  // not a power of two: the division path
+  hw.dram.address_mapping = "row_bank_channel_column";
+  {
+    Dram d(hw.dram, hw.energy, eq);
+    EXPECT_EQ(d.map(2 * 4096).channel, 2u);
+    EXPECT_EQ(d.map(3 * 4096).channel, 0u);
+    EXPECT_EQ(d.map(3 * 4096).bank, 1u);
+    EXPECT_EQ(d.map(24 * 4096).row, 1u);
+  }
+  hw.dram.address_mapping = "interleaved";
+  EXPECT_THROW(Dram(hw.dram, hw.energy, eq), std::invalid_argument);
+}
+
+TEST(DramTest, TimingFromParameters) {
+  EventQueue eq;
+  const HwConfig hw = test_config();
+  Dram d(hw.dram, hw.energy, eq);
+  EXPECT_EQ(d.timing().t_rcd_cycles, 18);
+  EXPECT_EQ(d.timing().t_rp_cycles, 18);
+  EXPECT_EQ(d.timing().t_cl_cycles, 15);
+  EXPECT_EQ(d.timing().t_ras_cycles, 42);
+  EXPECT_EQ(d.timing().controller, Tick{30 * kNs});
+  EXPECT_EQ(d.timing().transfer(2), Tick{10 * kNs});  // 64 B at 6.4 GB/s per channel
+  // The default LPDDR3-1600 clock: 18 ns = 14.4 cycles of 1.25 ns, rounded up to 15.
+  HwConfig lp = resolve_config({}, {}).hw;
+  Dram d2(lp.dram, lp.energy, eq);
+  EXPECT_EQ(d2.timing().t_rcd_cycles, 15);
+  EXPECT_EQ(d2.timing().t_cl_cycles, 12);
+}
+
+TEST(DramTest, SequentialReadsHitTheOpenRow) {
+  // 4096 sequential lines = 64 bank-rows of 64 lines: each bank-row misses once, then hits 63
+  // times, so hits / requests = (4096/64 - 1) / (4096/64) = 63/64 exactly.
+  const HwConfig hw = test_config();
+  constexpr std::uint64_t kLines = 4096, kLinesPerRow = 4096 / 64;
+  for (const bool timed : {true, false}) {
+    EventQueue eq;
+    Dram d(hw.dram, hw.energy, eq);
+    DramFeeder f(d, eq);
+    for (std::uint64_t i = 0; i < kLines; ++i) {
+      if (timed) {
+        f.add(i * 64, 64, false, DramClass::Textures);
+      } else {
+        d.access_functional(i * 64, 64, false, DramClass::Textures);
+      }
+    }
+    f.pump();
+    eq.run();
+    ASSERT_TRUE(f.all_done());
+    const DramStats& s = d.stats();
+    EXPECT_EQ(s.reads.value(), kLines) << timed;
+    EXPECT_EQ(s.row_misses.value(), kLines / kLinesPerRow) << timed;
+    EXPECT_EQ(s.row_hits.value(), kLines - kLines / kLinesPerRow) << timed;
+    EXPECT_EQ(s.row_empty.value(), 16u) << timed;  // 2 channels x 8 banks opened once from empty
+    EXPECT_EQ(s.row_conflicts.value(), kLines / kLinesPerRow - 16) << timed;
+    d.update_derived_stats();
+    EXPECT_DOUBLE_EQ(s.row_hit_rate.value(), 63.0 / 64.0) << timed;
+  }
+}
+
+TEST(DramTest, StridedRowConflictsPayPrechargeActivateRead) {
+  // Stride = row x channels x banks: every access is channel 0, bank 0, a new row.
+  const HwConfig hw = test_config();
+  constexpr std::uint64_t kStride = 4096ull * 2 * 8;
+  constexpr int kN = 12;
+  // Serialised (next request issued when the previous completes): the latency of one request is
+  // controller + [tRP] + tRCD + RL + burst + controller = 30 + 18 + 18 + 15 + 10 + 30 = 121 ns
+  // (the first finds the bank empty: no precharge, 103 ns).
+  {
+    EventQueue eq;
+    Dram d(hw.dram, hw.energy, eq);
+    std::vector<Tick> issued, done;
+    std::function<void(int)> send = [&](int i) {
+      issued.push_back(eq.now());
+      ASSERT_TRUE(d.enqueue(DramRequest{static_cast<std::uint64_t>(i) * kStride, 64, false, DramClass::Color, [&, i] {
+        done.push_back(eq.now());
+        if (i + 1 < kN) send(i + 1);
+      }}));
+    };
+    send(0);
+    eq.run();
+    ASSERT_EQ(done.size(), static_cast<std::size_t>(kN));
+    EXPECT_EQ((done[0] - issued[0]).ps(), 103 * kNs);
+    for (int i = 1; i < kN; ++i) EXPECT_EQ((done[i] - issued[i]).ps(), 121 * kNs) << i;
+    EXPECT_EQ(d.stats().row_hits.value(), 0u);
+    EXPECT_EQ(d.stats().row_conflicts.value(), static_cast<std::uint64_t>(kN - 1));
+    EXPECT_EQ(d.stats().precharges.value(), static_cast<std::uint64_t>(kN - 1));
+    EXPECT_EQ(d.stats().activates.value(), static_cast<std::uint64_t>(kN));
+  }
+  // Queued all at once: consecutive completions are tRP + tRCD + RL + burst = 61 ns apart (the
+  // precharge waits for the previous data, which ends after tRAS = 42 ns from its activate).
+  {
+    EventQueue eq;
+    Dram d(hw.dram, hw.energy, eq);
+    DramFeeder f(d, eq);
+    for (int i = 0; i < kN; ++i) f.add(static_cast<std::uint64_t>(i) * kStride, 64, false, DramClass::Color);
+    f.pump();
+    eq.run();
+    ASSERT_TRUE(f.all_done());
+    EXPECT_EQ(f.done()[0].ps(), 103 * kNs);
+    for (int i = 1; i < kN; ++i) EXPECT_EQ((f.done()[i] - f.done()[i - 1]).ps(), 61 * kNs) << i;
+    EXPECT_EQ(d.stats().row_hits.value(), 0u);
+  }
+}
+
+/// Time for `lines` sequential 64 B reads from address 0, and the feeder's refusal count.
+std::pair<double, std::uint64_t> sequential_stream_ps(const HwConfig& hw, std::uint64_t lines, bool per_channel,
+                                                      Dram** keep = nullptr, EventQueue* eq_out = nullptr) {
+  EventQueue local;
+  EventQueue& eq = eq_out ? *eq_out : local;
+  auto d = std::make_unique<Dram>(hw.dram, hw.energy, eq);
+  DramFeeder f(*d, eq, per_channel);
+  for (std::uint64_t i = 0; i < lines; ++i) f.add(i * 64, 64, false, DramClass::Textures);
+  f.pump();
+  eq.run();
+  EXPECT_TRUE(f.all_done());
+  const double took = static_cast<double>(f.last_done().ps());
+  if (keep) *keep = d.release();
+  return {took, f.refused()};
+}
+
+TEST(DramTest, BandwidthBoundStreamWithinFivePercent) {
+  // 16384 sequential 64 B reads (1 MiB), one in-order stream per channel, each kept as full as
+  // the queues allow. Bound: N x 64 B / 12.8 GB/s = 81.92 us; it must finish within 5 % of it.
+  // (Row switches are hidden: the next bank's row is opened while the current row streams.)
+  const HwConfig hw = test_config();
+  constexpr std::uint64_t kLines = 16384;
+  const double bound_ps = static_cast<double>(kLines * 64) / 12.8 * 1000.0;
+  EventQueue eq;
+  Dram* raw = nullptr;
+  const auto [took_ps, refused] = sequential_stream_ps(hw, kLines, true, &raw, &eq);
+  std::unique_ptr<Dram> d(raw);
+  EXPECT_GE(took_ps, bound_ps);
+  EXPECT_LE(took_ps, 1.05 * bound_ps) << "took " << took_ps / 1e6 << " us, bound " << bound_ps / 1e6 << " us";
+  EXPECT_GT(refused, 0u) << "the feeder should have been backpressured";
+  d->update_derived_stats();
+  std::cout << "[ figures  ] sequential stream, per-channel feed: " << took_ps / 1e6 << " us vs bound "
+            << bound_ps / 1e6 << " us (" << 100.0 * bound_ps / took_ps << " % of peak), achieved "
+            << d->stats().achieved_bandwidth_gbps.value() << " GB/s, row hit rate " << d->stats().row_hit_rate.value()
+            << "\n";
+  EXPECT_NEAR(d->channel_stats(0).utilization.value(), bound_ps / took_ps, 0.01);
+  EXPECT_NEAR(d->channel_stats(1).utilization.value(), bound_ps / took_ps, 0.01);
+}
+
+TEST(DramTest, InOrderSourceIsLimitedByQueueDepthVersusChannelInterleave) {
+  // A single in-order source blocks on the first full channel queue. With 32-entry queues (2 KiB
+  // of lines) and channels interleaved every 4 KiB row, each channel runs dry while the source
+  // waits on the other one; 64 entries cover a whole interleave unit and restore the bandwidth.
+  HwConfig hw = test_config();
+  constexpr std::uint64_t kLines = 16384;
+  const double bound_ps = static_cast<double>(kLines * 64) / 12.8 * 1000.0;
+  const double shallow = bound_ps / sequential_stream_ps(hw, kLines, false).first;
+  hw.dram.read_queue_entries = 64;
+  const double deep = bound_ps / sequential_stream_ps(hw, kLines, false).first;
+  std::cout << "[ figures  ] sequential stream, single in-order feed: " << 100.0 * shallow
+            << " % of peak with 32-entry queues, " << 100.0 * deep << " % with 64\n";
+  EXPECT_LT(shallow, 0.95);
+  EXPECT_GT(shallow, 0.75);
+  EXPECT_GE(deep, 0.95);
+}
+
+TEST(DramTest, QueueFullBackpressureLosesNothing) {
+  const HwConfig hw = test_config();
+  EventQueue eq;
+  Dram d(hw.dram, hw.energy, eq);
+  // 40 reads to channel 0 (addresses within the first 4 KiB row) at tick 0: 32 fit.
+  std::vector<int> completions(40, 0);
+  std::deque<DramRequest> refused;
+  for (int i = 0; i < 40; ++i) {
+    DramRequest r{static_cast<std::uint64_t>(i % 64) * 64, 64, false, DramClass::Other, [&completions, i] { ++completions[i]; }};
+    if (!d.enqueue(std::move(r))) {
+      EXPECT_TRUE(static_cast<bool>(r.on_complete)) << "a refused request must be left intact";
+      refused.push_back(std::move(r));
+    }
+  }
+  EXPECT_EQ(refused.size(), 8u);
+  EXPECT_EQ(d.read_queue_size(0), 32u);
+  EXPECT_FALSE(d.can_accept(0, false));
+  EXPECT_TRUE(d.can_accept(0, true));     // the write queue is separate
+  EXPECT_TRUE(d.can_accept(4096, false));  // channel 1 is empty
+  EXPECT_EQ(d.stats().rejected.value(), 8u);
+  d.set_space_callback([&](std::uint32_t) {
+    while (!refused.empty() && d.enqueue(std::move(refused.front()))) refused.pop_front();
+  });
+  eq.run();
+  EXPECT_TRUE(refused.empty());
+  for (int i = 0; i < 40; ++i) EXPECT_EQ(completions[i], 1) << i;
+  EXPECT_EQ(d.stats().completed.value(), 40u);
+  EXPECT_EQ(d.in_flight(), 0u);
+  EXPECT_FALSE(d.has_pending_work());
+}
+
+TEST(DramTest, ReadsBeforeWritesBelowTheWatermark) {
+  const HwConfig hw = test_config();
+  EventQueue eq;
+  Dram d(hw.dram, hw.energy, eq);
+  Tick last_read{0}, first_write = Tick::max();
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_TRUE(d.enqueue(DramRequest{static_cast<std::uint64_t>(i) * 64, 64, true, DramClass::Color,
+                                      [&] { first_write = std::min(first_write, eq.now()); }}));
+  }
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_TRUE(d.enqueue(DramRequest{2048 + static_cast<std::uint64_t>(i) * 64, 64, false, DramClass::Textures,
+                                      [&] { last_read = std::max(last_read, eq.now()); }}));
+  }
+  eq.run();
+  EXPECT_LT(last_read, first_write);
+  EXPECT_EQ(d.stats().writes.value(), 4u);
+  EXPECT_EQ(d.stats().write_bytes.value(), 256u);
+}
+
+TEST(DramTest, WriteDrainAtHighWatermark) {
+  HwConfig hw = test_config();
+  hw.dram.write_queue_entries = 8;  // high watermark 6, low 2
+  EventQueue eq;
+  Dram d(hw.dram, hw.energy, eq);
+  DramFeeder f(d, eq);
+  for (int i = 0; i < 64; ++i) {
+    f.add(static_cast<std::uint64_t>(i) * 64, 64, i % 2 == 0, i % 2 == 0 ? DramClass::Color : DramClass::Textures);
+  }
+  f.pump();
+  eq.run();
+  ASSERT_TRUE(f.all_done());
+  EXPECT_GT(d.channel_stats(0).write_drains.value(), 0u);
+  EXPECT_EQ(d.stats().completed.value(), 64u);
+}
+
+/// A mixed, pseudo-random workload: reads and writes of several classes over 8 MiB.
+std::vector<Tick> run_mixed(Dram& d, EventQueue& eq, std::uint32_t seed, int n) {
+  DramFeeder f(d, eq);
+  std::mt19937 rng(seed);
+  for (int i = 0; i < n; ++i) {
+    const std::uint64_t line = rng() % (8u << 20) / 64;
+    const bool w = rng() % 3 == 0;
+    const auto cls = static_cast<DramClass>(rng() % kDramClassCount);
+    f.add(line * 64, 64, w, cls);
+  }
+  f.pump();
+  eq.run();
+  EXPECT_TRUE(f.all_done());
+  return f.done();
+}
+
+TEST(DramTest, Deterministic) {
+  const HwConfig hw = test_config();
+  std::vector<Tick> ticks[2];
+  std::vector<StatRecord> stats[2];
+  for (int k = 0; k < 2; ++k) {
+    EventQueue eq;
+    Dram d(hw.dram, hw.energy, eq);
+    ticks[k] = run_mixed(d, eq, 42, 5000);
+    d.collect(stats[k]);
+  }
+  EXPECT_EQ(ticks[0], ticks[1]);
+  ASSERT_EQ(stats[0].size(), stats[1].size());
+  for (std::size_t i = 0; i < stats[0].size(); ++i) {
+    EXPECT_EQ(stats[0][i].scope, stats[1][i].scope);
+    EXPECT_EQ(stats[0][i].name, stats[1][i].name);
+    EXPECT_EQ(stats[0][i].value, stats[1][i].value) << stats[0][i].scope << " " << stats[0][i].name;
+  }
+}
+
+TEST(DramTest, EnergyConservation) {
+  HwConfig hw = test_config();
+  hw.energy.dram_read_pj_per_bit = 5.3;  // LPDDR4-like, so every term is non-zero
+  hw.energy.dram_write_pj_per_bit = 3.9;
+  hw.energy.dram_io_pj_per_bit = 3.2;
+  hw.energy.dram_activate_precharge_nj = 1.2;
+  EventQueue eq;
+  Dram d(hw.dram, hw.energy, eq);
+  run_mixed(d, eq, 7, 3000);
+  for (int i = 0; i < 500; ++i) d.access_functional(static_cast<std::uint64_t>(i) * 4096 * 3, 64, i % 2 == 1, DramClass::Spill);
+  const DramStats& s = d.stats();
+  // The same arithmetic as the model: total == counters x unit costs, exactly.
+  const double rb = 8.0 * static_cast<double>(s.read_bytes.value());
+  const double wb = 8.0 * static_cast<double>(s.write_bytes.value());
+  const double expected = rb * 5.3 + wb * 3.9 + (rb + wb) * 3.2 + static_cast<double>(s.activates.value()) * (1.2 * 1000.0);
+  EXPECT_EQ(d.energy_pj(), expected);
+  d.update_derived_stats();
+  EXPECT_EQ(s.energy_pj.value(), expected);
+  EXPECT_EQ(s.energy_read_pj.value() + s.energy_write_pj.value() + s.energy_io_pj.value() + s.energy_activate_pj.value(),
+            expected);
+  // Classes partition the counters, so their energies add up to the total (to rounding).
+  double sum = 0;
+  std::uint64_t acts = 0, bytes = 0;
+  for (std::size_t c = 0; c < kDramClassCount; ++c) {
+    const DramClassStats& cs = d.class_stats(static_cast<DramClass>(c));
+    sum += cs.energy_pj.value();
+    acts += cs.activates.value();
+    bytes += cs.read_bytes.value() + cs.write_bytes.value();
+  }
+  EXPECT_EQ(acts, s.activates.value());
+  EXPECT_EQ(bytes, s.read_bytes.value() + s.write_bytes.value());
+  EXPECT_NEAR(sum, expected, expected * 1e-12);
+  EXPECT_GT(s.activates.value(), 0u);
+}
+
+TEST(DramTest, ActivatesBelongToTheClassThatOpenedTheRow) {
+  const HwConfig hw = test_config();
+  EventQueue eq;
+  Dram d(hw.dram, hw.energy, eq);
+  EXPECT_EQ(d.access_functional(0, 64, false, DramClass::Color), RowOutcome::Empty);
+  EXPECT_EQ(d.access_functional(64, 64, false, DramClass::Textures), RowOutcome::Hit);
+  EXPECT_EQ(d.access_functional(16 * 4096, 64, true, DramClass::Gbuffer), RowOutcome::Conflict);
+  EXPECT_EQ(d.class_stats(DramClass::Color).activates.value(), 1u);
+  EXPECT_EQ(d.class_stats(DramClass::Textures).activates.value(), 0u);
+  EXPECT_EQ(d.class_stats(DramClass::Gbuffer).activates.value(), 1u);
+  EXPECT_EQ(d.stats().precharges.value(), 1u);
+  EXPECT_EQ(d.traffic().reads(DramClass::Textures), 64u);
+  EXPECT_EQ(d.traffic().writes(DramClass::Gbuffer), 64u);
+  EXPECT_EQ(d.access_functional(16 * 4096 + 128, 20, false, DramClass::Other), RowOutcome::Hit);
+  EXPECT_EQ(d.traffic().reads(DramClass::Other), 32u) << "rounded up to a whole burst";
+}
+
+TEST(DramTest, RejectsRowCrossingRequests) {
+  const HwConfig hw = test_config();
+  EventQueue eq;
+  Dram d(hw.dram, hw.energy, eq);
+  EXPECT_THROW(d.enqueue(DramRequest{4096 - 32, 64, false, DramClass::Other, {}}), std::invalid_argument);
+  EXPECT_THROW(d.enqueue(DramRequest{0, 0, false, DramClass::Other, {}}), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------------------------
+// MemorySystem
+
+struct Access {
+  Client client;
+  std::uint64_t addr;
+  std::uint32_t bytes;
+  bool is_write;
+  DramClass cls;
+};
+
+/// A pseudo-random mix of every client: texture reads with reuse, vertex/index fetch, parameter
+/// buffer writes then reads, tile loads and stores, compute buffers.
+std::vector<Access> mixed_accesses(std::uint32_t seed, int n) {
+  std::mt19937 rng(seed);
+  std::vector<Access> v;
+  for (int i = 0; i < n; ++i) {
+    switch (rng() % 6) {
+      case 0: v.push_back({Client::Texture, (1u << 20) + rng() % (512u << 10) / 16 * 16, 16, false, DramClass::Textures}); break;
+      case 1: v.push_back({Client::Geometry, (4u << 20) + rng() % (256u << 10) / 32 * 32, 32, false,
+                           rng() % 2 ? DramClass::Vertices : DramClass::Indices}); break;
+      case 2: v.push_back({Client::Tiler, (8u << 20) + rng() % (1u << 20) / 64 * 64, 64, true, DramClass::ParameterBuffer}); break;
+      case 3: v.push_back({Client::Isp, (8u << 20) + rng() % (1u << 20) / 64 * 64, 64, false, DramClass::ParameterBuffer}); break;
+      case 4: v.push_back({Client::PixelBackEnd, (16u << 20) + rng() % (2u << 20) / 128 * 128, 128, rng() % 2 == 0,
+                           DramClass::Color}); break;
+      default: v.push_back({Client::Compute, (24u << 20) + rng() % (256u << 10) / 8 * 8, 8, rng() % 4 == 0,
+                            DramClass::LightLists}); break;
+    }
+  }
+  return v;
+}
+
+/// Issues `v` in order through the timed path, retrying refused requests when the memory system
+/// is ready again; returns the number of refusals.
+std::uint64_t run_timed(MemorySystem& m, EventQueue& eq, const std::vector<Access>& v, std::vector<Tick>* done = nullptr) {
+  std::size_t next = 0;
+  std::uint64_t refusals = 0;
+  if (done) done->assign(v.size(), Tick{-1});
+  std::function<void()> pump = [&] {
+    while (next < v.size()) {
+      const Access& a = v[next];
+      const std::size_t i = next;
+      if (!m.issue(a.client, a.addr, a.bytes, a.is_write, a.cls, [done, i, &eq] { if (done) (*done)[i] = eq.now(); })) {
+        ++refusals;
+        m.notify_when_ready([&] { pump(); });
+        return;
+      }
+      ++next;
+    }
+  };
+  pump();
+  eq.run();
+  EXPECT_EQ(next, v.size());
+  EXPECT_EQ(m.requests_in_flight(), 0u);
+  return refusals;
+}
+
+TEST(MemorySystemTest, HitAndMissLatencies) {
+  const HwConfig hw = test_config();  // core 1 GHz: texture hit 4 cycles, SLC hit 20 cycles
+  EventQueue eq;
+  MemorySystem m(hw, eq);
+  Tick t0{-1}, t1{-1}, t2{-1};
+  // Texture read, cold: DRAM (30 + 18 + 15 + 10 + 30 = 103 ns, bank empty) + SLC 20 + L1 4.
+  ASSERT_TRUE(m.issue(Client::Texture, 0x10000, 16, false, DramClass::Textures, [&] { t0 = eq.now(); }));
+  eq.run();
+  EXPECT_EQ(t0.ps(), (103 + 20 + 4) * kNs);
+  // Same line again: L1 hit.
+  const Tick s1 = eq.now();
+  ASSERT_TRUE(m.issue(Client::Texture, 0x10000 + 32, 16, false, DramClass::Textures, [&] { t1 = eq.now(); }));
+  eq.run();
+  EXPECT_EQ((t1 - s1).ps(), 4 * kNs);
+  // The compute client has no L1: the line is in the SLC.
+  const Tick s2 = eq.now();
+  ASSERT_TRUE(m.issue(Client::Compute, 0x10000, 64, false, DramClass::Textures, [&] { t2 = eq.now(); }));
+  eq.run();
+  EXPECT_EQ((t2 - s2).ps(), 20 * kNs);
+  EXPECT_EQ(m.dram().stats().reads.value(), 1u);
+  EXPECT_EQ(m.texture_cache().stats().read_hits.value(), 1u);
+  EXPECT_EQ(m.slc().stats().read_hits.value(), 1u);
+}
+
+TEST(MemorySystemTest, RequestsToALineBeingFetchedWaitForIt) {
+  const HwConfig hw = test_config();
+  EventQueue eq;
+  MemorySystem m(hw, eq);
+  Tick a{-1}, b{-1}, c{-1};
+  ASSERT_TRUE(m.issue(Client::Texture, 0x20000, 16, false, DramClass::Textures, [&] { a = eq.now(); }));
+  ASSERT_TRUE(m.issue(Client::Texture, 0x20010, 16, false, DramClass::Textures, [&] { b = eq.now(); }));
+  // A multi-line request: one line being fetched, one new; done when both are.
+  ASSERT_TRUE(m.issue(Client::Texture, 0x20030, 32, false, DramClass::Textures, [&] { c = eq.now(); }));
+  eq.run();
+  EXPECT_EQ(a.ps(), 127 * kNs);
+  EXPECT_EQ(b, a) << "the second access waits for the fill instead of hitting early";
+  EXPECT_GE(c, a);
+  EXPECT_EQ(m.dram().stats().reads.value(), 2u);
+  EXPECT_EQ(m.stats().merged_misses.value(), 2u);
+  EXPECT_EQ(m.texture_cache().stats().read_misses.value(), 2u);
+}
+
+TEST(MemorySystemTest, CachesDisabledDramSeesExactlyTheIssuedBytes) {
+  const HwConfig hw = test_config();
+  const std::vector<Access> v = mixed_accesses(3, 4000);
+  DramTraffic issued;
+  for (const Access& a : v) {
+    // Round to whole bursts as DRAM transfers them (every access here is burst-aligned or smaller
+    // than a burst within one burst).
+    const std::uint64_t start = a.addr / 32 * 32, end = (a.addr + a.bytes + 31) / 32 * 32;
+    if (a.is_write) issued.write(a.cls, end - start); else issued.read(a.cls, end - start);
+  }
+  for (const bool timed : {true, false}) {
+    EventQueue eq;
+    MemorySystem m(hw, eq, "mem", MemorySystemOptions{.caches_enabled = false});
+    if (timed) {
+      run_timed(m, eq, v);
+    } else {
+      for (const Access& a : v) m.access_functional(a.client, a.addr, a.bytes, a.is_write, a.cls);
+    }
+    const DramTraffic t = m.traffic();
+    for (std::size_t c = 0; c < kDramClassCount; ++c) {
+      EXPECT_EQ(t.read_bytes[c], issued.read_bytes[c]) << to_string(static_cast<DramClass>(c)) << " timed=" << timed;
+      EXPECT_EQ(t.write_bytes[c], issued.write_bytes[c]) << to_string(static_cast<DramClass>(c)) << " timed=" << timed;
+    }
+    EXPECT_EQ(m.slc().stats().reads.value() + m.slc().stats().writes.value(), 0u);
+  }
+}
+
+TEST(MemorySystemTest, CachesEnabledDramBytesAreMissesTimesLines) {
+  const HwConfig hw = test_config();
+  EventQueue eq;
+  MemorySystem m(hw, eq);
+  // Cached clients only (no streaming): every DRAM read is an SLC read miss, every DRAM write a
+  // dirty SLC line written back (by eviction or the final flush).
+  std::vector<Access> v;
+  for (const Access& a : mixed_accesses(11, 20000)) {
+    if (a.client != Client::PixelBackEnd) v.push_back(a);
+  }
+  run_timed(m, eq, v);
+  bool flushed = false;
+  m.flush([&] { flushed = true; });
+  eq.run();
+  EXPECT_TRUE(flushed);
+  const CacheStats& slc = m.slc().stats();
+  const DramTraffic t = m.traffic();
+  EXPECT_EQ(t.total_read(), slc.read_misses.value() * 64);
+  EXPECT_EQ(t.total_written(), (slc.dirty_evictions.value() + slc.flush_writebacks.value()) * 64);
+  for (std::size_t c = 0; c < kDramClassCount; ++c) {
+    EXPECT_EQ(t.read_bytes[c], m.slc().class_stats(static_cast<DramClass>(c)).read_misses.value() * 64)
+        << to_string(static_cast<DramClass>(c));
+  }
+  EXPECT_GT(slc.read_hits.value(), 0u);
+  EXPECT_GT(m.texture_cache().stats().read_hits.value(), 0u);
+  EXPECT_GT(t.total_written(), 0u);
+}
+
+TEST(MemorySystemTest, FunctionalAndTimedPathsCountTheSameBytes) {
+  const HwConfig hw = test_config();
+  const std::vector<Access> v = mixed_accesses(5, 30000);
+  EventQueue eq_t, eq_f;
+  MemorySystem timed(hw, eq_t), functional(hw, eq_f);
+  run_timed(timed, eq_t, v);
+  for (const Access& a : v) functional.access_functional(a.client, a.addr, a.bytes, a.is_write, a.cls);
+  timed.flush();
+  eq_t.run();
+  functional.flush_functional();
+  const DramTraffic a = timed.traffic(), b = functional.traffic();
+  for (std::size_t c = 0; c < kDramClassCount; ++c) {
+    EXPECT_EQ(a.read_bytes[c], b.read_bytes[c]) << to_string(static_cast<DramClass>(c));
+    EXPECT_EQ(a.write_bytes[c], b.write_bytes[c]) << to_string(static_cast<DramClass>(c));
+  }
+  for (Cache* c : {&timed.texture_cache(), &timed.vertex_cache(), &timed.slc()}) {
+    Cache& f = c == &timed.texture_cache() ? functional.texture_cache()
+               : c == &timed.vertex_cache() ? functional.vertex_cache()
+                                             : functional.slc();
+    EXPECT_EQ(c->stats().read_hits.value(), f.stats().read_hits.value());
+    EXPECT_EQ(c->stats().write_misses.value(), f.stats().write_misses.value());
+    EXPECT_EQ(c->stats().dirty_evictions.value(), f.stats().dirty_evictions.value());
+  }
+  EXPECT_GT(a.reads(DramClass::Color), 0u);
+  EXPECT_GT(a.writes(DramClass::Color), 0u);
+  EXPECT_GT(a.reads(DramClass::Textures), 0u);
+}
+
+TEST(MemorySystemTest, PixelBackEndStreamsPastTheSlc) {
+  const HwConfig hw = test_config();
+  EventQueue eq;
+  MemorySystem m(hw, eq);
+  // A 32x32 RGBA8 tile store (4 KiB) and a load of another tile: nothing is allocated.
+  m.access_functional(Client::PixelBackEnd, 0x100000, 4096, true, DramClass::Color);
+  m.access_functional(Client::PixelBackEnd, 0x200000, 4096, false, DramClass::DepthStencil);
+  EXPECT_EQ(m.traffic().writes(DramClass::Color), 4096u);
+  EXPECT_EQ(m.traffic().reads(DramClass::DepthStencil), 4096u);
+  EXPECT_FALSE(m.slc().probe(0x100000));
+  EXPECT_FALSE(m.slc().probe(0x200000));
+  EXPECT_EQ(m.slc().stats().bypasses.value(), 128u);
+}
+
+TEST(MemorySystemTest, BackpressurePropagatesAndNothingIsLost) {
+  HwConfig hw = test_config();
+  hw.dram.read_queue_entries = 4;
+  EventQueue eq;
+  MemorySystem m(hw, eq);
+  // 2000 texture reads of distinct lines in one 4 KiB-row-sized stripe per channel: misses all the way.
+  std::vector<Access> v;
+  for (std::uint64_t i = 0; i < 2000; ++i) v.push_back({Client::Texture, i * 64, 4, false, DramClass::Textures});
+  std::vector<Tick> done;
+  const std::uint64_t refusals = run_timed(m, eq, v, &done);
+  EXPECT_GT(refusals, 0u);
+  EXPECT_GT(m.stats().dram_overflows.value(), 0u);
+  for (std::size_t i = 0; i < done.size(); ++i) ASSERT_GE(done[i].ps(), 0) << i;
+  EXPECT_EQ(m.dram().stats().reads.value(), 2000u);
+  EXPECT_EQ(m.client_stats(Client::Texture).completed.value(), 2000u);
+  EXPECT_EQ(m.client_stats(Client::Texture).rejected.value(), refusals);
+  EXPECT_FALSE(m.has_pending_work());
+}
+
+TEST(MemorySystemTest, FlushWritesBackDirtyLines) {
+  const HwConfig hw = test_config();
+  EventQueue eq;
+  MemorySystem m(hw, eq);
+  bool written = false;
+  ASSERT_TRUE(m.issue(Client::Tiler, 0x40000, 1024, true, DramClass::ParameterBuffer, [&] { written = true; }));
+  eq.run();
+  EXPECT_TRUE(written);
+  EXPECT_EQ(m.traffic().total_written(), 0u) << "write-back: still in the SLC";
+  Tick flushed{-1};
+  m.flush([&] { flushed = eq.now(); });
+  eq.run();
+  EXPECT_GT(flushed.ps(), 0);
+  EXPECT_EQ(m.traffic().writes(DramClass::ParameterBuffer), 1024u);
+  // The ISP reads the parameter buffer back through the vertex cache: SLC hits, no DRAM reads.
+  m.access_functional(Client::Isp, 0x40000, 1024, false, DramClass::ParameterBuffer);
+  EXPECT_EQ(m.traffic().total_read(), 0u);
+  EXPECT_EQ(m.slc().stats().read_hits.value(), 16u);
+}
+
+TEST(MemorySystemTest, DeterministicAndCollects) {
+  const HwConfig hw = test_config();
+  const std::vector<Access> v = mixed_accesses(9, 5000);
+  std::vector<Tick> done[2];
+  std::vector<StatRecord> stats[2];
+  for (int k = 0; k < 2; ++k) {
+    EventQueue eq;
+    MemorySystem m(hw, eq, "frame/mem");
+    run_timed(m, eq, v, &done[k]);
+    m.collect(stats[k]);
+  }
+  EXPECT_EQ(done[0], done[1]);
+  ASSERT_EQ(stats[0].size(), stats[1].size());
+  for (std::size_t i = 0; i < stats[0].size(); ++i) EXPECT_EQ(stats[0][i].value, stats[1][i].value) << stats[0][i].name;
+  bool dram = false, client = false;
+  for (const StatRecord& r : stats[0]) {
+    dram |= r.scope == "frame/mem/dram.class.color" && r.name == "read_bytes";
+    client |= r.scope == "frame/mem/client.texture" && r.name == "avg_latency_ns" && r.value > 0;
+  }
+  EXPECT_TRUE(dram);
+  EXPECT_TRUE(client);
+}
+
+TEST(MemorySystemTest, EnergyIsCachesPlusDram) {
+  const HwConfig hw = test_config();
+  EventQueue eq;
+  MemorySystem m(hw, eq);
+  for (const Access& a : mixed_accesses(13, 2000)) m.access_functional(a.client, a.addr, a.bytes, a.is_write, a.cls);
+  const double caches = m.texture_cache().energy_pj() + m.vertex_cache().energy_pj() + m.slc().energy_pj();
+  EXPECT_DOUBLE_EQ(m.energy_pj(), caches + m.dram().energy_pj());
+  EXPECT_GT(m.dram().energy_pj(), 0.0);
+  EXPECT_GT(caches, 0.0);
+}
+
+TEST(MemorySystemTest, Throughput) {
+  // Not a pass/fail figure: prints accesses per second of both paths for the report.
+  const HwConfig hw = resolve_config({}, {}).hw;
+  std::mt19937 rng(1);
+  std::vector<Access> v;
+  for (int i = 0; i < 1'000'000; ++i) {
+    // Texture fetches with locality (a 2 MiB texture, bilinear-ish neighbours) and tile stores.
+    const std::uint64_t base = (1u << 20) + (rng() % (2u << 20)) / 16 * 16;
+    v.push_back({Client::Texture, base, 16, false, DramClass::Textures});
+    v.push_back({Client::Texture, base + 16, 16, false, DramClass::Textures});
+    if (i % 8 == 0) v.push_back({Client::PixelBackEnd, (8u << 20) + static_cast<std::uint64_t>(i) * 64 % (4u << 20), 64, true, DramClass::Color});
+  }
+  double functional_rate = 0, timed_rate = 0;
+  {
+    EventQueue eq;
+    MemorySystem m(hw, eq);
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int rep = 0; rep < 5; ++rep) {
+      for (const Access& a : v) m.access_functional(a.client, a.addr, a.bytes, a.is_write, a.cls);
+    }
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    functional_rate = 5.0 * static_cast<double>(v.size()) / s;
+  }
+  {
+    EventQueue eq;
+    MemorySystem m(hw, eq);
+    const std::vector<Access> part(v.begin(), v.begin() + 500'000);
+    const auto t0 = std::chrono::steady_clock::now();
+    run_timed(m, eq, part);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    timed_rate = static_cast<double>(part.size()) / s;
+    std::cout << "[ figures  ] timed: " << eq.events_executed() << " events for " << part.size() << " accesses, "
+              << eq.now().seconds() * 1e6 << " us simulated\n";
+  }
+  std::cout << "[ figures  ] functional path: " << functional_rate / 1e6 << " M accesses/s; timed path: "
+            << timed_rate / 1e6 << " M accesses/s\n";
+  EXPECT_GT(functional_rate, 0.0);
+  EXPECT_GT(timed_rate, 0.0);
+}
+
+}  // namespace
+}  // namespace tbdr
