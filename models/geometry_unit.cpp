@@ -69,9 +69,14 @@ PixelRect light_screen_rect(const Light& light, const CameraXform& camera, const
   return rect.empty() ? PixelRect{} : rect;
 }
 
-HsrClass hsr_class_of(const PipelineState& pipeline, const ShaderDesc& shader, const Scene* scene,
+HsrClass hsr_class_of(const PipelineState& pipeline, const ShaderDesc& shader, const DrawCmd& draw, const Scene* scene,
                       std::uint32_t material) {
+  // Fragments that depend on what lies beneath (blending, reading pixel local storage, framebuffer
+  // fetch, pushing onto a PLS light stack) need it shaded first and never hide it.
   if (pipeline.blend != BlendMode::Off) return HsrClass::Translucent;
+  if (shader.pls == PlsAccess::Read || shader.pls == PlsAccess::ReadWrite) return HsrClass::Translucent;
+  if (shader.pls == PlsAccess::Write && material == kNoMaterial) return HsrClass::Translucent;
+  if (!draw.fetch.empty()) return HsrClass::Translucent;
   switch (pipeline.alpha) {
     case AlphaOverride::Opaque: return HsrClass::Opaque;
     case AlphaOverride::PunchThrough: return HsrClass::PunchThrough;
@@ -273,7 +278,7 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
       if (!keep) continue;
     }
     float key = -std::numeric_limits<float>::max();  // opaque and punch-through first, in scene order
-    if (hsr_class_of(*draw.pipeline, *draw.shader, scene_, sm.material) == HsrClass::Translucent && !sm.positions.empty()) {
+    if (hsr_class_of(*draw.pipeline, *draw.shader, *draw.cmd, scene_, sm.material) == HsrClass::Translucent && !sm.positions.empty()) {
       glm::vec3 lo(sm.positions[0]), hi(sm.positions[0]);
       for (const auto& p : sm.positions) {
         lo = glm::min(lo, p);
@@ -293,7 +298,7 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
     e.draw = draw_index;
     e.object = static_cast<std::uint32_t>(object_lights.size());
     e.material = sm.material;
-    e.hsr = hsr_class_of(*draw.pipeline, *draw.shader, scene_, sm.material);
+    e.hsr = hsr_class_of(*draw.pipeline, *draw.shader, *draw.cmd, scene_, sm.material);
     e.varyings = draw.shader->varyings;
     e.clip.viewport = viewport_;
     e.clip.cull = mat.double_sided ? FaceCull::None : face_cull_of(draw.pipeline->cull);
@@ -356,7 +361,7 @@ void GeometryUnit::draw_generated(const DrawContext& draw, std::uint32_t draw_in
   const DrawCmd& cmd = *draw.cmd;
   Emit e;
   e.draw = draw_index;
-  e.hsr = hsr_class_of(*draw.pipeline, *draw.shader, nullptr, kNoMaterial);
+  e.hsr = hsr_class_of(*draw.pipeline, *draw.shader, *draw.cmd, nullptr, kNoMaterial);
   e.varyings = draw.shader->varyings;
   e.clip.viewport = viewport_;
   e.clip.cull = face_cull_of(draw.pipeline->cull);

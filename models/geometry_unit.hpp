@@ -70,7 +70,7 @@ class GeometryUnit {
 };
 
 /// The hidden-surface class of a draw's fragments for a material (kNoMaterial for generated geometry).
-HsrClass hsr_class_of(const PipelineState& pipeline, const ShaderDesc& shader, const Scene* scene,
+HsrClass hsr_class_of(const PipelineState& pipeline, const ShaderDesc& shader, const DrawCmd& draw, const Scene* scene,
                       std::uint32_t material);
 
 }  // namespace tbdr

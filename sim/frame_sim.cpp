@@ -187,6 +187,10 @@ class FrameSimulator {
     frame_stat("passes", pass_index, "passes", "Render passes replayed");
     frame_stat("dispatches", static_cast<double>(dispatches), "dispatches", "Compute dispatches replayed");
     frame_stat("scene_triangles", static_cast<double>(scene_.triangle_count()), "triangles", "Triangles in the scene");
+    frame_stat("geometry_passes", geometry_passes_, "passes", "Passes that draw scene geometry");
+    std::uint64_t covered = 0;
+    for (auto v : result_.images.counters.shaded) covered += v > 0 ? 1 : 0;
+    frame_stat("covered_pixels", static_cast<double>(covered), "pixels", "Pixels shaded at least once (the visible surface)");
     return std::move(result_);
   }
 
@@ -376,6 +380,12 @@ class FrameSimulator {
     ctx.framebuffer_in_dram = hw_.gpu.mode == "imr";
     prepare_attachments(pass, ctx);
     resolve_draws(pass, ctx);
+    for (const auto& dc : pass.draws) {
+      if (dc.geometry == GeometryKind::Scene) {
+        ++geometry_passes_;
+        break;
+      }
+    }
     build_light_tiles(ctx);
     ctx.frustum = &frustum_;
     ctx.dram = &ps->dram;
@@ -573,6 +583,7 @@ class FrameSimulator {
   CameraXform camera_;
   ViewFrustum frustum_;
   std::uint32_t prim_base_ = 0;
+  int geometry_passes_ = 0;
   FrameResult result_;
 };
 
