@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
 
 namespace tbdr {
 
@@ -80,6 +81,7 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
     ch.banks.resize(banks_);
     ch.stats = std::make_unique<DramChannelStats>(scope + ".ch" + std::to_string(c));
   }
+  first_need_.assign(banks_, -1);
   for (std::size_t c = 0; c < kDramClassCount; ++c) {
     class_stats_[c] = std::make_unique<DramClassStats>(scope + ".class." + to_string(static_cast<DramClass>(c)));
   }
@@ -187,6 +189,7 @@ bool Dram::can_accept(std::uint64_t addr, bool is_write) const {
 }
 
 bool Dram::enqueue(DramRequest&& req) {
+  static_assert(std::is_trivially_copyable_v<Entry>, "the queues move entries with memmove");
   if (req.bytes == 0) throw std::invalid_argument("dram: request of 0 bytes");
   const DramCoord d = map(req.addr);
   if (d.column + static_cast<std::uint64_t>(req.bytes) > row_bytes_) {
@@ -207,7 +210,14 @@ bool Dram::enqueue(DramRequest&& req) {
   const Tick now = eq_.now();
   note_occupancy(ch, now);
   Entry e;
-  e.on_complete = std::move(req.on_complete);
+  if (free_done_.empty()) {
+    e.slot = static_cast<std::uint32_t>(done_.size());
+    done_.emplace_back();
+  } else {
+    e.slot = free_done_.back();
+    free_done_.pop_back();
+  }
+  done_[e.slot] = std::move(req.on_complete);
   e.enqueued = now;
   e.arrival = now + timing_.controller;
   e.row = d.row;
@@ -215,14 +225,13 @@ bool Dram::enqueue(DramRequest&& req) {
   e.bytes = transfer_bytes(req.bytes);
   e.cls = req.cls;
   e.is_write = req.is_write;
-  const Tick arrival = e.arrival;
-  q.push_back(std::move(e));
+  q.push_back(e);
   if (!any_timed_) {
     any_timed_ = true;
     first_enqueue_ = now;
   }
   ++in_flight_;
-  kick(d.channel, arrival);
+  kick(d.channel, e.arrival);
   return true;
 }
 
@@ -244,61 +253,37 @@ void Dram::kick(std::uint32_t c, Tick at) {
   ch.wakeup = eq_.schedule(edge, Priority::UnitOperate, [this, c] { wakeup(c); });
 }
 
-bool Dram::prepare(Channel& ch, std::vector<Entry>& q, std::int64_t n, Tick now) {
-  // Banks whose open row an arrived request still wants: closing it now would turn those row hits
-  // into misses (FR-FCFS serves row hits first).
-  std::uint64_t wanted = 0;
-  for (const Entry& e : q) {
-    if (e.arrival > now) break;
-    if (ch.banks[e.bank].open_row == static_cast<std::int64_t>(e.row)) wanted |= std::uint64_t{1} << e.bank;
-  }
-  const bool starving = ch.oldest_bypassed >= kStarvationCap;
-  for (std::size_t i = 0; i < q.size(); ++i) {
-    Entry& e = q[i];
-    if (e.arrival > now) break;
-    Bank& b = ch.banks[e.bank];
-    if (b.open_row == static_cast<std::int64_t>(e.row)) continue;
-    if (((wanted >> e.bank) & 1) != 0 && !(i == 0 && starving)) continue;
-    const RowOutcome o = b.open_row < 0 ? RowOutcome::Empty : RowOutcome::Conflict;
-    // Precharge when the bank allows it (tRAS after its activate, the last data out, tWR after the
-    // last write), activate tRP later; the column command may follow tRCD after the activate.
-    const std::int64_t t_act = o == RowOutcome::Empty ? std::max(n, b.act_ready)
-                                                      : std::max(n, b.pre_ready) + timing_.t_rp_cycles;
-    b.open_row = static_cast<std::int64_t>(e.row);
-    b.act_ready = t_act;
-    b.col_ready = t_act + timing_.t_rcd_cycles;
-    b.pre_ready = t_act + timing_.t_ras_cycles;
-    e.outcome = o;
-    account_activate(ch, o, e.cls);
-    if (i == 0) ch.oldest_bypassed = 0;
-    return true;
-  }
-  return false;
+void Dram::open_row(Channel& ch, Entry& e, std::int64_t n) {
+  Bank& b = ch.banks[e.bank];
+  const RowOutcome o = b.open_row < 0 ? RowOutcome::Empty : RowOutcome::Conflict;
+  // Precharge when the bank allows it (tRAS after its activate, the last data out, tWR after the
+  // last write), activate tRP later; the column command may follow tRCD after the activate.
+  const std::int64_t t_act =
+      o == RowOutcome::Empty ? std::max(n, b.act_ready) : std::max(n, b.pre_ready) + timing_.t_rp_cycles;
+  b.open_row = static_cast<std::int64_t>(e.row);
+  b.act_ready = t_act;
+  b.col_ready = t_act + timing_.t_rcd_cycles;
+  b.pre_ready = t_act + timing_.t_ras_cycles;
+  e.outcome = o;
+  account_activate(ch, o, e.cls);
 }
 
-int Dram::pick(Channel& ch, const std::vector<Entry>& q, std::int64_t n, Tick now, std::int64_t* next_ready) {
-  // A column command may issue once its bank allows it and its data (RL later) would start no
-  // more than one DRAM cycle before the data bus frees; issuing earlier would only park a request
-  // that FR-FCFS could still reorder.
-  const std::int64_t bus_c = ch.bus_free > now ? clock_.cycles_at(ch.bus_free).count() : n;
-  const std::int64_t bus_ready = bus_c - timing_.t_cl_cycles;
-  for (std::size_t i = 0; i < q.size(); ++i) {
-    const Entry& e = q[i];
+std::int64_t Dram::next_column_cycle(const Channel& ch, const std::vector<Entry>& q, std::int64_t n, Tick now) const {
+  const std::int64_t bus_ready = bus_ready_cycle(ch, n, now);
+  std::int64_t next = kNever;
+  for (const Entry& e : q) {
     if (e.arrival > now) break;
     const Bank& b = ch.banks[e.bank];
-    if (b.open_row != static_cast<std::int64_t>(e.row)) continue;
-    const std::int64_t issue = std::max(b.col_ready, bus_ready);
-    if (issue <= n) return static_cast<int>(i);  // the oldest row hit that can go now
-    *next_ready = std::min(*next_ready, issue);
+    if (b.open_row == static_cast<std::int64_t>(e.row)) next = std::min(next, std::max(b.col_ready, bus_ready));
   }
-  return -1;
+  return next == kNever ? kNever : std::max(next, n + 1);
 }
 
 void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::int64_t n) {
   Channel& ch = channels_[c];
   const Tick now = eq_.now();
   note_occupancy(ch, now);
-  Entry e = std::move(q[i]);
+  const Entry e = q[i];
   q.erase(q.begin() + static_cast<std::ptrdiff_t>(i));
 
   Bank& b = ch.banks[e.bank];
@@ -320,15 +305,7 @@ void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::in
     ++timed_reads_;
   }
 
-  std::uint32_t slot;
-  if (free_done_.empty()) {
-    slot = static_cast<std::uint32_t>(done_.size());
-    done_.emplace_back();
-  } else {
-    slot = free_done_.back();
-    free_done_.pop_back();
-  }
-  done_[slot] = std::move(e.on_complete);
+  const std::uint32_t slot = e.slot;
   eq_.schedule(done, Priority::DramResponse, [this, slot] { complete(slot); });
 }
 
@@ -342,43 +319,80 @@ void Dram::complete(std::uint32_t slot) {
   if (cb) cb();
 }
 
+std::vector<Dram::Entry>* Dram::active_queue(Channel& ch, Tick now, bool& draining) const {
+  if (!draining && ch.writeq.size() >= write_high_) {
+    draining = true;
+  } else if (draining && ch.writeq.size() <= write_low_) {
+    draining = false;
+  }
+  const bool reads_arrived = !ch.readq.empty() && ch.readq.front().arrival <= now;
+  const bool writes_arrived = !ch.writeq.empty() && ch.writeq.front().arrival <= now;
+  if (writes_arrived && (draining || !reads_arrived)) return &ch.writeq;
+  if (reads_arrived) return &ch.readq;
+  return nullptr;
+}
+
 void Dram::wakeup(std::uint32_t c) {
   Channel& ch = channels_[c];
   const Tick now = eq_.now();
   const std::int64_t n = clock_.cycles_at(now).count();
-  const bool reads_arrived = !ch.readq.empty() && ch.readq.front().arrival <= now;
-  const bool writes_arrived = !ch.writeq.empty() && ch.writeq.front().arrival <= now;
-  if (!ch.draining && ch.writeq.size() >= write_high_) {
-    ch.draining = true;
-    ++ch.stats->write_drains;
-  } else if (ch.draining && ch.writeq.size() <= write_low_) {
-    ch.draining = false;
-  }
-  std::vector<Entry>* q = nullptr;
-  if (writes_arrived && (ch.draining || !reads_arrived)) {
-    q = &ch.writeq;
-  } else if (reads_arrived) {
-    q = &ch.readq;
-  }
+  const bool was_draining = ch.draining;
+  std::vector<Entry>* q = active_queue(ch, now, ch.draining);
+  if (ch.draining && !was_draining) ++ch.stats->write_drains;
 
   std::int64_t next = kNever;
   bool freed = false;
   if (q != nullptr) {
-    const bool prepared = prepare(ch, *q, n, now);
-    const Entry& oldest = q->front();
-    const bool oldest_needs_row = ch.banks[oldest.bank].open_row != static_cast<std::int64_t>(oldest.row);
-    const int i = pick(ch, *q, n, now, &next);
-    if (i >= 0) {
-      if (i == 0) {
+    // One pass over the arrived requests: the banks whose open row is still wanted (row hits come
+    // first), the oldest request needing a row per bank, and the oldest row hit whose column
+    // command can issue now (its bank allows it and its data would not start more than one cycle
+    // before the data bus frees).
+    const std::int64_t bus_ready = bus_ready_cycle(ch, n, now);
+    std::uint64_t wanted = 0;
+    std::fill(first_need_.begin(), first_need_.end(), -1);
+    int issue = -1;
+    for (std::size_t i = 0; i < q->size(); ++i) {
+      const Entry& e = (*q)[i];
+      if (e.arrival > now) break;
+      const Bank& b = ch.banks[e.bank];
+      if (b.open_row == static_cast<std::int64_t>(e.row)) {
+        wanted |= std::uint64_t{1} << e.bank;
+        if (issue < 0 && std::max(b.col_ready, bus_ready) <= n) issue = static_cast<int>(i);
+      } else if (first_need_[e.bank] < 0) {
+        first_need_[e.bank] = static_cast<int>(i);
+      }
+    }
+    // Row preparation: the oldest request whose bank's open row nobody arrived still wants (the
+    // oldest request overrides that after kStarvationCap younger ones were served before it).
+    const bool starving = ch.oldest_bypassed >= kStarvationCap;
+    int prep = -1, eligible = 0;
+    for (std::uint32_t bank = 0; bank < banks_; ++bank) {
+      const int i = first_need_[bank];
+      if (i < 0 || (((wanted >> bank) & 1) != 0 && !(i == 0 && starving))) continue;
+      ++eligible;
+      if (prep < 0 || i < prep) prep = i;
+    }
+    const bool oldest_needs_row = first_need_[q->front().bank] == 0;
+    if (prep >= 0) {
+      open_row(ch, (*q)[static_cast<std::size_t>(prep)], n);
+      if (prep == 0) ch.oldest_bypassed = 0;
+    }
+    if (issue >= 0) {
+      if (issue == 0) {
         ch.oldest_bypassed = 0;
-      } else if (oldest_needs_row) {
+      } else if (oldest_needs_row && prep != 0) {
         ++ch.oldest_bypassed;
       }
-      commit(c, *q, static_cast<std::size_t>(i), n);
+      commit(c, *q, static_cast<std::size_t>(issue), n);
       freed = true;
     }
-    // One row command and one column command per DRAM cycle; look again next cycle after either.
-    if (prepared || freed || next == kNever) next = n + 1;
+    // One row and one column decision per DRAM cycle: come back next cycle if another row can be
+    // opened, else when the first row hit can take its column command.
+    next = eligible > 1 ? n + 1 : next_column_cycle(ch, *q, n, now);
+    // The other queue's turn (this one emptied or a watermark was crossed): look again next cycle.
+    bool draining = ch.draining;
+    if (active_queue(ch, now, draining) != q) next = n + 1;
+    if (next == kNever && !q->empty() && q->front().arrival <= now) next = n + 1;  // defensive
   }
   for (const std::vector<Entry>* qq : {&ch.readq, &ch.writeq}) {
     if (!qq->empty() && qq->front().arrival > now) next = std::min(next, cycle_ceil(qq->front().arrival));

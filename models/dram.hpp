@@ -1,7 +1,8 @@
 #pragma once
 // The external DRAM: channels x banks, one row buffer per bank under an open-page policy, read and
-// write queues per channel with an FR-FCFS scheduler (row hits first, then oldest; writes drained
-// in bursts between watermarks), JEDEC-style timing (tRCD, tRP, RL, tRAS, tWR, data-bus time from
+// write queues per channel with an FR-FCFS scheduler (rows are opened ahead for the oldest
+// requests, column commands go to the oldest row hit the data bus can take; writes drained in
+// bursts between watermarks), JEDEC-style timing (tRCD, tRP, RL, tRAS, tWR, data-bus time from
 // the channel bandwidth, controller latency) and energy per bit and per activate (DRAMPower-style
 // figures from [energy]). See docs/memory-model.md for the equations.
 //
@@ -144,8 +145,8 @@ class Dram final : public Unit {
   /// whenever no read is waiting). Fixed design constants (Ramulator's defaults are similar).
   static constexpr double kWriteHighWatermark = 0.75;
   static constexpr double kWriteLowWatermark = 0.25;
-  /// FR-FCFS starvation cap: after this many younger requests were served ahead of the oldest
-  /// ready one, the oldest goes next even if it is not a row hit.
+  /// FR-FCFS starvation cap: once this many younger requests were served while the oldest one
+  /// waited for its row, the oldest may close a row that younger requests still want.
   static constexpr std::uint32_t kStarvationCap = 16;
 
   /// Validates the parameters (std::invalid_argument on an inconsistent geometry).
@@ -207,8 +208,10 @@ class Dram final : public Unit {
   std::string stall_reason() const override;
 
  private:
+  // A queued request; trivially copyable (its callback waits in done_[slot]) so the queues move
+  // entries with memmove.
   struct Entry {
-    EventCallback on_complete;
+    std::uint32_t slot = 0;  // done_ slot holding on_complete
     Tick enqueued{0};
     Tick arrival{0};  // eligible for scheduling from this tick
     std::uint64_t row = 0;
@@ -251,12 +254,18 @@ class Dram final : public Unit {
   void note_occupancy(Channel& ch, Tick now);
   void kick(std::uint32_t c, Tick at);
   void wakeup(std::uint32_t c);
-  // Opens (precharge + activate) the row of the oldest arrived request whose bank holds another
-  // row that no arrived request still wants; true if it did.
-  bool prepare(Channel& ch, std::vector<Entry>& q, std::int64_t n, Tick now);
-  // Index of the oldest arrived request whose column command can issue at cycle n, or -1 (then
-  // *next_ready is lowered to the first cycle at which a waiting row hit can issue).
-  int pick(Channel& ch, const std::vector<Entry>& q, std::int64_t n, Tick now, std::int64_t* next_ready);
+  // The queue the scheduler serves at `now`: writes from the high watermark down to the low one
+  // (`draining` is the hysteresis state, updated) or when no read has arrived; else reads.
+  std::vector<Entry>* active_queue(Channel& ch, Tick now, bool& draining) const;
+  // Opens the row of `e` at cycle n (precharge if another row is open, then activate).
+  void open_row(Channel& ch, Entry& e, std::int64_t n);
+  // First cycle after n at which an arrived row hit of `q` could take its column command.
+  std::int64_t next_column_cycle(const Channel& ch, const std::vector<Entry>& q, std::int64_t n, Tick now) const;
+  // First cycle at which the data of a column command issued then would start no more than one
+  // DRAM cycle before the channel's data bus frees.
+  std::int64_t bus_ready_cycle(const Channel& ch, std::int64_t n, Tick now) const {
+    return (ch.bus_free > now ? clock_.cycles_at(ch.bus_free).count() : n) - timing_.t_cl_cycles;
+  }
   void commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::int64_t n);
   void complete(std::uint32_t slot);
   std::int64_t ns_to_cycles(double ns) const;
@@ -280,7 +289,7 @@ class Dram final : public Unit {
   unsigned row_shift_ = 0, ch_shift_ = 0, bank_shift_ = 0;
 
   std::vector<Channel> channels_;
-  std::vector<EventCallback> done_;        // on_complete of requests in flight, by slot
+  std::vector<EventCallback> done_;        // on_complete of accepted requests, by slot
   std::vector<std::uint32_t> free_done_;
   std::uint64_t in_flight_ = 0;
   bool any_timed_ = false;
@@ -289,6 +298,7 @@ class Dram final : public Unit {
   std::uint64_t timed_bytes_ = 0;
   std::uint64_t timed_reads_ = 0;
   std::function<void(std::uint32_t)> space_cb_;
+  std::vector<int> first_need_;  // scratch of wakeup(): per bank, the oldest request needing a row
 
   DramStats stats_;
   std::array<std::unique_ptr<DramClassStats>, kDramClassCount> class_stats_;
