@@ -1,0 +1,104 @@
+// Forward multi-pass: the scene is drawn once per batch of lights, each geometry pass adding its
+// batch's contribution with additive blending (CMU 15-769 "Deferred Shading" lecture: "for each
+// light: render scene with additive blending", z buffer initialised by a z pre-pass).
+// Billeter's table (not listed there; by the same criteria): off-chip buffers = color only (every
+// pass is a draw of one render pass, so depth and color stay on chip); geometry passes =
+// ceil(lights / lights_per_pass) (+1 with PreZ); overshading no with PreZ (equal test); MSAA yes;
+// blending yes (translucent geometry is drawn once, after the additive passes).
+//
+// Render pass `main`: color rgba8 (clear, store; MSAA resolves on chip) and depth d24s8 (transient).
+// Draws, in order:
+//   prez=yes: depth-only opaque + masked (alpha test) draws; every lighting pass then tests equal.
+//   lighting pass 0: opaque + masked, blend off: ambient + lights of batch 0 (lights=0-(n-1)).
+//     Without PreZ it writes depth (less) and the masked draw runs the alpha test.
+//   lighting pass b > 0: opaque + masked, depth equal, no write, blend add: the batch's light
+//     contributions only (docs/kernels.md: blend=add leaves the ambient term out). Punch-through
+//     geometry is forced opaque there: its discarded samples fail the equal test.
+//   translucent (BLEND) geometry: once, lights from the per-object lists, alpha blending (additive
+//     multi-pass cannot alpha-blend a surface lit in several passes).
+//
+// Shader cost (technique.hpp constants): forward_lit = kForwardLitAluOps 20 ALU (surface 12,
+// ambient 3, output 5), 2 fetches, 8 varyings, light_source=all over the draw's batch, 12 ALU per
+// light; forward_add is the same shader writing light contributions only (it still evaluates the
+// surface: the redundant per-pass work the lecture lists as the method's overhead);
+// forward_lit_masked +1 ALU alpha test; depth_only 0 ALU; depth_only_masked 1 ALU + 1 fetch.
+#include <algorithm>
+
+#include "workloads/technique.hpp"
+
+namespace tbdr {
+
+namespace {
+
+Trace generate_forward_multipass(const TraceSetup& setup, const TechniqueOptions& options) {
+  Trace t = begin_trace(setup, "forward_multipass", options);
+  const std::string lights = add_light_buffer(t);
+  const auto per_pass = static_cast<std::uint32_t>(options.get_int("lights_per_pass", 1, 1 << 20));
+  const bool prez = options.get_bool("prez");
+  const auto samples = static_cast<std::uint32_t>(setup.samples);
+  const auto light_count = static_cast<std::uint32_t>(t.lights.size());
+  const LightSource source = light_count > 0 ? LightSource::All : LightSource::None;
+
+  t.shaders.push_back(
+      make_shader("forward_lit", kForwardLitAluOps, kSurfaceTexFetches, kSurfaceVaryings, kLightAluOps, source, 1));
+  t.shaders.push_back(make_shader("forward_lit_masked", kForwardLitAluOps + kAlphaTestAluOps, kSurfaceTexFetches,
+                                  kSurfaceVaryings, kLightAluOps, source, 1, PlsAccess::None, true));
+  if (prez) {
+    add_prez_state(t);
+    t.pipelines.push_back(make_pipeline("first_equal", "forward_lit", true, false, CompareOp::Equal, BlendMode::Off,
+                                        CullMode::Back, AlphaOverride::Opaque));
+  } else {
+    t.pipelines.push_back(
+        make_pipeline("first", "forward_lit", true, true, CompareOp::Less, BlendMode::Off, CullMode::Back));
+    t.pipelines.push_back(make_pipeline("first_masked", "forward_lit_masked", true, true, CompareOp::Less,
+                                        BlendMode::Off, CullMode::Back));
+  }
+  if (light_count > per_pass)
+    t.pipelines.push_back(make_pipeline("additive", "forward_lit", true, false, CompareOp::Equal, BlendMode::Add,
+                                        CullMode::Back, AlphaOverride::Opaque));
+  add_translucent_state(t);
+
+  PassDesc pass;
+  pass.name = "main";
+  add_color_target(pass, "color", samples);
+  pass.attachments.push_back(make_attachment("depth", Format::D24s8, samples, LoadOp::Clear, StoreOp::DontCare,
+                                             AttachmentUsage::Depth, true));
+  if (prez) add_prez_draws(pass);
+
+  const std::uint32_t batches = light_count == 0 ? 1 : (light_count + per_pass - 1) / per_pass;
+  for (std::uint32_t b = 0; b < batches; ++b) {
+    LightSelection sel;
+    if (light_count > 0) {
+      sel.all = false;
+      sel.ranges.push_back({b * per_pass, std::min(light_count, (b + 1) * per_pass) - 1});
+    }
+    const bool first = b == 0;
+    const std::string opaque = first ? (prez ? "first_equal" : "first") : "additive";
+    const std::string masked = first ? (prez ? "first_equal" : "first_masked") : "additive";
+    DrawCmd o = scene_draw(SceneSubset::Opaque, opaque, {lights});
+    DrawCmd m = scene_draw(SceneSubset::Masked, masked, {lights});
+    if (light_count > 0) o.lights = m.lights = sel;
+    pass.draws.push_back(o);
+    pass.draws.push_back(m);
+  }
+  add_translucent_draw(pass, lights);
+  t.commands.emplace_back(std::move(pass));
+  return t;
+}
+
+}  // namespace
+
+TechniqueInfo technique_forward_multipass() {
+  return {"forward_multipass",
+          "one additive geometry pass per batch of lights after a depth pre-pass; color only leaves the chip "
+          "(CMU 15-769 deferred shading lecture, multi-pass forward)",
+          {{"lights_per_pass", "1",
+            "lights evaluated per additive geometry pass; 1 is the lecture's 'for each light: render scene with "
+            "additive blending', larger batches model shaders specialised for N lights"},
+           {"prez", "yes",
+            "depth-only pre-pass first so every lighting pass tests depth equal (the lecture: 'assume z buffer is "
+            "initialized using a z prepass'); no: the first lighting pass writes depth"}},
+          &generate_forward_multipass};
+}
+
+}  // namespace tbdr

@@ -1,0 +1,75 @@
+// Tiled deferred shading (Andersson 2011, "DirectX 11 rendering in Battlefield 3"; CMU 15-769
+// lecture "tile-based deferred shading"): a G-buffer pass stores the surface to DRAM, then ONE
+// compute dispatch per 16x16 tile computes the tile's depth bounds, culls the lights into a list in
+// group-shared memory and shades every pixel of the tile once, writing the lit frame. The G-buffer
+// is read once and the frame written once; light lists never leave the chip.
+// Billeter's table (as clustered deferred): off-chip buffers = G-buffers; 1 geometry pass;
+// overshading no; MSAA no; blending no.
+//
+// Pass `gbuffer`: option `gbuffer` targets (default Andersson's 4 x rgba8) + depth d24s8, stored.
+// barrier; dispatch tiled_deferred_shade groups = ceil(W/16) x ceil(H/16), 16x16 threads, reads the
+//   G-buffer, depth and lights, writes buffer `color` (the lit frame, content=image, W x H x 4 B).
+// Shader `tiled_deferred_lit` (the per-pixel cost the kernel charges): decode 4 (+1 per extra
+//   target) + position reconstruction 8 + ambient 3 + output 5 ALU, one fetch per G-buffer target
+//   + 1 for depth, light_source=tile_list (the group-shared list), 12 ALU per light. The tile is
+//   the workgroup's: no lookup cost.
+// Translucent (BLEND) geometry is not drawn: docs/kernels.md has no way to composite a raster pass
+// over a kernel-written image (see docs/techniques.md).
+#include <algorithm>
+
+#include "workloads/technique.hpp"
+
+namespace tbdr {
+
+namespace {
+
+Trace generate_tiled_deferred(const TraceSetup& setup, const TechniqueOptions& options) {
+  reject_msaa(setup, "tiled_deferred", "its G-buffer holds one surface per pixel (Billeter 2015: MSAA no)");
+  require_lights(setup, "tiled_deferred");
+  Trace t = begin_trace(setup, "tiled_deferred", options);
+  const std::string lights = add_light_buffer(t);
+  const GbufferLayout layout = gbuffer_layout_option(options, "gbuffer");
+  const auto tile_px = static_cast<std::uint32_t>(options.get_int("tile_px", 4, 256));
+  const std::uint32_t cap = list_cap_option(options, "max_lights_per_tile", t.lights.size());
+
+  PassDesc gbuffer = make_gbuffer_pass(t, layout);
+  const std::string frame = add_buffer(t, "color", std::uint64_t(setup.width) * std::uint64_t(setup.height) * 4,
+                                       TrafficClass::Color, BufferContent::Image);
+  const auto targets = static_cast<std::uint32_t>(layout.formats.size());
+  t.shaders.push_back(make_shader("tiled_deferred_lit",
+                                  kGbufferDecodeAluOps + kGbufferExtraTargetAluOps * layout.extra_targets() +
+                                      kPositionReconstructAluOps + kAmbientAluOps + kOutputAluOps,
+                                  targets + 1, 0, kLightAluOps, LightSource::TileList, 1));
+
+  std::vector<std::string> stored = layout.names;
+  stored.push_back("depth");
+  std::vector<std::string> reads = stored;
+  reads.push_back(lights);
+  const std::uint32_t edge = std::min(tile_px, kKernelGroupEdge);
+  t.commands.emplace_back(std::move(gbuffer));
+  t.commands.emplace_back(make_barrier(stored));
+  t.commands.emplace_back(make_dispatch("tiled_deferred_shade", tiles_for(setup.width, tile_px),
+                                        tiles_for(setup.height, tile_px), 1, edge, edge, 1, reads, {frame},
+                                        {{"shader", "tiled_deferred_lit"},
+                                         {"tile_px", std::to_string(tile_px)},
+                                         {"max_lights_per_tile", std::to_string(cap)}}));
+  return t;
+}
+
+}  // namespace
+
+TechniqueInfo technique_tiled_deferred() {
+  return {"tiled_deferred",
+          "G-buffer to DRAM, then one compute dispatch per 16x16 tile: depth bounds, light culling in group "
+          "memory, shading (Andersson 2011, Battlefield 3)",
+          {{"gbuffer", "rgba8,rgba8,rgba8,rgba8",
+            "G-buffer color targets: albedo, normal, extras; default Andersson's 4 x RGBA8 (+ D24S8 = 20 B/px, "
+            "per CMU 15-769 and DESIGN.md)"},
+           {"tile_px", "16", "screen tile edge in pixels of one workgroup (Andersson: 16x16 tiles)"},
+           {"max_lights_per_tile", "all",
+            "capacity of the group-shared light list (Andersson's MAX_LIGHTS); all = the light count, so no "
+            "tile can overflow and the image stays exact"}},
+          &generate_tiled_deferred};
+}
+
+}  // namespace tbdr
