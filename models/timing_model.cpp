@@ -4,6 +4,8 @@
 #include <cmath>
 #include <deque>
 #include <functional>
+#include <map>
+#include <tuple>
 #include <memory>
 
 #include "models/memory_system.hpp"
@@ -454,9 +456,14 @@ class TimingSim final : public Unit {
     std::uint64_t bytes = 0;
     for (std::size_t c = 0; c < kDramClassCount; ++c) bytes += t.load_bytes[c] + t.store_bytes[c];
     for (const auto& br : t.pb_reads) bytes += br.bytes;
-    result_.tiles.push_back({static_cast<std::int64_t>(render_command_), t.tile_x, t.tile_y,
-                             cycles_of(eq_.now()) - cycles_of(tiles_[i].fetch_start), static_cast<double>(t.samples),
-                             static_cast<double>(bytes)});
+    // One row per command and tile: strips and partial renders of the same tile add up.
+    const auto key = std::make_tuple(render_command_, t.tile_x, t.tile_y);
+    auto [it, inserted] = tile_rows_.try_emplace(key, result_.tiles.size());
+    if (inserted) result_.tiles.push_back({static_cast<std::int64_t>(render_command_), t.tile_x, t.tile_y, 0, 0, 0});
+    TileRecord& row = result_.tiles[it->second];
+    row.cycles += cycles_of(eq_.now()) - cycles_of(tiles_[i].fetch_start);
+    row.samples += static_cast<double>(t.samples);
+    row.dram_bytes += static_cast<double>(bytes);
     --in_flight_;
     ++tiles_done_;
     if (tiles_done_ == tiles_.size()) {
@@ -494,6 +501,7 @@ class TimingSim final : public Unit {
   std::size_t next_dispatch_ = 0, next_isp_ = 0, tiles_done_ = 0, in_flight_ = 0;
   std::deque<Tick> usc_ends_;
   std::deque<std::size_t> store_queue_;
+  std::map<std::tuple<std::size_t, int, int>, std::size_t> tile_rows_;  ///< (command, x, y) -> row in result_.tiles
   bool store_busy_ = false;
 };
 
