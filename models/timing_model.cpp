@@ -18,7 +18,7 @@ namespace tbdr {
 
 namespace {
 
-constexpr std::uint64_t kChunkBytes = 1024;     // bytes per memory request a stream issues
+constexpr std::uint64_t kChunkBytes = 4096;     // bytes per memory request a stream issues
 constexpr std::uint32_t kStreamOutstanding = 16;  // requests a stream keeps in flight
 constexpr std::uint64_t kThreadsPerTask = 32;   // threads of one USC task
 

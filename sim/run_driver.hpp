@@ -30,6 +30,8 @@ struct RunOutcome {
   double wall_seconds = 0;       ///< simulation only (trace read and scene load excluded)
   double load_seconds = 0;       ///< trace read and scene load
   double timing_seconds = 0;     ///< host time of the timing model
+  double cpu_seconds = 0;        ///< host CPU time of the functional simulation
+  double timing_cpu_seconds = 0; ///< host CPU time of the timing and energy models
   FrameResult frame;
   TimingResult timing;
   EnergyBreakdown energy;
