@@ -145,6 +145,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         break;
     }
     light_sum += fl.count;
+    if (from_triangle && sh.light_source != LightSource::None && sh.light_source != LightSource::Proxy) ++stats.lit_surface_invocations;
     for (const auto& [cls, bytes] : d.per_pixel_reads) ctx_.dram->read(cls, bytes);
     stats.alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * fl.count;
     stats.light_evaluations += fl.count;

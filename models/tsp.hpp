@@ -18,6 +18,7 @@ struct TspStats {
   Counter invocations{group, {"shader_invocations", "fragments", "Fragment shader invocations on covered pixels (helpers excluded)"}};
   Counter quads{group, {"shaded_quads", "quads", "2x2 quads launched"}};
   Counter helper_lanes{group, {"helper_lanes", "lanes", "Lanes of launched quads with no covered pixel (helpers)"}};
+  Counter lit_surface_invocations{group, {"lit_surface_invocations", "fragments", "Invocations on scene geometry whose shader evaluates lights (not proxies)"}};
   Counter shaded_samples{group, {"shaded_samples", "samples", "Samples whose color a shader wrote"}};
   Counter alu_ops{group, {"fragment_alu_ops", "ops", "Fragment shader ALU ops, helper lanes included"}};
   Counter texture_fetches{group, {"texture_fetches", "fetches", "Texture fetches, helper lanes included"}};

@@ -187,7 +187,7 @@ class FrameSimulator {
     frame_stat("passes", pass_index, "passes", "Render passes replayed");
     frame_stat("dispatches", static_cast<double>(dispatches), "dispatches", "Compute dispatches replayed");
     frame_stat("scene_triangles", static_cast<double>(scene_.triangle_count()), "triangles", "Triangles in the scene");
-    frame_stat("geometry_passes", geometry_passes_, "passes", "Passes that draw scene geometry");
+    frame_stat("geometry_passes", geometry_passes_, "passes", "Submissions of the scene's opaque geometry");
     std::uint64_t covered = 0;
     for (auto v : result_.images.counters.shaded) covered += v > 0 ? 1 : 0;
     frame_stat("covered_pixels", static_cast<double>(covered), "pixels", "Pixels shaded at least once (the visible surface)");
@@ -380,10 +380,12 @@ class FrameSimulator {
     ctx.framebuffer_in_dram = hw_.gpu.mode == "imr";
     prepare_attachments(pass, ctx);
     resolve_draws(pass, ctx);
+    // Geometry passes: submissions of the scene's opaque geometry (a PreZ, a G-buffer pass, each
+    // additive pass of a multi-pass technique, the forward pass).
     for (const auto& dc : pass.draws) {
-      if (dc.geometry == GeometryKind::Scene) {
+      if (dc.geometry == GeometryKind::Scene && dc.submesh.empty() && dc.material.empty() &&
+          (dc.subset == SceneSubset::All || dc.subset == SceneSubset::Opaque)) {
         ++geometry_passes_;
-        break;
       }
     }
     build_light_tiles(ctx);
