@@ -26,20 +26,6 @@ constexpr std::uint64_t kLightIndexBytes = 4;       // one light index
 const std::vector<std::string> kKernels = {"depth_bounds",   "tile_light_cull",      "cluster_flag",      "cluster_light_assign",
                                            "deferred_shade", "tiled_deferred_shade", "vbuffer_worklists", "vbuffer_shade"};
 
-DramClass dram_class_of(TrafficClass t) {
-  switch (t) {
-    case TrafficClass::LightData: return DramClass::LightData;
-    case TrafficClass::LightLists: return DramClass::LightLists;
-    case TrafficClass::Gbuffer: return DramClass::Gbuffer;
-    case TrafficClass::Color: return DramClass::Color;
-    case TrafficClass::Depth: return DramClass::DepthStencil;
-    case TrafficClass::Visibility: return DramClass::Visibility;
-    case TrafficClass::WorkLists: return DramClass::WorkLists;
-    case TrafficClass::Other: return DramClass::Other;
-  }
-  return DramClass::Other;
-}
-
 /// A dispatch being run: its parameters, inputs and outputs, with errors at its trace line.
 class Dispatch {
  public:
@@ -139,13 +125,13 @@ class Dispatch {
       }
       const BufferDesc* b = ctx_.trace->find_buffer(n);
       if (!b) continue;
-      dram_.read(dram_class_of(b->traffic), written_bytes(n, b->bytes));
+      dram_.read(traffic_class_of(b->traffic), written_bytes(n, b->bytes));
     }
   }
   /// Books a write of `bytes` to buffer `name` and remembers the size for later readers.
   void charge_write(const std::string& name, std::uint64_t bytes) {
     const BufferDesc* b = ctx_.trace->find_buffer(name);
-    const DramClass c = b ? dram_class_of(b->traffic) : DramClass::Other;
+    const DramClass c = b ? traffic_class_of(b->traffic) : DramClass::Other;
     dram_.write(c, bytes);
     ctx_.images->buffer_bytes_written[name] = bytes;
   }

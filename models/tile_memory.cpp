@@ -15,6 +15,20 @@ DramClass traffic_class_of(AttachmentUsage u) {
   return DramClass::Other;
 }
 
+DramClass traffic_class_of(TrafficClass t) {
+  switch (t) {
+    case TrafficClass::LightData: return DramClass::LightData;
+    case TrafficClass::LightLists: return DramClass::LightLists;
+    case TrafficClass::Gbuffer: return DramClass::Gbuffer;
+    case TrafficClass::Color: return DramClass::Color;
+    case TrafficClass::Depth: return DramClass::DepthStencil;
+    case TrafficClass::Visibility: return DramClass::Visibility;
+    case TrafficClass::WorkLists: return DramClass::WorkLists;
+    case TrafficClass::Other: return DramClass::Other;
+  }
+  return DramClass::Other;
+}
+
 namespace {
 
 bool is_resolve_target(const PassDesc& pass, const Attachment& a) {

@@ -38,6 +38,8 @@ struct TileMemoryStats {
 
 /// The DRAM traffic class of an attachment usage.
 DramClass traffic_class_of(AttachmentUsage u);
+/// The DRAM traffic class of a trace buffer's declared traffic.
+DramClass traffic_class_of(TrafficClass t);
 
 /// Tile memory of one pass.
 class TileMemory {

@@ -95,20 +95,6 @@ void build_light_tiles(RenderContext& ctx) {
   }
 }
 
-DramClass dram_class_of_buffer(TrafficClass t) {
-  switch (t) {
-    case TrafficClass::LightData: return DramClass::LightData;
-    case TrafficClass::LightLists: return DramClass::LightLists;
-    case TrafficClass::Gbuffer: return DramClass::Gbuffer;
-    case TrafficClass::Color: return DramClass::Color;
-    case TrafficClass::Depth: return DramClass::DepthStencil;
-    case TrafficClass::Visibility: return DramClass::Visibility;
-    case TrafficClass::WorkLists: return DramClass::WorkLists;
-    case TrafficClass::Other: return DramClass::Other;
-  }
-  return DramClass::Other;
-}
-
 bool is_resolve_target(const PassDesc& pass, const Attachment& a) {
   for (const auto& o : pass.attachments) {
     if (o.resolve == a.name) return true;
@@ -414,7 +400,7 @@ class FrameSimulator {
           if (!b || !seen.insert(n).second) continue;
           auto w = result_.images.buffer_bytes_written.find(n);
           const std::uint64_t bytes = w == result_.images.buffer_bytes_written.end() ? b->bytes : w->second;
-          ps->dram.read(dram_class_of_buffer(b->traffic), bytes);
+          ps->dram.read(traffic_class_of(b->traffic), bytes);
         }
       }
     }
