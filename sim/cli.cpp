@@ -20,6 +20,11 @@ const std::vector<CliCommand>& cli_commands() {
       {"scene", "Describe a scene: scene info atrium[:detail] | FILE.gltf/.glb", cmd_scene},
       {"trace", "Generate the command trace of a technique for a scene, lights, camera and resolution", cmd_trace},
       {"run", "Replay a trace on a hardware configuration and write the run to a results database", cmd_run},
+      {"sweep", "Run a sweep file's points in parallel worker processes into a results database, resumably "
+                "(or emit a Slurm job array)", cmd_sweep},
+      {"merge", "Merge shard databases (Slurm array tasks) into one without duplicates", cmd_merge},
+      {"report", "Compare techniques or configurations in a results database: tables of time, DRAM, energy",
+       cmd_report},
   };
   return commands;
 }

@@ -8,6 +8,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "analysis/report.hpp"
 #include "sim/errors.hpp"
 
 namespace tbdr {
@@ -155,6 +156,7 @@ ResultsDb::ResultsDb(const std::string& path, int target_version) : path_(path) 
     }
     exec("PRAGMA journal_mode = WAL");
     migrate(target_version);
+    create_views(db_, path_);  // the analysis views (analysis/views.sql)
   } catch (const InputError& e) {
     sqlite3_close(db_);
     db_ = nullptr;

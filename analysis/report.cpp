@@ -1,0 +1,531 @@
+// `tbdrsim report`: comparison tables over the analysis views (v_run_summary, v_param, v_metric).
+#include "analysis/report.hpp"
+
+#include <sqlite3.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <ostream>
+#include <set>
+#include <sstream>
+
+#include "sim/errors.hpp"
+#include "sim/results_db.hpp"
+
+namespace tbdr {
+
+// ---------------------------------------------------------------------------------------------
+// SqlQuery
+
+SqlQuery::SqlQuery(sqlite3* db, const std::string& path, const std::string& sql) : db_(db), path_(path) {
+  const char* tail = nullptr;
+  if (sqlite3_prepare_v2(db, sql.c_str(), static_cast<int>(sql.size()), &s_, &tail) != SQLITE_OK) {
+    std::string head = sql.substr(0, 60);
+    std::replace(head.begin(), head.end(), '\n', ' ');
+    fail("cannot prepare '" + head + (sql.size() > 60 ? "...'" : "'"));
+  }
+  if (tail && std::string(tail).find_first_not_of(" \t\r\n;") != std::string::npos) {
+    sqlite3_finalize(s_);
+    s_ = nullptr;
+    throw InputError(path_, "SQL: only one statement allowed, found more after '" +
+                                sql.substr(0, static_cast<std::size_t>(tail - sql.c_str())) + "'");
+  }
+}
+
+SqlQuery::~SqlQuery() { sqlite3_finalize(s_); }
+
+void SqlQuery::fail(const std::string& what) const {
+  throw InputError(path_, "SQLite: " + what + ": " + sqlite3_errmsg(db_));
+}
+
+SqlQuery& SqlQuery::bind(int i, const std::string& v) {
+  sqlite3_bind_text(s_, i, v.c_str(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
+  return *this;
+}
+SqlQuery& SqlQuery::bind(int i, std::int64_t v) {
+  sqlite3_bind_int64(s_, i, v);
+  return *this;
+}
+SqlQuery& SqlQuery::bind(int i, double v) {
+  sqlite3_bind_double(s_, i, v);
+  return *this;
+}
+
+bool SqlQuery::step() {
+  const int rc = sqlite3_step(s_);
+  if (rc == SQLITE_ROW) return true;
+  if (rc == SQLITE_DONE) return false;
+  fail("step failed");
+}
+
+void SqlQuery::reset() {
+  sqlite3_reset(s_);
+  sqlite3_clear_bindings(s_);
+}
+
+int SqlQuery::columns() const { return sqlite3_column_count(s_); }
+std::string SqlQuery::column_name(int col) const {
+  const char* n = sqlite3_column_name(s_, col);
+  return n ? n : "";
+}
+bool SqlQuery::is_null(int col) const { return sqlite3_column_type(s_, col) == SQLITE_NULL; }
+std::string SqlQuery::text(int col) const {
+  const auto* p = sqlite3_column_text(s_, col);
+  return p ? reinterpret_cast<const char*>(p) : "";
+}
+std::int64_t SqlQuery::int64(int col) const { return sqlite3_column_int64(s_, col); }
+double SqlQuery::real(int col) const { return sqlite3_column_double(s_, col); }
+
+// ---------------------------------------------------------------------------------------------
+// Report
+
+ReportFormat parse_report_format(const std::string& text) {
+  if (text == "table") return ReportFormat::Table;
+  if (text == "csv") return ReportFormat::Csv;
+  if (text == "markdown" || text == "md") return ReportFormat::Markdown;
+  throw InputError("--format " + text, "expected table, csv or markdown");
+}
+
+namespace {
+
+/// The traffic classes in the order the simulator declares them (others follow, sorted).
+const char* const kDramClassOrder[] = {"parameter_buffer", "vertices", "indices",    "textures", "color",
+                                       "depth_stencil",    "gbuffer",  "visibility", "light_data",
+                                       "light_lists",      "work_lists", "spill",    "other"};
+
+/// Shorthands for the group keys a user types most.
+std::string canonical_group_key(const std::string& key) {
+  if (key == "technique") return "trace.technique";
+  if (key == "scene") return "trace.scene";
+  if (key == "config" || key == "config_name") return "config.name";
+  if (key == "lights") return "trace.lights";
+  return key;
+}
+
+bool parse_number(const std::string& s, double& v) {
+  if (s.empty()) return false;
+  auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+  return r.ec == std::errc{} && r.ptr == s.data() + s.size();
+}
+
+/// Numbers sort numerically, text alphabetically, numbers before text.
+bool key_less(const std::string& a, const std::string& b) {
+  double x = 0, y = 0;
+  const bool na = parse_number(a, x), nb = parse_number(b, y);
+  if (na && nb) return x < y;
+  if (na != nb) return na;
+  return a < b;
+}
+
+/// Derived figures carry their unit in their name; raw statistics ('tsp.shaded_samples') get it added.
+std::string header_text(const std::string& metric, const std::string& unit) {
+  if (unit.empty() || metric.find('.') == std::string::npos) return metric;
+  return metric + " (" + unit + ")";
+}
+
+bool starts_ends(const std::string& s, const std::string& pre, const std::string& suf) {
+  return s.size() > pre.size() + suf.size() && s.rfind(pre, 0) == 0 &&
+         s.compare(s.size() - suf.size(), suf.size(), suf) == 0;
+}
+
+/// The default report's three tables: frame figures, DRAM MB per class, energy mJ per component.
+std::vector<ReportTable::Section> default_sections(const std::vector<std::string>& metrics) {
+  ReportTable::Section frame{"per frame", {}, {}};
+  ReportTable::Section dram{"DRAM MB per traffic class (read + written, as requested by the units; device = after the caches)", {}, {}};
+  ReportTable::Section energy{"energy mJ per component", {}, {}};
+  std::optional<std::size_t> dram_total, device_total, energy_total;
+  for (std::size_t i = 0; i < metrics.size(); ++i) {
+    const std::string& m = metrics[i];
+    if (m == "dram_total_mb") dram_total = i;
+    if (m == "dram_device_total_mb") device_total = i;
+    if (m == "energy_total_mj") energy_total = i;
+    if (m != "dram_total_mb" && m != "dram_device_total_mb" && starts_ends(m, "dram_", "_mb")) {
+      dram.metrics.push_back(i);
+      dram.headers.push_back(m.substr(5, m.size() - 8));
+    } else if (m != "energy_total_mj" && starts_ends(m, "energy_", "_mj")) {
+      energy.metrics.push_back(i);
+      energy.headers.push_back(m.substr(7, m.size() - 10));
+    } else {
+      frame.metrics.push_back(i);
+      frame.headers.push_back(m);
+    }
+  }
+  if (!dram.metrics.empty() && dram_total) {
+    dram.metrics.push_back(*dram_total);
+    dram.headers.push_back("total");
+  }
+  if (!dram.metrics.empty() && device_total) {
+    dram.metrics.push_back(*device_total);
+    dram.headers.push_back("device_total");
+  }
+  if (!energy.metrics.empty() && energy_total) {
+    energy.metrics.push_back(*energy_total);
+    energy.headers.push_back("total");
+  }
+  std::vector<ReportTable::Section> out;
+  for (auto* sec : {&frame, &dram, &energy}) {
+    if (!sec->metrics.empty()) out.push_back(*sec);
+  }
+  return out;
+}
+
+std::string format_value(double v) {
+  char buf[64];
+  if (std::fabs(v) < 1e15 && v == std::floor(v)) {
+    std::snprintf(buf, sizeof buf, "%.0f", v);
+  } else if (std::fabs(v) >= 1e4) {
+    std::snprintf(buf, sizeof buf, "%.0f", v);
+  } else {
+    std::snprintf(buf, sizeof buf, "%.4g", v);
+  }
+  return buf;
+}
+
+std::string format_csv_value(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) {
+    if (c == '"') q += '"';
+    q += c;
+  }
+  return q + "\"";
+}
+
+std::string md_field(const std::string& s) {
+  std::string r;
+  for (char c : s) {
+    if (c == '|') r += '\\';
+    r += c;
+  }
+  return r;
+}
+
+bool is_optional_default(const std::string& metric) {
+  return metric.rfind("dram_", 0) == 0 || metric.rfind("energy_", 0) == 0 || metric == "frame_time_ms" ||
+         metric == "cycles";
+}
+
+}  // namespace
+
+std::vector<std::string> default_report_metrics(sqlite3* db, const std::string& path) {
+  std::vector<std::string> m = {"frame_time_ms", "cycles", "dram_total_mb", "dram_device_total_mb"};
+  std::set<std::string> classes;
+  {
+    SqlQuery q(db, path, "SELECT DISTINCT substr(scope, 12) FROM stats WHERE scope GLOB 'frame/dram.*'");
+    while (q.step()) classes.insert(q.text(0));
+  }
+  for (const char* c : kDramClassOrder) {
+    if (classes.erase(c)) m.push_back(std::string("dram_") + c + "_mb");
+  }
+  for (const auto& c : classes) m.push_back("dram_" + c + "_mb");
+  m.push_back("energy_total_mj");
+  {
+    SqlQuery q(db, path,
+               "SELECT DISTINCT substr(name, 1, length(name) - 3) FROM stats WHERE scope = 'frame/energy' "
+               "AND name GLOB '*_pj' AND name <> 'total_pj' ORDER BY rowid");
+    while (q.step()) m.push_back("energy_" + q.text(0) + "_mj");
+  }
+  m.push_back("overshading");
+  m.push_back("lights_per_pixel");
+  return m;
+}
+
+ReportTable build_report(const ResultsDb& db, const ReportOptions& opt) {
+  sqlite3* h = db.handle();
+  const std::string& path = db.path();
+  ReportTable t;
+  std::vector<std::string> keys;
+  for (const auto& k : opt.by.empty() ? std::vector<std::string>{"technique"} : opt.by) {
+    keys.push_back(canonical_group_key(k));
+    t.group_keys.push_back(k);
+  }
+  // Runs passing the filter, and their inputs (config hash / trace hash).
+  std::vector<std::int64_t> ok_runs;
+  std::map<std::int64_t, std::string> run_inputs;
+  {
+    const std::string where = opt.where.empty() ? "1" : opt.where;
+    std::unique_ptr<SqlQuery> q;
+    try {
+      q = std::make_unique<SqlQuery>(
+          h, path, "SELECT run_id, status, config_hash, trace_hash FROM v_run_summary WHERE (" + where + ") ORDER BY run_id");
+      while (q->step()) {
+        if (q->text(1) == "ok") {
+          ok_runs.push_back(q->int64(0));
+          run_inputs[q->int64(0)] = q->text(2) + "/" + q->text(3);
+        } else {
+          ++t.runs_failed;
+        }
+      }
+    } catch (const InputError& e) {
+      throw InputError("--where " + opt.where, std::string(e.what()) + " (the condition is on v_run_summary's columns)");
+    }
+  }
+  t.runs_used = static_cast<std::int64_t>(ok_runs.size());
+  const std::set<std::int64_t> selected(ok_runs.begin(), ok_runs.end());
+
+  // Group key values per run.
+  std::map<std::int64_t, std::vector<std::string>> run_keys;
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    SqlQuery exists(h, path, "SELECT 1 FROM v_param WHERE key = ? LIMIT 1");
+    exists.bind(1, keys[k]);
+    if (!exists.step()) {
+      throw InputError("--by " + t.group_keys[k],
+                       "no run has this key; use technique, scene, config, lights, trace.width, trace.height, "
+                       "trace.samples or a parameter key (`tbdrsim params` lists them)");
+    }
+    SqlQuery q(h, path, "SELECT run_id, value FROM v_param WHERE key = ?");
+    q.bind(1, keys[k]);
+    while (q.step()) {
+      const std::int64_t id = q.int64(0);
+      if (!selected.count(id)) continue;
+      auto& v = run_keys[id];
+      v.resize(keys.size(), "(none)");
+      v[k] = q.text(1);
+    }
+  }
+
+  // Metrics.
+  const bool defaults = opt.metrics.empty();
+  t.metrics = defaults ? default_report_metrics(h, path) : opt.metrics;
+  t.units.assign(t.metrics.size(), "");
+  std::map<std::string, std::size_t> metric_index;
+  for (std::size_t i = 0; i < t.metrics.size(); ++i) metric_index[t.metrics[i]] = i;
+
+  struct Acc {
+    std::vector<double> sum;
+    std::vector<std::int64_t> n;
+    std::set<std::int64_t> runs;
+    std::set<std::string> inputs;
+  };
+  std::map<std::vector<std::string>, Acc> groups;
+  for (const auto id : ok_runs) {
+    auto& keyv = run_keys[id];
+    keyv.resize(keys.size(), "(none)");
+    auto& acc = groups[keyv];
+    acc.sum.resize(t.metrics.size(), 0.0);
+    acc.n.resize(t.metrics.size(), 0);
+    acc.runs.insert(id);
+    acc.inputs.insert(run_inputs[id]);
+  }
+  std::vector<bool> seen(t.metrics.size(), false), nonzero(t.metrics.size(), false);
+  if (!ok_runs.empty()) {
+    std::string in;
+    for (std::size_t i = 0; i < t.metrics.size(); ++i) in += (i ? ",?" : "?");
+    SqlQuery q(h, path, "SELECT run_id, metric, value, unit FROM v_metric WHERE metric IN (" + in + ")");
+    for (std::size_t i = 0; i < t.metrics.size(); ++i) q.bind(static_cast<int>(i + 1), t.metrics[i]);
+    while (q.step()) {
+      const std::int64_t id = q.int64(0);
+      if (!selected.count(id)) continue;
+      const std::size_t m = metric_index.at(q.text(1));
+      if (t.units[m].empty()) t.units[m] = q.text(3);
+      if (q.is_null(2)) continue;
+      const double v = q.real(2);
+      auto& acc = groups[run_keys[id]];
+      acc.sum[m] += v;
+      acc.n[m] += 1;
+      seen[m] = true;
+      if (v != 0) nonzero[m] = true;
+    }
+  }
+  if (!defaults && !ok_runs.empty()) {
+    for (std::size_t m = 0; m < t.metrics.size(); ++m) {
+      if (seen[m]) continue;
+      SqlQuery any(h, path, "SELECT 1 FROM v_metric WHERE metric = ? LIMIT 1");
+      any.bind(1, t.metrics[m]);
+      if (!any.step()) {
+        throw InputError("--metric " + t.metrics[m],
+                         "no run has this figure; see docs/queries.md or `SELECT DISTINCT metric FROM v_metric`");
+      }
+    }
+  }
+  // Keep the default metrics some run recorded (traffic classes and energy components only when
+  // some run has a non-zero value).
+  std::vector<std::size_t> keep;
+  for (std::size_t m = 0; m < t.metrics.size(); ++m) {
+    if (!defaults || (seen[m] && (nonzero[m] || !is_optional_default(t.metrics[m])))) keep.push_back(m);
+  }
+  std::vector<std::string> metrics, units;
+  for (auto m : keep) {
+    metrics.push_back(t.metrics[m]);
+    units.push_back(t.units[m]);
+  }
+  for (auto& [k, acc] : groups) {
+    if (acc.inputs.size() > 1) ++t.mixed_groups;
+    ReportTable::Row row;
+    row.keys = k;
+    row.runs = static_cast<std::int64_t>(acc.runs.size());
+    for (auto m : keep) {
+      if (acc.n[m] > 0) {
+        row.values.push_back(acc.sum[m] / static_cast<double>(acc.n[m]));
+      } else {
+        row.values.push_back(std::nullopt);
+      }
+    }
+    t.rows.push_back(std::move(row));
+  }
+  t.metrics = std::move(metrics);
+  t.units = std::move(units);
+  if (defaults) {
+    t.sections = default_sections(t.metrics);
+  } else {
+    ReportTable::Section all;
+    for (std::size_t m = 0; m < t.metrics.size(); ++m) {
+      all.metrics.push_back(m);
+      all.headers.push_back(header_text(t.metrics[m], t.units[m]));
+    }
+    t.sections.push_back(std::move(all));
+  }
+  std::sort(t.rows.begin(), t.rows.end(), [](const ReportTable::Row& a, const ReportTable::Row& b) {
+    for (std::size_t i = 0; i < a.keys.size(); ++i) {
+      if (a.keys[i] != b.keys[i]) return key_less(a.keys[i], b.keys[i]);
+    }
+    return false;
+  });
+  return t;
+}
+
+namespace {
+
+/// Prints one grid: the first `label_cols` columns left-aligned, the others right-aligned.
+void print_grid(const std::vector<std::vector<std::string>>& grid, std::size_t label_cols, ReportFormat format,
+                std::ostream& out) {
+  std::vector<std::size_t> width(grid.front().size(), 0);
+  for (const auto& line : grid) {
+    for (std::size_t c = 0; c < line.size(); ++c) width[c] = std::max(width[c], line[c].size());
+  }
+  if (format == ReportFormat::Markdown) {
+    for (std::size_t i = 0; i < grid.size(); ++i) {
+      out << "|";
+      for (std::size_t c = 0; c < grid[i].size(); ++c) {
+        const std::string cell = md_field(grid[i][c]);
+        const std::size_t w = std::max<std::size_t>(width[c], 3);
+        const std::size_t pad = w > grid[i][c].size() ? w - grid[i][c].size() : 0;
+        out << " " << (c < label_cols ? cell + std::string(pad, ' ') : std::string(pad, ' ') + cell) << " |";
+      }
+      out << "\n";
+      if (i == 0) {
+        out << "|";
+        for (std::size_t c = 0; c < grid[0].size(); ++c) {
+          const std::size_t w = std::max<std::size_t>(width[c], 3);
+          out << (c < label_cols ? " " + std::string(w, '-') + " |" : " " + std::string(w - 1, '-') + ": |");
+        }
+        out << "\n";
+      }
+    }
+    return;
+  }
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    std::string line;
+    for (std::size_t c = 0; c < grid[i].size(); ++c) {
+      const std::string& cell = grid[i][c];
+      const std::size_t pad = width[c] - cell.size();
+      if (c) line += "  ";
+      line += c < label_cols ? cell + std::string(pad, ' ') : std::string(pad, ' ') + cell;
+    }
+    out << line << "\n";
+    if (i == 0) {
+      std::string rule;
+      for (std::size_t c = 0; c < width.size(); ++c) rule += (c ? "  " : "") + std::string(width[c], '-');
+      out << rule << "\n";
+    }
+  }
+}
+
+}  // namespace
+
+void print_report(const ReportTable& t, ReportFormat format, bool transpose, std::ostream& out) {
+  const bool csv = format == ReportFormat::Csv;
+  auto value_text = [&](const std::optional<double>& v) {
+    if (!v) return csv ? std::string() : std::string("-");
+    return csv ? format_csv_value(*v) : format_value(*v);
+  };
+  // CSV: one flat table with the full metric names.
+  std::vector<ReportTable::Section> sections = t.sections;
+  if (csv || sections.empty()) {
+    ReportTable::Section all;
+    for (std::size_t m = 0; m < t.metrics.size(); ++m) {
+      all.metrics.push_back(m);
+      all.headers.push_back(csv ? t.metrics[m] : header_text(t.metrics[m], t.units[m]));
+    }
+    sections = {all};
+  }
+  if (!csv) {
+    out << t.runs_used << " finished run(s)";
+    if (t.runs_failed) out << " (" << t.runs_failed << " failed run(s) left out)";
+    out << ", grouped by ";
+    for (std::size_t k = 0; k < t.group_keys.size(); ++k) out << (k ? " x " : "") << t.group_keys[k];
+    out << "; the runs of a group averaged\n";
+    if (t.mixed_groups) {
+      out << "note: " << t.mixed_groups
+          << " group(s) average runs of different configurations or traces; separate them with more --by keys "
+             "(config, lights, a parameter key) or --where\n";
+    }
+    if (t.rows.empty()) {
+      out << "(no finished runs match)\n";
+      return;
+    }
+  }
+  for (std::size_t s = 0; s < sections.size(); ++s) {
+    const auto& sec = sections[s];
+    std::vector<std::vector<std::string>> grid;
+    std::size_t label_cols = 0;
+    if (!transpose) {
+      std::vector<std::string> head = t.group_keys;
+      head.push_back("runs");
+      head.insert(head.end(), sec.headers.begin(), sec.headers.end());
+      grid.push_back(head);
+      for (const auto& r : t.rows) {
+        std::vector<std::string> line = r.keys;
+        line.push_back(std::to_string(r.runs));
+        for (const auto m : sec.metrics) line.push_back(value_text(r.values[m]));
+        grid.push_back(line);
+      }
+      label_cols = t.group_keys.size();
+    } else {
+      std::string corner;
+      for (std::size_t k = 0; k < t.group_keys.size(); ++k) corner += (k ? " / " : "") + t.group_keys[k];
+      std::vector<std::string> head = {"metric \\ " + corner};
+      for (const auto& r : t.rows) {
+        std::string label;
+        for (std::size_t k = 0; k < r.keys.size(); ++k) label += (k ? " / " : "") + r.keys[k];
+        head.push_back(label);
+      }
+      grid.push_back(head);
+      std::vector<std::string> runs = {"runs"};
+      for (const auto& r : t.rows) runs.push_back(std::to_string(r.runs));
+      grid.push_back(runs);
+      for (std::size_t i = 0; i < sec.metrics.size(); ++i) {
+        std::vector<std::string> line = {sec.headers[i]};
+        for (const auto& r : t.rows) line.push_back(value_text(r.values[sec.metrics[i]]));
+        grid.push_back(line);
+      }
+      label_cols = 1;
+    }
+    if (csv) {
+      for (const auto& line : grid) {
+        for (std::size_t c = 0; c < line.size(); ++c) out << (c ? "," : "") << csv_field(line[c]);
+        out << "\n";
+      }
+      continue;
+    }
+    if (!sec.title.empty()) {
+      out << "\n" << (format == ReportFormat::Markdown ? "### " : "") << sec.title << "\n";
+      if (format == ReportFormat::Markdown) out << "\n";
+    } else if (format == ReportFormat::Markdown) {
+      out << "\n";
+    }
+    print_grid(grid, label_cols, format, out);
+  }
+}
+
+}  // namespace tbdr

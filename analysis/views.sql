@@ -1,0 +1,270 @@
+-- R"tbdr_views(
+-- tbdrsim results database: the analysis views. This file is the ONLY copy of their SQL.
+--
+-- tbdrsim compiles it into the binary (analysis/views.cpp #includes it: the first and last lines
+-- are SQL comments to SQLite but open and close a C++ raw string) and creates or refreshes the
+-- views in every database it opens. It is also plain SQL for the sqlite3 shell:
+--   sqlite3 results.db < analysis/views.sql
+--
+-- Figures a run did not record (cycles, time and energy before the timing model existed, a
+-- traffic class a version did not book) come out NULL, never 0 and never an error.
+-- Units are in the column names: _mb = 1e6 bytes, _mj = millijoules, _ms = milliseconds.
+-- dram_*_mb is the traffic the units requested at the chip boundary (frame/dram*, before the
+-- system level cache); dram_device_*_mb is what reached the DRAM devices (mem/dram*).
+-- light_evaluations counts fragment shading (tsp) and compute shading (deferred dispatches).
+-- Docs and ready-to-paste questions: docs/queries.md.
+
+-- One row per run: identity, status, frame size, the headline figures.
+DROP VIEW IF EXISTS v_run_summary;
+CREATE VIEW v_run_summary AS
+WITH f AS (
+  -- One index lookup per figure (stats is keyed by run_id, scope, name): far faster than
+  -- aggregating every statistic of every run.
+  SELECT r.id AS run_id,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'width') AS width,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'height') AS height,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'samples_per_pixel') AS samples_per_pixel,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'lights') AS lights,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'passes') AS passes,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'geometry_passes') AS geometry_passes,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'dispatches') AS dispatches,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'shaded_samples') AS shaded_samples,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'shader_invocations') AS shader_invocations,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'light_evaluations') AS tsp_light_evaluations,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/compute' AND name = 'compute_light_evaluations') AS compute_light_evaluations,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/isp' AND name = 'samples_rasterised') AS samples_rasterised,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tiler' AND name = 'partial_renders') AS partial_renders,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram' AND name = 'read_bytes') AS dram_read_bytes,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram' AND name = 'write_bytes') AS dram_write_bytes,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.parameter_buffer' AND name = 'read_bytes') AS pb_r,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.parameter_buffer' AND name = 'write_bytes') AS pb_w,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.vertices' AND name = 'read_bytes') AS vtx_r,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.vertices' AND name = 'write_bytes') AS vtx_w,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.indices' AND name = 'read_bytes') AS idx_r,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.indices' AND name = 'write_bytes') AS idx_w,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.textures' AND name = 'read_bytes') AS tex_r,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.textures' AND name = 'write_bytes') AS tex_w,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.color' AND name = 'read_bytes') AS col_r,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.color' AND name = 'write_bytes') AS col_w,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.depth_stencil' AND name = 'read_bytes') AS ds_r,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.depth_stencil' AND name = 'write_bytes') AS ds_w,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.gbuffer' AND name = 'read_bytes') AS gb_r,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.gbuffer' AND name = 'write_bytes') AS gb_w,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.visibility' AND name = 'read_bytes') AS vis_r,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.visibility' AND name = 'write_bytes') AS vis_w,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.light_data' AND name = 'read_bytes') AS ld_r,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.light_data' AND name = 'write_bytes') AS ld_w,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.light_lists' AND name = 'read_bytes') AS ll_r,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.light_lists' AND name = 'write_bytes') AS ll_w,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.work_lists' AND name = 'read_bytes') AS wl_r,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.work_lists' AND name = 'write_bytes') AS wl_w,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.spill' AND name = 'read_bytes') AS sp_r,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.spill' AND name = 'write_bytes') AS sp_w,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.other' AND name = 'read_bytes') AS oth_r,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.other' AND name = 'write_bytes') AS oth_w,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'mem/dram' AND name = 'read_bytes') AS device_read_bytes,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'mem/dram' AND name = 'write_bytes') AS device_write_bytes,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/timing' AND name = 'frame_cycles') AS cycles,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/timing' AND name = 'frame_time_ms') AS frame_time_ms,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'total_mj') AS energy_total_mj,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'dram_pj') AS e_dram_pj,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'caches_pj') AS e_caches_pj,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'tile_buffer_pj') AS e_tile_buffer_pj,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'tag_and_depth_buffer_pj') AS e_tag_depth_pj,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'alu_pj') AS e_alu_pj,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'texture_pj') AS e_texture_pj,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'static_pj') AS e_static_pj,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/host' AND name = 'simulation_wall_seconds') AS sim_wall_seconds
+  FROM runs r
+),
+g AS (
+  SELECT f.*,
+    CASE WHEN f.tsp_light_evaluations IS NULL AND f.compute_light_evaluations IS NULL THEN NULL
+         ELSE coalesce(f.tsp_light_evaluations, 0) + coalesce(f.compute_light_evaluations, 0) END AS light_evaluations
+  FROM f
+)
+SELECT r.id AS run_id, r.technique, r.scene, r.config_name, r.status, r.error,
+  r.config_hash, r.trace_hash, r.trace_path, r.started_at, r.host,
+  f.width, f.height, f.samples_per_pixel, f.lights, f.passes, f.geometry_passes, f.dispatches,
+  f.shaded_samples, f.shader_invocations, f.light_evaluations, f.samples_rasterised, f.partial_renders,
+  f.shaded_samples / nullif(f.width * f.height * coalesce(f.samples_per_pixel, 1), 0) AS overshading,
+  f.light_evaluations / nullif(f.width * f.height, 0) AS lights_per_pixel,
+  f.light_evaluations / nullif(f.shader_invocations, 0) AS lights_per_fragment,
+  f.pb_r / 1e6 AS dram_parameter_buffer_read_mb, f.pb_w / 1e6 AS dram_parameter_buffer_write_mb,
+  f.vtx_r / 1e6 AS dram_vertices_read_mb, f.vtx_w / 1e6 AS dram_vertices_write_mb,
+  f.idx_r / 1e6 AS dram_indices_read_mb, f.idx_w / 1e6 AS dram_indices_write_mb,
+  f.tex_r / 1e6 AS dram_textures_read_mb, f.tex_w / 1e6 AS dram_textures_write_mb,
+  f.col_r / 1e6 AS dram_color_read_mb, f.col_w / 1e6 AS dram_color_write_mb,
+  f.ds_r / 1e6 AS dram_depth_stencil_read_mb, f.ds_w / 1e6 AS dram_depth_stencil_write_mb,
+  f.gb_r / 1e6 AS dram_gbuffer_read_mb, f.gb_w / 1e6 AS dram_gbuffer_write_mb,
+  f.vis_r / 1e6 AS dram_visibility_read_mb, f.vis_w / 1e6 AS dram_visibility_write_mb,
+  f.ld_r / 1e6 AS dram_light_data_read_mb, f.ld_w / 1e6 AS dram_light_data_write_mb,
+  f.ll_r / 1e6 AS dram_light_lists_read_mb, f.ll_w / 1e6 AS dram_light_lists_write_mb,
+  f.wl_r / 1e6 AS dram_work_lists_read_mb, f.wl_w / 1e6 AS dram_work_lists_write_mb,
+  f.sp_r / 1e6 AS dram_spill_read_mb, f.sp_w / 1e6 AS dram_spill_write_mb,
+  f.oth_r / 1e6 AS dram_other_read_mb, f.oth_w / 1e6 AS dram_other_write_mb,
+  f.dram_read_bytes / 1e6 AS dram_read_mb,
+  f.dram_write_bytes / 1e6 AS dram_write_mb,
+  (f.dram_read_bytes + f.dram_write_bytes) / 1e6 AS dram_total_mb,
+  f.device_read_bytes / 1e6 AS dram_device_read_mb,
+  f.device_write_bytes / 1e6 AS dram_device_write_mb,
+  (f.device_read_bytes + f.device_write_bytes) / 1e6 AS dram_device_total_mb,
+  f.cycles, f.frame_time_ms,
+  f.energy_total_mj,
+  f.e_dram_pj * 1e-9 AS energy_dram_mj,
+  f.e_caches_pj * 1e-9 AS energy_caches_mj,
+  f.e_tile_buffer_pj * 1e-9 AS energy_tile_buffer_mj,
+  f.e_tag_depth_pj * 1e-9 AS energy_tag_and_depth_buffer_mj,
+  f.e_alu_pj * 1e-9 AS energy_alu_mj,
+  f.e_texture_pj * 1e-9 AS energy_texture_mj,
+  f.e_static_pj * 1e-9 AS energy_static_mj,
+  f.sim_wall_seconds
+FROM runs r JOIN g AS f ON f.run_id = r.id;
+
+-- Every parameter of every run, one row each, for pivoting and grouping: the resolved hardware
+-- parameters (run_params) plus what the trace and the run fixed, under pseudo-keys:
+-- trace.technique, trace.scene, trace.lights, trace.width, trace.height, trace.samples, config.name.
+-- value_num is the value as a number (booleans 1/0) or NULL for text.
+DROP VIEW IF EXISTS v_param;
+CREATE VIEW v_param AS
+SELECT run_id, key, value,
+  CASE WHEN value = 'true' THEN 1 WHEN value = 'false' THEN 0
+       WHEN value <> '' AND trim(value, '0123456789.eE+-') = '' AND value GLOB '*[0-9]*'
+         THEN CAST(value AS REAL) END AS value_num,
+  origin
+FROM run_params
+UNION ALL
+SELECT id, 'trace.technique', technique, NULL, 'trace' FROM runs
+UNION ALL
+SELECT id, 'trace.scene', scene, NULL, 'trace' FROM runs
+UNION ALL
+SELECT id, 'config.name', config_name, NULL, 'config file' FROM runs
+UNION ALL
+SELECT r.id,
+  CASE s.name WHEN 'lights' THEN 'trace.lights' WHEN 'width' THEN 'trace.width' WHEN 'height' THEN 'trace.height'
+              ELSE 'trace.samples' END,
+  CAST(CAST(s.value AS INTEGER) AS TEXT), s.value, 'trace'
+FROM runs r JOIN stats s ON s.run_id = r.id AND s.scope = 'frame/frame'
+  AND s.name IN ('lights', 'width', 'height', 'samples_per_pixel');
+
+-- DRAM traffic per run and traffic class (long form: works for classes added later). read/write/
+-- total_mb: what the units requested (frame/dram.<class>); device_*_mb: what reached the DRAM
+-- devices after the caches (mem/dram.class.<class>), NULL for runs without a memory system model.
+DROP VIEW IF EXISTS v_dram_class;
+CREATE VIEW v_dram_class AS
+SELECT r.id AS run_id, r.technique, r.config_name, r.status, substr(s.scope, 12) AS class,
+  sum(CASE WHEN s.name = 'read_bytes' THEN s.value END) / 1e6 AS read_mb,
+  sum(CASE WHEN s.name = 'write_bytes' THEN s.value END) / 1e6 AS write_mb,
+  sum(s.value) / 1e6 AS total_mb,
+  (SELECT value FROM stats WHERE run_id = r.id AND scope = 'mem/dram.class.' || substr(s.scope, 12)
+     AND name = 'read_bytes') / 1e6 AS device_read_mb,
+  (SELECT value FROM stats WHERE run_id = r.id AND scope = 'mem/dram.class.' || substr(s.scope, 12)
+     AND name = 'write_bytes') / 1e6 AS device_write_mb,
+  (SELECT sum(value) FROM stats WHERE run_id = r.id AND scope = 'mem/dram.class.' || substr(s.scope, 12)
+     AND name IN ('read_bytes', 'write_bytes')) / 1e6 AS device_total_mb
+FROM runs r
+JOIN stats s ON s.run_id = r.id AND s.scope > 'frame/dram.' AND s.scope < 'frame/dram/'  -- 'frame/dram.*'
+  AND s.name IN ('read_bytes', 'write_bytes')
+GROUP BY r.id, s.scope;
+
+-- Energy per run and component in mJ (long form: every frame/energy <component>_pj row).
+DROP VIEW IF EXISTS v_energy_component;
+CREATE VIEW v_energy_component AS
+SELECT r.id AS run_id, r.technique, r.config_name, r.status,
+  substr(s.name, 1, length(s.name) - 3) AS component, s.value * 1e-9 AS energy_mj
+FROM runs r JOIN stats s ON s.run_id = r.id AND s.scope = 'frame/energy'
+WHERE s.name GLOB '*_pj' AND s.name <> 'total_pj';
+
+-- Every figure of every run, one row each (metric, value, unit): the derived figures of
+-- v_run_summary under their column names (frame_time_ms, cycles, dram_total_mb, energy_total_mj,
+-- overshading, lights_per_pixel, ...), DRAM MB read+written per class ('dram_<class>_mb'), energy
+-- per component ('energy_<component>_mj'), DRAM MB after the caches per class
+-- ('dram_device_<class>_mb'), and every raw frame statistic as '<unit>.<name>' (the scope without
+-- 'frame/': 'tsp.shaded_samples', 'dram.color.write_bytes', 'unit.usc.utilization').
+DROP VIEW IF EXISTS v_metric;
+CREATE VIEW v_metric AS
+SELECT s.run_id, m.metric,
+  CASE m.metric
+    WHEN 'frame_time_ms' THEN s.frame_time_ms
+    WHEN 'cycles' THEN s.cycles
+    WHEN 'energy_total_mj' THEN s.energy_total_mj
+    WHEN 'dram_total_mb' THEN s.dram_total_mb
+    WHEN 'dram_read_mb' THEN s.dram_read_mb
+    WHEN 'dram_write_mb' THEN s.dram_write_mb
+    WHEN 'dram_device_total_mb' THEN s.dram_device_total_mb
+    WHEN 'dram_device_read_mb' THEN s.dram_device_read_mb
+    WHEN 'dram_device_write_mb' THEN s.dram_device_write_mb
+    WHEN 'overshading' THEN s.overshading
+    WHEN 'lights_per_pixel' THEN s.lights_per_pixel
+    WHEN 'lights_per_fragment' THEN s.lights_per_fragment
+    WHEN 'shaded_samples' THEN s.shaded_samples
+    WHEN 'samples_rasterised' THEN s.samples_rasterised
+    WHEN 'partial_renders' THEN s.partial_renders
+    WHEN 'sim_wall_seconds' THEN s.sim_wall_seconds
+  END AS value,
+  m.unit
+FROM v_run_summary s
+CROSS JOIN (SELECT column1 AS metric, column2 AS unit FROM (VALUES
+    ('frame_time_ms', 'ms'), ('cycles', 'cycles'),
+    ('energy_total_mj', 'mJ'),
+    ('dram_total_mb', 'MB'), ('dram_read_mb', 'MB'), ('dram_write_mb', 'MB'),
+    ('dram_device_total_mb', 'MB'), ('dram_device_read_mb', 'MB'), ('dram_device_write_mb', 'MB'),
+    ('overshading', 'shaded samples/sample'), ('lights_per_pixel', 'lights/pixel'),
+    ('lights_per_fragment', 'lights/fragment'), ('shaded_samples', 'samples'),
+    ('samples_rasterised', 'samples'), ('partial_renders', 'renders'), ('sim_wall_seconds', 's'))) m
+UNION ALL
+SELECT run_id, 'dram_' || class || '_mb', total_mb, 'MB' FROM v_dram_class WHERE total_mb IS NOT NULL
+UNION ALL
+SELECT run_id, 'dram_device_' || class || '_mb', device_total_mb, 'MB' FROM v_dram_class
+WHERE device_total_mb IS NOT NULL
+UNION ALL
+SELECT run_id, 'energy_' || component || '_mj', energy_mj, 'mJ' FROM v_energy_component
+UNION ALL
+SELECT run_id, substr(scope, 7) || '.' || name, value, unit FROM stats WHERE scope GLOB 'frame/*';
+
+-- Any figure against any parameter, finished runs only: filter on key and metric, e.g.
+--   SELECT value_num, avg(metric_value) FROM v_sensitivity
+--   WHERE key = 'tiling.tile_width' AND metric = 'frame_time_ms' GROUP BY value_num;
+DROP VIEW IF EXISTS v_sensitivity;
+CREATE VIEW v_sensitivity AS
+SELECT p.run_id, r.technique, r.scene, r.config_name, p.key, p.value, p.value_num,
+  m.metric, m.value AS metric_value, m.unit AS metric_unit
+FROM v_param p
+JOIN runs r ON r.id = p.run_id AND r.status = 'ok'
+JOIN v_metric m ON m.run_id = p.run_id;
+
+-- Techniques side by side: one row per (hardware config, scene, resolution, samples, lights,
+-- technique) over finished runs, repetitions averaged, with each technique's rank in its group
+-- (1 = fastest / least DRAM traffic / least energy).
+DROP VIEW IF EXISTS v_technique_comparison;
+CREATE VIEW v_technique_comparison AS
+SELECT config_name, config_hash, scene, width, height, samples_per_pixel, lights, technique,
+  count(*) AS runs,
+  avg(frame_time_ms) AS frame_time_ms, avg(cycles) AS cycles,
+  avg(dram_total_mb) AS dram_total_mb, avg(dram_read_mb) AS dram_read_mb, avg(dram_write_mb) AS dram_write_mb,
+  avg(dram_device_total_mb) AS dram_device_total_mb,
+  avg(dram_parameter_buffer_read_mb + dram_parameter_buffer_write_mb) AS dram_parameter_buffer_mb,
+  avg(dram_vertices_read_mb + dram_vertices_write_mb) AS dram_vertices_mb,
+  avg(dram_indices_read_mb + dram_indices_write_mb) AS dram_indices_mb,
+  avg(dram_textures_read_mb + dram_textures_write_mb) AS dram_textures_mb,
+  avg(dram_color_read_mb + dram_color_write_mb) AS dram_color_mb,
+  avg(dram_depth_stencil_read_mb + dram_depth_stencil_write_mb) AS dram_depth_stencil_mb,
+  avg(dram_gbuffer_read_mb + dram_gbuffer_write_mb) AS dram_gbuffer_mb,
+  avg(dram_visibility_read_mb + dram_visibility_write_mb) AS dram_visibility_mb,
+  avg(dram_light_data_read_mb + dram_light_data_write_mb) AS dram_light_data_mb,
+  avg(dram_light_lists_read_mb + dram_light_lists_write_mb) AS dram_light_lists_mb,
+  avg(dram_work_lists_read_mb + dram_work_lists_write_mb) AS dram_work_lists_mb,
+  avg(dram_spill_read_mb + dram_spill_write_mb) AS dram_spill_mb,
+  avg(dram_other_read_mb + dram_other_write_mb) AS dram_other_mb,
+  avg(energy_total_mj) AS energy_total_mj,
+  avg(overshading) AS overshading, avg(lights_per_pixel) AS lights_per_pixel,
+  rank() OVER (PARTITION BY config_hash, scene, width, height, samples_per_pixel, lights
+               ORDER BY avg(frame_time_ms) IS NULL, avg(frame_time_ms)) AS rank_frame_time,
+  rank() OVER (PARTITION BY config_hash, scene, width, height, samples_per_pixel, lights
+               ORDER BY avg(dram_total_mb) IS NULL, avg(dram_total_mb)) AS rank_dram,
+  rank() OVER (PARTITION BY config_hash, scene, width, height, samples_per_pixel, lights
+               ORDER BY avg(energy_total_mj) IS NULL, avg(energy_total_mj)) AS rank_energy
+FROM v_run_summary
+WHERE status = 'ok'
+GROUP BY config_hash, scene, width, height, samples_per_pixel, lights, technique;
+-- )tbdr_views"_tbdr_sql

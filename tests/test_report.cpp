@@ -1,0 +1,434 @@
+// The analysis views in every database and `tbdrsim report`: figures per run (NULL when a run did
+// not record them), parameters for pivoting, sensitivity rows, grouping by technique or parameter
+// with repetitions averaged, formats, errors, and the SQL of docs/queries.md on a real database.
+#include <gtest/gtest.h>
+
+#include <sqlite3.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "analysis/report.hpp"
+#include "sim/cli.hpp"
+#include "sim/errors.hpp"
+#include "sim/results_db.hpp"
+
+namespace tbdr {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("tbdrsim_test_report_" + std::to_string(getpid())) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+/// A run as the simulator writes it, with made-up figures.
+RunRecord synthetic_run(const std::string& technique, int tile_width, double shaded_samples, double lights,
+                        bool timed, double frame_time_ms = 0) {
+  RunRecord r;
+  r.started_at = "2026-01-01T00:00:00Z";
+  r.finished_at = r.started_at;
+  r.tool_version = "test";
+  r.host = "test";
+  r.command_line = "test";
+  r.config_name = "cfg";
+  r.config_hash = "c" + std::to_string(tile_width);
+  r.trace_path = technique + ".trace";
+  r.trace_hash = "t" + technique + std::to_string(lights);
+  r.scene = "atrium:1";
+  r.technique = technique;
+  r.params = {{"tiling.tile_width", std::to_string(tile_width), "--set tiling.tile_width=" + std::to_string(tile_width)},
+              {"gpu.mode", "tbdr", "default"},
+              {"writeback.compression_ratio", "0.5", "default"}};
+  auto st = [&](const std::string& scope, const std::string& name, double v, const std::string& unit) {
+    r.stats.push_back({scope, name, v, unit, "test"});
+  };
+  st("frame/frame", "width", 100, "pixels");
+  st("frame/frame", "height", 50, "pixels");
+  st("frame/frame", "samples_per_pixel", 1, "samples");
+  st("frame/frame", "lights", lights, "lights");
+  st("frame/tsp", "shaded_samples", shaded_samples, "samples");
+  st("frame/tsp", "shader_invocations", shaded_samples, "fragments");
+  st("frame/tsp", "light_evaluations", shaded_samples * 4, "evaluations");
+  st("frame/dram", "read_bytes", 3e6, "bytes");
+  st("frame/dram", "write_bytes", 1e6, "bytes");
+  st("frame/dram.color", "read_bytes", 0, "bytes");
+  st("frame/dram.color", "write_bytes", 1e6, "bytes");
+  st("frame/dram.parameter_buffer", "read_bytes", 3e6, "bytes");
+  st("frame/dram.parameter_buffer", "write_bytes", 0, "bytes");
+  st("frame/dram.gbuffer", "read_bytes", 0, "bytes");
+  st("frame/dram.gbuffer", "write_bytes", 0, "bytes");
+  st("pass0.main/dram", "read_bytes", 3e6, "bytes");
+  if (timed) {
+    st("frame/timing", "frame_cycles", frame_time_ms * 6e5, "cycles");
+    st("frame/timing", "frame_time_ms", frame_time_ms, "ms");
+    st("frame/energy", "dram_pj", 2e9, "pJ");
+    st("frame/energy", "alu_pj", 1e9, "pJ");
+    st("frame/energy", "total_pj", 3e9, "pJ");
+    st("frame/energy", "total_mj", 3, "mJ");
+  }
+  return r;
+}
+
+double real_of(const ResultsDb& db, const std::string& sql) {
+  SqlQuery q(db.handle(), db.path(), sql);
+  EXPECT_TRUE(q.step()) << sql;
+  EXPECT_FALSE(q.is_null(0)) << sql;
+  return q.real(0);
+}
+
+bool is_null(const ResultsDb& db, const std::string& sql) {
+  SqlQuery q(db.handle(), db.path(), sql);
+  return q.step() && q.is_null(0);
+}
+
+std::string report_text(const ResultsDb& db, const ReportOptions& opt, ReportFormat f = ReportFormat::Table) {
+  std::ostringstream out;
+  print_report(build_report(db, opt), f, opt.transpose, out);
+  return out.str();
+}
+
+std::vector<std::string> lines_of(const std::string& s) {
+  std::vector<std::string> v;
+  std::istringstream in(s);
+  std::string l;
+  while (std::getline(in, l)) v.push_back(l);
+  return v;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(ReportViews, EveryDatabaseHasCurrentViews) {
+  const std::string path = (scratch("views") / "v.db").string();
+  std::int64_t cookie = 0;
+  {
+    ResultsDb db(path);
+    for (const char* v : {"v_run_summary", "v_param", "v_metric", "v_sensitivity", "v_technique_comparison",
+                          "v_dram_class", "v_energy_component", "v_views_version"}) {
+      SqlQuery q(db.handle(), db.path(), "SELECT count(*) FROM sqlite_master WHERE type = 'view' AND name = ?");
+      q.bind(1, std::string(v));
+      ASSERT_TRUE(q.step());
+      EXPECT_EQ(q.int64(0), 1) << v;
+    }
+    SqlQuery c(db.handle(), db.path(), "PRAGMA schema_version");
+    c.step();
+    cookie = c.int64(0);
+  }
+  {  // Reopening writes nothing when the views are current.
+    ResultsDb db(path);
+    SqlQuery c(db.handle(), db.path(), "PRAGMA schema_version");
+    c.step();
+    EXPECT_EQ(c.int64(0), cookie);
+    db.exec("DROP VIEW v_sensitivity; DROP VIEW v_views_version; CREATE VIEW v_views_version AS SELECT 'old' AS sql_hash");
+  }
+  {  // Stale views are re-created.
+    ResultsDb db(path);
+    SqlQuery q(db.handle(), db.path(), "SELECT sql_hash FROM v_views_version");
+    ASSERT_TRUE(q.step());
+    EXPECT_EQ(q.text(0), views_sql_hash());
+    EXPECT_NO_THROW(SqlQuery(db.handle(), db.path(), "SELECT * FROM v_sensitivity").step());
+  }
+  {  // Databases at an older schema version get them too (they only use version-1 tables).
+    const std::string old = (scratch("views_v1") / "v1.db").string();
+    ResultsDb db(old, 1);
+    EXPECT_NO_THROW(SqlQuery(db.handle(), db.path(), "SELECT * FROM v_technique_comparison").step());
+  }
+}
+
+TEST(ReportViews, SqlFileIsTheOneEmbeddedCopy) {
+  std::ifstream in(std::string(TBDRSIM_SOURCE_DIR) + "/analysis/views.sql");
+  ASSERT_TRUE(in);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string file = ss.str();
+  EXPECT_EQ(file, "-- R\"tbdr_views(" + std::string(views_sql()) + ")tbdr_views\"_tbdr_sql\n");
+  // And the file runs as plain SQL in a fresh SQLite database with the tables.
+  const std::string path = (scratch("plain") / "p.db").string();
+  { ResultsDb db(path); }
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+  char* err = nullptr;
+  EXPECT_EQ(sqlite3_exec(raw, file.c_str(), nullptr, nullptr, &err), SQLITE_OK) << (err ? err : "");
+  sqlite3_free(err);
+  sqlite3_close(raw);
+}
+
+TEST(ReportViews, SummaryFiguresAreNullWhenARunDidNotRecordThem) {
+  const std::string path = (scratch("summary") / "s.db").string();
+  ResultsDb db(path);
+  const auto untimed = db.write_run(synthetic_run("plain_forward", 16, 7500, 64, false));
+  const auto timed = db.write_run(synthetic_run("deferred", 32, 5000, 64, true, 12.5));
+  const std::string u = " FROM v_run_summary WHERE run_id = " + std::to_string(untimed);
+  const std::string t = " FROM v_run_summary WHERE run_id = " + std::to_string(timed);
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT overshading" + u), 1.5);  // 7500 / (100 x 50 x 1)
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT lights_per_pixel" + u), 6.0);
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT dram_total_mb" + u), 4.0);
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT dram_color_write_mb" + u), 1.0);
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT dram_parameter_buffer_read_mb" + u), 3.0);
+  EXPECT_TRUE(is_null(db, "SELECT frame_time_ms" + u));
+  EXPECT_TRUE(is_null(db, "SELECT cycles" + u));
+  EXPECT_TRUE(is_null(db, "SELECT energy_total_mj" + u));
+  EXPECT_TRUE(is_null(db, "SELECT dram_textures_read_mb" + u));  // class not recorded
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT frame_time_ms" + t), 12.5);
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT cycles" + t), 12.5 * 6e5);
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT energy_total_mj" + t), 3.0);
+  EXPECT_NEAR(real_of(db, "SELECT energy_dram_mj" + t), 2.0, 1e-12);
+  EXPECT_EQ(real_of(db, "SELECT count(*) FROM v_run_summary"), 2);
+  // Long forms: classes and energy components.
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT total_mb FROM v_dram_class WHERE class = 'color' AND run_id = " +
+                                   std::to_string(untimed)),
+                   1.0);
+  EXPECT_NEAR(real_of(db, "SELECT energy_mj FROM v_energy_component WHERE component = 'alu'"), 1.0, 1e-12);
+  EXPECT_NEAR(real_of(db, "SELECT value FROM v_metric WHERE metric = 'energy_alu_mj'"), 1.0, 1e-12);
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT value FROM v_metric WHERE metric = 'tsp.shaded_samples' AND run_id = " +
+                                   std::to_string(untimed)),
+                   7500);
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT value FROM v_metric WHERE metric = 'dram_color_mb' AND run_id = " +
+                                   std::to_string(untimed)),
+                   1.0);
+  // Technique comparison ranks the timed run first on time (untimed ones sort last).
+  EXPECT_EQ(real_of(db, "SELECT count(*) FROM v_technique_comparison"), 2);
+  EXPECT_EQ(real_of(db, "SELECT rank_dram FROM v_technique_comparison WHERE technique = 'deferred'"), 1);
+}
+
+TEST(ReportViews, ParametersPivotAndSensitivity) {
+  const std::string path = (scratch("params") / "p.db").string();
+  ResultsDb db(path);
+  db.write_run(synthetic_run("a", 16, 5000, 64, false));
+  db.write_run(synthetic_run("a", 32, 6000, 64, false));
+  RunRecord failed = synthetic_run("a", 64, 9000, 64, false);
+  failed.status = "failed";
+  failed.error = "boom";
+  failed.stats.clear();
+  db.write_run(failed);
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT value_num FROM v_param WHERE key = 'tiling.tile_width' AND run_id = 2"), 32);
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT value_num FROM v_param WHERE key = 'writeback.compression_ratio' LIMIT 1"), 0.5);
+  EXPECT_TRUE(is_null(db, "SELECT value_num FROM v_param WHERE key = 'gpu.mode' LIMIT 1"));
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT value_num FROM v_param WHERE key = 'trace.lights' LIMIT 1"), 64);
+  EXPECT_EQ(real_of(db, "SELECT count(*) FROM v_param WHERE key = 'trace.technique'"), 3);
+  EXPECT_EQ(real_of(db, "SELECT count(*) FROM v_sensitivity WHERE key = 'tiling.tile_width' AND metric = 'overshading'"), 2);
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT metric_value FROM v_sensitivity WHERE key = 'tiling.tile_width' AND value = '32' "
+                               "AND metric = 'overshading'"),
+                   1.2);
+  // The failed run has its parameters and a summary row, but no figures and no sensitivity rows.
+  EXPECT_EQ(real_of(db, "SELECT count(*) FROM v_run_summary WHERE status = 'failed' AND error = 'boom'"), 1);
+  EXPECT_EQ(real_of(db, "SELECT count(*) FROM v_sensitivity WHERE run_id = 3"), 0);
+}
+
+TEST(Report, GroupsByTechniqueAveragingRepetitions) {
+  const std::string path = (scratch("tech") / "t.db").string();
+  ResultsDb db(path);
+  db.write_run(synthetic_run("clustered_forward", 16, 5000, 64, true, 10));
+  db.write_run(synthetic_run("clustered_forward", 16, 5000, 64, true, 20));  // a repetition
+  db.write_run(synthetic_run("deferred", 16, 6000, 64, true, 5));
+  RunRecord failed = synthetic_run("deferred", 16, 1, 64, false);
+  failed.status = "failed";
+  failed.stats.clear();
+  db.write_run(failed);
+  const ReportTable t = build_report(db, {});
+  ASSERT_EQ(t.rows.size(), 2u);
+  EXPECT_EQ(t.group_keys, std::vector<std::string>{"technique"});
+  EXPECT_EQ(t.rows[0].keys[0], "clustered_forward");
+  EXPECT_EQ(t.rows[0].runs, 2);
+  EXPECT_EQ(t.runs_used, 3);
+  EXPECT_EQ(t.runs_failed, 1);
+  ASSERT_EQ(t.metrics[0], "frame_time_ms");
+  EXPECT_DOUBLE_EQ(*t.rows[0].values[0], 15.0);
+  EXPECT_DOUBLE_EQ(*t.rows[1].values[0], 5.0);
+  // Default metrics: only what some run has (no gbuffer traffic, no texture class at all).
+  auto has = [&](const std::string& m) { return std::find(t.metrics.begin(), t.metrics.end(), m) != t.metrics.end(); };
+  for (const char* m : {"cycles", "dram_total_mb", "dram_color_mb", "dram_parameter_buffer_mb", "energy_total_mj",
+                        "energy_dram_mj", "energy_alu_mj", "overshading", "lights_per_pixel"}) {
+    EXPECT_TRUE(has(m)) << m;
+  }
+  EXPECT_FALSE(has("dram_gbuffer_mb"));
+  EXPECT_FALSE(has("dram_textures_mb"));
+
+  const std::string text = report_text(db, {});
+  EXPECT_NE(text.find("clustered_forward"), std::string::npos);
+  EXPECT_NE(text.find("deferred"), std::string::npos);
+  EXPECT_NE(text.find("1 failed run(s) left out"), std::string::npos) << text;
+  // Three titled tables (frame figures, DRAM per class, energy per component), each aligned: every
+  // line of a table is equally long (labels left-aligned, numbers right-aligned).
+  EXPECT_NE(text.find("\nper frame\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("\nDRAM MB per traffic class"), std::string::npos) << text;
+  EXPECT_NE(text.find("\nenergy mJ per component\n"), std::string::npos) << text;
+  const auto lines = lines_of(text);
+  int tables = 0;
+  for (std::size_t i = 1; i + 1 < lines.size(); ++i) {
+    if (!lines[i].empty()) continue;
+    ++tables;
+    const std::size_t head = i + 2;  // blank, title, header, rule, rows
+    ASSERT_LT(head + 2, lines.size()) << text;
+    EXPECT_EQ(lines[head + 1].find_first_not_of("- "), std::string::npos) << text;
+    for (std::size_t j = head; j < lines.size() && !lines[j].empty(); ++j) {
+      EXPECT_EQ(lines[j].size(), lines[head].size()) << text;
+    }
+  }
+  EXPECT_EQ(tables, 3) << text;
+  // The DRAM table names the classes briefly and ends with the total.
+  EXPECT_NE(text.find("parameter_buffer"), std::string::npos);
+  EXPECT_NE(text.find("  total"), std::string::npos);
+}
+
+TEST(Report, GroupsByParameterKeysWithFilterAndFormats) {
+  const std::string path = (scratch("param") / "p.db").string();
+  ResultsDb db(path);
+  for (int w : {128, 16, 32}) {
+    db.write_run(synthetic_run("a", w, 5000 + w, 64, false));
+    db.write_run(synthetic_run("b", w, 6000 + w, 256, false));
+  }
+  ReportOptions by_tile;
+  by_tile.by = {"tiling.tile_width"};
+  by_tile.metrics = {"overshading", "tsp.shaded_samples", "dram_color_mb"};
+  ReportTable t = build_report(db, by_tile);
+  ASSERT_EQ(t.rows.size(), 3u);
+  EXPECT_EQ(t.rows[0].keys[0], "16");  // numeric order
+  EXPECT_EQ(t.rows[2].keys[0], "128");
+  EXPECT_EQ(t.rows[0].runs, 2);
+  EXPECT_DOUBLE_EQ(*t.rows[0].values[1], (5016.0 + 6016.0) / 2);
+  EXPECT_EQ(t.units[1], "samples");
+
+  ReportOptions two = by_tile;
+  two.by = {"technique", "tiling.tile_width"};
+  two.where = "lights = 256";
+  t = build_report(db, two);
+  ASSERT_EQ(t.rows.size(), 3u);
+  EXPECT_EQ(t.rows[0].keys, (std::vector<std::string>{"b", "16"}));
+  EXPECT_EQ(t.runs_used, 3);
+
+  ReportOptions lights;
+  lights.by = {"lights"};
+  lights.metrics = {"lights_per_pixel"};
+  EXPECT_EQ(build_report(db, lights).rows.size(), 2u);
+
+  const std::string csv = report_text(db, by_tile, ReportFormat::Csv);
+  EXPECT_EQ(lines_of(csv)[0], "tiling.tile_width,runs,overshading,tsp.shaded_samples,dram_color_mb");
+  EXPECT_EQ(lines_of(csv).size(), 4u);
+  const std::string md = report_text(db, by_tile, ReportFormat::Markdown);
+  const auto ml = lines_of(md);
+  EXPECT_NE(md.find("note: 3 group(s) average runs of different"), std::string::npos) << md;
+  std::size_t first = 0;
+  while (first < ml.size() && ml[first].rfind("|", 0) != 0) ++first;
+  ASSERT_EQ(ml.size(), first + 5) << md;
+  EXPECT_EQ(ml[first].rfind("| tiling.tile_width", 0), 0u) << md;
+  EXPECT_NE(ml[first + 1].find("---:"), std::string::npos) << md;
+  EXPECT_EQ(ml[first + 4].rfind("| 128 ", 0), 0u) << md;
+  ReportOptions tr = by_tile;
+  tr.transpose = true;
+  const std::string tt = report_text(db, tr);
+  EXPECT_NE(tt.find("metric \\ tiling.tile_width"), std::string::npos) << tt;
+  EXPECT_NE(tt.find("overshading"), std::string::npos);
+
+  ReportOptions bad;
+  bad.metrics = {"frame_time_furlongs"};
+  EXPECT_THROW(build_report(db, bad), InputError);
+  bad.metrics.clear();
+  bad.by = {"tiling.tile_widht"};
+  EXPECT_THROW(build_report(db, bad), InputError);
+  bad.by.clear();
+  bad.where = "no_such_column = 1";
+  try {
+    build_report(db, bad);
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no_such_column"), std::string::npos);
+  }
+  bad.where = "1; DROP TABLE runs";
+  EXPECT_THROW(build_report(db, bad), InputError);
+  EXPECT_THROW(parse_report_format("xml"), InputError);
+}
+
+/// A real database: one tiny trace replayed on two configurations through the command line.
+class ReportReal : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new fs::path(scratch("real"));
+    db_ = new std::string((*dir_ / "real.db").string());
+    const std::string trace = (*dir_ / "pf.trace").string();
+    std::ostringstream out, err;
+    ASSERT_EQ(cli_main({"trace", "--resolution", "160x90", "--scene", "atrium:1", "--lights", "16", "--out", trace}, out, err),
+              0)
+        << err.str();
+    for (const char* set : {"tiling.tile_width=16", "tiling.tile_width=32"}) {
+      ASSERT_EQ(cli_main({"run", "--trace", trace, "--db", *db_, "--set", set, "--quiet"}, out, err), 0) << err.str();
+    }
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(dir_->parent_path());
+    delete dir_;
+    delete db_;
+  }
+  static fs::path* dir_;
+  static std::string* db_;
+};
+fs::path* ReportReal::dir_ = nullptr;
+std::string* ReportReal::db_ = nullptr;
+
+TEST_F(ReportReal, CommandPrintsGroups) {
+  std::ostringstream out, err;
+  ASSERT_EQ(cli_main({"report", "--db", *db_}, out, err), 0) << err.str();
+  EXPECT_NE(out.str().find("plain_forward"), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find("dram_total_mb"), std::string::npos) << out.str();
+  std::ostringstream o2;
+  ASSERT_EQ(cli_main({"report", "--db", *db_, "--by", "tiling.tile_width", "--metric", "overshading", "--metric",
+                      "dram_parameter_buffer_mb", "--format", "csv"},
+                     o2, err),
+            0)
+      << err.str();
+  const auto lines = lines_of(o2.str());
+  ASSERT_EQ(lines.size(), 3u) << o2.str();
+  EXPECT_EQ(lines[1].rfind("16,1,", 0), 0u) << o2.str();
+  EXPECT_EQ(lines[2].rfind("32,1,", 0), 0u) << o2.str();
+  std::ostringstream o3, e3;
+  EXPECT_EQ(cli_main({"report", "--db", (*dir_ / "absent.db").string()}, o3, e3), 2);
+  EXPECT_FALSE(fs::exists(*dir_ / "absent.db"));
+  EXPECT_EQ(cli_main({"report", "--db", *db_, "--metric", "nope"}, o3, e3), 2);
+  EXPECT_NE(e3.str().find("--metric nope"), std::string::npos) << e3.str();
+}
+
+TEST_F(ReportReal, EveryQueryInDocsRuns) {
+  std::ifstream in(std::string(TBDRSIM_SOURCE_DIR) + "/docs/queries.md");
+  ASSERT_TRUE(in);
+  std::vector<std::string> queries;
+  std::string line, cur;
+  bool inside = false;
+  while (std::getline(in, line)) {
+    if (!inside && line.rfind("```sql", 0) == 0) {
+      inside = true;
+      cur.clear();
+    } else if (inside && line.rfind("```", 0) == 0) {
+      inside = false;
+      queries.push_back(cur);
+    } else if (inside) {
+      cur += line + "\n";
+    }
+  }
+  ASSERT_GE(queries.size(), 8u);
+  ResultsDb db(*db_);
+  int with_rows = 0;
+  for (const auto& q : queries) {
+    int rows = 0;
+    char* err = nullptr;
+    const int rc = sqlite3_exec(
+        db.handle(), q.c_str(),
+        [](void* n, int, char**, char**) {
+          ++*static_cast<int*>(n);
+          return 0;
+        },
+        &rows, &err);
+    EXPECT_EQ(rc, SQLITE_OK) << q << "\n" << (err ? err : "");
+    sqlite3_free(err);
+    if (rows > 0) ++with_rows;
+  }
+  EXPECT_GE(with_rows, static_cast<int>(queries.size()) / 2) << "most documented queries should answer on a real run";
+}
+
+}  // namespace
+}  // namespace tbdr
