@@ -20,6 +20,7 @@ const std::vector<CliCommand>& cli_commands() {
       {"scene", "Describe a scene: scene info atrium[:detail] | FILE.gltf/.glb", cmd_scene},
       {"trace", "Generate the command trace of a technique for a scene, lights, camera and resolution", cmd_trace},
       {"run", "Replay a trace on a hardware configuration and write the run to a results database", cmd_run},
+      {"study", "The main job: every technique on the atrium at 1920x1080 with 256 and 1024 lights, compared", cmd_study},
       {"sweep", "Run a sweep file's points in parallel worker processes into a results database, resumably "
                 "(or emit a Slurm job array)", cmd_sweep},
       {"merge", "Merge shard databases (Slurm array tasks) into one without duplicates", cmd_merge},

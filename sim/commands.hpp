@@ -14,6 +14,7 @@ namespace tbdr {
 int cmd_scene(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_trace(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_params(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_sweep(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_merge(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);

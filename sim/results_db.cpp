@@ -138,25 +138,19 @@ ResultsDb::ResultsDb(const std::string& path, int target_version) : path_(path) 
   }
   try {
     sqlite3_busy_timeout(db_, 60000);
-    exec("PRAGMA foreign_keys = ON");
-    // Check what the file is before changing anything in it.
-    int app_id = 0;
-    int object_count = 0;
-    {
-      Stmt s(db_, path_, "PRAGMA application_id");
-      if (s.step()) app_id = static_cast<int>(s.int64(0));
+    // Opening writers race on a new file (creating the schema, switching to WAL); SQLite reports
+    // some of those races as SQLITE_BUSY without waiting, so the whole setup is retried.
+    for (int attempt = 0;; ++attempt) {
+      try {
+        setup(target_version);
+        break;
+      } catch (const InputError&) {
+        const int code = sqlite3_errcode(db_) & 0xff;
+        if ((code != SQLITE_BUSY && code != SQLITE_LOCKED) || attempt >= 200) throw;
+        sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+        usleep(static_cast<useconds_t>(2000 + 1000 * attempt));
+      }
     }
-    {
-      Stmt s(db_, path_, "SELECT count(*) FROM sqlite_master");
-      if (s.step()) object_count = static_cast<int>(s.int64(0));
-    }
-    if (app_id != kApplicationId && (app_id != 0 || object_count != 0)) {
-      throw InputError(path, "not a tbdrsim results database (SQLite application_id " +
-                                 std::to_string(app_id) + ", " + std::to_string(object_count) + " schema objects)");
-    }
-    exec("PRAGMA journal_mode = WAL");
-    migrate(target_version);
-    create_views(db_, path_);  // the analysis views (analysis/views.sql)
   } catch (const InputError& e) {
     sqlite3_close(db_);
     db_ = nullptr;
@@ -169,6 +163,28 @@ ResultsDb::ResultsDb(const std::string& path, int target_version) : path_(path) 
     db_ = nullptr;
     throw;
   }
+}
+
+void ResultsDb::setup(int target_version) {
+  exec("PRAGMA foreign_keys = ON");
+  // Check what the file is before changing anything in it.
+  int app_id = 0;
+  int object_count = 0;
+  {
+    Stmt s(db_, path_, "PRAGMA application_id");
+    if (s.step()) app_id = static_cast<int>(s.int64(0));
+  }
+  {
+    Stmt s(db_, path_, "SELECT count(*) FROM sqlite_master");
+    if (s.step()) object_count = static_cast<int>(s.int64(0));
+  }
+  if (app_id != kApplicationId && (app_id != 0 || object_count != 0)) {
+    throw InputError(path_, "not a tbdrsim results database (SQLite application_id " +
+                               std::to_string(app_id) + ", " + std::to_string(object_count) + " schema objects)");
+  }
+  exec("PRAGMA journal_mode = WAL");
+  migrate(target_version);
+  create_views(db_, path_);  // the analysis views (analysis/views.sql)
 }
 
 ResultsDb::~ResultsDb() { sqlite3_close(db_); }
@@ -209,7 +225,16 @@ void ResultsDb::migrate(int target_version) {
 }
 
 std::int64_t ResultsDb::write_run(const RunRecord& run) {
-  exec("BEGIN IMMEDIATE");
+  // BEGIN IMMEDIATE waits through the busy timeout; a busy error that SQLite reports at once (a
+  // writer racing a checkpoint) is retried.
+  for (int attempt = 0;; ++attempt) {
+    if (sqlite3_exec(db_, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr) == SQLITE_OK) break;
+    const int code = sqlite3_errcode(db_) & 0xff;
+    if ((code != SQLITE_BUSY && code != SQLITE_LOCKED) || attempt >= 200) {
+      throw InputError(path_, std::string("SQLite: cannot begin a transaction: ") + sqlite3_errmsg(db_));
+    }
+    usleep(static_cast<useconds_t>(2000 + 1000 * attempt));
+  }
   try {
     {
       Stmt s(db_, path_,

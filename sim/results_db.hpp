@@ -85,6 +85,7 @@ class ResultsDb {
   sqlite3* handle() const { return db_; }
 
  private:
+  void setup(int target_version);
   void migrate(int target_version);
   std::string path_;
   sqlite3* db_ = nullptr;
