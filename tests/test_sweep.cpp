@@ -27,9 +27,20 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// A scratch folder per test process (ctest runs tests in parallel processes).
+/// This process's scratch root (ctest runs tests in parallel processes), removed at exit.
+fs::path scratch_root() {
+  return fs::temp_directory_path() / ("tbdrsim_test_sweep_" + std::to_string(getpid()));
+}
+struct ScratchCleanup {
+  ~ScratchCleanup() {
+    std::error_code ec;
+    fs::remove_all(scratch_root(), ec);
+  }
+} scratch_cleanup;
+
+/// A fresh scratch folder under the root.
 fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("tbdrsim_test_sweep_" + std::to_string(getpid())) / name;
+  const fs::path dir = scratch_root() / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
