@@ -4,9 +4,11 @@
 
 namespace tbdr {
 
-glm::vec3 ShadingModel::light_contribution(const SurfacePoint& s, glm::vec3 eye, const Light& light) {
+glm::vec3 ShadingModel::lit_contribution(const SurfacePoint& s, glm::vec3 eye, const Light& light) {
   const glm::vec3 to_light = light.position - s.position;
-  const float dist = glm::length(to_light);
+  const float dist2 = glm::dot(to_light, to_light);
+  if (!(dist2 < light.radius * light.radius)) return glm::vec3(0.0f);  // beyond the radius: exactly 0
+  const float dist = std::sqrt(dist2);
   const float atten = light_attenuation(dist, light.radius);
   if (atten <= 0.0f) return glm::vec3(0.0f);
   const glm::vec3 l = dist > 0.0f ? to_light / dist : s.normal;

@@ -29,8 +29,15 @@ struct ShadingModel {
   static constexpr float kSpecular = 0.25f;       ///< specular reflectance (white)
   static constexpr float kShininess = 32.0f;      ///< Blinn-Phong exponent
 
-  /// Radiance leaving `s` towards `eye` from one light (0 outside its radius or cone).
-  static glm::vec3 light_contribution(const SurfacePoint& s, glm::vec3 eye, const Light& light);
+  /// Radiance leaving `s` towards `eye` from one light (0 outside its radius or cone). The test
+  /// against the radius is inline: most candidate lights of a pixel are rejected by it.
+  static glm::vec3 light_contribution(const SurfacePoint& s, glm::vec3 eye, const Light& light) {
+    const glm::vec3 d = light.position - s.position;
+    if (!(glm::dot(d, d) < light.radius * light.radius)) return glm::vec3(0.0f);
+    return lit_contribution(s, eye, light);
+  }
+  /// light_contribution for a light whose sphere contains the surface point.
+  static glm::vec3 lit_contribution(const SurfacePoint& s, glm::vec3 eye, const Light& light);
   /// The ambient term.
   static glm::vec3 ambient(const SurfacePoint& s) { return s.albedo * kAmbient; }
 };
