@@ -297,29 +297,36 @@ void ParamTable::apply_config_file(ResolvedParams& p, const std::string& path) c
   const std::vector<ScannedEntry> scanned = scan_ini(path, in, *this);
 
   // Boost.Program_options reads the values; the scan above supplies line numbers and strictness.
+  const std::vector<IniEntry> parsed = read_ini_entries(path, "config file", scanned.size());
+  for (std::size_t i = 0; i < scanned.size(); ++i) {
+    const std::string where = path + ":" + std::to_string(scanned[i].line);
+    if (parsed[i].key != scanned[i].key) {
+      throw InputError(where, "config file parse mismatch at key '" + scanned[i].key + "'");
+    }
+    apply_one(*this, p, where, parsed[i].key, parsed[i].value);
+  }
+  p.config_name = std::filesystem::path(path).stem().string();
+}
+
+std::vector<IniEntry> read_ini_entries(const std::string& path, const char* what, std::size_t expected_entries) {
   namespace po = boost::program_options;
-  std::ifstream again(path);
+  std::ifstream in(path);
+  if (!in) throw InputError(path, std::string("cannot open ") + what);
   po::options_description none;
   po::parsed_options parsed(&none);
   try {
-    parsed = po::parse_config_file(again, none, /*allow_unregistered=*/true);
+    parsed = po::parse_config_file(in, none, /*allow_unregistered=*/true);
   } catch (const po::error& e) {
-    throw InputError(path, std::string("cannot parse config file: ") + e.what());
+    throw InputError(path, std::string("cannot parse ") + what + ": " + e.what());
   }
-  if (parsed.options.size() != scanned.size()) {
-    throw InputError(path, "config file parse mismatch (" + std::to_string(parsed.options.size()) +
-                               " entries read, " + std::to_string(scanned.size()) + " expected)");
+  if (parsed.options.size() != expected_entries) {
+    throw InputError(path, std::string(what) + " parse mismatch (" + std::to_string(parsed.options.size()) +
+                               " entries read, " + std::to_string(expected_entries) + " expected)");
   }
-  for (std::size_t i = 0; i < scanned.size(); ++i) {
-    const auto& opt = parsed.options[i];
-    const std::string value = opt.value.empty() ? std::string{} : opt.value.front();
-    const std::string where = path + ":" + std::to_string(scanned[i].line);
-    if (opt.string_key != scanned[i].key) {
-      throw InputError(where, "config file parse mismatch at key '" + scanned[i].key + "'");
-    }
-    apply_one(*this, p, where, opt.string_key, value);
-  }
-  p.config_name = std::filesystem::path(path).stem().string();
+  std::vector<IniEntry> out;
+  out.reserve(parsed.options.size());
+  for (const auto& opt : parsed.options) out.push_back({opt.string_key, opt.value.empty() ? std::string{} : opt.value.front()});
+  return out;
 }
 
 void ParamTable::apply_override(ResolvedParams& p, const std::string& assignment) const {

@@ -13,6 +13,17 @@
 
 namespace tbdr {
 
+/// One "section.key = value" entry of an INI file as Boost.Program_options read it.
+struct IniEntry {
+  std::string key;    ///< "section.key"
+  std::string value;  ///< raw value text
+};
+/// Reads every entry of an INI file with Boost.Program_options (allow_unregistered), in file
+/// order; `what` names the file kind in errors ("config file", "sweep file"). Throws InputError
+/// naming the file when Boost refuses it or when it does not find `expected_entries` entries (the
+/// count a caller's own line scan found, so the two stay in step).
+std::vector<IniEntry> read_ini_entries(const std::string& path, const char* what, std::size_t expected_entries);
+
 /// The value of one parameter: integer, real, boolean, or text (free text or one of a choice list).
 using ParamValue = std::variant<std::int64_t, double, bool, std::string>;
 

@@ -259,19 +259,7 @@ SweepSpec parse_sweep_file(const std::string& path) {
   const std::vector<SweepLine> lines = scan_sweep_file(path, in, section_lines);
 
   // Boost.Program_options reads the values; the scan supplies line numbers and strictness.
-  namespace po = boost::program_options;
-  std::ifstream again(path);
-  po::options_description none;
-  po::parsed_options parsed(&none);
-  try {
-    parsed = po::parse_config_file(again, none, /*allow_unregistered=*/true);
-  } catch (const po::error& e) {
-    throw InputError(path, std::string("cannot parse sweep file: ") + e.what());
-  }
-  if (parsed.options.size() != lines.size()) {
-    throw InputError(path, "sweep file parse mismatch (" + std::to_string(parsed.options.size()) + " entries read, " +
-                               std::to_string(lines.size()) + " expected)");
-  }
+  const std::vector<IniEntry> parsed = read_ini_entries(path, "sweep file", lines.size());
 
   SweepSpec spec;
   spec.path = path;
@@ -283,8 +271,8 @@ SweepSpec parse_sweep_file(const std::string& path) {
   for (std::size_t i = 0; i < lines.size(); ++i) {
     const SweepLine& l = lines[i];
     const std::string where = path + ":" + std::to_string(l.line);
-    if (parsed.options[i].string_key != l.full) throw InputError(where, "sweep file parse mismatch at key '" + l.name + "'");
-    const std::string value = parsed.options[i].value.empty() ? std::string{} : trim(parsed.options[i].value.front());
+    if (parsed[i].key != l.full) throw InputError(where, "sweep file parse mismatch at key '" + l.name + "'");
+    const std::string value = trim(parsed[i].value);
 
     if (l.section == "sweep") {
       if (l.name == "name") {
