@@ -14,6 +14,7 @@
 #include "analysis/report.hpp"
 #include "sim/cli.hpp"
 #include "sim/errors.hpp"
+#include "scratch_dir.hpp"
 #include "sim/results_db.hpp"
 
 namespace tbdr {
@@ -21,24 +22,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// This process's scratch root (ctest runs tests in parallel processes), removed at exit.
-fs::path scratch_root() {
-  return fs::temp_directory_path() / ("tbdrsim_test_report_" + std::to_string(getpid()));
-}
-struct ScratchCleanup {
-  ~ScratchCleanup() {
-    std::error_code ec;
-    fs::remove_all(scratch_root(), ec);
-  }
-} scratch_cleanup;
-
-/// A fresh scratch folder under the root.
-fs::path scratch(const std::string& name) {
-  const fs::path dir = scratch_root() / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+testing_scratch::ScratchCleanup scratch_cleanup{"report"};
+fs::path scratch(const std::string& name) { return testing_scratch::scratch_dir("report", name); }
 
 /// A run as the simulator writes it, with made-up figures.
 RunRecord synthetic_run(const std::string& technique, int tile_width, double shaded_samples, double lights,

@@ -19,6 +19,7 @@
 #include "analysis/report.hpp"
 #include "sim/cli.hpp"
 #include "sim/errors.hpp"
+#include "scratch_dir.hpp"
 #include "sim/results_db.hpp"
 #include "sim/sweep.hpp"
 
@@ -27,24 +28,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// This process's scratch root (ctest runs tests in parallel processes), removed at exit.
-fs::path scratch_root() {
-  return fs::temp_directory_path() / ("tbdrsim_test_sweep_" + std::to_string(getpid()));
-}
-struct ScratchCleanup {
-  ~ScratchCleanup() {
-    std::error_code ec;
-    fs::remove_all(scratch_root(), ec);
-  }
-} scratch_cleanup;
-
-/// A fresh scratch folder under the root.
-fs::path scratch(const std::string& name) {
-  const fs::path dir = scratch_root() / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+testing_scratch::ScratchCleanup scratch_cleanup{"sweep"};
+fs::path scratch(const std::string& name) { return testing_scratch::scratch_dir("sweep", name); }
 
 void write_file(const fs::path& p, const std::string& text) {
   fs::create_directories(p.parent_path());
