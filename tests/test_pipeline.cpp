@@ -232,3 +232,56 @@ TEST(PipelineTileMemory, OverBudgetPassSplitsTilesOrSpills) {
 
 }  // namespace
 }  // namespace tbdr
+
+namespace tbdr {
+namespace {
+
+TEST(PipelineAlphaModes, AlphaBlendModeTestFlushesAndKillsAsItsMaterialsSay) {
+  const std::string path = std::string(TBDRSIM_SCENES_DIR) + "/AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "no " << path << " (../shared/scenes absent)";
+  const Scene scene = load_scene(path);
+  TraceSetup setup;
+  setup.scene = &scene;
+  setup.scene_spec = path;
+  setup.camera = framing_camera(scene);
+  setup.width = 320;
+  setup.height = 180;
+  const HwConfig hw = resolve_config({}, {"isp.tag_buffers=1"}).hw;
+  // Plain forward draws the opaque bed and labels, then the three MASK quads, then the BLEND quad.
+  // Every masked or blended fragment lands on the bed behind it, so it forces a flush of the tags
+  // there (one tag buffer: the whole tile) before it is shaded; MASK samples below their cutoff are
+  // killed; BLEND samples are shaded with blending and never write depth.
+  const Trace pf = generate_trace("plain_forward", setup);
+  const FrameResult f = simulate_frame(pf, path, scene, hw);
+  EXPECT_GT(stat(f, "frame/isp", "tag_flushes"), 0);
+  EXPECT_GT(stat(f, "frame/isp", "punch_through_samples"), 0);
+  EXPECT_GT(stat(f, "frame/tsp", "alpha_test_killed_samples"), 0);
+  EXPECT_GT(stat(f, "frame/isp", "translucent_samples"), 0);
+  EXPECT_EQ(stat(f, "frame/tsp", "blended_samples"), stat(f, "frame/isp", "translucent_samples"));
+  // The three MASK materials share one gradient mask with cutoffs 0.25, 0.5 and 0.75: drawn alone
+  // over the bed, a higher cutoff must discard a larger share of the quad's samples.
+  std::vector<double> killed_share;
+  for (const char* material : {"MatCutoff25", "MatCutoffDefault", "MatCutoff75"}) {
+    Trace t = pf;
+    auto& pass = std::get<PassDesc>(t.commands[0]);
+    std::vector<DrawCmd> draws;
+    for (auto d : pass.draws) {
+      if (d.subset == SceneSubset::Opaque) draws.push_back(d);
+      if (d.subset == SceneSubset::Masked) {
+        d.subset = SceneSubset::All;
+        d.material = material;
+        draws.push_back(d);
+      }
+    }
+    pass.draws = draws;
+    const FrameResult r = simulate_frame(t, path, scene, hw);
+    const double pt = stat(r, "frame/isp", "punch_through_samples");
+    ASSERT_GT(pt, 0) << material;
+    killed_share.push_back(stat(r, "frame/tsp", "alpha_test_killed_samples") / pt);
+  }
+  EXPECT_LT(killed_share[0], killed_share[1]);
+  EXPECT_LT(killed_share[1], killed_share[2]);
+}
+
+}  // namespace
+}  // namespace tbdr
