@@ -409,20 +409,37 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     for (int y = 0; y < H; ++y) {
       for (int x = 0; x < W; ++x) {
         const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
-        if (!surfaces->surface_valid[p * surfaces->samples]) continue;
-        const SurfacePoint& s = surfaces->surface[p * surfaces->samples];
-        const std::vector<std::uint32_t>* list = nullptr;
-        std::uint64_t count = n_lights;
-        if (tgrid) list = &tgrid->at_pixel(x, y);
-        if (cgrid) list = &cgrid->lists[cgrid->cluster_of(x, y, ctx.frustum.distance_of(s.position))];
-        if (list) count = list->size();
-        img.color[p] = glm::vec4(shade_surface(ctx, s, x, y, list), 1.0f);
-        ++stats.shaded_pixels;
-        stats.light_evaluations += count;
-        stats.alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * count;
-        ctx.images->counters.lights_evaluated[p] += static_cast<std::uint32_t>(count);
-        ctx.images->counters.shaded[p] += 1;
-        if (vbuffer) refetched.insert({static_cast<std::size_t>((y / tile_px) * ((W + tile_px - 1) / tile_px) + x / tile_px), s.triangle});
+        // Shade each distinct surface of the pixel once (with MSAA a pixel's samples may hold
+        // several triangles) and resolve: the average over the samples, uncovered ones black.
+        const std::size_t S = surfaces->samples;
+        glm::vec3 sum(0.0f);
+        std::uint32_t shaded_triangles[kMaxSamplesPerPixel];
+        glm::vec3 shaded_colors[kMaxSamplesPerPixel];
+        std::size_t n_shaded = 0;
+        for (std::size_t smp = 0; smp < S; ++smp) {
+          if (!surfaces->surface_valid[p * S + smp]) continue;
+          const SurfacePoint& s = surfaces->surface[p * S + smp];
+          std::size_t k = 0;
+          while (k < n_shaded && shaded_triangles[k] != s.triangle) ++k;
+          if (k == n_shaded) {
+            const std::vector<std::uint32_t>* list = nullptr;
+            std::uint64_t count = n_lights;
+            if (tgrid) list = &tgrid->at_pixel(x, y);
+            if (cgrid) list = &cgrid->lists[cgrid->cluster_of(x, y, ctx.frustum.distance_of(s.position))];
+            if (list) count = list->size();
+            shaded_triangles[k] = s.triangle;
+            shaded_colors[k] = shade_surface(ctx, s, x, y, list);
+            ++n_shaded;
+            ++stats.shaded_pixels;
+            stats.light_evaluations += count;
+            stats.alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * count;
+            ctx.images->counters.lights_evaluated[p] += static_cast<std::uint32_t>(count);
+            ctx.images->counters.shaded[p] += 1;
+            if (vbuffer) refetched.insert({static_cast<std::size_t>((y / tile_px) * ((W + tile_px - 1) / tile_px) + x / tile_px), s.triangle});
+          }
+          sum += shaded_colors[k];
+        }
+        if (n_shaded > 0) img.color[p] = glm::vec4(sum / static_cast<float>(S), 1.0f);
       }
     }
     stats.texture_fetches += stats.shaded_pixels.value() ? pixels * sh.tex_fetches : 0;

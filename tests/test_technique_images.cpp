@@ -35,7 +35,8 @@ ImageRGB8 final_image(const FrameResult& f) {
   return color_to_image(f.images.image_buffers.at(f.final_color).color, f.images.width, f.images.height);
 }
 
-TEST(TechniqueImages, EveryTechniqueMatchesPlainForward) {
+/// Renders every technique of `names` and compares it with plain forward (see the file comment).
+void compare_with_plain_forward(int samples, const std::vector<std::string>& names) {
   const Scene scene = opaque_atrium();
   TraceSetup setup;
   setup.scene = &scene;
@@ -47,6 +48,7 @@ TEST(TechniqueImages, EveryTechniqueMatchesPlainForward) {
   setup.lights = generate_lights(scene, spec);
   setup.width = 192;
   setup.height = 108;
+  setup.samples = samples;
   const HwConfig hw = resolve_config({}, {}).hw;
   const Trace pf = generate_trace("plain_forward", setup);
   const FrameResult ref = simulate_frame(pf, "plain_forward", scene, hw);
@@ -69,7 +71,7 @@ TEST(TechniqueImages, EveryTechniqueMatchesPlainForward) {
   }
   std::printf("[ image    ] %zu of %zu pixels show coplanar faces (z-fighting) and are skipped\n", n_ambiguous, ambiguous.size());
   EXPECT_LT(n_ambiguous, ambiguous.size() / 500);
-  for (const auto& name : technique_names()) {
+  for (const auto& name : names) {
     SCOPED_TRACE(name);
     const Trace t = generate_trace(name, setup);
     const FrameResult f = simulate_frame(t, name, scene, hw);
@@ -84,9 +86,17 @@ TEST(TechniqueImages, EveryTechniqueMatchesPlainForward) {
       worst = std::max(worst, d);
       differing += d > 1 ? 1 : 0;
     }
-    std::printf("[ image    ] %-28s largest difference %d/255, %zu channels over 1/255\n", name.c_str(), worst, differing);
+    std::printf("[ image    ] %dx %-28s largest difference %d/255, %zu channels over 1/255\n", samples, name.c_str(), worst,
+                differing);
     EXPECT_LE(worst, 1) << name;
   }
+}
+
+TEST(TechniqueImages, EveryTechniqueMatchesPlainForward) { compare_with_plain_forward(1, technique_names()); }
+
+TEST(TechniqueImages, MsaaTechniquesMatchPlainForwardAt4x) {
+  compare_with_plain_forward(4, {"forward_multipass", "forward_plus", "clustered_forward", "practical_clustered_forward",
+                                 "cascaded_clustered_forward", "visibility_buffer"});
 }
 
 }  // namespace
