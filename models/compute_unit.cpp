@@ -177,6 +177,67 @@ glm::vec3 shade_surface(const ComputeContext& ctx, const SurfacePoint& s, int x,
   return c;
 }
 
+/// Shades every stored surface of an image with the shader's light source (every light, a tile
+/// grid's or a cluster grid's lists) and resolves multisampled surfaces; with `refetch_tile_px` > 0
+/// (visibility buffer) each tile re-fetches the three vertices of every triangle it shades.
+ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& surfaces, const ShaderDesc& sh,
+                           const TileLightGrid* tgrid, const ClusterGrid* cgrid, int refetch_tile_px, ComputeStats& stats,
+                           DramTraffic& dram) {
+  const int W = ctx.viewport.width_px, H = ctx.viewport.height_px;
+  const std::uint64_t pixels = static_cast<std::uint64_t>(W) * static_cast<std::uint64_t>(H);
+  const auto n_lights = static_cast<std::uint64_t>(ctx.trace->lights.size());
+  const bool vbuffer = refetch_tile_px > 0;
+  const int tile_px = vbuffer ? refetch_tile_px : 1;
+  std::set<std::pair<std::size_t, std::uint32_t>> refetched;  // (tile, triangle)
+  const std::uint64_t shaded_before = stats.shaded_pixels.value();
+  ImageBuffer img;
+  img.color.assign(pixels, glm::vec4(0.0f));
+  for (int y = 0; y < H; ++y) {
+    for (int x = 0; x < W; ++x) {
+      const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
+      // Shade each distinct surface of the pixel once (with MSAA a pixel's samples may hold
+      // several triangles) and resolve: the average over the samples, uncovered ones black.
+      const std::size_t S = surfaces.samples;
+      glm::vec3 sum(0.0f);
+      std::uint32_t shaded_triangles[kMaxSamplesPerPixel];
+      glm::vec3 shaded_colors[kMaxSamplesPerPixel];
+      std::size_t n_shaded = 0;
+      for (std::size_t smp = 0; smp < S; ++smp) {
+        if (!surfaces.surface_valid[p * S + smp]) continue;
+        const SurfacePoint& s = surfaces.surface[p * S + smp];
+        std::size_t k = 0;
+        while (k < n_shaded && shaded_triangles[k] != s.triangle) ++k;
+        if (k == n_shaded) {
+          const std::vector<std::uint32_t>* list = nullptr;
+          std::uint64_t count = n_lights;
+          if (tgrid) list = &tgrid->at_pixel(x, y);
+          if (cgrid) list = &cgrid->lists[cgrid->cluster_of(x, y, ctx.frustum.distance_of(s.position))];
+          if (list) count = list->size();
+          shaded_triangles[k] = s.triangle;
+          shaded_colors[k] = shade_surface(ctx, s, x, y, list);
+          ++n_shaded;
+          ++stats.shaded_pixels;
+          stats.light_evaluations += count;
+          stats.alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * count;
+          ctx.images->counters.lights_evaluated[p] += static_cast<std::uint32_t>(count);
+          ctx.images->counters.shaded[p] += 1;
+          if (vbuffer) refetched.insert({static_cast<std::size_t>((y / tile_px) * ((W + tile_px - 1) / tile_px) + x / tile_px), s.triangle});
+        }
+        sum += shaded_colors[k];
+      }
+      if (n_shaded > 0) img.color[p] = glm::vec4(sum / static_cast<float>(S), 1.0f);
+    }
+  }
+  // Threads of uncovered pixels exit after reading their G-buffer sample: no texture fetches.
+  stats.texture_fetches += (stats.shaded_pixels.value() - shaded_before) * sh.tex_fetches;
+  if (vbuffer) {
+    // Each tile re-fetches the three vertices of every triangle it shades (Burns & Hunt).
+    stats.refetched_vertices += refetched.size() * 3;
+    dram.read(DramClass::Vertices, refetched.size() * 3 * kRefetchVertexBytes);
+  }
+  return img;
+}
+
 }  // namespace
 
 const std::vector<std::string>& kernel_names() { return kKernels; }
@@ -278,22 +339,7 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     if (!surfaces) k.fail("needs a G-buffer image (written by a pass) in reads=");
     const std::string out = k.buffer_with(cmd.writes, BufferContent::Image);
     if (out.empty()) k.fail("needs an image buffer in writes=");
-    ImageBuffer img;
-    img.color.assign(pixels, glm::vec4(0.0f));
-    for (int y = 0; y < H; ++y) {
-      for (int x = 0; x < W; ++x) {
-        const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
-        if (!surfaces->surface_valid[p * surfaces->samples]) continue;
-        const auto& list = grid->at_pixel(x, y);
-        img.color[p] = glm::vec4(shade_surface(ctx, surfaces->surface[p * surfaces->samples], x, y, &list), 1.0f);
-        ++stats.shaded_pixels;
-        stats.light_evaluations += list.size();
-        stats.alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * list.size();
-        ctx.images->counters.lights_evaluated[p] += static_cast<std::uint32_t>(list.size());
-        ctx.images->counters.shaded[p] += 1;
-      }
-    }
-    stats.texture_fetches += pixels * sh.tex_fetches;
+    ImageBuffer img = shade_surfaces(ctx, *surfaces, sh, grid.get(), nullptr, 0, stats, dram);
     write_image(out, std::move(img));
     return;
   }
@@ -403,51 +449,7 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     }
     const bool vbuffer = cmd.kernel == "vbuffer_shade";
     const int tile_px = k.get_int("tile_px", 16, 1, 1024);
-    std::set<std::pair<std::size_t, std::uint32_t>> refetched;  // (tile, triangle)
-    ImageBuffer img;
-    img.color.assign(pixels, glm::vec4(0.0f));
-    for (int y = 0; y < H; ++y) {
-      for (int x = 0; x < W; ++x) {
-        const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
-        // Shade each distinct surface of the pixel once (with MSAA a pixel's samples may hold
-        // several triangles) and resolve: the average over the samples, uncovered ones black.
-        const std::size_t S = surfaces->samples;
-        glm::vec3 sum(0.0f);
-        std::uint32_t shaded_triangles[kMaxSamplesPerPixel];
-        glm::vec3 shaded_colors[kMaxSamplesPerPixel];
-        std::size_t n_shaded = 0;
-        for (std::size_t smp = 0; smp < S; ++smp) {
-          if (!surfaces->surface_valid[p * S + smp]) continue;
-          const SurfacePoint& s = surfaces->surface[p * S + smp];
-          std::size_t k = 0;
-          while (k < n_shaded && shaded_triangles[k] != s.triangle) ++k;
-          if (k == n_shaded) {
-            const std::vector<std::uint32_t>* list = nullptr;
-            std::uint64_t count = n_lights;
-            if (tgrid) list = &tgrid->at_pixel(x, y);
-            if (cgrid) list = &cgrid->lists[cgrid->cluster_of(x, y, ctx.frustum.distance_of(s.position))];
-            if (list) count = list->size();
-            shaded_triangles[k] = s.triangle;
-            shaded_colors[k] = shade_surface(ctx, s, x, y, list);
-            ++n_shaded;
-            ++stats.shaded_pixels;
-            stats.light_evaluations += count;
-            stats.alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * count;
-            ctx.images->counters.lights_evaluated[p] += static_cast<std::uint32_t>(count);
-            ctx.images->counters.shaded[p] += 1;
-            if (vbuffer) refetched.insert({static_cast<std::size_t>((y / tile_px) * ((W + tile_px - 1) / tile_px) + x / tile_px), s.triangle});
-          }
-          sum += shaded_colors[k];
-        }
-        if (n_shaded > 0) img.color[p] = glm::vec4(sum / static_cast<float>(S), 1.0f);
-      }
-    }
-    stats.texture_fetches += stats.shaded_pixels.value() ? pixels * sh.tex_fetches : 0;
-    if (vbuffer) {
-      // Each tile re-fetches the three vertices of every triangle it shades (Burns & Hunt).
-      stats.refetched_vertices += refetched.size() * 3;
-      dram.read(DramClass::Vertices, refetched.size() * 3 * kRefetchVertexBytes);
-    }
+    ImageBuffer img = shade_surfaces(ctx, *surfaces, sh, tgrid, cgrid, vbuffer ? tile_px : 0, stats, dram);
     write_image(out, std::move(img));
     return;
   }

@@ -36,33 +36,6 @@ void write_file(const fs::path& p, const std::string& text) {
   std::ofstream(p) << text;
 }
 
-/// Runs the tbdrsim binary; returns its exit code, stdout+stderr in `output`.
-int run_tool(const std::vector<std::string>& args, std::string* output = nullptr) {
-  const fs::path log = fs::temp_directory_path() / ("tbdrsim_test_sweep_" + std::to_string(getpid()) + "_" +
-                                                     std::to_string(std::rand()) + ".log");
-  std::vector<std::string> all = {TBDRSIM_BINARY};
-  all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (auto& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(fd, 1);
-    dup2(fd, 2);
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  std::ifstream in(log);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  if (output) *output = ss.str();
-  fs::remove(log);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
 /// Starts the tbdrsim binary in the background (output to `log`).
 pid_t start_tool(const std::vector<std::string>& args, const fs::path& log) {
   std::vector<std::string> all = {TBDRSIM_BINARY};
@@ -79,6 +52,21 @@ pid_t start_tool(const std::vector<std::string>& args, const fs::path& log) {
     _exit(127);
   }
   return pid;
+}
+
+/// Runs the tbdrsim binary; returns its exit code, stdout+stderr in `output`.
+int run_tool(const std::vector<std::string>& args, std::string* output = nullptr) {
+  const fs::path log = fs::temp_directory_path() / ("tbdrsim_test_sweep_" + std::to_string(getpid()) + "_" +
+                                                     std::to_string(std::rand()) + ".log");
+  const pid_t pid = start_tool(args, log);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  std::ifstream in(log);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  if (output) *output = ss.str();
+  fs::remove(log);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 int wait_tool(pid_t pid) {
