@@ -212,7 +212,6 @@ class TimingSim final : public Unit {
     const Job& j = bin_jobs_[k];
     const RenderWork& rw = work_.commands[j.command].renders[static_cast<std::size_t>(j.render)];
     if (j.render > 0 && !frag_done_of_bin(k - 1)) return;
-    (void)rw;
     binning_busy_ = true;
     ++next_bin_;
     const BinningWork& b = rw.binning;
@@ -224,12 +223,12 @@ class TimingSim final : public Unit {
     if (result_.commands[j.command].start_cycle < 0) result_.commands[j.command].start_cycle = cycles_of(start);
     const Tick compute_end = reserve(binner_, start, cycles);
     auto pending = std::make_shared<int>(1);
-    auto finish = [this, k, start, compute_end, pending]() {
+    auto finish = [this, k, compute_end, pending]() {
       if (--*pending > 0) return;
       const Tick end = std::max(eq_.now(), compute_end);
-      eq_.schedule(end, [this, k, start, compute_end] {
-        binner_.stalled_cycles += cycles_of(eq_.now()) - cycles_of(compute_end) > 0 ? cycles_of(eq_.now()) - cycles_of(compute_end) : 0;
-        (void)start;
+      eq_.schedule(end, [this, k, compute_end] {
+        // Time spent waiting for memory after the binning work itself was done.
+        binner_.stalled_cycles += std::max(0.0, cycles_of(eq_.now()) - cycles_of(compute_end));
         bin_done_[k] = true;
         binning_busy_ = false;
         result_.commands[bin_jobs_[k].command].binning_end_cycle = cycles_of(eq_.now());

@@ -56,6 +56,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       (mat && mat->alpha_mask >= 0) ? &ctx_.scene->alpha_masks[static_cast<std::size_t>(mat->alpha_mask)] : nullptr;
   const bool pls_reads = ctx_.pls && (sh.pls == PlsAccess::Read || sh.pls == PlsAccess::ReadWrite);
   const bool pls_writes = ctx_.pls && (sh.pls == PlsAccess::Write || sh.pls == PlsAccess::ReadWrite);
+  const std::uint64_t pls_bytes = ctx_.pls ? ctx_.pass->pls_bytes_per_pixel() : 0;
   const int bits = p.setup.subpixel_bits;
   const std::int64_t half = std::int64_t{1} << (bits - 1);
   const std::uint32_t outputs = std::min<std::uint32_t>(sh.color_outputs, static_cast<std::uint32_t>(ctx_.color_targets.size()));
@@ -145,6 +146,9 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         break;
     }
     light_sum += fl.count;
+    // Pixel local storage traffic: the pass's whole PLS layout, read and/or written per fragment.
+    if (pls_reads) stats.pls_bytes_accessed += pls_bytes;
+    if (pls_writes && outputs == 0) stats.pls_bytes_accessed += pls_bytes;
     if (from_triangle && sh.light_source != LightSource::None && sh.light_source != LightSource::Proxy) ++stats.lit_surface_invocations;
     for (const auto& [cls, bytes] : d.per_pixel_reads) ctx_.dram->read(cls, bytes);
     stats.alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * fl.count;
@@ -196,7 +200,6 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
           ctx_.pls->overflow[pixel] = 1;
         }
       }
-      stats.pls_bytes_accessed += ctx_.pls->stack_capacity > 0 ? 4 : 0;
     }
     if (outputs == 0) continue;
 

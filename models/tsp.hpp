@@ -28,7 +28,7 @@ struct TspStats {
   Counter blended_samples{group, {"blended_samples", "samples", "Samples written with blending"}};
   Counter unassigned_cluster_fragments{group, {"unassigned_cluster_fragments", "fragments", "Fragments whose cluster got no light list (not flagged)"}};
   Counter light_stack_overflow_fragments{group, {"light_stack_overflow_fragments", "fragments", "Fragments whose PLS light stack overflowed (fell back to every light)"}};
-  Counter pls_bytes_accessed{group, {"pls_bytes_accessed", "bytes", "Pixel local storage bytes written by shaders without color outputs"}};
+  Counter pls_bytes_accessed{group, {"pls_bytes_accessed", "bytes", "Pixel local storage bytes read and written by shaders (the pass's PLS layout per access)"}};
   Counter tile_buffer_read_bytes{group, {"tile_buffer_read_bytes", "bytes", "On-chip tile buffer bytes read by blending and fetch"}};
   Counter tile_buffer_write_bytes{group, {"tile_buffer_write_bytes", "bytes", "On-chip tile buffer bytes written by shaders"}};
   explicit TspStats(std::string scope) : group(std::move(scope)) {}
