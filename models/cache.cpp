@@ -41,6 +41,7 @@ Cache::Cache(std::string scope, const CacheParams& p, double pj_per_byte, bool w
   dirty_.assign(lines, 0);
   cls_.assign(lines, DramClass::Other);
   fill_.assign(lines, kNoFill);
+  arrival_ps_.assign(lines, 0);
   for (std::size_t c = 0; c < kDramClassCount; ++c) {
     class_stats_[c] = std::make_unique<CacheClassStats>(scope + ".class." + to_string(static_cast<DramClass>(c)));
   }
@@ -114,6 +115,7 @@ CacheAccess Cache::access(std::uint64_t addr, std::uint32_t bytes, bool is_write
   dirty_[victim] = is_write ? 1 : 0;
   cls_[victim] = cls;
   fill_[victim] = kNoFill;
+  arrival_ps_[victim] = 0;
   if (is_write) {
     ++stats_.write_allocations;
   } else {
@@ -148,6 +150,7 @@ void Cache::invalidate_all() {
   std::fill(stamps_.begin(), stamps_.end(), 0);
   std::fill(dirty_.begin(), dirty_.end(), 0);
   std::fill(fill_.begin(), fill_.end(), kNoFill);
+  std::fill(arrival_ps_.begin(), arrival_ps_.end(), 0);
 }
 
 void Cache::update_derived_stats() {

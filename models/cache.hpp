@@ -95,11 +95,14 @@ class Cache {
   /// Drops every line (dirty data is discarded: call flush first to keep it).
   void invalidate_all();
 
-  /// Per-line user tag for the timing model (the pending fill of a line being fetched);
-  /// reset to kNoFill whenever the slot is (re)allocated.
+  /// Per-line user tags for the timing model: the pending fill of a line being fetched whose
+  /// arrival is not known yet (kNoFill when none), and the tick (ps) its data arrives once it is
+  /// (0 when it has always been there). Both reset whenever the slot is (re)allocated.
   static constexpr std::uint32_t kNoFill = UINT32_MAX;
   std::uint32_t fill_of(std::uint32_t slot) const { return fill_[slot]; }
   void set_fill(std::uint32_t slot, std::uint32_t fill) { fill_[slot] = fill; }
+  std::int64_t arrival_ps(std::uint32_t slot) const { return arrival_ps_[slot]; }
+  void set_arrival_ps(std::uint32_t slot, std::int64_t ps) { arrival_ps_[slot] = ps; }
   /// Line address (first byte) held by a slot.
   std::uint64_t slot_addr(std::uint32_t slot) const { return tags_[slot] << line_shift_; }
 
@@ -145,6 +148,7 @@ class Cache {
   std::vector<std::uint8_t> dirty_;
   std::vector<DramClass> cls_;         // class of the line's data (allocating access or last writer)
   std::vector<std::uint32_t> fill_;    // timing model's pending fill id, kNoFill when none
+  std::vector<std::int64_t> arrival_ps_;  // timing model's data arrival tick (ps)
 
   CacheStats stats_;
   std::array<std::unique_ptr<CacheClassStats>, kDramClassCount> class_stats_;

@@ -1,6 +1,7 @@
 #include "models/memory_system.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <stdexcept>
 
 namespace tbdr {
@@ -93,19 +94,12 @@ bool MemorySystem::issue(Client client, std::uint64_t addr, std::uint32_t bytes,
   Txn& x = txns_[t];
   x.on_complete = std::move(on_complete);
   x.issued = now;
-  x.remaining = 1;  // guard while the parts are being issued; becomes the part resolved at once
+  x.due = now;
+  x.remaining = 1;  // guard while the parts are being issued
   x.client = client;
   ++live_txns_;
-
-  issuing_txn_ = t;
-  sync_cycles_ = -1;
   access<true>(client, addr, bytes, is_write, cls, t);
-  issuing_txn_ = UINT32_MAX;
-  if (sync_cycles_ >= 0) {
-    deliver_later(Waiter{t, 0, WaiterKind::Txn}, core_.after(now, Cycles{sync_cycles_}));
-  } else {
-    part_done(t);  // every part waits on a fill: drop the guard
-  }
+  resolve_txn(t, now);  // drop the guard
   return true;
 }
 
@@ -197,26 +191,20 @@ void MemorySystem::l1_access(Cache& l1, std::uint64_t addr, std::uint32_t bytes,
     return;
   }
   if (a.hit) {
-    if constexpr (kTimed) {
-      const std::uint32_t f = l1.fill_of(a.slot);
-      if (f != Cache::kNoFill) {
-        ++stats_.merged_misses;
-        attach(f, w);
-      } else {
-        ready(w);
-      }
-    }
+    if constexpr (kTimed) hit(l1, a.slot, w);
     return;
   }
   // Read miss: the line was allocated; fetch all of it from the SLC.
-  Waiter below{};
   if constexpr (kTimed) {
     const std::uint32_t f = new_fill(&l1, a.slot);
     l1.set_fill(a.slot, f);
     attach(f, w);
-    below = Waiter{f, 0, WaiterKind::Fill};
+    fills_[f].parts = 1;  // guard while the SLC lines are being looked up
+    slc_range<true>(Allocation::Allocate, l1.line_addr(addr), l1.line_bytes(), false, cls, Waiter{f, 0, WaiterKind::Fill});
+    resolve_fill(f, eq_.now());
+  } else {
+    slc_range<false>(Allocation::Allocate, l1.line_addr(addr), l1.line_bytes(), false, cls, Waiter{});
   }
-  slc_range<kTimed>(Allocation::Allocate, l1.line_addr(addr), l1.line_bytes(), false, cls, below);
 }
 
 template <bool kTimed>
@@ -244,15 +232,7 @@ void MemorySystem::slc_access(Allocation alloc, std::uint64_t addr, std::uint32_
     return;
   }
   if (a.hit) {
-    if constexpr (kTimed) {
-      const std::uint32_t f = slc.fill_of(a.slot);
-      if (f != Cache::kNoFill) {
-        ++stats_.merged_misses;
-        attach(f, w);
-      } else {
-        ready(w);
-      }
-    }
+    if constexpr (kTimed) hit(slc, a.slot, w);
     return;
   }
   if (!a.allocated) {  // streaming read miss: fetch the bursts, install nothing
@@ -266,7 +246,7 @@ void MemorySystem::slc_access(Allocation alloc, std::uint64_t addr, std::uint32_
     slc.set_fill(a.slot, f);
     attach(f, w);
     ++fills_[f].parts;
-    send(DramRequest{line, line_bytes, false, cls, [this, f] { complete_fill(f); }});
+    send(DramRequest{line, line_bytes, false, cls, [this, f] { resolve_fill(f, eq_.now()); }});
   } else {
     dram_.access_functional(line, line_bytes, false, cls);
   }
@@ -286,7 +266,7 @@ void MemorySystem::dram_bypass(std::uint64_t addr, std::uint32_t bytes, bool is_
     const std::uint32_t f = new_fill(nullptr, 0);
     attach(f, w);
     ++fills_[f].parts;
-    send(DramRequest{start, n, false, cls, [this, f] { complete_fill(f); }});
+    send(DramRequest{start, n, false, cls, [this, f] { resolve_fill(f, eq_.now()); }});
   }
 }
 
@@ -313,20 +293,22 @@ void MemorySystem::dram_write_line(std::uint64_t addr, std::uint32_t bytes, Dram
 // ---------------------------------------------------------------------------------------------
 // Completion bookkeeping (timed path only)
 
-void MemorySystem::ready(Waiter w) {
-  switch (w.kind) {
-    case WaiterKind::None: return;
-    case WaiterKind::Txn:
-      if (w.id == issuing_txn_) {  // resolved while its issue() runs: one event for all such parts
-        sync_cycles_ = std::max<std::int64_t>(sync_cycles_, w.extra_cycles);
-        return;
-      }
-      ++txns_[w.id].remaining;
-      break;
-    case WaiterKind::Fill: ++fills_[w.id].parts; break;
+Tick MemorySystem::core_after(Tick base, Cycles n) {
+  // Most calls share their base tick (everything resolved at one DRAM completion or one issue())
+  // and a handful of latencies: remember the last base's edge and the last answer.
+  if (base != memo_base_) {
+    memo_base_ = base;
+    memo_edge_ = core_.cycles_at(core_.next_edge(base)).count();
+    memo_cycles_ = -1;
   }
-  deliver_later(w, core_.after(eq_.now(), Cycles{w.extra_cycles}));
+  if (n.count() != memo_cycles_) {
+    memo_cycles_ = n.count();
+    memo_tick_ = core_.tick_of(Cycles{memo_edge_ + memo_cycles_});
+  }
+  return memo_tick_;
 }
+
+void MemorySystem::ready(Waiter w) { resolve(w, core_after(eq_.now(), Cycles{w.extra_cycles})); }
 
 void MemorySystem::attach(std::uint32_t fill, Waiter w) {
   switch (w.kind) {
@@ -335,6 +317,45 @@ void MemorySystem::attach(std::uint32_t fill, Waiter w) {
     case WaiterKind::Fill: ++fills_[w.id].parts; break;
   }
   fills_[fill].waiters.push_back(w);
+}
+
+void MemorySystem::hit(Cache& cache, std::uint32_t slot, Waiter w) {
+  const std::uint32_t f = cache.fill_of(slot);
+  if (f != Cache::kNoFill) {  // still being fetched, arrival unknown: wait for it
+    ++stats_.merged_misses;
+    attach(f, w);
+    return;
+  }
+  const Tick arrival{cache.arrival_ps(slot)};
+  if (arrival > eq_.now()) {  // being fetched, arrives at a known tick
+    ++stats_.merged_misses;
+    resolve(w, core_after(arrival, Cycles{w.extra_cycles}));
+  } else {
+    ready(w);
+  }
+}
+
+void MemorySystem::resolve(Waiter w, Tick arrival) {
+  switch (w.kind) {
+    case WaiterKind::None: return;
+    case WaiterKind::Txn: {
+      Txn& x = txns_[w.id];
+      x.due = std::max(x.due, arrival);
+      return;
+    }
+    case WaiterKind::Fill: {
+      Fill& x = fills_[w.id];
+      x.due = std::max(x.due, arrival);
+      return;
+    }
+  }
+}
+
+void MemorySystem::resolve_txn(std::uint32_t t, Tick arrival) {
+  Txn& x = txns_[t];
+  x.due = std::max(x.due, arrival);
+  if (--x.remaining != 0) return;
+  eq_.schedule(x.due, Priority::CacheResponse, [this, t] { finish_txn(t); });
 }
 
 std::uint32_t MemorySystem::new_fill(Cache* cache, std::uint32_t slot) {
@@ -350,33 +371,37 @@ std::uint32_t MemorySystem::new_fill(Cache* cache, std::uint32_t slot) {
   x.cache = cache;
   x.slot = slot;
   x.parts = 0;
+  x.due = eq_.now();
   x.waiters.clear();
   return f;
 }
 
-void MemorySystem::complete_fill(std::uint32_t f) {
+void MemorySystem::resolve_fill(std::uint32_t f, Tick arrival) {
   Fill& x = fills_[f];
+  x.due = std::max(x.due, arrival);
   if (--x.parts != 0) return;
-  // The line may have been replaced while it was being fetched: then its slot names another fill.
-  if (x.cache != nullptr && x.cache->fill_of(x.slot) == f) x.cache->set_fill(x.slot, Cache::kNoFill);
-  const Tick now = eq_.now();
-  for (const Waiter& w : x.waiters) deliver_later(w, core_.after(now, Cycles{w.extra_cycles}));
+  // Every source is resolved: the line is complete at x.due. Its waiters get it then (plus their
+  // own latency), without an event; later accesses find the arrival tick on the line itself.
+  const Tick due = x.due;
+  if (x.cache != nullptr && x.cache->fill_of(x.slot) == f) {  // (else the line was replaced meanwhile)
+    x.cache->set_fill(x.slot, Cache::kNoFill);
+    x.cache->set_arrival_ps(x.slot, due.ps());
+  }
+  // Resolving a waiter never creates a fill, so fills_ (and x) stay where they are.
+  for (const Waiter& w : x.waiters) {
+    const Tick t = core_after(due, Cycles{w.extra_cycles});
+    if (w.kind == WaiterKind::Txn) {
+      resolve_txn(w.id, t);
+    } else if (w.kind == WaiterKind::Fill) {
+      resolve_fill(w.id, t);
+    }
+  }
   x.waiters.clear();
   free_fills_.push_back(f);
 }
 
-void MemorySystem::deliver_later(Waiter w, Tick when) {
-  const std::uint32_t id = w.id;
-  if (w.kind == WaiterKind::Txn) {
-    eq_.schedule(when, Priority::CacheResponse, [this, id] { part_done(id); });
-  } else {
-    eq_.schedule(when, Priority::CacheResponse, [this, id] { complete_fill(id); });
-  }
-}
-
-void MemorySystem::part_done(std::uint32_t t) {
+void MemorySystem::finish_txn(std::uint32_t t) {
   Txn& x = txns_[t];
-  if (--x.remaining != 0) return;
   MemoryClientStats& cs = *client_stats_[static_cast<std::size_t>(x.client)];
   ++cs.completed;
   cs.latency_ps += static_cast<std::uint64_t>((eq_.now() - x.issued).ps());

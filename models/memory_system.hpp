@@ -154,19 +154,28 @@ class MemorySystem final : public Unit {
     std::uint32_t extra_cycles = 0;
     WaiterKind kind = WaiterKind::None;
   };
+  // Completion is resolved, not simulated per line: a part (a line of a request, a source of a
+  // fill) is "resolved" as soon as the tick its data arrives is known, which is when the DRAM
+  // completion, a cache hit or a resolved fill below it is seen. A transaction runs one event, at
+  // the latest tick of its parts; a fill needs no event at all (see resolve_fill()).
   // One issue() call in flight.
   struct Txn {
     EventCallback on_complete;
     Tick issued{0};
-    std::uint32_t remaining = 0;  // outstanding parts
+    Tick due{0};                // latest arrival tick of the parts resolved so far
+    std::uint32_t remaining = 0;  // unresolved parts
     Client client = Client::Geometry;
   };
   // A line being fetched into `cache` (nullptr: a streaming read that allocates nothing).
+  // While unresolved, accesses that find the line wait in `waiters`; once resolved, the fill is
+  // recycled and the line keeps its arrival tick: an access before it gets its data then (a
+  // merged miss), one after it is a plain hit.
   struct Fill {
     std::vector<Waiter> waiters;
     Cache* cache = nullptr;
+    Tick due{0};
     std::uint32_t slot = 0;
-    std::uint32_t parts = 0;  // outstanding sources (DRAM reads, SLC responses)
+    std::uint32_t parts = 0;  // unresolved sources (DRAM reads, SLC lines)
   };
   // The path of a client.
   struct Route {
@@ -189,12 +198,16 @@ class MemorySystem final : public Unit {
   template <bool kTimed>
   void dram_write_line(std::uint64_t addr, std::uint32_t bytes, DramClass cls);
 
-  void ready(Waiter w);                    // data available at the waiter's level now
-  void attach(std::uint32_t fill, Waiter w);  // data available when `fill` completes
+  Tick core_after(Tick base, Cycles n);  // core_.after(base, n), memoised
+  void ready(Waiter w);                       // data available at the waiter's level now
+  void attach(std::uint32_t fill, Waiter w);  // data available when `fill` resolves
+  // A line that hit in `cache` at `slot`: ready now, or when the fill still bringing it arrives.
+  void hit(Cache& cache, std::uint32_t slot, Waiter w);
+  void resolve(Waiter w, Tick arrival);       // one part of the waiter arrives at `arrival`
+  void resolve_txn(std::uint32_t txn, Tick arrival);
+  void resolve_fill(std::uint32_t fill, Tick arrival);
   std::uint32_t new_fill(Cache* cache, std::uint32_t slot);
-  void complete_fill(std::uint32_t fill);
-  void part_done(std::uint32_t txn);
-  void deliver_later(Waiter w, Tick when);
+  void finish_txn(std::uint32_t txn);
   void send(DramRequest&& req);
   void drain_overflow(std::uint32_t channel);
   template <bool kTimed>
@@ -213,15 +226,15 @@ class MemorySystem final : public Unit {
   std::array<Route, kClientCount> routes_{};
   std::uint32_t burst_bytes_;
 
+  Tick memo_base_{-1};
+  std::int64_t memo_edge_ = 0, memo_cycles_ = -1;
+  Tick memo_tick_{0};
   std::vector<Txn> txns_;
   std::vector<std::uint32_t> free_txns_;
   std::uint64_t live_txns_ = 0;
   std::uint64_t completed_ = 0;
   std::vector<Fill> fills_;
   std::vector<std::uint32_t> free_fills_;
-  // While issue() runs: the transaction and the longest latency of its parts resolved at once.
-  std::uint32_t issuing_txn_ = UINT32_MAX;
-  std::int64_t sync_cycles_ = -1;
 
   // DRAM requests refused by a full DRAM queue, per channel and direction, in order.
   std::vector<std::array<std::deque<DramRequest>, 2>> overflow_;
