@@ -139,28 +139,30 @@ void Dram::account_activate(Channel& ch, RowOutcome o, DramClass cls) {
   }
 }
 
-void Dram::account_request(Channel& ch, RowOutcome o, bool is_write, DramClass cls, std::uint32_t bytes) {
+void Dram::account_request(Channel& ch, RowOutcome o, bool is_write, DramClass cls, std::uint32_t bytes,
+                           std::uint32_t lines) {
   DramClassStats& cs = *class_stats_[static_cast<std::size_t>(cls)];
   DramChannelStats& chs = *ch.stats;
+  ++stats_.entries;
   if (is_write) {
-    ++stats_.writes;
+    stats_.writes += lines;
     stats_.write_bytes += bytes;
-    ++cs.writes;
+    cs.writes += lines;
     cs.write_bytes += bytes;
-    ++chs.writes;
+    chs.writes += lines;
   } else {
-    ++stats_.reads;
+    stats_.reads += lines;
     stats_.read_bytes += bytes;
-    ++cs.reads;
+    cs.reads += lines;
     cs.read_bytes += bytes;
-    ++chs.reads;
+    chs.reads += lines;
   }
   chs.bytes += bytes;
-  if (o == RowOutcome::Hit) {
-    ++stats_.row_hits;
-    ++chs.row_hits;
-    return;
-  }
+  // The first line found the row as `o`; the rest of a chain follow it in the open row.
+  const std::uint32_t hits = o == RowOutcome::Hit ? lines : lines - 1;
+  stats_.row_hits += hits;
+  chs.row_hits += hits;
+  if (o == RowOutcome::Hit) return;
   ++stats_.row_misses;
   ++chs.row_misses;
   if (o == RowOutcome::Empty) {
@@ -170,7 +172,8 @@ void Dram::account_request(Channel& ch, RowOutcome o, bool is_write, DramClass c
   }
 }
 
-RowOutcome Dram::access_functional(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls) {
+RowOutcome Dram::access_functional(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls,
+                                   std::uint32_t lines) {
   const DramCoord d = map(addr);
   Channel& ch = channels_[d.channel];
   Bank& b = ch.banks[d.bank];
@@ -179,13 +182,13 @@ RowOutcome Dram::access_functional(std::uint64_t addr, std::uint32_t bytes, bool
     b.open_row = static_cast<std::int64_t>(d.row);
     account_activate(ch, o, cls);
   }
-  account_request(ch, o, is_write, cls, transfer_bytes(bytes));
+  account_request(ch, o, is_write, cls, transfer_bytes(bytes), std::max<std::uint32_t>(1, lines));
   return o;
 }
 
 bool Dram::can_accept(std::uint64_t addr, bool is_write) const {
   const Channel& ch = channels_[map(addr).channel];
-  return is_write ? ch.writeq.size() < write_cap_ : ch.readq.size() < read_cap_;
+  return is_write ? ch.write_lines < write_cap_ : ch.read_lines < read_cap_;
 }
 
 bool Dram::enqueue(DramRequest&& req) {
@@ -198,7 +201,14 @@ bool Dram::enqueue(DramRequest&& req) {
   }
   Channel& ch = channels_[d.channel];
   std::vector<Entry>& q = req.is_write ? ch.writeq : ch.readq;
-  if (q.size() >= (req.is_write ? write_cap_ : read_cap_)) {
+  const std::size_t cap = req.is_write ? write_cap_ : read_cap_;
+  const std::uint32_t lines = std::max<std::uint32_t>(1, req.lines);
+  if (lines > cap) {
+    throw std::invalid_argument("dram: request of " + std::to_string(lines) + " lines exceeds the " +
+                                std::to_string(cap) + "-entry queue");
+  }
+  std::size_t& queued = req.is_write ? ch.write_lines : ch.read_lines;
+  if (queued + lines > cap) {
     ++stats_.rejected;
     if (req.is_write) {
       ++ch.stats->write_queue_full;
@@ -210,22 +220,29 @@ bool Dram::enqueue(DramRequest&& req) {
   const Tick now = eq_.now();
   note_occupancy(ch, now);
   Entry e;
-  if (free_done_.empty()) {
+  e.report = req.report_when_scheduled;
+  e.tag = req.tag;
+  if (e.report) {
+    if (!schedule_cb_) throw std::logic_error("dram: report_when_scheduled without a schedule callback");
+  } else if (free_done_.empty()) {
     e.slot = static_cast<std::uint32_t>(done_.size());
     done_.emplace_back();
+    done_[e.slot] = std::move(req.on_complete);
   } else {
     e.slot = free_done_.back();
     free_done_.pop_back();
+    done_[e.slot] = std::move(req.on_complete);
   }
-  done_[e.slot] = std::move(req.on_complete);
   e.enqueued = now;
   e.arrival = now + timing_.controller;
   e.row = d.row;
   e.bank = d.bank;
   e.bytes = transfer_bytes(req.bytes);
+  e.lines = lines;
   e.cls = req.cls;
   e.is_write = req.is_write;
   q.push_back(e);
+  queued += lines;
   if (!any_timed_) {
     any_timed_ = true;
     first_enqueue_ = now;
@@ -237,8 +254,8 @@ bool Dram::enqueue(DramRequest&& req) {
 
 void Dram::note_occupancy(Channel& ch, Tick now) {
   const auto dt = static_cast<std::uint64_t>((now - ch.occupancy_since).ps());
-  ch.read_occupancy_ps += ch.readq.size() * dt;
-  ch.write_occupancy_ps += ch.writeq.size() * dt;
+  ch.read_occupancy_ps += ch.read_lines * dt;
+  ch.write_occupancy_ps += ch.write_lines * dt;
   ch.occupancy_since = now;
 }
 
@@ -285,6 +302,7 @@ void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::in
   note_occupancy(ch, now);
   const Entry e = q[i];
   q.erase(q.begin() + static_cast<std::ptrdiff_t>(i));
+  (e.is_write ? ch.write_lines : ch.read_lines) -= e.lines;
 
   Bank& b = ch.banks[e.bank];
   b.col_ready = n + 1;
@@ -296,15 +314,24 @@ void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::in
   const std::int64_t end_c = cycle_ceil(end);
   b.pre_ready = std::max(b.pre_ready, e.is_write ? end_c + timing_.t_wr_cycles : end_c);
 
-  account_request(ch, e.outcome, e.is_write, e.cls, e.bytes);
+  account_request(ch, e.outcome, e.is_write, e.cls, e.bytes, e.lines);
   ch.stats->busy_ps += static_cast<std::uint64_t>(duration.ps());
   timed_bytes_ += e.bytes;
   const Tick done = end + timing_.controller;
   if (!e.is_write) {
-    stats_.read_latency_ps += static_cast<std::uint64_t>((done - e.enqueued).ps());
-    ++timed_reads_;
+    // Per line: line i of L is back controller latency after (i + 1) / L of the transfer.
+    const auto L = static_cast<std::int64_t>(e.lines);
+    const std::int64_t first_done = (start + timing_.controller - e.enqueued).ps();
+    stats_.read_latency_ps += static_cast<std::uint64_t>(L * first_done + duration.ps() * (L + 1) / 2);
+    timed_reads_ += e.lines;
   }
-
+  if (e.report) {
+    --in_flight_;
+    ++stats_.completed;
+    last_completion_ = std::max(last_completion_, done);
+    schedule_cb_(e.tag, DramSchedule{start, end, timing_.controller});
+    return;
+  }
   const std::uint32_t slot = e.slot;
   eq_.schedule(done, Priority::DramResponse, [this, slot] { complete(slot); });
 }
@@ -315,14 +342,14 @@ void Dram::complete(std::uint32_t slot) {
   free_done_.push_back(slot);
   --in_flight_;
   ++stats_.completed;
-  last_completion_ = eq_.now();
+  last_completion_ = std::max(last_completion_, eq_.now());
   if (cb) cb();
 }
 
 std::vector<Dram::Entry>* Dram::active_queue(Channel& ch, Tick now, bool& draining) const {
-  if (!draining && ch.writeq.size() >= write_high_) {
+  if (!draining && ch.write_lines >= write_high_) {
     draining = true;
-  } else if (draining && ch.writeq.size() <= write_low_) {
+  } else if (draining && ch.write_lines <= write_low_) {
     draining = false;
   }
   const bool reads_arrived = !ch.readq.empty() && ch.readq.front().arrival <= now;

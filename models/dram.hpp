@@ -37,6 +37,24 @@ struct DramRequest {
   bool is_write = false;
   DramClass cls = DramClass::Other;
   EventCallback on_complete;  ///< run at the completion tick (Priority::DramResponse); may be empty
+  /// Line transfers merged into this request (a burst chain of consecutive lines of one row).
+  /// The controller queues and schedules it as one entry; the statistics count each line as a
+  /// request, the first with the row outcome found, the others as row hits.
+  std::uint32_t lines = 1;
+  /// Instead of an on_complete event at the completion tick: report the request to the schedule
+  /// callback (with `tag`) as soon as the controller has scheduled its data, so the requester
+  /// learns every line's arrival without an event per request (see set_schedule_callback()).
+  bool report_when_scheduled = false;
+  std::uint64_t tag = 0;
+};
+
+/// When the controller has scheduled a request's data: its bursts occupy the data bus from
+/// `data_start` to `data_end` (evenly, in address order) and each part reaches the requester
+/// `return_latency` after its last burst.
+struct DramSchedule {
+  Tick data_start{0};
+  Tick data_end{0};
+  Tick return_latency{0};
 };
 
 /// Physical address bit order of dram.address_mapping, most significant field first.
@@ -81,8 +99,9 @@ double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint
 /// Whole-DRAM statistics.
 struct DramStats {
   StatGroup group;
-  Counter reads{group, {"reads", "requests", "Read requests served"}};
-  Counter writes{group, {"writes", "requests", "Write requests served"}};
+  Counter reads{group, {"reads", "requests", "Read requests (line transfers) served"}};
+  Counter writes{group, {"writes", "requests", "Write requests (line transfers) served"}};
+  Counter entries{group, {"queue_entries_served", "entries", "Queue entries served: requests, a burst chain of lines counting once"}};
   Counter read_bytes{group, {"read_bytes", "bytes", "Bytes read (whole bursts)"}};
   Counter write_bytes{group, {"write_bytes", "bytes", "Bytes written (whole bursts)"}};
   Counter row_hits{group, {"row_hits", "requests", "Requests that found their row open"}};
@@ -93,9 +112,9 @@ struct DramStats {
   Counter precharges{group, {"precharges", "commands", "Precharge commands"}};
   Counter rejected{group, {"queue_full_rejections", "requests", "Requests refused because their queue was full"}};
   Counter completed{group, {"completed", "requests", "Timed requests completed"}};
-  Counter read_latency_ps{group, {"read_latency_total_ps", "ps", "Sum of timed read latencies (enqueue to data back)"}};
+  Counter read_latency_ps{group, {"read_latency_total_ps", "ps", "Sum over timed read lines of enqueue to the line's data back"}};
   Accumulator row_hit_rate{group, {"row_hit_rate", "ratio", "Row hits / requests"}};
-  Accumulator avg_read_latency_ns{group, {"avg_read_latency_ns", "ns", "Mean timed read latency, enqueue to data back"}};
+  Accumulator avg_read_latency_ns{group, {"avg_read_latency_ns", "ns", "Mean timed read latency per line, enqueue to data back"}};
   Accumulator achieved_bandwidth_gbps{group, {"achieved_bandwidth_gbps", "GB/s", "Timed bytes / (last completion - first enqueue)"}};
   Accumulator energy_read_pj{group, {"energy_read_pj", "pJ", "Read core energy: read bits x dram_read_pj_per_bit"}};
   Accumulator energy_write_pj{group, {"energy_write_pj", "pJ", "Write core energy: write bits x dram_write_pj_per_bit"}};
@@ -164,9 +183,15 @@ class Dram final : public Unit {
   bool can_accept(std::uint64_t addr, bool is_write) const;
   /// Called (after the scheduler step that freed it) whenever a queue slot frees on a channel.
   void set_space_callback(std::function<void(std::uint32_t channel)> cb) { space_cb_ = std::move(cb); }
+  /// Called, for requests with report_when_scheduled, at the moment their column command is
+  /// scheduled (a tick before their data is back); such requests schedule no completion event.
+  void set_schedule_callback(std::function<void(std::uint64_t tag, const DramSchedule&)> cb) {
+    schedule_cb_ = std::move(cb);
+  }
 
   /// Functional: the same row-buffer and statistics update as a timed request, without timing.
-  RowOutcome access_functional(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls);
+  RowOutcome access_functional(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls,
+                               std::uint32_t lines = 1);
 
   /// Address mapping.
   DramCoord map(std::uint64_t addr) const;
@@ -183,6 +208,8 @@ class Dram final : public Unit {
   std::uint32_t banks() const { return banks_; }
   std::uint64_t row_bytes() const { return row_bytes_; }
   std::uint32_t burst_bytes() const { return burst_bytes_; }
+  /// Most lines one request may carry: a burst chain occupies one queue entry per line.
+  std::uint32_t max_request_lines() const { return static_cast<std::uint32_t>(std::min(read_cap_, write_cap_)); }
   std::size_t read_queue_size(std::uint32_t channel) const { return channels_[channel].readq.size(); }
   std::size_t write_queue_size(std::uint32_t channel) const { return channels_[channel].writeq.size(); }
   /// Requests accepted (timed) and not yet completed.
@@ -217,8 +244,11 @@ class Dram final : public Unit {
     std::uint64_t row = 0;
     std::uint32_t bank = 0;
     std::uint32_t bytes = 0;  // whole bursts
+    std::uint32_t lines = 1;  // line transfers merged (statistics)
+    std::uint64_t tag = 0;    // report_when_scheduled: the requester's tag
     DramClass cls = DramClass::Other;
     bool is_write = false;
+    bool report = false;      // report_when_scheduled
     RowOutcome outcome = RowOutcome::Hit;  // Empty/Conflict once a row was opened for this request
   };
   struct Bank {
@@ -230,6 +260,8 @@ class Dram final : public Unit {
   struct Channel {
     std::vector<Entry> readq;
     std::vector<Entry> writeq;
+    std::size_t read_lines = 0;   // lines queued (capacity, watermarks and occupancy count lines)
+    std::size_t write_lines = 0;
     std::vector<Bank> banks;
     Tick bus_free{0};
     bool draining = false;
@@ -250,7 +282,8 @@ class Dram final : public Unit {
   // Statistics of a row opened (activate, and precharge for a conflict) for a request of `cls`.
   void account_activate(Channel& ch, RowOutcome o, DramClass cls);
   // Statistics of a request served (bytes; a row hit or miss as recorded when its row was opened).
-  void account_request(Channel& ch, RowOutcome o, bool is_write, DramClass cls, std::uint32_t bytes);
+  void account_request(Channel& ch, RowOutcome o, bool is_write, DramClass cls, std::uint32_t bytes,
+                       std::uint32_t lines);
   void note_occupancy(Channel& ch, Tick now);
   void kick(std::uint32_t c, Tick at);
   void wakeup(std::uint32_t c);
@@ -298,6 +331,7 @@ class Dram final : public Unit {
   std::uint64_t timed_bytes_ = 0;
   std::uint64_t timed_reads_ = 0;
   std::function<void(std::uint32_t)> space_cb_;
+  std::function<void(std::uint64_t, const DramSchedule&)> schedule_cb_;
   std::vector<int> first_need_;  // scratch of wakeup(): per bank, the oldest request needing a row
 
   DramStats stats_;

@@ -197,9 +197,13 @@ ParamRegistry<HwConfig> make_registry() {
   r.add(TBDR_PARAM(dram.controller_latency_ns), 30.0).unit("ns").range(0, 10000)
       .doc("Memory controller and interconnect latency each way").source("no public figure");
   r.add(TBDR_PARAM(dram.read_queue_entries), 32).unit("requests").range(1, 4096)
-      .doc("Read queue per channel").source("no public figure");
+      .doc("Read queue per channel, in line requests (a burst chain takes one entry per line)").source("no public figure");
   r.add(TBDR_PARAM(dram.write_queue_entries), 32).unit("requests").range(1, 4096)
-      .doc("Write queue per channel").source("no public figure");
+      .doc("Write queue per channel, in line requests (a burst chain takes one entry per line)").source("no public figure");
+  r.add(TBDR_PARAM(dram.max_chain_bytes), 1024).unit("bytes").range(0, 65536)
+      .doc("Longest run of consecutive lines of one row that one memory request misses in the SLC and "
+           "the controller queues as one entry and serves as back-to-back bursts (0: one line per entry)")
+      .source("design choice: a streaming unit's consecutive misses are row hits served back to back anyway");
   r.add(TBDR_PARAM(dram.address_mapping), std::string("row_bank_channel_column"))
       .choices({"row_bank_channel_column", "row_channel_bank_column"})
       .doc("Physical address bit order, most significant first").source("design choice");

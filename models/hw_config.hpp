@@ -120,6 +120,7 @@ struct DramParams {
   double controller_latency_ns = 0;
   std::int64_t read_queue_entries = 0;
   std::int64_t write_queue_entries = 0;
+  std::int64_t max_chain_bytes = 0;  ///< consecutive line misses queued as one entry (burst chain)
   std::string address_mapping;  ///< row_bank_channel_column | row_channel_bank_column
 };
 

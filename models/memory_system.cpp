@@ -46,6 +46,7 @@ MemorySystem::MemorySystem(const HwConfig& hw, EventQueue& eq, std::string scope
       slc_(std::make_unique<Cache>(scope + "/cache.slc", hw.cache.slc, hw.energy.slc_pj_per_byte)),
       dram_(hw.dram, hw.energy, eq, scope + "/dram"),
       burst_bytes_(static_cast<std::uint32_t>(hw.dram.burst_bytes)),
+      max_chain_bytes_(static_cast<std::uint64_t>(std::max<std::int64_t>(0, hw.dram.max_chain_bytes))),
       overflow_(dram_.channels()),
       overflow_cap_(std::max<std::size_t>(1, opt.overflow_entries)),
       stats_(scope) {
@@ -62,6 +63,8 @@ MemorySystem::MemorySystem(const HwConfig& hw, EventQueue& eq, std::string scope
     client_stats_[c] = std::make_unique<MemoryClientStats>(scope + "/client." + to_string(static_cast<Client>(c)));
   }
   dram_.set_space_callback([this](std::uint32_t c) { drain_overflow(c); });
+  dram_.set_schedule_callback(
+      [this](std::uint64_t tag, const DramSchedule& when) { resolve_chain(static_cast<std::uint32_t>(tag), when); });
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -153,6 +156,7 @@ void MemorySystem::flush_caches() {
       slc_range<kTimed>(Allocation::Allocate, a, l1->line_bytes(), true, c, Waiter{});
     });
   }
+  send_chains<kTimed>();
   slc_->flush([&](std::uint64_t a, DramClass c) {
     dram_write_line<kTimed>(a, static_cast<std::uint32_t>(slc_->line_bytes()), c);
   });
@@ -174,6 +178,7 @@ void MemorySystem::access(Client client, std::uint64_t addr, std::uint32_t bytes
   } else {
     slc_range<kTimed>(r.slc_alloc, addr, bytes, is_write, cls, w);
   }
+  send_chains<kTimed>();
 }
 
 template <bool kTimed>
@@ -246,9 +251,9 @@ void MemorySystem::slc_access(Allocation alloc, std::uint64_t addr, std::uint32_
     slc.set_fill(a.slot, f);
     attach(f, w);
     ++fills_[f].parts;
-    send(DramRequest{line, line_bytes, false, cls, [this, f] { resolve_fill(f, eq_.now()); }});
+    chain<true>(false, line, line_bytes, cls, f);
   } else {
-    dram_.access_functional(line, line_bytes, false, cls);
+    chain<false>(false, line, line_bytes, cls, Cache::kNoFill);
   }
 }
 
@@ -258,24 +263,85 @@ void MemorySystem::dram_bypass(std::uint64_t addr, std::uint32_t bytes, bool is_
   const std::uint64_t end = (addr + bytes + burst_bytes_ - 1) / burst_bytes_ * burst_bytes_;
   const auto n = static_cast<std::uint32_t>(end - start);
   if constexpr (!kTimed) {
-    dram_.access_functional(start, n, is_write, cls);
+    chain<false>(is_write, start, n, cls, Cache::kNoFill);
   } else if (is_write) {
-    dram_write_line<true>(start, n, cls);
+    chain<true>(true, start, n, cls, Cache::kNoFill);
     ready(w);  // posted
   } else {
     const std::uint32_t f = new_fill(nullptr, 0);
     attach(f, w);
     ++fills_[f].parts;
-    send(DramRequest{start, n, false, cls, [this, f] { resolve_fill(f, eq_.now()); }});
+    chain<true>(false, start, n, cls, f);
   }
 }
 
 template <bool kTimed>
-void MemorySystem::dram_write_line(std::uint64_t addr, std::uint32_t bytes, DramClass cls) {
+void MemorySystem::chain(bool is_write, std::uint64_t addr, std::uint32_t bytes, DramClass cls, std::uint32_t fill) {
+  Chain& c = chains_[is_write ? 1 : 0];
+  if (c.lines != 0 && (c.addr + c.bytes != addr || c.cls != cls || c.bytes + bytes > max_chain_bytes_ ||
+                       c.lines == dram_.max_request_lines() || addr / dram_.row_bytes() != c.addr / dram_.row_bytes())) {
+    send_chain<kTimed>(is_write);
+  }
+  if (c.lines == 0) {
+    c.addr = addr;
+    c.bytes = bytes;
+    c.cls = cls;
+    c.first_fill = fill;
+  } else {
+    c.bytes += bytes;
+    if constexpr (kTimed) {
+      if (!is_write) fills_[c.last_fill].next_in_chain = fill;
+    }
+  }
+  if constexpr (kTimed) {
+    if (!is_write) fills_[fill].chain_bytes = bytes;
+  }
+  c.last_fill = fill;
+  ++c.lines;
+}
+
+template <bool kTimed>
+void MemorySystem::send_chain(bool is_write) {
+  Chain& c = chains_[is_write ? 1 : 0];
+  if (c.lines == 0) return;
+  if (is_write) {
+    dram_write_line<kTimed>(c.addr, c.bytes, c.cls, c.lines);
+  } else if constexpr (!kTimed) {
+    dram_.access_functional(c.addr, c.bytes, false, c.cls, c.lines);
+  } else {
+    DramRequest r{c.addr, c.bytes, false, c.cls, {}};
+    r.lines = c.lines;
+    r.report_when_scheduled = true;
+    r.tag = c.first_fill;
+    send(std::move(r));
+  }
+  c.lines = 0;
+}
+
+void MemorySystem::resolve_chain(std::uint32_t f, const DramSchedule& when) {
+  // Total bytes first, then each line's arrival: after its share of the data transfer.
+  std::uint64_t total = 0;
+  for (std::uint32_t g = f; g != Cache::kNoFill; g = fills_[g].next_in_chain) total += fills_[g].chain_bytes;
+  const std::int64_t span = (when.data_end - when.data_start).ps();
+  std::uint64_t done = 0;
+  while (f != Cache::kNoFill) {
+    Fill& x = fills_[f];
+    const std::uint32_t next = x.next_in_chain;
+    x.next_in_chain = Cache::kNoFill;
+    done += x.chain_bytes;
+    const Tick data = when.data_start + Tick{static_cast<std::int64_t>(static_cast<std::uint64_t>(span) * done / total)};
+    resolve_fill(f, data + when.return_latency);  // recycles f; no fill is created meanwhile
+    f = next;
+  }
+}
+
+template <bool kTimed>
+void MemorySystem::dram_write_line(std::uint64_t addr, std::uint32_t bytes, DramClass cls, std::uint32_t lines) {
   if constexpr (!kTimed) {
-    dram_.access_functional(addr, bytes, true, cls);
+    dram_.access_functional(addr, bytes, true, cls, lines);
   } else {
     DramRequest r{addr, bytes, true, cls, {}};
+    r.lines = lines;
     if (flushing_) {
       ++flush_outstanding_;
       r.on_complete = [this] {
@@ -372,6 +438,7 @@ std::uint32_t MemorySystem::new_fill(Cache* cache, std::uint32_t slot) {
   x.slot = slot;
   x.parts = 0;
   x.due = eq_.now();
+  x.next_in_chain = Cache::kNoFill;
   x.waiters.clear();
   return f;
 }

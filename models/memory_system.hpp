@@ -176,6 +176,18 @@ class MemorySystem final : public Unit {
     Tick due{0};
     std::uint32_t slot = 0;
     std::uint32_t parts = 0;  // unresolved sources (DRAM reads, SLC lines)
+    std::uint32_t next_in_chain = UINT32_MAX;  // next fill served by the same DRAM burst chain
+    std::uint32_t chain_bytes = 0;             // bytes of the chain this fill waits for
+  };
+  // Consecutive lines of one row and direction that the current walk sends to DRAM, gathered
+  // into one request (burst chain) of at most dram.max_chain_bytes.
+  struct Chain {
+    std::uint64_t addr = 0;
+    std::uint32_t bytes = 0;
+    std::uint32_t lines = 0;
+    DramClass cls = DramClass::Other;
+    std::uint32_t first_fill = UINT32_MAX;  // reads: the fills the chain completes, linked
+    std::uint32_t last_fill = UINT32_MAX;
   };
   // The path of a client.
   struct Route {
@@ -195,8 +207,22 @@ class MemorySystem final : public Unit {
   // Straight to DRAM (streaming miss or no caches), whole bursts.
   template <bool kTimed>
   void dram_bypass(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Waiter w);
+  // A DRAM write (a line, or a chain of `lines` lines); counted by a timed flush in progress.
   template <bool kTimed>
-  void dram_write_line(std::uint64_t addr, std::uint32_t bytes, DramClass cls);
+  void dram_write_line(std::uint64_t addr, std::uint32_t bytes, DramClass cls, std::uint32_t lines = 1);
+  // Adds a DRAM transfer to the read (fill != kNoFill or functional) or write chain, sending the
+  // chain first if the transfer does not extend it.
+  template <bool kTimed>
+  void chain(bool is_write, std::uint64_t addr, std::uint32_t bytes, DramClass cls, std::uint32_t fill);
+  template <bool kTimed>
+  void send_chain(bool is_write);
+  template <bool kTimed>
+  void send_chains() {
+    send_chain<kTimed>(false);
+    send_chain<kTimed>(true);
+  }
+  // DRAM scheduled a read chain: each fill's line arrives after its share of the transfer.
+  void resolve_chain(std::uint32_t first_fill, const DramSchedule& when);
 
   Tick core_after(Tick base, Cycles n);  // core_.after(base, n), memoised
   void ready(Waiter w);                       // data available at the waiter's level now
@@ -225,6 +251,8 @@ class MemorySystem final : public Unit {
   Dram dram_;
   std::array<Route, kClientCount> routes_{};
   std::uint32_t burst_bytes_;
+  std::uint64_t max_chain_bytes_;
+  std::array<Chain, 2> chains_{};  // [0] reads, [1] writes
 
   Tick memo_base_{-1};
   std::int64_t memo_edge_ = 0, memo_cycles_ = -1;
