@@ -883,6 +883,68 @@ TEST(MemorySystemTest, FunctionalAndTimedPathsCountTheSameBytes) {
   EXPECT_GT(a.reads(DramClass::Textures), 0u);
 }
 
+TEST(MemorySystemTest, ConsecutiveMissesOfARowFormOneBurstChain) {
+  // A 4 KiB tile load (one row of one channel) streams past the SLC as 64 line misses. With
+  // 1 KiB chains they are 4 queue entries; statistics still count 64 line requests, the first a
+  // row miss (bank empty) and 63 row hits. Either way the data bus carries 64 x 10 ns back to back:
+  // done at 30 (controller) + 18 (tRCD) + 15 (RL) + 640 (data) + 30 (controller) = 733 ns, plus
+  // the SLC lookup that found the misses (20 ns).
+  for (const std::int64_t chain : {std::int64_t{0}, std::int64_t{1024}}) {
+    HwConfig hw = test_config();
+    hw.dram.max_chain_bytes = chain;
+    EventQueue eq;
+    MemorySystem m(hw, eq);
+    Tick done{-1};
+    ASSERT_TRUE(m.issue(Client::PixelBackEnd, 0x100000, 4096, false, DramClass::Color, [&] { done = eq.now(); }));
+    eq.run();
+    const DramStats& s = m.dram().stats();
+    EXPECT_EQ(s.reads.value(), 64u) << chain;
+    EXPECT_EQ(s.entries.value(), chain == 0 ? 64u : 4u) << chain;
+    EXPECT_EQ(s.row_hits.value(), 63u) << chain;
+    EXPECT_EQ(s.row_misses.value(), 1u) << chain;
+    EXPECT_EQ(s.activates.value(), 1u) << chain;
+    EXPECT_EQ(m.traffic().reads(DramClass::Color), 4096u) << chain;
+    EXPECT_EQ(done.ps(), (733 + 20) * kNs) << chain;
+  }
+  // A chain never takes more lines than a queue holds: 8-entry queues, 4 KiB chains -> 8 lines each.
+  HwConfig hw = test_config();
+  hw.dram.max_chain_bytes = 4096;
+  hw.dram.read_queue_entries = 8;
+  EventQueue eq;
+  MemorySystem m(hw, eq);
+  ASSERT_TRUE(m.issue(Client::PixelBackEnd, 0x100000, 4096, false, DramClass::Color));
+  eq.run();
+  EXPECT_EQ(m.dram().stats().entries.value(), 8u);
+  EXPECT_EQ(m.dram().stats().reads.value(), 64u);
+  // The functional path forms the same chains.
+  EventQueue eq_f;
+  MemorySystem f(hw, eq_f);
+  f.access_functional(Client::PixelBackEnd, 0x100000, 4096, false, DramClass::Color);
+  EXPECT_EQ(f.dram().stats().entries.value(), 8u);
+  EXPECT_EQ(f.dram().stats().row_hits.value(), 63u);
+}
+
+TEST(MemorySystemTest, EachLineOfAChainArrivesWithItsOwnBursts) {
+  // A 1 KiB compute read misses 16 SLC lines: one chain whose data occupies the bus for 160 ns.
+  // Its first line is back after 30 + 18 + 15 + 10 + 30 = 103 ns, the last after 253 ns; a
+  // request for the first line issued at the same time waits only for that line.
+  HwConfig hw = test_config();
+  hw.dram.max_chain_bytes = 1024;
+  EventQueue eq;
+  MemorySystem m(hw, eq);
+  Tick whole{-1}, first{-1};
+  ASSERT_TRUE(m.issue(Client::Compute, 0x40000, 1024, false, DramClass::LightLists, [&] { whole = eq.now(); }));
+  ASSERT_TRUE(m.issue(Client::Compute, 0x40000, 64, false, DramClass::LightLists, [&] { first = eq.now(); }));
+  eq.run();
+  EXPECT_EQ(whole.ps(), (253 + 20) * kNs);
+  EXPECT_EQ(first.ps(), (103 + 20) * kNs);
+  EXPECT_EQ(m.dram().stats().entries.value(), 1u);
+  EXPECT_EQ(m.stats().merged_misses.value(), 1u);
+  // Mean read latency per line: (103 + 113 + ... + 253) / 16 = 178 ns.
+  m.dram().update_derived_stats();
+  EXPECT_DOUBLE_EQ(m.dram().stats().avg_read_latency_ns.value(), 178.0);
+}
+
 TEST(MemorySystemTest, PixelBackEndStreamsPastTheSlc) {
   const HwConfig hw = test_config();
   EventQueue eq;
