@@ -34,6 +34,10 @@ struct TileWork {
   std::uint64_t quads = 0;
   std::uint64_t alu_ops = 0;              ///< fragment ALU ops (helpers included)
   std::uint64_t texels = 0;
+  /// Texture lines the tile's fragment shading touched (its footprint): sorted, unique offsets in
+  /// the texture address space (FrameWork::texture_bytes; models/texture_unit.hpp).
+  std::vector<std::uint64_t> texture_lines;
+  std::uint64_t texture_line_accesses = 0;  ///< distinct lines per quad and fetch, summed (before merging)
   std::uint64_t tile_buffer_bytes = 0;    ///< on-chip tile buffer bytes read + written
   std::uint64_t tag_bytes = 0;            ///< tag buffer bytes read + written
   std::uint64_t depth_bytes = 0;          ///< on-chip depth/stencil bytes read + written
@@ -79,6 +83,7 @@ struct FrameWork {
   int tile_width = 0;
   int tile_height = 0;
   int tiles_x = 0;
+  std::uint64_t texture_bytes = 0;  ///< size of the texture address space TileWork::texture_lines index
   std::vector<CommandWork> commands;
 };
 

@@ -26,6 +26,7 @@ struct ClusterGrid;
 struct DepthBounds;
 struct ViewFrustum;
 struct AttachmentImage;
+class TextureLayout;
 
 /// The camera as the units use it: matrices and the eye position.
 struct CameraXform {
@@ -158,6 +159,11 @@ struct RenderContext {
   DramTraffic* dram = nullptr;                ///< the pass's DRAM traffic (shader image reads)
   const ViewFrustum* frustum = nullptr;  ///< for cluster lookups
   std::uint32_t frame_prim_base = 0;      ///< added to a primitive's index to make a frame-unique id
+  /// Texture addresses of scene triangles' fetches: where textures live, and the list the TSP
+  /// appends the current tile's touched lines to (per quad and fetch slot, unsorted, repeats
+  /// kept). Either null: no addresses are generated.
+  const TextureLayout* textures = nullptr;
+  std::vector<std::uint64_t>* texture_lines = nullptr;
   /// Lights whose screen rectangle overlaps each shading tile (an exact-result acceleration of
   /// the image computation only; what a technique is charged for comes from its light source).
   int light_tile_px = 32;

@@ -1,10 +1,16 @@
 #include "models/tsp.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
+
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
 
 #include "models/light_lists.hpp"
 #include "models/shading.hpp"
+#include "models/texture_unit.hpp"
 
 namespace tbdr {
 
@@ -21,7 +27,153 @@ struct FragmentLights {
   std::uint64_t count = 0;                           ///< lights charged
 };
 
+/// The perspective-correct uv of a triangle anywhere on its plane: the same interpolation as
+/// perspective_barycentrics (screen-linear weights over w, renormalised) written as a ratio of
+/// screen-linear functions, uv = N(X, Y) / D(X, Y), so that points outside the triangle (helper
+/// lanes) cost a few multiply-adds.
+struct UvPlane {
+  double inv_area = 0;
+  double d0 = 0, d1 = 0, d2 = 0;  ///< D = d0 + l1 d1 + l2 d2, l = screen barycentric weights
+  double u0 = 0, u1 = 0, u2 = 0;  ///< N_u, the same way
+  double v0 = 0, v1 = 0, v2 = 0;  ///< N_v
+
+  UvPlane(const TriangleSetup& t, const std::array<glm::vec2, 3>& uv) {
+    inv_area = t.area_x2 > 0 ? 1.0 / static_cast<double>(t.area_x2) : 0.0;
+    double at_u[3], at_v[3];  // uv at the setup's (clipped, reordered) vertices, times 1/w
+    for (int k = 0; k < 3; ++k) {
+      const double b0 = t.bary[k].x, b1 = t.bary[k].y, b2 = t.bary[k].z, q = t.inv_w[k];
+      at_u[k] = (uv[0].x * b0 + uv[1].x * b1 + uv[2].x * b2) * q;
+      at_v[k] = (uv[0].y * b0 + uv[1].y * b1 + uv[2].y * b2) * q;
+    }
+    d0 = t.inv_w[0];
+    d1 = t.inv_w[1] - d0;
+    d2 = t.inv_w[2] - d0;
+    u0 = at_u[0];
+    u1 = at_u[1] - u0;
+    u2 = at_u[2] - u0;
+    v0 = at_v[0];
+    v1 = at_v[1] - v0;
+    v2 = at_v[2] - v0;
+  }
+  /// uv at fixed-point (X, Y), from the raw edge values E1, E2 there.
+  glm::vec2 at(std::int64_t e1, std::int64_t e2) const {
+    const double l1 = static_cast<double>(e1) * inv_area, l2 = static_cast<double>(e2) * inv_area;
+    const double inv_d = 1.0 / (d0 + l1 * d1 + l2 * d2);
+    return {static_cast<float>((u0 + l1 * u1 + l2 * u2) * inv_d), static_cast<float>((v0 + l1 * v1 + l2 * v2) * inv_d)};
+  }
+};
+
+/// The uvs of a quad's 4 pixel centres from its first pixel's edge values and the edge steps of
+/// one pixel right (e?x) and down (e?y). The weights are carried from the first pixel in single
+/// precision (fp32, as a GPU interpolates), 4 lanes at a time where SSE2 is available.
+class QuadUv {
+ public:
+  QuadUv(const UvPlane& plane, std::int64_t e1x, std::int64_t e1y, std::int64_t e2x, std::int64_t e2y)
+      : plane_(plane), e1x_(e1x), e1y_(e1y), e2x_(e2x), e2y_(e2y) {
+#if defined(__SSE2__)
+    const auto f = [](double v) { return static_cast<float>(v); };
+    const double ia = plane.inv_area;
+    const double l1x = static_cast<double>(e1x) * ia, l1y = static_cast<double>(e1y) * ia;
+    const double l2x = static_cast<double>(e2x) * ia, l2y = static_cast<double>(e2y) * ia;
+    l1_step_ = _mm_setr_ps(0.0f, f(l1x), f(l1y), f(l1x + l1y));
+    l2_step_ = _mm_setr_ps(0.0f, f(l2x), f(l2y), f(l2x + l2y));
+    d_[0] = _mm_set1_ps(f(plane.d0));
+    d_[1] = _mm_set1_ps(f(plane.d1));
+    d_[2] = _mm_set1_ps(f(plane.d2));
+    u_[0] = _mm_set1_ps(f(plane.u0));
+    u_[1] = _mm_set1_ps(f(plane.u1));
+    u_[2] = _mm_set1_ps(f(plane.u2));
+    v_[0] = _mm_set1_ps(f(plane.v0));
+    v_[1] = _mm_set1_ps(f(plane.v1));
+    v_[2] = _mm_set1_ps(f(plane.v2));
+#endif
+  }
+  /// uv[lane] for the pixels (x,y), (x+1,y), (x,y+1), (x+1,y+1) given E1, E2 at (x,y).
+  void at(std::int64_t e1, std::int64_t e2, std::array<glm::vec2, 4>& uv) const {
+#if defined(__SSE2__)
+    const double ia = plane_.inv_area;
+    const __m128 l1 = _mm_add_ps(_mm_set1_ps(static_cast<float>(static_cast<double>(e1) * ia)), l1_step_);
+    const __m128 l2 = _mm_add_ps(_mm_set1_ps(static_cast<float>(static_cast<double>(e2) * ia)), l2_step_);
+    auto plane = [&](const __m128* c) { return _mm_add_ps(_mm_add_ps(c[0], _mm_mul_ps(l1, c[1])), _mm_mul_ps(l2, c[2])); };
+    const __m128 inv_d = _mm_div_ps(_mm_set1_ps(1.0f), plane(d_));
+    const __m128 u = _mm_mul_ps(plane(u_), inv_d), v = _mm_mul_ps(plane(v_), inv_d);
+    _mm_storeu_ps(&uv[0].x, _mm_unpacklo_ps(u, v));
+    _mm_storeu_ps(&uv[2].x, _mm_unpackhi_ps(u, v));
+#else
+    uv = {plane_.at(e1, e2), plane_.at(e1 + e1x_, e2 + e2x_), plane_.at(e1 + e1y_, e2 + e2y_),
+          plane_.at(e1 + e1x_ + e1y_, e2 + e2x_ + e2y_)};
+#endif
+  }
+
+ private:
+  const UvPlane& plane_;
+  std::int64_t e1x_, e1y_, e2x_, e2y_;
+#if defined(__SSE2__)
+  __m128 l1_step_, l2_step_;
+  __m128 d_[3], u_[3], v_[3];
+#endif
+};
+
 }  // namespace
+
+void Tsp::texture_addresses(const Primitive& p, std::uint32_t tex_fetches, std::size_t quads, TspStats& stats) {
+  // The uvs at the 4 pixel centres of every launched quad (helper lanes extrapolate the
+  // triangle's plane, as hardware does) give the LOD and bilinear footprint each fetch slot reads.
+  const int bits = p.setup.subpixel_bits;
+  const std::int64_t half = std::int64_t{1} << (bits - 1);
+  const TextureLayout& layout = *ctx_.textures;
+  const TextureStorage& tex = layout.of_material(p.material);
+  std::vector<std::uint64_t>& lines = *ctx_.texture_lines;
+  // The tile's list keeps each line once: a small direct-mapped filter drops most repeats before
+  // they are appended (the list is sorted and merged at the end of the tile). A list emptied by
+  // the caller starts a new tile.
+  if (lines.empty()) {
+    if (++line_filter_epoch_ == 0) {
+      line_filter_.fill({});
+      line_filter_epoch_ = 1;
+    }
+  }
+  const UvPlane plane(p.setup, p.uv);
+  const std::int64_t step = std::int64_t{1} << bits;  // one pixel in fixed point
+  const std::int64_t e1x = p.setup.a[1] * step, e1y = p.setup.b[1] * step;
+  const std::int64_t e2x = p.setup.a[2] * step, e2y = p.setup.b[2] * step;
+  const QuadUv quad_uv(plane, e1x, e1y, e2x, e2y);
+  // Quads come in raster order: most of a quad's lines are its left neighbour's, already in the
+  // list; only the blocks it adds are looked up.
+  QuadFootprint* fp = &footprints_[0];
+  QuadFootprint* prev = &footprints_[1];
+  prev->blocks = false;  // nothing to compare the first quad with
+  prev->count = 0;
+  std::array<std::uint64_t, 16> fresh;
+  std::uint64_t accesses = 0;
+  for (std::size_t q = 0; q < quads; ++q) {
+    const std::int64_t qx = static_cast<std::int64_t>(quad_seen_[q] & 0xffffffffu) * 2;
+    const std::int64_t qy = static_cast<std::int64_t>(quad_seen_[q] >> 32) * 2;
+    const std::int64_t x0 = (qx << bits) + half, y0 = (qy << bits) + half;
+    const std::int64_t e1 = edge_value(p.setup, 1, x0, y0), e2 = edge_value(p.setup, 2, x0, y0);
+    std::array<glm::vec2, 4> uv;
+    quad_uv.at(e1, e2, uv);
+    layout.quad_blocks(tex, uv, *fp);
+    accesses += fp->count;
+    std::uint32_t n = fp->count;
+    const std::uint64_t* new_lines = fp->lines.data();
+    if (fp->blocks) {
+      const std::uint64_t added = layout.new_blocks(tex, *prev, *fp);
+      n = added != 0 ? layout.block_lines(tex, *fp, added, fresh.data()) : 0;
+      new_lines = fresh.data();
+    }
+    std::swap(fp, prev);
+    for (std::uint32_t j = 0; j < n; ++j) {
+      const std::uint64_t line = new_lines[j];
+      LineFilterEntry& e = line_filter_[(line * 0x9E3779B97F4A7C15ull) >> (64 - kLineFilterBits)];
+      if (e.epoch == line_filter_epoch_ && e.line == line) continue;
+      e = {line, line_filter_epoch_};
+      // Every fetch slot reads its own copy: the same line offset by whole copies.
+      for (std::uint32_t k = 0; k < tex_fetches; ++k) lines.push_back(line + std::uint64_t{k} * tex.slot_bytes);
+    }
+  }
+  stats.texture_line_accesses += accesses * tex_fetches;
+}
 
 void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, std::vector<std::uint32_t>* alive,
                 TspStats& stats) {
@@ -64,6 +216,11 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   for (std::uint32_t o = 0; o < outputs; ++o) out_bytes_per_sample += bytes_per_sample(ctx_.color_targets[o]->format);
   const BlendMode blend = d.pipeline->blend;
   if (alive) alive->assign(pixels.size(), 0);
+
+  // Texture addresses of scene triangles (other primitives read attachments or on-chip data).
+  if (from_triangle && sh.tex_fetches > 0 && ctx_.textures && ctx_.texture_lines) {
+    texture_addresses(p, sh.tex_fetches, static_cast<std::size_t>(quads), stats);
+  }
   std::uint64_t light_sum = 0;
 
   for (std::size_t i = 0; i < pixels.size(); ++i) {

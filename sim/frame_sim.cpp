@@ -10,6 +10,7 @@
 #include "models/geometry_unit.hpp"
 #include "models/light_lists.hpp"
 #include "models/isp.hpp"
+#include "models/texture_unit.hpp"
 #include "models/tile_memory.hpp"
 #include "models/tiler.hpp"
 #include "models/tsp.hpp"
@@ -131,6 +132,11 @@ class FrameSimulator {
     result_.work.tile_width = static_cast<int>(hw_.tiling.tile_width);
     result_.work.tile_height = static_cast<int>(hw_.tiling.tile_height);
     result_.work.tiles_x = (f.width + result_.work.tile_width - 1) / result_.work.tile_width;
+    // The texture address space: every fetch slot any shader of the trace uses gets its copies.
+    std::uint32_t slots = 1;
+    for (const auto& sh : trace_.shaders) slots = std::max(slots, sh.tex_fetches);
+    textures_ = std::make_unique<TextureLayout>(&scene_, hw_, slots);
+    result_.work.texture_bytes = textures_->total_bytes();
     int pass_index = 0;
     std::uint64_t dispatches = 0;
     for (const auto& cmd : trace_.commands) {
@@ -378,6 +384,9 @@ class FrameSimulator {
     ctx.frustum = &frustum_;
     ctx.dram = &ps->dram;
     ctx.frame_prim_base = prim_base_;
+    std::vector<std::uint64_t> tile_texture_lines;  // the current tile's texture lines, as the TSP appends them
+    ctx.textures = textures_.get();
+    ctx.texture_lines = &tile_texture_lines;
     PlsState pls;
     if (!pass.pls.empty()) {
       const std::size_t pixels = static_cast<std::size_t>(viewport_.width_px) * static_cast<std::size_t>(viewport_.height_px);
@@ -472,7 +481,8 @@ class FrameSimulator {
           const DramTraffic before = dram;
           const std::uint64_t s0 = ps->isp.samples_rasterised.value(), p0 = ps->isp.primitives_fetched.value();
           const std::uint64_t i0 = ps->tsp.invocations.value(), q0 = ps->tsp.quads.value(), a0 = ps->tsp.alu_ops.value();
-          const std::uint64_t x0 = ps->tsp.texels.value();
+          const std::uint64_t x0 = ps->tsp.texels.value(), la0 = ps->tsp.texture_line_accesses.value();
+          tile_texture_lines.clear();
           const std::uint64_t tb0 = ps->tsp.tile_buffer_read_bytes.value() + ps->tsp.tile_buffer_write_bytes.value();
           const std::uint64_t tg0 = ps->isp.tag_read_bytes.value() + ps->isp.tag_write_bytes.value();
           const std::uint64_t d0 = ps->isp.depth_read_bytes.value() + ps->isp.depth_write_bytes.value();
@@ -495,6 +505,11 @@ class FrameSimulator {
           tw.quads = ps->tsp.quads.value() - q0;
           tw.alu_ops = ps->tsp.alu_ops.value() - a0;
           tw.texels = ps->tsp.texels.value() - x0;
+          tw.texture_line_accesses = ps->tsp.texture_line_accesses.value() - la0;
+          std::sort(tile_texture_lines.begin(), tile_texture_lines.end());
+          tw.texture_lines.assign(tile_texture_lines.begin(),
+                                  std::unique(tile_texture_lines.begin(), tile_texture_lines.end()));
+          ps->tsp.texture_tile_lines += tw.texture_lines.size();
           tw.tile_buffer_bytes = ps->tsp.tile_buffer_read_bytes.value() + ps->tsp.tile_buffer_write_bytes.value() - tb0;
           tw.tag_bytes = ps->isp.tag_read_bytes.value() + ps->isp.tag_write_bytes.value() - tg0;
           tw.depth_bytes = ps->isp.depth_read_bytes.value() + ps->isp.depth_write_bytes.value() - d0;
@@ -572,6 +587,7 @@ class FrameSimulator {
   ViewFrustum frustum_;
   std::uint32_t prim_base_ = 0;
   int geometry_passes_ = 0;
+  std::unique_ptr<TextureLayout> textures_;  ///< the frame's texture address space
   FrameResult result_;
 };
 
