@@ -60,6 +60,8 @@ struct TileState {
   Tick fetch_start{0};
   bool fetched = false;
   int pending_streams = 0;
+  int pending_shading = 0;  ///< USC work and texture fetch still to finish
+  Tick usc_end{0};
 };
 
 /// The scheduler of the frame's work; a Unit so the run loop's watchdog can name it when stuck.
@@ -79,6 +81,7 @@ class TimingSim final : public Unit {
     raster_rate_ = static_cast<double>(hw.isp.samples_per_clock * hw.isp.raster_pipes);
     const std::uint64_t tile_px = static_cast<std::uint64_t>(hw.tiling.tile_width * hw.tiling.tile_height);
     usc_queue_tiles_ = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(hw.usc.tasks_in_flight) * kThreadsPerTask / tile_px);
+    texture_line_bytes_ = static_cast<std::uint64_t>(hw.cache.texture.line_bytes);
     allocate_regions();
   }
 
@@ -119,6 +122,15 @@ class TimingSim final : public Unit {
     result_.memory_energy_pj = mem_.energy_pj();
     mem_.collect(result_.memory_stats);
     result_.events = eq_.events_executed();
+    for (const auto& cmd : work_.commands) {
+      for (const auto& r : cmd.renders) {
+        for (const auto& t : r.tiles) {
+          result_.texture_line_accesses += t.texture_line_accesses;
+          result_.texture_footprint_lines += t.texture_lines.size();
+        }
+      }
+    }
+    result_.texture_cache_misses = mem_.texture_cache().class_stats(DramClass::Textures).read_misses.value();
     return std::move(result_);
   }
 
@@ -192,6 +204,7 @@ class TimingSim final : public Unit {
       fb_base_.push_back(cmd.is_dispatch ? 0 : space.allocate("framebuffer." + cmd.name, stride * max_tile, DramClass::Color));
       cmd_base_.push_back(space.allocate("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, 64), DramClass::Other));
     }
+    if (work_.texture_bytes > 0) texture_base_ = space.allocate("textures", work_.texture_bytes, DramClass::Textures);
     pb_base_[0] = space.allocate("parameter_buffer.0", pb_bytes, DramClass::ParameterBuffer);
     pb_base_[1] = space.allocate("parameter_buffer.1", pb_bytes, DramClass::ParameterBuffer);
     vertex_base_ = space.allocate("vertex_and_index_buffers", vertex_bytes, DramClass::Vertices);
@@ -407,13 +420,45 @@ class TimingSim final : public Unit {
         }
       }
       const double usc_cycles = std::max(static_cast<double>(t.alu_ops) / alu_rate_, static_cast<double>(t.texels) / tex_rate_);
+      const Tick usc_start = std::max(isp_end, usc_.free_at);
       const Tick usc_end = reserve(usc_, isp_end, usc_cycles);
       usc_ends_.push_back(usc_end);
-      eq_.schedule(usc_end, [this, i] {
-        store_queue_.push_back(i);
-        pump_stores();
-      });
+      TileState& ts = tiles_[i];
+      ts.usc_end = usc_end;
+      ts.pending_shading = 1;
+      eq_.schedule(usc_end, [this, i] { shading_part_done(i); });
+      // The tile's texture footprint streams through the texture cache while it shades; the tile
+      // leaves the USCs when both its ALU work and its texture data are done.
+      if (!t.texture_lines.empty()) {
+        ++ts.pending_shading;
+        eq_.schedule(usc_start, [this, i] { fetch_textures(i); });
+      }
     }
+  }
+
+  void fetch_textures(std::size_t i) {
+    const TileWork& t = render_->tiles[i];
+    MemStream* s = new_stream(Client::Texture, false, DramClass::Textures);
+    const std::uint64_t line = texture_line_bytes_;
+    // Consecutive lines go as one range (the memory system still looks each line up).
+    std::size_t k = 0;
+    while (k < t.texture_lines.size()) {
+      std::size_t e = k + 1;
+      while (e < t.texture_lines.size() && t.texture_lines[e] == t.texture_lines[e - 1] + line) ++e;
+      s->add(texture_base_ + t.texture_lines[k], (e - k) * line);
+      k = e;
+    }
+    s->start([this, i] {
+      const Tick usc_end = tiles_[i].usc_end;
+      if (eq_.now() > usc_end) usc_.stalled_cycles += cycles_of(eq_.now()) - cycles_of(usc_end);
+      shading_part_done(i);
+    });
+  }
+
+  void shading_part_done(std::size_t i) {
+    if (--tiles_[i].pending_shading > 0) return;
+    store_queue_.push_back(i);
+    pump_stores();
   }
 
   /// The pixel back end writes one tile at a time: its stores stream to memory while it formats
@@ -491,6 +536,8 @@ class TimingSim final : public Unit {
   // Address space.
   std::uint64_t pb_base_[2] = {0, 0};
   std::uint64_t vertex_base_ = 0, vertex_cursor_ = 0;
+  std::uint64_t texture_base_ = 0;
+  std::uint64_t texture_line_bytes_ = 64;
   std::vector<std::uint64_t> fb_base_, fb_stride_, cmd_base_;
   // The render whose tiles are in flight.
   const RenderWork* render_ = nullptr;

@@ -59,6 +59,12 @@ struct TimingResult {
   std::vector<StatRecord> memory_stats;  ///< caches, DRAM, clients
   std::vector<TileRecord> tiles;      ///< per tile: cycles, samples, DRAM bytes
   std::uint64_t events = 0;
+  /// Texture fetch: lines the shaded quads accessed (distinct per quad and fetch), lines of the
+  /// tiles' footprints (each sent once per tile through the texture cache), and how many of
+  /// those missed the texture cache.
+  std::uint64_t texture_line_accesses = 0;
+  std::uint64_t texture_footprint_lines = 0;
+  std::uint64_t texture_cache_misses = 0;
 };
 
 /// Runs the timing model over a frame's work.

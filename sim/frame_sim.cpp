@@ -510,6 +510,9 @@ class FrameSimulator {
           tw.texture_lines.assign(tile_texture_lines.begin(),
                                   std::unique(tile_texture_lines.begin(), tile_texture_lines.end()));
           ps->tsp.texture_tile_lines += tw.texture_lines.size();
+          // The footprint is what the texture unit requests (before the texture cache), booked like
+          // the parameter buffer reads: after the tile's loads and stores were taken from `dram`.
+          dram.read(DramClass::Textures, tw.texture_lines.size() * static_cast<std::uint64_t>(hw_.cache.texture.line_bytes));
           tw.tile_buffer_bytes = ps->tsp.tile_buffer_read_bytes.value() + ps->tsp.tile_buffer_write_bytes.value() - tb0;
           tw.tag_bytes = ps->isp.tag_read_bytes.value() + ps->isp.tag_write_bytes.value() - tg0;
           tw.depth_bytes = ps->isp.depth_read_bytes.value() + ps->isp.depth_write_bytes.value() - d0;

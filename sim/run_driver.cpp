@@ -113,6 +113,14 @@ void time_frame(const HwConfig& hw, FrameResult& frame, TimingResult& timing, En
     st.push_back({scope, "utilization", timing.frame_cycles > 0 ? u.busy_cycles / timing.frame_cycles : 0.0, "ratio",
                   "Busy cycles / frame cycles"});
   }
+  const double accesses = static_cast<double>(timing.texture_line_accesses);
+  const double misses = static_cast<double>(timing.texture_cache_misses);
+  st.push_back({"frame/texture", "line_accesses", accesses, "lines", "Texture lines the shaded quads accessed (distinct per quad and fetch)"});
+  st.push_back({"frame/texture", "footprint_lines", static_cast<double>(timing.texture_footprint_lines), "lines",
+                "Lines of the tiles' texture footprints, each sent once per tile through the texture cache"});
+  st.push_back({"frame/texture", "cache_misses", misses, "lines", "Footprint lines that missed the texture cache"});
+  st.push_back({"frame/texture", "hit_rate_with_tile_reuse", accesses > 0 ? 1.0 - misses / accesses : 0.0, "ratio",
+                "Texture cache hit rate counting reuse within a tile as hits (its footprint is fetched once)"});
   for (auto& r : timing.memory_stats) st.push_back(r);
   energy = compute_energy(hw, st, timing.frame_time_ps);
   energy.collect(st);
