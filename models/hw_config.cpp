@@ -123,6 +123,9 @@ ParamRegistry<HwConfig> make_registry() {
       .doc("Texels read per texture fetch (4 = bilinear)").source("bilinear filtering");
   r.add(TBDR_PARAM(texture.bytes_per_texel), 4).unit("bytes").range(1, 16)
       .doc("Bytes per texel in memory (RGBA8 uncompressed)").source("RGBA8");
+  r.add(TBDR_PARAM(texture.outstanding_requests), 64).unit("requests").range(1, 4096)
+      .doc("Memory requests the texture units keep in flight for one tile's footprint (miss latency hiding)")
+      .source("no public figure; 12.8 GB/s x 0.5 us latency needs about 100 lines in flight");
 
   r.section("pls", "On-chip tile memory and pixel local storage");
   r.add(TBDR_PARAM(pls.tile_buffer_bits_per_pixel), 128).unit("bits/pixel").range(32, 2048)

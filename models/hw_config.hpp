@@ -73,6 +73,7 @@ struct TextureParams {
   double texels_per_clock = 0;
   std::int64_t texels_per_fetch = 0;
   std::int64_t bytes_per_texel = 0;
+  std::int64_t outstanding_requests = 0;  ///< memory requests in flight per tile footprint
 };
 
 /// [pls] on-chip tile memory and pixel local storage.

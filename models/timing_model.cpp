@@ -36,7 +36,8 @@ class TimingSim;
 /// flight, retrying when the memory system pushes back; calls `done` when every byte completed.
 class MemStream {
  public:
-  MemStream(TimingSim& sim, Client client, bool write, DramClass cls) : sim_(sim), client_(client), write_(write), cls_(cls) {}
+  MemStream(TimingSim& sim, Client client, bool write, DramClass cls, std::uint32_t outstanding = kStreamOutstanding)
+      : sim_(sim), client_(client), write_(write), cls_(cls), outstanding_(outstanding) {}
   void add(std::uint64_t addr, std::uint64_t bytes);
   void start(std::function<void()> done);
   bool empty() const { return chunks_.empty(); }
@@ -47,6 +48,7 @@ class MemStream {
   Client client_;
   bool write_;
   DramClass cls_;
+  std::uint32_t outstanding_;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> chunks_;
   std::size_t next_ = 0;
   std::size_t completed_ = 0;
@@ -210,8 +212,8 @@ class TimingSim final : public Unit {
     vertex_base_ = space.allocate("vertex_and_index_buffers", vertex_bytes, DramClass::Vertices);
   }
 
-  MemStream* new_stream(Client c, bool write, DramClass cls) {
-    streams_.push_back(std::make_unique<MemStream>(*this, c, write, cls));
+  MemStream* new_stream(Client c, bool write, DramClass cls, std::uint32_t outstanding = kStreamOutstanding) {
+    streams_.push_back(std::make_unique<MemStream>(*this, c, write, cls, outstanding));
     return streams_.back().get();
   }
 
@@ -438,7 +440,8 @@ class TimingSim final : public Unit {
 
   void fetch_textures(std::size_t i) {
     const TileWork& t = render_->tiles[i];
-    MemStream* s = new_stream(Client::Texture, false, DramClass::Textures);
+    MemStream* s = new_stream(Client::Texture, false, DramClass::Textures,
+                              static_cast<std::uint32_t>(hw_.texture.outstanding_requests));
     const std::uint64_t line = texture_line_bytes_;
     // Consecutive lines go as one range (the memory system still looks each line up).
     std::size_t k = 0;
@@ -572,7 +575,7 @@ void MemStream::start(std::function<void()> done) {
 
 void MemStream::pump() {
   waiting_ = false;
-  while (in_flight_ < kStreamOutstanding && next_ < chunks_.size()) {
+  while (in_flight_ < outstanding_ && next_ < chunks_.size()) {
     const auto& ch = chunks_[next_];
     const bool ok = sim_.mem().issue(client_, ch.first, ch.second, write_, cls_, [this] {
       --in_flight_;

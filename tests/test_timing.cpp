@@ -111,6 +111,43 @@ TEST(TimingRoofline, StoreBoundFrameMatchesDramBandwidth) {
   EXPECT_NEAR(r.timing.frame_cycles, bound, 0.05 * bound) << "DRAM bound " << bound;
 }
 
+TEST(TimingRoofline, TextureBoundFrameMatchesDramBandwidth) {
+  // One full-frame quad at 512x512 mapping an 8192x8192 texture (16 texels per pixel: mip level 4,
+  // 512x512 texels) with 8 fetch slots (8 copies) and 1 ALU op: the frame is its texture reads
+  // (8 x 1 MiB footprints; border lines shared by neighbouring tiles may hit in the SLC) plus a
+  // 1 MiB colour store. With the default 8 texels per clock the texture units would bind first
+  // (8.4 M texels / 8 = 1.05 M cycles); at 64 per clock the bound is the DRAM:
+  // bytes moved / dram.bandwidth_gbps (12.8 GB/s), at 600 MHz.
+  Scene s = base_scene();
+  TextureInfo tex;
+  tex.name = "big";
+  tex.format = "procedural";
+  tex.width = tex.height = 8192;
+  tex.channels = 4;
+  s.textures.push_back(tex);
+  s.materials[0].base_color_texture = 0;
+  Trace t = frame_of(512);
+  t.shaders[0].alu_ops = 1;
+  t.shaders[0].tex_fetches = 8;
+  add_quad(s, "wall", 3, 0, 64, 0);
+  PassDesc p = base_pass();
+  p.draws = {draw_of("wall")};
+  t.commands.push_back(p);
+  const Timed r = run_timed(t, s, {"texture.texels_per_clock=64"});
+  const double footprint = static_cast<double>(r.timing.texture_footprint_lines * 64);
+  const double texture = static_cast<double>(r.timing.dram.reads(DramClass::Textures));
+  const double moved = static_cast<double>(r.timing.dram.total_read() + r.timing.dram.total_written());
+  EXPECT_GT(footprint, 0.9 * 8 * 1024 * 1024) << "8 copies of a 512x512 level, 4 B per texel";
+  EXPECT_LT(footprint, 1.3 * 8 * 1024 * 1024) << "each line about once per tile";
+  EXPECT_LE(texture, footprint);
+  EXPECT_GT(texture, 0.8 * moved) << "a texture-bound frame";
+  const double bound = moved / 12.8e9 * 600e6;
+  EXPECT_NEAR(r.timing.frame_cycles, bound, 0.05 * bound) << "DRAM bound " << bound;
+  // Every footprint line went through the texture cache; quads re-read most lines within a tile.
+  EXPECT_EQ(r.timing.texture_footprint_lines * 64, r.frame.dram.reads(DramClass::Textures));
+  EXPECT_GT(r.timing.texture_line_accesses, r.timing.texture_footprint_lines);
+}
+
 Trace atrium_like(Scene& s) {
   // A small frame with opaque, punch-through and translucent layers (the functional tests' scene).
   s = base_scene();
