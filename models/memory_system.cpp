@@ -48,6 +48,7 @@ MemorySystem::MemorySystem(const HwConfig& hw, EventQueue& eq, std::string scope
       burst_bytes_(static_cast<std::uint32_t>(hw.dram.burst_bytes)),
       max_chain_bytes_(static_cast<std::uint64_t>(std::max<std::int64_t>(0, hw.dram.max_chain_bytes))),
       overflow_(dram_.channels()),
+      overflow_lines_(dram_.channels()),
       overflow_cap_(std::max<std::size_t>(1, opt.overflow_entries)),
       stats_(scope) {
   if (dram_.row_bytes() % slc_->line_bytes() != 0) {
@@ -122,11 +123,31 @@ void MemorySystem::access_functional(Client client, std::uint64_t addr, std::uin
 }
 
 void MemorySystem::notify_when_ready(EventCallback cb) {
-  if (can_accept()) {
-    eq_.schedule(eq_.now(), Priority::Default, std::move(cb));
-  } else {
-    ready_waiters_.push_back(std::move(cb));
-  }
+  // Requesters refused earlier are served first, in the order they asked (fair admission: a unit
+  // whose completions keep it issuing cannot starve one that is waiting).
+  ready_waiters_.push_back(std::move(cb));
+  if (overflow_full_ == 0) schedule_waiters();
+}
+
+void MemorySystem::schedule_waiters() {
+  if (waiters_scheduled_ || ready_waiters_.empty()) return;
+  waiters_scheduled_ = true;
+  eq_.schedule(eq_.now(), Priority::Default, [this] {
+    waiters_scheduled_ = false;
+    std::vector<EventCallback> ws = std::move(ready_waiters_);
+    ready_waiters_.clear();
+    serving_waiters_ = true;
+    for (std::size_t i = 0; i < ws.size(); ++i) {
+      if (overflow_full_ != 0) {  // full again: the rest keep their place, ahead of newcomers
+        ready_waiters_.insert(ready_waiters_.begin(), std::make_move_iterator(ws.begin() + static_cast<std::ptrdiff_t>(i)),
+                              std::make_move_iterator(ws.end()));
+        break;
+      }
+      ws[i]();
+    }
+    serving_waiters_ = false;
+    if (overflow_full_ == 0) schedule_waiters();
+  });
 }
 
 void MemorySystem::flush(EventCallback on_done) {
@@ -481,27 +502,35 @@ void MemorySystem::finish_txn(std::uint32_t t) {
 }
 
 void MemorySystem::send(DramRequest&& req) {
-  auto& q = overflow_[dram_.channel_of(req.addr)][req.is_write ? 1 : 0];
+  // The overflow queues count lines, like the DRAM queues (a burst chain holds one per line).
+  const std::uint32_t c = dram_.channel_of(req.addr);
+  const std::size_t dir = req.is_write ? 1 : 0;
+  auto& q = overflow_[c][dir];
   if (q.empty() && dram_.enqueue(std::move(req))) return;
+  std::size_t& lines = overflow_lines_[c][dir];
+  const bool was_full = lines >= overflow_cap_;
+  lines += std::max<std::uint32_t>(1, req.lines);
   q.push_back(std::move(req));
   ++overflow_count_;
   ++stats_.dram_overflows;
-  if (q.size() == overflow_cap_) ++overflow_full_;
+  if (!was_full && lines >= overflow_cap_) ++overflow_full_;
 }
 
 void MemorySystem::drain_overflow(std::uint32_t channel) {
-  for (auto& q : overflow_[channel]) {
-    while (!q.empty() && dram_.enqueue(std::move(q.front()))) {
-      if (q.size() == overflow_cap_) --overflow_full_;
+  for (std::size_t dir = 0; dir < 2; ++dir) {
+    auto& q = overflow_[channel][dir];
+    std::size_t& lines = overflow_lines_[channel][dir];
+    while (!q.empty()) {
+      const std::uint32_t n = std::max<std::uint32_t>(1, q.front().lines);
+      if (!dram_.enqueue(std::move(q.front()))) break;
+      const bool was_full = lines >= overflow_cap_;
+      lines -= n;
+      if (was_full && lines < overflow_cap_) --overflow_full_;
       q.pop_front();
       --overflow_count_;
     }
   }
-  if (overflow_full_ == 0 && !ready_waiters_.empty()) {
-    std::vector<EventCallback> ws = std::move(ready_waiters_);
-    ready_waiters_.clear();
-    for (EventCallback& cb : ws) eq_.schedule(eq_.now(), Priority::Default, std::move(cb));
-  }
+  if (overflow_full_ == 0) schedule_waiters();
 }
 
 // ---------------------------------------------------------------------------------------------

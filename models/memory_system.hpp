@@ -108,7 +108,8 @@ class MemorySystem final : public Unit {
   void access_functional(Client client, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls);
 
   /// Whether issue() would accept a request now.
-  bool can_accept() const { return overflow_full_ == 0; }
+  /// (Refused too while earlier refused requesters wait for their turn, unless it is theirs.)
+  bool can_accept() const { return overflow_full_ == 0 && (ready_waiters_.empty() || serving_waiters_); }
   /// Runs `cb` (as an event) as soon as issue() can accept again; at once if it can now.
   void notify_when_ready(EventCallback cb);
 
@@ -266,10 +267,14 @@ class MemorySystem final : public Unit {
 
   // DRAM requests refused by a full DRAM queue, per channel and direction, in order.
   std::vector<std::array<std::deque<DramRequest>, 2>> overflow_;
+  std::vector<std::array<std::size_t, 2>> overflow_lines_;  // lines held per queue
   std::uint64_t overflow_count_ = 0;  // requests in all overflow queues
-  std::uint32_t overflow_full_ = 0;   // overflow queues at or above their cap
+  std::uint32_t overflow_full_ = 0;   // overflow queues holding their cap of lines or more
   std::size_t overflow_cap_;
-  std::vector<EventCallback> ready_waiters_;
+  std::vector<EventCallback> ready_waiters_;  // refused requesters, in order
+  bool waiters_scheduled_ = false;            // an event will serve them
+  bool serving_waiters_ = false;              // that event is running: they may issue
+  void schedule_waiters();
   // Timed flush in progress: outstanding DRAM writes (+1 while the flush is being issued).
   bool flushing_ = false;
   std::uint64_t flush_outstanding_ = 0;

@@ -246,7 +246,7 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
 
   // The measured method table (Billeter's columns) at the largest light count.
   out << "\nMethod table, measured at " << max_lights << " lights (off-chip: classes with DRAM traffic besides the "
-      << "parameter buffer, vertices, indices and light data)\n";
+      << "parameter buffer, vertices, indices, textures and light data)\n";
   out << std::left << std::setw(30) << "technique" << std::setw(56) << "off-chip buffers" << std::right << std::setw(9) << "geo pass"
       << std::setw(14) << "overshading" << std::setw(6) << "MSAA" << std::setw(10) << "blending" << "\n";
   out << "  (overshading: lit surface invocations per visible pixel, yes above 1.10 (translucent layers add about 5 %); blending: the image with the translucent glass\n"
