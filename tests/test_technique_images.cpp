@@ -12,6 +12,7 @@
 #include "workloads/lights.hpp"
 #include "workloads/scene_library.hpp"
 #include "workloads/technique.hpp"
+#include "atrium_trace_setup.hpp"
 
 namespace tbdr {
 namespace {
@@ -38,16 +39,7 @@ ImageRGB8 final_image(const FrameResult& f) {
 /// Renders every technique of `names` and compares it with plain forward (see the file comment).
 void compare_with_plain_forward(int samples, const std::vector<std::string>& names) {
   const Scene scene = opaque_atrium();
-  TraceSetup setup;
-  setup.scene = &scene;
-  setup.scene_spec = "atrium:1";
-  setup.camera_name = "entrance";
-  setup.camera = atrium_viewpoint("entrance", scene);
-  LightSetSpec spec;
-  spec.count = 64;
-  setup.lights = generate_lights(scene, spec);
-  setup.width = 192;
-  setup.height = 108;
+  TraceSetup setup = testing_support::atrium_entrance_setup(scene, 64, 192, 108);
   setup.samples = samples;
   const HwConfig hw = resolve_config({}, {}).hw;
   const Trace pf = generate_trace("plain_forward", setup);

@@ -22,6 +22,7 @@
 #include "workloads/lights.hpp"
 #include "workloads/scene_library.hpp"
 #include "workloads/technique.hpp"
+#include "atrium_trace_setup.hpp"
 
 namespace tbdr {
 namespace {
@@ -250,16 +251,7 @@ TEST(TechniqueGeneration, TinySceneTracesRoundTrip) {
 
 TEST(TechniqueGeneration, AtriumTracesRoundTrip) {
   const Scene scene = load_scene("atrium:1");
-  TraceSetup setup;
-  setup.scene = &scene;
-  setup.scene_spec = "atrium:1";
-  setup.camera_name = "entrance";
-  setup.camera = atrium_viewpoint("entrance", scene);
-  LightSetSpec spec;
-  spec.count = 16;
-  setup.lights = generate_lights(scene, spec);
-  setup.width = 160;
-  setup.height = 90;
+  const TraceSetup setup = testing_support::atrium_entrance_setup(scene, 16, 160, 90);
   for (const auto& name : kAllTechniques) {
     const Trace t = generate_trace(name, setup);
     EXPECT_EQ(t.scene.kind, SceneKind::Atrium) << name;
