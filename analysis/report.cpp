@@ -13,8 +13,8 @@
 #include <set>
 #include <sstream>
 
-#include "sim/errors.hpp"
-#include "sim/results_db.hpp"
+#include "kernel/errors.hpp"
+#include "analysis/results_db.hpp"
 
 namespace tbdr {
 

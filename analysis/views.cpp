@@ -6,8 +6,8 @@
 #include <string_view>
 
 #include "analysis/report.hpp"
-#include "sim/errors.hpp"
-#include "sim/hash.hpp"
+#include "kernel/errors.hpp"
+#include "kernel/hash.hpp"
 
 namespace tbdr {
 

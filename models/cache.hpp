@@ -16,7 +16,7 @@
 
 #include "models/hw_config.hpp"
 #include "models/traffic.hpp"
-#include "sim/stats.hpp"
+#include "kernel/stats.hpp"
 
 namespace tbdr {
 

@@ -8,7 +8,7 @@
 #include "models/geometry_unit.hpp"
 #include "models/shading.hpp"
 #include "models/tile_memory.hpp"
-#include "sim/errors.hpp"
+#include "kernel/errors.hpp"
 
 namespace tbdr {
 

@@ -11,8 +11,8 @@
 #include "models/light_lists.hpp"
 #include "models/render_state.hpp"
 #include "models/traffic.hpp"
-#include "sim/stats.hpp"
-#include "sim/trace.hpp"
+#include "kernel/stats.hpp"
+#include "trace/trace.hpp"
 
 namespace tbdr {
 

@@ -23,10 +23,10 @@
 
 #include "models/hw_config.hpp"
 #include "models/traffic.hpp"
-#include "sim/event_queue.hpp"
-#include "sim/run_loop.hpp"
-#include "sim/stats.hpp"
-#include "sim/time.hpp"
+#include "kernel/event_queue.hpp"
+#include "kernel/run_loop.hpp"
+#include "kernel/stats.hpp"
+#include "kernel/time.hpp"
 
 namespace tbdr {
 

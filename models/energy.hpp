@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "models/hw_config.hpp"
-#include "sim/stats.hpp"
+#include "kernel/stats.hpp"
 
 namespace tbdr {
 

@@ -10,8 +10,8 @@
 #include "models/hw_config.hpp"
 #include "models/render_state.hpp"
 #include "models/traffic.hpp"
-#include "sim/stats.hpp"
-#include "workloads/scene.hpp"
+#include "kernel/stats.hpp"
+#include "scene/scene.hpp"
 
 namespace tbdr {
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "sim/params.hpp"
+#include "kernel/params.hpp"
 
 namespace tbdr {
 

@@ -12,7 +12,7 @@
 
 #include "models/render_state.hpp"
 #include "models/tsp.hpp"
-#include "sim/stats.hpp"
+#include "kernel/stats.hpp"
 
 namespace tbdr {
 

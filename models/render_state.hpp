@@ -15,9 +15,9 @@
 #include "models/rasterizer.hpp"
 #include "models/shading.hpp"
 #include "models/traffic.hpp"
-#include "sim/trace.hpp"
-#include "workloads/camera.hpp"
-#include "workloads/scene.hpp"
+#include "trace/trace.hpp"
+#include "scene/camera.hpp"
+#include "scene/scene.hpp"
 
 namespace tbdr {
 

@@ -9,7 +9,7 @@
 
 #include <glm/glm.hpp>
 
-#include "workloads/lights.hpp"
+#include "scene/lights.hpp"
 
 namespace tbdr {
 

@@ -10,7 +10,7 @@
 #endif
 
 #include "models/hw_config.hpp"
-#include "workloads/scene.hpp"
+#include "scene/scene.hpp"
 
 namespace tbdr {
 

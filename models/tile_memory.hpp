@@ -15,7 +15,7 @@
 
 #include "models/render_state.hpp"
 #include "models/traffic.hpp"
-#include "sim/stats.hpp"
+#include "kernel/stats.hpp"
 
 namespace tbdr {
 

@@ -13,7 +13,7 @@
 #include "models/rasterizer.hpp"
 #include "models/render_state.hpp"
 #include "models/traffic.hpp"
-#include "sim/stats.hpp"
+#include "kernel/stats.hpp"
 
 namespace tbdr {
 

@@ -9,10 +9,10 @@
 #include <memory>
 
 #include "models/memory_system.hpp"
-#include "sim/errors.hpp"
-#include "sim/event_queue.hpp"
-#include "sim/run_loop.hpp"
-#include "sim/time.hpp"
+#include "kernel/errors.hpp"
+#include "kernel/event_queue.hpp"
+#include "kernel/run_loop.hpp"
+#include "kernel/time.hpp"
 
 namespace tbdr {
 

@@ -27,8 +27,7 @@
 #include "models/frame_work.hpp"
 #include "models/hw_config.hpp"
 #include "models/traffic.hpp"
-#include "sim/results_db.hpp"
-#include "sim/stats.hpp"
+#include "kernel/stats.hpp"
 
 namespace tbdr {
 

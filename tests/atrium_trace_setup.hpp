@@ -1,8 +1,8 @@
 #pragma once
 // Tests' generator setup for the atrium seen from its entrance, with seeded lights.
-#include "workloads/lights.hpp"
-#include "workloads/scene_library.hpp"
-#include "workloads/technique.hpp"
+#include "scene/lights.hpp"
+#include "scene/scene_library.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr::testing_support {
 

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "sim/trace.hpp"
-#include "workloads/scene.hpp"
+#include "trace/trace.hpp"
+#include "scene/scene.hpp"
 
 namespace tbdr {
 namespace synthetic {

@@ -9,10 +9,10 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "sim/errors.hpp"
-#include "workloads/atrium.hpp"
-#include "workloads/camera.hpp"
-#include "workloads/scene_library.hpp"
+#include "kernel/errors.hpp"
+#include "scene/atrium.hpp"
+#include "scene/camera.hpp"
+#include "scene/scene_library.hpp"
 
 namespace tbdr {
 namespace {

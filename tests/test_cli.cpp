@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "sim/cli.hpp"
+#include "app/cli.hpp"
 
 namespace tbdr {
 namespace {

@@ -14,10 +14,10 @@
 #include <tuple>
 #include <vector>
 
-#include "sim/errors.hpp"
-#include "sim/event_queue.hpp"
-#include "sim/run_loop.hpp"
-#include "sim/time.hpp"
+#include "kernel/errors.hpp"
+#include "kernel/event_queue.hpp"
+#include "kernel/run_loop.hpp"
+#include "kernel/time.hpp"
 
 namespace tbdr {
 

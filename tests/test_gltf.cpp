@@ -14,11 +14,11 @@
 #include <nlohmann/json.hpp>
 #include <stb/stb_image_write.h>
 
-#include "sim/errors.hpp"
-#include "sim/hash.hpp"
-#include "workloads/camera.hpp"
-#include "workloads/gltf_loader.hpp"
-#include "workloads/scene_library.hpp"
+#include "kernel/errors.hpp"
+#include "kernel/hash.hpp"
+#include "scene/camera.hpp"
+#include "scene/gltf_loader.hpp"
+#include "scene/scene_library.hpp"
 
 namespace tbdr {
 namespace {

@@ -9,8 +9,8 @@
 #include <set>
 #include <tuple>
 
-#include "sim/errors.hpp"
-#include "sim/image_output.hpp"
+#include "kernel/errors.hpp"
+#include "app/image_output.hpp"
 
 namespace tbdr {
 namespace {

@@ -6,9 +6,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "sim/errors.hpp"
-#include "workloads/atrium.hpp"
-#include "workloads/lights.hpp"
+#include "kernel/errors.hpp"
+#include "scene/atrium.hpp"
+#include "scene/lights.hpp"
 
 namespace tbdr {
 namespace {

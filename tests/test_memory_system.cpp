@@ -23,8 +23,8 @@
 #include "models/dram.hpp"
 #include "models/hw_config.hpp"
 #include "models/memory_system.hpp"
-#include "sim/event_queue.hpp"
-#include "sim/time.hpp"
+#include "kernel/event_queue.hpp"
+#include "kernel/time.hpp"
 
 namespace tbdr {
 namespace {

@@ -5,7 +5,7 @@
 #include <fstream>
 
 #include "models/hw_config.hpp"
-#include "sim/errors.hpp"
+#include "kernel/errors.hpp"
 
 namespace tbdr {
 namespace {

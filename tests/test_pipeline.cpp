@@ -6,11 +6,11 @@
 #include <filesystem>
 
 #include "models/hw_config.hpp"
-#include "sim/frame_sim.hpp"
-#include "sim/trace.hpp"
-#include "workloads/lights.hpp"
-#include "workloads/scene_library.hpp"
-#include "workloads/technique.hpp"
+#include "models/command_processor.hpp"
+#include "trace/trace.hpp"
+#include "scene/lights.hpp"
+#include "scene/scene_library.hpp"
+#include "techniques/technique.hpp"
 #include "synthetic_scene.hpp"
 
 namespace tbdr {

@@ -12,10 +12,10 @@
 #include <sstream>
 
 #include "analysis/report.hpp"
-#include "sim/cli.hpp"
-#include "sim/errors.hpp"
+#include "app/cli.hpp"
+#include "kernel/errors.hpp"
 #include "scratch_dir.hpp"
-#include "sim/results_db.hpp"
+#include "analysis/results_db.hpp"
 
 namespace tbdr {
 namespace {

@@ -10,8 +10,8 @@
 #include <fstream>
 #include <thread>
 
-#include "sim/errors.hpp"
-#include "sim/results_db.hpp"
+#include "kernel/errors.hpp"
+#include "analysis/results_db.hpp"
 
 namespace tbdr {
 namespace {

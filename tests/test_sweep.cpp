@@ -17,11 +17,11 @@
 #include <thread>
 
 #include "analysis/report.hpp"
-#include "sim/cli.hpp"
-#include "sim/errors.hpp"
+#include "app/cli.hpp"
+#include "kernel/errors.hpp"
 #include "scratch_dir.hpp"
-#include "sim/results_db.hpp"
-#include "sim/sweep.hpp"
+#include "analysis/results_db.hpp"
+#include "app/sweep.hpp"
 
 namespace tbdr {
 namespace {

@@ -7,11 +7,11 @@
 #include <cstdio>
 
 #include "models/hw_config.hpp"
-#include "sim/frame_sim.hpp"
-#include "sim/image_output.hpp"
-#include "workloads/lights.hpp"
-#include "workloads/scene_library.hpp"
-#include "workloads/technique.hpp"
+#include "models/command_processor.hpp"
+#include "app/image_output.hpp"
+#include "scene/lights.hpp"
+#include "scene/scene_library.hpp"
+#include "techniques/technique.hpp"
 #include "atrium_trace_setup.hpp"
 
 namespace tbdr {

@@ -16,12 +16,12 @@
 #include <string>
 #include <vector>
 
-#include "sim/errors.hpp"
-#include "sim/trace.hpp"
-#include "workloads/camera.hpp"
-#include "workloads/lights.hpp"
-#include "workloads/scene_library.hpp"
-#include "workloads/technique.hpp"
+#include "kernel/errors.hpp"
+#include "trace/trace.hpp"
+#include "scene/camera.hpp"
+#include "scene/lights.hpp"
+#include "scene/scene_library.hpp"
+#include "techniques/technique.hpp"
 #include "atrium_trace_setup.hpp"
 
 namespace tbdr {

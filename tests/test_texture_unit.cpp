@@ -13,7 +13,7 @@
 
 #include "models/hw_config.hpp"
 #include "models/texture_unit.hpp"
-#include "sim/frame_sim.hpp"
+#include "models/command_processor.hpp"
 #include "synthetic_scene.hpp"
 
 namespace tbdr {

@@ -5,8 +5,8 @@
 #include <cstdio>
 
 #include "models/hw_config.hpp"
-#include "sim/frame_sim.hpp"
-#include "sim/run_driver.hpp"
+#include "models/command_processor.hpp"
+#include "app/run_driver.hpp"
 #include "synthetic_scene.hpp"
 
 namespace tbdr {

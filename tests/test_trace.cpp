@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "sim/errors.hpp"
-#include "sim/trace.hpp"
-#include "workloads/technique.hpp"
+#include "kernel/errors.hpp"
+#include "trace/trace.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 namespace {

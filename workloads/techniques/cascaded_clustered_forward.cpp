@@ -17,8 +17,8 @@
 //   2 fetches, 8 varyings, 12 per light), BLEND geometry with the same lists.
 #include <algorithm>
 
-#include "sim/errors.hpp"
-#include "workloads/technique.hpp"
+#include "kernel/errors.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 

@@ -21,7 +21,7 @@
 // Translucent (BLEND) geometry is not drawn (see tiled_deferred.cpp and docs/techniques.md).
 #include <algorithm>
 
-#include "workloads/technique.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 

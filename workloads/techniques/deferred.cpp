@@ -18,7 +18,7 @@
 //      decode 4 (+1 per extra target) + position reconstruction 8 + output 5 = 17 ALU,
 //      one fetch per G-buffer target, 3 varyings (view ray), 12 ALU for its light.
 //   3. translucent=forward: BLEND geometry, forward-lit from per-object light lists, alpha blend.
-#include "workloads/technique.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 

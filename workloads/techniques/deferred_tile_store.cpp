@@ -18,7 +18,7 @@
 //   3. fullscreen `resolve` (pls=read, 1 color output): decode 4 + ambient 3 + output 5 = 12 ALU;
 //      docs/kernels.md: writes ambient + accumulator.
 //   4. translucent=forward: BLEND geometry, per-object light lists, alpha blend.
-#include "workloads/technique.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 

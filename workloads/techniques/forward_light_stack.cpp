@@ -17,8 +17,8 @@
 //   3. opaque + masked `forward_lit` (depth equal, no write; light_source=pls_stack, pls=read;
 //      20 + 2 stack read ALU, 2 fetches, 8 varyings, 12 per light).
 //   4. BLEND geometry, per-object light lists, alpha blend.
-#include "sim/errors.hpp"
-#include "workloads/technique.hpp"
+#include "kernel/errors.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 

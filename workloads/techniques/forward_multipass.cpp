@@ -24,7 +24,7 @@
 // forward_lit_masked +1 ALU alpha test; depth_only 0 ALU; depth_only_masked 1 ALU + 1 fetch.
 #include <algorithm>
 
-#include "workloads/technique.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 

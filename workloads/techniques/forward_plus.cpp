@@ -14,7 +14,7 @@
 //   (depth_reload=yes: load, equal test, no write; no: transient, cleared, less); opaque + masked
 //   with `forward_lit` (light_source=tile_list; 20 + 3 tile lookup ALU, 2 fetches, 8 varyings,
 //   12 per light), then BLEND geometry with per-object lists and alpha blending.
-#include "workloads/technique.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 

@@ -25,7 +25,7 @@
 //     frame is the light buffer the lighting pass completed (ambient + lights). Compared with
 //     Engel the trace lacks the final rgba8 color write (4 B/px) and stores the frame in the light
 //     buffer's format; the cost of the second geometry pass and of reading the light buffer is kept.
-#include "workloads/technique.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 

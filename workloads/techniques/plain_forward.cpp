@@ -16,7 +16,7 @@
 //                       finite-radius attenuation (1-(d/r)^2)^2 (~3), N.L clamp (~2), accumulate (~2)
 //   varyings = 8        world position (3), normal (3), uv (2)
 // The masked shader adds 1 ALU op for the alpha test and may discard.
-#include "workloads/technique.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 

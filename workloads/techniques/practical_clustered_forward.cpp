@@ -15,7 +15,7 @@
 //   BLEND geometry with the same shader and alpha blending (the dense grid covers it).
 // Buffers: cluster_grid 8 B x clusters, light_index clusters x max_lights_per_cluster x
 //   index_bytes; clusters = ceil(W/tile_px) x ceil(H/tile_px) x slices.
-#include "workloads/technique.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 

@@ -17,7 +17,7 @@
 // over a kernel-written image (see docs/techniques.md).
 #include <algorithm>
 
-#include "workloads/technique.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 

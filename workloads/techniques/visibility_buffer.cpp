@@ -23,8 +23,8 @@
 // Translucent (BLEND) geometry is not drawn (Burns & Hunt do not handle it; see docs/techniques.md).
 #include <algorithm>
 
-#include "sim/errors.hpp"
-#include "workloads/technique.hpp"
+#include "kernel/errors.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 

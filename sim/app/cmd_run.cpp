@@ -1,0 +1,157 @@
+// `tbdrsim scene`, `tbdrsim trace` and `tbdrsim run`: inspect scenes, generate technique traces,
+// replay a trace and write the run to the results database.
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include <boost/program_options.hpp>
+
+#include "app/cli.hpp"
+#include "app/commands.hpp"
+#include "kernel/errors.hpp"
+#include "models/command_processor.hpp"
+#include "app/image_output.hpp"
+#include "analysis/results_db.hpp"
+#include "app/run_driver.hpp"
+#include "tbdrsim_version.hpp"
+#include "scene/camera.hpp"
+#include "scene/lights.hpp"
+#include "scene/scene_library.hpp"
+#include "techniques/technique.hpp"
+
+namespace tbdr {
+
+namespace po = boost::program_options;
+
+int cmd_scene(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
+  po::options_description desc("scene options");
+  desc.add_options()("action", po::value<std::string>()->required(), "info")(
+      "scene", po::value<std::string>()->required(), "atrium[:detail] or a .gltf/.glb file");
+  po::positional_options_description pos;
+  pos.add("action", 1).add("scene", 1);
+  po::variables_map vm;
+  if (!parse_command_options("scene", args, desc, &pos, vm, out)) return 0;
+  if (vm["action"].as<std::string>() != "info") {
+    throw UsageError("tbdrsim scene: unknown action '" + vm["action"].as<std::string>() + "' (expected: info)");
+  }
+  const Scene scene = load_scene(vm["scene"].as<std::string>());
+  print_scene_info(scene, out);
+  return 0;
+}
+
+namespace {
+
+void parse_resolution(const std::string& text, int& w, int& h) {
+  const auto x = text.find('x');
+  try {
+    std::size_t a = 0, b = 0;
+    if (x == std::string::npos) throw std::invalid_argument("no x");
+    w = std::stoi(text.substr(0, x), &a);
+    h = std::stoi(text.substr(x + 1), &b);
+    if (a != x || b != text.size() - x - 1 || w <= 0 || h <= 0 || w > 16384 || h > 16384) throw std::invalid_argument("range");
+  } catch (const std::exception&) {
+    throw InputError("--resolution " + text, "expected WIDTHxHEIGHT with both in [1, 16384], e.g. 1920x1080");
+  }
+}
+
+}  // namespace
+
+TraceSetup trace_setup_from_options(const po::variables_map& vm, Scene& scene_storage) {
+  TraceSetup setup;
+  setup.scene_spec = vm["scene"].as<std::string>();
+  scene_storage = load_scene(setup.scene_spec);
+  setup.scene = &scene_storage;
+  parse_resolution(vm["resolution"].as<std::string>(), setup.width, setup.height);
+  setup.samples = vm["samples"].as<int>();
+  const std::string camera = vm["camera"].as<std::string>();
+  if (scene_storage.name == "atrium") {
+    setup.camera_name = camera.empty() ? "entrance" : camera;
+    setup.camera = atrium_viewpoint(setup.camera_name, scene_storage);
+  } else {
+    if (!camera.empty() && camera != "framing") {
+      throw InputError("--camera " + camera, "glTF scenes have one viewpoint, 'framing'");
+    }
+    setup.camera_name = "framing";
+    setup.camera = framing_camera(scene_storage);
+  }
+  if (vm.count("light-file")) {
+    setup.lights = read_light_file(vm["light-file"].as<std::string>());
+  } else {
+    LightSetSpec spec;
+    const int n = vm["lights"].as<int>();
+    if (n < 0 || n > 1000000) throw InputError("--lights " + std::to_string(n), "expected a count in [0, 1000000]");
+    spec.count = static_cast<std::uint32_t>(n);
+    spec.seed = vm["light-seed"].as<std::uint64_t>();
+    setup.lights = generate_lights(scene_storage, spec);
+  }
+  if (vm.count("option")) {
+    for (const auto& kv : vm["option"].as<std::vector<std::string>>()) {
+      const auto eq = kv.find('=');
+      if (eq == std::string::npos) throw InputError("--option " + kv, "expected key=value");
+      setup.options[kv.substr(0, eq)] = kv.substr(eq + 1);
+    }
+  }
+  return setup;
+}
+
+void add_trace_setup_options(po::options_description& desc) {
+  desc.add_options()
+      ("scene", po::value<std::string>()->default_value("atrium:" + std::to_string(default_atrium_detail)),
+       "atrium[:detail] or a .gltf/.glb file")
+      ("lights", po::value<int>()->default_value(256), "number of generated lights")
+      ("light-seed", po::value<std::uint64_t>()->default_value(1), "seed of the light placement")
+      ("light-file", po::value<std::string>(), "read the lights from this file instead of generating them")
+      ("camera", po::value<std::string>()->default_value(""), "atrium viewpoint (entrance, gallery, top, ...); glTF: framing")
+      ("resolution", po::value<std::string>()->default_value("1920x1080"), "WIDTHxHEIGHT in pixels")
+      ("samples", po::value<int>()->default_value(1), "MSAA samples per pixel: 1, 2 or 4")
+      ("option,o", po::value<std::vector<std::string>>()->composing(), "technique option key=value (repeatable)");
+}
+
+int cmd_trace(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
+  po::options_description desc("trace options");
+  add_trace_setup_options(desc);
+  desc.add_options()("technique,t", po::value<std::string>()->default_value("plain_forward"),
+                     "technique generator (see --list)")("out", po::value<std::string>(), "output trace file")(
+      "list", "list the techniques and their options");
+  po::variables_map vm;
+  if (!parse_command_options("trace", args, desc, nullptr, vm, out)) return 0;
+  if (vm.count("list")) {
+    for (const auto& t : techniques()) {
+      out << t.name << ": " << t.summary << "\n";
+      for (const auto& o : t.options) out << "    " << o.key << " = " << o.default_value << "  " << o.doc << "\n";
+    }
+    return 0;
+  }
+  if (!vm.count("out")) throw UsageError("tbdrsim trace: --out FILE is required");
+  Scene scene;
+  const TraceSetup setup = trace_setup_from_options(vm, scene);
+  const Trace trace = generate_trace(vm["technique"].as<std::string>(), setup);
+  write_trace_file(trace, vm["out"].as<std::string>());
+  out << "wrote " << vm["out"].as<std::string>() << ": technique " << trace.technique << ", " << trace.lights.size()
+      << " lights, " << trace.commands.size() << " commands, hash " << trace_hash(trace) << "\n";
+  return 0;
+}
+
+int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
+  po::options_description desc("run options");
+  add_config_options(desc);
+  desc.add_options()("trace,t", po::value<std::string>()->required(), "command trace to replay")(
+      "db,d", po::value<std::string>()->required(), "results database (created if absent)")(
+      "images,i", po::value<std::string>(), "write the frame's images and heat maps into this folder")(
+      "quiet,q", "print nothing but errors");
+  po::variables_map vm;
+  if (!parse_command_options("run", args, desc, nullptr, vm, out)) return 0;
+  RunRequest req;
+  req.config = config_from_options(vm);
+  req.trace_path = vm["trace"].as<std::string>();
+  req.db_path = vm["db"].as<std::string>();
+  if (vm.count("images")) req.images_dir = vm["images"].as<std::string>();
+  req.command_line = invocation_command_line();
+  const RunOutcome outcome = run_one(req);
+  if (!vm.count("quiet")) print_run_summary(outcome, out);
+  return 0;
+}
+
+}  // namespace tbdr

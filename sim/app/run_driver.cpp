@@ -1,0 +1,236 @@
+#include "app/run_driver.hpp"
+
+#include <chrono>
+#include <ctime>
+#include <filesystem>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+
+#include "kernel/errors.hpp"
+#include "app/image_output.hpp"
+#include "analysis/results_db.hpp"
+#include "trace/trace.hpp"
+#include "tbdrsim_version.hpp"
+#include "scene/scene_library.hpp"
+
+namespace tbdr {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// CPU time of this process, seconds (less sensitive than wall time to other load on the host).
+double cpu_seconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+
+/// The scene a trace references: the atrium at its detail, or the glTF path relative to the
+/// trace file first, then to the working directory.
+Scene load_trace_scene(const Trace& trace, const std::string& trace_path) {
+  if (trace.scene.kind == SceneKind::Atrium) return load_scene("atrium:" + std::to_string(trace.scene.detail));
+  namespace fs = std::filesystem;
+  const fs::path rel = fs::path(trace_path).parent_path() / trace.scene.path;
+  const std::string path = fs::exists(rel) ? rel.string() : trace.scene.path;
+  if (!fs::exists(path)) {
+    throw InputError(trace_path, trace.scene.line, "scene file '" + trace.scene.path + "' not found (looked in " +
+                                                       rel.string() + " and the working directory)");
+  }
+  return load_scene(path);
+}
+
+std::string stat_text(double v) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(2) << v;
+  return s.str();
+}
+
+double find_stat(const FrameResult& f, const std::string& scope, const std::string& name) {
+  for (const auto& r : f.stats) {
+    if (r.scope == scope && r.name == name) return r.value;
+  }
+  return 0;
+}
+
+}  // namespace
+
+std::vector<std::string> write_frame_images(const FrameResult& frame, const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> written;
+  const int w = frame.images.width, h = frame.images.height;
+  const std::size_t pixels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  auto out = [&](const std::string& name) { return (fs::path(dir) / name).string(); };
+  auto save = [&](const std::string& name, const ImageRGB8& img) {
+    write_png(out(name), img);
+    written.push_back(out(name));
+  };
+  for (const auto& [name, img] : frame.images.attachments) {
+    if (img.usage == AttachmentUsage::Depth) {
+      std::vector<float> d(pixels);
+      for (std::size_t p = 0; p < pixels; ++p) d[p] = img.depth[p * img.samples];
+      save("depth_" + name + ".png", depth_to_image(d, w, h));
+    } else if (!img.color.empty() && img.samples == 1) {
+      save("attachment_" + name + ".png", color_to_image(img.color, w, h));
+    }
+  }
+  if (auto it = frame.images.attachments.find(frame.final_color); it != frame.images.attachments.end()) {
+    save("color.png", color_to_image(it->second.color, w, h));
+  } else if (auto ib = frame.images.image_buffers.find(frame.final_color); ib != frame.images.image_buffers.end()) {
+    save("color.png", color_to_image(ib->second.color, w, h));
+  }
+  save("triangle_id.png", ids_to_image(frame.images.counters.triangle_id, w, h, 0));
+  auto heat = [&](const std::vector<std::uint32_t>& v, const std::string& file, const std::string& title,
+                  const std::string& unit) {
+    std::vector<double> d(v.begin(), v.end());
+    HeatmapSpec spec;
+    spec.title = title;
+    spec.unit = unit;
+    save(file, heatmap_to_image(d, w, h, spec));
+  };
+  heat(frame.images.counters.rasterised_samples, "heat_overdraw.png", "Overdraw", "samples rasterised per pixel");
+  heat(frame.images.counters.shaded, "heat_shaded.png", "Shading", "shader invocations per pixel");
+  heat(frame.images.counters.lights_evaluated, "heat_lights.png", "Lights evaluated", "lights per pixel");
+  return written;
+}
+
+void time_frame(const HwConfig& hw, FrameResult& frame, TimingResult& timing, EnergyBreakdown& energy) {
+  timing = run_timing(hw, frame.work);
+  auto& st = frame.stats;
+  st.push_back({"frame/timing", "frame_cycles", timing.frame_cycles, "cycles", "Frame time in core clock cycles"});
+  st.push_back({"frame/timing", "frame_time_ms", timing.frame_time_ps * 1e-9, "ms", "Frame time"});
+  st.push_back({"frame/timing", "timing_events", static_cast<double>(timing.events), "events", "Events the timing model executed"});
+  for (const auto& c : timing.commands) {
+    st.push_back({c.name + "/timing", "start_cycle", c.start_cycle, "cycles", "Cycle the command's first work started"});
+    st.push_back({c.name + "/timing", "binning_end_cycle", c.binning_end_cycle, "cycles", "Cycle its last binning finished (passes)"});
+    st.push_back({c.name + "/timing", "end_cycle", c.end_cycle, "cycles", "Cycle its last tile or compute work finished"});
+  }
+  for (const auto& u : timing.units) {
+    const std::string scope = "frame/unit." + u.name;
+    const double idle = std::max(0.0, timing.frame_cycles - u.busy_cycles - u.stalled_cycles);
+    st.push_back({scope, "busy_cycles", u.busy_cycles, "cycles", "Cycles the unit was working"});
+    st.push_back({scope, "stalled_cycles", u.stalled_cycles, "cycles", "Cycles the unit waited for a full queue downstream or for memory"});
+    st.push_back({scope, "idle_cycles", idle, "cycles", "Cycles the unit had nothing to do"});
+    st.push_back({scope, "utilization", timing.frame_cycles > 0 ? u.busy_cycles / timing.frame_cycles : 0.0, "ratio",
+                  "Busy cycles / frame cycles"});
+  }
+  const double accesses = static_cast<double>(timing.texture_line_accesses);
+  const double misses = static_cast<double>(timing.texture_cache_misses);
+  st.push_back({"frame/texture", "line_accesses", accesses, "lines", "Texture lines the shaded quads accessed (distinct per quad and fetch)"});
+  st.push_back({"frame/texture", "footprint_lines", static_cast<double>(timing.texture_footprint_lines), "lines",
+                "Lines of the tiles' texture footprints, each sent once per tile through the texture cache"});
+  st.push_back({"frame/texture", "cache_misses", misses, "lines", "Footprint lines that missed the texture cache"});
+  st.push_back({"frame/texture", "hit_rate_with_tile_reuse", accesses > 0 ? 1.0 - misses / accesses : 0.0, "ratio",
+                "Texture cache hit rate counting reuse within a tile as hits (its footprint is fetched once)"});
+  for (auto& r : timing.memory_stats) st.push_back(r);
+  energy = compute_energy(hw, st, timing.frame_time_ps);
+  energy.collect(st);
+}
+
+std::string write_tile_cycles_image(const FrameResult& frame, const TimingResult& timing, const std::string& dir) {
+  const int tw = frame.work.tile_width, th = frame.work.tile_height;
+  const int tx = (frame.images.width + tw - 1) / tw, ty = (frame.images.height + th - 1) / th;
+  std::vector<double> cycles(static_cast<std::size_t>(tx) * static_cast<std::size_t>(ty), 0.0);
+  for (const auto& t : timing.tiles) {
+    if (t.tile_x < tx && t.tile_y < ty) cycles[static_cast<std::size_t>(t.tile_y * tx + t.tile_x)] += t.cycles;
+  }
+  HeatmapSpec spec;
+  spec.title = "Tile cycles";
+  spec.unit = "cycles per tile, summed over passes (fetch to writeback)";
+  const std::string path = (std::filesystem::path(dir) / "heat_tile_cycles.png").string();
+  write_png(path, heatmap_tiles_to_image(cycles, tx, ty, tw, th, frame.images.width, frame.images.height, spec));
+  return path;
+}
+
+RunOutcome run_one(const RunRequest& req) {
+  namespace fs = std::filesystem;
+  RunOutcome outcome;
+  const auto t_load = std::chrono::steady_clock::now();
+  const std::string started = utc_now_iso8601();
+  if (!req.images_dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(req.images_dir, ec);
+    if (ec || !fs::is_directory(req.images_dir)) throw InputError(req.images_dir, "cannot create the images folder");
+  }
+  const Trace trace = read_trace(req.trace_path);
+  const Scene scene = load_trace_scene(trace, req.trace_path);
+  outcome.load_seconds = seconds_since(t_load);
+
+  const auto t_sim = std::chrono::steady_clock::now();
+  const double c_sim = cpu_seconds();
+  outcome.frame = simulate_frame(trace, req.trace_path, scene, req.config.hw);
+  outcome.wall_seconds = seconds_since(t_sim);
+  outcome.cpu_seconds = cpu_seconds() - c_sim;
+  const auto t_timing = std::chrono::steady_clock::now();
+  const double c_timing = cpu_seconds();
+  time_frame(req.config.hw, outcome.frame, outcome.timing, outcome.energy);
+  outcome.timing_seconds = seconds_since(t_timing);
+  outcome.timing_cpu_seconds = cpu_seconds() - c_timing;
+  outcome.technique = trace.technique.empty() ? "custom" : trace.technique;
+  outcome.scene = scene.source;
+
+  if (!req.images_dir.empty()) {
+    outcome.images_written = write_frame_images(outcome.frame, req.images_dir);
+    outcome.images_written.push_back(write_tile_cycles_image(outcome.frame, outcome.timing, req.images_dir));
+  }
+
+  RunRecord rec;
+  rec.started_at = started;
+  rec.finished_at = utc_now_iso8601();
+  rec.tool_version = kToolVersion;
+  rec.host = host_name();
+  rec.command_line = req.command_line;
+  rec.config_name = req.config.params.config_name;
+  rec.config_hash = req.config.hash;
+  rec.trace_path = req.trace_path;
+  rec.trace_hash = trace_hash(trace);
+  rec.scene = scene.source;
+  rec.technique = outcome.technique;
+  rec.status = "ok";
+  const auto& table = hw_params().table();
+  for (std::size_t i = 0; i < table.decls().size(); ++i) {
+    rec.params.push_back({table.decls()[i].key, format_param_value(req.config.params.values[i]), req.config.params.origins[i].text});
+  }
+  rec.stats = outcome.frame.stats;
+  rec.stats.push_back({"frame/host", "simulation_wall_seconds", outcome.wall_seconds, "s", "Host wall time of the functional simulation"});
+  rec.stats.push_back({"frame/host", "timing_wall_seconds", outcome.timing_seconds, "s", "Host wall time of the timing and energy models"});
+  rec.stats.push_back({"frame/host", "simulation_cpu_seconds", outcome.cpu_seconds, "s", "Host CPU time of the functional simulation"});
+  rec.stats.push_back({"frame/host", "timing_cpu_seconds", outcome.timing_cpu_seconds, "s", "Host CPU time of the timing and energy models"});
+  rec.tiles = outcome.timing.tiles;
+  ResultsDb db(req.db_path);
+  outcome.run_id = db.write_run(rec);
+  return outcome;
+}
+
+void print_run_summary(const RunOutcome& o, std::ostream& out) {
+  const FrameResult& f = o.frame;
+  const double pixels = static_cast<double>(f.images.width) * f.images.height;
+  const double shaded = find_stat(f, "frame/tsp", "shader_invocations");
+  out << "run " << o.run_id << ": " << o.technique << " on " << o.scene << ", " << f.images.width << "x"
+      << f.images.height << ", " << f.passes.size() << " pass(es), simulated in " << stat_text(o.wall_seconds) << " s\n";
+  out << "  primitives in/out:  " << find_stat(f, "frame/geometry", "primitives_in") << " / "
+      << find_stat(f, "frame/geometry", "primitives_out") << "  (clipped " << find_stat(f, "frame/geometry", "primitives_clipped")
+      << ", partial renders " << find_stat(f, "frame/tiler", "partial_renders") << ")\n";
+  out << "  samples rasterised: " << find_stat(f, "frame/isp", "samples_rasterised") << "  removed by HSR "
+      << find_stat(f, "frame/isp", "hsr_removed_samples") << "  depth-test failed "
+      << find_stat(f, "frame/isp", "depth_test_failed_samples") << "  tag flushes " << find_stat(f, "frame/isp", "tag_flushes") << "\n";
+  out << "  shaded: " << shaded << " invocations (" << stat_text(shaded / pixels) << " per pixel), "
+      << find_stat(f, "frame/tsp", "shaded_quads") << " quads, " << find_stat(f, "frame/tsp", "helper_lanes")
+      << " helper lanes, " << find_stat(f, "frame/tsp", "light_evaluations") << " light evaluations\n";
+  out << "  frame: " << stat_text(find_stat(f, "frame/timing", "frame_cycles")) << " cycles, "
+      << stat_text(find_stat(f, "frame/timing", "frame_time_ms")) << " ms, energy " << stat_text(find_stat(f, "frame/energy", "total_mj"))
+      << " mJ (timing model " << stat_text(o.timing_seconds) << " s)\n";
+  out << "  DRAM MB read/written per class (requested by the units, before caches):\n";
+  for (std::size_t c = 0; c < kDramClassCount; ++c) {
+    if (f.dram.read_bytes[c] == 0 && f.dram.write_bytes[c] == 0) continue;
+    out << "    " << std::left << std::setw(18) << to_string(static_cast<DramClass>(c)) << std::right << std::setw(10)
+        << stat_text(f.dram.read_bytes[c] / 1e6) << std::setw(10) << stat_text(f.dram.write_bytes[c] / 1e6) << "\n";
+  }
+  out << "    " << std::left << std::setw(18) << "total" << std::right << std::setw(10) << stat_text(f.dram.total_read() / 1e6)
+      << std::setw(10) << stat_text(f.dram.total_written() / 1e6) << "\n";
+  if (!o.images_written.empty()) {
+    out << "  images: " << o.images_written.size() << " files in "
+        << std::filesystem::path(o.images_written.front()).parent_path().string() << "\n";
+  }
+}
+
+}  // namespace tbdr

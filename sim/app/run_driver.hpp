@@ -1,0 +1,57 @@
+#pragma once
+// The run driver: one simulation from inputs to a database row. Reads the trace, loads the scene
+// it references, replays the frame, writes the images, and stores the run (every resolved
+// parameter, every statistic) in one transaction. Used by `run` and, later, by sweeps.
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+
+#include "models/hw_config.hpp"
+#include "models/energy.hpp"
+#include "models/timing_model.hpp"
+#include "models/command_processor.hpp"
+
+namespace tbdr {
+
+/// What to simulate and where the results go.
+struct RunRequest {
+  ResolvedConfig config;
+  std::string trace_path;
+  std::string db_path;
+  std::string images_dir;    ///< empty: no images
+  std::string command_line;  ///< recorded in the runs table
+};
+
+/// What a run produced.
+struct RunOutcome {
+  std::int64_t run_id = 0;
+  std::string technique;
+  std::string scene;
+  double wall_seconds = 0;       ///< simulation only (trace read and scene load excluded)
+  double load_seconds = 0;       ///< trace read and scene load
+  double timing_seconds = 0;     ///< host time of the timing model
+  double cpu_seconds = 0;        ///< host CPU time of the functional simulation
+  double timing_cpu_seconds = 0; ///< host CPU time of the timing and energy models
+  FrameResult frame;
+  TimingResult timing;
+  EnergyBreakdown energy;
+  std::vector<std::string> images_written;
+};
+
+/// Runs one simulation end to end. InputError on bad input; nothing is written to the database
+/// unless the whole run succeeded.
+RunOutcome run_one(const RunRequest& request);
+
+/// Prints the figures a user looks at first.
+void print_run_summary(const RunOutcome& outcome, std::ostream& out);
+
+/// Writes the frame's images (final color, depth, triangle ids, heat maps) into `dir`.
+std::vector<std::string> write_frame_images(const FrameResult& frame, const std::string& dir);
+/// Writes the heat map of cycles per tile (summed over the frame's passes).
+std::string write_tile_cycles_image(const FrameResult& frame, const TimingResult& timing, const std::string& dir);
+
+/// Runs the timing and energy models on a functional frame and appends their statistics
+/// (frame/timing, <command>/timing, frame/unit.*, mem/*, frame/energy) to frame.stats.
+void time_frame(const HwConfig& hw, FrameResult& frame, TimingResult& timing, EnergyBreakdown& energy);
+
+}  // namespace tbdr

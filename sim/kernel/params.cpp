@@ -1,0 +1,365 @@
+#include "kernel/params.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include <boost/program_options/options_description.hpp>
+#include <boost/program_options/parsers.hpp>
+
+#include "kernel/errors.hpp"
+#include "kernel/hash.hpp"
+
+namespace tbdr {
+
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return {};
+  const auto e = s.find_last_not_of(" \t\r\n");
+  return s.substr(b, e - b + 1);
+}
+
+std::string format_real(double v) {
+  char buf[64];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  std::string s(buf, r.ptr);
+  return s;
+}
+
+std::string format_bound(double v, ParamType t) {
+  if (std::isinf(v)) return v < 0 ? "-inf" : "inf";
+  if (t == ParamType::Int) return std::to_string(static_cast<long long>(v));
+  return format_real(v);
+}
+
+}  // namespace
+
+const char* to_string(ParamType t) {
+  switch (t) {
+    case ParamType::Int: return "int";
+    case ParamType::Real: return "real";
+    case ParamType::Bool: return "bool";
+    case ParamType::Text: return "text";
+    case ParamType::Choice: return "choice";
+  }
+  return "?";
+}
+
+std::string format_param_value(const ParamValue& v) {
+  if (auto* i = std::get_if<std::int64_t>(&v)) return std::to_string(*i);
+  if (auto* d = std::get_if<double>(&v)) return format_real(*d);
+  if (auto* b = std::get_if<bool>(&v)) return *b ? "true" : "false";
+  return std::get<std::string>(v);
+}
+
+std::string ParamDecl::section() const {
+  const auto dot = key.rfind('.');
+  return dot == std::string::npos ? std::string{} : key.substr(0, dot);
+}
+
+std::string ParamDecl::range_text() const {
+  switch (type) {
+    case ParamType::Int:
+    case ParamType::Real:
+      return "[" + format_bound(min, type) + ", " + format_bound(max, type) + "]";
+    case ParamType::Bool: return "true|false";
+    case ParamType::Text: return "any text";
+    case ParamType::Choice: {
+      std::string s = "one of ";
+      for (std::size_t i = 0; i < choices.size(); ++i) s += (i ? "|" : "") + choices[i];
+      return s;
+    }
+  }
+  return {};
+}
+
+bool ParamDecl::parse(const std::string& raw, ParamValue& out, std::string& why) const {
+  const std::string text = trim(raw);
+  switch (type) {
+    case ParamType::Int: {
+      std::int64_t v = 0;
+      const char* b = text.data();
+      const char* e = b + text.size();
+      auto r = std::from_chars(b, e, v);
+      if (text.empty() || r.ec != std::errc{} || r.ptr != e) {
+        why = "an integer in " + range_text();
+        return false;
+      }
+      if (static_cast<double>(v) < min || static_cast<double>(v) > max) {
+        why = "an integer in " + range_text();
+        return false;
+      }
+      out = v;
+      return true;
+    }
+    case ParamType::Real: {
+      double v = 0;
+      const char* b = text.data();
+      const char* e = b + text.size();
+      auto r = std::from_chars(b, e, v);
+      if (text.empty() || r.ec != std::errc{} || r.ptr != e || !std::isfinite(v)) {
+        why = "a finite number in " + range_text();
+        return false;
+      }
+      if (v < min || v > max) {
+        why = "a number in " + range_text();
+        return false;
+      }
+      out = v;
+      return true;
+    }
+    case ParamType::Bool: {
+      std::string t = text;
+      std::transform(t.begin(), t.end(), t.begin(), [](unsigned char c) { return std::tolower(c); });
+      if (t == "true" || t == "1" || t == "on" || t == "yes") { out = true; return true; }
+      if (t == "false" || t == "0" || t == "off" || t == "no") { out = false; return true; }
+      why = "true|false (also 1|0, on|off, yes|no)";
+      return false;
+    }
+    case ParamType::Text:
+      out = text;
+      return true;
+    case ParamType::Choice:
+      if (std::find(choices.begin(), choices.end(), text) == choices.end()) {
+        why = range_text();
+        return false;
+      }
+      out = text;
+      return true;
+  }
+  return false;
+}
+
+void ParamTable::check_default(const ParamDecl& d) const {
+  std::string why;
+  ParamValue v;
+  if (!d.parse(format_param_value(d.default_value), v, why)) {
+    throw std::logic_error("parameter " + d.key + ": default " + format_param_value(d.default_value) +
+                           " is not " + why);
+  }
+}
+
+ParamTable::Builder ParamTable::declare(std::string key, ParamType type, ParamValue default_value) {
+  if (find(key) >= 0) throw std::logic_error("parameter declared twice: " + key);
+  ParamDecl d;
+  d.key = std::move(key);
+  d.type = type;
+  d.default_value = std::move(default_value);
+  decls_.push_back(std::move(d));
+  return Builder(decls_.back());
+}
+
+void ParamTable::section(std::string name, std::string doc) {
+  sections_.emplace_back(std::move(name), std::move(doc));
+}
+
+int ParamTable::find(const std::string& key) const {
+  for (std::size_t i = 0; i < decls_.size(); ++i) {
+    if (decls_[i].key == key) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+bool ParamTable::has_section(const std::string& name) const {
+  for (const auto& s : sections_) {
+    if (s.first == name) return true;
+  }
+  for (const auto& d : decls_) {
+    if (d.section() == name) return true;
+  }
+  return false;
+}
+
+ResolvedParams ParamTable::defaults() const {
+  for (const auto& d : decls_) check_default(d);
+  ResolvedParams p;
+  for (const auto& d : decls_) {
+    p.values.push_back(d.default_value);
+    p.origins.push_back(ParamOrigin{});
+  }
+  return p;
+}
+
+namespace {
+
+/// One "key = value" line found by the line scan, with its line number.
+struct ScannedEntry {
+  std::string key;
+  std::string value;
+  long line = 0;
+};
+
+/// Scans an INI file the way Boost.Program_options reads it ('#' starts a comment anywhere,
+/// [section] headers, key=value), keeping line numbers, which Boost does not report.
+std::vector<ScannedEntry> scan_ini(const std::string& path, std::istream& in, const ParamTable& table) {
+  std::vector<ScannedEntry> out;
+  std::map<std::string, long> seen;
+  std::string line;
+  std::string section;
+  long n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    const std::string s = trim(line);
+    if (s.empty()) continue;
+    if (s.front() == '[') {
+      if (s.back() != ']') throw InputError(path, n, "malformed section header '" + s + "' (expected [name])");
+      section = trim(s.substr(1, s.size() - 2));
+      if (!table.has_section(section)) {
+        std::string known;
+        for (const auto& sec : table.sections()) known += (known.empty() ? "" : ", ") + sec.first;
+        throw InputError(path, n, "unknown section [" + section + "] (known sections: " + known + ")");
+      }
+      continue;
+    }
+    const auto eq = s.find('=');
+    if (eq == std::string::npos) {
+      throw InputError(path, n, "expected 'key = value' or '[section]', found '" + s + "'");
+    }
+    const std::string name = trim(s.substr(0, eq));
+    if (name.empty()) throw InputError(path, n, "missing key before '='");
+    const std::string key = section.empty() ? name : section + "." + name;
+    if (auto it = seen.find(key); it != seen.end()) {
+      throw InputError(path, n, "key '" + key + "' set twice in one file (first at line " +
+                                    std::to_string(it->second) + ")");
+    }
+    seen[key] = n;
+    out.push_back({key, trim(s.substr(eq + 1)), n});
+  }
+  return out;
+}
+
+std::string closest_key(const ParamTable& table, const std::string& key) {
+  // Suggest a declared key of the same section, or with the same name, when one is close.
+  const auto dot = key.rfind('.');
+  const std::string name = dot == std::string::npos ? key : key.substr(dot + 1);
+  const std::string sec = dot == std::string::npos ? "" : key.substr(0, dot);
+  auto distance = [](const std::string& a, const std::string& b) {
+    std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+      cur[0] = i;
+      for (std::size_t j = 1; j <= b.size(); ++j) {
+        cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      }
+      std::swap(prev, cur);
+    }
+    return prev[b.size()];
+  };
+  std::string best;
+  std::size_t best_d = 4;
+  for (const auto& d : table.decls()) {
+    if (d.section() != sec) continue;
+    const std::string dn = d.key.substr(d.key.rfind('.') + 1);
+    const std::size_t dist = distance(name, dn);
+    if (dist < best_d) {
+      best_d = dist;
+      best = d.key;
+    }
+  }
+  return best;
+}
+
+void apply_one(const ParamTable& table, ResolvedParams& p, const std::string& where, const std::string& key,
+               const std::string& value) {
+  const int idx = table.find(key);
+  if (idx < 0) {
+    std::string msg = "unknown parameter '" + key + "'";
+    const std::string guess = closest_key(table, key);
+    if (!guess.empty()) msg += " (did you mean '" + guess + "'?)";
+    msg += "; `tbdrsim params` lists every parameter";
+    throw InputError(where, msg);
+  }
+  const ParamDecl& d = table.decls()[static_cast<std::size_t>(idx)];
+  std::string why;
+  ParamValue v;
+  if (!d.parse(value, v, why)) {
+    throw InputError(where, "parameter '" + key + "' = '" + value + "': expected " + why +
+                                (d.unit.empty() ? "" : " (" + d.unit + ")"));
+  }
+  p.values[static_cast<std::size_t>(idx)] = std::move(v);
+  p.origins[static_cast<std::size_t>(idx)].text = where;
+}
+
+}  // namespace
+
+void ParamTable::apply_config_file(ResolvedParams& p, const std::string& path) const {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "cannot open config file");
+  const std::vector<ScannedEntry> scanned = scan_ini(path, in, *this);
+
+  // Boost.Program_options reads the values; the scan above supplies line numbers and strictness.
+  const std::vector<IniEntry> parsed = read_ini_entries(path, "config file", scanned.size());
+  for (std::size_t i = 0; i < scanned.size(); ++i) {
+    const std::string where = path + ":" + std::to_string(scanned[i].line);
+    if (parsed[i].key != scanned[i].key) {
+      throw InputError(where, "config file parse mismatch at key '" + scanned[i].key + "'");
+    }
+    apply_one(*this, p, where, parsed[i].key, parsed[i].value);
+  }
+  p.config_name = std::filesystem::path(path).stem().string();
+}
+
+std::vector<IniEntry> read_ini_entries(const std::string& path, const char* what, std::size_t expected_entries) {
+  namespace po = boost::program_options;
+  std::ifstream in(path);
+  if (!in) throw InputError(path, std::string("cannot open ") + what);
+  po::options_description none;
+  po::parsed_options parsed(&none);
+  try {
+    parsed = po::parse_config_file(in, none, /*allow_unregistered=*/true);
+  } catch (const po::error& e) {
+    throw InputError(path, std::string("cannot parse ") + what + ": " + e.what());
+  }
+  if (parsed.options.size() != expected_entries) {
+    throw InputError(path, std::string(what) + " parse mismatch (" + std::to_string(parsed.options.size()) +
+                               " entries read, " + std::to_string(expected_entries) + " expected)");
+  }
+  std::vector<IniEntry> out;
+  out.reserve(parsed.options.size());
+  for (const auto& opt : parsed.options) out.push_back({opt.string_key, opt.value.empty() ? std::string{} : opt.value.front()});
+  return out;
+}
+
+void ParamTable::apply_override(ResolvedParams& p, const std::string& assignment) const {
+  const std::string where = "--set " + assignment;
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos) throw InputError(where, "expected section.key=value");
+  const std::string key = trim(assignment.substr(0, eq));
+  const std::string value = trim(assignment.substr(eq + 1));
+  if (key.find('.') == std::string::npos) throw InputError(where, "expected section.key=value (no section in '" + key + "')");
+  const auto dot = key.rfind('.');
+  if (!has_section(key.substr(0, dot))) {
+    throw InputError(where, "unknown section '" + key.substr(0, dot) + "'; `tbdrsim params` lists every parameter");
+  }
+  apply_one(*this, p, where, key, value);
+}
+
+ResolvedParams ParamTable::resolve(const std::vector<std::string>& config_files,
+                                   const std::vector<std::string>& overrides) const {
+  ResolvedParams p = defaults();
+  for (const auto& f : config_files) apply_config_file(p, f);
+  for (const auto& o : overrides) apply_override(p, o);
+  return p;
+}
+
+std::string ParamTable::hash(const ResolvedParams& p) const {
+  Fnv1a64 h;
+  for (std::size_t i = 0; i < decls_.size(); ++i) {
+    h.update(decls_[i].key);
+    h.update("=");
+    h.update(format_param_value(p.values[i]));
+    h.update("\n");
+  }
+  return h.hex();
+}
+
+}  // namespace tbdr

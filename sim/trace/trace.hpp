@@ -1,0 +1,334 @@
+#pragma once
+// The command trace: what an application would have submitted for one frame, as technique
+// generators (workloads/) write it and the simulator (sim/) replays it. The text format is
+// specified in docs/trace-format.md; this header is its data model, the reader and the writer.
+//
+// A trace has declarations (scene, frame, camera, lights, buffers, shaders, pipelines) and an
+// ordered list of commands (render passes with their attachments, pixel local storage and draws;
+// compute dispatches; barriers). Every element keeps the line it was read from, so the
+// simulator's errors can name file:line too (0 for elements built in memory).
+#include <cstdint>
+#include <iosfwd>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include "scene/camera.hpp"
+#include "scene/lights.hpp"
+
+namespace tbdr {
+
+/// The trace format version this build reads and writes. See docs/trace-format.md for what bumps it.
+inline constexpr int kTraceVersion = 1;
+
+// ---------------------------------------------------------------------------------------------
+// Enums. Each has to_string() giving the trace spelling and parse_<enum>() returning nullopt for
+// an unknown spelling (the reader turns that into an InputError naming the token).
+// ---------------------------------------------------------------------------------------------
+
+/// Pixel format of an attachment, a pixel-local-storage variable or an image.
+enum class Format : std::uint8_t {
+  R8, Rg8, Rgba8, Rgb10a2, R11g11b10f, R16f, Rg16f, Rgba16f, R32f, Rg32f, Rgba32f,
+  R32ui, Rg32ui, Rgba32ui, D16, D24s8, D32f, D32fs8,
+};
+/// Bytes one sample of this format occupies (d32fs8: 4 depth + 1 stencil = 5).
+std::uint32_t bytes_per_sample(Format f);
+/// True for the depth(/stencil) formats d16, d24s8, d32f, d32fs8.
+bool is_depth_format(Format f);
+/// True for the formats with a stencil component: d24s8, d32fs8.
+bool has_stencil(Format f);
+
+/// What a render pass does with an attachment's contents when it begins.
+enum class LoadOp : std::uint8_t { Clear, Load, DontCare };
+/// What a render pass does with an attachment's contents when it ends.
+enum class StoreOp : std::uint8_t { Store, DontCare };
+/// What an attachment or buffer holds, for classing its DRAM traffic.
+enum class AttachmentUsage : std::uint8_t { Color, Depth, Gbuffer, Visibility };
+
+/// Where the shader gets the lights it evaluates per fragment (the simulator counts them).
+enum class LightSource : std::uint8_t {
+  None,         ///< evaluates no light
+  All,          ///< every light of the draw's light selection
+  ObjectList,   ///< the lights whose spheres touch the drawn instance's bounds
+  Proxy,        ///< the one light whose proxy geometry (sphere, quad) is being drawn
+  TileList,     ///< the lights of the screen tile's list (built by a culling dispatch)
+  ClusterList,  ///< the lights of the fragment's cluster list (built by an assignment dispatch)
+  PlsStack,     ///< the lights stacked in the pixel's local storage (forward light stack)
+};
+
+/// How a shader touches the pass's pixel local storage.
+enum class PlsAccess : std::uint8_t { None, Read, Write, ReadWrite };
+
+/// Depth or stencil comparison.
+enum class CompareOp : std::uint8_t { Never, Less, Equal, LessEqual, Greater, NotEqual, GreaterEqual, Always };
+/// Stencil update operation.
+enum class StencilOp : std::uint8_t { Keep, Zero, Replace, Incr, Decr, Invert, IncrWrap, DecrWrap };
+/// Color blending of a pipeline: none, additive (src+dst), or alpha (src*a + dst*(1-a)).
+enum class BlendMode : std::uint8_t { Off, Add, Alpha };
+/// Face culling of a pipeline.
+enum class CullMode : std::uint8_t { None, Back, Front };
+/// How the ISP treats the drawn fragments for hidden-surface removal: as the material says, or forced.
+enum class AlphaOverride : std::uint8_t { Material, Opaque, PunchThrough, Translucent };
+
+/// What geometry a draw submits.
+enum class GeometryKind : std::uint8_t {
+  Scene,         ///< scene instances (a subset, a sub-mesh or a material)
+  Fullscreen,    ///< one triangle covering the whole frame
+  LightSpheres,  ///< one icosphere per selected light, enclosing the light's sphere
+  LightQuads,    ///< one screen-space quad (2 triangles) per selected light, bounding its projection
+};
+/// Which scene instances a `draw scene` submits, by material alpha mode.
+enum class SceneSubset : std::uint8_t { All, Opaque, Masked, Blended };
+
+/// DRAM traffic class of a buffer (how the results database books its bytes).
+enum class TrafficClass : std::uint8_t { LightData, LightLists, Gbuffer, Color, Depth, Visibility, WorkLists, Other };
+/// What a buffer holds (what the kernels and shaders that use it find there).
+enum class BufferContent : std::uint8_t {
+  Lights,          ///< the light array (positions, radii, colors, spot cones)
+  LightIndexList,  ///< packed light indices referenced by a grid
+  TileGrid,        ///< per screen tile: offset and count into a light index list
+  ClusterGrid,     ///< per cluster: offset and count into a light index list
+  UsedClusters,    ///< the compact list of clusters some pixel falls into
+  DepthBounds,     ///< per-tile min/max depth
+  WorkLists,       ///< per-material tile work lists (visibility buffer)
+  Image,           ///< an image written by a compute kernel (e.g. the lit frame)
+  Other,           ///< anything else
+};
+
+/// Name of the scene source kind.
+enum class SceneKind : std::uint8_t { Atrium, Gltf };
+
+const char* to_string(Format v);
+const char* to_string(LoadOp v);
+const char* to_string(StoreOp v);
+const char* to_string(AttachmentUsage v);
+const char* to_string(LightSource v);
+const char* to_string(PlsAccess v);
+const char* to_string(CompareOp v);
+const char* to_string(StencilOp v);
+const char* to_string(BlendMode v);
+const char* to_string(CullMode v);
+const char* to_string(AlphaOverride v);
+const char* to_string(GeometryKind v);
+const char* to_string(SceneSubset v);
+const char* to_string(TrafficClass v);
+const char* to_string(BufferContent v);
+const char* to_string(SceneKind v);
+
+std::optional<Format> parse_format(std::string_view s);
+std::optional<LoadOp> parse_load_op(std::string_view s);
+std::optional<StoreOp> parse_store_op(std::string_view s);
+std::optional<AttachmentUsage> parse_attachment_usage(std::string_view s);
+std::optional<LightSource> parse_light_source(std::string_view s);
+std::optional<PlsAccess> parse_pls_access(std::string_view s);
+std::optional<CompareOp> parse_compare_op(std::string_view s);
+std::optional<StencilOp> parse_stencil_op(std::string_view s);
+std::optional<BlendMode> parse_blend_mode(std::string_view s);
+std::optional<CullMode> parse_cull_mode(std::string_view s);
+std::optional<AlphaOverride> parse_alpha_override(std::string_view s);
+std::optional<GeometryKind> parse_geometry_kind(std::string_view s);
+std::optional<SceneSubset> parse_scene_subset(std::string_view s);
+std::optional<TrafficClass> parse_traffic_class(std::string_view s);
+std::optional<BufferContent> parse_buffer_content(std::string_view s);
+std::optional<SceneKind> parse_scene_kind(std::string_view s);
+
+// ---------------------------------------------------------------------------------------------
+// Declarations
+// ---------------------------------------------------------------------------------------------
+
+/// The scene the trace draws: referenced (built-in generator + detail, or glTF path + hash), not copied.
+struct TraceScene {
+  SceneKind kind = SceneKind::Atrium;
+  int detail = 1;            ///< atrium only: the generator's detail level
+  std::string path;          ///< gltf only: the file as the generator was given it
+  std::string content_hash;  ///< 16 hex digits (fnv1a of the file / generator spec); required for gltf
+  int line = 0;
+};
+
+/// Frame size and sample count the trace was generated for.
+struct TraceFrame {
+  int width = 0;    ///< pixels
+  int height = 0;   ///< pixels
+  int samples = 1;  ///< MSAA samples per pixel: 1, 2, 4 or 8
+  int line = 0;
+};
+
+/// Which lights (indices into Trace::lights) a draw's shader sees or proxies: all, or ranges.
+struct LightSelection {
+  bool all = true;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> ranges;  ///< inclusive [first, last], sorted, disjoint, non-adjacent
+  bool empty() const { return !all && ranges.empty(); }
+  /// Number of lights selected out of `light_count`.
+  std::uint64_t count(std::uint64_t light_count) const;
+  /// True if light `index` is selected.
+  bool contains(std::uint32_t index) const;
+};
+
+/// Declared cost and behaviour of a fragment shader. Cost is declared, not executed.
+struct ShaderDesc {
+  std::string name;
+  std::uint32_t alu_ops = 0;        ///< FP32 ALU operations per fragment, excluding lights
+  std::uint32_t tex_fetches = 0;    ///< bilinear texture fetches per fragment
+  std::uint32_t varyings = 0;       ///< 32-bit components interpolated per fragment
+  std::uint32_t light_alu_ops = 0;  ///< FP32 ALU operations per light the fragment evaluates
+  LightSource light_source = LightSource::None;
+  std::uint32_t color_outputs = 0;  ///< color attachments written (0..8), in declaration order
+  PlsAccess pls = PlsAccess::None;
+  bool discard = false;             ///< may discard fragments (alpha test): punch-through behaviour
+  int line = 0;
+};
+
+/// Fixed-function state and shader of a draw, declared once and referenced by name.
+struct PipelineState {
+  std::string name;
+  std::string shader;                   ///< a ShaderDesc name
+  bool depth_test = true;
+  bool depth_write = true;
+  CompareOp depth_compare = CompareOp::Less;
+  bool stencil_test = false;
+  CompareOp stencil_compare = CompareOp::Always;
+  StencilOp stencil_fail_op = StencilOp::Keep;        ///< stencil test failed
+  StencilOp stencil_depth_fail_op = StencilOp::Keep;  ///< stencil passed, depth failed
+  StencilOp stencil_pass_op = StencilOp::Keep;        ///< both passed
+  std::uint32_t stencil_ref = 0;                      ///< reference value, 0..255
+  BlendMode blend = BlendMode::Off;
+  CullMode cull = CullMode::Back;
+  AlphaOverride alpha = AlphaOverride::Material;
+  int line = 0;
+};
+
+/// A buffer in DRAM: light data, light lists, grids, work lists.
+struct BufferDesc {
+  std::string name;
+  std::uint64_t bytes = 0;
+  TrafficClass traffic = TrafficClass::Other;
+  BufferContent content = BufferContent::Other;
+  bool upload = false;  ///< filled by the CPU before the frame (else a dispatch must write it first)
+  int line = 0;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Commands
+// ---------------------------------------------------------------------------------------------
+
+/// A render-pass attachment: one image of frame size. The same name in a later pass is the same
+/// image (same format, samples and usage); load=load there reads what an earlier pass stored.
+struct Attachment {
+  std::string name;
+  Format format = Format::Rgba8;
+  std::uint32_t samples = 1;  ///< per pixel
+  LoadOp load = LoadOp::Clear;
+  StoreOp store = StoreOp::Store;
+  bool transient = false;     ///< memoryless / lazily allocated: never in DRAM
+  AttachmentUsage usage = AttachmentUsage::Color;
+  std::string resolve;        ///< name of a 1-sample attachment of the pass this one resolves into, or empty
+  int line = 0;
+  std::uint32_t bytes_per_pixel() const { return bytes_per_sample(format) * samples; }
+};
+
+/// One pixel-local-storage variable; the pass's variables in order make its per-pixel layout.
+struct PlsVariable {
+  std::string name;
+  Format format = Format::Rgba8;
+  int line = 0;
+};
+
+/// A draw inside a render pass.
+struct DrawCmd {
+  std::string pipeline;                    ///< a PipelineState name
+  GeometryKind geometry = GeometryKind::Scene;
+  SceneSubset subset = SceneSubset::All;   ///< scene draws, unless submesh or material is set
+  std::string submesh;                     ///< scene draws: only this sub-mesh (by name)
+  std::string material;                    ///< scene draws: only sub-meshes with this material (by name)
+  LightSelection lights;                   ///< lights the shader sees (light_source=all) or that get proxies
+  std::uint32_t subdivisions = 1;          ///< light_spheres: icosphere level (20 * 4^n triangles)
+  std::vector<std::string> reads;          ///< buffers and stored images read as textures/buffers (DRAM)
+  std::vector<std::string> fetch;          ///< attachments of this pass read at the same pixel, on chip
+  int line = 0;
+};
+
+/// A render pass: attachments, pixel local storage layout and draws, replayed tile by tile.
+struct PassDesc {
+  std::string name;
+  std::vector<Attachment> attachments;
+  std::vector<PlsVariable> pls;
+  std::vector<DrawCmd> draws;
+  int line = 0;      ///< the `pass` line
+  int end_line = 0;  ///< the `end` line
+  /// Bytes of pixel local storage per pixel (sum of the variables).
+  std::uint32_t pls_bytes_per_pixel() const;
+  /// The depth attachment, or nullptr.
+  const Attachment* depth_attachment() const;
+  /// The attachment of that name, or nullptr.
+  const Attachment* find_attachment(std::string_view name) const;
+  /// Attachments a shader's color outputs write, in order: non-depth ones that are not resolve targets.
+  std::vector<const Attachment*> color_targets() const;
+};
+
+/// A compute dispatch of a named kernel (the simulator validates the kernel name and its params).
+struct DispatchCmd {
+  std::string kernel;
+  std::uint32_t groups[3] = {1, 1, 1};      ///< workgroups in x, y, z
+  std::uint32_t group_size[3] = {1, 1, 1};  ///< threads per workgroup in x, y, z
+  std::vector<std::string> reads;           ///< buffers and stored images read
+  std::vector<std::string> writes;          ///< buffers and images written
+  std::map<std::string, std::string> params;  ///< kernel parameters, verbatim
+  int line = 0;
+  std::uint64_t group_count() const { return std::uint64_t{groups[0]} * groups[1] * groups[2]; }
+};
+
+/// A barrier: later work touching `resources` waits until earlier work writing them has finished.
+struct BarrierCmd {
+  bool all = false;                    ///< every resource (full drain)
+  std::vector<std::string> resources;  ///< buffer or image names when not `all`
+  int line = 0;
+};
+
+/// One step of the frame, in submission order.
+using TraceCommand = std::variant<PassDesc, DispatchCmd, BarrierCmd>;
+
+/// A whole frame's trace.
+struct Trace {
+  int version = kTraceVersion;
+  std::string technique;                      ///< generator name, empty for hand-written traces
+  std::map<std::string, std::string> options; ///< the generator's options, verbatim
+  int technique_line = 0;
+  TraceScene scene;
+  TraceFrame frame;
+  Camera camera;
+  std::string camera_name;                    ///< viewpoint name, may be empty
+  int camera_line = 0;
+  std::vector<Light> lights;
+  std::vector<int> light_lines;               ///< source line of each light (same size as lights, or empty)
+  std::vector<BufferDesc> buffers;
+  std::vector<ShaderDesc> shaders;
+  std::vector<PipelineState> pipelines;
+  std::vector<TraceCommand> commands;
+
+  const ShaderDesc* find_shader(std::string_view name) const;
+  const PipelineState* find_pipeline(std::string_view name) const;
+  const BufferDesc* find_buffer(std::string_view name) const;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Reading, writing, hashing
+// ---------------------------------------------------------------------------------------------
+
+/// Reads and validates a trace file; every error is an InputError naming path:line and the token.
+Trace read_trace(const std::string& path);
+/// Same, from a stream; `name` is used in error messages in place of the file name.
+Trace parse_trace(std::istream& in, const std::string& name);
+/// Writes the canonical text of a trace (parse_trace of it gives a trace that writes identically).
+void write_trace(const Trace& trace, std::ostream& out);
+/// The canonical text as a string.
+std::string trace_text(const Trace& trace);
+/// Writes the canonical text to a file; throws InputError if the file cannot be written.
+void write_trace_file(const Trace& trace, const std::string& path);
+/// Hash of the canonical text, 16 hex digits: identifies a trace in the results database.
+std::string trace_hash(const Trace& trace);
+
+}  // namespace tbdr

@@ -1,0 +1,182 @@
+// Canonical trace writer: one fixed order and spelling, so that write -> read -> write gives
+// identical bytes and trace_hash() identifies a trace. Floats use the shortest text that reads
+// back to the same float (std::to_chars), so values round-trip exactly.
+#include <charconv>
+#include <fstream>
+#include <ostream>
+#include <sstream>
+#include <system_error>
+
+#include "kernel/errors.hpp"
+#include "trace/trace.hpp"
+
+namespace tbdr {
+
+namespace {
+
+std::string fmt_float(float v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+std::string fmt_vec3(const glm::vec3& v) { return fmt_float(v.x) + "," + fmt_float(v.y) + "," + fmt_float(v.z); }
+
+const char* yes_no(bool b) { return b ? "yes" : "no"; }
+
+// Quotes a free-text value when the reader would otherwise split or misread it.
+std::string quote_if_needed(const std::string& s) {
+  bool needs = s.empty();
+  for (char c : s)
+    if (c == ' ' || c == '\t' || c == '"' || c == '\\' || c == '#' || c == '\r' || c == '\n') needs = true;
+  if (!needs) return s;
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  out += '"';
+  return out;
+}
+
+std::string fmt_list(const std::vector<std::string>& v) {
+  std::string out;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (i) out += ',';
+    out += v[i];
+  }
+  return out;
+}
+
+std::string fmt_lights(const LightSelection& s) {
+  if (s.all) return "all";
+  if (s.ranges.empty()) return "none";
+  std::string out;
+  for (std::size_t i = 0; i < s.ranges.size(); ++i) {
+    if (i) out += ',';
+    out += std::to_string(s.ranges[i].first);
+    if (s.ranges[i].second != s.ranges[i].first) {
+      out += '-';
+      out += std::to_string(s.ranges[i].second);
+    }
+  }
+  return out;
+}
+
+std::string fmt_u32x3(const std::uint32_t (&v)[3]) {
+  return std::to_string(v[0]) + "," + std::to_string(v[1]) + "," + std::to_string(v[2]);
+}
+
+void write_pass(const PassDesc& p, std::ostream& out) {
+  out << "pass " << p.name << "\n";
+  for (const auto& a : p.attachments) {
+    out << "  attachment " << a.name << " format=" << to_string(a.format) << " samples=" << a.samples
+        << " load=" << to_string(a.load) << " store=" << to_string(a.store) << " usage=" << to_string(a.usage)
+        << " transient=" << yes_no(a.transient);
+    if (!a.resolve.empty()) out << " resolve=" << a.resolve;
+    out << "\n";
+  }
+  for (const auto& v : p.pls) out << "  pls " << v.name << " format=" << to_string(v.format) << "\n";
+  for (const auto& d : p.draws) {
+    out << "  draw " << to_string(d.geometry) << " pipeline=" << d.pipeline;
+    if (d.geometry == GeometryKind::Scene) {
+      if (!d.submesh.empty())
+        out << " submesh=" << quote_if_needed(d.submesh);
+      else if (!d.material.empty())
+        out << " material=" << quote_if_needed(d.material);
+      else
+        out << " subset=" << to_string(d.subset);
+    }
+    if (d.geometry == GeometryKind::LightSpheres) out << " subdivisions=" << d.subdivisions;
+    if (!d.lights.all) out << " lights=" << fmt_lights(d.lights);
+    if (!d.reads.empty()) out << " reads=" << fmt_list(d.reads);
+    if (!d.fetch.empty()) out << " fetch=" << fmt_list(d.fetch);
+    out << "\n";
+  }
+  out << "end\n";
+}
+
+}  // namespace
+
+void write_trace(const Trace& t, std::ostream& out) {
+  out << "tbdrsim-trace " << kTraceVersion << "\n";
+  if (!t.technique.empty()) {
+    out << "technique " << t.technique;
+    for (const auto& [k, v] : t.options) out << " " << k << "=" << quote_if_needed(v);
+    out << "\n";
+  }
+
+  const auto& s = t.scene;
+  if (s.kind == SceneKind::Atrium) {
+    out << "scene atrium detail=" << s.detail;
+  } else {
+    out << "scene gltf path=" << quote_if_needed(s.path);
+  }
+  if (!s.content_hash.empty()) out << " hash=" << s.content_hash;
+  out << "\n";
+
+  out << "frame width=" << t.frame.width << " height=" << t.frame.height << " samples=" << t.frame.samples << "\n";
+
+  const auto& c = t.camera;
+  out << "camera eye=" << fmt_vec3(c.eye) << " target=" << fmt_vec3(c.target) << " up=" << fmt_vec3(c.up)
+      << " fov_y_deg=" << fmt_float(c.fov_y_deg) << " near=" << fmt_float(c.near_plane)
+      << " far=" << fmt_float(c.far_plane);
+  if (!t.camera_name.empty()) out << " name=" << quote_if_needed(t.camera_name);
+  out << "\n";
+
+  for (const auto& l : t.lights) {
+    const bool spot = l.type == Light::Type::Spot;
+    out << "light " << (spot ? "spot" : "point") << " position=" << fmt_vec3(l.position)
+        << " radius=" << fmt_float(l.radius) << " color=" << fmt_vec3(l.color)
+        << " intensity=" << fmt_float(l.intensity);
+    if (spot)
+      out << " direction=" << fmt_vec3(l.direction) << " cos_inner=" << fmt_float(l.cos_inner)
+          << " cos_outer=" << fmt_float(l.cos_outer);
+    out << "\n";
+  }
+
+  for (const auto& b : t.buffers)
+    out << "buffer " << b.name << " bytes=" << b.bytes << " traffic=" << to_string(b.traffic)
+        << " content=" << to_string(b.content) << " upload=" << yes_no(b.upload) << "\n";
+
+  for (const auto& sh : t.shaders)
+    out << "shader " << sh.name << " alu_ops=" << sh.alu_ops << " tex_fetches=" << sh.tex_fetches
+        << " varyings=" << sh.varyings << " light_alu_ops=" << sh.light_alu_ops
+        << " light_source=" << to_string(sh.light_source) << " color_outputs=" << sh.color_outputs
+        << " pls=" << to_string(sh.pls) << " discard=" << yes_no(sh.discard) << "\n";
+
+  for (const auto& p : t.pipelines)
+    out << "pipeline " << p.name << " shader=" << p.shader << " depth_test=" << yes_no(p.depth_test)
+        << " depth_write=" << yes_no(p.depth_write) << " depth_compare=" << to_string(p.depth_compare)
+        << " stencil_test=" << yes_no(p.stencil_test) << " stencil_compare=" << to_string(p.stencil_compare)
+        << " stencil_fail_op=" << to_string(p.stencil_fail_op)
+        << " stencil_depth_fail_op=" << to_string(p.stencil_depth_fail_op)
+        << " stencil_pass_op=" << to_string(p.stencil_pass_op) << " stencil_ref=" << p.stencil_ref
+        << " blend=" << to_string(p.blend) << " cull=" << to_string(p.cull) << " alpha=" << to_string(p.alpha)
+        << "\n";
+
+  for (const auto& cmd : t.commands) {
+    if (const auto* p = std::get_if<PassDesc>(&cmd)) {
+      write_pass(*p, out);
+    } else if (const auto* d = std::get_if<DispatchCmd>(&cmd)) {
+      out << "dispatch " << d->kernel << " groups=" << fmt_u32x3(d->groups)
+          << " group_size=" << fmt_u32x3(d->group_size);
+      if (!d->reads.empty()) out << " reads=" << fmt_list(d->reads);
+      if (!d->writes.empty()) out << " writes=" << fmt_list(d->writes);
+      for (const auto& [k, v] : d->params) out << " " << k << "=" << quote_if_needed(v);
+      out << "\n";
+    } else if (const auto* b = std::get_if<BarrierCmd>(&cmd)) {
+      out << "barrier resources=" << (b->all ? std::string("all") : fmt_list(b->resources)) << "\n";
+    }
+  }
+}
+
+void write_trace_file(const Trace& trace, const std::string& path) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw InputError(path, "cannot open the trace file for writing");
+  write_trace(trace, out);
+  out.flush();
+  if (!out) throw InputError(path, "error writing the trace file");
+}
+
+}  // namespace tbdr

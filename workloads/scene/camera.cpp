@@ -1,0 +1,99 @@
+#include "scene/camera.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "kernel/errors.hpp"
+#include "scene/atrium.hpp"
+
+namespace tbdr {
+
+glm::mat4 Camera::view() const { return glm::lookAt(eye, target, up); }
+
+glm::mat4 Camera::projection(float aspect) const {
+  // glm's default (no GLM_FORCE_DEPTH_ZERO_TO_ONE) is the OpenGL clip range z in [-w, w].
+  return glm::perspective(glm::radians(fov_y_deg), aspect, near_plane, far_plane);
+}
+
+namespace {
+
+/// One named atrium viewpoint: eye and target in the atrium's meters (see workloads/atrium.hpp).
+struct AtriumView {
+  const char* name;
+  glm::vec3 eye;
+  glm::vec3 target;
+  float fov_y_deg;
+};
+
+std::vector<AtriumView> atrium_views() {
+  const AtriumLayout L = atrium_layout();
+  const float eye_h = 1.7f;  // standing eye height, meters
+  return {
+      // At the west end of the courtyard, eye height, looking east along its length: both
+      // colonnades recede in rows, banners and plants overlap the arcades.
+      {"entrance", {-L.court_half_x + 1.0f, eye_h, -1.2f}, {L.court_half_x, 3.2f, 0.6f}, 60.0f},
+      // On the upper gallery (north side), looking diagonally across the courtyard at the far arcades.
+      {"gallery",
+       {-L.court_half_x + 2.0f, L.storey1_height + eye_h, L.court_half_z + 0.5f * L.aisle_depth},
+       {L.court_half_x * 0.5f, L.storey1_height * 0.6f, -L.court_half_z},
+       60.0f},
+      // High above the south-west corner looking down into the courtyard.
+      {"top", {-L.court_half_x * 0.3f, L.roof_height * 2.0f, -L.outer_half_z * 1.3f}, {0.0f, 2.0f, 0.0f}, 60.0f},
+      // Inside the ground-floor south aisle, looking east down the row of columns.
+      {"aisle", {-L.court_half_x + 0.5f, eye_h, -L.court_half_z - 0.5f * L.aisle_depth}, {L.court_half_x, 2.0f, -L.court_half_z + 1.0f}, 60.0f},
+      // In the courtyard looking up at the banners hanging in front of the north upper arcade.
+      {"banners", {2.0f, eye_h, -L.court_half_z + 1.5f}, {0.0f, L.storey1_height, L.court_half_z}, 60.0f},
+  };
+}
+
+}  // namespace
+
+std::vector<std::string> atrium_viewpoint_names() {
+  std::vector<std::string> names;
+  for (const AtriumView& v : atrium_views()) names.emplace_back(v.name);
+  return names;
+}
+
+Camera atrium_viewpoint(const std::string& name, const Scene& atrium) {
+  for (const AtriumView& v : atrium_views()) {
+    if (name != v.name) continue;
+    Camera cam;
+    cam.eye = v.eye;
+    cam.target = v.target;
+    cam.up = glm::vec3(0.0f, 1.0f, 0.0f);
+    cam.fov_y_deg = v.fov_y_deg;
+    cam.near_plane = 0.1f;
+    // Far: the farthest bounds corner from the eye, so nothing in the scene is clipped away.
+    const Bounds& b = atrium.bounds;
+    float far_m = 0.0f;
+    for (int i = 0; i < 8; ++i) {
+      const glm::vec3 c((i & 1) ? b.max.x : b.min.x, (i & 2) ? b.max.y : b.min.y, (i & 4) ? b.max.z : b.min.z);
+      far_m = std::max(far_m, glm::length(c - v.eye));
+    }
+    cam.far_plane = std::max(far_m * 1.01f, 1.0f);
+    return cam;
+  }
+  std::string valid;
+  for (const std::string& n : atrium_viewpoint_names()) valid += (valid.empty() ? "" : ", ") + n;
+  throw InputError("viewpoint '" + name + "'", "unknown atrium viewpoint; valid: " + valid);
+}
+
+Camera framing_camera(const Scene& scene) {
+  Camera cam;
+  const glm::vec3 center = scene.bounds.center();
+  float radius = 0.5f * glm::length(scene.bounds.extent());
+  if (!(radius > 0.0f) || !std::isfinite(radius)) radius = 1.0f;
+  cam.fov_y_deg = 60.0f;
+  // Distance at which the bounding sphere fits the vertical field of view, with 5% margin.
+  const float dist = 1.05f * radius / std::sin(glm::radians(cam.fov_y_deg) * 0.5f);
+  cam.eye = center + glm::vec3(0.0f, 0.0f, dist);
+  cam.target = center;
+  cam.up = glm::vec3(0.0f, 1.0f, 0.0f);
+  cam.near_plane = std::max(dist - radius, radius * 1e-3f) * 0.9f;
+  cam.far_plane = (dist + radius) * 1.1f;
+  return cam;
+}
+
+}  // namespace tbdr

@@ -1,0 +1,1071 @@
+#include "scene/gltf_loader.hpp"
+
+// Debian's libtinygltf is a compiled library built with its default options (stb_image for
+// images, nlohmann json, file system callbacks): include the header without
+// TINYGLTF_IMPLEMENTATION and without any TINYGLTF_NO_* define so the class layout matches.
+#include <tiny_gltf.h>
+// The stb_image implementation lives in Debian's libstb; only the declarations are needed.
+#include <stb/stb_image.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <sstream>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <nlohmann/json.hpp>
+
+#include "kernel/errors.hpp"
+#include "kernel/hash.hpp"
+
+namespace tbdr {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// ---------------------------------------------------------------------------------------------
+// Image headers
+
+std::uint32_t be32(const std::uint8_t* p) {
+  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | p[3];
+}
+std::uint32_t le32(const std::uint8_t* p) {
+  return (std::uint32_t{p[3]} << 24) | (std::uint32_t{p[2]} << 16) | (std::uint32_t{p[1]} << 8) | p[0];
+}
+std::uint16_t be16(const std::uint8_t* p) { return static_cast<std::uint16_t>((p[0] << 8) | p[1]); }
+std::uint16_t le16(const std::uint8_t* p) { return static_cast<std::uint16_t>((p[1] << 8) | p[0]); }
+
+std::optional<ImageHeader> parse_png(const std::uint8_t* d, std::size_t n) {
+  // Signature (8) + IHDR chunk: length (4) "IHDR" (4) width (4) height (4) depth (1) color type (1).
+  if (n < 8 + 8 + 13 || std::memcmp(d + 12, "IHDR", 4) != 0) return std::nullopt;
+  ImageHeader h;
+  h.format = "png";
+  h.width = static_cast<int>(be32(d + 16));
+  h.height = static_cast<int>(be32(d + 20));
+  switch (d[25]) {
+    case 0: h.channels = 1; break;
+    case 2: h.channels = 3; break;
+    case 3: h.channels = 3; break;
+    case 4: h.channels = 2; break;
+    case 6: h.channels = 4; break;
+    default: return std::nullopt;
+  }
+  if (d[25] == 3) {
+    // A palette image has alpha when a tRNS chunk comes before the image data.
+    std::size_t pos = 8;
+    while (pos + 8 <= n) {
+      const std::uint32_t len = be32(d + pos);
+      if (std::memcmp(d + pos + 4, "tRNS", 4) == 0) {
+        h.channels = 4;
+        break;
+      }
+      if (std::memcmp(d + pos + 4, "IDAT", 4) == 0) break;
+      if (len > n) break;
+      pos += 12 + static_cast<std::size_t>(len);
+    }
+  }
+  if (h.width <= 0 || h.height <= 0) return std::nullopt;
+  return h;
+}
+
+std::optional<ImageHeader> parse_jpeg(const std::uint8_t* d, std::size_t n) {
+  std::size_t pos = 2;  // after SOI
+  while (pos + 4 <= n) {
+    if (d[pos] != 0xFF) return std::nullopt;
+    while (pos < n && d[pos] == 0xFF) ++pos;  // fill bytes
+    if (pos >= n) return std::nullopt;
+    const std::uint8_t marker = d[pos++];
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) continue;  // no length
+    if (marker == 0xD9 || marker == 0xDA) return std::nullopt;          // EOI/SOS before a SOF
+    if (pos + 2 > n) return std::nullopt;
+    const std::size_t len = be16(d + pos);
+    if (len < 2) return std::nullopt;
+    const bool sof = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+    if (sof) {
+      if (pos + 8 > n) return std::nullopt;
+      ImageHeader h;
+      h.format = "jpeg";
+      h.height = be16(d + pos + 3);
+      h.width = be16(d + pos + 5);
+      h.channels = d[pos + 7];
+      if (h.width <= 0 || h.height <= 0) return std::nullopt;
+      return h;
+    }
+    pos += len;
+  }
+  return std::nullopt;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Small helpers
+
+std::string quoted_name(const std::string& name) { return name.empty() ? std::string() : " '" + name + "'"; }
+
+std::string url_decode(const std::string& s) {
+  std::string out;
+  out.reserve(s.size());
+  auto hex = [](char c) -> int {
+    if (c >= '0' && c <= '9') return c - '0';
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+    return -1;
+  };
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (s[i] == '%' && i + 2 < s.size() && hex(s[i + 1]) >= 0 && hex(s[i + 2]) >= 0) {
+      out.push_back(static_cast<char>(hex(s[i + 1]) * 16 + hex(s[i + 2])));
+      i += 2;
+    } else {
+      out.push_back(s[i]);
+    }
+  }
+  return out;
+}
+
+bool is_data_uri(const std::string& uri) { return uri.rfind("data:", 0) == 0; }
+
+std::vector<std::uint8_t> read_all(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "cannot open file");
+  return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+int component_bytes(int ct) {
+  switch (ct) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_INT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+    default: return 0;
+  }
+}
+
+int type_components(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return 1;
+    case TINYGLTF_TYPE_VEC2: return 2;
+    case TINYGLTF_TYPE_VEC3: return 3;
+    case TINYGLTF_TYPE_VEC4: return 4;
+    case TINYGLTF_TYPE_MAT2: return 4;
+    case TINYGLTF_TYPE_MAT3: return 9;
+    case TINYGLTF_TYPE_MAT4: return 16;
+    default: return 0;
+  }
+}
+
+const char* component_name(int ct) {
+  switch (ct) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: return "BYTE";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return "UNSIGNED_BYTE";
+    case TINYGLTF_COMPONENT_TYPE_SHORT: return "SHORT";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return "UNSIGNED_SHORT";
+    case TINYGLTF_COMPONENT_TYPE_INT: return "INT";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return "UNSIGNED_INT";
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return "FLOAT";
+    default: return "unknown component type";
+  }
+}
+
+const char* type_name(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return "SCALAR";
+    case TINYGLTF_TYPE_VEC2: return "VEC2";
+    case TINYGLTF_TYPE_VEC3: return "VEC3";
+    case TINYGLTF_TYPE_VEC4: return "VEC4";
+    case TINYGLTF_TYPE_MAT2: return "MAT2";
+    case TINYGLTF_TYPE_MAT3: return "MAT3";
+    case TINYGLTF_TYPE_MAT4: return "MAT4";
+    default: return "unknown type";
+  }
+}
+
+const char* mode_name(int mode) {
+  switch (mode) {
+    case TINYGLTF_MODE_POINTS: return "POINTS";
+    case TINYGLTF_MODE_LINE: return "LINES";
+    case TINYGLTF_MODE_LINE_LOOP: return "LINE_LOOP";
+    case TINYGLTF_MODE_LINE_STRIP: return "LINE_STRIP";
+    case TINYGLTF_MODE_TRIANGLES: return "TRIANGLES";
+    case TINYGLTF_MODE_TRIANGLE_STRIP: return "TRIANGLE_STRIP";
+    case TINYGLTF_MODE_TRIANGLE_FAN: return "TRIANGLE_FAN";
+    default: return "unknown";
+  }
+}
+
+/// Accessors larger than this (elements) are rejected before anything is allocated.
+constexpr std::size_t max_accessor_elements = std::size_t{1} << 28;
+/// Alpha masks are decoded only up to this many texels (a 8192 x 8192 texture).
+constexpr std::size_t max_mask_texels = std::size_t{1} << 26;
+
+// Reads one component as a double (exact for every glTF component type).
+double read_component(const unsigned char* p, int ct, bool normalized) {
+  switch (ct) {
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: {
+      float f;
+      std::memcpy(&f, p, 4);
+      return f;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? p[0] / 255.0 : p[0];
+    case TINYGLTF_COMPONENT_TYPE_BYTE: {
+      const auto v = static_cast<std::int8_t>(p[0]);
+      return normalized ? std::max(v / 127.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+      std::uint16_t v;
+      std::memcpy(&v, p, 2);
+      return normalized ? v / 65535.0 : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_SHORT: {
+      std::int16_t v;
+      std::memcpy(&v, p, 2);
+      return normalized ? std::max(v / 32767.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+      std::uint32_t v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_INT: {
+      std::int32_t v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
+    default: return 0.0;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Pre-check of the JSON (before tinygltf loads anything): external buffers must exist with the
+// right size, buffer views must lie inside their buffers. tinygltf reports a missing buffer
+// file only by its uri and reads image buffer views without a range check, so both are checked
+// here, naming the buffer.
+
+std::optional<nlohmann::json> extract_json(const std::vector<std::uint8_t>& bytes, bool binary) {
+  try {
+    if (!binary) return nlohmann::json::parse(bytes.begin(), bytes.end());
+    if (bytes.size() < 20) return std::nullopt;
+    const std::uint32_t chunk_len = le32(bytes.data() + 12);
+    const std::uint32_t chunk_type = le32(bytes.data() + 16);
+    if (chunk_type != 0x4E4F534Au || 20ull + chunk_len > bytes.size()) return std::nullopt;
+    return nlohmann::json::parse(bytes.begin() + 20, bytes.begin() + 20 + chunk_len);
+  } catch (const nlohmann::json::exception&) {
+    return std::nullopt;  // tinygltf reports the syntax error with its own message
+  }
+}
+
+void precheck_json(const std::string& file, const nlohmann::json& j) {
+  const fs::path dir = fs::path(file).parent_path();
+  std::vector<std::uint64_t> buffer_bytes;
+  if (j.is_object() && j.contains("buffers") && j["buffers"].is_array()) {
+    const auto& buffers = j["buffers"];
+    for (std::size_t i = 0; i < buffers.size(); ++i) {
+      const auto& b = buffers[i];
+      std::uint64_t len = 0;
+      if (b.contains("byteLength") && b["byteLength"].is_number_unsigned()) len = b["byteLength"].get<std::uint64_t>();
+      buffer_bytes.push_back(len);
+      const std::string name = b.contains("name") && b["name"].is_string() ? b["name"].get<std::string>() : "";
+      if (!b.contains("uri") || !b["uri"].is_string()) continue;
+      const std::string uri = b["uri"].get<std::string>();
+      if (is_data_uri(uri)) continue;
+      const fs::path p = dir / url_decode(uri);
+      std::error_code ec;
+      if (!fs::is_regular_file(p, ec)) {
+        throw InputError(file, "buffer " + std::to_string(i) + quoted_name(name) + ": file '" + uri +
+                                   "' not found (looked for " + p.string() + ")");
+      }
+      const auto size = fs::file_size(p, ec);
+      if (!ec && size != len) {
+        throw InputError(file, "buffer " + std::to_string(i) + quoted_name(name) + ": file '" + p.string() + "' is " +
+                                   std::to_string(size) + " bytes but byteLength is " + std::to_string(len));
+      }
+    }
+  }
+  if (j.is_object() && j.contains("bufferViews") && j["bufferViews"].is_array()) {
+    const auto& views = j["bufferViews"];
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      const auto& v = views[i];
+      const std::string name = v.contains("name") && v["name"].is_string() ? v["name"].get<std::string>() : "";
+      const std::string what = "bufferView " + std::to_string(i) + quoted_name(name);
+      if (!v.contains("buffer") || !v["buffer"].is_number_integer()) continue;  // tinygltf reports it
+      const auto b = v["buffer"].get<long long>();
+      if (b < 0 || static_cast<std::size_t>(b) >= buffer_bytes.size()) {
+        throw InputError(file, what + ": refers to buffer " + std::to_string(b) + ", but the file has " +
+                                   std::to_string(buffer_bytes.size()) + " buffers");
+      }
+      std::uint64_t off = 0, len = 0;
+      if (v.contains("byteOffset") && v["byteOffset"].is_number_unsigned()) off = v["byteOffset"].get<std::uint64_t>();
+      if (v.contains("byteLength") && v["byteLength"].is_number_unsigned()) len = v["byteLength"].get<std::uint64_t>();
+      const std::uint64_t blen = buffer_bytes[static_cast<std::size_t>(b)];
+      if (off > blen || len > blen - off) {
+        throw InputError(file, what + ": bytes [" + std::to_string(off) + ", " + std::to_string(off + len) +
+                                   ") lie outside buffer " + std::to_string(b) + " (" +
+                                   std::to_string(buffer_bytes[static_cast<std::size_t>(b)]) + " bytes)");
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The image loader given to tinygltf: keeps the encoded bytes (as_is) and reads only the header.
+
+bool keep_encoded_image(tinygltf::Image* image, const int /*image_idx*/, std::string* /*err*/,
+                        std::string* /*warn*/, int /*req_width*/, int /*req_height*/,
+                        const unsigned char* bytes, int size, void* /*user*/) {
+  image->image.assign(bytes, bytes + std::max(size, 0));
+  image->as_is = true;
+  if (auto h = parse_image_header(bytes, static_cast<std::size_t>(std::max(size, 0)))) {
+    image->width = h->width;
+    image->height = h->height;
+    image->component = h->channels;
+    image->bits = 8;
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The conversion from a validated tinygltf::Model to a Scene.
+
+class Converter {
+ public:
+  Converter(std::string file, const tinygltf::Model& model, Scene& scene)
+      : file_(std::move(file)), m_(model), scene_(scene) {}
+
+  void run();
+
+ private:
+  [[noreturn]] void fail(const std::string& msg) const { throw InputError(file_, msg); }
+
+  std::string mesh_desc(int mesh) const {
+    return "mesh " + std::to_string(mesh) + quoted_name(m_.meshes[static_cast<std::size_t>(mesh)].name);
+  }
+  std::string node_desc(int node) const {
+    return "node " + std::to_string(node) + quoted_name(m_.nodes[static_cast<std::size_t>(node)].name);
+  }
+  std::string accessor_desc(int acc, const std::string& role) const {
+    return "accessor " + std::to_string(acc) + quoted_name(m_.accessors[static_cast<std::size_t>(acc)].name) + " (" +
+           role + ")";
+  }
+
+  void check_index(int index, std::size_t size, const std::string& owner, const char* what) const {
+    if (index < 0 || static_cast<std::size_t>(index) >= size) {
+      fail(owner + ": refers to " + what + " " + std::to_string(index) + ", but the file has " + std::to_string(size));
+    }
+  }
+
+  // Validates that `count` elements of `elem_bytes` at `byte_offset` with `stride` fit in the view;
+  // returns a pointer to the first element.
+  const unsigned char* view_range(int view_index, std::size_t byte_offset, std::size_t count, std::size_t elem_bytes,
+                                  bool allow_stride, const std::string& desc, std::size_t* stride_out) const;
+
+  template <class Out>
+  std::vector<Out> read_accessor(int acc_index, const std::string& desc, std::size_t* element_bytes = nullptr) const;
+
+  void collect_textures();
+  void convert_materials();
+  std::uint32_t default_material();
+  const std::vector<std::uint32_t>& mesh_submeshes(int mesh);
+  void convert_primitive(int mesh, int prim, std::vector<std::uint32_t>& out);
+  void check_node_graph();
+  void place_node(int node, const glm::mat4& parent);
+  glm::mat4 local_matrix(int node) const;
+  int alpha_mask_for_image(int image, const std::string& material_desc);
+
+  std::string file_;
+  const tinygltf::Model& m_;
+  Scene& scene_;
+  std::map<int, std::vector<std::uint32_t>> mesh_cache_;
+  std::map<int, int> mask_cache_;  // image -> alpha mask index (-1: no alpha)
+  std::vector<int> material_texcoord_;  // per glTF material: TEXCOORD set of its base color texture
+  int default_material_ = -1;
+  std::vector<int> parent_;  // per node, -1 for roots (filled by check_node_graph)
+};
+
+const unsigned char* Converter::view_range(int view_index, std::size_t byte_offset, std::size_t count,
+                                           std::size_t elem_bytes, bool allow_stride, const std::string& desc,
+                                           std::size_t* stride_out) const {
+  check_index(view_index, m_.bufferViews.size(), desc, "bufferView");
+  const tinygltf::BufferView& bv = m_.bufferViews[static_cast<std::size_t>(view_index)];
+  const std::string bv_desc = "bufferView " + std::to_string(view_index) + quoted_name(bv.name);
+  check_index(bv.buffer, m_.buffers.size(), bv_desc, "buffer");
+  const tinygltf::Buffer& buf = m_.buffers[static_cast<std::size_t>(bv.buffer)];
+  if (bv.byteOffset > buf.data.size() || bv.byteLength > buf.data.size() - bv.byteOffset) {
+    fail(bv_desc + ": bytes [" + std::to_string(bv.byteOffset) + ", " + std::to_string(bv.byteOffset + bv.byteLength) +
+         ") lie outside buffer " + std::to_string(bv.buffer) + quoted_name(buf.name) + " (" +
+         std::to_string(buf.data.size()) + " bytes)");
+  }
+  std::size_t stride = elem_bytes;
+  if (allow_stride && bv.byteStride != 0) {
+    if (bv.byteStride < elem_bytes) {
+      fail(desc + ": " + bv_desc + " byteStride " + std::to_string(bv.byteStride) + " is smaller than the element (" +
+           std::to_string(elem_bytes) + " bytes)");
+    }
+    stride = bv.byteStride;
+  }
+  if (count > 0) {
+    // offset + stride*(count-1) + element <= view length, without overflowing.
+    const bool fits = byte_offset <= bv.byteLength && elem_bytes <= bv.byteLength - byte_offset &&
+                      (count - 1) <= (bv.byteLength - byte_offset - elem_bytes) / stride;
+    if (!fits) {
+      const long double end = static_cast<long double>(byte_offset) +
+                              static_cast<long double>(stride) * static_cast<long double>(count - 1) +
+                              static_cast<long double>(elem_bytes);
+      std::ostringstream need;
+      need.precision(20);
+      need << end;
+      fail(desc + ": " + std::to_string(count) + " elements of " + std::to_string(elem_bytes) + " bytes (stride " +
+           std::to_string(stride) + ") from byte " + std::to_string(byte_offset) + " need " + need.str() +
+           " bytes, but " + bv_desc + " has " + std::to_string(bv.byteLength));
+    }
+  }
+  if (stride_out) *stride_out = stride;
+  return buf.data.data() + bv.byteOffset + byte_offset;
+}
+
+template <class Out>
+std::vector<Out> Converter::read_accessor(int acc_index, const std::string& desc, std::size_t* element_bytes) const {
+  const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(acc_index)];
+  const int cb = component_bytes(acc.componentType);
+  const int nc = type_components(acc.type);
+  if (cb == 0) fail(desc + ": invalid componentType " + std::to_string(acc.componentType));
+  if (nc == 0) fail(desc + ": invalid type " + std::to_string(acc.type));
+  if (acc.count == 0) fail(desc + ": count is 0");
+  if (acc.count > max_accessor_elements) {
+    fail(desc + ": count " + std::to_string(acc.count) + " exceeds the supported " +
+         std::to_string(max_accessor_elements) + " elements");
+  }
+  const std::size_t elem = static_cast<std::size_t>(cb) * static_cast<std::size_t>(nc);
+  if (element_bytes) *element_bytes = elem;
+  std::size_t stride = 0;
+  const unsigned char* base =
+      acc.bufferView >= 0 ? view_range(acc.bufferView, acc.byteOffset, acc.count, elem, true, desc, &stride) : nullptr;
+  std::vector<Out> out(acc.count * static_cast<std::size_t>(nc), Out{});
+  if (base != nullptr) {
+    for (std::size_t i = 0; i < acc.count; ++i) {
+      const unsigned char* p = base + i * stride;
+      for (int c = 0; c < nc; ++c) {
+        out[i * static_cast<std::size_t>(nc) + static_cast<std::size_t>(c)] =
+            static_cast<Out>(read_component(p + c * cb, acc.componentType, acc.normalized));
+      }
+    }
+  }  // else: no buffer view, the values start as zeros (glTF spec), sparse data may replace some
+  if (acc.sparse.isSparse) {
+    const auto& sp = acc.sparse;
+    const std::string sdesc = desc + " sparse";
+    if (sp.count <= 0 || static_cast<std::size_t>(sp.count) > acc.count) {
+      fail(sdesc + ": count " + std::to_string(sp.count) + " must be in 1.." + std::to_string(acc.count));
+    }
+    const int icb = component_bytes(sp.indices.componentType);
+    if (sp.indices.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+        sp.indices.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+        sp.indices.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT) {
+      fail(sdesc + " indices: componentType must be UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT");
+    }
+    const auto n = static_cast<std::size_t>(sp.count);
+    const unsigned char* ip = view_range(sp.indices.bufferView, static_cast<std::size_t>(sp.indices.byteOffset), n,
+                                         static_cast<std::size_t>(icb), false, sdesc + " indices", nullptr);
+    const unsigned char* vp = view_range(sp.values.bufferView, static_cast<std::size_t>(sp.values.byteOffset), n, elem,
+                                         false, sdesc + " values", nullptr);
+    double prev = -1.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const double idx = read_component(ip + k * static_cast<std::size_t>(icb), sp.indices.componentType, false);
+      if (idx <= prev || idx >= static_cast<double>(acc.count)) {
+        fail(sdesc + " indices: index " + std::to_string(static_cast<std::uint64_t>(idx)) + " at position " +
+             std::to_string(k) + " is not increasing or is out of range (" + std::to_string(acc.count) + " elements)");
+      }
+      prev = idx;
+      const auto i = static_cast<std::size_t>(idx);
+      for (int c = 0; c < nc; ++c) {
+        out[i * static_cast<std::size_t>(nc) + static_cast<std::size_t>(c)] =
+            static_cast<Out>(read_component(vp + k * elem + static_cast<std::size_t>(c * cb), acc.componentType,
+                                            acc.normalized));
+      }
+    }
+  }
+  return out;
+}
+
+void Converter::collect_textures() {
+  for (std::size_t i = 0; i < m_.images.size(); ++i) {
+    const tinygltf::Image& img = m_.images[i];
+    TextureInfo t;
+    t.name = !img.uri.empty() && !is_data_uri(img.uri) ? url_decode(img.uri)
+             : !img.name.empty()                       ? img.name
+                                                       : "image " + std::to_string(i);
+    const std::string desc = "image " + std::to_string(i) + " '" + t.name + "'";
+    if (img.image.empty()) {
+      t.missing = true;
+      if (!img.uri.empty() && !is_data_uri(img.uri)) {
+        scene_.warnings.push_back(desc + ": file not found, texture counted as 0 bytes");
+      } else {
+        scene_.warnings.push_back(desc + ": no image data, texture counted as 0 bytes");
+      }
+    } else if (auto h = parse_image_header(img.image.data(), img.image.size())) {
+      t.format = h->format;
+      t.width = h->width;
+      t.height = h->height;
+      t.channels = h->channels;
+    } else {
+      t.format = "unknown";
+      scene_.warnings.push_back(desc + ": unrecognised image format (not PNG/JPEG/GIF/BMP/KTX2), counted as 0 bytes");
+    }
+    scene_.textures.push_back(std::move(t));
+  }
+}
+
+int Converter::alpha_mask_for_image(int image, const std::string& material_desc) {
+  auto it = mask_cache_.find(image);
+  if (it != mask_cache_.end()) return it->second;
+  int result = -1;
+  const tinygltf::Image& img = m_.images[static_cast<std::size_t>(image)];
+  const auto header = parse_image_header(img.image.data(), img.image.size());
+  if (header && static_cast<std::size_t>(header->width) * static_cast<std::size_t>(header->height) > max_mask_texels) {
+    scene_.warnings.push_back(material_desc + ": base color image " + std::to_string(image) + " is too large (" +
+                              std::to_string(header->width) + "x" + std::to_string(header->height) +
+                              ") to decode as an alpha mask; alpha test uses the factor's alpha");
+  } else if (!img.image.empty()) {
+    int w = 0, h = 0, comp = 0;
+    stbi_uc* px = stbi_load_from_memory(img.image.data(), static_cast<int>(img.image.size()), &w, &h, &comp, 4);
+    if (px == nullptr) {
+      scene_.warnings.push_back(material_desc + ": base color image " + std::to_string(image) +
+                                " could not be decoded (" + stbi_failure_reason() +
+                                "); alpha test uses the factor's alpha");
+    } else {
+      AlphaMask mask;
+      mask.width = w;
+      mask.height = h;
+      mask.alpha.resize(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
+      bool any_transparent = false;
+      for (std::size_t i = 0; i < mask.alpha.size(); ++i) {
+        mask.alpha[i] = px[i * 4 + 3];
+        any_transparent |= mask.alpha[i] != 255;
+      }
+      stbi_image_free(px);
+      // An image without alpha (or fully opaque) leaves the factor's alpha alone: no mask.
+      if (any_transparent) {
+        result = static_cast<int>(scene_.alpha_masks.size());
+        scene_.alpha_masks.push_back(std::move(mask));
+      }
+    }
+  }
+  mask_cache_[image] = result;
+  return result;
+}
+
+void Converter::convert_materials() {
+  material_texcoord_.assign(m_.materials.size(), 0);
+  for (std::size_t i = 0; i < m_.materials.size(); ++i) {
+    const tinygltf::Material& gm = m_.materials[i];
+    const std::string desc = "material " + std::to_string(i) + quoted_name(gm.name);
+    Material mat;
+    mat.name = gm.name.empty() ? "material " + std::to_string(i) : gm.name;
+    if (gm.alphaMode.empty() || gm.alphaMode == "OPAQUE") {
+      mat.alpha_mode = AlphaMode::Opaque;
+    } else if (gm.alphaMode == "MASK") {
+      mat.alpha_mode = AlphaMode::PunchThrough;
+    } else if (gm.alphaMode == "BLEND") {
+      mat.alpha_mode = AlphaMode::Translucent;
+    } else {
+      fail(desc + ": alphaMode '" + gm.alphaMode + "' is not OPAQUE, MASK or BLEND");
+    }
+    mat.alpha_cutoff = static_cast<float>(gm.alphaCutoff);
+    if (!std::isfinite(mat.alpha_cutoff) || mat.alpha_cutoff < 0.0f) {
+      fail(desc + ": alphaCutoff " + std::to_string(gm.alphaCutoff) + " is not a non-negative number");
+    }
+    mat.double_sided = gm.doubleSided;
+    const auto& f = gm.pbrMetallicRoughness.baseColorFactor;
+    if (f.size() == 4) {
+      mat.base_color = glm::vec4(static_cast<float>(f[0]), static_cast<float>(f[1]), static_cast<float>(f[2]),
+                                 static_cast<float>(f[3]));
+    } else if (!f.empty()) {
+      fail(desc + ": baseColorFactor has " + std::to_string(f.size()) + " components, expected 4");
+    }
+    const int tex = gm.pbrMetallicRoughness.baseColorTexture.index;
+    if (tex >= 0) {
+      check_index(tex, m_.textures.size(), desc + " baseColorTexture", "texture");
+      const tinygltf::Texture& t = m_.textures[static_cast<std::size_t>(tex)];
+      if (t.source >= 0) {
+        check_index(t.source, m_.images.size(), "texture " + std::to_string(tex) + quoted_name(t.name), "image");
+        mat.base_color_texture = t.source;
+        material_texcoord_[i] = gm.pbrMetallicRoughness.baseColorTexture.texCoord;
+        if (mat.alpha_mode == AlphaMode::PunchThrough) mat.alpha_mask = alpha_mask_for_image(t.source, desc);
+      } else {
+        scene_.warnings.push_back("texture " + std::to_string(tex) + quoted_name(t.name) +
+                                  ": no source image (extension-only textures are not supported); " + desc +
+                                  " is untextured");
+      }
+    }
+    // Other textures must still point at real textures and images.
+    const std::pair<const char*, int> others[] = {
+        {"normalTexture", gm.normalTexture.index},
+        {"occlusionTexture", gm.occlusionTexture.index},
+        {"emissiveTexture", gm.emissiveTexture.index},
+        {"metallicRoughnessTexture", gm.pbrMetallicRoughness.metallicRoughnessTexture.index}};
+    for (const auto& [slot, index] : others) {
+      if (index < 0) continue;
+      check_index(index, m_.textures.size(), desc + " " + slot, "texture");
+      const tinygltf::Texture& t = m_.textures[static_cast<std::size_t>(index)];
+      if (t.source >= 0) {
+        check_index(t.source, m_.images.size(), "texture " + std::to_string(index) + quoted_name(t.name), "image");
+      }
+    }
+    scene_.materials.push_back(std::move(mat));
+  }
+}
+
+std::uint32_t Converter::default_material() {
+  if (default_material_ < 0) {
+    default_material_ = static_cast<int>(scene_.materials.size());
+    Material mat;
+    mat.name = "default";
+    scene_.materials.push_back(mat);
+  }
+  return static_cast<std::uint32_t>(default_material_);
+}
+
+void Converter::convert_primitive(int mesh, int prim_index, std::vector<std::uint32_t>& out) {
+  const tinygltf::Mesh& gmesh = m_.meshes[static_cast<std::size_t>(mesh)];
+  const tinygltf::Primitive& prim = gmesh.primitives[static_cast<std::size_t>(prim_index)];
+  const std::string where = mesh_desc(mesh) + " primitive " + std::to_string(prim_index);
+
+  if (prim.mode >= TINYGLTF_MODE_POINTS && prim.mode <= TINYGLTF_MODE_LINE_STRIP) {
+    scene_.warnings.push_back(where + ": mode " + mode_name(prim.mode) + " skipped (only triangles are simulated)");
+    return;
+  }
+  if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+      prim.mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+    fail(where + ": invalid mode " + std::to_string(prim.mode));
+  }
+  auto pos_it = prim.attributes.find("POSITION");
+  if (pos_it == prim.attributes.end()) fail(where + ": has no POSITION attribute");
+
+  // Every attribute: a valid accessor whose bytes lie in its buffer view, one element per vertex.
+  const int pos_acc = pos_it->second;
+  check_index(pos_acc, m_.accessors.size(), where + " POSITION", "accessor");
+  const std::size_t vertex_count = m_.accessors[static_cast<std::size_t>(pos_acc)].count;
+  std::uint32_t stride_bytes = 0;
+  for (const auto& [attr, acc_index] : prim.attributes) {
+    check_index(acc_index, m_.accessors.size(), where + " attribute " + attr, "accessor");
+    const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(acc_index)];
+    const std::string desc = accessor_desc(acc_index, attr + " of " + where);
+    if (acc.count != vertex_count) {
+      fail(desc + ": has " + std::to_string(acc.count) + " elements but POSITION (accessor " + std::to_string(pos_acc) +
+           ") has " + std::to_string(vertex_count));
+    }
+    const int cb = component_bytes(acc.componentType);
+    const int nc = type_components(acc.type);
+    if (cb == 0) fail(desc + ": invalid componentType " + std::to_string(acc.componentType));
+    if (nc == 0) fail(desc + ": invalid type " + std::to_string(acc.type));
+    stride_bytes += static_cast<std::uint32_t>(cb * nc);
+  }
+
+  SubMesh sm;
+  sm.name = gmesh.name.empty() ? "mesh " + std::to_string(mesh) : gmesh.name;
+  if (gmesh.primitives.size() > 1) sm.name += "/" + std::to_string(prim_index);
+  sm.vertex_stride_bytes = stride_bytes;
+
+  // POSITION: VEC3 FLOAT, all finite.
+  {
+    const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(pos_acc)];
+    const std::string desc = accessor_desc(pos_acc, "POSITION of " + where);
+    if (acc.type != TINYGLTF_TYPE_VEC3 || acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) {
+      fail(desc + ": POSITION must be VEC3 FLOAT, found " + type_name(acc.type) + " " +
+           component_name(acc.componentType));
+    }
+    const std::vector<float> v = read_accessor<float>(pos_acc, desc);
+    sm.positions.resize(vertex_count);
+    for (std::size_t i = 0; i < vertex_count; ++i) {
+      const glm::vec3 p(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+        std::ostringstream os;
+        os << desc << ": vertex " << i << " has a non-finite coordinate (" << p.x << ", " << p.y << ", " << p.z << ")";
+        fail(os.str());
+      }
+      sm.positions[i] = p;
+    }
+  }
+  // NORMAL: VEC3 FLOAT when present.
+  bool has_normals = false;
+  if (auto it = prim.attributes.find("NORMAL"); it != prim.attributes.end()) {
+    const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(it->second)];
+    const std::string desc = accessor_desc(it->second, "NORMAL of " + where);
+    if (acc.type != TINYGLTF_TYPE_VEC3 || acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) {
+      fail(desc + ": NORMAL must be VEC3 FLOAT, found " + type_name(acc.type) + " " +
+           component_name(acc.componentType));
+    }
+    const std::vector<float> v = read_accessor<float>(it->second, desc);
+    sm.normals.resize(vertex_count);
+    for (std::size_t i = 0; i < vertex_count; ++i) {
+      const glm::vec3 n(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+      if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z)) {
+        fail(desc + ": vertex " + std::to_string(i) + " has a non-finite normal");
+      }
+      sm.normals[i] = n;
+    }
+    has_normals = true;
+  }
+  // TEXCOORD_n (the set the base color texture uses): VEC2 FLOAT or normalized UBYTE/USHORT.
+  std::uint32_t material_index = 0;
+  int texcoord_set = 0;
+  if (prim.material >= 0) {
+    check_index(prim.material, m_.materials.size(), where, "material");
+    material_index = static_cast<std::uint32_t>(prim.material);
+    texcoord_set = material_texcoord_[static_cast<std::size_t>(prim.material)];
+  } else {
+    material_index = default_material();
+  }
+  sm.material = material_index;
+  sm.uvs.assign(vertex_count, glm::vec2(0.0f));
+  const std::string uv_attr = "TEXCOORD_" + std::to_string(texcoord_set);
+  if (auto it = prim.attributes.find(uv_attr); it != prim.attributes.end()) {
+    const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(it->second)];
+    const std::string desc = accessor_desc(it->second, uv_attr + " of " + where);
+    const bool ok_type = acc.type == TINYGLTF_TYPE_VEC2 &&
+                         (acc.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT ||
+                          ((acc.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                            acc.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) &&
+                           acc.normalized));
+    if (!ok_type) {
+      fail(desc + ": " + uv_attr + " must be VEC2 FLOAT or normalized UNSIGNED_BYTE/UNSIGNED_SHORT, found " +
+           type_name(acc.type) + " " + component_name(acc.componentType));
+    }
+    const std::vector<float> v = read_accessor<float>(it->second, desc);
+    for (std::size_t i = 0; i < vertex_count; ++i) sm.uvs[i] = glm::vec2(v[2 * i], v[2 * i + 1]);
+  } else if (texcoord_set != 0 && scene_.materials[material_index].base_color_texture >= 0) {
+    scene_.warnings.push_back(where + ": material uses " + uv_attr + " which the primitive lacks; uvs are zero");
+  }
+  // Remaining attributes: validated (byte ranges), not kept.
+  for (const auto& [attr, acc_index] : prim.attributes) {
+    if (attr == "POSITION" || attr == "NORMAL" || attr == uv_attr) continue;
+    std::size_t elem = 0;
+    const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(acc_index)];
+    const std::string desc = accessor_desc(acc_index, attr + " of " + where);
+    if (acc.bufferView >= 0) {
+      elem = static_cast<std::size_t>(component_bytes(acc.componentType) * type_components(acc.type));
+      view_range(acc.bufferView, acc.byteOffset, acc.count, elem, true, desc, nullptr);
+    }
+  }
+
+  // Indices: scalar unsigned, all < vertex count. Non-indexed draws get 0..n-1 and index_bytes 0.
+  std::vector<std::uint32_t> idx;
+  if (prim.indices >= 0) {
+    check_index(prim.indices, m_.accessors.size(), where + " indices", "accessor");
+    const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(prim.indices)];
+    const std::string desc = accessor_desc(prim.indices, "indices of " + where);
+    if (acc.type != TINYGLTF_TYPE_SCALAR ||
+        (acc.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+         acc.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+         acc.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)) {
+      fail(desc + ": indices must be SCALAR UNSIGNED_BYTE/UNSIGNED_SHORT/UNSIGNED_INT, found " + type_name(acc.type) +
+           " " + component_name(acc.componentType));
+    }
+    if (acc.bufferView >= 0 && m_.bufferViews.size() > static_cast<std::size_t>(acc.bufferView) &&
+        m_.bufferViews[static_cast<std::size_t>(acc.bufferView)].byteStride != 0) {
+      fail(desc + ": the buffer view of indices must not have a byteStride");
+    }
+    idx = read_accessor<std::uint32_t>(prim.indices, desc);
+    for (std::size_t i = 0; i < idx.size(); ++i) {
+      if (idx[i] >= vertex_count) {
+        fail(desc + ": index " + std::to_string(idx[i]) + " at position " + std::to_string(i) + " is out of range (" +
+             std::to_string(vertex_count) + " vertices)");
+      }
+    }
+    sm.index_bytes = static_cast<std::uint32_t>(component_bytes(acc.componentType));
+  } else {
+    idx.resize(vertex_count);
+    for (std::size_t i = 0; i < vertex_count; ++i) idx[i] = static_cast<std::uint32_t>(i);
+    sm.index_bytes = 0;
+  }
+
+  // Topology to a triangle list (glTF 2.0 spec, section 3.7.2.1 winding for strips and fans).
+  const std::size_t n = idx.size();
+  if (prim.mode == TINYGLTF_MODE_TRIANGLES) {
+    if (n % 3 != 0) {
+      scene_.warnings.push_back(where + ": " + std::to_string(n) +
+                                " indices is not a multiple of 3; the trailing ones are ignored");
+    }
+    idx.resize(n - n % 3);
+    sm.indices = std::move(idx);
+  } else if (n >= 3) {
+    sm.indices.reserve((n - 2) * 3);
+    for (std::size_t i = 0; i + 2 < n; ++i) {
+      if (prim.mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+        sm.indices.push_back(idx[i]);
+        sm.indices.push_back(idx[i + 1 + i % 2]);
+        sm.indices.push_back(idx[i + 2 - i % 2]);
+      } else {
+        sm.indices.push_back(idx[i + 1]);
+        sm.indices.push_back(idx[i + 2]);
+        sm.indices.push_back(idx[0]);
+      }
+    }
+  }
+
+  // Missing normals: each triangle's face normal, area-weighted at shared vertices (exactly the
+  // flat normal for non-indexed geometry and wherever a vertex joins coplanar triangles only).
+  if (!has_normals) {
+    sm.normals.assign(vertex_count, glm::vec3(0.0f));
+    for (std::size_t t = 0; t + 2 < sm.indices.size(); t += 3) {
+      const std::uint32_t a = sm.indices[t], b = sm.indices[t + 1], c = sm.indices[t + 2];
+      const glm::vec3 fn = glm::cross(sm.positions[b] - sm.positions[a], sm.positions[c] - sm.positions[a]);
+      sm.normals[a] += fn;
+      sm.normals[b] += fn;
+      sm.normals[c] += fn;
+    }
+    for (glm::vec3& nrm : sm.normals) {
+      const float len = glm::length(nrm);
+      nrm = len > 0.0f && std::isfinite(len) ? nrm / len : glm::vec3(0.0f, 0.0f, 1.0f);
+    }
+  }
+
+  out.push_back(static_cast<std::uint32_t>(scene_.submeshes.size()));
+  scene_.submeshes.push_back(std::move(sm));
+}
+
+const std::vector<std::uint32_t>& Converter::mesh_submeshes(int mesh) {
+  auto it = mesh_cache_.find(mesh);
+  if (it != mesh_cache_.end()) return it->second;
+  std::vector<std::uint32_t> list;
+  const tinygltf::Mesh& gmesh = m_.meshes[static_cast<std::size_t>(mesh)];
+  for (std::size_t p = 0; p < gmesh.primitives.size(); ++p) convert_primitive(mesh, static_cast<int>(p), list);
+  return mesh_cache_.emplace(mesh, std::move(list)).first->second;
+}
+
+void Converter::check_node_graph() {
+  const std::size_t n = m_.nodes.size();
+  std::vector<int> parent(n, -1);
+  for (std::size_t i = 0; i < n; ++i) {
+    const tinygltf::Node& node = m_.nodes[i];
+    const std::string desc = node_desc(static_cast<int>(i));
+    for (int c : node.children) {
+      check_index(c, n, desc + " children", "node");
+      if (static_cast<std::size_t>(c) == i) fail(desc + ": is its own child (node graph cycle)");
+      if (parent[static_cast<std::size_t>(c)] >= 0) {
+        fail(node_desc(c) + ": is a child of both " + node_desc(parent[static_cast<std::size_t>(c)]) + " and " + desc +
+             " (glTF nodes must form a tree)");
+      }
+      parent[static_cast<std::size_t>(c)] = static_cast<int>(i);
+    }
+    if (node.mesh != -1) check_index(node.mesh, m_.meshes.size(), desc, "mesh");
+    if (!node.matrix.empty() && node.matrix.size() != 16) {
+      fail(desc + ": matrix has " + std::to_string(node.matrix.size()) + " values, expected 16");
+    }
+  }
+  // With one parent per node, a cycle is a loop when walking up the parent chain.
+  std::vector<std::uint8_t> state(n, 0);  // 0 unvisited, 1 on the current walk, 2 known to reach a root
+  for (std::size_t start = 0; start < n; ++start) {
+    std::vector<std::size_t> walk;
+    std::size_t cur = start;
+    for (;;) {
+      if (state[cur] == 2) break;
+      if (state[cur] == 1) {
+        std::string chain = std::to_string(cur);
+        for (std::size_t c = static_cast<std::size_t>(parent[cur]); c != cur; c = static_cast<std::size_t>(parent[c]))
+          chain = std::to_string(c) + " -> " + chain;
+        fail(node_desc(static_cast<int>(cur)) + ": node graph cycle (parent -> child: " + std::to_string(cur) +
+             " -> " + chain + ")");
+      }
+      state[cur] = 1;
+      walk.push_back(cur);
+      if (parent[cur] < 0) break;
+      cur = static_cast<std::size_t>(parent[cur]);
+    }
+    for (std::size_t w : walk) state[w] = 2;
+  }
+  parent_ = std::move(parent);
+}
+
+glm::mat4 Converter::local_matrix(int node_index) const {
+  const tinygltf::Node& node = m_.nodes[static_cast<std::size_t>(node_index)];
+  glm::mat4 m(1.0f);
+  if (node.matrix.size() == 16) {
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) m[c][r] = static_cast<float>(node.matrix[static_cast<std::size_t>(c * 4 + r)]);
+  } else {
+    glm::vec3 t(0.0f), s(1.0f);
+    glm::quat q(1.0f, 0.0f, 0.0f, 0.0f);
+    if (node.translation.size() == 3)
+      t = glm::vec3(static_cast<float>(node.translation[0]), static_cast<float>(node.translation[1]),
+                    static_cast<float>(node.translation[2]));
+    else if (!node.translation.empty())
+      fail(node_desc(node_index) + ": translation must have 3 values");
+    if (node.rotation.size() == 4)
+      q = glm::quat(static_cast<float>(node.rotation[3]), static_cast<float>(node.rotation[0]),
+                    static_cast<float>(node.rotation[1]), static_cast<float>(node.rotation[2]));
+    else if (!node.rotation.empty())
+      fail(node_desc(node_index) + ": rotation must have 4 values");
+    if (node.scale.size() == 3)
+      s = glm::vec3(static_cast<float>(node.scale[0]), static_cast<float>(node.scale[1]),
+                    static_cast<float>(node.scale[2]));
+    else if (!node.scale.empty())
+      fail(node_desc(node_index) + ": scale must have 3 values");
+    const float ql = glm::length(q);
+    if (ql > 0.0f && std::isfinite(ql)) q = q / ql;
+    m = glm::translate(glm::mat4(1.0f), t) * glm::mat4_cast(q) * glm::scale(glm::mat4(1.0f), s);
+  }
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(m[c][r])) fail(node_desc(node_index) + ": transform has a non-finite value");
+  return m;
+}
+
+void Converter::place_node(int root, const glm::mat4& parent) {
+  // Depth-first, children in order, with an explicit stack (node chains can be deep).
+  std::vector<std::pair<int, glm::mat4>> stack = {{root, parent}};
+  while (!stack.empty()) {
+    const auto [node_index, parent_world] = stack.back();
+    stack.pop_back();
+    const tinygltf::Node& node = m_.nodes[static_cast<std::size_t>(node_index)];
+    const glm::mat4 world = parent_world * local_matrix(node_index);
+    if (node.mesh >= 0) {
+      for (std::uint32_t sm : mesh_submeshes(node.mesh)) {
+        Instance inst;
+        inst.submesh = sm;
+        inst.world = world;
+        inst.node = node.name.empty() ? "node " + std::to_string(node_index) : node.name;
+        scene_.instances.push_back(std::move(inst));
+      }
+    }
+    for (auto it = node.children.rbegin(); it != node.children.rend(); ++it) stack.emplace_back(*it, world);
+  }
+}
+
+void Converter::run() {
+  for (const std::string& ext : m_.extensionsRequired) {
+    if (ext == "KHR_draco_mesh_compression" || ext == "EXT_meshopt_compression" || ext == "KHR_mesh_quantization") {
+      fail("requires extension " + ext + ", which tbdrsim does not support");
+    }
+    scene_.warnings.push_back("required extension " + ext + " is ignored");
+  }
+  collect_textures();
+  convert_materials();
+  check_node_graph();
+
+  std::vector<int> roots;
+  if (!m_.scenes.empty()) {
+    int s = m_.defaultScene >= 0 ? m_.defaultScene : 0;
+    check_index(s, m_.scenes.size(), "default scene", "scene");
+    const tinygltf::Scene& sc = m_.scenes[static_cast<std::size_t>(s)];
+    for (int r : sc.nodes) {
+      check_index(r, m_.nodes.size(), "scene " + std::to_string(s) + quoted_name(sc.name), "node");
+      if (parent_[static_cast<std::size_t>(r)] >= 0) {
+        scene_.warnings.push_back("scene " + std::to_string(s) + " lists " + node_desc(r) + " as a root, but it is a child of " +
+                                  node_desc(parent_[static_cast<std::size_t>(r)]) + "; it is placed twice");
+      }
+      roots.push_back(r);
+    }
+  } else {
+    std::vector<bool> is_child(m_.nodes.size(), false);
+    for (const auto& node : m_.nodes)
+      for (int c : node.children) is_child[static_cast<std::size_t>(c)] = true;
+    for (std::size_t i = 0; i < m_.nodes.size(); ++i)
+      if (!is_child[i]) roots.push_back(static_cast<int>(i));
+  }
+  for (int r : roots) place_node(r, glm::mat4(1.0f));
+  if (m_.nodes.empty() && !m_.meshes.empty()) {
+    scene_.warnings.push_back("no nodes: each mesh is placed once at the origin");
+    for (std::size_t mi = 0; mi < m_.meshes.size(); ++mi) {
+      for (std::uint32_t sm : mesh_submeshes(static_cast<int>(mi))) {
+        Instance inst;
+        inst.submesh = sm;
+        inst.node = "mesh " + std::to_string(mi);
+        scene_.instances.push_back(std::move(inst));
+      }
+    }
+  }
+  if (scene_.instances.empty()) scene_.warnings.push_back("the scene has no triangles");
+}
+
+}  // namespace
+
+std::optional<ImageHeader> parse_image_header(const std::uint8_t* d, std::size_t n) {
+  if (d == nullptr) return std::nullopt;
+  static const std::uint8_t png_sig[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+  if (n >= 8 && std::memcmp(d, png_sig, 8) == 0) return parse_png(d, n);
+  if (n >= 3 && d[0] == 0xFF && d[1] == 0xD8 && d[2] == 0xFF) return parse_jpeg(d, n);
+  if (n >= 10 && (std::memcmp(d, "GIF87a", 6) == 0 || std::memcmp(d, "GIF89a", 6) == 0)) {
+    ImageHeader h{"gif", le16(d + 6), le16(d + 8), 4};
+    if (h.width > 0 && h.height > 0) return h;
+    return std::nullopt;
+  }
+  if (n >= 30 && d[0] == 'B' && d[1] == 'M') {
+    const auto w = static_cast<std::int32_t>(le32(d + 18));
+    const auto h = static_cast<std::int32_t>(le32(d + 22));
+    const int bpp = le16(d + 28);
+    ImageHeader hd{"bmp", w, h < 0 ? -h : h, bpp == 32 ? 4 : bpp == 8 ? 1 : 3};
+    if (hd.width > 0 && hd.height > 0) return hd;
+    return std::nullopt;
+  }
+  static const std::uint8_t ktx2_sig[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, 0x0D, 0x0A, 0x1A, 0x0A};
+  if (n >= 28 && std::memcmp(d, ktx2_sig, 12) == 0) {
+    ImageHeader h{"ktx2", static_cast<int>(le32(d + 20)), static_cast<int>(le32(d + 24)), 4};
+    if (h.width > 0 && h.height > 0) return h;
+    return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+Scene load_gltf(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw InputError(path, "scene file not found");
+  const std::vector<std::uint8_t> bytes = read_all(path);
+  const bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
+  if (auto j = extract_json(bytes, binary)) precheck_json(path, *j);
+
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(&keep_encoded_image, nullptr);
+  tinygltf::Model model;
+  std::string err, warn;
+  const std::string base_dir = fs::path(path).parent_path().string();
+  bool ok = false;
+  if (binary) {
+    ok = loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), static_cast<unsigned int>(bytes.size()),
+                                     base_dir);
+  } else {
+    ok = loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
+                                    static_cast<unsigned int>(bytes.size()), base_dir);
+  }
+  if (!ok) {
+    std::string msg = err.empty() ? "tinygltf could not parse the file" : err;
+    while (!msg.empty() && (msg.back() == '\n' || msg.back() == '\r')) msg.pop_back();
+    for (char& c : msg)
+      if (c == '\n') c = ';';
+    throw InputError(path, "invalid glTF: " + msg);
+  }
+
+  Scene scene;
+  scene.name = fs::path(path).stem().string();
+  scene.source = path;
+  // tinygltf's own warnings, less those about images that collect_textures() words better.
+  std::istringstream ws(warn);
+  for (std::string line; std::getline(ws, line);) {
+    if (line.empty() || line.find("File not found") != std::string::npos ||
+        line.find("for image[") != std::string::npos)
+      continue;
+    scene.warnings.push_back("tinygltf: " + line);
+  }
+
+  Converter conv(path, model, scene);
+  conv.run();
+  update_bounds(scene);
+
+  // Content hash: the file's bytes, then each external buffer's, then each external image's.
+  Fnv1a64 h;
+  h.update(bytes.data(), bytes.size());
+  for (const tinygltf::Buffer& b : model.buffers)
+    if (!b.uri.empty() && !is_data_uri(b.uri)) h.update(b.data.data(), b.data.size());
+  for (const tinygltf::Image& img : model.images)
+    if (!img.uri.empty() && !is_data_uri(img.uri)) h.update(img.image.data(), img.image.size());
+  scene.content_hash = h.hex();
+  return scene;
+}
+
+}  // namespace tbdr

@@ -1,0 +1,22 @@
+#pragma once
+// One entry point for every scene a run can name: the built-in atrium or a glTF file, and a
+// human-readable summary of a loaded scene (what `tbdrsim scene-info` prints).
+#include <ostream>
+#include <string>
+
+#include "scene/scene.hpp"
+
+namespace tbdr {
+
+/// Detail level of a plain "atrium" spec.
+inline constexpr int default_atrium_detail = 3;
+
+/// Loads a scene from a spec: "atrium" (detail 3), "atrium:N" (N in 1..5), or a path ending in
+/// .gltf or .glb. Throws InputError naming the spec (or the file) when it cannot.
+Scene load_scene(const std::string& spec);
+
+/// Prints name, source, content hash, triangle/vertex/sub-mesh/instance counts, materials by alpha
+/// mode (count and triangles), bounds, textures (count and GPU bytes) and warnings.
+void print_scene_info(const Scene& scene, std::ostream& out);
+
+}  // namespace tbdr
