@@ -18,7 +18,7 @@ unsigned log2_exact(std::uint64_t v) {
 }  // namespace
 
 Cache::Cache(std::string scope, const CacheParams& p, double pj_per_byte, bool write_allocate)
-    : pj_per_byte_(pj_per_byte), write_allocate_(write_allocate), stats_(scope) {
+    : pj_per_byte_(pj_per_byte), write_allocate_(write_allocate), scope_(scope) {
   if (p.line_bytes <= 0 || !is_pow2(static_cast<std::uint64_t>(p.line_bytes))) {
     throw std::invalid_argument("cache '" + scope + "': line_bytes must be a power of two");
   }
@@ -42,16 +42,13 @@ Cache::Cache(std::string scope, const CacheParams& p, double pj_per_byte, bool w
   cls_.assign(lines, DramClass::Other);
   fill_.assign(lines, kNoFill);
   arrival_ps_.assign(lines, 0);
-  for (std::size_t c = 0; c < kDramClassCount; ++c) {
-    class_stats_[c] = std::make_unique<CacheClassStats>(scope + ".class." + to_string(static_cast<DramClass>(c)));
-  }
 }
 
 CacheAccess Cache::access(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Allocation alloc) {
   const std::uint64_t line = addr >> line_shift_;
   const std::uint32_t base = set_of(line) * ways_;
   const std::uint64_t* tags = tags_.data() + base;
-  CacheClassStats& cs = *class_stats_[static_cast<std::size_t>(cls)];
+  CacheClassStats& cs = class_stats_[static_cast<std::size_t>(cls)];
   const std::uint64_t stamp = ++clock_;
   CacheAccess r;
 
@@ -168,13 +165,15 @@ double Cache::energy_pj() const {
 
 void Cache::collect(std::vector<StatRecord>& out) {
   update_derived_stats();
-  stats_.group.collect(out);
-  for (const auto& cs : class_stats_) cs->group.collect(out);
+  collect_stats(stats_, scope_, out);
+  for (std::size_t c = 0; c < kDramClassCount; ++c) {
+    collect_stats(class_stats_[c], scope_ + ".class." + to_string(static_cast<DramClass>(c)), out);
+  }
 }
 
 void Cache::reset_stats() {
-  stats_.group.reset();
-  for (auto& cs : class_stats_) cs->group.reset();
+  stats_ = {};
+  class_stats_ = {};
 }
 
 }  // namespace tbdr

@@ -37,38 +37,40 @@ struct CacheAccess {
   std::uint32_t slot = kNoSlot;   ///< slot of the line hit or installed (kNoSlot on a bypassed miss)
 };
 
+// Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
+#define TBDR_CACHE_CLASS_STATS(X) \
+  X(Counter, read_hits, "accesses", Sum, "Read accesses of this class that hit") \
+  X(Counter, read_misses, "accesses", Sum, "Read accesses of this class that missed") \
+  X(Counter, write_hits, "accesses", Sum, "Write accesses of this class that hit") \
+  X(Counter, write_misses, "accesses", Sum, "Write accesses of this class that missed")
 /// Per-traffic-class hit and miss counts of one cache.
 struct CacheClassStats {
-  StatGroup group;
-  Counter read_hits{group, {"read_hits", "accesses", "Read accesses of this class that hit"}};
-  Counter read_misses{group, {"read_misses", "accesses", "Read accesses of this class that missed"}};
-  Counter write_hits{group, {"write_hits", "accesses", "Write accesses of this class that hit"}};
-  Counter write_misses{group, {"write_misses", "accesses", "Write accesses of this class that missed"}};
-  explicit CacheClassStats(std::string scope) : group(std::move(scope)) {}
+  TBDR_STATS(TBDR_CACHE_CLASS_STATS)
 };
 
+// Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
+#define TBDR_CACHE_STATS(X) \
+  X(Counter, reads, "accesses", Sum, "Read accesses") \
+  X(Counter, writes, "accesses", Sum, "Write accesses") \
+  X(Counter, read_hits, "accesses", Sum, "Read accesses that hit") \
+  X(Counter, read_misses, "accesses", Sum, "Read accesses that missed") \
+  X(Counter, write_hits, "accesses", Sum, "Write accesses that hit") \
+  X(Counter, write_misses, "accesses", Sum, "Write accesses that missed") \
+  X(Counter, bypasses, "accesses", Sum, "Misses that did not allocate (streaming or write-no-allocate)") \
+  X(Counter, fills, "lines", Sum, "Lines installed by read misses (fetched from the next level)") \
+  X(Counter, write_allocations, "lines", Sum, "Lines installed by write misses without a fetch") \
+  X(Counter, clean_evictions, "lines", Sum, "Valid clean lines replaced") \
+  X(Counter, dirty_evictions, "lines", Sum, "Dirty lines replaced (each one written back)") \
+  X(Counter, flush_writebacks, "lines", Sum, "Dirty lines written back by flushes") \
+  X(Counter, read_bytes, "bytes", Sum, "Bytes read by requesters (hits and misses)") \
+  X(Counter, write_bytes, "bytes", Sum, "Bytes written by requesters (hits and misses)") \
+  X(Counter, fill_bytes, "bytes", Sum, "Bytes installed by read-miss fills") \
+  X(Counter, writeback_bytes, "bytes", Sum, "Bytes of dirty lines written back (evictions and flushes)") \
+  X(Accumulator, hit_rate, "ratio", Derived, "Hits / accesses (derived at collection)") \
+  X(Accumulator, energy_pj, "pJ", Sum, "SRAM energy: (read + write + fill + writeback bytes) x pJ/byte")
 /// Statistics of one cache.
 struct CacheStats {
-  StatGroup group;
-  Counter reads{group, {"reads", "accesses", "Read accesses"}};
-  Counter writes{group, {"writes", "accesses", "Write accesses"}};
-  Counter read_hits{group, {"read_hits", "accesses", "Read accesses that hit"}};
-  Counter read_misses{group, {"read_misses", "accesses", "Read accesses that missed"}};
-  Counter write_hits{group, {"write_hits", "accesses", "Write accesses that hit"}};
-  Counter write_misses{group, {"write_misses", "accesses", "Write accesses that missed"}};
-  Counter bypasses{group, {"bypasses", "accesses", "Misses that did not allocate (streaming or write-no-allocate)"}};
-  Counter fills{group, {"fills", "lines", "Lines installed by read misses (fetched from the next level)"}};
-  Counter write_allocations{group, {"write_allocations", "lines", "Lines installed by write misses without a fetch"}};
-  Counter clean_evictions{group, {"clean_evictions", "lines", "Valid clean lines replaced"}};
-  Counter dirty_evictions{group, {"dirty_evictions", "lines", "Dirty lines replaced (each one written back)"}};
-  Counter flush_writebacks{group, {"flush_writebacks", "lines", "Dirty lines written back by flushes"}};
-  Counter read_bytes{group, {"read_bytes", "bytes", "Bytes read by requesters (hits and misses)"}};
-  Counter write_bytes{group, {"write_bytes", "bytes", "Bytes written by requesters (hits and misses)"}};
-  Counter fill_bytes{group, {"fill_bytes", "bytes", "Bytes installed by read-miss fills"}};
-  Counter writeback_bytes{group, {"writeback_bytes", "bytes", "Bytes of dirty lines written back (evictions and flushes)"}};
-  Accumulator hit_rate{group, {"hit_rate", "ratio", "Hits / accesses (derived at collection)"}};
-  Accumulator energy_pj{group, {"energy_pj", "pJ", "SRAM energy: (read + write + fill + writeback bytes) x pJ/byte"}};
-  explicit CacheStats(std::string scope) : group(std::move(scope)) {}
+  TBDR_STATS(TBDR_CACHE_STATS)
 };
 
 /// A set-associative, true-LRU, write-back cache (tags only).
@@ -116,7 +118,7 @@ class Cache {
 
   CacheStats& stats() { return stats_; }
   const CacheStats& stats() const { return stats_; }
-  const CacheClassStats& class_stats(DramClass c) const { return *class_stats_[static_cast<std::size_t>(c)]; }
+  const CacheClassStats& class_stats(DramClass c) const { return class_stats_[static_cast<std::size_t>(c)]; }
   /// SRAM energy so far: (read + write + fill + writeback bytes) x pJ/byte.
   double energy_pj() const;
   /// Sets the derived statistics (hit rate, energy).
@@ -150,8 +152,9 @@ class Cache {
   std::vector<std::uint32_t> fill_;    // timing model's pending fill id, kNoFill when none
   std::vector<std::int64_t> arrival_ps_;  // timing model's data arrival tick (ps)
 
+  std::string scope_;  // statistics scope, e.g. "mem/cache.texture"
   CacheStats stats_;
-  std::array<std::unique_ptr<CacheClassStats>, kDramClassCount> class_stats_;
+  std::array<CacheClassStats, kDramClassCount> class_stats_;
 };
 
 template <class Fn>

@@ -20,26 +20,28 @@ namespace tbdr {
 
 namespace {
 
-/// Statistics of one pass, one group per unit.
+/// Statistics of one pass (or, summed, of the frame), one set per unit.
 struct PassStats {
   GeometryStats geometry;
   TilerStats tiler;
   IspStats isp;
   TspStats tsp;
   TileMemoryStats tile_memory;
-  DramTraffic dram;
-  explicit PassStats(const std::string& prefix)
-      : geometry(prefix + "/geometry"),
-        tiler(prefix + "/tiler"),
-        isp(prefix + "/isp"),
-        tsp(prefix + "/tsp"),
-        tile_memory(prefix + "/tile_memory") {}
-  void collect(std::vector<StatRecord>& out) const {
-    geometry.group.collect(out);
-    tiler.group.collect(out);
-    isp.group.collect(out);
-    tsp.group.collect(out);
-    tile_memory.group.collect(out);
+  PassStats& operator+=(const PassStats& o) {
+    geometry += o.geometry;
+    tiler += o.tiler;
+    isp += o.isp;
+    tsp += o.tsp;
+    tile_memory += o.tile_memory;
+    return *this;
+  }
+  /// Rows "<prefix>/<unit>" for the results database.
+  void collect(const std::string& prefix, std::vector<StatRecord>& out) const {
+    collect_stats(geometry, prefix + "/geometry", out);
+    collect_stats(tiler, prefix + "/tiler", out);
+    collect_stats(isp, prefix + "/isp", out);
+    collect_stats(tsp, prefix + "/tsp", out);
+    collect_stats(tile_memory, prefix + "/tile_memory", out);
   }
 };
 
@@ -147,27 +149,9 @@ class FrameSimulator {
       }
       // Barriers order work; in the functional model every command completes before the next.
     }
-    // Frame totals: sums over passes per unit (gauges take the largest pass value).
-    std::map<std::pair<std::string, std::string>, StatRecord> totals;
-    std::vector<std::pair<std::string, std::string>> order;
-    for (const auto& r : result_.stats) {
-      const auto slash = r.scope.find('/');
-      const std::string unit = r.scope.substr(slash + 1);
-      if (unit.rfind("dram", 0) == 0) continue;
-      const auto key = std::make_pair(unit, r.name);
-      auto it = totals.find(key);
-      if (it == totals.end()) {
-        StatRecord t = r;
-        t.scope = "frame/" + unit;
-        totals.emplace(key, t);
-        order.push_back(key);
-      } else if (r.name.rfind("onchip_", 0) == 0 || r.name == "tile_split_factor" || r.name == "pb_peak_allocated_bytes") {
-        it->second.value = std::max(it->second.value, r.value);
-      } else {
-        it->second.value += r.value;
-      }
-    }
-    for (const auto& k : order) result_.stats.push_back(totals.at(k));
+    // Frame totals: every unit's statistics summed over the passes (gauges: the largest level).
+    if (pass_index > 0) frame_totals_.collect("frame", result_.stats);
+    if (dispatches > 0) collect_stats(compute_totals_, "frame/compute", result_.stats);
     collect_dram("frame", result_.dram, result_.stats);
     auto frame_stat = [&](const char* name, double v, const char* unit, const char* desc) {
       result_.stats.push_back({"frame/frame", name, v, unit, desc});
@@ -316,7 +300,7 @@ class FrameSimulator {
 
   void run_dispatch_cmd(const DispatchCmd& d, int index) {
     const std::string prefix = "dispatch" + std::to_string(index) + "." + d.kernel;
-    ComputeStats stats(prefix + "/compute");
+    ComputeStats stats;
     DramTraffic dram;
     ComputeContext cc;
     cc.hw = &hw_;
@@ -341,14 +325,15 @@ class FrameSimulator {
     cw.name = prefix;
     cw.is_dispatch = true;
     cw.depends_on_previous = true;  // a dispatch follows a barrier on what it reads
-    cw.compute_alu_ops = stats.alu_ops.value();
+    cw.compute_alu_ops = stats.compute_alu_ops.value();
     cw.compute_threads = stats.threads.value();
-    cw.compute_texels = stats.texture_fetches.value() * static_cast<std::uint64_t>(hw_.texture.texels_per_fetch);
+    cw.compute_texels = stats.compute_texture_fetches.value() * static_cast<std::uint64_t>(hw_.texture.texels_per_fetch);
     cw.read_bytes = dram.read_bytes;
     cw.write_bytes = dram.write_bytes;
     result_.work.commands.push_back(std::move(cw));
     if (!image.empty()) result_.final_color = image;
-    stats.group.collect(result_.stats);
+    collect_stats(stats, prefix + "/compute", result_.stats);
+    compute_totals_ += stats;
     collect_dram(prefix, dram, result_.stats);
     PassSummary summary;
     summary.name = prefix;
@@ -359,7 +344,8 @@ class FrameSimulator {
 
   void run_pass(const PassDesc& pass, int index) {
     const std::string prefix = "pass" + std::to_string(index) + "." + pass.name;
-    auto ps = std::make_unique<PassStats>(prefix);
+    auto ps = std::make_unique<PassStats>();
+    DramTraffic pass_dram;
     RenderContext ctx;
     ctx.hw = &hw_;
     ctx.scene = &scene_;
@@ -382,7 +368,7 @@ class FrameSimulator {
     }
     build_light_tiles(ctx);
     ctx.frustum = &frustum_;
-    ctx.dram = &ps->dram;
+    ctx.dram = &pass_dram;
     ctx.frame_prim_base = prim_base_;
     std::vector<std::uint64_t> tile_texture_lines;  // the current tile's texture lines, as the TSP appends them
     ctx.textures = textures_.get();
@@ -409,11 +395,11 @@ class FrameSimulator {
           if (!b || !seen.insert(n).second) continue;
           auto w = result_.images.buffer_bytes_written.find(n);
           const std::uint64_t bytes = w == result_.images.buffer_bytes_written.end() ? b->bytes : w->second;
-          ps->dram.read(traffic_class_of(b->traffic), bytes);
+          pass_dram.read(traffic_class_of(b->traffic), bytes);
         }
       }
     }
-    const DramTraffic pass_buffer_reads = ps->dram;
+    const DramTraffic pass_buffer_reads = pass_dram;
 
     // imr has no binning: the whole frame is one "tile" and nothing goes through a parameter buffer.
     HwConfig hw = hw_;
@@ -430,7 +416,7 @@ class FrameSimulator {
     Isp isp(ctx, tsp);
     const std::vector<int> order = tile_order(tiler.tiles_x(), tiler.tiles_y(), hw.tiling.tile_order);
     std::vector<std::uint8_t> resumed(static_cast<std::size_t>(tiler.tile_count()), 0);
-    DramTraffic& dram = ps->dram;
+    DramTraffic& dram = pass_dram;
 
     CommandWork cw;
     cw.name = prefix;
@@ -441,32 +427,24 @@ class FrameSimulator {
     for (const auto& dc : pass.draws) {
       if (!dc.reads.empty()) cw.depends_on_previous = true;
     }
-    // Snapshots of the binning counters at the start of each render.
-    BinningWork base;
-    auto binning_now = [&]() {
-      BinningWork b;
-      b.vertices_shaded = ps->geometry.vertices_shaded.value();
-      b.vertex_alu_ops = ps->geometry.vertex_alu_ops.value();
-      b.vertex_fetch_bytes = ps->geometry.vertex_fetch_bytes.value();
-      b.index_fetch_bytes = ps->geometry.index_fetch_bytes.value();
-      b.primitives_in = ps->geometry.primitives_in.value();
-      b.primitives_binned = ps->tiler.primitives_binned.value();
-      b.tile_references = ps->tiler.tile_references.value();
-      return b;
-    };
+    // The geometry and tiler statistics at the start of the current render.
+    GeometryStats geometry_base;
+    TilerStats tiler_base;
 
     auto render = [&](bool partial) {
       RenderWork rw;
       rw.partial = partial;
-      const BinningWork now = binning_now();
-      rw.binning.vertices_shaded = now.vertices_shaded - base.vertices_shaded;
-      rw.binning.vertex_alu_ops = now.vertex_alu_ops - base.vertex_alu_ops;
-      rw.binning.vertex_fetch_bytes = now.vertex_fetch_bytes - base.vertex_fetch_bytes;
-      rw.binning.index_fetch_bytes = now.index_fetch_bytes - base.index_fetch_bytes;
-      rw.binning.primitives_in = now.primitives_in - base.primitives_in;
-      rw.binning.primitives_binned = now.primitives_binned - base.primitives_binned;
-      rw.binning.tile_references = now.tile_references - base.tile_references;
-      base = now;
+      const GeometryStats g = ps->geometry - geometry_base;
+      const TilerStats b = ps->tiler - tiler_base;
+      rw.binning.vertices_shaded = g.vertices_shaded.value();
+      rw.binning.vertex_alu_ops = g.vertex_alu_ops.value();
+      rw.binning.vertex_fetch_bytes = g.vertex_fetch_bytes.value();
+      rw.binning.index_fetch_bytes = g.index_fetch_bytes.value();
+      rw.binning.primitives_in = g.primitives_in.value();
+      rw.binning.primitives_binned = b.primitives_binned.value();
+      rw.binning.tile_references = b.tile_references.value();
+      geometry_base = ps->geometry;
+      tiler_base = ps->tiler;
       DramTraffic pb;
       tiler.finish_render(ps->tiler, pb);
       if (!ctx.framebuffer_in_dram) {
@@ -479,17 +457,14 @@ class FrameSimulator {
         const std::uint64_t pb_read = prims.empty() ? 0 : tiler.tile_read_bytes(t);
         for (const PixelRect& r : tile_memory.strips(tiler.tile_rect(t))) {
           const DramTraffic before = dram;
-          const std::uint64_t s0 = ps->isp.samples_rasterised.value(), p0 = ps->isp.primitives_fetched.value();
-          const std::uint64_t i0 = ps->tsp.invocations.value(), q0 = ps->tsp.quads.value(), a0 = ps->tsp.alu_ops.value();
-          const std::uint64_t x0 = ps->tsp.texels.value(), la0 = ps->tsp.texture_line_accesses.value();
+          const IspStats isp0 = ps->isp;
+          const TspStats tsp0 = ps->tsp;
           tile_texture_lines.clear();
-          const std::uint64_t tb0 = ps->tsp.tile_buffer_read_bytes.value() + ps->tsp.tile_buffer_write_bytes.value();
-          const std::uint64_t tg0 = ps->isp.tag_read_bytes.value() + ps->isp.tag_write_bytes.value();
-          const std::uint64_t d0 = ps->isp.depth_read_bytes.value() + ps->isp.depth_write_bytes.value();
           tile_memory.begin_tile(r, resumed[static_cast<std::size_t>(t)] != 0, dram);
-          const std::uint64_t tbr0 = ps->tsp.tile_buffer_read_bytes.value(), tbw0 = ps->tsp.tile_buffer_write_bytes.value();
           isp.render_tile(r, prims, ps->isp, ps->tsp);
-          tile_memory.spill(ps->tsp.tile_buffer_read_bytes.value() - tbr0, ps->tsp.tile_buffer_write_bytes.value() - tbw0, dram);
+          const IspStats tile_isp = ps->isp - isp0;
+          const TspStats tile_tsp = ps->tsp - tsp0;
+          tile_memory.spill(tile_tsp.tile_buffer_read_bytes.value(), tile_tsp.tile_buffer_write_bytes.value(), dram);
           tile_memory.end_tile(r, partial, dram);
           TileWork tw;
           tw.tile_x = t % tiler.tiles_x();
@@ -499,13 +474,13 @@ class FrameSimulator {
             tw.load_bytes[c] = dram.read_bytes[c] - before.read_bytes[c];
             tw.store_bytes[c] = dram.write_bytes[c] - before.write_bytes[c];
           }
-          tw.primitives = ps->isp.primitives_fetched.value() - p0;
-          tw.samples = ps->isp.samples_rasterised.value() - s0;
-          tw.invocations = ps->tsp.invocations.value() - i0;
-          tw.quads = ps->tsp.quads.value() - q0;
-          tw.alu_ops = ps->tsp.alu_ops.value() - a0;
-          tw.texels = ps->tsp.texels.value() - x0;
-          tw.texture_line_accesses = ps->tsp.texture_line_accesses.value() - la0;
+          tw.primitives = tile_isp.primitives_fetched.value();
+          tw.samples = tile_isp.samples_rasterised.value();
+          tw.invocations = tile_tsp.shader_invocations.value();
+          tw.quads = tile_tsp.shaded_quads.value();
+          tw.alu_ops = tile_tsp.fragment_alu_ops.value();
+          tw.texels = tile_tsp.texels_filtered.value();
+          tw.texture_line_accesses = tile_tsp.texture_line_accesses.value();
           std::sort(tile_texture_lines.begin(), tile_texture_lines.end());
           tw.texture_lines.assign(tile_texture_lines.begin(),
                                   std::unique(tile_texture_lines.begin(), tile_texture_lines.end()));
@@ -513,9 +488,9 @@ class FrameSimulator {
           // The footprint is what the texture unit requests (before the texture cache), booked like
           // the parameter buffer reads: after the tile's loads and stores were taken from `dram`.
           dram.read(DramClass::Textures, tw.texture_lines.size() * static_cast<std::uint64_t>(hw_.cache.texture.line_bytes));
-          tw.tile_buffer_bytes = ps->tsp.tile_buffer_read_bytes.value() + ps->tsp.tile_buffer_write_bytes.value() - tb0;
-          tw.tag_bytes = ps->isp.tag_read_bytes.value() + ps->isp.tag_write_bytes.value() - tg0;
-          tw.depth_bytes = ps->isp.depth_read_bytes.value() + ps->isp.depth_write_bytes.value() - d0;
+          tw.tile_buffer_bytes = tile_tsp.tile_buffer_read_bytes.value() + tile_tsp.tile_buffer_write_bytes.value();
+          tw.tag_bytes = tile_isp.tag_buffer_read_bytes.value() + tile_isp.tag_buffer_write_bytes.value();
+          tw.depth_bytes = tile_isp.depth_buffer_read_bytes.value() + tile_isp.depth_buffer_write_bytes.value();
           if (!ctx.framebuffer_in_dram) {
             ps->tiler.pb_bytes_read += pb_read;
             dram.read(DramClass::ParameterBuffer, pb_read);
@@ -550,8 +525,8 @@ class FrameSimulator {
     prim_base_ = ctx.frame_prim_base;
     if (ctx.framebuffer_in_dram) {
       // The depth and color accesses of an immediate-mode GPU go to DRAM (caches come with the timing model).
-      dram.read(DramClass::DepthStencil, ps->isp.depth_read_bytes.value());
-      dram.write(DramClass::DepthStencil, ps->isp.depth_write_bytes.value());
+      dram.read(DramClass::DepthStencil, ps->isp.depth_buffer_read_bytes.value());
+      dram.write(DramClass::DepthStencil, ps->isp.depth_buffer_write_bytes.value());
       dram.read(DramClass::Color, ps->tsp.tile_buffer_read_bytes.value());
       dram.write(DramClass::Color, ps->tsp.tile_buffer_write_bytes.value());
     }
@@ -563,13 +538,14 @@ class FrameSimulator {
     if (ctx.framebuffer_in_dram) {
       // imr: the framebuffer accesses happen during shading; book them on the one "tile".
       auto& tw = cw.renders.back().tiles.back();
-      tw.load_bytes[static_cast<std::size_t>(DramClass::DepthStencil)] += ps->isp.depth_read_bytes.value();
-      tw.store_bytes[static_cast<std::size_t>(DramClass::DepthStencil)] += ps->isp.depth_write_bytes.value();
+      tw.load_bytes[static_cast<std::size_t>(DramClass::DepthStencil)] += ps->isp.depth_buffer_read_bytes.value();
+      tw.store_bytes[static_cast<std::size_t>(DramClass::DepthStencil)] += ps->isp.depth_buffer_write_bytes.value();
       tw.load_bytes[static_cast<std::size_t>(DramClass::Color)] += ps->tsp.tile_buffer_read_bytes.value();
       tw.store_bytes[static_cast<std::size_t>(DramClass::Color)] += ps->tsp.tile_buffer_write_bytes.value();
     }
     result_.work.commands.push_back(std::move(cw));
-    ps->collect(result_.stats);
+    ps->collect(prefix, result_.stats);
+    frame_totals_ += *ps;
     collect_dram(prefix, dram, result_.stats);
     PassSummary summary;
     summary.name = pass.name;
@@ -591,6 +567,8 @@ class FrameSimulator {
   std::uint32_t prim_base_ = 0;
   int geometry_passes_ = 0;
   std::unique_ptr<TextureLayout> textures_;  ///< the frame's texture address space
+  PassStats frame_totals_;                   ///< every pass's unit statistics, summed
+  ComputeStats compute_totals_;              ///< every dispatch's statistics, summed
   FrameResult result_;
 };
 

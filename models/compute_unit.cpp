@@ -189,7 +189,7 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
   const bool vbuffer = refetch_tile_px > 0;
   const int tile_px = vbuffer ? refetch_tile_px : 1;
   std::set<std::pair<std::size_t, std::uint32_t>> refetched;  // (tile, triangle)
-  const std::uint64_t shaded_before = stats.shaded_pixels.value();
+  const std::uint64_t shaded_before = stats.compute_shaded_pixels.value();
   ImageBuffer img;
   img.color.assign(pixels, glm::vec4(0.0f));
   for (int y = 0; y < H; ++y) {
@@ -216,9 +216,9 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
           shaded_triangles[k] = s.triangle;
           shaded_colors[k] = shade_surface(ctx, s, x, y, list);
           ++n_shaded;
-          ++stats.shaded_pixels;
-          stats.light_evaluations += count;
-          stats.alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * count;
+          ++stats.compute_shaded_pixels;
+          stats.compute_light_evaluations += count;
+          stats.compute_alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * count;
           ctx.images->counters.lights_evaluated[p] += static_cast<std::uint32_t>(count);
           ctx.images->counters.shaded[p] += 1;
           if (vbuffer) refetched.insert({static_cast<std::size_t>((y / tile_px) * ((W + tile_px - 1) / tile_px) + x / tile_px), s.triangle});
@@ -229,7 +229,7 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
     }
   }
   // Threads of uncovered pixels exit after reading their G-buffer sample: no texture fetches.
-  stats.texture_fetches += (stats.shaded_pixels.value() - shaded_before) * sh.tex_fetches;
+  stats.compute_texture_fetches += (stats.compute_shaded_pixels.value() - shaded_before) * sh.tex_fetches;
   if (vbuffer) {
     // Each tile re-fetches the three vertices of every triangle it shades (Burns & Hunt).
     stats.refetched_vertices += refetched.size() * 3;
@@ -271,7 +271,7 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     const std::string out = k.buffer_with(cmd.writes, BufferContent::DepthBounds);
     if (out.empty()) k.fail("needs a depth_bounds buffer in writes=");
     auto b = std::make_shared<DepthBounds>(DepthBounds::compute(ctx.frustum, *depth, tile_px));
-    stats.alu_ops += pixels * depth->samples * kDepthReduceOps;
+    stats.compute_alu_ops += pixels * depth->samples * kDepthReduceOps;
     k.charge_write(out, b->min_distance.size() * 8);
     ctx.images->depth_bounds[out] = b;
     return;
@@ -303,7 +303,7 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
       bounds = it->second;
     } else if (const AttachmentImage* depth = k.read_depth(); depth && bounds_mode != "none") {
       bounds = std::make_shared<DepthBounds>(DepthBounds::compute(ctx.frustum, *depth, tile_px));
-      stats.alu_ops += pixels * depth->samples * kDepthReduceOps;
+      stats.compute_alu_ops += pixels * depth->samples * kDepthReduceOps;
     }
     const auto rects = light_rects(ctx);
     for (int ty = 0; ty < grid->tiles_y; ++ty) {
@@ -321,9 +321,9 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
       }
     }
     stats.light_volume_tests += tiles * n_lights;
-    stats.alu_ops += tiles * n_lights * kSphereVolumeTestOps;
-    stats.list_entries += grid->total_entries();
-    stats.list_overflows += grid->overflowed_tiles;
+    stats.compute_alu_ops += tiles * n_lights * kSphereVolumeTestOps;
+    stats.light_list_entries += grid->total_entries();
+    stats.light_list_overflows += grid->overflowed_tiles;
     if (!shade) {
       const std::string gname = k.buffer_with(cmd.writes, BufferContent::TileGrid);
       const std::string lname = k.buffer_with(cmd.writes, BufferContent::LightIndexList);
@@ -372,7 +372,7 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
           }
         }
       }
-      stats.alu_ops += pixels * depth->samples * kClusterIndexOps;
+      stats.compute_alu_ops += pixels * depth->samples * kClusterIndexOps;
       stats.clusters_used += grid->used_count();
       k.charge_write(out, clusters / 8 + grid->used_count() * 4);  // flags + compact list of used clusters
       ctx.images->cluster_grids[out] = grid;
@@ -414,8 +414,8 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     }
     const std::uint64_t processed = grid->used_count();
     stats.light_volume_tests += processed * n_lights;
-    stats.alu_ops += processed * n_lights * kSphereVolumeTestOps;
-    stats.list_entries += grid->total_entries();
+    stats.compute_alu_ops += processed * n_lights * kSphereVolumeTestOps;
+    stats.light_list_entries += grid->total_entries();
     const std::string gname = k.buffer_with(cmd.writes, BufferContent::ClusterGrid);
     const std::string lname = k.buffer_with(cmd.writes, BufferContent::LightIndexList);
     if (gname.empty() || lname.empty()) k.fail("needs a cluster_grid and a light_index_list buffer in writes=");
@@ -470,7 +470,7 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
                         vis->surface[p * vis->samples].material});
       }
     }
-    stats.alu_ops += pixels * kWorkListOps;
+    stats.compute_alu_ops += pixels * kWorkListOps;
     stats.work_list_entries += entries.size();
     k.charge_write(out, entries.size() * 8);  // (tile, material) entry of 8 bytes
     return;

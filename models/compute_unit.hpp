@@ -16,23 +16,24 @@
 
 namespace tbdr {
 
+// Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
+#define TBDR_COMPUTE_STATS(X) \
+  X(Counter, dispatches, "dispatches", Sum, "Compute dispatches run") \
+  X(Counter, workgroups, "workgroups", Sum, "Workgroups launched") \
+  X(Counter, threads, "threads", Sum, "Threads launched") \
+  X(Counter, compute_alu_ops, "ops", Sum, "ALU operations of compute kernels") \
+  X(Counter, light_volume_tests, "tests", Sum, "Light sphere against tile/cluster volume tests") \
+  X(Counter, light_list_entries, "entries", Sum, "Light indices written into tile or cluster lists") \
+  X(Counter, clusters_used, "clusters", Sum, "Clusters flagged as holding visible samples") \
+  X(Counter, light_list_overflows, "tiles", Sum, "Tiles whose list exceeded the format's cap") \
+  X(Counter, compute_shaded_pixels, "pixels", Sum, "Pixels shaded by compute kernels") \
+  X(Counter, compute_light_evaluations, "evaluations", Sum, "Lights evaluated by compute shading") \
+  X(Counter, compute_texture_fetches, "fetches", Sum, "Texture fetches of compute shading") \
+  X(Counter, work_list_entries, "entries", Sum, "Per-material tile work list entries") \
+  X(Counter, refetched_vertices, "vertices", Sum, "Vertices re-fetched by visibility-buffer shading")
 /// Statistics of compute dispatches.
 struct ComputeStats {
-  StatGroup group;
-  Counter dispatches{group, {"dispatches", "dispatches", "Compute dispatches run"}};
-  Counter workgroups{group, {"workgroups", "workgroups", "Workgroups launched"}};
-  Counter threads{group, {"threads", "threads", "Threads launched"}};
-  Counter alu_ops{group, {"compute_alu_ops", "ops", "ALU operations of compute kernels"}};
-  Counter light_volume_tests{group, {"light_volume_tests", "tests", "Light sphere against tile/cluster volume tests"}};
-  Counter list_entries{group, {"light_list_entries", "entries", "Light indices written into tile or cluster lists"}};
-  Counter clusters_used{group, {"clusters_used", "clusters", "Clusters flagged as holding visible samples"}};
-  Counter list_overflows{group, {"light_list_overflows", "tiles", "Tiles whose list exceeded the format's cap"}};
-  Counter shaded_pixels{group, {"compute_shaded_pixels", "pixels", "Pixels shaded by compute kernels"}};
-  Counter light_evaluations{group, {"compute_light_evaluations", "evaluations", "Lights evaluated by compute shading"}};
-  Counter texture_fetches{group, {"compute_texture_fetches", "fetches", "Texture fetches of compute shading"}};
-  Counter work_list_entries{group, {"work_list_entries", "entries", "Per-material tile work list entries"}};
-  Counter refetched_vertices{group, {"refetched_vertices", "vertices", "Vertices re-fetched by visibility-buffer shading"}};
-  explicit ComputeStats(std::string scope) : group(std::move(scope)) {}
+  TBDR_STATS(TBDR_COMPUTE_STATS)
 };
 
 /// What a dispatch needs from the frame around it.

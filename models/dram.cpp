@@ -35,7 +35,7 @@ double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint
 }
 
 Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::string scope)
-    : name_(scope), eq_(eq), energy_(e), clock_(ClockDomain::from_mhz("dram", p.clock_mhz)), stats_(scope) {
+    : name_(scope), eq_(eq), energy_(e), clock_(ClockDomain::from_mhz("dram", p.clock_mhz)) {
   const auto bad = [&](const std::string& why) { throw std::invalid_argument("dram '" + scope + "': " + why); };
   if (p.channels < 1 || p.channels > 1024) bad("channels must be in [1, 1024]");
   if (p.banks < 1 || p.banks > 64) bad("banks must be in [1, 64]");
@@ -79,12 +79,8 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
     ch.readq.reserve(read_cap_);
     ch.writeq.reserve(write_cap_);
     ch.banks.resize(banks_);
-    ch.stats = std::make_unique<DramChannelStats>(scope + ".ch" + std::to_string(c));
   }
   first_need_.assign(banks_, -1);
-  for (std::size_t c = 0; c < kDramClassCount; ++c) {
-    class_stats_[c] = std::make_unique<DramClassStats>(scope + ".class." + to_string(static_cast<DramClass>(c)));
-  }
 }
 
 std::int64_t Dram::ns_to_cycles(double ns) const {
@@ -131,19 +127,19 @@ DramCoord Dram::map(std::uint64_t addr) const {
 
 void Dram::account_activate(Channel& ch, RowOutcome o, DramClass cls) {
   ++stats_.activates;
-  ++ch.stats->activates;
-  ++class_stats_[static_cast<std::size_t>(cls)]->activates;
+  ++ch.stats.activates;
+  ++class_stats_[static_cast<std::size_t>(cls)].activates;
   if (o == RowOutcome::Conflict) {
     ++stats_.precharges;
-    ++ch.stats->precharges;
+    ++ch.stats.precharges;
   }
 }
 
 void Dram::account_request(Channel& ch, RowOutcome o, bool is_write, DramClass cls, std::uint32_t bytes,
                            std::uint32_t lines) {
-  DramClassStats& cs = *class_stats_[static_cast<std::size_t>(cls)];
-  DramChannelStats& chs = *ch.stats;
-  ++stats_.entries;
+  DramClassStats& cs = class_stats_[static_cast<std::size_t>(cls)];
+  DramChannelStats& chs = ch.stats;
+  ++stats_.queue_entries_served;
   if (is_write) {
     stats_.writes += lines;
     stats_.write_bytes += bytes;
@@ -166,7 +162,7 @@ void Dram::account_request(Channel& ch, RowOutcome o, bool is_write, DramClass c
   ++stats_.row_misses;
   ++chs.row_misses;
   if (o == RowOutcome::Empty) {
-    ++stats_.row_empty;
+    ++stats_.row_misses_empty;
   } else {
     ++stats_.row_conflicts;
   }
@@ -209,11 +205,11 @@ bool Dram::enqueue(DramRequest&& req) {
   }
   std::size_t& queued = req.is_write ? ch.write_lines : ch.read_lines;
   if (queued + lines > cap) {
-    ++stats_.rejected;
+    ++stats_.queue_full_rejections;
     if (req.is_write) {
-      ++ch.stats->write_queue_full;
+      ++ch.stats.write_queue_full;
     } else {
-      ++ch.stats->read_queue_full;
+      ++ch.stats.read_queue_full;
     }
     return false;
   }
@@ -315,14 +311,14 @@ void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::in
   b.pre_ready = std::max(b.pre_ready, e.is_write ? end_c + timing_.t_wr_cycles : end_c);
 
   account_request(ch, e.outcome, e.is_write, e.cls, e.bytes, e.lines);
-  ch.stats->busy_ps += static_cast<std::uint64_t>(duration.ps());
+  ch.stats.busy_ps += static_cast<std::uint64_t>(duration.ps());
   timed_bytes_ += e.bytes;
   const Tick done = end + timing_.controller;
   if (!e.is_write) {
     // Per line: line i of L is back controller latency after (i + 1) / L of the transfer.
     const auto L = static_cast<std::int64_t>(e.lines);
     const std::int64_t first_done = (start + timing_.controller - e.enqueued).ps();
-    stats_.read_latency_ps += static_cast<std::uint64_t>(L * first_done + duration.ps() * (L + 1) / 2);
+    stats_.read_latency_total_ps += static_cast<std::uint64_t>(L * first_done + duration.ps() * (L + 1) / 2);
     timed_reads_ += e.lines;
   }
   if (e.report) {
@@ -365,7 +361,7 @@ void Dram::wakeup(std::uint32_t c) {
   const std::int64_t n = clock_.cycles_at(now).count();
   const bool was_draining = ch.draining;
   std::vector<Entry>* q = active_queue(ch, now, ch.draining);
-  if (ch.draining && !was_draining) ++ch.stats->write_drains;
+  if (ch.draining && !was_draining) ++ch.stats.write_drains;
 
   std::int64_t next = kNever;
   bool freed = false;
@@ -433,8 +429,8 @@ void Dram::wakeup(std::uint32_t c) {
 DramTraffic Dram::traffic() const {
   DramTraffic t;
   for (std::size_t c = 0; c < kDramClassCount; ++c) {
-    t.read_bytes[c] = class_stats_[c]->read_bytes.value();
-    t.write_bytes[c] = class_stats_[c]->write_bytes.value();
+    t.read_bytes[c] = class_stats_[c].read_bytes.value();
+    t.write_bytes[c] = class_stats_[c].write_bytes.value();
   }
   return t;
 }
@@ -444,7 +440,7 @@ double Dram::energy_pj() const {
 }
 
 double Dram::energy_pj(DramClass c) const {
-  const DramClassStats& cs = *class_stats_[static_cast<std::size_t>(c)];
+  const DramClassStats& cs = class_stats_[static_cast<std::size_t>(c)];
   return dram_energy_pj(energy_, cs.read_bytes.value(), cs.write_bytes.value(), cs.activates.value());
 }
 
@@ -453,15 +449,15 @@ void Dram::update_derived_stats() {
   const double elapsed_ps = static_cast<double>(now.ps());
   for (Channel& ch : channels_) {
     note_occupancy(ch, now);
-    DramChannelStats& s = *ch.stats;
-    s.read_queue_occupancy.set(elapsed_ps > 0 ? static_cast<double>(ch.read_occupancy_ps) / elapsed_ps : 0.0);
-    s.write_queue_occupancy.set(elapsed_ps > 0 ? static_cast<double>(ch.write_occupancy_ps) / elapsed_ps : 0.0);
+    DramChannelStats& s = ch.stats;
+    s.read_queue_occupancy_avg.set(elapsed_ps > 0 ? static_cast<double>(ch.read_occupancy_ps) / elapsed_ps : 0.0);
+    s.write_queue_occupancy_avg.set(elapsed_ps > 0 ? static_cast<double>(ch.write_occupancy_ps) / elapsed_ps : 0.0);
     s.utilization.set(elapsed_ps > 0 ? static_cast<double>(s.busy_ps.value()) / elapsed_ps : 0.0);
   }
   const std::uint64_t requests = stats_.reads.value() + stats_.writes.value();
   stats_.row_hit_rate.set(requests == 0 ? 0.0 : static_cast<double>(stats_.row_hits.value()) / static_cast<double>(requests));
   stats_.avg_read_latency_ns.set(
-      timed_reads_ == 0 ? 0.0 : static_cast<double>(stats_.read_latency_ps.value()) * 1e-3 / static_cast<double>(timed_reads_));
+      timed_reads_ == 0 ? 0.0 : static_cast<double>(stats_.read_latency_total_ps.value()) * 1e-3 / static_cast<double>(timed_reads_));
   const std::int64_t window_ps = (last_completion_ - first_enqueue_).ps();
   stats_.achieved_bandwidth_gbps.set(window_ps <= 0 ? 0.0 : static_cast<double>(timed_bytes_) * 1000.0 / static_cast<double>(window_ps));
   const double read_bits = 8.0 * static_cast<double>(stats_.read_bytes.value());
@@ -471,14 +467,16 @@ void Dram::update_derived_stats() {
   stats_.energy_io_pj.set((read_bits + write_bits) * energy_.dram_io_pj_per_bit);
   stats_.energy_activate_pj.set(static_cast<double>(stats_.activates.value()) * (energy_.dram_activate_precharge_nj * 1000.0));
   stats_.energy_pj.set(energy_pj());
-  for (std::size_t c = 0; c < kDramClassCount; ++c) class_stats_[c]->energy_pj.set(energy_pj(static_cast<DramClass>(c)));
+  for (std::size_t c = 0; c < kDramClassCount; ++c) class_stats_[c].energy_pj.set(energy_pj(static_cast<DramClass>(c)));
 }
 
 void Dram::collect(std::vector<StatRecord>& out) {
   update_derived_stats();
-  stats_.group.collect(out);
-  for (const Channel& ch : channels_) ch.stats->group.collect(out);
-  for (const auto& cs : class_stats_) cs->group.collect(out);
+  collect_stats(stats_, name_, out);
+  for (std::size_t c = 0; c < channels_.size(); ++c) collect_stats(channels_[c].stats, name_ + ".ch" + std::to_string(c), out);
+  for (std::size_t c = 0; c < kDramClassCount; ++c) {
+    collect_stats(class_stats_[c], name_ + ".class." + to_string(static_cast<DramClass>(c)), out);
+  }
 }
 
 std::string Dram::stall_reason() const {

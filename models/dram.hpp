@@ -96,64 +96,67 @@ enum class RowOutcome : std::uint8_t {
 double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint64_t write_bytes,
                       std::uint64_t activates);
 
+// Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
+#define TBDR_DRAM_STATS(X) \
+  X(Counter, reads, "requests", Sum, "Read requests (line transfers) served") \
+  X(Counter, writes, "requests", Sum, "Write requests (line transfers) served") \
+  X(Counter, queue_entries_served, "entries", Sum, "Queue entries served: requests, a burst chain of lines counting once") \
+  X(Counter, read_bytes, "bytes", Sum, "Bytes read (whole bursts)") \
+  X(Counter, write_bytes, "bytes", Sum, "Bytes written (whole bursts)") \
+  X(Counter, row_hits, "requests", Sum, "Requests that found their row open") \
+  X(Counter, row_misses, "requests", Sum, "Requests that needed an activate (empty + conflict)") \
+  X(Counter, row_misses_empty, "requests", Sum, "Row misses to a bank with no open row") \
+  X(Counter, row_conflicts, "requests", Sum, "Row misses that closed another open row") \
+  X(Counter, activates, "commands", Sum, "Activate commands") \
+  X(Counter, precharges, "commands", Sum, "Precharge commands") \
+  X(Counter, queue_full_rejections, "requests", Sum, "Requests refused because their queue was full") \
+  X(Counter, completed, "requests", Sum, "Timed requests completed") \
+  X(Counter, read_latency_total_ps, "ps", Sum, "Sum over timed read lines of enqueue to the line's data back") \
+  X(Accumulator, row_hit_rate, "ratio", Derived, "Row hits / requests") \
+  X(Accumulator, avg_read_latency_ns, "ns", Derived, "Mean timed read latency per line, enqueue to data back") \
+  X(Accumulator, achieved_bandwidth_gbps, "GB/s", Derived, "Timed bytes / (last completion - first enqueue)") \
+  X(Accumulator, energy_read_pj, "pJ", Sum, "Read core energy: read bits x dram_read_pj_per_bit") \
+  X(Accumulator, energy_write_pj, "pJ", Sum, "Write core energy: write bits x dram_write_pj_per_bit") \
+  X(Accumulator, energy_io_pj, "pJ", Sum, "I/O energy: (read + write bits) x dram_io_pj_per_bit") \
+  X(Accumulator, energy_activate_pj, "pJ", Sum, "Activates x dram_activate_precharge_nj x 1000") \
+  X(Accumulator, energy_pj, "pJ", Sum, "Total DRAM energy (read + write + I/O + activate/precharge)")
 /// Whole-DRAM statistics.
 struct DramStats {
-  StatGroup group;
-  Counter reads{group, {"reads", "requests", "Read requests (line transfers) served"}};
-  Counter writes{group, {"writes", "requests", "Write requests (line transfers) served"}};
-  Counter entries{group, {"queue_entries_served", "entries", "Queue entries served: requests, a burst chain of lines counting once"}};
-  Counter read_bytes{group, {"read_bytes", "bytes", "Bytes read (whole bursts)"}};
-  Counter write_bytes{group, {"write_bytes", "bytes", "Bytes written (whole bursts)"}};
-  Counter row_hits{group, {"row_hits", "requests", "Requests that found their row open"}};
-  Counter row_misses{group, {"row_misses", "requests", "Requests that needed an activate (empty + conflict)"}};
-  Counter row_empty{group, {"row_misses_empty", "requests", "Row misses to a bank with no open row"}};
-  Counter row_conflicts{group, {"row_conflicts", "requests", "Row misses that closed another open row"}};
-  Counter activates{group, {"activates", "commands", "Activate commands"}};
-  Counter precharges{group, {"precharges", "commands", "Precharge commands"}};
-  Counter rejected{group, {"queue_full_rejections", "requests", "Requests refused because their queue was full"}};
-  Counter completed{group, {"completed", "requests", "Timed requests completed"}};
-  Counter read_latency_ps{group, {"read_latency_total_ps", "ps", "Sum over timed read lines of enqueue to the line's data back"}};
-  Accumulator row_hit_rate{group, {"row_hit_rate", "ratio", "Row hits / requests"}};
-  Accumulator avg_read_latency_ns{group, {"avg_read_latency_ns", "ns", "Mean timed read latency per line, enqueue to data back"}};
-  Accumulator achieved_bandwidth_gbps{group, {"achieved_bandwidth_gbps", "GB/s", "Timed bytes / (last completion - first enqueue)"}};
-  Accumulator energy_read_pj{group, {"energy_read_pj", "pJ", "Read core energy: read bits x dram_read_pj_per_bit"}};
-  Accumulator energy_write_pj{group, {"energy_write_pj", "pJ", "Write core energy: write bits x dram_write_pj_per_bit"}};
-  Accumulator energy_io_pj{group, {"energy_io_pj", "pJ", "I/O energy: (read + write bits) x dram_io_pj_per_bit"}};
-  Accumulator energy_activate_pj{group, {"energy_activate_pj", "pJ", "Activates x dram_activate_precharge_nj x 1000"}};
-  Accumulator energy_pj{group, {"energy_pj", "pJ", "Total DRAM energy (read + write + I/O + activate/precharge)"}};
-  explicit DramStats(std::string scope) : group(std::move(scope)) {}
+  TBDR_STATS(TBDR_DRAM_STATS)
 };
 
+// Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
+#define TBDR_DRAM_CHANNEL_STATS(X) \
+  X(Counter, reads, "requests", Sum, "Read requests served") \
+  X(Counter, writes, "requests", Sum, "Write requests served") \
+  X(Counter, bytes, "bytes", Sum, "Bytes transferred (both directions)") \
+  X(Counter, row_hits, "requests", Sum, "Requests that found their row open") \
+  X(Counter, row_misses, "requests", Sum, "Requests that needed an activate") \
+  X(Counter, activates, "commands", Sum, "Activate commands") \
+  X(Counter, precharges, "commands", Sum, "Precharge commands") \
+  X(Counter, busy_ps, "ps", Sum, "Time the data bus was transferring") \
+  X(Counter, read_queue_full, "requests", Sum, "Reads refused: read queue full") \
+  X(Counter, write_queue_full, "requests", Sum, "Writes refused: write queue full") \
+  X(Counter, write_drains, "drains", Sum, "Times the write queue reached the high watermark") \
+  X(Accumulator, read_queue_occupancy_avg, "requests", Derived, "Time-averaged read queue occupancy (from tick 0)") \
+  X(Accumulator, write_queue_occupancy_avg, "requests", Derived, "Time-averaged write queue occupancy (from tick 0)") \
+  X(Accumulator, utilization, "ratio", Derived, "busy_ps / elapsed ps (from tick 0)")
 /// Statistics of one DRAM channel.
 struct DramChannelStats {
-  StatGroup group;
-  Counter reads{group, {"reads", "requests", "Read requests served"}};
-  Counter writes{group, {"writes", "requests", "Write requests served"}};
-  Counter bytes{group, {"bytes", "bytes", "Bytes transferred (both directions)"}};
-  Counter row_hits{group, {"row_hits", "requests", "Requests that found their row open"}};
-  Counter row_misses{group, {"row_misses", "requests", "Requests that needed an activate"}};
-  Counter activates{group, {"activates", "commands", "Activate commands"}};
-  Counter precharges{group, {"precharges", "commands", "Precharge commands"}};
-  Counter busy_ps{group, {"busy_ps", "ps", "Time the data bus was transferring"}};
-  Counter read_queue_full{group, {"read_queue_full", "requests", "Reads refused: read queue full"}};
-  Counter write_queue_full{group, {"write_queue_full", "requests", "Writes refused: write queue full"}};
-  Counter write_drains{group, {"write_drains", "drains", "Times the write queue reached the high watermark"}};
-  Accumulator read_queue_occupancy{group, {"read_queue_occupancy_avg", "requests", "Time-averaged read queue occupancy (from tick 0)"}};
-  Accumulator write_queue_occupancy{group, {"write_queue_occupancy_avg", "requests", "Time-averaged write queue occupancy (from tick 0)"}};
-  Accumulator utilization{group, {"utilization", "ratio", "busy_ps / elapsed ps (from tick 0)"}};
-  explicit DramChannelStats(std::string scope) : group(std::move(scope)) {}
+  TBDR_STATS(TBDR_DRAM_CHANNEL_STATS)
 };
 
+// Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
+#define TBDR_DRAM_CLASS_STATS(X) \
+  X(Counter, reads, "requests", Sum, "Read requests of this class") \
+  X(Counter, writes, "requests", Sum, "Write requests of this class") \
+  X(Counter, read_bytes, "bytes", Sum, "DRAM bytes read for this traffic class") \
+  X(Counter, write_bytes, "bytes", Sum, "DRAM bytes written for this traffic class") \
+  X(Counter, activates, "commands", Sum, "Activates caused by requests of this class") \
+  X(Accumulator, energy_pj, "pJ", Sum, "DRAM energy of this class (its bytes and its activates)")
 /// DRAM statistics of one traffic class.
 struct DramClassStats {
-  StatGroup group;
-  Counter reads{group, {"reads", "requests", "Read requests of this class"}};
-  Counter writes{group, {"writes", "requests", "Write requests of this class"}};
-  Counter read_bytes{group, {"read_bytes", "bytes", "DRAM bytes read for this traffic class"}};
-  Counter write_bytes{group, {"write_bytes", "bytes", "DRAM bytes written for this traffic class"}};
-  Counter activates{group, {"activates", "commands", "Activates caused by requests of this class"}};
-  Accumulator energy_pj{group, {"energy_pj", "pJ", "DRAM energy of this class (its bytes and its activates)"}};
-  explicit DramClassStats(std::string scope) : group(std::move(scope)) {}
+  TBDR_STATS(TBDR_DRAM_CLASS_STATS)
 };
 
 /// The DRAM devices and their memory controller.
@@ -216,8 +219,8 @@ class Dram final : public Unit {
   std::uint64_t in_flight() const { return in_flight_; }
 
   const DramStats& stats() const { return stats_; }
-  const DramChannelStats& channel_stats(std::uint32_t c) const { return *channels_[c].stats; }
-  const DramClassStats& class_stats(DramClass c) const { return *class_stats_[static_cast<std::size_t>(c)]; }
+  const DramChannelStats& channel_stats(std::uint32_t c) const { return channels_[c].stats; }
+  const DramClassStats& class_stats(DramClass c) const { return class_stats_[static_cast<std::size_t>(c)]; }
   /// Bytes per class so far, in the shape the rest of the simulator uses.
   DramTraffic traffic() const;
   /// Energy so far (same formula and operation order as the statistics).
@@ -271,7 +274,7 @@ class Dram final : public Unit {
     Tick occupancy_since{0};
     std::uint64_t read_occupancy_ps = 0;   // integral of read queue size over time
     std::uint64_t write_occupancy_ps = 0;  // integral of write queue size over time
-    std::unique_ptr<DramChannelStats> stats;
+    DramChannelStats stats;
   };
 
   RowOutcome outcome(const Bank& b, std::uint64_t row) const {
@@ -335,7 +338,7 @@ class Dram final : public Unit {
   std::vector<int> first_need_;  // scratch of wakeup(): per bank, the oldest request needing a row
 
   DramStats stats_;
-  std::array<std::unique_ptr<DramClassStats>, kDramClassCount> class_stats_;
+  std::array<DramClassStats, kDramClassCount> class_stats_;
 };
 
 }  // namespace tbdr

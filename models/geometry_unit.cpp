@@ -213,10 +213,10 @@ void GeometryUnit::emit_triangle(const Emit& e, const glm::vec4 clip[3], const g
   const ClipTriangle ct{clip[0], clip[1], clip[2]};
   clip_and_cull(ct, e.clip, cs, screen);
   stats.primitives_in += cs.in;
-  stats.culled_frustum += cs.culled_frustum;
-  stats.culled_backface += cs.culled_backface;
-  stats.culled_zero_area += cs.culled_zero_area;
-  stats.clipped += cs.clipped;
+  stats.primitives_culled_frustum += cs.culled_frustum;
+  stats.primitives_culled_backface += cs.culled_backface;
+  stats.primitives_culled_zero_area += cs.culled_zero_area;
+  stats.primitives_clipped += cs.clipped;
   for (const ScreenTriangle& st : screen) {
     Primitive p;
     p.setup = setup_triangle(st, viewport_);

@@ -19,21 +19,22 @@ namespace tbdr {
 /// plane; the whole viewport when it crosses the near plane).
 PixelRect light_screen_rect(const Light& light, const CameraXform& camera, const Viewport& viewport);
 
+// Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
+#define TBDR_GEOMETRY_STATS(X) \
+  X(Counter, draws, "draws", Sum, "Draw commands processed") \
+  X(Counter, primitives_in, "primitives", Sum, "Triangles submitted by draws") \
+  X(Counter, primitives_culled_frustum, "primitives", Sum, "Triangles outside the view frustum") \
+  X(Counter, primitives_culled_backface, "primitives", Sum, "Triangles removed by face culling") \
+  X(Counter, primitives_culled_zero_area, "primitives", Sum, "Triangles with zero area after snapping") \
+  X(Counter, primitives_clipped, "primitives", Sum, "Triangles cut by the near (or far) plane") \
+  X(Counter, primitives_out, "primitives", Sum, "Screen triangles sent to the tiler") \
+  X(Counter, vertices_shaded, "vertices", Sum, "Vertex shader invocations (post-transform cache misses)") \
+  X(Counter, vertex_alu_ops, "ops", Sum, "Vertex shader ALU operations") \
+  X(Counter, vertex_fetch_bytes, "bytes", Sum, "Vertex attribute bytes fetched") \
+  X(Counter, index_fetch_bytes, "bytes", Sum, "Index buffer bytes fetched")
 /// Statistics of the geometry unit.
 struct GeometryStats {
-  StatGroup group;
-  Counter draws{group, {"draws", "draws", "Draw commands processed"}};
-  Counter primitives_in{group, {"primitives_in", "primitives", "Triangles submitted by draws"}};
-  Counter culled_frustum{group, {"primitives_culled_frustum", "primitives", "Triangles outside the view frustum"}};
-  Counter culled_backface{group, {"primitives_culled_backface", "primitives", "Triangles removed by face culling"}};
-  Counter culled_zero_area{group, {"primitives_culled_zero_area", "primitives", "Triangles with zero area after snapping"}};
-  Counter clipped{group, {"primitives_clipped", "primitives", "Triangles cut by the near (or far) plane"}};
-  Counter primitives_out{group, {"primitives_out", "primitives", "Screen triangles sent to the tiler"}};
-  Counter vertices_shaded{group, {"vertices_shaded", "vertices", "Vertex shader invocations (post-transform cache misses)"}};
-  Counter vertex_alu_ops{group, {"vertex_alu_ops", "ops", "Vertex shader ALU operations"}};
-  Counter vertex_fetch_bytes{group, {"vertex_fetch_bytes", "bytes", "Vertex attribute bytes fetched"}};
-  Counter index_fetch_bytes{group, {"index_fetch_bytes", "bytes", "Index buffer bytes fetched"}};
-  explicit GeometryStats(std::string scope) : group(std::move(scope)) {}
+  TBDR_STATS(TBDR_GEOMETRY_STATS)
 };
 
 /// The geometry unit of one GPU; stateless between draws but for its configuration.

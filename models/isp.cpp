@@ -73,7 +73,7 @@ void Isp::flush(const PixelRect& rect, const std::vector<std::uint8_t>* select, 
     ++isp.tag_flushes;
     isp.tag_flushed_samples += flush_samples_.size();
   }
-  isp.tag_read_bytes += flush_samples_.size() * static_cast<std::uint64_t>(ctx_.hw->isp.tag_bits / 8);
+  isp.tag_buffer_read_bytes += flush_samples_.size() * static_cast<std::uint64_t>(ctx_.hw->isp.tag_bits / 8);
   // Shade primitive by primitive, in submission order; raster order within each.
   std::stable_sort(flush_samples_.begin(), flush_samples_.end(),
                    [](const PendingSample& a, const PendingSample& b) { return a.tag < b.tag; });
@@ -93,7 +93,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
   const int rw = rect.width();
   const std::size_t tile_samples = static_cast<std::size_t>(rw) * static_cast<std::size_t>(rect.height()) * S;
   tags_.assign(tile_samples, kNoTag);
-  ++isp.tiles;
+  ++isp.tiles_rendered;
   const std::uint64_t ds_bytes = static_cast<std::uint64_t>(ctx_.hw->isp.depth_stencil_bytes_per_sample);
   const std::uint64_t tag_bytes = static_cast<std::uint64_t>(ctx_.hw->isp.tag_bits / 8);
   AttachmentImage* depth_img = ctx_.depth;
@@ -125,15 +125,15 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
         const std::size_t gi = pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(s);
         if (stencil_on) {
           if (!passes<std::uint8_t>(pl.stencil_compare, ref, stencil[gi])) {
-            ++isp.stencil_test_failed;
+            ++isp.stencil_test_failed_samples;
             stencil[gi] = apply_stencil(pl.stencil_fail_op, stencil[gi], ref);
             continue;
           }
         }
         if (depth_on) {
-          isp.depth_read_bytes += ds_bytes;
+          isp.depth_buffer_read_bytes += ds_bytes;
           if (!passes<float>(pl.depth_compare, z[s], depth[gi])) {
-            ++isp.depth_test_failed;
+            ++isp.depth_test_failed_samples;
             if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
             continue;
           }
@@ -141,19 +141,19 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
         if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_pass_op, stencil[gi], ref);
         if (deferred_opaque) {
           const std::size_t li = lbase + static_cast<std::size_t>(s);
-          if (tags_[li] != kNoTag) ++isp.hsr_removed;
+          if (tags_[li] != kNoTag) ++isp.hsr_removed_samples;
           tags_[li] = prim_index;
-          isp.tag_write_bytes += tag_bytes;
+          isp.tag_buffer_write_bytes += tag_bytes;
           if (write_on) {
             depth[gi] = z[s];
-            isp.depth_write_bytes += ds_bytes;
+            isp.depth_buffer_write_bytes += ds_bytes;
           }
         } else {
           pending_.push_back({prim_index, x, y, 1u << s});
           pending_depth_.push_back(z[s]);
           if (early_write) {
             depth[gi] = z[s];
-            isp.depth_write_bytes += ds_bytes;
+            isp.depth_buffer_write_bytes += ds_bytes;
           }
         }
       }
@@ -185,7 +185,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
         while (!(pending_[k].bit & (1u << s))) ++s;
         depth[(static_cast<std::size_t>(pending_[k].y) * W + static_cast<std::size_t>(pending_[k].x)) * S +
               static_cast<std::size_t>(s)] = pending_depth_[k];
-        isp.depth_write_bytes += ds_bytes;
+        isp.depth_buffer_write_bytes += ds_bytes;
       }
     }
     if (punch && write_on) {
@@ -199,7 +199,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
             const std::size_t gi = (static_cast<std::size_t>(pending_[k].y) * W + static_cast<std::size_t>(pending_[k].x)) * S +
                                    static_cast<std::size_t>(s);
             depth[gi] = pending_depth_[k];
-            isp.depth_write_bytes += ds_bytes;
+            isp.depth_buffer_write_bytes += ds_bytes;
           }
           ++k;
         }

@@ -16,24 +16,25 @@
 
 namespace tbdr {
 
+// Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
+#define TBDR_ISP_STATS(X) \
+  X(Counter, tiles_rendered, "tiles", Sum, "Tile renders (each sub-tile of a split tile counts)") \
+  X(Counter, primitives_fetched, "primitives", Sum, "Primitives read from tile lists and set up") \
+  X(Counter, samples_rasterised, "samples", Sum, "Samples covered by rasterised primitives") \
+  X(Counter, depth_test_failed_samples, "samples", Sum, "Samples failing the depth test") \
+  X(Counter, stencil_test_failed_samples, "samples", Sum, "Samples failing the stencil test") \
+  X(Counter, hsr_removed_samples, "samples", Sum, "Samples whose pending tag was overwritten before shading") \
+  X(Counter, tag_flushes, "flushes", Sum, "Mid-tile tag buffer flushes forced by punch-through or translucent primitives") \
+  X(Counter, tag_flushed_samples, "samples", Sum, "Samples sent to the TSP by mid-tile flushes") \
+  X(Counter, punch_through_samples, "samples", Sum, "Punch-through samples passing depth test") \
+  X(Counter, translucent_samples, "samples", Sum, "Translucent samples passing depth test") \
+  X(Counter, depth_buffer_read_bytes, "bytes", Sum, "On-chip depth/stencil bytes read by tests") \
+  X(Counter, depth_buffer_write_bytes, "bytes", Sum, "On-chip depth/stencil bytes written") \
+  X(Counter, tag_buffer_read_bytes, "bytes", Sum, "Tag buffer bytes read (flushes)") \
+  X(Counter, tag_buffer_write_bytes, "bytes", Sum, "Tag buffer bytes written")
 /// Statistics of the ISP.
 struct IspStats {
-  StatGroup group;
-  Counter tiles{group, {"tiles_rendered", "tiles", "Tile renders (each sub-tile of a split tile counts)"}};
-  Counter primitives_fetched{group, {"primitives_fetched", "primitives", "Primitives read from tile lists and set up"}};
-  Counter samples_rasterised{group, {"samples_rasterised", "samples", "Samples covered by rasterised primitives"}};
-  Counter depth_test_failed{group, {"depth_test_failed_samples", "samples", "Samples failing the depth test"}};
-  Counter stencil_test_failed{group, {"stencil_test_failed_samples", "samples", "Samples failing the stencil test"}};
-  Counter hsr_removed{group, {"hsr_removed_samples", "samples", "Samples whose pending tag was overwritten before shading"}};
-  Counter tag_flushes{group, {"tag_flushes", "flushes", "Mid-tile tag buffer flushes forced by punch-through or translucent primitives"}};
-  Counter tag_flushed_samples{group, {"tag_flushed_samples", "samples", "Samples sent to the TSP by mid-tile flushes"}};
-  Counter punch_through_samples{group, {"punch_through_samples", "samples", "Punch-through samples passing depth test"}};
-  Counter translucent_samples{group, {"translucent_samples", "samples", "Translucent samples passing depth test"}};
-  Counter depth_read_bytes{group, {"depth_buffer_read_bytes", "bytes", "On-chip depth/stencil bytes read by tests"}};
-  Counter depth_write_bytes{group, {"depth_buffer_write_bytes", "bytes", "On-chip depth/stencil bytes written"}};
-  Counter tag_read_bytes{group, {"tag_buffer_read_bytes", "bytes", "Tag buffer bytes read (flushes)"}};
-  Counter tag_write_bytes{group, {"tag_buffer_write_bytes", "bytes", "Tag buffer bytes written"}};
-  explicit IspStats(std::string scope) : group(std::move(scope)) {}
+  TBDR_STATS(TBDR_ISP_STATS)
 };
 
 /// The ISP of one GPU, working on one tile at a time.

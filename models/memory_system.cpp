@@ -49,8 +49,7 @@ MemorySystem::MemorySystem(const HwConfig& hw, EventQueue& eq, std::string scope
       max_chain_bytes_(static_cast<std::uint64_t>(std::max<std::int64_t>(0, hw.dram.max_chain_bytes))),
       overflow_(dram_.channels()),
       overflow_lines_(dram_.channels()),
-      overflow_cap_(std::max<std::size_t>(1, opt.overflow_entries)),
-      stats_(scope) {
+      overflow_cap_(std::max<std::size_t>(1, opt.overflow_entries)) {
   if (dram_.row_bytes() % slc_->line_bytes() != 0) {
     throw std::invalid_argument("memory system: dram.row_bytes must be a multiple of cache.slc.line_bytes");
   }
@@ -60,9 +59,6 @@ MemorySystem::MemorySystem(const HwConfig& hw, EventQueue& eq, std::string scope
     routes_[static_cast<std::size_t>(Client::Texture)] = {texture_.get(), Allocation::Allocate};
   }
   routes_[static_cast<std::size_t>(Client::PixelBackEnd)].slc_alloc = Allocation::NoAllocate;
-  for (std::size_t c = 0; c < kClientCount; ++c) {
-    client_stats_[c] = std::make_unique<MemoryClientStats>(scope + "/client." + to_string(static_cast<Client>(c)));
-  }
   dram_.set_space_callback([this](std::uint32_t c) { drain_overflow(c); });
   dram_.set_schedule_callback(
       [this](std::uint64_t tag, const DramSchedule& when) { resolve_chain(static_cast<std::uint32_t>(tag), when); });
@@ -74,7 +70,7 @@ MemorySystem::MemorySystem(const HwConfig& hw, EventQueue& eq, std::string scope
 bool MemorySystem::issue(Client client, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls,
                          EventCallback on_complete) {
   if (bytes == 0) throw std::invalid_argument("memory system: request of 0 bytes");
-  MemoryClientStats& cs = *client_stats_[static_cast<std::size_t>(client)];
+  MemoryClientStats& cs = client_stats_[static_cast<std::size_t>(client)];
   if (!can_accept()) {
     ++cs.rejected;
     return false;
@@ -110,8 +106,8 @@ bool MemorySystem::issue(Client client, std::uint64_t addr, std::uint32_t bytes,
 void MemorySystem::access_functional(Client client, std::uint64_t addr, std::uint32_t bytes, bool is_write,
                                      DramClass cls) {
   if (bytes == 0) return;
-  MemoryClientStats& cs = *client_stats_[static_cast<std::size_t>(client)];
-  ++cs.functional;
+  MemoryClientStats& cs = client_stats_[static_cast<std::size_t>(client)];
+  ++cs.functional_accesses;
   if (is_write) {
     ++cs.writes;
     cs.write_bytes += bytes;
@@ -490,9 +486,9 @@ void MemorySystem::resolve_fill(std::uint32_t f, Tick arrival) {
 
 void MemorySystem::finish_txn(std::uint32_t t) {
   Txn& x = txns_[t];
-  MemoryClientStats& cs = *client_stats_[static_cast<std::size_t>(x.client)];
+  MemoryClientStats& cs = client_stats_[static_cast<std::size_t>(x.client)];
   ++cs.completed;
-  cs.latency_ps += static_cast<std::uint64_t>((eq_.now() - x.issued).ps());
+  cs.latency_total_ps += static_cast<std::uint64_t>((eq_.now() - x.issued).ps());
   EventCallback cb = std::move(x.on_complete);
   x.on_complete.reset();
   free_txns_.push_back(t);
@@ -545,11 +541,12 @@ void MemorySystem::collect(std::vector<StatRecord>& out) {
   stats_.cache_energy_pj.set(caches);
   stats_.dram_energy_pj.set(dram_.energy_pj());
   stats_.energy_pj.set(energy_pj());
-  stats_.group.collect(out);
-  for (auto& cs : client_stats_) {
-    const std::uint64_t n = cs->completed.value();
-    cs->avg_latency_ns.set(n == 0 ? 0.0 : static_cast<double>(cs->latency_ps.value()) * 1e-3 / static_cast<double>(n));
-    cs->group.collect(out);
+  collect_stats(stats_, name_, out);
+  for (std::size_t c = 0; c < kClientCount; ++c) {
+    MemoryClientStats& cs = client_stats_[c];
+    const std::uint64_t n = cs.completed.value();
+    cs.avg_latency_ns.set(n == 0 ? 0.0 : static_cast<double>(cs.latency_total_ps.value()) * 1e-3 / static_cast<double>(n));
+    collect_stats(cs, name_ + "/client." + to_string(static_cast<Client>(c)), out);
   }
   texture_->collect(out);
   vertex_->collect(out);

@@ -61,31 +61,33 @@ struct MemorySystemOptions {
   std::uint32_t overflow_entries = 32;
 };
 
+// Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
+#define TBDR_MEMORY_CLIENT_STATS(X) \
+  X(Counter, reads, "requests", Sum, "Read requests accepted") \
+  X(Counter, writes, "requests", Sum, "Write requests accepted") \
+  X(Counter, read_bytes, "bytes", Sum, "Bytes read by accepted requests") \
+  X(Counter, write_bytes, "bytes", Sum, "Bytes written by accepted requests") \
+  X(Counter, rejected, "requests", Sum, "issue() calls refused (backpressure); the unit retries") \
+  X(Counter, completed, "requests", Sum, "Timed requests completed") \
+  X(Counter, latency_total_ps, "ps", Sum, "Sum of timed request latencies (issue to callback)") \
+  X(Counter, functional_accesses, "requests", Sum, "Requests made through the functional path") \
+  X(Accumulator, avg_latency_ns, "ns", Derived, "Mean timed request latency")
 /// Requests of one client as issued to the memory system.
 struct MemoryClientStats {
-  StatGroup group;
-  Counter reads{group, {"reads", "requests", "Read requests accepted"}};
-  Counter writes{group, {"writes", "requests", "Write requests accepted"}};
-  Counter read_bytes{group, {"read_bytes", "bytes", "Bytes read by accepted requests"}};
-  Counter write_bytes{group, {"write_bytes", "bytes", "Bytes written by accepted requests"}};
-  Counter rejected{group, {"rejected", "requests", "issue() calls refused (backpressure); the unit retries"}};
-  Counter completed{group, {"completed", "requests", "Timed requests completed"}};
-  Counter latency_ps{group, {"latency_total_ps", "ps", "Sum of timed request latencies (issue to callback)"}};
-  Counter functional{group, {"functional_accesses", "requests", "Requests made through the functional path"}};
-  Accumulator avg_latency_ns{group, {"avg_latency_ns", "ns", "Mean timed request latency"}};
-  explicit MemoryClientStats(std::string scope) : group(std::move(scope)) {}
+  TBDR_STATS(TBDR_MEMORY_CLIENT_STATS)
 };
 
+// Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
+#define TBDR_MEMORY_SYSTEM_STATS(X) \
+  X(Counter, dram_overflows, "requests", Sum, "DRAM requests held back because their DRAM queue was full") \
+  X(Counter, merged_misses, "accesses", Sum, "Accesses that found their line already being fetched and waited for it") \
+  X(Counter, flushes, "flushes", Sum, "Cache flushes (dirty lines written back)") \
+  X(Accumulator, cache_energy_pj, "pJ", Sum, "Energy of the texture, vertex and system level caches") \
+  X(Accumulator, dram_energy_pj, "pJ", Sum, "DRAM energy") \
+  X(Accumulator, energy_pj, "pJ", Sum, "Caches + DRAM energy")
 /// Statistics of the memory system as a whole.
 struct MemorySystemStats {
-  StatGroup group;
-  Counter dram_overflows{group, {"dram_overflows", "requests", "DRAM requests held back because their DRAM queue was full"}};
-  Counter merged_misses{group, {"merged_misses", "accesses", "Accesses that found their line already being fetched and waited for it"}};
-  Counter flushes{group, {"flushes", "flushes", "Cache flushes (dirty lines written back)"}};
-  Accumulator cache_energy_pj{group, {"cache_energy_pj", "pJ", "Energy of the texture, vertex and system level caches"}};
-  Accumulator dram_energy_pj{group, {"dram_energy_pj", "pJ", "DRAM energy"}};
-  Accumulator energy_pj{group, {"energy_pj", "pJ", "Caches + DRAM energy"}};
-  explicit MemorySystemStats(std::string scope) : group(std::move(scope)) {}
+  TBDR_STATS(TBDR_MEMORY_SYSTEM_STATS)
 };
 
 /// Caches + DRAM behind one interface, in timed and functional flavours.
@@ -136,7 +138,7 @@ class MemorySystem final : public Unit {
   double energy_pj() const;
   /// Timed requests accepted and not yet completed.
   std::uint64_t requests_in_flight() const { return live_txns_; }
-  const MemoryClientStats& client_stats(Client c) const { return *client_stats_[static_cast<std::size_t>(c)]; }
+  const MemoryClientStats& client_stats(Client c) const { return client_stats_[static_cast<std::size_t>(c)]; }
   const MemorySystemStats& stats() const { return stats_; }
   /// Every statistic of the memory system (derived ones updated first) appended to `out`.
   void collect(std::vector<StatRecord>& out);
@@ -281,7 +283,7 @@ class MemorySystem final : public Unit {
   std::vector<EventCallback> flush_done_;
 
   MemorySystemStats stats_;
-  std::array<std::unique_ptr<MemoryClientStats>, kClientCount> client_stats_;
+  std::array<MemoryClientStats, kClientCount> client_stats_;
 };
 
 }  // namespace tbdr

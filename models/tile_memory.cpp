@@ -55,9 +55,9 @@ TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats) : ctx_(ctx), 
       split_ = static_cast<int>((need_ + budget_ - 1) / budget_);
     }
   }
-  stats_.need_bytes_per_pixel += need_;
-  stats_.budget_bytes_per_pixel += budget_;
-  stats_.split_factor += static_cast<std::uint64_t>(split_);
+  stats_.onchip_need_bytes_per_pixel += need_;
+  stats_.onchip_budget_bytes_per_pixel += budget_;
+  stats_.tile_split_factor += static_cast<std::uint64_t>(split_);
 }
 
 std::vector<PixelRect> TileMemory::strips(const PixelRect& tile) const {
@@ -88,17 +88,17 @@ void TileMemory::begin_tile(const PixelRect& r, bool resumed, DramTraffic& dram)
     } else if (resumed) {
       const auto b = static_cast<std::uint64_t>(std::ceil(static_cast<double>(bytes) * ratio));
       dram.read(traffic_class_of(a.usage), b);
-      stats_.partial_reload_bytes += b;
+      stats_.partial_render_reload_bytes += b;
       continue;
     }
     if (a.load == LoadOp::Load && !a.transient) {
-      stats_.load_bytes += bytes;
+      stats_.tile_load_bytes += bytes;
       dram.read(traffic_class_of(a.usage), static_cast<std::uint64_t>(std::ceil(static_cast<double>(bytes) * ratio)));
       continue;
     }
     if (a.load == LoadOp::Load && a.transient) continue;  // memoryless: nothing to load
     // clear (and don't care, made deterministic): initialise the tile's samples
-    if (a.load == LoadOp::Clear) stats_.clear_bytes += bytes;
+    if (a.load == LoadOp::Clear) stats_.tile_clear_bytes += bytes;
     const std::size_t S = img.samples;
     for (int y = r.y0; y < r.y1; ++y) {
       const std::size_t b = (static_cast<std::size_t>(y) * W + static_cast<std::size_t>(r.x0)) * S;
@@ -132,7 +132,7 @@ void TileMemory::end_tile(const PixelRect& r, bool partial, DramTraffic& dram) {
     if (partial) {
       // The tile buffer is needed for the next render: everything leaves the chip, transient or not.
       dram.write(traffic_class_of(a.usage), compressed);
-      stats_.partial_store_bytes += compressed;
+      stats_.partial_render_store_bytes += compressed;
       continue;
     }
     if (!a.resolve.empty()) {
@@ -151,7 +151,7 @@ void TileMemory::end_tile(const PixelRect& r, bool partial, DramTraffic& dram) {
       stats_.resolved_samples += static_cast<std::uint64_t>(r.width()) * static_cast<std::uint64_t>(r.height()) * S;
     }
     if (a.store == StoreOp::Store && !a.transient) {
-      stats_.store_bytes += bytes;
+      stats_.tile_store_bytes += bytes;
       stats_.writeback_dram_bytes += compressed;
       dram.write(traffic_class_of(a.usage), compressed);
     }

@@ -19,21 +19,22 @@
 
 namespace tbdr {
 
+// Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
+#define TBDR_TILE_MEMORY_STATS(X) \
+  X(Counter, onchip_need_bytes_per_pixel, "bytes/pixel", Gauge, "Tile memory the pass needs per pixel (attachments x samples + PLS)") \
+  X(Counter, onchip_budget_bytes_per_pixel, "bytes/pixel", Gauge, "Tile memory available per pixel") \
+  X(Counter, tile_split_factor, "strips", Gauge, "Strips each tile is rendered in to fit the budget (1 = fits)") \
+  X(Counter, tile_load_bytes, "bytes", Sum, "Attachment bytes loaded from DRAM into tile memory (uncompressed)") \
+  X(Counter, tile_clear_bytes, "bytes", Sum, "Tile memory bytes initialised by clear load ops") \
+  X(Counter, tile_store_bytes, "bytes", Sum, "Attachment bytes written back from tile memory (uncompressed)") \
+  X(Counter, writeback_dram_bytes, "bytes", Sum, "Bytes the writeback sent to DRAM after compression") \
+  X(Counter, partial_render_store_bytes, "bytes", Sum, "Bytes stored to DRAM at partial renders") \
+  X(Counter, partial_render_reload_bytes, "bytes", Sum, "Bytes reloaded after partial renders") \
+  X(Counter, spill_bytes, "bytes", Sum, "Tile buffer bytes spilled to DRAM and read back (pls.over_budget = spill)") \
+  X(Counter, resolved_samples, "samples", Sum, "Multisampled samples averaged into resolve targets")
 /// Statistics of tile memory and writeback.
 struct TileMemoryStats {
-  StatGroup group;
-  Counter need_bytes_per_pixel{group, {"onchip_need_bytes_per_pixel", "bytes/pixel", "Tile memory the pass needs per pixel (attachments x samples + PLS)"}};
-  Counter budget_bytes_per_pixel{group, {"onchip_budget_bytes_per_pixel", "bytes/pixel", "Tile memory available per pixel"}};
-  Counter split_factor{group, {"tile_split_factor", "strips", "Strips each tile is rendered in to fit the budget (1 = fits)"}};
-  Counter load_bytes{group, {"tile_load_bytes", "bytes", "Attachment bytes loaded from DRAM into tile memory (uncompressed)"}};
-  Counter clear_bytes{group, {"tile_clear_bytes", "bytes", "Tile memory bytes initialised by clear load ops"}};
-  Counter store_bytes{group, {"tile_store_bytes", "bytes", "Attachment bytes written back from tile memory (uncompressed)"}};
-  Counter writeback_dram_bytes{group, {"writeback_dram_bytes", "bytes", "Bytes the writeback sent to DRAM after compression"}};
-  Counter partial_store_bytes{group, {"partial_render_store_bytes", "bytes", "Bytes stored to DRAM at partial renders"}};
-  Counter partial_reload_bytes{group, {"partial_render_reload_bytes", "bytes", "Bytes reloaded after partial renders"}};
-  Counter spill_bytes{group, {"spill_bytes", "bytes", "Tile buffer bytes spilled to DRAM and read back (pls.over_budget = spill)"}};
-  Counter resolved_samples{group, {"resolved_samples", "samples", "Multisampled samples averaged into resolve targets"}};
-  explicit TileMemoryStats(std::string scope) : group(std::move(scope)) {}
+  TBDR_STATS(TBDR_TILE_MEMORY_STATS)
 };
 
 /// The DRAM traffic class of an attachment usage.

@@ -17,22 +17,23 @@
 
 namespace tbdr {
 
+// Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
+#define TBDR_TILER_STATS(X) \
+  X(Counter, primitives_binned, "primitives", Sum, "Primitives written to the parameter buffer") \
+  X(Counter, tile_references, "references", Sum, "Sum over primitives of the tiles each touches") \
+  X(Counter, primitive_blocks, "blocks", Sum, "Primitive blocks written") \
+  X(Counter, pb_vertices, "vertices", Sum, "Vertices written into primitive blocks") \
+  X(Counter, control_stream_entries, "entries", Sum, "Control stream entries (tile x primitive block)") \
+  X(Counter, pb_primitive_block_bytes, "bytes", Sum, "Primitive block bytes written") \
+  X(Counter, pb_control_stream_bytes, "bytes", Sum, "Control stream bytes allocated (whole blocks)") \
+  X(Counter, pb_region_header_bytes, "bytes", Sum, "Region header bytes written") \
+  X(Counter, pb_bytes_written, "bytes", Sum, "Parameter buffer bytes written in all") \
+  X(Counter, pb_bytes_read, "bytes", Sum, "Parameter buffer bytes read back by the ISP") \
+  X(Counter, pb_peak_allocated_bytes, "bytes", Gauge, "Largest page-rounded parameter buffer use of one render") \
+  X(Counter, partial_renders, "renders", Sum, "Renders forced by a full parameter buffer")
 /// Statistics of the tiler and the parameter buffer.
 struct TilerStats {
-  StatGroup group;
-  Counter primitives_binned{group, {"primitives_binned", "primitives", "Primitives written to the parameter buffer"}};
-  Counter tile_references{group, {"tile_references", "references", "Sum over primitives of the tiles each touches"}};
-  Counter primitive_blocks{group, {"primitive_blocks", "blocks", "Primitive blocks written"}};
-  Counter pb_vertices{group, {"pb_vertices", "vertices", "Vertices written into primitive blocks"}};
-  Counter control_stream_entries{group, {"control_stream_entries", "entries", "Control stream entries (tile x primitive block)"}};
-  Counter pb_primitive_block_bytes{group, {"pb_primitive_block_bytes", "bytes", "Primitive block bytes written"}};
-  Counter pb_control_stream_bytes{group, {"pb_control_stream_bytes", "bytes", "Control stream bytes allocated (whole blocks)"}};
-  Counter pb_region_header_bytes{group, {"pb_region_header_bytes", "bytes", "Region header bytes written"}};
-  Counter pb_bytes_written{group, {"pb_bytes_written", "bytes", "Parameter buffer bytes written in all"}};
-  Counter pb_bytes_read{group, {"pb_bytes_read", "bytes", "Parameter buffer bytes read back by the ISP"}};
-  Counter pb_peak_allocated_bytes{group, {"pb_peak_allocated_bytes", "bytes", "Largest page-rounded parameter buffer use of one render"}};
-  Counter partial_renders{group, {"partial_renders", "renders", "Renders forced by a full parameter buffer"}};
-  explicit TilerStats(std::string scope) : group(std::move(scope)) {}
+  TBDR_STATS(TBDR_TILER_STATS)
 };
 
 /// The tiling engine and the parameter buffer of one render.

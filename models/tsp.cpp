@@ -196,11 +196,11 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   std::sort(quad_seen_.begin(), quad_seen_.end());
   const auto quads = static_cast<std::uint64_t>(std::unique(quad_seen_.begin(), quad_seen_.end()) - quad_seen_.begin());
   const std::uint64_t helpers = quads * 4 - pixels.size();
-  stats.invocations += pixels.size();
-  stats.quads += quads;
+  stats.shader_invocations += pixels.size();
+  stats.shaded_quads += quads;
   stats.helper_lanes += helpers;
   stats.texture_fetches += quads * 4 * sh.tex_fetches;
-  stats.texels += quads * 4 * sh.tex_fetches * static_cast<std::uint64_t>(hw.texture.texels_per_fetch);
+  stats.texels_filtered += quads * 4 * sh.tex_fetches * static_cast<std::uint64_t>(hw.texture.texels_per_fetch);
 
   const bool from_triangle = p.material != kNoMaterial && ctx_.scene != nullptr;
   const Material* mat = from_triangle ? &ctx_.scene->materials[p.material] : nullptr;
@@ -248,7 +248,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         const glm::vec2 uv = p.uv[0] * b.x + p.uv[1] * b.y + p.uv[2] * b.z;
         const float a = s.alpha * (mask_tex ? mask_tex->sample(uv) : 1.0f);
         if (a < mat->alpha_cutoff) {
-          stats.alpha_killed += static_cast<std::uint64_t>(std::popcount(write_mask));
+          stats.alpha_test_killed_samples += static_cast<std::uint64_t>(std::popcount(write_mask));
           write_mask = 0;
         }
       }
@@ -308,7 +308,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     if (pls_writes && outputs == 0) stats.pls_bytes_accessed += pls_bytes;
     if (from_triangle && sh.light_source != LightSource::None && sh.light_source != LightSource::Proxy) ++stats.lit_surface_invocations;
     for (const auto& [cls, bytes] : d.per_pixel_reads) ctx_.dram->read(cls, bytes);
-    stats.alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * fl.count;
+    stats.fragment_alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * fl.count;
     stats.light_evaluations += fl.count;
     ctx_.images->counters.shaded[pixel] += 1;
     ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(fl.count);
@@ -412,7 +412,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     }
   }
   // Helper lanes run the same code (their light loops as long as the batch's average fragment).
-  stats.alu_ops += helpers * sh.alu_ops + (helpers * std::uint64_t{sh.light_alu_ops} * light_sum) / pixels.size();
+  stats.fragment_alu_ops += helpers * sh.alu_ops + (helpers * std::uint64_t{sh.light_alu_ops} * light_sum) / pixels.size();
 }
 
 }  // namespace tbdr

@@ -16,28 +16,29 @@
 
 namespace tbdr {
 
+// Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
+#define TBDR_TSP_STATS(X) \
+  X(Counter, shader_invocations, "fragments", Sum, "Fragment shader invocations on covered pixels (helpers excluded)") \
+  X(Counter, shaded_quads, "quads", Sum, "2x2 quads launched") \
+  X(Counter, helper_lanes, "lanes", Sum, "Lanes of launched quads with no covered pixel (helpers)") \
+  X(Counter, lit_surface_invocations, "fragments", Sum, "Invocations on scene geometry whose shader evaluates lights (not proxies)") \
+  X(Counter, shaded_samples, "samples", Sum, "Samples whose color a shader wrote") \
+  X(Counter, fragment_alu_ops, "ops", Sum, "Fragment shader ALU ops, helper lanes included") \
+  X(Counter, texture_fetches, "fetches", Sum, "Texture fetches, helper lanes included") \
+  X(Counter, texels_filtered, "texels", Sum, "Texels read by the texture units") \
+  X(Counter, texture_line_accesses, "lines", Sum, "Texture cache line accesses: distinct lines per quad and fetch, before merging within the tile") \
+  X(Counter, texture_tile_lines, "lines", Sum, "Distinct texture lines each tile touched (its footprint), summed over tiles") \
+  X(Counter, light_evaluations, "evaluations", Sum, "Lights evaluated by covered fragments") \
+  X(Counter, alpha_test_killed_samples, "samples", Sum, "Punch-through samples discarded by the alpha test") \
+  X(Counter, blended_samples, "samples", Sum, "Samples written with blending") \
+  X(Counter, unassigned_cluster_fragments, "fragments", Sum, "Fragments whose cluster got no light list (not flagged)") \
+  X(Counter, light_stack_overflow_fragments, "fragments", Sum, "Fragments whose PLS light stack overflowed (fell back to every light)") \
+  X(Counter, pls_bytes_accessed, "bytes", Sum, "Pixel local storage bytes read and written by shaders (the pass's PLS layout per access)") \
+  X(Counter, tile_buffer_read_bytes, "bytes", Sum, "On-chip tile buffer bytes read by blending and fetch") \
+  X(Counter, tile_buffer_write_bytes, "bytes", Sum, "On-chip tile buffer bytes written by shaders")
 /// Statistics of fragment shading.
 struct TspStats {
-  StatGroup group;
-  Counter invocations{group, {"shader_invocations", "fragments", "Fragment shader invocations on covered pixels (helpers excluded)"}};
-  Counter quads{group, {"shaded_quads", "quads", "2x2 quads launched"}};
-  Counter helper_lanes{group, {"helper_lanes", "lanes", "Lanes of launched quads with no covered pixel (helpers)"}};
-  Counter lit_surface_invocations{group, {"lit_surface_invocations", "fragments", "Invocations on scene geometry whose shader evaluates lights (not proxies)"}};
-  Counter shaded_samples{group, {"shaded_samples", "samples", "Samples whose color a shader wrote"}};
-  Counter alu_ops{group, {"fragment_alu_ops", "ops", "Fragment shader ALU ops, helper lanes included"}};
-  Counter texture_fetches{group, {"texture_fetches", "fetches", "Texture fetches, helper lanes included"}};
-  Counter texels{group, {"texels_filtered", "texels", "Texels read by the texture units"}};
-  Counter texture_line_accesses{group, {"texture_line_accesses", "lines", "Texture cache line accesses: distinct lines per quad and fetch, before merging within the tile"}};
-  Counter texture_tile_lines{group, {"texture_tile_lines", "lines", "Distinct texture lines each tile touched (its footprint), summed over tiles"}};
-  Counter light_evaluations{group, {"light_evaluations", "evaluations", "Lights evaluated by covered fragments"}};
-  Counter alpha_killed{group, {"alpha_test_killed_samples", "samples", "Punch-through samples discarded by the alpha test"}};
-  Counter blended_samples{group, {"blended_samples", "samples", "Samples written with blending"}};
-  Counter unassigned_cluster_fragments{group, {"unassigned_cluster_fragments", "fragments", "Fragments whose cluster got no light list (not flagged)"}};
-  Counter light_stack_overflow_fragments{group, {"light_stack_overflow_fragments", "fragments", "Fragments whose PLS light stack overflowed (fell back to every light)"}};
-  Counter pls_bytes_accessed{group, {"pls_bytes_accessed", "bytes", "Pixel local storage bytes read and written by shaders (the pass's PLS layout per access)"}};
-  Counter tile_buffer_read_bytes{group, {"tile_buffer_read_bytes", "bytes", "On-chip tile buffer bytes read by blending and fetch"}};
-  Counter tile_buffer_write_bytes{group, {"tile_buffer_write_bytes", "bytes", "On-chip tile buffer bytes written by shaders"}};
-  explicit TspStats(std::string scope) : group(std::move(scope)) {}
+  TBDR_STATS(TBDR_TSP_STATS)
 };
 
 /// One pixel of a shading batch: absolute coordinates and the samples to write.

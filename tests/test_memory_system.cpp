@@ -387,7 +387,7 @@ TEST(DramTest, SequentialReadsHitTheOpenRow) {
     EXPECT_EQ(s.reads.value(), kLines) << timed;
     EXPECT_EQ(s.row_misses.value(), kLines / kLinesPerRow) << timed;
     EXPECT_EQ(s.row_hits.value(), kLines - kLines / kLinesPerRow) << timed;
-    EXPECT_EQ(s.row_empty.value(), 16u) << timed;  // 2 channels x 8 banks opened once from empty
+    EXPECT_EQ(s.row_misses_empty.value(), 16u) << timed;  // 2 channels x 8 banks opened once from empty
     EXPECT_EQ(s.row_conflicts.value(), kLines / kLinesPerRow - 16) << timed;
     d.update_derived_stats();
     EXPECT_DOUBLE_EQ(s.row_hit_rate.value(), 63.0 / 64.0) << timed;
@@ -514,7 +514,7 @@ TEST(DramTest, QueueFullBackpressureLosesNothing) {
   EXPECT_FALSE(d.can_accept(0, false));
   EXPECT_TRUE(d.can_accept(0, true));     // the write queue is separate
   EXPECT_TRUE(d.can_accept(4096, false));  // channel 1 is empty
-  EXPECT_EQ(d.stats().rejected.value(), 8u);
+  EXPECT_EQ(d.stats().queue_full_rejections.value(), 8u);
   d.set_space_callback([&](std::uint32_t) {
     while (!refused.empty() && d.enqueue(std::move(refused.front()))) refused.pop_front();
   });
@@ -899,7 +899,7 @@ TEST(MemorySystemTest, ConsecutiveMissesOfARowFormOneBurstChain) {
     eq.run();
     const DramStats& s = m.dram().stats();
     EXPECT_EQ(s.reads.value(), 64u) << chain;
-    EXPECT_EQ(s.entries.value(), chain == 0 ? 64u : 4u) << chain;
+    EXPECT_EQ(s.queue_entries_served.value(), chain == 0 ? 64u : 4u) << chain;
     EXPECT_EQ(s.row_hits.value(), 63u) << chain;
     EXPECT_EQ(s.row_misses.value(), 1u) << chain;
     EXPECT_EQ(s.activates.value(), 1u) << chain;
@@ -914,13 +914,13 @@ TEST(MemorySystemTest, ConsecutiveMissesOfARowFormOneBurstChain) {
   MemorySystem m(hw, eq);
   ASSERT_TRUE(m.issue(Client::PixelBackEnd, 0x100000, 4096, false, DramClass::Color));
   eq.run();
-  EXPECT_EQ(m.dram().stats().entries.value(), 8u);
+  EXPECT_EQ(m.dram().stats().queue_entries_served.value(), 8u);
   EXPECT_EQ(m.dram().stats().reads.value(), 64u);
   // The functional path forms the same chains.
   EventQueue eq_f;
   MemorySystem f(hw, eq_f);
   f.access_functional(Client::PixelBackEnd, 0x100000, 4096, false, DramClass::Color);
-  EXPECT_EQ(f.dram().stats().entries.value(), 8u);
+  EXPECT_EQ(f.dram().stats().queue_entries_served.value(), 8u);
   EXPECT_EQ(f.dram().stats().row_hits.value(), 63u);
 }
 
@@ -938,7 +938,7 @@ TEST(MemorySystemTest, EachLineOfAChainArrivesWithItsOwnBursts) {
   eq.run();
   EXPECT_EQ(whole.ps(), (253 + 20) * kNs);
   EXPECT_EQ(first.ps(), (103 + 20) * kNs);
-  EXPECT_EQ(m.dram().stats().entries.value(), 1u);
+  EXPECT_EQ(m.dram().stats().queue_entries_served.value(), 1u);
   EXPECT_EQ(m.stats().merged_misses.value(), 1u);
   // Mean read latency per line: (103 + 113 + ... + 253) / 16 = 178 ns.
   m.dram().update_derived_stats();

@@ -1,20 +1,31 @@
 #pragma once
-// Statistics: each one is declared once (name, unit, description) where its unit defines it, and
-// lives in a plain member that the hot path increments directly. A StatGroup is a scope ("isp",
-// "pass.0.gbuffer", "dram.class.color") that knows its statistics so a run can collect them all
-// into the results database at the end; nothing is looked up by string while simulating.
+// Statistics: each one is declared once, in its unit's statistics set, with its name (the
+// member's), unit, description and kind (summed or a gauge). A set is a plain value: the hot
+// path increments members directly, sets subtract (the work of one tile = after - before) and add
+// (a frame = the sum of its passes; gauges take the largest value) as values, and turn into rows
+// (StatRecord) only where a run is written to the results database. Nothing is looked up by name.
+#include <algorithm>
+#include <concepts>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 namespace tbdr {
 
+/// How a statistic combines across passes, tiles or runs.
+enum class StatKind : std::uint8_t {
+  Sum,    ///< a count or total: the frame's value is the sum of its parts
+  Gauge,  ///< a level (bytes per pixel, a peak, a factor): the frame's value is the largest part
+  Derived,  ///< a ratio or mean its owner computes from the set's sums; never combined
+};
+
 /// The declaration of a statistic: stored once per name in the database's stat_defs table.
-/// The strings must have static storage (string literals).
+/// The strings have static storage (string literals).
 struct StatDef {
   const char* name;
   const char* unit;
   const char* description;
+  StatKind kind = StatKind::Sum;
 };
 
 /// One collected value: what the results database stores per run.
@@ -37,80 +48,97 @@ struct TileRecord {
   bool operator==(const TileRecord&) const = default;
 };
 
-class StatBase;
-
-/// A named scope that owns the list of statistics registered in it. Not copyable or movable:
-/// statistics register their own address.
-class StatGroup {
+/// An event count (samples, bytes, primitives): a 64-bit integer.
+class Counter {
  public:
-  explicit StatGroup(std::string scope) : scope_(std::move(scope)) {}
-  StatGroup(const StatGroup&) = delete;
-  StatGroup& operator=(const StatGroup&) = delete;
-
-  const std::string& scope() const { return scope_; }
-  void set_scope(std::string s) { scope_ = std::move(s); }
-  /// Appends every statistic of this group (in declaration order) to `out`.
-  void collect(std::vector<StatRecord>& out) const;
-  /// Resets every statistic to zero.
-  void reset();
-
- private:
-  friend class StatBase;
-  std::string scope_;
-  std::vector<StatBase*> stats_;
-};
-
-/// Common part of counters and accumulators: the declaration and the registration.
-class StatBase {
- public:
-  StatBase(StatGroup& group, const StatDef& def) : def_(def) { group.stats_.push_back(this); }
-  StatBase(const StatBase&) = delete;
-  StatBase& operator=(const StatBase&) = delete;
-  virtual ~StatBase() = default;
-  const StatDef& def() const { return def_; }
-  virtual double as_double() const = 0;
-  virtual void reset() = 0;
-
- private:
-  const StatDef def_;  ///< copied: the strings are literals with static storage
-};
-
-/// An event count (samples, bytes, primitives): a plain 64-bit integer.
-class Counter final : public StatBase {
- public:
-  using StatBase::StatBase;
   Counter& operator+=(std::uint64_t n) { value_ += n; return *this; }
+  Counter& operator-=(std::uint64_t n) { value_ -= n; return *this; }
   Counter& operator++() { ++value_; return *this; }
+  Counter& operator+=(const Counter& o) { value_ += o.value_; return *this; }
+  Counter& operator-=(const Counter& o) { value_ -= o.value_; return *this; }
+  void set(std::uint64_t v) { value_ = v; }
   std::uint64_t value() const { return value_; }
-  double as_double() const override { return static_cast<double>(value_); }
-  void reset() override { value_ = 0; }
+  double as_double() const { return static_cast<double>(value_); }
+  auto operator<=>(const Counter&) const = default;
 
  private:
   std::uint64_t value_ = 0;
 };
 
-/// A real-valued total (energy in pJ, time in ps as a derived figure): a plain double.
-class Accumulator final : public StatBase {
+/// A real-valued total (energy in pJ, time in ps as a derived figure).
+class Accumulator {
  public:
-  using StatBase::StatBase;
   Accumulator& operator+=(double v) { value_ += v; return *this; }
+  Accumulator& operator+=(const Accumulator& o) { value_ += o.value_; return *this; }
+  Accumulator& operator-=(const Accumulator& o) { value_ -= o.value_; return *this; }
   void set(double v) { value_ = v; }
   double value() const { return value_; }
-  double as_double() const override { return value_; }
-  void reset() override { value_ = 0; }
+  double as_double() const { return value_; }
+  auto operator<=>(const Accumulator&) const = default;
 
  private:
   double value_ = 0;
 };
 
-inline void StatGroup::collect(std::vector<StatRecord>& out) const {
-  for (const StatBase* s : stats_) {
-    out.push_back({scope_, s->def().name, s->as_double(), s->def().unit, s->def().description});
+// Declares a statistics set inside a struct from an X-macro list of
+//   X(Counter|Accumulator, member, "unit", Sum|Gauge, "description")
+// It defines one member per entry and `zip(a, b, f)`, which calls f(a.member, b.member, def) for
+// every entry in declaration order; the free functions below are written once on top of it.
+#define TBDR_STAT_MEMBER(type, member, unit, kind, desc) ::tbdr::type member;
+#define TBDR_STAT_ZIP(type, member, unit, kind, desc) \
+  f(a.member, b.member, ::tbdr::StatDef{#member, unit, desc, ::tbdr::StatKind::kind});
+#define TBDR_STATS(LIST)                              \
+  LIST(TBDR_STAT_MEMBER)                              \
+  template <class A, class B, class F>                \
+  static void zip(A& a, B& b, F&& f) {                \
+    LIST(TBDR_STAT_ZIP)                               \
   }
+
+/// A struct declared with TBDR_STATS.
+template <class S>
+concept StatSet = requires(S& s, const S& c) {
+  S::zip(s, c, [](auto&, const auto&, const StatDef&) {});
+};
+
+/// The part of `a` not in `b` (b an earlier snapshot of a): sums subtract; gauges and derived
+/// figures keep a's value.
+template <StatSet S>
+S operator-(S a, const S& b) {
+  S::zip(a, b, [](auto& x, const auto& y, const StatDef& d) {
+    if (d.kind == StatKind::Sum) x -= y;
+  });
+  return a;
 }
 
-inline void StatGroup::reset() {
-  for (StatBase* s : stats_) s->reset();
+/// Adds `b` into `a`: sums add; gauges take the larger level; derived figures keep a's value
+/// (their owner recomputes them from the sums).
+template <StatSet S>
+S& operator+=(S& a, const S& b) {
+  S::zip(a, b, [](auto& x, const auto& y, const StatDef& d) {
+    if (d.kind == StatKind::Sum) {
+      x += y;
+    } else if (d.kind == StatKind::Gauge && y.value() > x.value()) {
+      x = y;
+    }
+  });
+  return a;
+}
+
+/// Appends every statistic of `s` to `out` under `scope`, in declaration order.
+template <StatSet S>
+void collect_stats(const S& s, const std::string& scope, std::vector<StatRecord>& out) {
+  S::zip(s, s, [&](const auto& x, const auto&, const StatDef& d) {
+    out.push_back({scope, d.name, x.as_double(), d.unit, d.description});
+  });
+}
+
+/// Every declaration of a set, in order (for tools that print what a unit counts).
+template <StatSet S>
+std::vector<StatDef> stat_defs() {
+  std::vector<StatDef> defs;
+  S s{};
+  S::zip(s, s, [&](const auto&, const auto&, const StatDef& d) { defs.push_back(d); });
+  return defs;
 }
 
 }  // namespace tbdr

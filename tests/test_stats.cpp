@@ -1,0 +1,69 @@
+// Statistics sets: declared once, combined as values (kernel/stats.hpp).
+#include <gtest/gtest.h>
+
+#include "kernel/stats.hpp"
+
+namespace tbdr {
+namespace {
+
+#define TEST_UNIT_STATS(X)                                             \
+  X(Counter, samples, "samples", Sum, "Samples seen")                  \
+  X(Counter, peak_bytes, "bytes", Gauge, "Largest footprint")          \
+  X(Accumulator, energy_pj, "pJ", Sum, "Energy")                       \
+  X(Accumulator, hit_rate, "ratio", Derived, "Hits / accesses")
+struct TestUnitStats {
+  TBDR_STATS(TEST_UNIT_STATS)
+};
+
+TEST(Stats, DeclarationsCarryTheMemberNameUnitAndKind) {
+  const auto defs = stat_defs<TestUnitStats>();
+  ASSERT_EQ(defs.size(), 4u);
+  EXPECT_STREQ(defs[0].name, "samples");
+  EXPECT_STREQ(defs[1].unit, "bytes");
+  EXPECT_EQ(defs[1].kind, StatKind::Gauge);
+  EXPECT_EQ(defs[3].kind, StatKind::Derived);
+}
+
+TEST(Stats, SnapshotDifferenceIsTheWorkInBetween) {
+  TestUnitStats s;
+  s.samples += 100;
+  s.peak_bytes.set(64);
+  const TestUnitStats before = s;
+  s.samples += 28;        // one tile's work
+  s.peak_bytes.set(96);   // a level, not work: the difference keeps the current level
+  s.energy_pj += 2.5;
+  const TestUnitStats tile = s - before;
+  EXPECT_EQ(tile.samples.value(), 28u);
+  EXPECT_EQ(tile.peak_bytes.value(), 96u);
+  EXPECT_DOUBLE_EQ(tile.energy_pj.value(), 2.5);
+}
+
+TEST(Stats, FrameTotalSumsCountsAndTakesTheLargestGauge) {
+  TestUnitStats pass_a, pass_b, frame;
+  pass_a.samples += 10;
+  pass_a.peak_bytes.set(4096);
+  pass_a.hit_rate.set(0.5);
+  pass_b.samples += 32;
+  pass_b.peak_bytes.set(1024);
+  pass_b.hit_rate.set(0.9);
+  frame += pass_a;
+  frame += pass_b;
+  EXPECT_EQ(frame.samples.value(), 42u);        // 10 + 32
+  EXPECT_EQ(frame.peak_bytes.value(), 4096u);   // max(4096, 1024), not 5120
+  EXPECT_DOUBLE_EQ(frame.hit_rate.value(), 0);  // derived: left for its owner to recompute
+}
+
+TEST(Stats, CollectWritesOneRowPerStatisticUnderTheScope) {
+  TestUnitStats s;
+  s.samples += 7;
+  std::vector<StatRecord> rows;
+  collect_stats(s, "pass0.main/isp", rows);
+  ASSERT_EQ(rows.size(), 4u);
+  EXPECT_EQ(rows[0].scope, "pass0.main/isp");
+  EXPECT_EQ(rows[0].name, "samples");
+  EXPECT_EQ(rows[0].value, 7);
+  EXPECT_EQ(rows[2].unit, "pJ");
+}
+
+}  // namespace
+}  // namespace tbdr
