@@ -1,84 +1,20 @@
 // `tbdrsim report`: comparison tables over the analysis views (v_run_summary, v_param, v_metric).
 #include "analysis/report.hpp"
 
-#include <sqlite3.h>
-
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <memory>
 #include <ostream>
 #include <set>
 #include <sstream>
 
-#include "kernel/errors.hpp"
 #include "analysis/results_db.hpp"
+#include "analysis/sql.hpp"
+#include "kernel/errors.hpp"
 
 namespace tbdr {
-
-// ---------------------------------------------------------------------------------------------
-// SqlQuery
-
-SqlQuery::SqlQuery(sqlite3* db, const std::string& path, const std::string& sql) : db_(db), path_(path) {
-  const char* tail = nullptr;
-  if (sqlite3_prepare_v2(db, sql.c_str(), static_cast<int>(sql.size()), &s_, &tail) != SQLITE_OK) {
-    std::string head = sql.substr(0, 60);
-    std::replace(head.begin(), head.end(), '\n', ' ');
-    fail("cannot prepare '" + head + (sql.size() > 60 ? "...'" : "'"));
-  }
-  if (tail && std::string(tail).find_first_not_of(" \t\r\n;") != std::string::npos) {
-    sqlite3_finalize(s_);
-    s_ = nullptr;
-    throw InputError(path_, "SQL: only one statement allowed, found more after '" +
-                                sql.substr(0, static_cast<std::size_t>(tail - sql.c_str())) + "'");
-  }
-}
-
-SqlQuery::~SqlQuery() { sqlite3_finalize(s_); }
-
-void SqlQuery::fail(const std::string& what) const {
-  throw InputError(path_, "SQLite: " + what + ": " + sqlite3_errmsg(db_));
-}
-
-SqlQuery& SqlQuery::bind(int i, const std::string& v) {
-  sqlite3_bind_text(s_, i, v.c_str(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
-  return *this;
-}
-SqlQuery& SqlQuery::bind(int i, std::int64_t v) {
-  sqlite3_bind_int64(s_, i, v);
-  return *this;
-}
-SqlQuery& SqlQuery::bind(int i, double v) {
-  sqlite3_bind_double(s_, i, v);
-  return *this;
-}
-
-bool SqlQuery::step() {
-  const int rc = sqlite3_step(s_);
-  if (rc == SQLITE_ROW) return true;
-  if (rc == SQLITE_DONE) return false;
-  fail("step failed");
-}
-
-void SqlQuery::reset() {
-  sqlite3_reset(s_);
-  sqlite3_clear_bindings(s_);
-}
-
-int SqlQuery::columns() const { return sqlite3_column_count(s_); }
-std::string SqlQuery::column_name(int col) const {
-  const char* n = sqlite3_column_name(s_, col);
-  return n ? n : "";
-}
-bool SqlQuery::is_null(int col) const { return sqlite3_column_type(s_, col) == SQLITE_NULL; }
-std::string SqlQuery::text(int col) const {
-  const auto* p = sqlite3_column_text(s_, col);
-  return p ? reinterpret_cast<const char*>(p) : "";
-}
-std::int64_t SqlQuery::int64(int col) const { return sqlite3_column_int64(s_, col); }
-double SqlQuery::real(int col) const { return sqlite3_column_double(s_, col); }
 
 // ---------------------------------------------------------------------------------------------
 // Report
@@ -215,13 +151,12 @@ bool is_optional_default(const std::string& metric) {
          metric == "cycles";
 }
 
-}  // namespace
-
-std::vector<std::string> default_report_metrics(sqlite3* db, const std::string& path) {
+/// The default metrics, in column order (figures absent from every run are dropped later).
+std::vector<std::string> default_report_metrics(const SqlConnection& db) {
   std::vector<std::string> m = {"frame_time_ms", "cycles", "dram_total_mb", "dram_device_total_mb"};
   std::set<std::string> classes;
   {
-    SqlQuery q(db, path, "SELECT DISTINCT substr(scope, 12) FROM stats WHERE scope GLOB 'frame/dram.*'");
+    SqlStatement q(db, "SELECT DISTINCT substr(scope, 12) FROM stats WHERE scope GLOB 'frame/dram.*'");
     while (q.step()) classes.insert(q.text(0));
   }
   for (const char* c : kDramClassOrder) {
@@ -230,9 +165,9 @@ std::vector<std::string> default_report_metrics(sqlite3* db, const std::string& 
   for (const auto& c : classes) m.push_back("dram_" + c + "_mb");
   m.push_back("energy_total_mj");
   {
-    SqlQuery q(db, path,
-               "SELECT DISTINCT substr(name, 1, length(name) - 3) FROM stats WHERE scope = 'frame/energy' "
-               "AND name GLOB '*_pj' AND name <> 'total_pj' ORDER BY rowid");
+    SqlStatement q(db,
+                   "SELECT DISTINCT substr(name, 1, length(name) - 3) FROM stats WHERE scope = 'frame/energy' "
+                   "AND name GLOB '*_pj' AND name <> 'total_pj' ORDER BY rowid");
     while (q.step()) m.push_back("energy_" + q.text(0) + "_mj");
   }
   m.push_back("overshading");
@@ -240,50 +175,49 @@ std::vector<std::string> default_report_metrics(sqlite3* db, const std::string& 
   return m;
 }
 
-ReportTable build_report(const ResultsDb& db, const ReportOptions& opt) {
-  sqlite3* h = db.handle();
-  const std::string& path = db.path();
-  ReportTable t;
-  std::vector<std::string> keys;
-  for (const auto& k : opt.by.empty() ? std::vector<std::string>{"technique"} : opt.by) {
-    keys.push_back(canonical_group_key(k));
-    t.group_keys.push_back(k);
-  }
-  // Runs passing the filter, and their inputs (config hash / trace hash).
-  std::vector<std::int64_t> ok_runs;
-  std::map<std::int64_t, std::string> run_inputs;
-  {
-    const std::string where = opt.where.empty() ? "1" : opt.where;
-    std::unique_ptr<SqlQuery> q;
-    try {
-      q = std::make_unique<SqlQuery>(
-          h, path, "SELECT run_id, status, config_hash, trace_hash FROM v_run_summary WHERE (" + where + ") ORDER BY run_id");
-      while (q->step()) {
-        if (q->text(1) == "ok") {
-          ok_runs.push_back(q->int64(0));
-          run_inputs[q->int64(0)] = q->text(2) + "/" + q->text(3);
-        } else {
-          ++t.runs_failed;
-        }
-      }
-    } catch (const InputError& e) {
-      throw InputError("--where " + opt.where, std::string(e.what()) + " (the condition is on v_run_summary's columns)");
-    }
-  }
-  t.runs_used = static_cast<std::int64_t>(ok_runs.size());
-  const std::set<std::int64_t> selected(ok_runs.begin(), ok_runs.end());
+/// The finished runs passing the user's filter, with their inputs ("config hash/trace hash").
+struct SelectedRuns {
+  std::vector<std::int64_t> ok;              ///< ascending
+  std::map<std::int64_t, std::string> inputs;
+  std::int64_t failed = 0;                   ///< failed runs passing the filter
+};
 
-  // Group key values per run.
+SelectedRuns select_runs(const SqlConnection& db, const std::string& where) {
+  SelectedRuns r;
+  try {
+    // --where is an SQL condition by design, the only text spliced into a statement here; the
+    // statement holds one statement only (SqlStatement refuses "1; DROP TABLE runs").
+    SqlStatement q(db, "SELECT run_id, status, config_hash, trace_hash FROM v_run_summary WHERE (" +
+                           (where.empty() ? std::string("1") : where) + ") ORDER BY run_id");
+    while (q.step()) {
+      if (q.text(1) == "ok") {
+        r.ok.push_back(q.int64(0));
+        r.inputs[q.int64(0)] = q.text(2) + "/" + q.text(3);
+      } else {
+        ++r.failed;
+      }
+    }
+  } catch (const InputError& e) {
+    throw InputError("--where " + where, std::string(e.what()) + " (the condition is on v_run_summary's columns)");
+  }
+  return r;
+}
+
+/// The group key values of every selected run ("(none)" where a run has no such key).
+std::map<std::int64_t, std::vector<std::string>> group_keys_of(const SqlConnection& db,
+                                                               const std::vector<std::string>& keys,
+                                                               const std::vector<std::string>& typed,
+                                                               const std::set<std::int64_t>& selected) {
   std::map<std::int64_t, std::vector<std::string>> run_keys;
   for (std::size_t k = 0; k < keys.size(); ++k) {
-    SqlQuery exists(h, path, "SELECT 1 FROM v_param WHERE key = ? LIMIT 1");
+    SqlStatement exists(db, "SELECT 1 FROM v_param WHERE key = ? LIMIT 1");
     exists.bind(1, keys[k]);
     if (!exists.step()) {
-      throw InputError("--by " + t.group_keys[k],
+      throw InputError("--by " + typed[k],
                        "no run has this key; use technique, scene, config, lights, trace.width, trace.height, "
                        "trace.samples or a parameter key (`tbdrsim params` lists them)");
     }
-    SqlQuery q(h, path, "SELECT run_id, value FROM v_param WHERE key = ?");
+    SqlStatement q(db, "SELECT run_id, value FROM v_param WHERE key = ?");
     q.bind(1, keys[k]);
     while (q.step()) {
       const std::int64_t id = q.int64(0);
@@ -293,54 +227,87 @@ ReportTable build_report(const ResultsDb& db, const ReportOptions& opt) {
       v[k] = q.text(1);
     }
   }
+  for (const auto id : selected) run_keys[id].resize(keys.size(), "(none)");
+  return run_keys;
+}
 
-  // Metrics.
-  const bool defaults = opt.metrics.empty();
-  t.metrics = defaults ? default_report_metrics(h, path) : opt.metrics;
-  t.units.assign(t.metrics.size(), "");
+/// Sums of one group's runs, per metric.
+struct GroupSums {
+  std::vector<double> sum;
+  std::vector<std::int64_t> n;
+  std::set<std::int64_t> runs;
+  std::set<std::string> inputs;
+};
+
+/// Which metrics some selected run recorded (and with a non-zero value), and their units.
+struct MetricsSeen {
+  std::vector<bool> seen, nonzero;
+  std::vector<std::string> units;
+};
+
+/// Adds every selected run's value of each metric to its group's sums.
+MetricsSeen sum_metrics(const SqlConnection& db, const std::vector<std::string>& metrics,
+                        const std::set<std::int64_t>& selected,
+                        std::map<std::int64_t, std::vector<std::string>>& run_keys,
+                        std::map<std::vector<std::string>, GroupSums>& groups) {
+  MetricsSeen s{std::vector<bool>(metrics.size(), false), std::vector<bool>(metrics.size(), false),
+                std::vector<std::string>(metrics.size())};
+  if (selected.empty()) return s;
   std::map<std::string, std::size_t> metric_index;
-  for (std::size_t i = 0; i < t.metrics.size(); ++i) metric_index[t.metrics[i]] = i;
+  for (std::size_t i = 0; i < metrics.size(); ++i) metric_index[metrics[i]] = i;
+  // One placeholder per metric: only "?" marks are spliced in, the names are bound.
+  std::string in;
+  for (std::size_t i = 0; i < metrics.size(); ++i) in += (i ? ",?" : "?");
+  SqlStatement q(db, "SELECT run_id, metric, value, unit FROM v_metric WHERE metric IN (" + in + ")");
+  for (std::size_t i = 0; i < metrics.size(); ++i) q.bind(static_cast<int>(i + 1), metrics[i]);
+  while (q.step()) {
+    const std::int64_t id = q.int64(0);
+    if (!selected.count(id)) continue;
+    const std::size_t m = metric_index.at(q.text(1));
+    if (s.units[m].empty()) s.units[m] = q.text(3);
+    if (q.is_null(2)) continue;
+    const double v = q.real(2);
+    auto& acc = groups[run_keys[id]];
+    acc.sum[m] += v;
+    acc.n[m] += 1;
+    s.seen[m] = true;
+    if (v != 0) s.nonzero[m] = true;
+  }
+  return s;
+}
 
-  struct Acc {
-    std::vector<double> sum;
-    std::vector<std::int64_t> n;
-    std::set<std::int64_t> runs;
-    std::set<std::string> inputs;
-  };
-  std::map<std::vector<std::string>, Acc> groups;
-  for (const auto id : ok_runs) {
-    auto& keyv = run_keys[id];
-    keyv.resize(keys.size(), "(none)");
-    auto& acc = groups[keyv];
+}  // namespace
+
+ReportTable build_report(const ResultsDb& db, const ReportOptions& opt) {
+  const SqlConnection& sql = db.sql();
+  ReportTable t;
+  std::vector<std::string> keys;
+  for (const auto& k : opt.by.empty() ? std::vector<std::string>{"technique"} : opt.by) {
+    keys.push_back(canonical_group_key(k));
+    t.group_keys.push_back(k);
+  }
+  const SelectedRuns runs = select_runs(sql, opt.where);
+  t.runs_failed = runs.failed;
+  t.runs_used = static_cast<std::int64_t>(runs.ok.size());
+  const std::set<std::int64_t> selected(runs.ok.begin(), runs.ok.end());
+  auto run_keys = group_keys_of(sql, keys, t.group_keys, selected);
+
+  const bool defaults = opt.metrics.empty();
+  t.metrics = defaults ? default_report_metrics(sql) : opt.metrics;
+  std::map<std::vector<std::string>, GroupSums> groups;
+  for (const auto id : runs.ok) {
+    auto& acc = groups[run_keys[id]];
     acc.sum.resize(t.metrics.size(), 0.0);
     acc.n.resize(t.metrics.size(), 0);
     acc.runs.insert(id);
-    acc.inputs.insert(run_inputs[id]);
+    acc.inputs.insert(runs.inputs.at(id));
   }
-  std::vector<bool> seen(t.metrics.size(), false), nonzero(t.metrics.size(), false);
-  if (!ok_runs.empty()) {
-    std::string in;
-    for (std::size_t i = 0; i < t.metrics.size(); ++i) in += (i ? ",?" : "?");
-    SqlQuery q(h, path, "SELECT run_id, metric, value, unit FROM v_metric WHERE metric IN (" + in + ")");
-    for (std::size_t i = 0; i < t.metrics.size(); ++i) q.bind(static_cast<int>(i + 1), t.metrics[i]);
-    while (q.step()) {
-      const std::int64_t id = q.int64(0);
-      if (!selected.count(id)) continue;
-      const std::size_t m = metric_index.at(q.text(1));
-      if (t.units[m].empty()) t.units[m] = q.text(3);
-      if (q.is_null(2)) continue;
-      const double v = q.real(2);
-      auto& acc = groups[run_keys[id]];
-      acc.sum[m] += v;
-      acc.n[m] += 1;
-      seen[m] = true;
-      if (v != 0) nonzero[m] = true;
-    }
-  }
-  if (!defaults && !ok_runs.empty()) {
+  const MetricsSeen seen = sum_metrics(sql, t.metrics, selected, run_keys, groups);
+  t.units = seen.units;
+  if (!defaults && !runs.ok.empty()) {
     for (std::size_t m = 0; m < t.metrics.size(); ++m) {
-      if (seen[m]) continue;
-      SqlQuery any(h, path, "SELECT 1 FROM v_metric WHERE metric = ? LIMIT 1");
+      if (seen.seen[m]) continue;
+      SqlStatement any(sql, "SELECT 1 FROM v_metric WHERE metric = ? LIMIT 1");
       any.bind(1, t.metrics[m]);
       if (!any.step()) {
         throw InputError("--metric " + t.metrics[m],
@@ -352,7 +319,7 @@ ReportTable build_report(const ResultsDb& db, const ReportOptions& opt) {
   // some run has a non-zero value).
   std::vector<std::size_t> keep;
   for (std::size_t m = 0; m < t.metrics.size(); ++m) {
-    if (!defaults || (seen[m] && (nonzero[m] || !is_optional_default(t.metrics[m])))) keep.push_back(m);
+    if (!defaults || (seen.seen[m] && (seen.nonzero[m] || !is_optional_default(t.metrics[m])))) keep.push_back(m);
   }
   std::vector<std::string> metrics, units;
   for (auto m : keep) {

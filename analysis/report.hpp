@@ -1,7 +1,7 @@
 #pragma once
 // The analysis layer over a results database: the SQL views every database carries
-// (analysis/views.sql, compiled in by analysis/views.cpp), a small prepared-statement helper, and
-// the comparison tables of `tbdrsim report`.
+// (analysis/views.sql, compiled in by analysis/views.cpp) and the comparison tables of
+// `tbdrsim report`.
 #include <cstdint>
 #include <iosfwd>
 #include <optional>
@@ -9,12 +9,10 @@
 #include <string_view>
 #include <vector>
 
-struct sqlite3;
-struct sqlite3_stmt;
-
 namespace tbdr {
 
 class ResultsDb;
+class SqlConnection;
 
 /// The SQL of the analysis views, exactly as in analysis/views.sql.
 std::string_view views_sql();
@@ -22,38 +20,7 @@ std::string_view views_sql();
 std::string views_sql_hash();
 /// Creates the views in an open database, or re-creates them when they are missing or were made
 /// by a different views.sql (one write transaction; nothing is written when they are current).
-/// `path` names the database in errors (InputError).
-void create_views(sqlite3* db, const std::string& path);
-
-/// A prepared SQL statement on an open database that finalizes itself; errors are InputErrors
-/// naming the database (and the SQL's first words when it cannot be prepared).
-class SqlQuery {
- public:
-  SqlQuery(sqlite3* db, const std::string& path, const std::string& sql);
-  ~SqlQuery();
-  SqlQuery(const SqlQuery&) = delete;
-  SqlQuery& operator=(const SqlQuery&) = delete;
-
-  SqlQuery& bind(int i, const std::string& v);
-  SqlQuery& bind(int i, std::int64_t v);
-  SqlQuery& bind(int i, double v);
-  /// Steps once: true when a row is available.
-  bool step();
-  /// Resets for another execution with new bindings.
-  void reset();
-  int columns() const;
-  std::string column_name(int col) const;
-  bool is_null(int col) const;
-  std::string text(int col) const;
-  std::int64_t int64(int col) const;
-  double real(int col) const;
-
- private:
-  [[noreturn]] void fail(const std::string& what) const;
-  sqlite3* db_;
-  std::string path_;
-  sqlite3_stmt* s_ = nullptr;
-};
+void create_views(const SqlConnection& db);
 
 /// How `tbdrsim report` prints a table.
 enum class ReportFormat { Table, Csv, Markdown };
@@ -98,8 +65,6 @@ struct ReportTable {
   std::int64_t mixed_groups = 0;
 };
 
-/// The default metrics, in column order (figures absent from every run are dropped later).
-std::vector<std::string> default_report_metrics(sqlite3* db, const std::string& path);
 /// Builds the comparison. InputError for an unknown group key or metric, or bad SQL in `where`.
 ReportTable build_report(const ResultsDb& db, const ReportOptions& options);
 /// Prints it: aligned columns (table), CSV, or a Markdown table.

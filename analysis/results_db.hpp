@@ -1,14 +1,13 @@
 #pragma once
 // The results database: one SQLite file (WAL mode, busy timeout), a versioned schema with forward
-// migrations, and one transaction per run so a crash never leaves half a run behind.
+// migrations, and one transaction per run so a crash never leaves half a run behind. Queries go
+// through its connection with the SQL helper (analysis/sql.hpp).
 #include <cstdint>
-#include <optional>
 #include <string>
 #include <vector>
 
+#include "analysis/sql.hpp"
 #include "kernel/stats.hpp"
-
-struct sqlite3;
 
 namespace tbdr {
 
@@ -20,10 +19,8 @@ struct RunParam {
   bool operator==(const RunParam&) const = default;
 };
 
-
-/// Everything stored about one run. `id` is set by write_run / read back by read_run.
+/// Everything stored about one run (write_run returns its id).
 struct RunRecord {
-  std::int64_t id = 0;
   std::string started_at;    ///< ISO 8601 UTC
   std::string finished_at;   ///< ISO 8601 UTC
   std::string tool_version;
@@ -52,33 +49,22 @@ class ResultsDb {
 
   /// Opens (creating if absent) and migrates up to `target_version` (tests use older versions).
   explicit ResultsDb(const std::string& path, int target_version = kSchemaVersion);
-  ~ResultsDb();
   ResultsDb(const ResultsDb&) = delete;
   ResultsDb& operator=(const ResultsDb&) = delete;
 
-  const std::string& path() const { return path_; }
+  const std::string& path() const { return conn_.path(); }
+  /// The open connection, for the queries of the analysis, sweep and study code.
+  const SqlConnection& sql() const { return conn_; }
   int schema_version() const;
 
   /// Writes the whole run (runs, run_params, stat_defs, stats, tile_stats) in one transaction and
   /// returns its id.
   std::int64_t write_run(const RunRecord& run);
-  /// Reads a run back (params and stats in insertion order); nullopt when absent.
-  std::optional<RunRecord> read_run(std::int64_t id) const;
-  /// Ids of all runs, ascending.
-  std::vector<std::int64_t> run_ids() const;
-  /// Id of a finished (status ok) run with this resolved configuration and trace, if any.
-  std::optional<std::int64_t> find_ok_run(const std::string& config_hash, const std::string& trace_hash) const;
-  /// Runs arbitrary SQL with no result (views, maintenance); InputError on failure.
-  void exec(const std::string& sql) const;
-
-  /// The raw handle for analysis code that issues its own queries.
-  sqlite3* handle() const { return db_; }
 
  private:
   void setup(int target_version);
   void migrate(int target_version);
-  std::string path_;
-  sqlite3* db_ = nullptr;
+  SqlConnection conn_;
 };
 
 /// Current UTC time as ISO 8601 ("2026-11-22T10:00:00Z").

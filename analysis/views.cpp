@@ -1,12 +1,10 @@
 // The analysis views, compiled in from analysis/views.sql (the one copy of their SQL) and created
 // in every database tbdrsim opens (ResultsDb's constructor calls create_views()).
-#include <sqlite3.h>
-
 #include <string>
 #include <string_view>
 
 #include "analysis/report.hpp"
-#include "kernel/errors.hpp"
+#include "analysis/sql.hpp"
 #include "kernel/hash.hpp"
 
 namespace tbdr {
@@ -27,27 +25,22 @@ constexpr SqlText kViewsSql =
 #include "analysis/views.sql"
     ;
 
-std::string last_error(sqlite3* db) { return sqlite3_errmsg(db); }
-
-void exec_sql(sqlite3* db, const std::string& path, const std::string& sql) {
-  char* err = nullptr;
-  if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
-    std::string msg = err ? err : last_error(db);
-    sqlite3_free(err);
-    throw InputError(path, "SQLite (analysis views): " + msg);
-  }
+/// The hash stored in the database's v_views_version view, or "" when it has none.
+std::string stored_views_hash(const SqlConnection& db) {
+  SqlStatement exists(db, "SELECT count(*) FROM sqlite_master WHERE type = 'view' AND name = 'v_views_version'");
+  if (!exists.step() || exists.int64(0) == 0) return {};
+  SqlStatement s(db, "SELECT sql_hash FROM v_views_version");
+  return s.step() ? s.text(0) : std::string();
 }
 
-/// The hash stored in the database's v_views_version view, or "" when there is none.
-std::string stored_views_hash(sqlite3* db) {
-  sqlite3_stmt* s = nullptr;
-  std::string hash;
-  if (sqlite3_prepare_v2(db, "SELECT sql_hash FROM v_views_version", -1, &s, nullptr) == SQLITE_OK &&
-      sqlite3_step(s) == SQLITE_ROW) {
-    if (const auto* p = sqlite3_column_text(s, 0)) hash = reinterpret_cast<const char*>(p);
-  }
-  sqlite3_finalize(s);
-  return hash;
+/// The statement that records the hash: a view cannot hold a bound parameter, so SQLite's quote()
+/// of the bound hash writes the literal into the view's SQL.
+std::string views_version_sql(const SqlConnection& db, const std::string& hash) {
+  SqlStatement s(db, "SELECT 'DROP VIEW IF EXISTS v_views_version; CREATE VIEW v_views_version AS SELECT ' || "
+                     "quote(?) || ' AS sql_hash;'");
+  s.bind(1, hash);
+  s.step();
+  return s.text(0);
 }
 
 }  // namespace
@@ -56,22 +49,15 @@ std::string_view views_sql() { return {kViewsSql.text, kViewsSql.size}; }
 
 std::string views_sql_hash() { return fnv1a_hex(views_sql()); }
 
-void create_views(sqlite3* db, const std::string& path) {
+void create_views(const SqlConnection& db) {
   const std::string want = views_sql_hash();
   if (stored_views_hash(db) == want) return;
-  exec_sql(db, path, "BEGIN IMMEDIATE");
-  try {
-    if (stored_views_hash(db) != want) {
-      exec_sql(db, path, std::string(views_sql()));
-      exec_sql(db, path,
-               "DROP VIEW IF EXISTS v_views_version;\n"
-               "CREATE VIEW v_views_version AS SELECT '" + want + "' AS sql_hash;");
-    }
-    exec_sql(db, path, "COMMIT");
-  } catch (...) {
-    sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
-    throw;
+  SqlTransaction tx(db);
+  if (stored_views_hash(db) != want) {
+    db.exec(std::string(views_sql()));
+    db.exec(views_version_sql(db, want));
   }
+  tx.commit();
 }
 
 }  // namespace tbdr

@@ -3,7 +3,6 @@
 // with repetitions averaged, formats, errors, and the SQL of docs/queries.md on a real database.
 #include <gtest/gtest.h>
 
-#include <sqlite3.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -12,10 +11,11 @@
 #include <sstream>
 
 #include "analysis/report.hpp"
+#include "analysis/results_db.hpp"
+#include "analysis/sql.hpp"
 #include "app/cli.hpp"
 #include "kernel/errors.hpp"
 #include "scratch_dir.hpp"
-#include "analysis/results_db.hpp"
 
 namespace tbdr {
 namespace {
@@ -74,14 +74,14 @@ RunRecord synthetic_run(const std::string& technique, int tile_width, double sha
 }
 
 double real_of(const ResultsDb& db, const std::string& sql) {
-  SqlQuery q(db.handle(), db.path(), sql);
+  SqlStatement q(db.sql(), sql);
   EXPECT_TRUE(q.step()) << sql;
   EXPECT_FALSE(q.is_null(0)) << sql;
   return q.real(0);
 }
 
 bool is_null(const ResultsDb& db, const std::string& sql) {
-  SqlQuery q(db.handle(), db.path(), sql);
+  SqlStatement q(db.sql(), sql);
   return q.step() && q.is_null(0);
 }
 
@@ -108,33 +108,33 @@ TEST(ReportViews, EveryDatabaseHasCurrentViews) {
     ResultsDb db(path);
     for (const char* v : {"v_run_summary", "v_param", "v_metric", "v_sensitivity", "v_technique_comparison",
                           "v_dram_class", "v_energy_component", "v_views_version"}) {
-      SqlQuery q(db.handle(), db.path(), "SELECT count(*) FROM sqlite_master WHERE type = 'view' AND name = ?");
+      SqlStatement q(db.sql(), "SELECT count(*) FROM sqlite_master WHERE type = 'view' AND name = ?");
       q.bind(1, std::string(v));
       ASSERT_TRUE(q.step());
       EXPECT_EQ(q.int64(0), 1) << v;
     }
-    SqlQuery c(db.handle(), db.path(), "PRAGMA schema_version");
+    SqlStatement c(db.sql(), "PRAGMA schema_version");
     c.step();
     cookie = c.int64(0);
   }
   {  // Reopening writes nothing when the views are current.
     ResultsDb db(path);
-    SqlQuery c(db.handle(), db.path(), "PRAGMA schema_version");
+    SqlStatement c(db.sql(), "PRAGMA schema_version");
     c.step();
     EXPECT_EQ(c.int64(0), cookie);
-    db.exec("DROP VIEW v_sensitivity; DROP VIEW v_views_version; CREATE VIEW v_views_version AS SELECT 'old' AS sql_hash");
+    db.sql().exec("DROP VIEW v_sensitivity; DROP VIEW v_views_version; CREATE VIEW v_views_version AS SELECT 'old' AS sql_hash");
   }
   {  // Stale views are re-created.
     ResultsDb db(path);
-    SqlQuery q(db.handle(), db.path(), "SELECT sql_hash FROM v_views_version");
+    SqlStatement q(db.sql(), "SELECT sql_hash FROM v_views_version");
     ASSERT_TRUE(q.step());
     EXPECT_EQ(q.text(0), views_sql_hash());
-    EXPECT_NO_THROW(SqlQuery(db.handle(), db.path(), "SELECT * FROM v_sensitivity").step());
+    EXPECT_NO_THROW(SqlStatement(db.sql(), "SELECT * FROM v_sensitivity").step());
   }
   {  // Databases at an older schema version get them too (they only use version-1 tables).
     const std::string old = (scratch("views_v1") / "v1.db").string();
     ResultsDb db(old, 1);
-    EXPECT_NO_THROW(SqlQuery(db.handle(), db.path(), "SELECT * FROM v_technique_comparison").step());
+    EXPECT_NO_THROW(SqlStatement(db.sql(), "SELECT * FROM v_technique_comparison").step());
   }
 }
 
@@ -148,12 +148,7 @@ TEST(ReportViews, SqlFileIsTheOneEmbeddedCopy) {
   // And the file runs as plain SQL in a fresh SQLite database with the tables.
   const std::string path = (scratch("plain") / "p.db").string();
   { ResultsDb db(path); }
-  sqlite3* raw = nullptr;
-  ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
-  char* err = nullptr;
-  EXPECT_EQ(sqlite3_exec(raw, file.c_str(), nullptr, nullptr, &err), SQLITE_OK) << (err ? err : "");
-  sqlite3_free(err);
-  sqlite3_close(raw);
+  EXPECT_NO_THROW(SqlConnection(path).exec(file));
 }
 
 TEST(ReportViews, SummaryFiguresAreNullWhenARunDidNotRecordThem) {
@@ -411,18 +406,12 @@ TEST_F(ReportReal, EveryQueryInDocsRuns) {
   ResultsDb db(*db_);
   int with_rows = 0;
   for (const auto& q : queries) {
-    int rows = 0;
-    char* err = nullptr;
-    const int rc = sqlite3_exec(
-        db.handle(), q.c_str(),
-        [](void* n, int, char**, char**) {
-          ++*static_cast<int*>(n);
-          return 0;
-        },
-        &rows, &err);
-    EXPECT_EQ(rc, SQLITE_OK) << q << "\n" << (err ? err : "");
-    sqlite3_free(err);
-    if (rows > 0) ++with_rows;
+    try {
+      SqlStatement s(db.sql(), q);
+      if (s.step()) ++with_rows;
+    } catch (const SqlError& e) {
+      ADD_FAILURE() << q << "\n" << e.what();
+    }
   }
   EXPECT_GE(with_rows, static_cast<int>(queries.size()) / 2) << "most documented queries should answer on a real run";
 }

@@ -1,17 +1,18 @@
 // Results database: schema creation and migration, round trip, atomicity, concurrent writers.
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <sqlite3.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <thread>
 
-#include "kernel/errors.hpp"
 #include "analysis/results_db.hpp"
+#include "analysis/sql.hpp"
+#include "kernel/errors.hpp"
 
 namespace tbdr {
 namespace {
@@ -46,16 +47,61 @@ RunRecord make_run(const std::string& tag, int n_params = 20, int n_stats = 50) 
   return r;
 }
 
+/// The first column of the first row of `sql` on its own connection (-1 when there is no row).
 int count(const std::string& path, const std::string& sql) {
-  sqlite3* db = nullptr;
-  sqlite3_open(path.c_str(), &db);
-  sqlite3_stmt* s = nullptr;
-  sqlite3_prepare_v2(db, sql.c_str(), -1, &s, nullptr);
-  int v = -1;
-  if (sqlite3_step(s) == SQLITE_ROW) v = sqlite3_column_int(s, 0);
-  sqlite3_finalize(s);
-  sqlite3_close(db);
-  return v;
+  SqlConnection db(path);
+  SqlStatement s(db, sql);
+  return s.step() ? static_cast<int>(s.int64(0)) : -1;
+}
+
+/// The first column of the first row of `sql` as text.
+std::string text_of(const ResultsDb& db, const std::string& sql) {
+  SqlStatement s(db.sql(), sql);
+  return s.step() ? s.text(0) : std::string("(no row)");
+}
+
+/// Ids of all runs, ascending.
+std::vector<std::int64_t> run_ids(const ResultsDb& db) {
+  std::vector<std::int64_t> ids;
+  SqlStatement s(db.sql(), "SELECT id FROM runs ORDER BY id");
+  while (s.step()) ids.push_back(s.int64(0));
+  return ids;
+}
+
+/// A run read back (params and stats in insertion order, tiles in raster order); nullopt when absent.
+std::optional<RunRecord> read_run(const ResultsDb& db, std::int64_t id) {
+  RunRecord r;
+  {
+    SqlStatement s(db.sql(),
+                   "SELECT started_at, finished_at, tool_version, host, command_line, config_name, config_hash, "
+                   "trace_path, trace_hash, scene, technique, status, error FROM runs WHERE id = ?");
+    s.bind(1, id);
+    if (!s.step()) return std::nullopt;
+    std::string* fields[] = {&r.started_at,  &r.finished_at, &r.tool_version, &r.host,      &r.command_line,
+                             &r.config_name, &r.config_hash, &r.trace_path,   &r.trace_hash, &r.scene,
+                             &r.technique,   &r.status,      &r.error};
+    for (int col = 0; col < 13; ++col) *fields[col] = s.text(col);
+  }
+  {
+    SqlStatement s(db.sql(), "SELECT key, value, origin FROM run_params WHERE run_id = ? ORDER BY rowid");
+    s.bind(1, id);
+    while (s.step()) r.params.push_back({s.text(0), s.text(1), s.text(2)});
+  }
+  {
+    SqlStatement s(db.sql(),
+                   "SELECT s.scope, s.name, s.value, s.unit, coalesce(d.description, '') FROM stats s "
+                   "LEFT JOIN stat_defs d ON d.name = s.name WHERE s.run_id = ? ORDER BY s.rowid");
+    s.bind(1, id);
+    while (s.step()) r.stats.push_back({s.text(0), s.text(1), s.real(2), s.text(3), s.text(4)});
+  }
+  if (db.schema_version() >= 2) {
+    SqlStatement s(db.sql(),
+                   "SELECT pass, tile_x, tile_y, cycles, samples, dram_bytes FROM tile_stats WHERE run_id = ? "
+                   "ORDER BY pass, tile_y, tile_x");
+    s.bind(1, id);
+    while (s.step()) r.tiles.push_back({s.int64(0), s.int64(1), s.int64(2), s.real(3), s.real(4), s.real(5)});
+  }
+  return r;
 }
 
 TEST(ResultsDb, CreatesCurrentSchemaInWalMode) {
@@ -63,11 +109,7 @@ TEST(ResultsDb, CreatesCurrentSchemaInWalMode) {
   ResultsDb db(path);
   EXPECT_EQ(db.schema_version(), ResultsDb::kSchemaVersion);
   EXPECT_EQ(count(path, "SELECT count(*) FROM sqlite_master WHERE name IN ('runs','run_params','stats','stat_defs','tile_stats')"), 5);
-  sqlite3_stmt* s = nullptr;
-  sqlite3_prepare_v2(db.handle(), "PRAGMA journal_mode", -1, &s, nullptr);
-  ASSERT_EQ(sqlite3_step(s), SQLITE_ROW);
-  EXPECT_STREQ(reinterpret_cast<const char*>(sqlite3_column_text(s, 0)), "wal");
-  sqlite3_finalize(s);
+  EXPECT_EQ(text_of(db, "PRAGMA journal_mode"), "wal");
 }
 
 TEST(ResultsDb, RoundTripIsEqual) {
@@ -75,7 +117,7 @@ TEST(ResultsDb, RoundTripIsEqual) {
   ResultsDb db(path);
   const RunRecord w = make_run("a");
   const auto id = db.write_run(w);
-  const auto r = db.read_run(id);
+  const auto r = read_run(db, id);
   ASSERT_TRUE(r.has_value());
   EXPECT_EQ(r->config_hash, w.config_hash);
   EXPECT_EQ(r->command_line, w.command_line);
@@ -90,9 +132,7 @@ TEST(ResultsDb, RoundTripIsEqual) {
     EXPECT_EQ(r->stats[i].description, w.stats[i].description);
   }
   EXPECT_EQ(r->tiles, w.tiles);
-  EXPECT_EQ(db.find_ok_run(w.config_hash, w.trace_hash), id);
-  EXPECT_FALSE(db.find_ok_run(w.config_hash, "other").has_value());
-  EXPECT_FALSE(db.read_run(id + 100).has_value());
+  EXPECT_FALSE(read_run(db, id + 100).has_value());
   // The resolved configuration is readable with a plain SELECT.
   EXPECT_EQ(count(path, "SELECT value FROM run_params WHERE run_id = 1 AND key = 'sec.key7'"), 7);
 }
@@ -110,15 +150,15 @@ TEST(ResultsDb, MigratesAnOlderSchemaKeepingRuns) {
   ResultsDb now(path);
   EXPECT_EQ(now.schema_version(), ResultsDb::kSchemaVersion);
   EXPECT_EQ(count(path, "SELECT count(*) FROM sqlite_master WHERE name = 'tile_stats'"), 1);
-  ASSERT_EQ(now.run_ids().size(), 1u);
-  EXPECT_EQ(now.read_run(now.run_ids()[0])->config_hash, "hash-old");
+  ASSERT_EQ(run_ids(now).size(), 1u);
+  EXPECT_EQ(read_run(now, run_ids(now)[0])->config_hash, "hash-old");
   now.write_run(make_run("new"));
-  EXPECT_EQ(now.run_ids().size(), 2u);
+  EXPECT_EQ(run_ids(now).size(), 2u);
 }
 
 TEST(ResultsDb, RefusesNewerSchemaAndForeignFiles) {
   const auto path = fresh_db("newer.db");
-  { ResultsDb db(path); db.exec("PRAGMA user_version = 99"); }
+  { ResultsDb db(path); db.sql().exec("PRAGMA user_version = 99"); }
   try {
     ResultsDb db(path);
     FAIL() << "newer schema accepted";
@@ -126,12 +166,7 @@ TEST(ResultsDb, RefusesNewerSchemaAndForeignFiles) {
     EXPECT_NE(std::string(e.what()).find(path + ": results database schema version 99 is newer"), std::string::npos) << e.what();
   }
   const auto foreign = fresh_db("foreign.db");
-  {
-    sqlite3* db = nullptr;
-    sqlite3_open(foreign.c_str(), &db);
-    sqlite3_exec(db, "CREATE TABLE people(name TEXT)", nullptr, nullptr, nullptr);
-    sqlite3_close(db);
-  }
+  SqlConnection(foreign).exec("CREATE TABLE people(name TEXT)");
   EXPECT_THROW(ResultsDb db(foreign), InputError);
   const auto text = fresh_db("text.db");
   std::ofstream(text) << "this is not a database, just text that is long enough to fill a header page....\n";
@@ -167,15 +202,11 @@ TEST(ResultsDb, KilledWriterLeavesOnlyWholeRuns) {
   ASSERT_TRUE(WIFSIGNALED(status));
 
   ResultsDb db(path);
-  sqlite3_stmt* s = nullptr;
-  sqlite3_prepare_v2(db.handle(), "PRAGMA integrity_check", -1, &s, nullptr);
-  ASSERT_EQ(sqlite3_step(s), SQLITE_ROW);
-  EXPECT_STREQ(reinterpret_cast<const char*>(sqlite3_column_text(s, 0)), "ok");
-  sqlite3_finalize(s);
-  const auto ids = db.run_ids();
+  EXPECT_EQ(text_of(db, "PRAGMA integrity_check"), "ok");
+  const auto ids = run_ids(db);
   EXPECT_GE(ids.size(), 3u);
   for (auto id : ids) {
-    const auto r = db.read_run(id);
+    const auto r = read_run(db, id);
     EXPECT_EQ(r->params.size(), 200u) << "run " << id << " is partial";
     EXPECT_EQ(r->stats.size(), 2000u) << "run " << id << " is partial";
   }

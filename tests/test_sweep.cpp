@@ -16,12 +16,12 @@
 #include <sstream>
 #include <thread>
 
-#include "analysis/report.hpp"
+#include "analysis/results_db.hpp"
+#include "analysis/sql.hpp"
 #include "app/cli.hpp"
+#include "app/sweep.hpp"
 #include "kernel/errors.hpp"
 #include "scratch_dir.hpp"
-#include "analysis/results_db.hpp"
-#include "app/sweep.hpp"
 
 namespace tbdr {
 namespace {
@@ -77,7 +77,7 @@ int wait_tool(pid_t pid) {
 
 std::int64_t scalar(const std::string& db_path, const std::string& sql) {
   ResultsDb db(db_path);
-  SqlQuery q(db.handle(), db.path(), sql);
+  SqlStatement q(db.sql(), sql);
   return q.step() ? q.int64(0) : -1;
 }
 
@@ -458,11 +458,11 @@ TEST_F(SweepRun, SlurmScriptAndMergedShardsMatchOneDatabase) {
   auto rows = [](const std::string& db) {
     std::multiset<std::string> r;
     ResultsDb d(db);
-    SqlQuery q(d.handle(), d.path(),
+    SqlStatement q(d.sql(),
                "SELECT r.config_hash, r.trace_hash, s.scope, s.name, s.value FROM runs r JOIN stats s ON s.run_id = r.id "
                "WHERE s.scope NOT GLOB 'frame/host*'");
     while (q.step()) r.insert(q.text(0) + "|" + q.text(1) + "|" + q.text(2) + "|" + q.text(3) + "|" + q.text(4));
-    SqlQuery p(d.handle(), d.path(), "SELECT r.config_hash, p.key, p.value FROM runs r JOIN run_params p ON p.run_id = r.id");
+    SqlStatement p(d.sql(), "SELECT r.config_hash, p.key, p.value FROM runs r JOIN run_params p ON p.run_id = r.id");
     while (p.step()) r.insert(p.text(0) + "|" + p.text(1) + "|" + p.text(2));
     return r;
   };

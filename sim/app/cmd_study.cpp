@@ -1,43 +1,56 @@
 // `tbdrsim study`: the README's main job. Every technique on the built-in atrium at 1920x1080
-// with 256 and 1024 lights on one configuration, in parallel worker processes, into one results
-// database; prints the comparison table and the measured method table (Billeter's columns), and
-// writes images, heat maps and plots into a folder.
-#include <signal.h>
-#include <sys/wait.h>
+// with 256 and 1024 lights on one configuration, in parallel worker processes (the worker pool),
+// into one results database; prints the comparison table and the measured method table
+// (Billeter's columns), and writes images, heat maps and plots into a folder.
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
-#include <cstdlib>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
-#include <map>
+#include <optional>
 #include <sstream>
 
 #include <boost/program_options.hpp>
-#include <sqlite3.h>
 
+#include "analysis/results_db.hpp"
+#include "analysis/sql.hpp"
 #include "app/cli.hpp"
 #include "app/commands.hpp"
-#include "kernel/errors.hpp"
 #include "app/image_output.hpp"
-#include "analysis/results_db.hpp"
 #include "app/run_driver.hpp"
-#include "scene/camera.hpp"
-#include "scene/lights.hpp"
+#include "app/worker_pool.hpp"
+#include "kernel/errors.hpp"
 #include "scene/scene_library.hpp"
 #include "techniques/technique.hpp"
 
 namespace tbdr {
 
 namespace po = boost::program_options;
+namespace fs = std::filesystem;
 
 namespace {
 
 /// Lights per additive pass of forward_multipass in the study.
 constexpr int kMultipassBatch = 64;
+
+/// What the study runs, from its command line.
+struct StudyPlan {
+  std::string dir;
+  std::string db_path;
+  std::string scene;
+  std::string resolution;
+  std::string image_mode;  ///< none | largest | all
+  int jobs = 2;
+  std::vector<int> light_counts;
+  std::vector<std::string> techniques;
+  int max_lights = 0;
+  ResolvedConfig config;
+};
 
 /// One point of the study: a technique at a light count.
 struct StudyPoint {
@@ -46,16 +59,6 @@ struct StudyPoint {
   std::string trace_path;
   std::string images_dir;
 };
-
-double query_double(sqlite3* db, const std::string& sql) {
-  sqlite3_stmt* s = nullptr;
-  double v = 0;
-  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &s, nullptr) == SQLITE_OK && sqlite3_step(s) == SQLITE_ROW) {
-    v = sqlite3_column_double(s, 0);
-  }
-  sqlite3_finalize(s);
-  return v;
-}
 
 std::string fmt(double v, int decimals) {
   std::ostringstream o;
@@ -99,6 +102,234 @@ void draw_progress(std::ostream& out, std::size_t done, std::size_t total, doubl
   }
 }
 
+StudyPlan plan_from_options(const po::variables_map& vm) {
+  StudyPlan plan;
+  plan.dir = vm["out"].as<std::string>();
+  plan.jobs = vm["jobs"].as<int>();
+  if (plan.jobs < 1 || plan.jobs > 64) throw InputError("--jobs " + std::to_string(plan.jobs), "expected 1..64 worker processes");
+  plan.light_counts = vm.count("lights") ? vm["lights"].as<std::vector<int>>() : std::vector<int>{256, 1024};
+  plan.techniques = vm.count("technique") ? vm["technique"].as<std::vector<std::string>>() : technique_names();
+  for (const auto& n : plan.techniques) find_technique(n);  // InputError for an unknown name
+  plan.image_mode = vm["images"].as<std::string>();
+  if (plan.image_mode != "none" && plan.image_mode != "largest" && plan.image_mode != "all") {
+    throw InputError("--images " + plan.image_mode, "expected none, largest or all");
+  }
+  plan.config = config_from_options(vm);
+  plan.scene = vm["scene"].as<std::string>();
+  plan.resolution = vm["resolution"].as<std::string>();
+  plan.max_lights = *std::max_element(plan.light_counts.begin(), plan.light_counts.end());
+  plan.db_path = (fs::path(plan.dir) / "study.db").string();
+  return plan;
+}
+
+/// Generates every point's trace (cheap, here; the workers replay them).
+std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
+  std::vector<StudyPoint> points;
+  const std::vector<std::string> trace_args = {"--scene", plan.scene, "--resolution", plan.resolution};
+  for (int n : plan.light_counts) {
+    for (const auto& t : plan.techniques) {
+      StudyPoint p;
+      p.technique = t;
+      p.lights = n;
+      p.trace_path = (fs::path(plan.dir) / "traces" / (t + "_" + std::to_string(n) + ".trace")).string();
+      if (plan.image_mode == "all" || (plan.image_mode == "largest" && n == plan.max_lights)) {
+        p.images_dir = (fs::path(plan.dir) / "images" / (t + "_" + std::to_string(n))).string();
+      }
+      std::vector<std::string> a = {"trace", "--technique", t, "--lights", std::to_string(n), "--out", p.trace_path};
+      a.insert(a.end(), trace_args.begin(), trace_args.end());
+      // One additive pass per light would replay the scene 1024 times: the study batches lights
+      // (the issue allows "one additive pass per light or per light batch").
+      if (t == "forward_multipass") a.insert(a.end(), {"--option", "lights_per_pass=" + std::to_string(kMultipassBatch)});
+      std::ostringstream sink, errs;
+      if (cli_main(a, sink, errs) != 0) throw InputError("study", "generating " + t + ": " + errs.str());
+      points.push_back(p);
+    }
+  }
+  return points;
+}
+
+/// Runs every point on the worker pool, one simulation per child process, each run written at once
+/// (one transaction); a failed point's message goes to `err`. Returns the number of failed points.
+int run_points(const StudyPlan& plan, const std::vector<StudyPoint>& points, std::ostream& out, std::ostream& err) {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+  const bool tty = isatty(STDOUT_FILENO) != 0 && &out == &std::cout;
+  std::size_t next = 0, done = 0, drawn = 0;
+  int failures = 0;
+  // Redrawn five times a second on a terminal; in a log, a line a second at most, when it moved.
+  const auto interval = std::chrono::milliseconds(tty ? 200 : 1000);
+  auto last_draw = std::chrono::steady_clock::now();
+  draw_progress(out, 0, points.size(), seconds(), tty);
+  WorkerPoolHooks hooks;
+  hooks.next = [&]() -> std::optional<WorkerJob> {
+    if (next == points.size()) return std::nullopt;
+    const std::size_t i = next++;
+    WorkerJob job;
+    job.id = i;
+    job.function = [&plan, &points, i] {
+      try {
+        RunRequest req;
+        req.config = plan.config;
+        req.trace_path = points[i].trace_path;
+        req.db_path = plan.db_path;
+        req.images_dir = points[i].images_dir;
+        req.command_line = invocation_command_line() + " [point " + std::to_string(i) + "]";
+        run_one(req);
+        return 0;
+      } catch (const std::exception& e) {
+        std::cerr << "study: " << points[i].technique << " with " << points[i].lights << " lights failed: " << e.what() << "\n";
+        return 1;
+      }
+    };
+    return job;
+  };
+  hooks.ended = [&](const WorkerEnd& end) {
+    err << end.stderr_text;
+    if (!end.ok()) ++failures;
+    ++done;
+  };
+  hooks.tick = [&] {
+    if (std::chrono::steady_clock::now() - last_draw < interval || (!tty && done == drawn)) return;
+    draw_progress(out, done, points.size(), seconds(), tty);
+    last_draw = std::chrono::steady_clock::now();
+    drawn = done;
+  };
+  run_worker_pool({plan.jobs, false}, hooks);
+  draw_progress(out, points.size(), points.size(), seconds(), tty);
+  if (tty) out << "\n";
+  return failures;
+}
+
+/// The figures of the study's runs, read back from its database with bound queries.
+class StudyResults {
+ public:
+  explicit StudyResults(const ResultsDb& db)
+      : run_(db.sql(), "SELECT max(id) FROM runs WHERE status = 'ok' AND trace_path = ?"),
+        stat_(db.sql(), "SELECT value FROM stats WHERE run_id = ? AND scope = ? AND name = ?") {}
+
+  /// The latest finished run of a point, if any.
+  std::optional<std::int64_t> run_of(const StudyPoint& p) {
+    run_.bind(1, p.trace_path);
+    std::optional<std::int64_t> id;
+    if (run_.step() && !run_.is_null(0)) id = run_.int64(0);
+    run_.reset();
+    return id;
+  }
+
+  /// One statistic of a run. A unit with no work in a frame records no row (frame/compute of a
+  /// technique without a compute pass): an absent statistic is zero.
+  double stat(std::int64_t run, const std::string& scope, const std::string& name) {
+    stat_.bind(1, run).bind(2, scope).bind(3, name);
+    const double v = stat_.step() ? stat_.real(0) : 0.0;
+    stat_.reset();
+    return v;
+  }
+
+  /// DRAM bytes read and written in a scope ("frame/dram", "frame/dram.color").
+  double dram_bytes(std::int64_t run, const std::string& scope) {
+    return stat(run, scope, "read_bytes") + stat(run, scope, "write_bytes");
+  }
+
+  /// Lit surface invocations per visible pixel.
+  double overshading(std::int64_t run) {
+    return overshading_of(stat(run, "frame/tsp", "lit_surface_invocations"),
+                          stat(run, "frame/compute", "compute_shaded_pixels"), covered_pixels(run));
+  }
+
+  /// Pixels covered by scene geometry (at least 1).
+  double covered_pixels(std::int64_t run) { return std::max(1.0, stat(run, "frame/frame", "covered_pixels")); }
+
+ private:
+  SqlStatement run_, stat_;
+};
+
+/// The comparison table: the latest run of each point.
+void print_comparison(const StudyPlan& plan, const std::vector<StudyPoint>& points, StudyResults& results,
+                      std::ostream& out) {
+  out << "\nComparison (" << plan.config.params.config_name << "): frame time, DRAM traffic requested by the units, energy"
+      << " (forward_multipass: " << kMultipassBatch << " lights per pass)\n";
+  out << std::left << std::setw(30) << "technique" << std::right << std::setw(7) << "lights" << std::setw(11) << "frame ms"
+      << std::setw(11) << "DRAM MB" << std::setw(11) << "energy mJ" << std::setw(12) << "overshading" << std::setw(12)
+      << "lights/px" << "\n";
+  for (const auto& p : points) {
+    const std::optional<std::int64_t> run = results.run_of(p);
+    if (!run) {
+      out << std::left << std::setw(30) << p.technique << std::right << std::setw(7) << p.lights << "   (failed)\n";
+      continue;
+    }
+    const double covered = results.covered_pixels(*run);
+    const double evals =
+        results.stat(*run, "frame/tsp", "light_evaluations") + results.stat(*run, "frame/compute", "compute_light_evaluations");
+    out << std::left << std::setw(30) << p.technique << std::right << std::setw(7) << p.lights << std::setw(11)
+        << fmt(results.stat(*run, "frame/timing", "frame_time_ms"), 2) << std::setw(11)
+        << fmt(results.dram_bytes(*run, "frame/dram") / 1e6, 1) << std::setw(11)
+        << fmt(results.stat(*run, "frame/energy", "total_mj"), 2) << std::setw(12) << fmt(results.overshading(*run), 2)
+        << std::setw(12) << fmt(evals / covered, 1) << "\n";
+  }
+}
+
+/// The measured method table (Billeter's columns) at the largest light count.
+void print_method_table(const StudyPlan& plan, const std::vector<StudyPoint>& points, StudyResults& results,
+                        std::ostream& out) {
+  out << "\nMethod table, measured at " << plan.max_lights << " lights (off-chip: classes with DRAM traffic besides the "
+      << "parameter buffer, vertices, indices, textures and light data)\n";
+  out << std::left << std::setw(30) << "technique" << std::setw(56) << "off-chip buffers" << std::right << std::setw(9) << "geo pass"
+      << std::setw(14) << "overshading" << std::setw(6) << "MSAA" << std::setw(10) << "blending" << "\n";
+  out << "  (overshading: lit surface invocations per visible pixel, yes above 1.10 (translucent layers add about 5 %); blending: the image with the translucent glass\n"
+      << "   equals plain forward's; MSAA: the generator produces a 4x trace)\n";
+  std::string reference_color;
+  for (const auto& p : points) {
+    if (p.lights == plan.max_lights && p.technique == "plain_forward" && !p.images_dir.empty()) {
+      reference_color = (fs::path(p.images_dir) / "color.png").string();
+    }
+  }
+  for (const auto& p : points) {
+    if (p.lights != plan.max_lights) continue;
+    const std::optional<std::int64_t> run = results.run_of(p);
+    if (!run) continue;
+    std::string offchip;
+    for (const char* cls : {"color", "depth_stencil", "gbuffer", "visibility", "light_lists", "work_lists", "spill"}) {
+      if (results.dram_bytes(*run, std::string("frame/dram.") + cls) > 0) offchip += (offchip.empty() ? "" : ",") + std::string(cls);
+    }
+    const double overshading = results.overshading(*run);
+    // MSAA: does the technique's generator produce a 4x trace?
+    bool msaa = true;
+    {
+      std::ostringstream sink, errs;
+      msaa = cli_main({"trace", "--technique", p.technique, "--lights", "1", "--resolution", "64x36", "--samples", "4", "--out",
+                       (fs::path(plan.dir) / "traces" / "msaa_probe.trace").string()},
+                      sink, errs) == 0;
+    }
+    // Blending: does its image, translucent glass included, equal plain forward's?
+    std::string blending = "n/a";
+    if (!reference_color.empty() && !p.images_dir.empty()) {
+      // The atrium has a few exactly coplanar faces (z-fighting, about 0.02 % of the pixels) whose
+      // visible one depends on the depth test; more than 0.1 % of differing pixels is real.
+      blending = differing_pixels(reference_color, (fs::path(p.images_dir) / "color.png").string()) <= 0.001 ? "yes" : "no";
+    }
+    out << std::left << std::setw(30) << p.technique << std::setw(56) << offchip << std::right << std::setw(9)
+        << fmt(results.stat(*run, "frame/frame", "geometry_passes"), 0) << std::setw(12)
+        << std::setw(14) << (fmt(overshading, 2) + (overshading > 1.10 ? " yes" : " no")) << std::setw(6)
+        << (msaa ? "yes" : "no") << std::setw(10) << blending << "\n";
+  }
+}
+
+/// Plots, when the analysis scripts and Debian's python3 with pandas and matplotlib are present;
+/// returns how many were written.
+int write_plots(const std::string& db_path, const fs::path& plots) {
+  std::error_code ec;
+  fs::create_directories(plots, ec);
+  int plotted = 0;
+  for (const char* script : {"plot_techniques.py", "plot_scaling.py"}) {
+    const fs::path s = fs::path(TBDRSIM_SOURCE_DIR) / "analysis" / script;
+    if (!fs::exists(s) || !fs::exists("/usr/bin/python3")) continue;
+    const std::string png = (plots / (std::string(script).substr(0, std::string(script).size() - 3) + ".png")).string();
+    const std::string cmd = "/usr/bin/python3 " + s.string() + " --db " + db_path + " --out " + png + " > /dev/null 2>&1";
+    if (std::system(cmd.c_str()) == 0) ++plotted;
+  }
+  return plotted;
+}
+
 }  // namespace
 
 int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
@@ -113,197 +344,29 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
       "images", po::value<std::string>()->default_value("largest"), "write images for: none | largest (light count) | all");
   po::variables_map vm;
   if (!parse_command_options("study", args, desc, nullptr, vm, out)) return 0;
-  namespace fs = std::filesystem;
-  const std::string dir = vm["out"].as<std::string>();
-  const int jobs = vm["jobs"].as<int>();
-  if (jobs < 1 || jobs > 64) throw InputError("--jobs " + std::to_string(jobs), "expected 1..64 worker processes");
-  const std::vector<int> light_counts = vm.count("lights") ? vm["lights"].as<std::vector<int>>() : std::vector<int>{256, 1024};
-  const std::vector<std::string> names = vm.count("technique") ? vm["technique"].as<std::vector<std::string>>() : technique_names();
-  for (const auto& n : names) find_technique(n);  // InputError for an unknown name
-  const std::string image_mode = vm["images"].as<std::string>();
-  if (image_mode != "none" && image_mode != "largest" && image_mode != "all") {
-    throw InputError("--images " + image_mode, "expected none, largest or all");
-  }
-  const ResolvedConfig config = config_from_options(vm);
+  const StudyPlan plan = plan_from_options(vm);
   std::error_code ec;
-  fs::create_directories(fs::path(dir) / "traces", ec);
-  fs::create_directories(fs::path(dir) / "images", ec);
-  if (ec) throw InputError(dir, "cannot create the study folder: " + ec.message());
-  const std::string db_path = (fs::path(dir) / "study.db").string();
-  { ResultsDb db(db_path); }  // create or migrate before the workers start
+  fs::create_directories(fs::path(plan.dir) / "traces", ec);
+  fs::create_directories(fs::path(plan.dir) / "images", ec);
+  if (ec) throw InputError(plan.dir, "cannot create the study folder: " + ec.message());
+  { ResultsDb db(plan.db_path); }  // create or migrate before the workers start
 
-  // Traces: generated once here (cheap), replayed by the workers.
-  out << "study: " << names.size() << " techniques x " << light_counts.size() << " light counts on "
-      << vm["scene"].as<std::string>() << " at " << vm["resolution"].as<std::string>() << ", configuration '"
-      << config.params.config_name << "', " << jobs << " workers" << std::endl;
-  std::vector<StudyPoint> points;
-  const int max_lights = *std::max_element(light_counts.begin(), light_counts.end());
-  {
-    std::vector<std::string> trace_args = {"--scene", vm["scene"].as<std::string>(), "--resolution", vm["resolution"].as<std::string>()};
-    for (int n : light_counts) {
-      for (const auto& t : names) {
-        StudyPoint p;
-        p.technique = t;
-        p.lights = n;
-        p.trace_path = (fs::path(dir) / "traces" / (t + "_" + std::to_string(n) + ".trace")).string();
-        if (image_mode == "all" || (image_mode == "largest" && n == max_lights)) {
-          p.images_dir = (fs::path(dir) / "images" / (t + "_" + std::to_string(n))).string();
-        }
-        std::vector<std::string> a = {"trace", "--technique", t, "--lights", std::to_string(n), "--out", p.trace_path};
-        a.insert(a.end(), trace_args.begin(), trace_args.end());
-        // One additive pass per light would replay the scene 1024 times: the study batches lights
-        // (the issue allows "one additive pass per light or per light batch").
-        if (t == "forward_multipass") a.insert(a.end(), {"--option", "lights_per_pass=" + std::to_string(kMultipassBatch)});
-        std::ostringstream sink, errs;
-        if (cli_main(a, sink, errs) != 0) throw InputError("study", "generating " + t + ": " + errs.str());
-        points.push_back(p);
-      }
-    }
-  }
-
-  // Workers: point i goes to worker i % jobs; each run is written at once (one transaction).
-  const auto t0 = std::chrono::steady_clock::now();
-  std::vector<pid_t> workers;
-  for (int w = 0; w < jobs; ++w) {
-    const pid_t pid = fork();
-    if (pid < 0) throw std::runtime_error("fork failed");
-    if (pid == 0) {
-      int rc = 0;
-      for (std::size_t i = static_cast<std::size_t>(w); i < points.size(); i += static_cast<std::size_t>(jobs)) {
-        try {
-          RunRequest req;
-          req.config = config;
-          req.trace_path = points[i].trace_path;
-          req.db_path = db_path;
-          req.images_dir = points[i].images_dir;
-          req.command_line = invocation_command_line() + " [point " + std::to_string(i) + "]";
-          run_one(req);
-        } catch (const std::exception& e) {
-          std::cerr << "study: " << points[i].technique << " with " << points[i].lights << " lights failed: " << e.what() << "\n";
-          rc = 1;
-        }
-      }
-      _exit(rc);
-    }
-    workers.push_back(pid);
-  }
-  const bool tty = isatty(STDOUT_FILENO) != 0 && &out == &std::cout;
-  sqlite3* db = nullptr;
-  sqlite3_open_v2(db_path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
-  sqlite3_busy_timeout(db, 10000);
-  const double runs_before = query_double(db, "SELECT count(*) FROM runs");
-  std::size_t alive = workers.size();
-  int failures = 0;
-  std::size_t last_done = static_cast<std::size_t>(-1);
-  while (alive > 0) {
-    int status = 0;
-    const pid_t pid = waitpid(-1, &status, WNOHANG);
-    if (pid > 0) {
-      --alive;
-      if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) ++failures;
-      continue;
-    }
-    const auto done = static_cast<std::size_t>(query_double(db, "SELECT count(*) FROM runs") - runs_before);
-    if (done != last_done || tty) {
-      draw_progress(out, std::min(done, points.size()), points.size(),
-                    std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), tty);
-      last_done = done;
-    }
-    usleep(tty ? 200000 : 1000000);
-  }
-  draw_progress(out, points.size(), points.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), tty);
-  if (tty) out << "\n";
+  out << "study: " << plan.techniques.size() << " techniques x " << plan.light_counts.size() << " light counts on "
+      << plan.scene << " at " << plan.resolution << ", configuration '" << plan.config.params.config_name << "', "
+      << plan.jobs << " workers" << std::endl;
+  const std::vector<StudyPoint> points = generate_traces(plan);
+  const int failures = run_points(plan, points, out, err);
   if (failures > 0) err << "study: " << failures << " worker(s) reported failed runs (see above)\n";
-
-  // The comparison table: the latest run of each point.
-  auto run_of = [&](const StudyPoint& p) {
-    return query_double(db, "SELECT max(id) FROM runs WHERE status = 'ok' AND trace_path = '" + p.trace_path + "'");
-  };
-  auto metric = [&](double run, const std::string& scope, const std::string& name) {
-    return query_double(db, "SELECT value FROM stats WHERE run_id = " + fmt(run, 0) + " AND scope = '" + scope + "' AND name = '" + name + "'");
-  };
-  out << "\nComparison (" << config.params.config_name << "): frame time, DRAM traffic requested by the units, energy"
-      << " (forward_multipass: " << kMultipassBatch << " lights per pass)\n";
-  out << std::left << std::setw(30) << "technique" << std::right << std::setw(7) << "lights" << std::setw(11) << "frame ms"
-      << std::setw(11) << "DRAM MB" << std::setw(11) << "energy mJ" << std::setw(12) << "overshading" << std::setw(12)
-      << "lights/px" << "\n";
-  for (const auto& p : points) {
-    const double run = run_of(p);
-    if (run <= 0) {
-      out << std::left << std::setw(30) << p.technique << std::right << std::setw(7) << p.lights << "   (failed)\n";
-      continue;
-    }
-    const double dram = metric(run, "frame/dram", "read_bytes") + metric(run, "frame/dram", "write_bytes");
-    const double covered = std::max(1.0, metric(run, "frame/frame", "covered_pixels"));
-    const double overshading = overshading_of(metric(run, "frame/tsp", "lit_surface_invocations"),
-                                              metric(run, "frame/compute", "compute_shaded_pixels"), covered);
-    const double evals = metric(run, "frame/tsp", "light_evaluations") + metric(run, "frame/compute", "compute_light_evaluations");
-    out << std::left << std::setw(30) << p.technique << std::right << std::setw(7) << p.lights << std::setw(11)
-        << fmt(metric(run, "frame/timing", "frame_time_ms"), 2) << std::setw(11) << fmt(dram / 1e6, 1) << std::setw(11)
-        << fmt(metric(run, "frame/energy", "total_mj"), 2) << std::setw(12) << fmt(overshading, 2) << std::setw(12)
-        << fmt(evals / covered, 1) << "\n";
+  {
+    const ResultsDb db(plan.db_path);
+    StudyResults results(db);
+    print_comparison(plan, points, results, out);
+    print_method_table(plan, points, results, out);
   }
-
-  // The measured method table (Billeter's columns) at the largest light count.
-  out << "\nMethod table, measured at " << max_lights << " lights (off-chip: classes with DRAM traffic besides the "
-      << "parameter buffer, vertices, indices, textures and light data)\n";
-  out << std::left << std::setw(30) << "technique" << std::setw(56) << "off-chip buffers" << std::right << std::setw(9) << "geo pass"
-      << std::setw(14) << "overshading" << std::setw(6) << "MSAA" << std::setw(10) << "blending" << "\n";
-  out << "  (overshading: lit surface invocations per visible pixel, yes above 1.10 (translucent layers add about 5 %); blending: the image with the translucent glass\n"
-      << "   equals plain forward's; MSAA: the generator produces a 4x trace)\n";
-  std::string reference_color;
-  for (const auto& p : points) {
-    if (p.lights == max_lights && p.technique == "plain_forward" && !p.images_dir.empty()) {
-      reference_color = (fs::path(p.images_dir) / "color.png").string();
-    }
-  }
-  for (const auto& p : points) {
-    if (p.lights != max_lights) continue;
-    const double run = run_of(p);
-    if (run <= 0) continue;
-    std::string offchip;
-    for (const char* cls : {"color", "depth_stencil", "gbuffer", "visibility", "light_lists", "work_lists", "spill"}) {
-      const double b = metric(run, std::string("frame/dram.") + cls, "read_bytes") + metric(run, std::string("frame/dram.") + cls, "write_bytes");
-      if (b > 0) offchip += (offchip.empty() ? "" : ",") + std::string(cls);
-    }
-    const double covered = std::max(1.0, metric(run, "frame/frame", "covered_pixels"));
-    const double overshading = overshading_of(metric(run, "frame/tsp", "lit_surface_invocations"),
-                                              metric(run, "frame/compute", "compute_shaded_pixels"), covered);
-    // MSAA: does the technique's generator produce a 4x trace?
-    bool msaa = true;
-    {
-      std::ostringstream sink, errs;
-      msaa = cli_main({"trace", "--technique", p.technique, "--lights", "1", "--resolution", "64x36", "--samples", "4", "--out",
-                       (fs::path(dir) / "traces" / "msaa_probe.trace").string()},
-                      sink, errs) == 0;
-    }
-    // Blending: does its image, translucent glass included, equal plain forward's?
-    std::string blending = "n/a";
-    if (!reference_color.empty() && !p.images_dir.empty()) {
-      // The atrium has a few exactly coplanar faces (z-fighting, about 0.02 % of the pixels) whose
-      // visible one depends on the depth test; more than 0.1 % of differing pixels is real.
-      blending = differing_pixels(reference_color, (fs::path(p.images_dir) / "color.png").string()) <= 0.001 ? "yes" : "no";
-    }
-    out << std::left << std::setw(30) << p.technique << std::setw(56) << offchip << std::right << std::setw(9)
-        << fmt(metric(run, "frame/frame", "geometry_passes"), 0) << std::setw(12)
-        << std::setw(14) << (fmt(overshading, 2) + (overshading > 1.10 ? " yes" : " no")) << std::setw(6)
-        << (msaa ? "yes" : "no") << std::setw(10) << blending << "\n";
-  }
-  sqlite3_close(db);
-
-  // Plots, when the analysis scripts and Debian's python3 with pandas and matplotlib are present.
-  const fs::path plots = fs::path(dir) / "plots";
-  fs::create_directories(plots, ec);
-  int plotted = 0;
-  for (const char* script : {"plot_techniques.py", "plot_scaling.py"}) {
-    const fs::path s = fs::path(TBDRSIM_SOURCE_DIR) / "analysis" / script;
-    if (!fs::exists(s) || !fs::exists("/usr/bin/python3")) continue;
-    const std::string png = (plots / (std::string(script).substr(0, std::string(script).size() - 3) + ".png")).string();
-    const std::string cmd = "/usr/bin/python3 " + s.string() + " --db " + db_path + " --out " + png + " > /dev/null 2>&1";
-    if (std::system(cmd.c_str()) == 0) ++plotted;
-  }
-  out << "\nresults: " << db_path << " (" << points.size() << " runs), traces in " << (fs::path(dir) / "traces").string()
-      << ", images and heat maps in " << (fs::path(dir) / "images").string() << ", " << plotted << " plots in " << plots.string()
+  const fs::path plots = fs::path(plan.dir) / "plots";
+  const int plotted = write_plots(plan.db_path, plots);
+  out << "\nresults: " << plan.db_path << " (" << points.size() << " runs), traces in " << (fs::path(plan.dir) / "traces").string()
+      << ", images and heat maps in " << (fs::path(plan.dir) / "images").string() << ", " << plotted << " plots in " << plots.string()
       << "\n";
   return failures > 0 ? 1 : 0;
 }

@@ -8,11 +8,14 @@
 #include <boost/program_options.hpp>
 
 #include "analysis/report.hpp"
+#include "analysis/results_db.hpp"
 #include "app/cli.hpp"
 #include "app/commands.hpp"
-#include "kernel/errors.hpp"
-#include "analysis/results_db.hpp"
 #include "app/sweep.hpp"
+#include "app/sweep_merge.hpp"
+#include "app/sweep_slurm.hpp"
+#include "app/worker_pool.hpp"
+#include "kernel/errors.hpp"
 
 namespace tbdr {
 

@@ -1,74 +1,17 @@
 #pragma once
-// Sweeps: a sweep file (INI) names base configs, parameters with lists, ranges or zipped groups,
-// traces and repetitions; it expands into a deterministic list of points (the cartesian product).
-// run_sweep() runs the points in parallel worker processes (`tbdrsim run` per point), skips points
-// already in the database, records failures, and stops cleanly on Ctrl-C. Slurm job arrays run
-// slices of a sweep into shard databases that merge_databases() joins. Syntax: docs/sweeps.md.
+// Running a sweep: its points (app/sweep_spec.hpp) run in parallel worker processes
+// (app/worker_pool.hpp), `tbdrsim run` per point; points already in the database are skipped,
+// failures are recorded as failed runs, and Ctrl-C stops cleanly. Slurm job arrays
+// (app/sweep_slurm.hpp) run slices of a sweep into shard databases that app/sweep_merge.hpp joins.
+// Syntax: docs/sweeps.md.
 #include <cstddef>
-#include <cstdint>
 #include <iosfwd>
 #include <string>
-#include <vector>
+
+#include "app/sweep_progress.hpp"
+#include "app/sweep_spec.hpp"
 
 namespace tbdr {
-
-/// One swept axis: a single parameter, or a zip group of parameters that vary together.
-/// values[i][k] is the i-th setting of keys[k]. The key "config" varies the config file.
-struct SweepAxis {
-  std::string name;                              ///< the key, or "zip.<group>"
-  std::vector<std::string> keys;
-  std::vector<std::vector<std::string>> values;
-  std::vector<std::string> where;                ///< "file:line" of each key
-};
-
-/// A parsed sweep file; every path is already relative to the working directory.
-struct SweepSpec {
-  std::string path;                        ///< the sweep file
-  std::string name;                        ///< [sweep] name, or the file's stem
-  std::vector<std::string> base_configs;   ///< applied in order to every point
-  std::vector<std::string> sets;           ///< fixed "key=value" overrides for every point
-  std::vector<std::string> set_where;      ///< "file:line" of each fixed override
-  std::vector<SweepAxis> axes;             ///< in file order; the last one varies fastest
-  std::vector<std::string> traces;         ///< globs expanded, in file order (glob matches sorted)
-  int repetitions = 1;
-};
-
-/// One simulation of a sweep: configuration, trace and repetition.
-struct SweepPoint {
-  std::size_t index = 0;   ///< position in the deterministic order
-  std::size_t group = 0;   ///< index of its (configuration, trace) pair; repetitions share it
-  int repetition = 0;
-  std::vector<std::string> configs;  ///< config files, in order
-  std::vector<std::string> sets;     ///< "key=value" overrides: fixed ones, then the axes'
-  std::string trace;
-  std::string label;                 ///< "tiling.tile_width=16 isp.tag_buffers=2 | a.trace"
-};
-
-/// A slice of a sweep for a job array: point groups g with g % count == index.
-struct SweepSlice {
-  int index = 0;
-  int count = 1;
-};
-
-/// Parses a sweep file. InputError naming file:line for anything malformed or unknown (sections,
-/// keys, values out of range, bad ranges, zip lists of unequal length, globs matching nothing).
-SweepSpec parse_sweep_file(const std::string& path);
-
-/// Expands one value list: "1, 2, 4", "16..64 step 16", "1..8 x 2" (also "*2"), "0.5..1 step 0.25".
-/// InputError naming `where` when malformed.
-std::vector<std::string> expand_value_list(const std::string& text, const std::string& where);
-
-/// All points in their deterministic order: axes (last fastest), then traces, then repetitions.
-std::vector<SweepPoint> expand_sweep(const SweepSpec& spec);
-
-/// Parses "i/K" (0 <= i < K). InputError naming the argument otherwise.
-SweepSlice parse_slice(const std::string& text);
-
-/// The points of one slice (their index and group are kept).
-std::vector<SweepPoint> slice_points(const std::vector<SweepPoint>& points, SweepSlice slice);
-
-/// How progress is shown.
-enum class SweepProgress { Bar, Lines, None };
 
 /// How to run a sweep.
 struct SweepOptions {
@@ -95,26 +38,5 @@ struct SweepSummary {
 /// SIGINT stops launching points and waits for the running ones, a second SIGINT or a SIGTERM
 /// kills them (a killed run leaves no rows). InputError for bad inputs, before anything runs.
 SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& options, std::ostream& out);
-
-/// Writes a Slurm job-array script (array task i runs slice i/slices into dir/shard_i.db) and a
-/// README telling how to merge; returns the script's path.
-std::string write_slurm_job(const SweepSpec& spec, const std::string& dir, int slices, int jobs,
-                            const std::string& binary);
-
-/// What merging one shard did.
-struct MergeShardResult {
-  std::string shard;
-  std::size_t copied = 0;
-  std::size_t duplicates = 0;
-};
-
-/// Merges shard databases into `out_path` (created if absent), one transaction per shard, with new
-/// run ids. A finished run whose (config_hash, trace_hash) is already finished in the output is a
-/// duplicate (repetitions are kept: a shard's k-th finished run of a point is copied when the
-/// output holds fewer than k); failed runs are copied unless an identical row is already there.
-std::vector<MergeShardResult> merge_databases(const std::string& out_path, const std::vector<std::string>& shards);
-
-/// This executable's path (/proc/self/exe).
-std::string self_executable();
 
 }  // namespace tbdr

@@ -1,0 +1,441 @@
+#include "app/sweep_spec.hpp"
+
+#include <glob.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "kernel/errors.hpp"
+#include "models/hw_config.hpp"
+
+namespace tbdr {
+
+namespace fs = std::filesystem;
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return {};
+  const auto e = s.find_last_not_of(" \t\r\n");
+  return s.substr(b, e - b + 1);
+}
+
+namespace {
+
+std::vector<std::string> split_commas(const std::string& text) {
+  std::vector<std::string> out;
+  std::string cur;
+  std::istringstream in(text);
+  while (std::getline(in, cur, ',')) out.push_back(trim(cur));
+  if (!text.empty() && text.back() == ',') out.push_back("");
+  return out;
+}
+
+/// The message of an InputError without its "where: " prefix.
+std::string bare_message(const InputError& e) {
+  const std::string what = e.what();
+  const std::string& where = e.where();
+  if (!where.empty() && what.rfind(where + ": ", 0) == 0) return what.substr(where.size() + 2);
+  return what;
+}
+
+/// A path written in the sweep file, relative to the sweep file's folder (absolute stays absolute).
+std::string relative_to(const fs::path& base_dir, const std::string& p) {
+  const fs::path path(p);
+  if (path.is_absolute()) return path.lexically_normal().string();
+  return (base_dir / path).lexically_normal().string();
+}
+
+bool has_glob_chars(const std::string& s) { return s.find_first_of("*?[") != std::string::npos; }
+
+// ---------------------------------------------------------------------------------------------
+// Ranges
+
+bool is_integer_text(const std::string& s) {
+  if (s.empty()) return false;
+  std::size_t i = (s[0] == '-' || s[0] == '+') ? 1 : 0;
+  if (i == s.size()) return false;
+  for (; i < s.size(); ++i) {
+    if (s[i] < '0' || s[i] > '9') return false;
+  }
+  return true;
+}
+
+bool parse_double(const std::string& s, double& v) {
+  const std::string t = trim(s);
+  if (t.empty()) return false;
+  const char* b = t.data() + (t[0] == '+' ? 1 : 0);
+  auto r = std::from_chars(b, t.data() + t.size(), v);
+  return r.ec == std::errc{} && r.ptr == t.data() + t.size() && std::isfinite(v);
+}
+
+std::string format_number(double v, bool integer) {
+  if (integer) return std::to_string(static_cast<long long>(std::llround(v)));
+  // Round away accumulated binary noise (0.1 * 3 = 0.30000000000000004) before printing.
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.12g", v);
+  double clean = 0;
+  parse_double(buf, clean);
+  auto r = std::to_chars(buf, buf + sizeof buf, clean);
+  return std::string(buf, r.ptr);
+}
+
+constexpr std::size_t kMaxRangeValues = 100000;
+
+std::vector<std::string> expand_range(const std::string& text, const std::string& where) {
+  const auto dots = text.find("..");
+  const std::string lo_text = trim(text.substr(0, dots));
+  std::string rest = trim(text.substr(dots + 2));
+  std::string hi_text = rest, op, by_text;
+  // "A..B", "A..B step S", "A..B x F", "A..B *F"
+  if (auto p = rest.find("step"); p != std::string::npos) {
+    hi_text = trim(rest.substr(0, p));
+    op = "step";
+    by_text = trim(rest.substr(p + 4));
+  } else if (auto q = rest.find_first_of("x*"); q != std::string::npos) {
+    hi_text = trim(rest.substr(0, q));
+    op = "x";
+    by_text = trim(rest.substr(q + 1));
+  }
+  const std::string syntax = "expected a range A..B, A..B step S or A..B x F (geometric), e.g. 16..64 step 16 or 1..8 x 2";
+  double lo = 0, hi = 0, by = op == "x" ? 2 : 1;
+  if (!parse_double(lo_text, lo) || !parse_double(hi_text, hi) || (!op.empty() && !parse_double(by_text, by))) {
+    throw InputError(where, "bad range '" + text + "': " + syntax);
+  }
+  if (hi < lo) throw InputError(where, "bad range '" + text + "': the end is below the start");
+  if (op != "x" && by <= 0) throw InputError(where, "bad range '" + text + "': the step must be positive");
+  if (op == "x" && (by <= 1 || lo <= 0)) {
+    throw InputError(where, "bad range '" + text + "': a geometric range needs a start > 0 and a factor > 1");
+  }
+  const bool integer = is_integer_text(lo_text) && is_integer_text(hi_text) && (op.empty() || is_integer_text(by_text));
+  std::vector<std::string> out;
+  const double eps = 1e-9 * std::max({std::fabs(lo), std::fabs(hi), 1.0});
+  for (std::size_t i = 0;; ++i) {
+    const double v = op == "x" ? lo * std::pow(by, static_cast<double>(i)) : lo + static_cast<double>(i) * by;
+    if (v > hi + eps) break;
+    if (out.size() >= kMaxRangeValues) {
+      throw InputError(where, "range '" + text + "' has more than " + std::to_string(kMaxRangeValues) + " values");
+    }
+    out.push_back(format_number(v, integer));
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The sweep file
+
+/// One "key = value" line of the sweep file with its section and line number.
+struct SweepLine {
+  std::string section;
+  std::string name;   ///< the key within its section
+  std::string full;   ///< section + "." + name, as Boost.Program_options reports it
+  std::string value;
+  long line = 0;
+};
+
+/// Scans the file like Boost.Program_options reads it ('#' comments, [section], key = value) to
+/// keep line numbers; sections must be sweep, set, vary or zip.NAME.
+std::vector<SweepLine> scan_sweep_file(const std::string& path, std::istream& in, std::map<std::string, long>& section_lines) {
+  std::vector<SweepLine> out;
+  std::map<std::string, long> seen;
+  std::string line, section;
+  long n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+    const std::string s = trim(line);
+    if (s.empty()) continue;
+    if (s.front() == '[') {
+      if (s.back() != ']') throw InputError(path, n, "malformed section header '" + s + "' (expected [name])");
+      section = trim(s.substr(1, s.size() - 2));
+      const bool zip = section.rfind("zip.", 0) == 0 && section.size() > 4;
+      if (section != "sweep" && section != "set" && section != "vary" && !zip) {
+        throw InputError(path, n, "unknown section [" + section + "] (known: [sweep], [set], [vary], [zip.NAME])");
+      }
+      if (section_lines.count(section)) {
+        throw InputError(path, n, "section [" + section + "] appears twice (first at line " +
+                                      std::to_string(section_lines[section]) + ")");
+      }
+      section_lines[section] = n;
+      continue;
+    }
+    const auto eq = s.find('=');
+    if (eq == std::string::npos) throw InputError(path, n, "expected 'key = value' or '[section]', found '" + s + "'");
+    if (section.empty()) throw InputError(path, n, "'" + s + "' is outside any section (start with [sweep])");
+    const std::string name = trim(s.substr(0, eq));
+    if (name.empty()) throw InputError(path, n, "missing key before '='");
+    const std::string full = section + "." + name;
+    const bool repeatable = section == "sweep" && (name == "config" || name == "trace");
+    if (auto it = seen.find(full); it != seen.end() && !repeatable) {
+      throw InputError(path, n, "key '" + name + "' set twice in [" + section + "] (first at line " +
+                                    std::to_string(it->second) + ")");
+    }
+    seen[full] = n;
+    out.push_back({section, name, full, trim(s.substr(eq + 1)), n});
+  }
+  return out;
+}
+
+/// Checks that `key` is a hardware parameter and `value` a valid value for it.
+void check_param_value(const std::string& key, const std::string& value, const std::string& where) {
+  const ParamTable& table = hw_params().table();
+  ResolvedParams p = table.defaults();
+  try {
+    table.apply_override(p, key + "=" + value);
+  } catch (const InputError& e) {
+    throw InputError(where, bare_message(e));
+  }
+}
+
+std::vector<std::string> expand_traces(const std::string& pattern, const fs::path& base_dir, const std::string& where) {
+  const std::string p = relative_to(base_dir, pattern);
+  if (!has_glob_chars(pattern)) {
+    if (!fs::is_regular_file(p)) throw InputError(where, "trace file '" + p + "' not found");
+    return {p};
+  }
+  glob_t g{};
+  const int rc = ::glob(p.c_str(), 0, nullptr, &g);
+  std::vector<std::string> out;
+  if (rc == 0) {
+    for (std::size_t i = 0; i < g.gl_pathc; ++i) {
+      if (fs::is_regular_file(g.gl_pathv[i])) out.push_back(g.gl_pathv[i]);
+    }
+  }
+  globfree(&g);
+  if (out.empty()) throw InputError(where, "trace pattern '" + p + "' matches no file");
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> expand_value_list(const std::string& text, const std::string& where) {
+  if (trim(text).empty()) throw InputError(where, "empty value list");
+  std::vector<std::string> out;
+  for (const auto& item : split_commas(text)) {
+    if (item.empty()) throw InputError(where, "empty item in the list '" + text + "'");
+    if (item.find("..") != std::string::npos) {
+      const auto r = expand_range(item, where);
+      out.insert(out.end(), r.begin(), r.end());
+    } else {
+      out.push_back(item);
+    }
+  }
+  std::set<std::string> seen;
+  for (const auto& v : out) {
+    if (!seen.insert(v).second) throw InputError(where, "value '" + v + "' listed twice in '" + text + "'");
+  }
+  return out;
+}
+
+namespace {
+
+/// Applies one [sweep] line: name, config (base files), trace (files or globs), repetitions.
+void apply_sweep_key(SweepSpec& spec, const SweepLine& l, const std::string& value, const std::string& where,
+                     const fs::path& base_dir) {
+  if (l.name == "name") {
+    if (value.empty()) throw InputError(where, "empty name");
+    spec.name = value;
+  } else if (l.name == "config") {
+    for (const auto& item : split_commas(value)) {
+      if (item.empty()) throw InputError(where, "empty config file name");
+      const std::string p = relative_to(base_dir, item);
+      if (!fs::is_regular_file(p)) throw InputError(where, "config file '" + p + "' not found");
+      spec.base_configs.push_back(p);
+    }
+  } else if (l.name == "trace") {
+    for (const auto& item : split_commas(value)) {
+      if (item.empty()) throw InputError(where, "empty trace name");
+      const auto t = expand_traces(item, base_dir, where);
+      spec.traces.insert(spec.traces.end(), t.begin(), t.end());
+    }
+  } else if (l.name == "repetitions") {
+    int reps = 0;
+    auto r = std::from_chars(value.data(), value.data() + value.size(), reps);
+    if (value.empty() || r.ec != std::errc{} || r.ptr != value.data() + value.size() || reps < 1 || reps > 1000) {
+      throw InputError(where, "repetitions = '" + value + "': expected an integer in [1, 1000]");
+    }
+    spec.repetitions = reps;
+  } else {
+    throw InputError(where, "unknown key '" + l.name + "' in [sweep] (known: name, config, trace, repetitions)");
+  }
+}
+
+/// The checked values of one [vary] or [zip.NAME] line: config files (a plain list, paths may
+/// contain "..", made relative to the working directory) or parameter values (ranges expanded).
+std::vector<std::string> axis_values(const SweepLine& l, const std::string& value, const std::string& where,
+                                     const fs::path& base_dir) {
+  if (l.name != "config") {
+    std::vector<std::string> values = expand_value_list(value, where);
+    for (const auto& v : values) check_param_value(l.name, v, where);
+    return values;
+  }
+  std::vector<std::string> values = split_commas(value);
+  std::set<std::string> seen;
+  for (const auto& v : values) {
+    if (v.empty()) throw InputError(where, "empty config file name in '" + value + "'");
+    if (!seen.insert(v).second) throw InputError(where, "config file '" + v + "' listed twice");
+  }
+  for (auto& v : values) {
+    v = relative_to(base_dir, v);
+    if (!fs::is_regular_file(v)) throw InputError(where, "config file '" + v + "' not found");
+  }
+  return values;
+}
+
+/// Adds one key of a zip group to its axis (created at the group's first key).
+void add_zip_key(SweepSpec& spec, std::map<std::string, std::size_t>& zip_axis, const SweepLine& l,
+                 const std::vector<std::string>& values, const std::string& where) {
+  auto z = zip_axis.find(l.section);
+  if (z == zip_axis.end()) {
+    SweepAxis axis;
+    axis.name = l.section;
+    axis.values.resize(values.size());
+    z = zip_axis.emplace(l.section, spec.axes.size()).first;
+    spec.axes.push_back(std::move(axis));
+  }
+  SweepAxis& axis = spec.axes[z->second];
+  if (values.size() != axis.values.size()) {
+    throw InputError(where, "[" + l.section + "] '" + l.name + "' has " + std::to_string(values.size()) +
+                                " values but '" + axis.keys.front() + "' (" + axis.where.front() + ") has " +
+                                std::to_string(axis.values.size()) + "; zipped keys need lists of equal length");
+  }
+  axis.keys.push_back(l.name);
+  axis.where.push_back(where);
+  for (std::size_t v = 0; v < values.size(); ++v) axis.values[v].push_back(values[v]);
+}
+
+}  // namespace
+
+SweepSpec parse_sweep_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "cannot open sweep file");
+  std::map<std::string, long> section_lines;
+  const std::vector<SweepLine> lines = scan_sweep_file(path, in, section_lines);
+
+  // Boost.Program_options reads the values; the scan supplies line numbers and strictness.
+  const std::vector<IniEntry> parsed = read_ini_entries(path, "sweep file", lines.size());
+
+  SweepSpec spec;
+  spec.path = path;
+  spec.name = fs::path(path).stem().string();
+  const fs::path base_dir = fs::path(path).parent_path();
+  std::map<std::string, std::string> key_where;  // every key set or swept, for conflicts
+  std::map<std::string, std::size_t> zip_axis;   // zip group -> axis index
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const SweepLine& l = lines[i];
+    const std::string where = path + ":" + std::to_string(l.line);
+    if (parsed[i].key != l.full) throw InputError(where, "sweep file parse mismatch at key '" + l.name + "'");
+    const std::string value = trim(parsed[i].value);
+    if (l.section == "sweep") {
+      apply_sweep_key(spec, l, value, where, base_dir);
+      continue;
+    }
+    // [set], [vary], [zip.NAME]: the key is a parameter, or "config" (a config file axis).
+    if (auto it = key_where.find(l.name); it != key_where.end()) {
+      throw InputError(where, "'" + l.name + "' is already set or swept at " + it->second);
+    }
+    key_where[l.name] = where;
+    if (l.section == "set") {
+      if (l.name == "config") throw InputError(where, "config files go in [sweep] (config = FILE) or [vary] (config = A, B)");
+      check_param_value(l.name, value, where);
+      spec.sets.push_back(l.name + "=" + value);
+      spec.set_where.push_back(where);
+    } else if (l.section == "vary") {
+      SweepAxis axis;
+      axis.name = l.name;
+      axis.keys = {l.name};
+      for (auto& v : axis_values(l, value, where, base_dir)) axis.values.push_back({v});
+      axis.where = {where};
+      spec.axes.push_back(std::move(axis));
+    } else {
+      add_zip_key(spec, zip_axis, l, axis_values(l, value, where, base_dir), where);
+    }
+  }
+  if (!section_lines.count("sweep")) throw InputError(path, "no [sweep] section (it names the traces)");
+  if (spec.traces.empty()) {
+    throw InputError(path, section_lines["sweep"], "[sweep] names no trace (trace = FILE or GLOB, repeatable)");
+  }
+  for (const auto& [sec, line] : section_lines) {
+    if (sec.rfind("zip.", 0) == 0 && !zip_axis.count(sec)) throw InputError(path, line, "[" + sec + "] is empty");
+  }
+  return spec;
+}
+
+std::vector<SweepPoint> expand_sweep(const SweepSpec& spec) {
+  std::size_t combos = 1;
+  for (const auto& a : spec.axes) combos *= a.values.size();
+  std::vector<SweepPoint> points;
+  points.reserve(combos * spec.traces.size() * static_cast<std::size_t>(spec.repetitions));
+  std::vector<std::size_t> digit(spec.axes.size(), 0);
+  std::size_t group = 0;
+  for (std::size_t c = 0; c < combos; ++c) {
+    // Mixed-radix decode, the last axis fastest.
+    std::size_t rest = c;
+    for (std::size_t a = spec.axes.size(); a-- > 0;) {
+      digit[a] = rest % spec.axes[a].values.size();
+      rest /= spec.axes[a].values.size();
+    }
+    std::vector<std::string> configs = spec.base_configs;
+    std::vector<std::string> sets = spec.sets;
+    std::string label;
+    for (std::size_t a = 0; a < spec.axes.size(); ++a) {
+      const auto& axis = spec.axes[a];
+      for (std::size_t k = 0; k < axis.keys.size(); ++k) {
+        const std::string& v = axis.values[digit[a]][k];
+        if (axis.keys[k] == "config") {
+          configs.push_back(v);
+          label += (label.empty() ? "" : " ") + std::string("config=") + fs::path(v).filename().string();
+        } else {
+          sets.push_back(axis.keys[k] + "=" + v);
+          label += (label.empty() ? "" : " ") + axis.keys[k] + "=" + v;
+        }
+      }
+    }
+    for (const auto& trace : spec.traces) {
+      for (int r = 0; r < spec.repetitions; ++r) {
+        SweepPoint p;
+        p.index = points.size();
+        p.group = group;
+        p.repetition = r;
+        p.configs = configs;
+        p.sets = sets;
+        p.trace = trace;
+        p.label = (label.empty() ? "" : label + " | ") + fs::path(trace).filename().string();
+        if (spec.repetitions > 1) p.label += " #" + std::to_string(r + 1);
+        points.push_back(std::move(p));
+      }
+      ++group;
+    }
+  }
+  return points;
+}
+
+SweepSlice parse_slice(const std::string& text) {
+  const auto slash = text.find('/');
+  SweepSlice s;
+  auto num = [](const std::string& t, int& v) {
+    auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+    return !t.empty() && r.ec == std::errc{} && r.ptr == t.data() + t.size();
+  };
+  if (slash == std::string::npos || !num(text.substr(0, slash), s.index) || !num(text.substr(slash + 1), s.count) ||
+      s.count < 1 || s.index < 0 || s.index >= s.count) {
+    throw InputError("--slice " + text, "expected i/K with 0 <= i < K, e.g. 0/4");
+  }
+  return s;
+}
+
+std::vector<SweepPoint> slice_points(const std::vector<SweepPoint>& points, SweepSlice slice) {
+  std::vector<SweepPoint> out;
+  for (const auto& p : points) {
+    if (p.group % static_cast<std::size_t>(slice.count) == static_cast<std::size_t>(slice.index)) out.push_back(p);
+  }
+  return out;
+}
+
+}  // namespace tbdr

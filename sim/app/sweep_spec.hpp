@@ -1,0 +1,69 @@
+#pragma once
+// The sweep file: a sweep file (INI) names base configs, parameters with lists, ranges or zipped
+// groups, traces and repetitions; it expands into a deterministic list of points (the cartesian
+// product), and slices of that list feed Slurm job arrays. Syntax: docs/sweeps.md.
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace tbdr {
+
+/// One swept axis: a single parameter, or a zip group of parameters that vary together.
+/// values[i][k] is the i-th setting of keys[k]. The key "config" varies the config file.
+struct SweepAxis {
+  std::string name;                              ///< the key, or "zip.<group>"
+  std::vector<std::string> keys;
+  std::vector<std::vector<std::string>> values;
+  std::vector<std::string> where;                ///< "file:line" of each key
+};
+
+/// A parsed sweep file; every path is already relative to the working directory.
+struct SweepSpec {
+  std::string path;                        ///< the sweep file
+  std::string name;                        ///< [sweep] name, or the file's stem
+  std::vector<std::string> base_configs;   ///< applied in order to every point
+  std::vector<std::string> sets;           ///< fixed "key=value" overrides for every point
+  std::vector<std::string> set_where;      ///< "file:line" of each fixed override
+  std::vector<SweepAxis> axes;             ///< in file order; the last one varies fastest
+  std::vector<std::string> traces;         ///< globs expanded, in file order (glob matches sorted)
+  int repetitions = 1;
+};
+
+/// One simulation of a sweep: configuration, trace and repetition.
+struct SweepPoint {
+  std::size_t index = 0;   ///< position in the deterministic order
+  std::size_t group = 0;   ///< index of its (configuration, trace) pair; repetitions share it
+  int repetition = 0;
+  std::vector<std::string> configs;  ///< config files, in order
+  std::vector<std::string> sets;     ///< "key=value" overrides: fixed ones, then the axes'
+  std::string trace;
+  std::string label;                 ///< "tiling.tile_width=16 isp.tag_buffers=2 | a.trace"
+};
+
+/// A slice of a sweep for a job array: point groups g with g % count == index.
+struct SweepSlice {
+  int index = 0;
+  int count = 1;
+};
+
+/// Parses a sweep file. InputError naming file:line for anything malformed or unknown (sections,
+/// keys, values out of range, bad ranges, zip lists of unequal length, globs matching nothing).
+SweepSpec parse_sweep_file(const std::string& path);
+
+/// Expands one value list: "1, 2, 4", "16..64 step 16", "1..8 x 2" (also "*2"), "0.5..1 step 0.25".
+/// InputError naming `where` when malformed.
+std::vector<std::string> expand_value_list(const std::string& text, const std::string& where);
+
+/// All points in their deterministic order: axes (last fastest), then traces, then repetitions.
+std::vector<SweepPoint> expand_sweep(const SweepSpec& spec);
+
+/// Parses "i/K" (0 <= i < K). InputError naming the argument otherwise.
+SweepSlice parse_slice(const std::string& text);
+
+/// The points of one slice (their index and group are kept).
+std::vector<SweepPoint> slice_points(const std::vector<SweepPoint>& points, SweepSlice slice);
+
+/// The text without its leading and trailing blanks (spaces, tabs, CR, LF).
+std::string trim(const std::string& s);
+
+}  // namespace tbdr

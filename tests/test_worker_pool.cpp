@@ -1,0 +1,189 @@
+// The worker pool: jobs (functions in forked children, or programs) run at most `workers` at a
+// time, their stderr and exit status come back, a throwing hook kills the running children, and
+// SIGINT stops launching (once) or kills the running jobs (twice).
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+#include <thread>
+
+#include "app/worker_pool.hpp"
+#include "scratch_dir.hpp"
+
+namespace tbdr {
+namespace {
+
+namespace fs = std::filesystem;
+
+testing_scratch::ScratchCleanup scratch_cleanup{"pool"};
+
+/// Hooks that hand out `n` jobs made by `make` and record how each ended.
+struct Recorder {
+  std::size_t next = 0, max_running = 0;
+  std::map<std::size_t, WorkerEnd> ends;
+  WorkerPoolHooks hooks(std::size_t n, std::function<WorkerJob(std::size_t)> make) {
+    WorkerPoolHooks h;
+    h.next = [this, n, make]() -> std::optional<WorkerJob> {
+      if (next == n) return std::nullopt;
+      return make(next++);
+    };
+    h.ended = [this](const WorkerEnd& e) { ends[e.id] = e; };
+    h.running = [this](std::size_t r) { max_running = std::max(max_running, r); };
+    return h;
+  }
+};
+
+WorkerJob function_job(std::size_t id, std::function<int()> f) {
+  WorkerJob j;
+  j.id = id;
+  j.function = std::move(f);
+  return j;
+}
+
+TEST(WorkerPool, RunsFunctionsInChildrenAtMostWorkersAtATime) {
+  Recorder rec;
+  const pid_t self = getpid();
+  auto hooks = rec.hooks(6, [self](std::size_t i) {
+    return function_job(i, [i, self] {
+      std::fprintf(stderr, "job %zu in a child: %s\n", i, getpid() != self ? "yes" : "no");
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      return static_cast<int>(i % 2);
+    });
+  });
+  EXPECT_FALSE(run_worker_pool({2, false}, hooks));
+  ASSERT_EQ(rec.ends.size(), 6u);
+  EXPECT_EQ(rec.max_running, 2u);
+  for (const auto& [i, e] : rec.ends) {
+    EXPECT_EQ(e.ok(), i % 2 == 0) << i;
+    EXPECT_FALSE(e.killed);
+    EXPECT_EQ(e.stderr_text, "job " + std::to_string(i) + " in a child: yes\n");
+    EXPECT_GE(e.seconds, 0.04);
+  }
+}
+
+TEST(WorkerPool, RunsProgramsAndReportsExceptionsOfFunctions) {
+  Recorder rec;
+  auto hooks = rec.hooks(3, [](std::size_t i) {
+    if (i == 0) return function_job(i, []() -> int { throw std::runtime_error("no trace"); });
+    WorkerJob j;
+    j.id = i;
+    j.argv = i == 1 ? std::vector<std::string>{"/bin/sh", "-c", "echo to stdout; echo to stderr >&2; exit 3"}
+                    : std::vector<std::string>{"/nonexistent/tbdrsim", "run"};
+    return j;
+  });
+  run_worker_pool({3, false}, hooks);
+  ASSERT_EQ(rec.ends.size(), 3u);
+  EXPECT_FALSE(rec.ends[0].ok());
+  EXPECT_EQ(rec.ends[0].stderr_text, "error: no trace\n");
+  EXPECT_TRUE(WIFEXITED(rec.ends[1].status));
+  EXPECT_EQ(WEXITSTATUS(rec.ends[1].status), 3);
+  EXPECT_EQ(rec.ends[1].stderr_text, "to stderr\n");  // stdout goes to /dev/null
+  EXPECT_EQ(WEXITSTATUS(rec.ends[2].status), 127);
+  EXPECT_EQ(rec.ends[2].stderr_text, "cannot execute the tbdrsim binary\n");
+}
+
+TEST(WorkerPool, AThrowingHookKillsTheRunningChildren) {
+  const fs::path pid_file = testing_scratch::scratch_dir("pool", "throw") / "slow.pid";
+  WorkerPoolHooks hooks;
+  std::size_t next = 0;
+  hooks.next = [&]() -> std::optional<WorkerJob> {
+    if (next == 2) return std::nullopt;
+    const std::size_t i = next++;
+    if (i == 0) {
+      return function_job(i, [pid_file] {
+        std::ofstream(pid_file) << getpid();
+        std::this_thread::sleep_for(std::chrono::seconds(30));
+        return 0;
+      });
+    }
+    return function_job(i, [pid_file] {
+      while (!fs::exists(pid_file)) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      return 0;
+    });
+  };
+  hooks.ended = [](const WorkerEnd&) { throw std::runtime_error("database full"); };
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_THROW(run_worker_pool({2, false}, hooks), std::runtime_error);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(20));
+  pid_t slow = 0;
+  std::ifstream(pid_file) >> slow;
+  ASSERT_GT(slow, 0);
+  EXPECT_EQ(kill(slow, 0), -1);  // killed and reaped
+  EXPECT_EQ(errno, ESRCH);
+}
+
+/// Ten jobs on two workers (the first 100 ms, the others 1 s); after the first ends, SIGINT is
+/// raised `interrupts` times while the second still runs.
+void interrupt_after_first(int interrupts, std::map<std::size_t, WorkerEnd>& ends, std::vector<bool>& stops,
+                           std::size_t& launched, bool& interrupted) {
+  WorkerPoolHooks hooks;
+  launched = 0;
+  hooks.next = [&]() -> std::optional<WorkerJob> {
+    if (launched == 10) return std::nullopt;
+    const std::size_t i = launched++;
+    return function_job(i, [i] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(i == 0 ? 100 : 1000));
+      return 0;
+    });
+  };
+  hooks.ended = [&](const WorkerEnd& e) {
+    ends[e.id] = e;
+    if (ends.size() == 1) {
+      for (int k = 0; k < interrupts; ++k) raise(SIGINT);
+    }
+  };
+  hooks.stopping = [&](bool kill, std::size_t) { stops.push_back(kill); };
+  interrupted = run_worker_pool({2, true}, hooks);
+}
+
+TEST(WorkerPool, FirstSigintStopsLaunchingAndWaits) {
+  std::map<std::size_t, WorkerEnd> ends;
+  std::vector<bool> stops;
+  std::size_t launched = 0;
+  bool interrupted = false;
+  interrupt_after_first(1, ends, stops, launched, interrupted);
+  EXPECT_TRUE(interrupted);
+  EXPECT_EQ(stops, std::vector<bool>{false});
+  EXPECT_EQ(launched, 2u);
+  EXPECT_EQ(ends.size(), launched);
+  for (const auto& [i, e] : ends) EXPECT_TRUE(e.ok() && !e.killed) << i;
+}
+
+TEST(WorkerPool, SecondSigintKillsTheRunningJobs) {
+  std::map<std::size_t, WorkerEnd> ends;
+  std::vector<bool> stops;
+  std::size_t launched = 0;
+  bool interrupted = false;
+  interrupt_after_first(2, ends, stops, launched, interrupted);
+  EXPECT_TRUE(interrupted);
+  EXPECT_EQ(stops, (std::vector<bool>{true}));
+  EXPECT_EQ(ends.size(), launched);
+  std::size_t killed = 0;
+  for (const auto& [i, e] : ends) killed += e.killed ? 1 : 0;
+  EXPECT_EQ(killed, launched - 1);
+  // The pool put the old action back.
+  struct sigaction now {};
+  sigaction(SIGINT, nullptr, &now);
+  EXPECT_EQ(now.sa_handler, SIG_DFL);
+}
+
+TEST(WorkerPool, ShellQuoting) {
+  EXPECT_EQ(shell_quote("plain-arg_1.ini"), "plain-arg_1.ini");
+  EXPECT_EQ(shell_quote(""), "''");
+  EXPECT_EQ(shell_quote("a b"), "'a b'");
+  EXPECT_EQ(shell_quote("it's"), "'it'\\''s'");
+  EXPECT_EQ(shell_command_line({"tbdrsim", "run", "--set", "gpu.name=a GPU"}), "tbdrsim run --set 'gpu.name=a GPU'");
+}
+
+}  // namespace
+}  // namespace tbdr
