@@ -20,30 +20,6 @@ namespace tbdr {
 
 namespace {
 
-/// Statistics of one pass (or, summed, of the frame), one set per unit.
-struct PassStats {
-  GeometryStats geometry;
-  TilerStats tiler;
-  IspStats isp;
-  TspStats tsp;
-  TileMemoryStats tile_memory;
-  PassStats& operator+=(const PassStats& o) {
-    geometry += o.geometry;
-    tiler += o.tiler;
-    isp += o.isp;
-    tsp += o.tsp;
-    tile_memory += o.tile_memory;
-    return *this;
-  }
-  /// Rows "<prefix>/<unit>" for the results database.
-  void collect(const std::string& prefix, std::vector<StatRecord>& out) const {
-    collect_stats(geometry, prefix + "/geometry", out);
-    collect_stats(tiler, prefix + "/tiler", out);
-    collect_stats(isp, prefix + "/isp", out);
-    collect_stats(tsp, prefix + "/tsp", out);
-    collect_stats(tile_memory, prefix + "/tile_memory", out);
-  }
-};
 
 void collect_dram(const std::string& prefix, const DramTraffic& dram, std::vector<StatRecord>& out) {
   std::uint64_t r = 0, w = 0;
@@ -150,8 +126,8 @@ class FrameSimulator {
       // Barriers order work; in the functional model every command completes before the next.
     }
     // Frame totals: every unit's statistics summed over the passes (gauges: the largest level).
-    if (pass_index > 0) frame_totals_.collect("frame", result_.stats);
-    if (dispatches > 0) collect_stats(compute_totals_, "frame/compute", result_.stats);
+    if (pass_index > 0) result_.totals.render.collect("frame", result_.stats);
+    if (dispatches > 0) collect_stats(result_.totals.compute, "frame/compute", result_.stats);
     collect_dram("frame", result_.dram, result_.stats);
     auto frame_stat = [&](const char* name, double v, const char* unit, const char* desc) {
       result_.stats.push_back({"frame/frame", name, v, unit, desc});
@@ -333,7 +309,7 @@ class FrameSimulator {
     result_.work.commands.push_back(std::move(cw));
     if (!image.empty()) result_.final_color = image;
     collect_stats(stats, prefix + "/compute", result_.stats);
-    compute_totals_ += stats;
+    result_.totals.compute += stats;
     collect_dram(prefix, dram, result_.stats);
     PassSummary summary;
     summary.name = prefix;
@@ -545,7 +521,7 @@ class FrameSimulator {
     }
     result_.work.commands.push_back(std::move(cw));
     ps->collect(prefix, result_.stats);
-    frame_totals_ += *ps;
+    result_.totals.render += *ps;
     collect_dram(prefix, dram, result_.stats);
     PassSummary summary;
     summary.name = pass.name;
@@ -567,8 +543,6 @@ class FrameSimulator {
   std::uint32_t prim_base_ = 0;
   int geometry_passes_ = 0;
   std::unique_ptr<TextureLayout> textures_;  ///< the frame's texture address space
-  PassStats frame_totals_;                   ///< every pass's unit statistics, summed
-  ComputeStats compute_totals_;              ///< every dispatch's statistics, summed
   FrameResult result_;
 };
 

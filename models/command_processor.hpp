@@ -6,15 +6,53 @@
 #include <string>
 #include <vector>
 
+#include "models/compute_unit.hpp"
 #include "models/frame_work.hpp"
+#include "models/geometry_unit.hpp"
 #include "models/hw_config.hpp"
+#include "models/isp.hpp"
 #include "models/render_state.hpp"
+#include "models/tile_memory.hpp"
+#include "models/tiler.hpp"
+#include "models/tsp.hpp"
 #include "models/traffic.hpp"
 #include "kernel/stats.hpp"
 #include "trace/trace.hpp"
 #include "scene/scene.hpp"
 
 namespace tbdr {
+
+/// Statistics of one pass (or, summed, of the frame), one set per unit.
+struct PassStats {
+  GeometryStats geometry;
+  TilerStats tiler;
+  IspStats isp;
+  TspStats tsp;
+  TileMemoryStats tile_memory;
+  /// Adds another pass: counts sum, gauges take the larger level.
+  PassStats& operator+=(const PassStats& o) {
+    geometry += o.geometry;
+    tiler += o.tiler;
+    isp += o.isp;
+    tsp += o.tsp;
+    tile_memory += o.tile_memory;
+    return *this;
+  }
+  /// Rows "<prefix>/<unit>" for the results database.
+  void collect(const std::string& prefix, std::vector<StatRecord>& out) const {
+    collect_stats(geometry, prefix + "/geometry", out);
+    collect_stats(tiler, prefix + "/tiler", out);
+    collect_stats(isp, prefix + "/isp", out);
+    collect_stats(tsp, prefix + "/tsp", out);
+    collect_stats(tile_memory, prefix + "/tile_memory", out);
+  }
+};
+
+/// The frame's unit statistics: render passes and compute dispatches, each summed.
+struct FrameStats {
+  PassStats render;
+  ComputeStats compute;
+};
 
 /// What one pass did, for summaries (the full figures are in FrameResult::stats).
 struct PassSummary {
@@ -33,6 +71,7 @@ struct FrameResult {
   FrameImages images;
   std::string final_color;         ///< name of the last stored color attachment or image buffer ("" if none)
   FrameWork work;                  ///< what the timing model schedules
+  FrameStats totals;               ///< typed frame totals (the same figures as the "frame/<unit>" rows)
 };
 
 /// Replays `trace` on `scene` with the hardware `hw`. Input problems (an unsupported kernel or

@@ -2,20 +2,13 @@
 
 namespace tbdr {
 
-namespace {
-
-double stat_of(const std::vector<StatRecord>& stats, const std::string& scope, const std::string& name) {
-  double v = 0;
-  for (const auto& r : stats) {
-    if (r.scope == scope && r.name == name) v += r.value;
-  }
-  return v;
-}
-
-}  // namespace
-
-EnergyBreakdown compute_energy(const HwConfig& hw, const std::vector<StatRecord>& stats, double frame_time_ps) {
+EnergyBreakdown compute_energy(const HwConfig& hw, const FrameStats& frame, const MemorySystemStats& memory,
+                               double frame_time_ps) {
   const auto& e = hw.energy;
+  const TspStats& tsp = frame.render.tsp;
+  const TileMemoryStats& tm = frame.render.tile_memory;
+  const IspStats& isp = frame.render.isp;
+  const auto d = [](const auto& stat) { return stat.as_double(); };
   EnergyBreakdown b;
   auto term = [&](const char* component, const char* counter, double count, double pj_per_unit) {
     b.terms.push_back({component, counter, count, pj_per_unit, count * pj_per_unit});
@@ -23,24 +16,21 @@ EnergyBreakdown compute_energy(const HwConfig& hw, const std::vector<StatRecord>
   };
   // The memory system computed its energies per access (DRAM read/write/IO bits, activates; cache
   // bytes by cache): charged here as one unit each so the sum stays exact.
-  term("dram", "pJ (memory system)", stat_of(stats, "mem/dram", "energy_pj"), 1.0);
-  term("caches", "pJ (memory system)", stat_of(stats, "mem", "cache_energy_pj"), 1.0);
+  term("dram", "pJ (memory system)", memory.dram_energy_pj.value(), 1.0);
+  term("caches", "pJ (memory system)", memory.cache_energy_pj.value(), 1.0);
   term("tile_buffer", "bytes",
-       stat_of(stats, "frame/tsp", "tile_buffer_read_bytes") + stat_of(stats, "frame/tsp", "tile_buffer_write_bytes") +
-           stat_of(stats, "frame/tile_memory", "tile_load_bytes") + stat_of(stats, "frame/tile_memory", "tile_store_bytes") +
-           stat_of(stats, "frame/tile_memory", "tile_clear_bytes") + stat_of(stats, "frame/tsp", "pls_bytes_accessed"),
+       d(tsp.tile_buffer_read_bytes) + d(tsp.tile_buffer_write_bytes) + d(tm.tile_load_bytes) + d(tm.tile_store_bytes) +
+           d(tm.tile_clear_bytes) + d(tsp.pls_bytes_accessed),
        e.tile_buffer_pj_per_byte);
   term("tag_and_depth_buffer", "bytes",
-       stat_of(stats, "frame/isp", "tag_buffer_read_bytes") + stat_of(stats, "frame/isp", "tag_buffer_write_bytes") +
-           stat_of(stats, "frame/isp", "depth_buffer_read_bytes") + stat_of(stats, "frame/isp", "depth_buffer_write_bytes"),
+       d(isp.tag_buffer_read_bytes) + d(isp.tag_buffer_write_bytes) + d(isp.depth_buffer_read_bytes) +
+           d(isp.depth_buffer_write_bytes),
        e.tag_buffer_pj_per_byte);
   term("alu", "ops",
-       stat_of(stats, "frame/tsp", "fragment_alu_ops") + stat_of(stats, "frame/geometry", "vertex_alu_ops") +
-           stat_of(stats, "frame/compute", "compute_alu_ops"),
+       d(tsp.fragment_alu_ops) + d(frame.render.geometry.vertex_alu_ops) + d(frame.compute.compute_alu_ops),
        e.alu_op_pj);
   term("texture", "texels",
-       stat_of(stats, "frame/tsp", "texels_filtered") +
-           stat_of(stats, "frame/compute", "compute_texture_fetches") * static_cast<double>(hw.texture.texels_per_fetch),
+       d(tsp.texels_filtered) + d(frame.compute.compute_texture_fetches) * static_cast<double>(hw.texture.texels_per_fetch),
        e.texel_pj);
   // Static: mW x ps = 1e-3 W x 1e-12 s = 1e-15 J = 1e-3 pJ.
   term("static", "mW x ps", e.static_power_mw * frame_time_ps, 1e-3);

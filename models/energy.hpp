@@ -6,7 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "models/command_processor.hpp"
 #include "models/hw_config.hpp"
+#include "models/memory_system.hpp"
 #include "kernel/stats.hpp"
 
 namespace tbdr {
@@ -28,8 +30,9 @@ struct EnergyBreakdown {
   void collect(std::vector<StatRecord>& out) const;
 };
 
-/// Computes the breakdown from a run's frame statistics (functional counts and the memory
-/// system's energies) and the frame time.
-EnergyBreakdown compute_energy(const HwConfig& hw, const std::vector<StatRecord>& stats, double frame_time_ps);
+/// Computes the breakdown from the frame's unit statistics, the memory system's energies and the
+/// frame time.
+EnergyBreakdown compute_energy(const HwConfig& hw, const FrameStats& frame, const MemorySystemStats& memory,
+                               double frame_time_ps);
 
 }  // namespace tbdr

@@ -121,8 +121,8 @@ class TimingSim final : public Unit {
                      {usc_.name, usc_.busy_cycles, usc_.stalled_cycles},
                      {pbe_.name, pbe_.busy_cycles, pbe_.stalled_cycles}};
     result_.dram = mem_.traffic();
-    result_.memory_energy_pj = mem_.energy_pj();
     mem_.collect(result_.memory_stats);
+    result_.memory = mem_.stats();
     result_.events = eq_.events_executed();
     for (const auto& cmd : work_.commands) {
       for (const auto& r : cmd.renders) {

@@ -26,6 +26,7 @@
 
 #include "models/frame_work.hpp"
 #include "models/hw_config.hpp"
+#include "models/memory_system.hpp"
 #include "models/traffic.hpp"
 #include "kernel/stats.hpp"
 
@@ -54,8 +55,8 @@ struct TimingResult {
   std::vector<UnitTime> units;
   DramTraffic issued;                 ///< bytes the units requested, per class (before caches)
   DramTraffic dram;                   ///< bytes DRAM transferred, per class (after caches)
-  double memory_energy_pj = 0;        ///< caches + DRAM
-  std::vector<StatRecord> memory_stats;  ///< caches, DRAM, clients
+  MemorySystemStats memory;           ///< the memory system's own totals (energies of caches and DRAM)
+  std::vector<StatRecord> memory_stats;  ///< rows of caches, DRAM, clients for the database
   std::vector<TileRecord> tiles;      ///< per tile: cycles, samples, DRAM bytes
   std::uint64_t events = 0;
   /// Texture fetch: lines the shaded quads accessed (distinct per quad and fetch), lines of the

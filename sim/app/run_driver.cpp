@@ -45,12 +45,6 @@ std::string stat_text(double v) {
   return s.str();
 }
 
-double find_stat(const FrameResult& f, const std::string& scope, const std::string& name) {
-  for (const auto& r : f.stats) {
-    if (r.scope == scope && r.name == name) return r.value;
-  }
-  return 0;
-}
 
 }  // namespace
 
@@ -122,7 +116,7 @@ void time_frame(const HwConfig& hw, FrameResult& frame, TimingResult& timing, En
   st.push_back({"frame/texture", "hit_rate_with_tile_reuse", accesses > 0 ? 1.0 - misses / accesses : 0.0, "ratio",
                 "Texture cache hit rate counting reuse within a tile as hits (its footprint is fetched once)"});
   for (auto& r : timing.memory_stats) st.push_back(r);
-  energy = compute_energy(hw, st, timing.frame_time_ps);
+  energy = compute_energy(hw, frame.totals, timing.memory, timing.frame_time_ps);
   energy.collect(st);
 }
 
@@ -204,20 +198,22 @@ RunOutcome run_one(const RunRequest& req) {
 void print_run_summary(const RunOutcome& o, std::ostream& out) {
   const FrameResult& f = o.frame;
   const double pixels = static_cast<double>(f.images.width) * f.images.height;
-  const double shaded = find_stat(f, "frame/tsp", "shader_invocations");
+  const GeometryStats& geometry = f.totals.render.geometry;
+  const IspStats& isp = f.totals.render.isp;
+  const TspStats& tsp = f.totals.render.tsp;
+  const std::uint64_t shaded = tsp.shader_invocations.value();
   out << "run " << o.run_id << ": " << o.technique << " on " << o.scene << ", " << f.images.width << "x"
       << f.images.height << ", " << f.passes.size() << " pass(es), simulated in " << stat_text(o.wall_seconds) << " s\n";
-  out << "  primitives in/out:  " << find_stat(f, "frame/geometry", "primitives_in") << " / "
-      << find_stat(f, "frame/geometry", "primitives_out") << "  (clipped " << find_stat(f, "frame/geometry", "primitives_clipped")
-      << ", partial renders " << find_stat(f, "frame/tiler", "partial_renders") << ")\n";
-  out << "  samples rasterised: " << find_stat(f, "frame/isp", "samples_rasterised") << "  removed by HSR "
-      << find_stat(f, "frame/isp", "hsr_removed_samples") << "  depth-test failed "
-      << find_stat(f, "frame/isp", "depth_test_failed_samples") << "  tag flushes " << find_stat(f, "frame/isp", "tag_flushes") << "\n";
-  out << "  shaded: " << shaded << " invocations (" << stat_text(shaded / pixels) << " per pixel), "
-      << find_stat(f, "frame/tsp", "shaded_quads") << " quads, " << find_stat(f, "frame/tsp", "helper_lanes")
-      << " helper lanes, " << find_stat(f, "frame/tsp", "light_evaluations") << " light evaluations\n";
-  out << "  frame: " << stat_text(find_stat(f, "frame/timing", "frame_cycles")) << " cycles, "
-      << stat_text(find_stat(f, "frame/timing", "frame_time_ms")) << " ms, energy " << stat_text(find_stat(f, "frame/energy", "total_mj"))
+  out << "  primitives in/out:  " << geometry.primitives_in.value() << " / " << geometry.primitives_out.value()
+      << "  (clipped " << geometry.primitives_clipped.value() << ", partial renders "
+      << f.totals.render.tiler.partial_renders.value() << ")\n";
+  out << "  samples rasterised: " << isp.samples_rasterised.value() << "  removed by HSR " << isp.hsr_removed_samples.value()
+      << "  depth-test failed " << isp.depth_test_failed_samples.value() << "  tag flushes " << isp.tag_flushes.value() << "\n";
+  out << "  shaded: " << shaded << " invocations (" << stat_text(static_cast<double>(shaded) / pixels) << " per pixel), "
+      << tsp.shaded_quads.value() << " quads, " << tsp.helper_lanes.value() << " helper lanes, "
+      << tsp.light_evaluations.value() << " light evaluations\n";
+  out << "  frame: " << stat_text(o.timing.frame_cycles) << " cycles, " << stat_text(o.timing.frame_time_ps * 1e-9)
+      << " ms, energy " << stat_text(o.energy.total_pj * 1e-9)
       << " mJ (timing model " << stat_text(o.timing_seconds) << " s)\n";
   out << "  DRAM MB read/written per class (requested by the units, before caches):\n";
   for (std::size_t c = 0; c < kDramClassCount; ++c) {
