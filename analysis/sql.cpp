@@ -57,7 +57,7 @@ std::int64_t SqlConnection::last_insert_rowid() const { return sqlite3_last_inse
 
 SqlStatement::SqlStatement(const SqlConnection& db, const std::string& sql) : db_(db) {
   const char* tail = nullptr;
-  if (sqlite3_prepare_v2(db.handle(), sql.c_str(), static_cast<int>(sql.size()), &s_, &tail) != SQLITE_OK) {
+  if (sqlite3_prepare_v2(db.db_, sql.c_str(), static_cast<int>(sql.size()), &s_, &tail) != SQLITE_OK) {
     db.fail("cannot prepare " + sql_head(sql));
   }
   if (tail && std::string(tail).find_first_not_of(" \t\r\n;") != std::string::npos) {
@@ -117,7 +117,7 @@ double SqlStatement::real(int col) const { return sqlite3_column_double(s_, col)
 SqlTransaction::SqlTransaction(const SqlConnection& db) : db_(db) { db.exec("BEGIN IMMEDIATE"); }
 
 SqlTransaction::~SqlTransaction() {
-  if (open_) sqlite3_exec(db_.handle(), "ROLLBACK", nullptr, nullptr, nullptr);
+  if (open_) sqlite3_exec(db_.db_, "ROLLBACK", nullptr, nullptr, nullptr);
 }
 
 void SqlTransaction::commit() {

@@ -36,17 +36,19 @@ class SqlConnection {
   SqlConnection(const SqlConnection&) = delete;
   SqlConnection& operator=(const SqlConnection&) = delete;
 
+  /// The database file, as errors name it.
   const std::string& path() const { return path_; }
-  sqlite3* handle() const { return db_; }
   /// Runs a script of statements that take no parameters and return no rows (schema, views,
   /// BEGIN/COMMIT). SqlError naming the script's first words on failure.
   void exec(const std::string& script) const;
   /// Row id of the last INSERT on this connection.
   std::int64_t last_insert_rowid() const;
-  /// Throws the SqlError for the connection's last failure; `what` says what failed.
-  [[noreturn]] void fail(const std::string& what) const;
 
  private:
+  friend class SqlStatement;
+  friend class SqlTransaction;
+  /// Throws the SqlError for the connection's last failure; `what` says what failed.
+  [[noreturn]] void fail(const std::string& what) const;
   std::string path_;
   sqlite3* db_ = nullptr;
 };

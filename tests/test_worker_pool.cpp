@@ -122,55 +122,55 @@ TEST(WorkerPool, AThrowingHookKillsTheRunningChildren) {
   EXPECT_EQ(errno, ESRCH);
 }
 
+/// What a pool interrupted by SIGINT did.
+struct Interrupted {
+  std::map<std::size_t, WorkerEnd> ends;
+  std::vector<bool> stops;  ///< the `kill` flag of each stopping report
+  std::size_t launched = 0;
+  bool interrupted = false;
+};
+
 /// Ten jobs on two workers (the first 100 ms, the others 1 s); after the first ends, SIGINT is
 /// raised `interrupts` times while the second still runs.
-void interrupt_after_first(int interrupts, std::map<std::size_t, WorkerEnd>& ends, std::vector<bool>& stops,
-                           std::size_t& launched, bool& interrupted) {
+Interrupted interrupt_after_first(int interrupts) {
+  Interrupted r;
   WorkerPoolHooks hooks;
-  launched = 0;
   hooks.next = [&]() -> std::optional<WorkerJob> {
-    if (launched == 10) return std::nullopt;
-    const std::size_t i = launched++;
+    if (r.launched == 10) return std::nullopt;
+    const std::size_t i = r.launched++;
     return function_job(i, [i] {
       std::this_thread::sleep_for(std::chrono::milliseconds(i == 0 ? 100 : 1000));
       return 0;
     });
   };
   hooks.ended = [&](const WorkerEnd& e) {
-    ends[e.id] = e;
-    if (ends.size() == 1) {
+    r.ends[e.id] = e;
+    if (r.ends.size() == 1) {
       for (int k = 0; k < interrupts; ++k) raise(SIGINT);
     }
   };
-  hooks.stopping = [&](bool kill, std::size_t) { stops.push_back(kill); };
-  interrupted = run_worker_pool({2, true}, hooks);
+  hooks.stopping = [&](bool kill, std::size_t) { r.stops.push_back(kill); };
+  r.interrupted = run_worker_pool({2, true}, hooks);
+  return r;
 }
 
 TEST(WorkerPool, FirstSigintStopsLaunchingAndWaits) {
-  std::map<std::size_t, WorkerEnd> ends;
-  std::vector<bool> stops;
-  std::size_t launched = 0;
-  bool interrupted = false;
-  interrupt_after_first(1, ends, stops, launched, interrupted);
-  EXPECT_TRUE(interrupted);
-  EXPECT_EQ(stops, std::vector<bool>{false});
-  EXPECT_EQ(launched, 2u);
-  EXPECT_EQ(ends.size(), launched);
-  for (const auto& [i, e] : ends) EXPECT_TRUE(e.ok() && !e.killed) << i;
+  const Interrupted r = interrupt_after_first(1);
+  EXPECT_TRUE(r.interrupted);
+  EXPECT_EQ(r.stops, std::vector<bool>{false});
+  EXPECT_EQ(r.launched, 2u);
+  EXPECT_EQ(r.ends.size(), r.launched);
+  for (const auto& [i, e] : r.ends) EXPECT_TRUE(e.ok() && !e.killed) << i;
 }
 
 TEST(WorkerPool, SecondSigintKillsTheRunningJobs) {
-  std::map<std::size_t, WorkerEnd> ends;
-  std::vector<bool> stops;
-  std::size_t launched = 0;
-  bool interrupted = false;
-  interrupt_after_first(2, ends, stops, launched, interrupted);
-  EXPECT_TRUE(interrupted);
-  EXPECT_EQ(stops, (std::vector<bool>{true}));
-  EXPECT_EQ(ends.size(), launched);
+  const Interrupted r = interrupt_after_first(2);
+  EXPECT_TRUE(r.interrupted);
+  EXPECT_EQ(r.stops, std::vector<bool>{true});
+  EXPECT_EQ(r.ends.size(), r.launched);
   std::size_t killed = 0;
-  for (const auto& [i, e] : ends) killed += e.killed ? 1 : 0;
-  EXPECT_EQ(killed, launched - 1);
+  for (const auto& [i, e] : r.ends) killed += e.killed ? 1 : 0;
+  EXPECT_EQ(killed, r.launched - 1);
   // The pool put the old action back.
   struct sigaction now {};
   sigaction(SIGINT, nullptr, &now);

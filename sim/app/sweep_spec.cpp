@@ -294,7 +294,6 @@ void add_zip_key(SweepSpec& spec, std::map<std::string, std::size_t>& zip_axis, 
   auto z = zip_axis.find(l.section);
   if (z == zip_axis.end()) {
     SweepAxis axis;
-    axis.name = l.section;
     axis.values.resize(values.size());
     z = zip_axis.emplace(l.section, spec.axes.size()).first;
     spec.axes.push_back(std::move(axis));
@@ -345,10 +344,8 @@ SweepSpec parse_sweep_file(const std::string& path) {
       if (l.name == "config") throw InputError(where, "config files go in [sweep] (config = FILE) or [vary] (config = A, B)");
       check_param_value(l.name, value, where);
       spec.sets.push_back(l.name + "=" + value);
-      spec.set_where.push_back(where);
     } else if (l.section == "vary") {
       SweepAxis axis;
-      axis.name = l.name;
       axis.keys = {l.name};
       for (auto& v : axis_values(l, value, where, base_dir)) axis.values.push_back({v});
       axis.where = {where};

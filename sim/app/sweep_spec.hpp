@@ -11,7 +11,6 @@ namespace tbdr {
 /// One swept axis: a single parameter, or a zip group of parameters that vary together.
 /// values[i][k] is the i-th setting of keys[k]. The key "config" varies the config file.
 struct SweepAxis {
-  std::string name;                              ///< the key, or "zip.<group>"
   std::vector<std::string> keys;
   std::vector<std::vector<std::string>> values;
   std::vector<std::string> where;                ///< "file:line" of each key
@@ -23,7 +22,6 @@ struct SweepSpec {
   std::string name;                        ///< [sweep] name, or the file's stem
   std::vector<std::string> base_configs;   ///< applied in order to every point
   std::vector<std::string> sets;           ///< fixed "key=value" overrides for every point
-  std::vector<std::string> set_where;      ///< "file:line" of each fixed override
   std::vector<SweepAxis> axes;             ///< in file order; the last one varies fastest
   std::vector<std::string> traces;         ///< globs expanded, in file order (glob matches sorted)
   int repetitions = 1;
