@@ -57,6 +57,7 @@ class SqlConnection {
 /// one statement (a second one is refused), so text spliced into it cannot add statements.
 class SqlStatement {
  public:
+  /// Prepares `sql` on `db`; SqlError naming its first words when SQLite refuses it.
   SqlStatement(const SqlConnection& db, const std::string& sql);
   ~SqlStatement();
   SqlStatement(const SqlStatement&) = delete;
@@ -72,6 +73,7 @@ class SqlStatement {
   void run();
   /// Resets for another execution and clears the bindings.
   void reset();
+  /// The current row's column `col` (0-based): NULL or not, and its value as text, integer, real.
   bool is_null(int col) const;
   std::string text(int col) const;
   std::int64_t int64(int col) const;
@@ -85,10 +87,12 @@ class SqlStatement {
 /// A write transaction (BEGIN IMMEDIATE) that rolls back when destroyed without commit().
 class SqlTransaction {
  public:
+  /// Begins it (BEGIN IMMEDIATE: waits for the write lock through the busy timeout).
   explicit SqlTransaction(const SqlConnection& db);
   ~SqlTransaction();
   SqlTransaction(const SqlTransaction&) = delete;
   SqlTransaction& operator=(const SqlTransaction&) = delete;
+  /// Commits (COMMIT); when that fails the destructor rolls back.
   void commit();
 
  private:

@@ -142,6 +142,39 @@ RunRecord failed_run(const SweepPoint& p, const ResolvedConfig& config, const Tr
   return rec;
 }
 
+/// Tells whether a point is already in the database: it holds more finished runs of the point's
+/// configuration and trace than the point's repetition number.
+class DoneCheck {
+ public:
+  DoneCheck(const ResultsDb& db, const PointInputs& inputs, const std::vector<SweepPoint>& points)
+      : count_(db.sql(), "SELECT count(*) FROM runs WHERE config_hash = ? AND trace_hash = ? AND status = 'ok'"),
+        inputs_(inputs),
+        points_(points) {}
+  bool operator()(std::size_t i) {
+    count_.bind(1, inputs_.config[i]->hash).bind(2, inputs_.trace[i]->hash);
+    const std::int64_t n = count_.step() ? count_.int64(0) : 0;
+    count_.reset();
+    return n > points_[i].repetition;
+  }
+
+ private:
+  SqlStatement count_;
+  const PointInputs& inputs_;
+  const std::vector<SweepPoint>& points_;
+};
+
+/// The sweep's first line: its points, configurations, traces, what is done and what will run.
+void print_plan(const SweepSpec& spec, const SweepOptions& opt, std::size_t points, std::size_t all,
+                const PointInputs& inputs, std::size_t skipped, std::size_t to_run, std::ostream& out) {
+  out << "sweep " << spec.name << ": " << points << " point(s)";
+  if (opt.slice.count > 1) out << " in slice " << opt.slice.index << "/" << opt.slice.count << " (of " << all << ")";
+  out << " (" << inputs.configs.size() << " configuration(s) x " << inputs.traces.size() << " trace(s)";
+  if (spec.repetitions > 1) out << " x " << spec.repetitions << " repetitions";
+  out << "), " << skipped << " already in " << opt.db_path << ", " << to_run << " to run";
+  if (!opt.dry_run) out << " with " << opt.jobs << " worker(s)";
+  out << "\n" << std::flush;
+}
+
 void print_summary(const SweepSpec& spec, const SweepSummary& summary, std::ostream& out) {
   const std::size_t ran = summary.ok + summary.failed;
   out << "sweep " << spec.name << ": " << summary.ok << " ok, " << summary.failed << " failed, " << summary.skipped
@@ -169,14 +202,7 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
   const PointInputs inputs = resolve_inputs(spec, points);
 
   ResultsDb db(opt.db_path);
-  SqlStatement count_ok(db.sql(), "SELECT count(*) FROM runs WHERE config_hash = ? AND trace_hash = ? AND status = 'ok'");
-  // A point is done when the database holds more finished runs of its inputs than its repetition.
-  auto already_done = [&](std::size_t i) {
-    count_ok.bind(1, inputs.config[i]->hash).bind(2, inputs.trace[i]->hash);
-    const std::int64_t n = count_ok.step() ? count_ok.int64(0) : 0;
-    count_ok.reset();
-    return n > points[i].repetition;
-  };
+  DoneCheck already_done(db, inputs, points);
   std::vector<std::size_t> todo;
   std::vector<bool> done_before(points.size(), false);
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -187,14 +213,7 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
       todo.push_back(i);
     }
   }
-  out << "sweep " << spec.name << ": " << points.size() << " point(s)";
-  if (opt.slice.count > 1) out << " in slice " << opt.slice.index << "/" << opt.slice.count << " (of " << all.size() << ")";
-  out << " (" << inputs.configs.size() << " configuration(s) x " << inputs.traces.size() << " trace(s)";
-  if (spec.repetitions > 1) out << " x " << spec.repetitions << " repetitions";
-  out << "), " << summary.skipped << " already in " << opt.db_path << ", " << todo.size() << " to run";
-  if (!opt.dry_run) out << " with " << opt.jobs << " worker(s)";
-  out << "\n" << std::flush;
-
+  print_plan(spec, opt, points.size(), all.size(), inputs, summary.skipped, todo.size(), out);
   if (opt.dry_run) {
     for (std::size_t i = 0; i < points.size(); ++i) {
       out << "  " << std::setw(5) << points[i].index << "  " << (done_before[i] ? "done  " : "to run") << "  "
