@@ -22,6 +22,8 @@ case "$mode" in
     OUT=$(cd "$OUT" && pwd)
     TMP=$(mktemp -d)
     trap 'rm -rf "$TMP"' EXIT
+    cp "$BIN" "$TMP/tbdrsim"  # one binary for every run, even if the build folder is rebuilt meanwhile
+    BIN="$TMP/tbdrsim"
     techniques=(plain_forward forward_multipass deferred tiled_deferred clustered_deferred forward_plus
                 clustered_forward practical_clustered_forward cascaded_clustered_forward
                 deferred_tile_store forward_light_stack visibility_buffer light_prepass)
@@ -53,10 +55,13 @@ case "$mode" in
     for f in "$A"/*.tsv; do
       n=$(basename "$f")
       if [ ! -f "$B/$n" ]; then echo "MISSING in $B: $n"; status=1; continue; fi
-      if ! diff -q "$f" "$B/$n" > /dev/null; then
-        echo "DIFFERS: $n ($(diff "$f" "$B/$n" | grep -c '^[<>]') lines)"
-        diff "$f" "$B/$n" | head -20
+      if ! cmp -s "$f" "$B/$n"; then
         status=1
+        for kind in stat tile param; do
+          d=$(diff <(grep "^$kind"$'\t' "$f") <(grep "^$kind"$'\t' "$B/$n") | grep -c '^[<>]' || true)
+          [ "$d" -eq 0 ] || echo "DIFFERS: $n: $d $kind lines"
+        done
+        diff "$f" "$B/$n" | head -12 || true
       fi
     done
     for f in "$B"/*.tsv; do

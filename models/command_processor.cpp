@@ -35,15 +35,18 @@ void collect_dram(const std::string& prefix, const DramTraffic& dram, std::vecto
 }
 
 /// Tile indices in the configured dispatch order.
-std::vector<int> tile_order(int tiles_x, int tiles_y, const std::string& order) {
+std::vector<int> tile_order(int tiles_x, int tiles_y, TileOrder order) {
+  // Bits of each tile coordinate interleaved into a Morton key: 16 bits order 65536 tiles per
+  // axis, far more than any frame has, in a 32-bit key.
+  constexpr int kMortonBitsPerAxis = 16;
   std::vector<int> out;
   out.reserve(static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y));
-  if (order == "morton") {
+  if (order == TileOrder::Morton) {
     std::vector<std::pair<std::uint64_t, int>> keyed;
     for (int ty = 0; ty < tiles_y; ++ty) {
       for (int tx = 0; tx < tiles_x; ++tx) {
         std::uint64_t key = 0;
-        for (int b = 0; b < 16; ++b) {
+        for (int b = 0; b < kMortonBitsPerAxis; ++b) {
           key |= (static_cast<std::uint64_t>((tx >> b) & 1) << (2 * b)) | (static_cast<std::uint64_t>((ty >> b) & 1) << (2 * b + 1));
         }
         keyed.push_back({key, ty * tiles_x + tx});
@@ -57,29 +60,188 @@ std::vector<int> tile_order(int tiles_x, int tiles_y, const std::string& order) 
   return out;
 }
 
-/// Builds the per-32px-tile light candidate lists used to compute colors quickly and exactly.
-void build_light_tiles(RenderContext& ctx) {
-  ctx.light_tile_px = 32;
-  ctx.light_tiles_x = (ctx.viewport.width_px + ctx.light_tile_px - 1) / ctx.light_tile_px;
-  const int ty_n = (ctx.viewport.height_px + ctx.light_tile_px - 1) / ctx.light_tile_px;
-  ctx.light_tiles.assign(static_cast<std::size_t>(ctx.light_tiles_x) * static_cast<std::size_t>(ty_n), {});
-  for (std::uint32_t l = 0; l < ctx.lights->size(); ++l) {
-    const PixelRect r = light_screen_rect((*ctx.lights)[l], ctx.camera, ctx.viewport);
-    if (r.empty()) continue;
-    for (int ty = r.y0 / ctx.light_tile_px; ty <= (r.y1 - 1) / ctx.light_tile_px; ++ty) {
-      for (int tx = r.x0 / ctx.light_tile_px; tx <= (r.x1 - 1) / ctx.light_tile_px; ++tx) {
-        ctx.light_tiles[static_cast<std::size_t>(ty * ctx.light_tiles_x + tx)].push_back(l);
-      }
-    }
-  }
-}
-
 bool is_resolve_target(const PassDesc& pass, const Attachment& a) {
   for (const auto& o : pass.attachments) {
     if (o.resolve == a.name) return true;
   }
   return false;
 }
+
+/// Renders one pass through the units: geometry and binning of its draws, a render (every
+/// touched tile through tile memory, ISP and TSP) whenever the parameter buffer fills and at the
+/// end, and the work each render and tile hands to the timing model.
+class PassRenderer {
+ public:
+  PassRenderer(RenderContext& ctx, const HwConfig& frame_hw, PassStats& stats, DramTraffic& dram, CommandWork& cw)
+      : hw_(pass_hw(frame_hw, ctx)), ctx_(bind(ctx, hw_, tile_texture_lines_)), stats_(stats), dram_(dram), cw_(cw),
+        geometry_(hw_, ctx.scene, *ctx.lights, ctx.camera, ctx.viewport),
+        tiler_(hw_, ctx.viewport, ctx.pattern),
+        tile_memory_(ctx, stats.tile_memory),
+        tsp_(ctx),
+        isp_(ctx, tsp_),
+        order_(tile_order(tiler_.tiles_x(), tiler_.tiles_y(), hw_.tiling.tile_order)),
+        resumed_(static_cast<std::size_t>(tiler_.tile_count()), 0) {}
+
+  /// Geometry, binning and rendering of every draw; a partial render whenever the parameter
+  /// buffer is full.
+  void run() {
+    std::vector<Primitive> staged;
+    for (std::uint32_t i = 0; i < ctx_.draws.size(); ++i) {
+      staged.clear();
+      geometry_.run_draw(ctx_.draws[i], i, staged, ctx_.object_lights, stats_.geometry, dram_);
+      for (const Primitive& p : staged) {
+        ctx_.prims.push_back(p);
+        if (!tiler_.bin(static_cast<std::uint32_t>(ctx_.prims.size() - 1), ctx_.prims.back(), stats_.tiler)) {
+          ctx_.prims.pop_back();
+          ++stats_.tiler.partial_renders;
+          render(true);
+          ctx_.prims.push_back(p);
+          tiler_.bin(0, ctx_.prims.back(), stats_.tiler);
+        }
+      }
+    }
+    render(false);
+    if (ctx_.framebuffer_in_dram) book_imr_framebuffer();
+  }
+
+ private:
+  /// imr has no binning: the whole frame is one "tile" and nothing goes through a parameter buffer.
+  static HwConfig pass_hw(const HwConfig& frame_hw, const RenderContext& ctx) {
+    HwConfig hw = frame_hw;
+    if (ctx.framebuffer_in_dram) {
+      hw.tiling.tile_width = ctx.viewport.width_px;
+      hw.tiling.tile_height = ctx.viewport.height_px;
+      hw.tiling.pb_capacity_bytes = std::int64_t{1} << 62;
+    }
+    return hw;
+  }
+
+  /// Points the context at the pass's hardware and at the current tile's texture line list.
+  static RenderContext& bind(RenderContext& ctx, const HwConfig& hw, std::vector<std::uint64_t>& texture_lines) {
+    ctx.hw = &hw;
+    ctx.texture_lines = &texture_lines;
+    return ctx;
+  }
+
+  /// The binning work since the previous render.
+  BinningWork binning_since_last_render() {
+    const GeometryStats g = stats_.geometry - geometry_base_;
+    const TilerStats b = stats_.tiler - tiler_base_;
+    BinningWork w;
+    w.vertices_shaded = g.vertices_shaded.value();
+    w.vertex_alu_ops = g.vertex_alu_ops.value();
+    w.vertex_fetch_bytes = g.vertex_fetch_bytes.value();
+    w.index_fetch_bytes = g.index_fetch_bytes.value();
+    w.primitives_in = g.primitives_in.value();
+    w.primitives_binned = b.primitives_binned.value();
+    w.tile_references = b.tile_references.value();
+    geometry_base_ = stats_.geometry;
+    tiler_base_ = stats_.tiler;
+    return w;
+  }
+
+  /// Renders every tile the binned primitives touch (all tiles for the last render of the pass).
+  void render(bool partial) {
+    RenderWork rw;
+    rw.partial = partial;
+    rw.binning = binning_since_last_render();
+    DramTraffic pb;
+    tiler_.finish_render(stats_.tiler, pb);
+    if (!ctx_.framebuffer_in_dram) {
+      dram_ += pb;
+      rw.binning.pb_write_bytes = pb.writes(DramClass::ParameterBuffer);
+    }
+    for (int t : order_) {
+      const auto& prims = tiler_.tile_primitives(t);
+      if (partial && prims.empty()) continue;  // untouched: nothing to render yet
+      for (const PixelRect& r : tile_memory_.strips(tiler_.tile_rect(t))) rw.tiles.push_back(render_tile(t, r, prims, partial));
+      if (partial) resumed_[static_cast<std::size_t>(t)] = 1;
+    }
+    cw_.renders.push_back(std::move(rw));
+    tiler_.reset();
+    ctx_.frame_prim_base += static_cast<std::uint32_t>(ctx_.prims.size());
+    ctx_.prims.clear();
+  }
+
+  /// One tile (or strip of a tile): loads, ISP and TSP, stores; what it cost.
+  TileWork render_tile(int t, const PixelRect& r, const std::vector<std::uint32_t>& prims, bool partial) {
+    const DramTraffic before = dram_;
+    const IspStats isp0 = stats_.isp;
+    const TspStats tsp0 = stats_.tsp;
+    tile_texture_lines_.clear();
+    tile_memory_.begin_tile(r, resumed_[static_cast<std::size_t>(t)] != 0, dram_);
+    isp_.render_tile(r, prims, stats_.isp, stats_.tsp);
+    const IspStats tile_isp = stats_.isp - isp0;
+    const TspStats tile_tsp = stats_.tsp - tsp0;
+    tile_memory_.spill(tile_tsp.tile_buffer_read_bytes.value(), tile_tsp.tile_buffer_write_bytes.value(), dram_);
+    tile_memory_.end_tile(r, partial, dram_);
+    TileWork tw;
+    tw.tile_x = t % tiler_.tiles_x();
+    tw.tile_y = t / tiler_.tiles_x();
+    tw.rect = r;
+    for (std::size_t c = 0; c < kDramClassCount; ++c) {
+      tw.load_bytes[c] = dram_.read_bytes[c] - before.read_bytes[c];
+      tw.store_bytes[c] = dram_.write_bytes[c] - before.write_bytes[c];
+    }
+    tw.primitives = tile_isp.primitives_fetched.value();
+    tw.samples = tile_isp.samples_rasterised.value();
+    tw.invocations = tile_tsp.shader_invocations.value();
+    tw.quads = tile_tsp.shaded_quads.value();
+    tw.alu_ops = tile_tsp.fragment_alu_ops.value();
+    tw.texels = tile_tsp.texels_filtered.value();
+    tw.texture_line_accesses = tile_tsp.texture_line_accesses.value();
+    std::sort(tile_texture_lines_.begin(), tile_texture_lines_.end());
+    tw.texture_lines.assign(tile_texture_lines_.begin(), std::unique(tile_texture_lines_.begin(), tile_texture_lines_.end()));
+    stats_.tsp.texture_tile_lines += tw.texture_lines.size();
+    // The footprint is what the texture unit requests (before the texture cache), booked like
+    // the parameter buffer reads: after the tile's loads and stores were taken from `dram_`.
+    dram_.read(DramClass::Textures, tw.texture_lines.size() * static_cast<std::uint64_t>(hw_.cache.texture.line_bytes));
+    tw.tile_buffer_bytes = tile_tsp.tile_buffer_read_bytes.value() + tile_tsp.tile_buffer_write_bytes.value();
+    tw.tag_bytes = tile_isp.tag_buffer_read_bytes.value() + tile_isp.tag_buffer_write_bytes.value();
+    tw.depth_bytes = tile_isp.depth_buffer_read_bytes.value() + tile_isp.depth_buffer_write_bytes.value();
+    if (!ctx_.framebuffer_in_dram) {
+      const std::uint64_t pb_read = prims.empty() ? 0 : tiler_.tile_read_bytes(t);
+      stats_.tiler.pb_bytes_read += pb_read;
+      dram_.read(DramClass::ParameterBuffer, pb_read);
+      if (!prims.empty()) tw.pb_reads = tiler_.tile_read_ranges(t);
+    }
+    return tw;
+  }
+
+  /// imr: the depth and color accesses go to DRAM during shading (caches come with the timing
+  /// model); booked on the pass and on its one "tile".
+  void book_imr_framebuffer() {
+    const std::uint64_t depth_read = stats_.isp.depth_buffer_read_bytes.value();
+    const std::uint64_t depth_write = stats_.isp.depth_buffer_write_bytes.value();
+    const std::uint64_t color_read = stats_.tsp.tile_buffer_read_bytes.value();
+    const std::uint64_t color_write = stats_.tsp.tile_buffer_write_bytes.value();
+    dram_.read(DramClass::DepthStencil, depth_read);
+    dram_.write(DramClass::DepthStencil, depth_write);
+    dram_.read(DramClass::Color, color_read);
+    dram_.write(DramClass::Color, color_write);
+    auto& tw = cw_.renders.back().tiles.back();
+    tw.load_bytes[static_cast<std::size_t>(DramClass::DepthStencil)] += depth_read;
+    tw.store_bytes[static_cast<std::size_t>(DramClass::DepthStencil)] += depth_write;
+    tw.load_bytes[static_cast<std::size_t>(DramClass::Color)] += color_read;
+    tw.store_bytes[static_cast<std::size_t>(DramClass::Color)] += color_write;
+  }
+
+  HwConfig hw_;  ///< the frame's hardware, with one frame-sized tile in imr mode
+  std::vector<std::uint64_t> tile_texture_lines_;  ///< the current tile's texture lines, as the TSP appends them
+  RenderContext& ctx_;
+  PassStats& stats_;
+  DramTraffic& dram_;
+  CommandWork& cw_;
+  GeometryUnit geometry_;
+  Tiler tiler_;
+  TileMemory tile_memory_;
+  Tsp tsp_;
+  Isp isp_;
+  std::vector<int> order_;               ///< tile indices in dispatch order
+  std::vector<std::uint8_t> resumed_;    ///< per tile: rendered before by a partial render
+  GeometryStats geometry_base_;          ///< the statistics at the start of the current render
+  TilerStats tiler_base_;
+};
 
 class FrameSimulator {
  public:
@@ -101,6 +263,14 @@ class FrameSimulator {
     }
     camera_ = CameraXform::from(trace_.camera, static_cast<float>(f.width) / static_cast<float>(f.height));
     frustum_ = ViewFrustum::from(trace_.camera, f.width, f.height);
+    light_bins_ = LightScreenBins::build(trace_.lights, camera_, viewport_);
+    inputs_.hw = &hw_;
+    inputs_.scene = &scene_;
+    inputs_.lights = &trace_.lights;
+    inputs_.camera = camera_;
+    inputs_.viewport = viewport_;
+    inputs_.frustum = &frustum_;
+    inputs_.light_bins = &light_bins_;
     result_.images.width = f.width;
     result_.images.height = f.height;
     result_.images.counters.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height));
@@ -279,22 +449,10 @@ class FrameSimulator {
     ComputeStats stats;
     DramTraffic dram;
     ComputeContext cc;
-    cc.hw = &hw_;
+    static_cast<FrameInputs&>(cc) = inputs_;
     cc.trace = &trace_;
     cc.trace_path = &path_;
-    cc.scene = &scene_;
     cc.images = &result_.images;
-    cc.frustum = frustum_;
-    cc.camera = camera_;
-    cc.viewport = viewport_;
-    RenderContext tmp;
-    tmp.lights = &trace_.lights;
-    tmp.camera = camera_;
-    tmp.viewport = viewport_;
-    build_light_tiles(tmp);
-    cc.light_tile_px = tmp.light_tile_px;
-    cc.light_tiles_x = tmp.light_tiles_x;
-    cc.light_tiles = &tmp.light_tiles;
     std::string image;
     run_dispatch(cc, d, stats, dram, image);
     CommandWork cw;
@@ -321,203 +479,36 @@ class FrameSimulator {
   void run_pass(const PassDesc& pass, int index) {
     const std::string prefix = "pass" + std::to_string(index) + "." + pass.name;
     auto ps = std::make_unique<PassStats>();
-    DramTraffic pass_dram;
+    DramTraffic dram;
     RenderContext ctx;
-    ctx.hw = &hw_;
-    ctx.scene = &scene_;
-    ctx.lights = &trace_.lights;
-    ctx.camera = camera_;
-    ctx.viewport = viewport_;
+    static_cast<FrameInputs&>(ctx) = inputs_;
     ctx.pass = &pass;
     ctx.images = &result_.images;
-    ctx.defer_shading = hw_.gpu.mode == "tbdr";
-    ctx.framebuffer_in_dram = hw_.gpu.mode == "imr";
+    ctx.defer_shading = hw_.gpu.mode == GpuMode::Tbdr;
+    ctx.framebuffer_in_dram = hw_.gpu.mode == GpuMode::Imr;
     prepare_attachments(pass, ctx);
     resolve_draws(pass, ctx);
-    // Geometry passes: submissions of the scene's opaque geometry (a PreZ, a G-buffer pass, each
-    // additive pass of a multi-pass technique, the forward pass).
-    for (const auto& dc : pass.draws) {
-      if (dc.geometry == GeometryKind::Scene && dc.submesh.empty() && dc.material.empty() &&
-          (dc.subset == SceneSubset::All || dc.subset == SceneSubset::Opaque)) {
-        ++geometry_passes_;
-      }
-    }
-    build_light_tiles(ctx);
-    ctx.frustum = &frustum_;
-    ctx.dram = &pass_dram;
+    count_geometry_passes(pass);
+    ctx.dram = &dram;
     ctx.frame_prim_base = prim_base_;
-    std::vector<std::uint64_t> tile_texture_lines;  // the current tile's texture lines, as the TSP appends them
     ctx.textures = textures_.get();
-    ctx.texture_lines = &tile_texture_lines;
     PlsState pls;
     if (!pass.pls.empty()) {
-      const std::size_t pixels = static_cast<std::size_t>(viewport_.width_px) * static_cast<std::size_t>(viewport_.height_px);
-      const std::uint32_t bytes = pass.pls_bytes_per_pixel();
-      pls.stack_capacity = bytes > 4 ? (bytes - 4) / 2 : 0;
-      pls.surface.assign(pixels, SurfacePoint{});
-      pls.valid.assign(pixels, 0);
-      pls.accum.assign(pixels, glm::vec3(0.0f));
-      pls.stack.assign(pixels * pls.stack_capacity, 0);
-      pls.stack_count.assign(pixels, 0);
-      pls.overflow.assign(pixels, 0);
+      pls = make_pls(pass);
       ctx.pls = &pls;
     }
-    // Buffers the draws read (lights, light lists): booked once per pass (re-reads hit on chip).
-    {
-      std::set<std::string> seen;
-      for (const auto& dc : pass.draws) {
-        for (const auto& n : dc.reads) {
-          const BufferDesc* b = trace_.find_buffer(n);
-          if (!b || !seen.insert(n).second) continue;
-          auto w = result_.images.buffer_bytes_written.find(n);
-          const std::uint64_t bytes = w == result_.images.buffer_bytes_written.end() ? b->bytes : w->second;
-          pass_dram.read(traffic_class_of(b->traffic), bytes);
-        }
-      }
-    }
-    const DramTraffic pass_buffer_reads = pass_dram;
-
-    // imr has no binning: the whole frame is one "tile" and nothing goes through a parameter buffer.
-    HwConfig hw = hw_;
-    if (ctx.framebuffer_in_dram) {
-      hw.tiling.tile_width = viewport_.width_px;
-      hw.tiling.tile_height = viewport_.height_px;
-      hw.tiling.pb_capacity_bytes = std::int64_t{1} << 62;
-    }
-    ctx.hw = &hw;
-    GeometryUnit geometry(hw, &scene_, trace_.lights, camera_, viewport_);
-    Tiler tiler(hw, viewport_, ctx.pattern);
-    TileMemory tile_memory(ctx, ps->tile_memory);
-    Tsp tsp(ctx);
-    Isp isp(ctx, tsp);
-    const std::vector<int> order = tile_order(tiler.tiles_x(), tiler.tiles_y(), hw.tiling.tile_order);
-    std::vector<std::uint8_t> resumed(static_cast<std::size_t>(tiler.tile_count()), 0);
-    DramTraffic& dram = pass_dram;
-
     CommandWork cw;
     cw.name = prefix;
-    cw.read_bytes = pass_buffer_reads.read_bytes;  // buffers read once per pass, at its start
-    for (const auto& a : pass.attachments) {
-      if (a.load == LoadOp::Load && !a.transient) cw.depends_on_previous = true;
-    }
-    for (const auto& dc : pass.draws) {
-      if (!dc.reads.empty()) cw.depends_on_previous = true;
-    }
-    // The geometry and tiler statistics at the start of the current render.
-    GeometryStats geometry_base;
-    TilerStats tiler_base;
+    cw.read_bytes = book_buffer_reads(pass, dram).read_bytes;  // buffers read once per pass, at its start
+    cw.depends_on_previous = reads_earlier_results(pass);
 
-    auto render = [&](bool partial) {
-      RenderWork rw;
-      rw.partial = partial;
-      const GeometryStats g = ps->geometry - geometry_base;
-      const TilerStats b = ps->tiler - tiler_base;
-      rw.binning.vertices_shaded = g.vertices_shaded.value();
-      rw.binning.vertex_alu_ops = g.vertex_alu_ops.value();
-      rw.binning.vertex_fetch_bytes = g.vertex_fetch_bytes.value();
-      rw.binning.index_fetch_bytes = g.index_fetch_bytes.value();
-      rw.binning.primitives_in = g.primitives_in.value();
-      rw.binning.primitives_binned = b.primitives_binned.value();
-      rw.binning.tile_references = b.tile_references.value();
-      geometry_base = ps->geometry;
-      tiler_base = ps->tiler;
-      DramTraffic pb;
-      tiler.finish_render(ps->tiler, pb);
-      if (!ctx.framebuffer_in_dram) {
-        dram += pb;
-        rw.binning.pb_write_bytes = pb.writes(DramClass::ParameterBuffer);
-      }
-      for (int t : order) {
-        const auto& prims = tiler.tile_primitives(t);
-        if (partial && prims.empty()) continue;  // untouched: nothing to render yet
-        const std::uint64_t pb_read = prims.empty() ? 0 : tiler.tile_read_bytes(t);
-        for (const PixelRect& r : tile_memory.strips(tiler.tile_rect(t))) {
-          const DramTraffic before = dram;
-          const IspStats isp0 = ps->isp;
-          const TspStats tsp0 = ps->tsp;
-          tile_texture_lines.clear();
-          tile_memory.begin_tile(r, resumed[static_cast<std::size_t>(t)] != 0, dram);
-          isp.render_tile(r, prims, ps->isp, ps->tsp);
-          const IspStats tile_isp = ps->isp - isp0;
-          const TspStats tile_tsp = ps->tsp - tsp0;
-          tile_memory.spill(tile_tsp.tile_buffer_read_bytes.value(), tile_tsp.tile_buffer_write_bytes.value(), dram);
-          tile_memory.end_tile(r, partial, dram);
-          TileWork tw;
-          tw.tile_x = t % tiler.tiles_x();
-          tw.tile_y = t / tiler.tiles_x();
-          tw.rect = r;
-          for (std::size_t c = 0; c < kDramClassCount; ++c) {
-            tw.load_bytes[c] = dram.read_bytes[c] - before.read_bytes[c];
-            tw.store_bytes[c] = dram.write_bytes[c] - before.write_bytes[c];
-          }
-          tw.primitives = tile_isp.primitives_fetched.value();
-          tw.samples = tile_isp.samples_rasterised.value();
-          tw.invocations = tile_tsp.shader_invocations.value();
-          tw.quads = tile_tsp.shaded_quads.value();
-          tw.alu_ops = tile_tsp.fragment_alu_ops.value();
-          tw.texels = tile_tsp.texels_filtered.value();
-          tw.texture_line_accesses = tile_tsp.texture_line_accesses.value();
-          std::sort(tile_texture_lines.begin(), tile_texture_lines.end());
-          tw.texture_lines.assign(tile_texture_lines.begin(),
-                                  std::unique(tile_texture_lines.begin(), tile_texture_lines.end()));
-          ps->tsp.texture_tile_lines += tw.texture_lines.size();
-          // The footprint is what the texture unit requests (before the texture cache), booked like
-          // the parameter buffer reads: after the tile's loads and stores were taken from `dram`.
-          dram.read(DramClass::Textures, tw.texture_lines.size() * static_cast<std::uint64_t>(hw_.cache.texture.line_bytes));
-          tw.tile_buffer_bytes = tile_tsp.tile_buffer_read_bytes.value() + tile_tsp.tile_buffer_write_bytes.value();
-          tw.tag_bytes = tile_isp.tag_buffer_read_bytes.value() + tile_isp.tag_buffer_write_bytes.value();
-          tw.depth_bytes = tile_isp.depth_buffer_read_bytes.value() + tile_isp.depth_buffer_write_bytes.value();
-          if (!ctx.framebuffer_in_dram) {
-            ps->tiler.pb_bytes_read += pb_read;
-            dram.read(DramClass::ParameterBuffer, pb_read);
-            if (!prims.empty()) tw.pb_reads = tiler.tile_read_ranges(t);
-          }
-          rw.tiles.push_back(std::move(tw));
-        }
-        if (partial) resumed[static_cast<std::size_t>(t)] = 1;
-      }
-      cw.renders.push_back(std::move(rw));
-      tiler.reset();
-      ctx.frame_prim_base += static_cast<std::uint32_t>(ctx.prims.size());
-      ctx.prims.clear();
-    };
-
-    std::vector<Primitive> staged;
-    for (std::uint32_t i = 0; i < ctx.draws.size(); ++i) {
-      staged.clear();
-      geometry.run_draw(ctx.draws[i], i, staged, ctx.object_lights, ps->geometry, dram);
-      for (const Primitive& p : staged) {
-        ctx.prims.push_back(p);
-        if (!tiler.bin(static_cast<std::uint32_t>(ctx.prims.size() - 1), ctx.prims.back(), ps->tiler)) {
-          ctx.prims.pop_back();
-          ++ps->tiler.partial_renders;
-          render(true);
-          ctx.prims.push_back(p);
-          tiler.bin(0, ctx.prims.back(), ps->tiler);
-        }
-      }
-    }
-    render(false);
+    PassRenderer renderer(ctx, hw_, *ps, dram, cw);
+    renderer.run();
     prim_base_ = ctx.frame_prim_base;
-    if (ctx.framebuffer_in_dram) {
-      // The depth and color accesses of an immediate-mode GPU go to DRAM (caches come with the timing model).
-      dram.read(DramClass::DepthStencil, ps->isp.depth_buffer_read_bytes.value());
-      dram.write(DramClass::DepthStencil, ps->isp.depth_buffer_write_bytes.value());
-      dram.read(DramClass::Color, ps->tsp.tile_buffer_read_bytes.value());
-      dram.write(DramClass::Color, ps->tsp.tile_buffer_write_bytes.value());
-    }
     for (const auto& a : pass.attachments) {
       AttachmentImage& img = result_.images.attachments.at(a.name);
       img.defined = a.store == StoreOp::Store && !a.transient;
       if (img.defined && a.usage == AttachmentUsage::Color) result_.final_color = a.name;
-    }
-    if (ctx.framebuffer_in_dram) {
-      // imr: the framebuffer accesses happen during shading; book them on the one "tile".
-      auto& tw = cw.renders.back().tiles.back();
-      tw.load_bytes[static_cast<std::size_t>(DramClass::DepthStencil)] += ps->isp.depth_buffer_read_bytes.value();
-      tw.store_bytes[static_cast<std::size_t>(DramClass::DepthStencil)] += ps->isp.depth_buffer_write_bytes.value();
-      tw.load_bytes[static_cast<std::size_t>(DramClass::Color)] += ps->tsp.tile_buffer_read_bytes.value();
-      tw.store_bytes[static_cast<std::size_t>(DramClass::Color)] += ps->tsp.tile_buffer_write_bytes.value();
     }
     result_.work.commands.push_back(std::move(cw));
     ps->collect(prefix, result_.stats);
@@ -533,6 +524,59 @@ class FrameSimulator {
     result_.dram += dram;
   }
 
+  /// Geometry passes: submissions of the scene's opaque geometry (a PreZ, a G-buffer pass, each
+  /// additive pass of a multi-pass technique, the forward pass).
+  void count_geometry_passes(const PassDesc& pass) {
+    for (const auto& dc : pass.draws) {
+      if (dc.geometry == GeometryKind::Scene && dc.submesh.empty() && dc.material.empty() &&
+          (dc.subset == SceneSubset::All || dc.subset == SceneSubset::Opaque)) {
+        ++geometry_passes_;
+      }
+    }
+  }
+
+  /// The pass's pixel local storage, sized from its declared layout.
+  PlsState make_pls(const PassDesc& pass) const {
+    PlsState pls;
+    const std::size_t pixels = static_cast<std::size_t>(viewport_.width_px) * static_cast<std::size_t>(viewport_.height_px);
+    pls.stack_capacity = pls_light_stack_capacity(pass.pls_bytes_per_pixel());
+    pls.surface.assign(pixels, SurfacePoint{});
+    pls.valid.assign(pixels, 0);
+    pls.accum.assign(pixels, glm::vec3(0.0f));
+    pls.stack.assign(pixels * pls.stack_capacity, 0);
+    pls.stack_count.assign(pixels, 0);
+    pls.overflow.assign(pixels, 0);
+    return pls;
+  }
+
+  /// Buffers the draws read (lights, light lists): booked once per pass (re-reads hit on chip).
+  DramTraffic book_buffer_reads(const PassDesc& pass, DramTraffic& dram) const {
+    DramTraffic reads;
+    std::set<std::string> seen;
+    for (const auto& dc : pass.draws) {
+      for (const auto& n : dc.reads) {
+        const BufferDesc* b = trace_.find_buffer(n);
+        if (!b || !seen.insert(n).second) continue;
+        auto w = result_.images.buffer_bytes_written.find(n);
+        const std::uint64_t bytes = w == result_.images.buffer_bytes_written.end() ? b->bytes : w->second;
+        reads.read(traffic_class_of(b->traffic), bytes);
+      }
+    }
+    dram += reads;
+    return reads;
+  }
+
+  /// Whether the pass must wait for earlier commands: it loads a stored attachment or reads a buffer.
+  static bool reads_earlier_results(const PassDesc& pass) {
+    for (const auto& a : pass.attachments) {
+      if (a.load == LoadOp::Load && !a.transient) return true;
+    }
+    for (const auto& dc : pass.draws) {
+      if (!dc.reads.empty()) return true;
+    }
+    return false;
+  }
+
   const Trace& trace_;
   const std::string& path_;
   const Scene& scene_;
@@ -540,6 +584,8 @@ class FrameSimulator {
   Viewport viewport_;
   CameraXform camera_;
   ViewFrustum frustum_;
+  LightScreenBins light_bins_;  ///< candidate lights per screen bin, for the frame's images
+  FrameInputs inputs_;          ///< what every pass and dispatch reads of the frame
   std::uint32_t prim_base_ = 0;
   int geometry_passes_ = 0;
   std::unique_ptr<TextureLayout> textures_;  ///< the frame's texture address space

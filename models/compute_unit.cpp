@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <optional>
 #include <set>
+#include <utility>
 
 #include "models/geometry_unit.hpp"
 #include "models/shading.hpp"
@@ -22,9 +24,27 @@ constexpr std::uint64_t kWorkListOps = 4;           // material lookup and appen
 constexpr std::uint64_t kRefetchVertexBytes = 32;   // position, normal, uv per re-fetched vertex
 constexpr std::uint64_t kTileGridEntryBytes = 8;    // offset + count per tile or cluster
 constexpr std::uint64_t kLightIndexBytes = 4;       // one light index
+constexpr std::uint64_t kDepthBoundsTileBytes = 8;  // min and max depth per tile, FP32 each
+constexpr std::uint64_t kUsedClusterBytes = 4;      // one cluster index in the compact used list
+constexpr std::uint64_t kWorkListEntryBytes = 8;    // (tile, material) per work list entry
+constexpr std::uint64_t kImageBytesPerPixel = 4;    // an image buffer is rgba8
+// Culling stays conservative against float rounding: a tile's depth range is widened by 0.1 %.
+constexpr float kBoundsFarScale = 1.001f;
+constexpr float kBoundsNearScale = 0.999f;
 
-const std::vector<std::string> kKernels = {"depth_bounds",   "tile_light_cull",      "cluster_flag",      "cluster_light_assign",
-                                           "deferred_shade", "tiled_deferred_shade", "vbuffer_worklists", "vbuffer_shade"};
+// Defaults of the kernels' trace parameters (docs/kernels.md): 16x16 pixel tiles (Andersson;
+// Harada's Forward+); clusters of 64x64 pixels and 16 depth slices (Olsson, Billeter, Assarsson).
+constexpr int kDefaultTilePx = 16;
+constexpr int kDefaultClusterTilePx = 64;
+constexpr int kDefaultClusterSlices = 16;
+
+
+/// Which depth range of a tile tile_light_cull tests lights against (its `bounds` parameter).
+enum class DepthRange : std::uint8_t {
+  MinMax,  ///< between the tile's nearest and farthest visible depth
+  Max,     ///< from the eye to the tile's farthest visible depth
+  None,    ///< the whole frustum depth (no depth image needed)
+};
 
 /// A dispatch being run: its parameters, inputs and outputs, with errors at its trace line.
 class Dispatch {
@@ -69,14 +89,16 @@ class Dispatch {
     }
     return v;
   }
-  std::string get_choice(const char* key, const std::string& def, std::initializer_list<const char*> choices) const {
+  /// A choice parameter as its enumerator (`def` when absent), looked up once per dispatch.
+  template <class E>
+  E get_choice(const char* key, E def, std::initializer_list<std::pair<E, const char*>> choices) const {
     auto it = cmd_.params.find(key);
     if (it == cmd_.params.end()) return def;
-    for (const char* c : choices) {
-      if (it->second == c) return it->second;
+    for (const auto& [value, name] : choices) {
+      if (it->second == name) return value;
     }
     std::string known;
-    for (const char* c : choices) known += (known.empty() ? "" : "|") + std::string(c);
+    for (const auto& c : choices) known += (known.empty() ? "" : "|") + std::string(c.second);
     fail("parameter " + std::string(key) + "='" + it->second + "' is not one of " + known);
   }
   const ShaderDesc& shader() const {
@@ -154,7 +176,7 @@ void cull_lights(const ComputeContext& ctx, const std::vector<PixelRect>& light_
   for (std::uint32_t l = 0; l < lights.size(); ++l) {
     const PixelRect& lr = light_rects[l];
     if (lr.empty() || intersect(lr, rect).empty()) continue;
-    if (sphere_touches_tile_volume(ctx.frustum, lights[l], rect, d0, d1)) out.push_back(l);
+    if (sphere_touches_tile_volume(*ctx.frustum, lights[l], rect, d0, d1)) out.push_back(l);
   }
 }
 
@@ -171,8 +193,7 @@ glm::vec3 shade_surface(const ComputeContext& ctx, const SurfacePoint& s, int x,
   if (list) {
     for (std::uint32_t l : *list) c += ShadingModel::light_contribution(s, ctx.camera.eye, lights[l]);
   } else {
-    const auto& cand = (*ctx.light_tiles)[static_cast<std::size_t>((y / ctx.light_tile_px) * ctx.light_tiles_x + x / ctx.light_tile_px)];
-    for (std::uint32_t l : cand) c += ShadingModel::light_contribution(s, ctx.camera.eye, lights[l]);
+    for (std::uint32_t l : ctx.light_bins->at(x, y)) c += ShadingModel::light_contribution(s, ctx.camera.eye, lights[l]);
   }
   return c;
 }
@@ -211,7 +232,7 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
           const std::vector<std::uint32_t>* list = nullptr;
           std::uint64_t count = n_lights;
           if (tgrid) list = &tgrid->at_pixel(x, y);
-          if (cgrid) list = &cgrid->lists[cgrid->cluster_of(x, y, ctx.frustum.distance_of(s.position))];
+          if (cgrid) list = &cgrid->lists[cgrid->cluster_of(x, y, ctx.frustum->distance_of(s.position))];
           if (list) count = list->size();
           shaded_triangles[k] = s.triangle;
           shaded_colors[k] = shade_surface(ctx, s, x, y, list);
@@ -240,11 +261,14 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
 
 }  // namespace
 
-const std::vector<std::string>& kernel_names() { return kKernels; }
-
 void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStats& stats, DramTraffic& dram,
                   std::string& image_written) {
   Dispatch k(ctx, cmd, stats, dram);
+  // The kernel's name is looked up once: the trace reader refuses unknown names, a trace built in
+  // memory may still carry one.
+  const std::optional<ComputeKernel> parsed = parse_compute_kernel(cmd.kernel);
+  if (!parsed) k.fail("unknown kernel (known: " + compute_kernel_list() + ")");
+  const ComputeKernel kernel = *parsed;
   const int W = ctx.viewport.width_px, H = ctx.viewport.height_px;
   const std::uint64_t pixels = static_cast<std::uint64_t>(W) * static_cast<std::uint64_t>(H);
   const auto n_lights = static_cast<std::uint64_t>(ctx.trace->lights.size());
@@ -259,34 +283,35 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
   };
   auto write_image = [&](const std::string& name, ImageBuffer&& img) {
     ctx.images->image_buffers[name] = std::move(img);
-    k.charge_write(name, pixels * 4);  // rgba8 output
+    k.charge_write(name, pixels * kImageBytesPerPixel);
     image_written = name;
   };
 
-  if (cmd.kernel == "depth_bounds") {
+  if (kernel == ComputeKernel::DepthBounds) {
     k.allow({"tile_px"});
-    const int tile_px = k.get_int("tile_px", 16, 1, 1024);
+    const int tile_px = k.get_int("tile_px", kDefaultTilePx, 1, 1024);
     const AttachmentImage* depth = k.read_depth();
     if (!depth) k.fail("needs a depth image in reads=");
     const std::string out = k.buffer_with(cmd.writes, BufferContent::DepthBounds);
     if (out.empty()) k.fail("needs a depth_bounds buffer in writes=");
-    auto b = std::make_shared<DepthBounds>(DepthBounds::compute(ctx.frustum, *depth, tile_px));
+    auto b = std::make_shared<DepthBounds>(DepthBounds::compute(*ctx.frustum, *depth, tile_px));
     stats.compute_alu_ops += pixels * depth->samples * kDepthReduceOps;
-    k.charge_write(out, b->min_distance.size() * 8);
+    k.charge_write(out, b->min_distance.size() * kDepthBoundsTileBytes);
     ctx.images->depth_bounds[out] = b;
     return;
   }
 
-  if (cmd.kernel == "tile_light_cull" || cmd.kernel == "tiled_deferred_shade") {
-    const bool shade = cmd.kernel == "tiled_deferred_shade";
+  if (kernel == ComputeKernel::TileLightCull || kernel == ComputeKernel::TiledDeferredShade) {
+    const bool shade = kernel == ComputeKernel::TiledDeferredShade;
     if (shade) {
       k.allow({"tile_px", "max_lights_per_tile", "bounds", "shader"});
     } else {
       k.allow({"tile_px", "max_lights_per_tile", "bounds"});
     }
-    const int tile_px = k.get_int("tile_px", 16, 1, 1024);
+    const int tile_px = k.get_int("tile_px", kDefaultTilePx, 1, 1024);
     const int cap = k.get_int("max_lights_per_tile", 0, 0, 1 << 20);
-    const std::string bounds_mode = k.get_choice("bounds", "minmax", {"minmax", "max", "none"});
+    const DepthRange bounds_mode = k.get_choice("bounds", DepthRange::MinMax,
+                                                {{DepthRange::MinMax, "minmax"}, {DepthRange::Max, "max"}, {DepthRange::None, "none"}});
     auto grid = std::make_shared<TileLightGrid>();
     grid->tile_px = tile_px;
     tiles_of(tile_px, grid->tiles_x, grid->tiles_y);
@@ -301,8 +326,8 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
       if (it == ctx.images->depth_bounds.end()) k.fail("depth_bounds buffer '" + bname + "' was not written by a depth_bounds dispatch");
       if (it->second->tile_px != tile_px) k.fail("depth_bounds buffer '" + bname + "' has another tile size");
       bounds = it->second;
-    } else if (const AttachmentImage* depth = k.read_depth(); depth && bounds_mode != "none") {
-      bounds = std::make_shared<DepthBounds>(DepthBounds::compute(ctx.frustum, *depth, tile_px));
+    } else if (const AttachmentImage* depth = k.read_depth(); depth && bounds_mode != DepthRange::None) {
+      bounds = std::make_shared<DepthBounds>(DepthBounds::compute(*ctx.frustum, *depth, tile_px));
       stats.compute_alu_ops += pixels * depth->samples * kDepthReduceOps;
     }
     const auto rects = light_rects(ctx);
@@ -312,8 +337,8 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
         float d0 = 0.0f, d1 = 1e30f;
         if (bounds) {
           if (bounds->min_distance[t] > bounds->max_distance[t]) continue;  // nothing visible: empty list
-          d1 = bounds->max_distance[t] * 1.001f;
-          if (bounds_mode == "minmax") d0 = bounds->min_distance[t] * 0.999f;
+          d1 = bounds->max_distance[t] * kBoundsFarScale;
+          if (bounds_mode == DepthRange::MinMax) d0 = bounds->min_distance[t] * kBoundsNearScale;
         }
         const PixelRect rect = intersect({tx * tile_px, ty * tile_px, (tx + 1) * tile_px, (ty + 1) * tile_px}, {0, 0, W, H});
         cull_lights(ctx, rects, rect, d0, d1, grid->lists[t]);
@@ -344,19 +369,19 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     return;
   }
 
-  if (cmd.kernel == "cluster_flag" || cmd.kernel == "cluster_light_assign") {
-    const bool assign = cmd.kernel == "cluster_light_assign";
+  if (kernel == ComputeKernel::ClusterFlag || kernel == ComputeKernel::ClusterLightAssign) {
+    const bool assign = kernel == ComputeKernel::ClusterLightAssign;
     if (assign) {
       k.allow({"tile_px", "slices", "slicing", "min_depth", "dense"});
     } else {
       k.allow({"tile_px", "slices", "slicing", "min_depth"});
     }
-    const int tile_px = k.get_int("tile_px", 64, 1, 1024);
-    const int slices = k.get_int("slices", 16, 1, 4096);
-    const Slicing slicing = k.get_choice("slicing", "log", {"log", "cubical"}) == "log" ? Slicing::Log : Slicing::Cubical;
-    const float min_depth = k.get_float("min_depth", ctx.frustum.near_plane, 0.0f, 1e6f);
+    const int tile_px = k.get_int("tile_px", kDefaultClusterTilePx, 1, 1024);
+    const int slices = k.get_int("slices", kDefaultClusterSlices, 1, 4096);
+    const Slicing slicing = k.get_choice("slicing", Slicing::Log, {{Slicing::Log, "log"}, {Slicing::Cubical, "cubical"}});
+    const float min_depth = k.get_float("min_depth", ctx.frustum->near_plane, 0.0f, 1e6f);
     auto grid = std::make_shared<ClusterGrid>();
-    grid->configure(ctx.frustum, tile_px, slices, slicing, min_depth);
+    grid->configure(*ctx.frustum, tile_px, slices, slicing, min_depth);
     const std::size_t clusters = grid->used.size();
     if (!assign) {
       const AttachmentImage* depth = k.read_depth();
@@ -368,17 +393,17 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
           const std::size_t p = (static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x)) * depth->samples;
           for (std::size_t s = 0; s < depth->samples; ++s) {
             const float d = depth->depth[p + s];
-            if (d < 1.0f) grid->used[grid->cluster_of(x, y, ctx.frustum.distance_of_window_depth(d))] = 1;
+            if (d < 1.0f) grid->used[grid->cluster_of(x, y, ctx.frustum->distance_of_window_depth(d))] = 1;
           }
         }
       }
       stats.compute_alu_ops += pixels * depth->samples * kClusterIndexOps;
       stats.clusters_used += grid->used_count();
-      k.charge_write(out, clusters / 8 + grid->used_count() * 4);  // flags + compact list of used clusters
+      k.charge_write(out, clusters / 8 + grid->used_count() * kUsedClusterBytes);  // flag bits + compact list of used clusters
       ctx.images->cluster_grids[out] = grid;
       return;
     }
-    const bool dense_param = k.get_choice("dense", "no", {"yes", "no"}) == "yes";
+    const bool dense_param = k.get_choice("dense", false, {{true, "yes"}, {false, "no"}});
     const std::string used_name = k.buffer_with(cmd.reads, BufferContent::UsedClusters);
     if (!dense_param && !used_name.empty()) {
       auto it = ctx.images->cluster_grids.find(used_name);
@@ -396,7 +421,7 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     for (std::uint32_t l = 0; l < lights.size(); ++l) {
       const PixelRect& lr = rects[l];
       if (lr.empty()) continue;
-      const float dist = ctx.frustum.distance_of(lights[l].position);
+      const float dist = ctx.frustum->distance_of(lights[l].position);
       const int s0 = grid->slice_of(std::max(0.0f, dist - lights[l].radius));
       const int s1 = grid->slice_of(dist + lights[l].radius);
       for (int s = s0; s <= s1; ++s) {
@@ -407,7 +432,7 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
             const std::size_t c = grid->index(tx, ty, s);
             if (!grid->used[c]) continue;
             const PixelRect rect = intersect({tx * tile_px, ty * tile_px, (tx + 1) * tile_px, (ty + 1) * tile_px}, {0, 0, W, H});
-            if (sphere_touches_tile_volume(ctx.frustum, lights[l], rect, d0, d1)) grid->lists[c].push_back(l);
+            if (sphere_touches_tile_volume(*ctx.frustum, lights[l], rect, d0, d1)) grid->lists[c].push_back(l);
           }
         }
       }
@@ -425,7 +450,7 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     return;
   }
 
-  if (cmd.kernel == "deferred_shade" || cmd.kernel == "vbuffer_shade") {
+  if (kernel == ComputeKernel::DeferredShade || kernel == ComputeKernel::VbufferShade) {
     k.allow({"shader", "tile_px"});
     const ShaderDesc& sh = k.shader();
     const AttachmentImage* surfaces = k.read_surfaces();
@@ -447,16 +472,16 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     } else if (sh.light_source != LightSource::All) {
       k.fail(std::string("light_source '") + to_string(sh.light_source) + "' cannot be used by a compute kernel");
     }
-    const bool vbuffer = cmd.kernel == "vbuffer_shade";
-    const int tile_px = k.get_int("tile_px", 16, 1, 1024);
+    const bool vbuffer = kernel == ComputeKernel::VbufferShade;
+    const int tile_px = k.get_int("tile_px", kDefaultTilePx, 1, 1024);
     ImageBuffer img = shade_surfaces(ctx, *surfaces, sh, tgrid, cgrid, vbuffer ? tile_px : 0, stats, dram);
     write_image(out, std::move(img));
     return;
   }
 
-  if (cmd.kernel == "vbuffer_worklists") {
+  if (kernel == ComputeKernel::VbufferWorklists) {
     k.allow({"tile_px"});
-    const int tile_px = k.get_int("tile_px", 16, 1, 1024);
+    const int tile_px = k.get_int("tile_px", kDefaultTilePx, 1, 1024);
     const AttachmentImage* vis = k.read_surfaces();
     if (!vis) k.fail("needs a visibility image (written by a pass) in reads=");
     const std::string out = k.buffer_with(cmd.writes, BufferContent::WorkLists);
@@ -472,13 +497,11 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     }
     stats.compute_alu_ops += pixels * kWorkListOps;
     stats.work_list_entries += entries.size();
-    k.charge_write(out, entries.size() * 8);  // (tile, material) entry of 8 bytes
+    k.charge_write(out, entries.size() * kWorkListEntryBytes);
     return;
   }
 
-  std::string known;
-  for (const auto& n : kKernels) known += (known.empty() ? "" : ", ") + n;
-  k.fail("unknown kernel (known: " + known + ")");
+  k.fail(std::string("kernel '") + to_string(kernel) + "' is not implemented");
 }
 
 }  // namespace tbdr

@@ -36,27 +36,17 @@ struct ComputeStats {
   TBDR_STATS(TBDR_COMPUTE_STATS)
 };
 
-/// What a dispatch needs from the frame around it.
-struct ComputeContext {
-  const HwConfig* hw = nullptr;
+/// What a dispatch needs from the frame around it: the frame's inputs, the trace (for errors
+/// naming its lines) and the frame's images, which kernels read and write.
+struct ComputeContext : FrameInputs {
   const Trace* trace = nullptr;
   const std::string* trace_path = nullptr;
-  const Scene* scene = nullptr;
   FrameImages* images = nullptr;
-  ViewFrustum frustum;
-  CameraXform camera;
-  Viewport viewport;
-  int light_tile_px = 32;  ///< the screen-tile light candidates (exact acceleration of `all`)
-  int light_tiles_x = 0;
-  const std::vector<std::vector<std::uint32_t>>* light_tiles = nullptr;
 };
 
 /// Runs one dispatch; InputError (trace:line) for an unknown kernel, a bad parameter or a
 /// missing input.
 void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStats& stats, DramTraffic& dram,
                   std::string& image_written);
-
-/// The kernels the simulator implements, for error messages and docs.
-const std::vector<std::string>& kernel_names();
 
 }  // namespace tbdr

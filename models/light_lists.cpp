@@ -1,5 +1,7 @@
 #include "models/light_lists.hpp"
 
+#include "models/geometry_unit.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -133,6 +135,23 @@ void ClusterGrid::slice_range(int k, float& d0, float& d1) const {
   // Guard against float rounding at slice boundaries: widen slightly (conservative).
   d0 *= 0.999f;
   d1 *= 1.001f;
+}
+
+LightScreenBins LightScreenBins::build(const std::vector<Light>& lights, const CameraXform& camera, const Viewport& viewport) {
+  LightScreenBins b;
+  b.bins_x = (viewport.width_px + kBinPx - 1) / kBinPx;
+  const int bins_y = (viewport.height_px + kBinPx - 1) / kBinPx;
+  b.bins.assign(static_cast<std::size_t>(b.bins_x) * static_cast<std::size_t>(bins_y), {});
+  for (std::uint32_t l = 0; l < lights.size(); ++l) {
+    const PixelRect r = light_screen_rect(lights[l], camera, viewport);
+    if (r.empty()) continue;
+    for (int ty = r.y0 / kBinPx; ty <= (r.y1 - 1) / kBinPx; ++ty) {
+      for (int tx = r.x0 / kBinPx; tx <= (r.x1 - 1) / kBinPx; ++tx) {
+        b.bins[static_cast<std::size_t>(ty * b.bins_x + tx)].push_back(l);
+      }
+    }
+  }
+  return b;
 }
 
 }  // namespace tbdr

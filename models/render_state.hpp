@@ -138,13 +138,35 @@ struct FrameImages {
 
 namespace tbdr {
 
-/// Everything the fragment units (ISP, TSP, tile memory) read while rendering one pass's tiles.
-struct RenderContext {
+/// The lights whose screen rectangle overlaps each square bin of the screen: an exact acceleration
+/// of the image computation of "every light" shaders (a light outside a pixel's bin cannot reach
+/// it). Not a model of hardware: what a technique is charged for comes from its light source.
+struct LightScreenBins {
+  /// Bin size: a host-speed choice only; every bin size gives the same images and figures.
+  static constexpr int kBinPx = 32;
+  int bins_x = 0;
+  std::vector<std::vector<std::uint32_t>> bins;  ///< row-major, light indices in ascending order
+  static LightScreenBins build(const std::vector<Light>& lights, const CameraXform& camera, const Viewport& viewport);
+  /// The candidate lights of pixel (x, y).
+  const std::vector<std::uint32_t>& at(int x, int y) const {
+    return bins[static_cast<std::size_t>((y / kBinPx) * bins_x + x / kBinPx)];
+  }
+};
+
+/// The frame's read-only inputs, shared by every render pass and compute dispatch.
+struct FrameInputs {
   const HwConfig* hw = nullptr;
   const Scene* scene = nullptr;
   const std::vector<Light>* lights = nullptr;
   CameraXform camera;
   Viewport viewport;
+  const ViewFrustum* frustum = nullptr;          ///< for cluster lookups
+  const LightScreenBins* light_bins = nullptr;   ///< candidate lights per screen bin
+};
+
+/// Everything the fragment units (ISP, TSP, tile memory) read while rendering one pass's tiles:
+/// the frame's inputs, the pass, and the render's shared data (draws, primitives, targets).
+struct RenderContext : FrameInputs {
   SamplePattern pattern;
   const PassDesc* pass = nullptr;
   FrameImages* images = nullptr;
@@ -157,18 +179,12 @@ struct RenderContext {
   AttachmentImage* depth = nullptr;           ///< the pass's depth attachment image, or nullptr
   PlsState* pls = nullptr;                    ///< the pass's pixel local storage, or nullptr
   DramTraffic* dram = nullptr;                ///< the pass's DRAM traffic (shader image reads)
-  const ViewFrustum* frustum = nullptr;  ///< for cluster lookups
   std::uint32_t frame_prim_base = 0;      ///< added to a primitive's index to make a frame-unique id
   /// Texture addresses of scene triangles' fetches: where textures live, and the list the TSP
   /// appends the current tile's touched lines to (per quad and fetch slot, unsorted, repeats
   /// kept). Either null: no addresses are generated.
   const TextureLayout* textures = nullptr;
   std::vector<std::uint64_t>* texture_lines = nullptr;
-  /// Lights whose screen rectangle overlaps each shading tile (an exact-result acceleration of
-  /// the image computation only; what a technique is charged for comes from its light source).
-  int light_tile_px = 32;
-  int light_tiles_x = 0;
-  std::vector<std::vector<std::uint32_t>> light_tiles;
 };
 
 }  // namespace tbdr

@@ -320,9 +320,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       glm::vec3 c(0.0f);
       if (!have_surface) return c;
       if (fl.all_selected) {
-        const auto& cand = ctx_.light_tiles[static_cast<std::size_t>((px.y / ctx_.light_tile_px) * ctx_.light_tiles_x +
-                                                                     px.x / ctx_.light_tile_px)];
-        for (std::uint32_t l : cand) {
+        for (std::uint32_t l : ctx_.light_bins->at(px.x, px.y)) {
           if (d.light_selected[l]) c += ShadingModel::light_contribution(s, eye, lights[l]);
         }
       } else if (fl.list) {
