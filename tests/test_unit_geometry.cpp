@@ -1,0 +1,238 @@
+// The geometry unit on its own, with the identity camera (world position = clip position, w = 1):
+// NDC is the world's (x, y, z), the visible volume the cube [-1, 1]^3, and a triangle that is
+// counter-clockwise in (x, y) is front-facing (GL convention). Counts of culling, clipping, vertex
+// shading behind the post-transform cache and fetch bytes are derived by hand.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "unit_fixture.hpp"
+
+namespace tbdr {
+namespace {
+
+using namespace unit;
+
+/// A scene of one instance per sub-mesh (identity placement).
+Scene scene_of(const std::vector<SubMesh>& meshes, bool double_sided = false) {
+  Scene s;
+  Material m;
+  m.name = "m";
+  m.double_sided = double_sided;
+  s.materials = {m};
+  for (const auto& mesh : meshes) {
+    s.submeshes.push_back(mesh);
+    s.instances.push_back({static_cast<std::uint32_t>(s.submeshes.size() - 1), glm::mat4(1.0f), mesh.name});
+  }
+  return s;
+}
+
+DrawCmd draw_of(const std::string& submesh) {
+  DrawCmd d;
+  d.submesh = submesh;
+  return d;
+}
+
+PipelineState culling(CullMode c) {
+  PipelineState p;
+  p.cull = c;
+  return p;
+}
+
+GeometrySpec spec_of(Scene scene, std::vector<std::string> sets = {}) {
+  GeometrySpec g;
+  g.scene = std::move(scene);
+  g.sets = std::move(sets);
+  return g;
+}
+
+// Counter-clockwise (front) and clockwise (back) triangles in the middle of the screen.
+const std::vector<glm::vec3> kFrontBack = {{-0.5f, -0.5f, 0}, {0.5f, -0.5f, 0}, {0, 0.5f, 0},   // CCW
+                                           {-0.5f, -0.5f, 0}, {0, 0.5f, 0}, {0.5f, -0.5f, 0}};  // CW
+
+TEST(UnitGeometry, BackFacesAreCulledPerThePipeline) {
+  const Scene s = scene_of({make_mesh("pair", kFrontBack, {0, 1, 2, 3, 4, 5})});
+  {
+    GeometryRig rig(spec_of(s));
+    rig.run(draw_of("pair"), make_shader(1), culling(CullMode::Back));
+    EXPECT_EQ(rig.stats.draws.value(), 1u);
+    EXPECT_EQ(rig.stats.primitives_in.value(), 2u);
+    EXPECT_EQ(rig.stats.primitives_culled_backface.value(), 1u);
+    EXPECT_EQ(rig.stats.primitives_out.value(), 1u);
+    ASSERT_EQ(rig.prims.size(), 1u);
+    EXPECT_TRUE(rig.prims[0].setup.front_facing);
+  }
+  {
+    GeometryRig rig(spec_of(s));
+    rig.run(draw_of("pair"), make_shader(1), culling(CullMode::Front));
+    EXPECT_EQ(rig.stats.primitives_culled_backface.value(), 1u);
+    ASSERT_EQ(rig.prims.size(), 1u);
+    EXPECT_FALSE(rig.prims[0].setup.front_facing);
+  }
+  {
+    GeometryRig rig(spec_of(s));
+    rig.run(draw_of("pair"), make_shader(1), culling(CullMode::None));
+    EXPECT_EQ(rig.stats.primitives_culled_backface.value(), 0u);
+    EXPECT_EQ(rig.stats.primitives_out.value(), 2u);
+  }
+  // A double-sided material overrides the pipeline's culling.
+  GeometryRig rig(spec_of(scene_of({make_mesh("pair", kFrontBack, {0, 1, 2, 3, 4, 5})}, true)));
+  rig.run(draw_of("pair"), make_shader(1), culling(CullMode::Back));
+  EXPECT_EQ(rig.stats.primitives_out.value(), 2u);
+}
+
+TEST(UnitGeometry, TrianglesOutsideTheFrustumAreRejected) {
+  // Wholly right of x = 1; wholly beyond the far plane z = 1; wholly in front of the near plane
+  // z = -1; and one in view: 3 frustum culls, 1 out.
+  const Scene s = scene_of({make_mesh("t", {{1.5f, 0, 0}, {2.5f, 0, 0}, {2, 0.5f, 0},
+                                            {-0.5f, -0.5f, 2}, {0.5f, -0.5f, 2}, {0, 0.5f, 2},
+                                            {-0.5f, -0.5f, -3}, {0.5f, -0.5f, -3}, {0, 0.5f, -3},
+                                            {-0.5f, -0.5f, 0}, {0.5f, -0.5f, 0}, {0, 0.5f, 0}},
+                                     {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11})});
+  GeometryRig rig(spec_of(s));
+  rig.run(draw_of("t"));
+  EXPECT_EQ(rig.stats.primitives_in.value(), 4u);
+  EXPECT_EQ(rig.stats.primitives_culled_frustum.value(), 3u);
+  EXPECT_EQ(rig.stats.primitives_out.value(), 1u);
+}
+
+TEST(UnitGeometry, ATriangleCrossingTheNearPlaneIsClippedIntoTwo) {
+  // The apex at z = -3 lies beyond the near plane z = -w = -1: the edges to it are cut at a third
+  // of their length, leaving the quad (-0.5,-0.5), (0.5,-0.5), (1/3,-1/6), (-1/3,-1/6), fanned
+  // into 2 triangles.
+  const Scene s = scene_of({make_mesh("t", {{-0.5f, -0.5f, 0}, {0.5f, -0.5f, 0}, {0, 0.5f, -3}}, {0, 1, 2})});
+  GeometryRig rig(spec_of(s));
+  rig.run(draw_of("t"));
+  EXPECT_EQ(rig.stats.primitives_in.value(), 1u);
+  EXPECT_EQ(rig.stats.primitives_clipped.value(), 1u);
+  EXPECT_EQ(rig.stats.primitives_out.value(), 2u);
+  ASSERT_EQ(rig.prims.size(), 2u);
+  // The clipped vertices are new (no re-use in primitive blocks); the original ones keep theirs.
+  std::uint64_t made_by_clipping = 0;
+  for (const auto& p : rig.prims) {
+    for (std::uint64_t k : p.vertex_key) made_by_clipping += (k >> 63) & 1u;
+  }
+  EXPECT_EQ(made_by_clipping, 3u);  // (1/3,-1/6) once, (-1/3,-1/6) in both triangles of the fan
+}
+
+TEST(UnitGeometry, ZeroAreaTrianglesAreCulled) {
+  // Three collinear vertices, and a triangle of 1e-5 NDC (0.08 sub-pixel units) that snaps to a
+  // point.
+  const Scene s = scene_of({make_mesh("t", {{-0.5f, 0, 0}, {0, 0, 0}, {0.5f, 0, 0},
+                                            {0, 0, 0}, {1e-5f, 0, 0}, {0, 1e-5f, 0}},
+                                     {0, 1, 2, 3, 4, 5})});
+  GeometryRig rig(spec_of(s));
+  rig.run(draw_of("t"), make_shader(1), culling(CullMode::None));
+  EXPECT_EQ(rig.stats.primitives_culled_zero_area.value(), 2u);
+  EXPECT_EQ(rig.stats.primitives_out.value(), 0u);
+}
+
+// A quad: 4 vertices, indices 0 1 2 0 2 3 (2-byte indices, 32-byte vertices).
+const std::vector<glm::vec3> kQuad = {{-0.5f, -0.5f, 0}, {0.5f, -0.5f, 0}, {0.5f, 0.5f, 0}, {-0.5f, 0.5f, 0}};
+
+TEST(UnitGeometry, ThePostTransformCacheShadesASharedVertexOnce) {
+  // 32 entries: the 6 indices shade 4 vertices: 4 x 24 = 96 vertex ALU ops (geometry.
+  // vertex_shader_alu_ops), 4 x 32 = 128 B of attributes and 6 x 2 = 12 B of indices fetched.
+  GeometryRig rig(spec_of(scene_of({make_mesh("quad", kQuad, {0, 1, 2, 0, 2, 3})})));
+  rig.run(draw_of("quad"));
+  EXPECT_EQ(rig.stats.vertices_shaded.value(), 4u);
+  EXPECT_EQ(rig.stats.vertex_alu_ops.value(), 96u);
+  EXPECT_EQ(rig.stats.vertex_fetch_bytes.value(), 128u);
+  EXPECT_EQ(rig.stats.index_fetch_bytes.value(), 12u);
+  EXPECT_EQ(rig.dram.reads(DramClass::Vertices), 128u);
+  EXPECT_EQ(rig.dram.reads(DramClass::Indices), 12u);
+  EXPECT_EQ(rig.stats.primitives_out.value(), 2u);
+}
+
+TEST(UnitGeometry, ASmallerCacheShadesMoreVertices) {
+  // FIFO of 2 entries over 0 1 2 0 2 3: 0 miss [0], 1 miss [0 1], 2 miss (evicts 0) [2 1],
+  // 0 miss (evicts 1) [2 0], 2 hit, 3 miss: 5 shaded. No cache: all 6.
+  const Scene s = scene_of({make_mesh("quad", kQuad, {0, 1, 2, 0, 2, 3})});
+  GeometryRig two(spec_of(s, {"geometry.vertex_cache_entries=2"}));
+  two.run(draw_of("quad"));
+  EXPECT_EQ(two.stats.vertices_shaded.value(), 5u);
+  EXPECT_EQ(two.stats.vertex_fetch_bytes.value(), 5u * 32u);
+  GeometryRig none(spec_of(s, {"geometry.vertex_cache_entries=0"}));
+  none.run(draw_of("quad"));
+  EXPECT_EQ(none.stats.vertices_shaded.value(), 6u);
+}
+
+TEST(UnitGeometry, ANonIndexedDrawShadesEveryVertex) {
+  // index_bytes 0: the 6 generated indices all shade, even with a cache; no index bytes.
+  GeometryRig rig(spec_of(scene_of({make_mesh("quad", kQuad, {0, 1, 2, 0, 2, 3}, 0, 0, 48)})));
+  rig.run(draw_of("quad"));
+  EXPECT_EQ(rig.stats.vertices_shaded.value(), 6u);
+  EXPECT_EQ(rig.stats.vertex_fetch_bytes.value(), 6u * 48u);
+  EXPECT_EQ(rig.stats.index_fetch_bytes.value(), 0u);
+}
+
+TEST(UnitGeometry, AFullscreenDrawIsOneTriangleOfThreeVertices) {
+  // Three generated vertices of 16 B (a vec4 position each), one triangle covering the viewport.
+  GeometryRig rig(spec_of(scene_of({})));
+  DrawCmd d;
+  d.geometry = GeometryKind::Fullscreen;
+  rig.run(d);
+  EXPECT_EQ(rig.stats.vertices_shaded.value(), 3u);
+  EXPECT_EQ(rig.stats.vertex_fetch_bytes.value(), 48u);
+  EXPECT_EQ(rig.stats.primitives_out.value(), 1u);
+  ASSERT_EQ(rig.prims.size(), 1u);
+  EXPECT_EQ(rig.prims[0].setup.bbox, (PixelRect{0, 0, 64, 64}));
+}
+
+TEST(UnitGeometry, LightProxiesAreShadedPerSelectedLight) {
+  // Quads: 4 vertices and 2 triangles per light whose sphere is in front of the camera; a light
+  // behind it (z = +1 with the identity view looking down -z) has no screen rectangle: skipped.
+  Light in_front;
+  in_front.position = {0, 0, -0.5f};
+  in_front.radius = 0.1f;
+  Light behind;
+  behind.position = {0, 0, 1};
+  behind.radius = 0.1f;
+  GeometrySpec g = spec_of(scene_of({}));
+  g.lights = {in_front, behind};
+  {
+    GeometryRig rig(g);
+    DrawCmd d;
+    d.geometry = GeometryKind::LightQuads;
+    rig.run(d, make_shader(1, 0, LightSource::Proxy), {}, {0, 1});
+    EXPECT_EQ(rig.stats.vertices_shaded.value(), 4u);
+    EXPECT_EQ(rig.stats.primitives_out.value(), 2u);
+    for (const auto& p : rig.prims) EXPECT_EQ(p.proxy_light, 0);
+  }
+  // Spheres: an icosahedron (20 triangles, 60 vertices) per light at level 0, 4x as many per
+  // subdivision: level 1 = 80 triangles, 240 vertices; both lights are submitted.
+  GeometryRig rig(g);
+  DrawCmd d;
+  d.geometry = GeometryKind::LightSpheres;
+  d.subdivisions = 1;
+  rig.run(d, make_shader(1, 0, LightSource::Proxy), culling(CullMode::None), {0, 1});
+  EXPECT_EQ(rig.stats.vertices_shaded.value(), 2u * 240u);
+  EXPECT_EQ(rig.stats.primitives_in.value(), 2u * 80u);
+  EXPECT_EQ(rig.stats.vertex_fetch_bytes.value(), 2u * 240u * 16u);
+}
+
+TEST(UnitGeometry, ObjectListsHoldTheLightsTouchingTheInstanceBounds) {
+  // The quad's bounds are [-0.5, 0.5]^2 x {0}. Light 0 at (0, 0, 0.5), r 0.6: distance 0.5 -> in.
+  // Light 1 at (2, 2, 0), r 1: nearest point (0.5, 0.5, 0), distance 2.12 -> out. Light 2 at
+  // (1, 0, 0), r 0.5: nearest point (0.5, 0, 0), distance exactly 0.5 -> in (touching counts).
+  Light l0, l1, l2;
+  l0.position = {0, 0, 0.5f};
+  l0.radius = 0.6f;
+  l1.position = {2, 2, 0};
+  l1.radius = 1.0f;
+  l2.position = {1, 0, 0};
+  l2.radius = 0.5f;
+  GeometrySpec g = spec_of(scene_of({make_mesh("quad", kQuad, {0, 1, 2, 0, 2, 3})}));
+  g.lights = {l0, l1, l2};
+  GeometryRig rig(g);
+  rig.run(draw_of("quad"), make_shader(1, 1, LightSource::ObjectList), {}, {0, 1, 2});
+  ASSERT_EQ(rig.object_lights.size(), 1u);
+  EXPECT_EQ(rig.object_lights[0], (std::vector<std::uint32_t>{0, 2}));
+  // Only the selected lights are considered.
+  rig.run(draw_of("quad"), make_shader(1, 1, LightSource::ObjectList), {}, {1, 2});
+  ASSERT_EQ(rig.object_lights.size(), 2u);
+  EXPECT_EQ(rig.object_lights[1], (std::vector<std::uint32_t>{2}));
+}
+
+}  // namespace
+}  // namespace tbdr

@@ -1,0 +1,288 @@
+// The ISP on its own: one tile of a 64x64 viewport, triangles given in pixel coordinates, every
+// count derived by hand (sample positions at pixel centres for 1x, the top-left fill rule).
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "unit_fixture.hpp"
+
+namespace tbdr {
+namespace {
+
+using namespace unit;
+
+// Triangles of tile 0 ([0,32) x [0,32)), y down; samples at (x + 0.5, y + 0.5).
+// UL: the upper-left half. Its hypotenuse x + y = 32 is a bottom-right edge (the setup orders
+// the vertices clockwise on the y-down screen: (0,0) -> (32,0) is a top edge, (0,32) -> (0,0) a
+// left edge, (32,0) -> (0,32) neither), so a pixel is covered iff x + 0.5 + y + 0.5 < 32, i.e.
+// x + y <= 30: sum over s = x + y of (s + 1) for s = 0..30 = 31 * 32 / 2 = 496 samples. The 32
+// samples exactly on the hypotenuse (x + y = 31) are left out.
+const ScreenTri kUpperLeft{{0, 0}, {32, 0}, {0, 32}};
+constexpr std::uint64_t kUpperLeftSamples = 496;
+// LR: the lower-right half, sharing the hypotenuse, which is ITS left edge: x + y >= 31,
+// 1024 - 496 = 528 samples (the 32 diagonal samples belong to it).
+const ScreenTri kLowerRight{{32, 0}, {32, 32}, {0, 32}};
+constexpr std::uint64_t kLowerRightSamples = 528;
+// FULL: (0,0), (128,0), (0,128) covers every sample of the 64x64 viewport (the farthest sample,
+// (63.5, 63.5), has x + y = 127 < 128).
+const ScreenTri kFull{{0, 0}, {128, 0}, {0, 128}};
+constexpr std::uint64_t kTileSamples = 32 * 32;  // 1024
+
+constexpr std::uint64_t kDepthBytes = 4;  // isp.depth_stencil_bytes_per_sample (D24S8)
+constexpr std::uint64_t kTagBytes = 4;    // isp.tag_bits = 32
+
+ScreenTri at(ScreenTri t, float z, std::uint32_t draw = 0, HsrClass hsr = HsrClass::Opaque) {
+  t.z = z;
+  t.draw = draw;
+  t.hsr = hsr;
+  return t;
+}
+
+TEST(UnitIsp, RightTriangleRasterisesHalfATileUnderTheTopLeftRule) {
+  RenderRig rig;
+  rig.add_draw(make_shader(1));
+  rig.add_triangle(kUpperLeft);
+  rig.render_tile(RenderRig::tile_rect(0, 0));
+  EXPECT_EQ(rig.isp_stats.tiles_rendered.value(), 1u);
+  EXPECT_EQ(rig.isp_stats.primitives_fetched.value(), 1u);
+  EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), kUpperLeftSamples);  // 496 (x + y <= 30)
+  EXPECT_EQ(rig.isp_stats.depth_test_failed_samples.value(), 0u);
+  EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), 0u);
+  // Every sample reads and writes depth once (4 B each): 496 x 4 = 1984 B; writes its tag
+  // (32 bits): 1984 B; the end-of-tile flush reads every valid tag: 1984 B, and it is not a
+  // mid-tile flush.
+  EXPECT_EQ(rig.isp_stats.depth_buffer_read_bytes.value(), 496u * kDepthBytes);
+  EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), 496u * kDepthBytes);
+  EXPECT_EQ(rig.isp_stats.tag_buffer_write_bytes.value(), 496u * kTagBytes);
+  EXPECT_EQ(rig.isp_stats.tag_buffer_read_bytes.value(), 496u * kTagBytes);
+  EXPECT_EQ(rig.isp_stats.tag_flushes.value(), 0u);
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 496u);
+  // The sample on the hypotenuse at pixel (15, 16) (x + y = 31) is outside; (15, 15) inside.
+  EXPECT_EQ(rig.images.counters.rasterised_samples[16 * 64 + 15], 0u);
+  EXPECT_EQ(rig.images.counters.rasterised_samples[15 * 64 + 15], 1u);
+}
+
+TEST(UnitIsp, TheTwoHalvesOfATileCoverEverySampleOnce) {
+  {
+    RenderRig rig;
+    rig.add_draw(make_shader(1));
+    rig.add_triangle(kLowerRight);
+    rig.render_tile(RenderRig::tile_rect(0, 0));
+    EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), kLowerRightSamples);  // 528 = 1024 - 496
+  }
+  RenderRig rig;
+  rig.add_draw(make_shader(1));
+  rig.add_triangle(at(kUpperLeft, 0.5f));
+  rig.add_triangle(at(kLowerRight, 0.5f));
+  rig.render_tile(RenderRig::tile_rect(0, 0));
+  // No crack, no double hit along the shared edge: 496 + 528 = 1024 samples, none hidden.
+  EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), kTileSamples);
+  EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), 0u);
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), kTileSamples);
+  // The neighbouring tile sees neither (primitives are still fetched: 2 more).
+  rig.render_tile(RenderRig::tile_rect(1, 0));
+  EXPECT_EQ(rig.isp_stats.primitives_fetched.value(), 4u);
+  EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), kTileSamples);
+}
+
+TEST(UnitIsp, FourSamplesPerPixelSplitTheDiagonalPixels) {
+  // 4x MSAA at offsets (6,2), (14,6), (2,10), (10,14) / 16: x + y offsets 0.5, 1.25, 0.75, 1.5.
+  // UL covers a sample iff x + y + offset < 32: pixels with x + y <= 30 keep all 4 (496 x 4 =
+  // 1984); on the diagonal x + y = 31 only offsets 0.5 and 0.75 (2 x 32 = 64); exactly half of
+  // the tile's 4096 samples: 2048. 528 pixels get an invocation (496 + 32), 2048 samples a color.
+  RenderSpec spec;
+  spec.attachments = default_attachments(4);
+  RenderRig rig(spec);
+  ASSERT_EQ(rig.samples_per_pixel(), 4);
+  rig.add_draw(make_shader(1));
+  rig.add_triangle(kUpperLeft);
+  rig.render_tile(RenderRig::tile_rect(0, 0));
+  EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), 2048u);
+  EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), 2048u * kDepthBytes);
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 528u);
+  EXPECT_EQ(rig.tsp_stats.shaded_samples.value(), 2048u);
+}
+
+TEST(UnitIsp, TriangleBehindTheFirstFailsTheDepthTest) {
+  // Front (z 0.25) then back (z 0.75), both covering the tile: the back one's 1024 samples fail
+  // the Less test against 0.25; only the front one is tagged and shaded.
+  RenderRig rig;
+  rig.add_draw(make_shader(1));
+  rig.add_triangle(at(kFull, 0.25f));
+  rig.add_triangle(at(kFull, 0.75f));
+  rig.render_tile(RenderRig::tile_rect(0, 0));
+  EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), 2 * kTileSamples);
+  EXPECT_EQ(rig.isp_stats.depth_test_failed_samples.value(), kTileSamples);
+  EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), 0u);
+  // Depth: 2048 reads, 1024 writes (4 B each); tags: 1024 written, 1024 read at the end.
+  EXPECT_EQ(rig.isp_stats.depth_buffer_read_bytes.value(), 2048u * kDepthBytes);
+  EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), 1024u * kDepthBytes);
+  EXPECT_EQ(rig.isp_stats.tag_buffer_write_bytes.value(), 1024u * kTagBytes);
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), kTileSamples);
+  EXPECT_FLOAT_EQ(rig.depth_at(5, 5), 0.25f);
+}
+
+TEST(UnitIsp, OpaqueOverOpaqueRemovesTheHiddenSamplesBeforeShading) {
+  // Back (z 0.75) then front (z 0.25): every back sample passes the depth test and is tagged,
+  // then the front one overwrites all 1024 tags: the back triangle is never shaded.
+  RenderRig rig;
+  rig.add_draw(make_shader(1));
+  const std::uint32_t back = rig.add_triangle(at(kFull, 0.75f));
+  const std::uint32_t front = rig.add_triangle(at(kFull, 0.25f));
+  rig.render_tile(RenderRig::tile_rect(0, 0));
+  EXPECT_EQ(rig.isp_stats.depth_test_failed_samples.value(), 0u);
+  EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), kTileSamples);
+  EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), 2048u * kDepthBytes);
+  EXPECT_EQ(rig.isp_stats.tag_buffer_write_bytes.value(), 2048u * kTagBytes);
+  EXPECT_EQ(rig.isp_stats.tag_buffer_read_bytes.value(), 1024u * kTagBytes);
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), kTileSamples);
+  // The last primitive shaded at a pixel is the front one (ids are index + 1).
+  EXPECT_EQ(rig.images.counters.triangle_id[10 * 64 + 10], front + 1);
+  EXPECT_NE(rig.images.counters.triangle_id[10 * 64 + 10], back + 1);
+}
+
+TEST(UnitIsp, PartlyHiddenTriangleIsShadedOnlyWhereVisible) {
+  // Back FULL (z 0.75) then front UL (z 0.25): HSR removes the 496 back samples under UL; the
+  // back triangle is shaded on LR's 528 samples and the front one on 496: 1024 invocations.
+  RenderRig rig;
+  rig.add_draw(make_shader(1));
+  rig.add_triangle(at(kFull, 0.75f));
+  rig.add_triangle(at(kUpperLeft, 0.25f));
+  rig.render_tile(RenderRig::tile_rect(0, 0));
+  EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), 1024u + 496u);
+  EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), 496u);
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 1024u);
+}
+
+TEST(UnitIsp, WithoutTagBufferEverySampleThatPassesEarlyDepthIsShaded) {
+  // gpu.mode = tbr: back then front are both shaded at early-Z, 2 x 1024 invocations; no tags.
+  RenderRig rig(RenderSpec{.sets = {"gpu.mode=tbr"}});
+  rig.add_draw(make_shader(1));
+  rig.add_triangle(at(kFull, 0.75f));
+  rig.add_triangle(at(kFull, 0.25f));
+  rig.render_tile(RenderRig::tile_rect(0, 0));
+  EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), 0u);
+  EXPECT_EQ(rig.isp_stats.tag_buffer_write_bytes.value(), 0u);
+  EXPECT_EQ(rig.isp_stats.tag_buffer_read_bytes.value(), 0u);
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 2 * kTileSamples);
+  EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), 2048u * kDepthBytes);
+}
+
+/// Opaque FULL behind a punch-through UL (no material: its alpha test keeps every sample).
+void punch_through_over_opaque(RenderRig& rig) {
+  rig.add_draw(make_shader(1));
+  rig.add_triangle(at(kFull, 0.75f, 0, HsrClass::Opaque));
+  rig.add_triangle(at(kUpperLeft, 0.25f, 0, HsrClass::PunchThrough));
+  rig.render_tile(RenderRig::tile_rect(0, 0));
+}
+
+TEST(UnitIsp, PunchThroughFlushesAllTagsWithOneTagBuffer) {
+  // One tag buffer: the punch-through primitive flushes all 1024 pending opaque tags (1 mid-tile
+  // flush), is shaded itself (496), and nothing is left for the end of the tile.
+  RenderRig rig(RenderSpec{.sets = {"isp.tag_buffers=1"}});
+  punch_through_over_opaque(rig);
+  EXPECT_EQ(rig.isp_stats.tag_flushes.value(), 1u);
+  EXPECT_EQ(rig.isp_stats.tag_flushed_samples.value(), 1024u);
+  EXPECT_EQ(rig.isp_stats.punch_through_samples.value(), 496u);
+  EXPECT_EQ(rig.isp_stats.tag_buffer_read_bytes.value(), 1024u * kTagBytes);
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 1024u + 496u);
+  // Depth: 1024 opaque writes, then 496 punch-through writes after its (passing) alpha test.
+  EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), (1024u + 496u) * kDepthBytes);
+}
+
+TEST(UnitIsp, PunchThroughFlushesOnlyTheCoveredTagsWithTwoTagBuffers) {
+  // Two tag buffers: only the 496 tags under the punch-through primitive are flushed; the other
+  // 528 opaque tags are shaded at the end of the tile: 496 + 496 + 528 = 1520 invocations.
+  RenderRig rig(RenderSpec{.sets = {"isp.tag_buffers=2"}});
+  punch_through_over_opaque(rig);
+  EXPECT_EQ(rig.isp_stats.tag_flushes.value(), 1u);
+  EXPECT_EQ(rig.isp_stats.tag_flushed_samples.value(), 496u);
+  EXPECT_EQ(rig.isp_stats.tag_buffer_read_bytes.value(), (496u + 528u) * kTagBytes);
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 496u + 496u + 528u);
+}
+
+/// Opaque A (FULL, z 0.75), punch-through P1 (the corner (0,0),(8,0),(0,8), z 0.25), opaque B
+/// (LR, z 0.5), punch-through P2 (the corner (24,32),(32,24),(32,32), z 0.25).
+void two_punch_throughs(RenderRig& rig) {
+  rig.add_draw(make_shader(1));
+  rig.add_triangle(at(kFull, 0.75f));
+  rig.add_triangle(at(ScreenTri{{0, 0}, {8, 0}, {0, 8}}, 0.25f, 0, HsrClass::PunchThrough));
+  rig.add_triangle(at(kLowerRight, 0.5f));
+  rig.add_triangle(at(ScreenTri{{24, 32}, {32, 24}, {32, 32}}, 0.25f, 0, HsrClass::PunchThrough));
+  rig.render_tile(RenderRig::tile_rect(0, 0));
+}
+
+TEST(UnitIsp, MoreTagBuffersNeverFlushMoreSamples) {
+  // P1 covers x + y <= 6 (its hypotenuse is a bottom-right edge): 1+2+...+7 = 28 samples.
+  // P2 covers x + y >= 55 inside [24,32)^2 (its hypotenuse is a left edge): sums 55..62 have
+  // 8, 7, ..., 1 pixels: 36 samples, all inside B's region (x + y >= 31).
+  // One tag buffer: P1 flushes all 1024 A tags; B writes 528 tags; P2 flushes those 528:
+  //   1552 flushed samples; shaded 1024 + 28 + 528 + 36 = 1616.
+  // Two or more: P1 flushes the 28 A tags under it; B overwrites 528 A tags (HSR); P2 flushes
+  //   the 36 B tags under it: 64 flushed; the end shades A's 1024 - 28 - 528 = 468 and B's
+  //   528 - 36 = 492: shaded 28 + 28 + 36 + 36 + 468 + 492 = 1088.
+  const std::uint64_t flushed[] = {1552, 64, 64, 64};
+  const std::uint64_t shaded[] = {1616, 1088, 1088, 1088};
+  const std::uint64_t hsr[] = {0, 528, 528, 528};
+  std::uint64_t previous = ~std::uint64_t{0};
+  for (int buffers = 1; buffers <= 4; ++buffers) {
+    RenderRig rig(RenderSpec{.sets = {"isp.tag_buffers=" + std::to_string(buffers)}});
+    two_punch_throughs(rig);
+    SCOPED_TRACE("isp.tag_buffers=" + std::to_string(buffers));
+    EXPECT_EQ(rig.isp_stats.punch_through_samples.value(), 28u + 36u);
+    EXPECT_EQ(rig.isp_stats.tag_flushes.value(), 2u);
+    EXPECT_EQ(rig.isp_stats.tag_flushed_samples.value(), flushed[buffers - 1]);
+    EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), hsr[buffers - 1]);
+    EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), shaded[buffers - 1]);
+    EXPECT_LE(rig.isp_stats.tag_flushed_samples.value(), previous);
+    previous = rig.isp_stats.tag_flushed_samples.value();
+  }
+}
+
+TEST(UnitIsp, PunchThroughWritesDepthOnlyWhereTheAlphaTestKeptTheSample) {
+  // UL with the masked material (uv (0,0), (1,0), (0,1): u = (x + 0.5) / 32 at pixel centres;
+  // the 2x1 mask is transparent for u < 0.5, i.e. x <= 15). Killed: sum over x = 0..15 of the
+  // (31 - x) covered rows = 496 - 120 = 376; kept 120 (x = 16..30). The opaque FULL behind
+  // (z 0.75) keeps its depth where the leaves were killed.
+  RenderRig rig;
+  rig.add_draw(make_shader(1));
+  rig.add_triangle(at(kFull, 0.75f));
+  ScreenTri leaves = at(kUpperLeft, 0.25f, 0, HsrClass::PunchThrough);
+  leaves.material = 1;
+  leaves.uv = {glm::vec2{0, 0}, glm::vec2{1, 0}, glm::vec2{0, 1}};
+  rig.add_triangle(leaves);
+  rig.render_tile(RenderRig::tile_rect(0, 0));
+  EXPECT_EQ(rig.tsp_stats.alpha_test_killed_samples.value(), 376u);
+  EXPECT_EQ(rig.isp_stats.punch_through_samples.value(), 496u);
+  // Depth writes: 1024 opaque + 120 surviving leaves.
+  EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), (1024u + 120u) * kDepthBytes);
+  EXPECT_FLOAT_EQ(rig.depth_at(3, 3), 0.75f);   // killed leaf (x = 3)
+  EXPECT_FLOAT_EQ(rig.depth_at(20, 5), 0.25f);  // kept leaf (x = 20, x + y = 25)
+  // Colors written: 1024 opaque samples + 120 leaves.
+  EXPECT_EQ(rig.tsp_stats.shaded_samples.value(), 1024u + 120u);
+}
+
+TEST(UnitIsp, TranslucentPrimitiveIsShadedAtOnceAndHidesNothing) {
+  // Blended UL (z 0.25, no depth write) over opaque FULL (z 0.75), two tag buffers: the 496
+  // opaque tags beneath are flushed first, the translucent samples blended (496 read-modify-
+  // writes of 4 B), and the other 528 opaque tags shaded at the end.
+  RenderRig rig;
+  rig.add_draw(make_shader(1));
+  PipelineState blend;
+  blend.depth_write = false;
+  blend.blend = BlendMode::Alpha;
+  rig.add_draw(make_shader(1), blend);
+  rig.add_triangle(at(kFull, 0.75f, 0));
+  rig.add_triangle(at(kUpperLeft, 0.25f, 1, HsrClass::Translucent));
+  rig.render_tile(RenderRig::tile_rect(0, 0));
+  EXPECT_EQ(rig.isp_stats.translucent_samples.value(), 496u);
+  EXPECT_EQ(rig.isp_stats.tag_flushed_samples.value(), 496u);
+  EXPECT_EQ(rig.tsp_stats.blended_samples.value(), 496u);
+  EXPECT_EQ(rig.tsp_stats.tile_buffer_read_bytes.value(), 496u * 4);
+  EXPECT_EQ(rig.tsp_stats.tile_buffer_write_bytes.value(), (1024u + 496u) * 4);
+  EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), 1024u * kDepthBytes);
+  EXPECT_FLOAT_EQ(rig.depth_at(3, 3), 0.75f);
+}
+
+}  // namespace
+}  // namespace tbdr

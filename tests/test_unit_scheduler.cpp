@@ -1,0 +1,135 @@
+// The scheduler of the timing model on hand-made work (no memory traffic, so every time is a
+// service time): default rates are 4 USCs x 16 lanes x 2 ops = 128 ALU ops per clock, 32 samples
+// per clock on 1 raster pipe, 2 texture units x 4 texels = 8 texels per clock, 1 primitive per
+// clock of geometry; 4 tiles in flight; the USCs hold 56 tasks x 32 threads / 1024 pixels = 1
+// tile. Cycles are whole core cycles; every service time below is exact.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "unit_fixture.hpp"
+
+namespace tbdr {
+namespace {
+
+using namespace unit;
+
+// Times read back from ticks (whole picoseconds) at 600 MHz differ from whole cycles by less than
+// a picosecond per cycle edge: 1001 cycles end at ceil(1001 x 1666.67) ps = 1001.0004 cycles.
+constexpr double kTickRounding = 0.01;
+
+/// One pass of one render with `tiles`.
+FrameWork one_render(std::vector<TileWork> tiles, BinningWork binning = {}) {
+  return frame_work({pass_work("pass0", {render_work(std::move(tiles), binning)})});
+}
+
+TEST(UnitScheduler, AnAluBoundTileTakesItsOpsOverTheUscRate) {
+  // ISP: max(1 primitive, 32 samples / 32) = 1 cycle; USCs: 128000 / 128 = 1000 cycles.
+  const TimingResult r = run_schedule(one_render({tile_work(0, 0, 1, 32, 128000)}));
+  EXPECT_EQ(r.frame_cycles, 1001.0);
+  EXPECT_EQ(unit_time(r, "usc").busy_cycles, 1000.0);
+  EXPECT_EQ(unit_time(r, "isp").busy_cycles, 1.0);
+  EXPECT_EQ(unit_time(r, "isp").stalled_cycles, 0.0);
+  // One tile row for the heat map: fetched at 0, stored at 1001.
+  ASSERT_EQ(r.tiles.size(), 1u);
+  EXPECT_NEAR(r.tiles[0].cycles, 1001.0, kTickRounding);
+}
+
+TEST(UnitScheduler, TwiceTheUscsHalveTheShadingTime) {
+  // 8 USCs: 128000 / (8 x 16 x 2) = 500; as do 32 lanes, or 4 ops per lane per clock.
+  const FrameWork w = one_render({tile_work(0, 0, 1, 32, 128000)});
+  for (const char* set : {"usc.count=8", "usc.lanes=32", "usc.alu_ops_per_lane_per_clock=4"}) {
+    const TimingResult r = run_schedule(w, {set});
+    EXPECT_EQ(unit_time(r, "usc").busy_cycles, 500.0) << set;
+    EXPECT_EQ(r.frame_cycles, 501.0) << set;
+  }
+}
+
+TEST(UnitScheduler, AFillBoundTileTakesItsSamplesOverTheRasterRate) {
+  // 64000 samples / 32 per clock = 2000 cycles; with 2 raster pipes 1000. No shading.
+  const FrameWork w = one_render({tile_work(0, 0, 10, 64000, 0)});
+  const TimingResult one = run_schedule(w);
+  EXPECT_EQ(one.frame_cycles, 2000.0);
+  EXPECT_EQ(unit_time(one, "isp").busy_cycles, 2000.0);
+  const TimingResult two = run_schedule(w, {"isp.raster_pipes=2"});
+  EXPECT_EQ(two.frame_cycles, 1000.0);
+  // Setup bound: 3000 primitives of few samples take 3000 cycles (one per clock).
+  EXPECT_EQ(run_schedule(one_render({tile_work(0, 0, 3000, 3200, 0)})).frame_cycles, 3000.0);
+}
+
+TEST(UnitScheduler, ATextureBoundTileTakesItsTexelsOverTheTextureRate) {
+  // 8000 texels / (2 units x 4 texels per clock) = 1000 cycles (> 128 ops / 128 = 1).
+  const TimingResult r = run_schedule(one_render({tile_work(0, 0, 0, 0, 128, 8000)}));
+  EXPECT_EQ(unit_time(r, "usc").busy_cycles, 1000.0);
+  EXPECT_EQ(r.frame_cycles, 1000.0);
+  const TimingResult more = run_schedule(one_render({tile_work(0, 0, 0, 0, 128, 8000)}), {"texture.units=4"});
+  EXPECT_EQ(more.frame_cycles, 500.0);
+}
+
+/// Four tiles, each 1000 cycles on the ISP (32000 samples) and 1000 on the USCs (128000 ops).
+FrameWork four_balanced_tiles() {
+  return one_render({tile_work(0, 0, 1, 32000, 128000), tile_work(1, 0, 1, 32000, 128000),
+                     tile_work(0, 1, 1, 32000, 128000), tile_work(1, 1, 1, 32000, 128000)});
+}
+
+TEST(UnitScheduler, TilesInFlightOverlapOneTilesShadingWithTheNextOnesRasterisation) {
+  // 4 in flight: ISP 0-1000, 1000-2000, ..., 3000-4000; each tile's shading follows its ISP
+  // work: USCs 1000-2000, ..., 4000-5000. Frame 1000 + 4 x 1000 = 5000.
+  const TimingResult four = run_schedule(four_balanced_tiles());
+  EXPECT_EQ(four.frame_cycles, 5000.0);
+  EXPECT_EQ(unit_time(four, "isp").busy_cycles, 4000.0);
+  EXPECT_EQ(unit_time(four, "usc").busy_cycles, 4000.0);
+  // 1 in flight: a tile starts when the previous one is stored: 4 x (1000 + 1000) = 8000.
+  const TimingResult one = run_schedule(four_balanced_tiles(), {"isp.tiles_in_flight=1"});
+  EXPECT_EQ(one.frame_cycles, 8000.0);
+}
+
+TEST(UnitScheduler, AFullUscQueueStallsTheIsp) {
+  // Three tiles of 100 ISP cycles (3200 samples) and 1000 USC cycles. The USCs hold one tile:
+  // tile 1 leaves the ISP at 200 but waits until tile 0 leaves the USCs at 1100 (900 stalled);
+  // tile 2 rasterises 1100-1200 and waits for 2100 (900). Frame: 100 + 3 x 1000 = 3100.
+  const FrameWork w = one_render({tile_work(0, 0, 1, 3200, 128000), tile_work(1, 0, 1, 3200, 128000),
+                                  tile_work(0, 1, 1, 3200, 128000)});
+  const TimingResult r = run_schedule(w);
+  EXPECT_EQ(r.frame_cycles, 3100.0);
+  EXPECT_EQ(unit_time(r, "isp").busy_cycles, 300.0);
+  EXPECT_NEAR(unit_time(r, "isp").stalled_cycles, 1800.0, kTickRounding);
+  // 112 tasks x 32 threads / 1024 = 3 tiles queued: no stall, the same USC-bound frame.
+  const TimingResult deep = run_schedule(w, {"usc.tasks_in_flight=112"});
+  EXPECT_NEAR(unit_time(deep, "isp").stalled_cycles, 0.0, kTickRounding);
+  EXPECT_EQ(deep.frame_cycles, 3100.0);
+}
+
+TEST(UnitScheduler, BinningOfTheNextPassOverlapsTheTilesOfThisOne) {
+  // Two passes, each binning 1000 primitives (1000 cycles at 1 per clock) and one 1000-cycle
+  // ALU tile. Pass 1 bins 1000-2000 while pass 0's tile shades 1000-2000; its tile 2000-3000.
+  const RenderWork r = render_work({tile_work(0, 0, 0, 0, 128000)}, binning_work(1000));
+  const TimingResult two_passes = run_schedule(frame_work({pass_work("a", {r}), pass_work("b", {r})}));
+  EXPECT_EQ(two_passes.frame_cycles, 3000.0);
+  EXPECT_EQ(unit_time(two_passes, "binning").busy_cycles, 2000.0);
+  ASSERT_EQ(two_passes.commands.size(), 2u);
+  EXPECT_NEAR(two_passes.commands[1].start_cycle, 1000.0, kTickRounding);
+  EXPECT_NEAR(two_passes.commands[1].binning_end_cycle, 2000.0, kTickRounding);
+  // The same two renders as one pass cut by a partial render: the second binning needs the
+  // parameter buffer the first render's tiles are reading: 1000 + 1000 + 1000 + 1000 = 4000.
+  RenderWork partial = r;
+  partial.partial = true;
+  const TimingResult one_pass = run_schedule(frame_work({pass_work("a", {partial, r})}));
+  EXPECT_EQ(one_pass.frame_cycles, 4000.0);
+}
+
+TEST(UnitScheduler, ADispatchTakesItsOpsOverTheUscRate) {
+  // 256000 ops / 128 = 2000 cycles; 32000 texels / 8 = 4000 cycles: the larger bounds it.
+  EXPECT_EQ(run_schedule(frame_work({dispatch_work("d", 256000)})).frame_cycles, 2000.0);
+  EXPECT_EQ(run_schedule(frame_work({dispatch_work("d", 256000, 32000)})).frame_cycles, 4000.0);
+}
+
+TEST(UnitScheduler, FrameTimeIsCyclesAtTheCoreClock) {
+  // 500 MHz: 2 ns per cycle; 1001 cycles = 2002000 ps.
+  const TimingResult r = run_schedule(one_render({tile_work(0, 0, 1, 32, 128000)}), {"gpu.core_clock_mhz=500"});
+  EXPECT_EQ(r.frame_cycles, 1001.0);
+  EXPECT_EQ(r.frame_time_ps, 2002000.0);
+}
+
+}  // namespace
+}  // namespace tbdr

@@ -1,0 +1,195 @@
+// The TSP on its own: shading batches handed over directly (or by the ISP for one triangle), with
+// quads, helper lanes, ALU ops, texture fetches and tile buffer bytes derived by hand.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "unit_fixture.hpp"
+
+namespace tbdr {
+namespace {
+
+using namespace unit;
+
+/// Pixels (x0..x1) x (y0..y1) inclusive, sorted by row then column (what the ISP hands over).
+std::vector<ShadePixel> block(int x0, int y0, int x1, int y1) {
+  std::vector<ShadePixel> out;
+  for (int y = y0; y <= y1; ++y) {
+    for (int x = x0; x <= x1; ++x) out.push_back({x, y, 1u});
+  }
+  return out;
+}
+
+/// The pixels of the upper-left half of tile 0 under the top-left rule: x + y <= 30 (496).
+std::vector<ShadePixel> upper_left_pixels() {
+  std::vector<ShadePixel> out;
+  for (int y = 0; y < 32; ++y) {
+    for (int x = 0; x < 32; ++x) {
+      if (x + y <= 30) out.push_back({x, y, 1u});
+    }
+  }
+  return out;
+}
+
+const ScreenTri kUpperLeft{{0, 0}, {32, 0}, {0, 32}};
+
+TEST(UnitTsp, OnePixelLaunchesAQuadWithThreeHelperLanes) {
+  RenderRig rig;
+  rig.add_draw(make_shader(10, 0, LightSource::None, 1, 2));
+  const std::uint32_t p = rig.add_triangle(kUpperLeft);
+  rig.shade(p, {{5, 7, 1u}});
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 1u);
+  EXPECT_EQ(rig.tsp_stats.shaded_quads.value(), 1u);
+  EXPECT_EQ(rig.tsp_stats.helper_lanes.value(), 3u);
+  // Every lane runs: 4 x 10 ALU ops; 4 lanes x 2 fetches = 8 fetches of 4 texels (bilinear).
+  EXPECT_EQ(rig.tsp_stats.fragment_alu_ops.value(), 40u);
+  EXPECT_EQ(rig.tsp_stats.texture_fetches.value(), 8u);
+  EXPECT_EQ(rig.tsp_stats.texels_filtered.value(), 32u);
+  // One rgba8 sample written: 4 B of tile buffer.
+  EXPECT_EQ(rig.tsp_stats.shaded_samples.value(), 1u);
+  EXPECT_EQ(rig.tsp_stats.tile_buffer_write_bytes.value(), 4u);
+}
+
+TEST(UnitTsp, QuadsAreAlignedToEvenPixels) {
+  // 2x2 pixels at (4,4): one quad, no helper. The same 2x2 at (5,5) straddles 4 quads: 16 lanes,
+  // 12 helpers. 3x3 at (1,1)..(3,3): quads x 0..1, y 0..1 = 4 quads, 16 - 9 = 7 helpers.
+  RenderRig rig;
+  rig.add_draw(make_shader(1));
+  const std::uint32_t p = rig.add_triangle(kUpperLeft);
+  rig.shade(p, block(4, 4, 5, 5));
+  EXPECT_EQ(rig.tsp_stats.shaded_quads.value(), 1u);
+  EXPECT_EQ(rig.tsp_stats.helper_lanes.value(), 0u);
+  rig.shade(p, block(5, 5, 6, 6));
+  EXPECT_EQ(rig.tsp_stats.shaded_quads.value(), 1u + 4u);
+  EXPECT_EQ(rig.tsp_stats.helper_lanes.value(), 12u);
+  rig.shade(p, block(1, 1, 3, 3));
+  EXPECT_EQ(rig.tsp_stats.shaded_quads.value(), 1u + 4u + 4u);
+  EXPECT_EQ(rig.tsp_stats.helper_lanes.value(), 12u + 7u);
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 4u + 4u + 9u);
+}
+
+TEST(UnitTsp, QuadsAndHelperLanesOfATriangleWhoseEdgeCutsQuads) {
+  // The ISP hands over UL (x + y <= 30, 496 pixels) in one batch. Quad (qx, qy) holds pixels with
+  // x + y from 2(qx + qy) to 2(qx + qy) + 2: quads with qx + qy <= 14 are full (sum over s = 0..14
+  // of (s + 1) = 120 quads, 480 pixels); the 16 quads with qx + qy = 15 hold one covered pixel
+  // (x + y = 30) and 3 helpers. 136 quads, 544 lanes, 48 helpers.
+  RenderRig rig;
+  rig.add_draw(make_shader(1));
+  rig.add_triangle(kUpperLeft);
+  rig.render_tile(RenderRig::tile_rect(0, 0));
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 496u);
+  EXPECT_EQ(rig.tsp_stats.shaded_quads.value(), 136u);
+  EXPECT_EQ(rig.tsp_stats.helper_lanes.value(), 48u);
+}
+
+TEST(UnitTsp, AluOpsAreBaseAndPerLightOpsTimesLanes) {
+  // 10 ALU ops + 5 per light, every light of the draw's selection (3 of the 3 lights): per lane
+  // 10 + 5 x 3 = 25; UL's 544 lanes (496 + 48 helpers): 13600 ops. Light evaluations count
+  // covered fragments only: 3 x 496 = 1488.
+  RenderSpec spec;
+  spec.lights.resize(3);
+  RenderRig rig(spec);
+  rig.add_draw(make_shader(10, 5, LightSource::All), {}, {0, 1, 2});
+  rig.add_triangle(kUpperLeft);
+  rig.shade(0, upper_left_pixels());
+  EXPECT_EQ(rig.tsp_stats.shaded_quads.value(), 136u);
+  EXPECT_EQ(rig.tsp_stats.fragment_alu_ops.value(), 25u * 544u);
+  EXPECT_EQ(rig.tsp_stats.light_evaluations.value(), 3u * 496u);
+}
+
+TEST(UnitTsp, FewerSelectedLightsCostFewerOps) {
+  // The same triangle with 2 of the 3 lights selected: (10 + 5 x 2) x 544 = 10880; with a shader
+  // that evaluates no light: 10 x 544 = 5440.
+  RenderSpec spec;
+  spec.lights.resize(3);
+  RenderRig rig(spec);
+  rig.add_draw(make_shader(10, 5, LightSource::All), {}, {0, 2});
+  rig.add_draw(make_shader(10, 5, LightSource::None), {}, {0, 1, 2});
+  ScreenTri t = kUpperLeft;
+  rig.add_triangle(t);
+  t.draw = 1;
+  rig.add_triangle(t);
+  rig.shade(0, upper_left_pixels());
+  EXPECT_EQ(rig.tsp_stats.fragment_alu_ops.value(), 20u * 544u);
+  rig.shade(1, upper_left_pixels());
+  EXPECT_EQ(rig.tsp_stats.fragment_alu_ops.value(), 20u * 544u + 10u * 544u);
+  EXPECT_EQ(rig.tsp_stats.light_evaluations.value(), 2u * 496u);
+}
+
+TEST(UnitTsp, TileBufferBytesFollowTheOutputFormats) {
+  // Two color outputs, rgba8 (4 B) and rgba16f (8 B): 12 B per written sample. Additive blending
+  // reads them too. 496 pixels: 5952 B written, 5952 B read, 496 blended samples.
+  RenderSpec spec;
+  spec.attachments = {make_attachment("color", Format::Rgba8), make_attachment("hdr", Format::Rgba16f),
+                      make_attachment("depth", Format::D24s8, LoadOp::Clear, StoreOp::DontCare, true)};
+  RenderRig rig(spec);
+  PipelineState add;
+  add.blend = BlendMode::Add;
+  rig.add_draw(make_shader(1, 0, LightSource::None, 2), add);
+  rig.add_triangle(kUpperLeft);
+  rig.shade(0, upper_left_pixels());
+  EXPECT_EQ(rig.tsp_stats.shaded_samples.value(), 496u);
+  EXPECT_EQ(rig.tsp_stats.tile_buffer_write_bytes.value(), 496u * 12u);
+  EXPECT_EQ(rig.tsp_stats.tile_buffer_read_bytes.value(), 496u * 12u);
+  EXPECT_EQ(rig.tsp_stats.blended_samples.value(), 496u);
+}
+
+TEST(UnitTsp, StoredImagesSampledPerPixelAreReadPerInvocation) {
+  // A shader reading an 8 B G-buffer texel at its own pixel: one read per covered fragment
+  // (helpers excluded): 9 pixels -> 72 B of class gbuffer.
+  RenderRig rig;
+  rig.add_draw(make_shader(1), {}, {}, {{DramClass::Gbuffer, 8u}});
+  rig.add_triangle(kUpperLeft);
+  rig.shade(0, block(1, 1, 3, 3));
+  EXPECT_EQ(rig.dram.reads(DramClass::Gbuffer), 9u * 8u);
+  EXPECT_EQ(rig.dram.total_read(), 9u * 8u);
+}
+
+TEST(UnitTsp, PixelLocalStorageIsAccessedWholePerFragment) {
+  // PLS of rgba8 + r32ui = 8 B per pixel. A shader reading it (no color output) accesses 8 B per
+  // fragment; one reading and writing it 16 B. 4x4 pixels: 128 B, then 256 B more.
+  RenderSpec spec;
+  spec.pls = {PlsVariable{"albedo", Format::Rgba8, 0}, PlsVariable{"count", Format::R32ui, 0}};
+  RenderRig rig(spec);
+  ShaderDesc reader = make_shader(1, 0, LightSource::None, 0);
+  reader.pls = PlsAccess::Read;
+  ShaderDesc rw = reader;
+  rw.pls = PlsAccess::ReadWrite;
+  rig.add_draw(reader);
+  rig.add_draw(rw);
+  ScreenTri t = kUpperLeft;
+  rig.add_triangle(t);
+  t.draw = 1;
+  rig.add_triangle(t);
+  rig.shade(0, block(0, 0, 3, 3));
+  EXPECT_EQ(rig.tsp_stats.pls_bytes_accessed.value(), 16u * 8u);
+  rig.shade(1, block(0, 0, 3, 3));
+  EXPECT_EQ(rig.tsp_stats.pls_bytes_accessed.value(), 16u * 8u + 16u * 16u);
+  EXPECT_EQ(rig.tsp_stats.shaded_samples.value(), 0u);  // no color output
+}
+
+TEST(UnitTsp, AlphaTestKillsTheMaskedSamples) {
+  // UL with the masked material, uv (0,0), (1,0), (0,1): u = (x + 0.5) / 32 at pixel centres; the
+  // mask is transparent for u < 0.5 (x <= 15). Killed: sum over x = 0..15 of (31 - x) = 376;
+  // alive 120. Killed fragments still ran (ALU ops of all 544 lanes) but write no color.
+  RenderRig rig;
+  rig.add_draw(make_shader(1));
+  ScreenTri leaves = kUpperLeft;
+  leaves.hsr = HsrClass::PunchThrough;
+  leaves.material = 1;
+  leaves.uv = {glm::vec2{0, 0}, glm::vec2{1, 0}, glm::vec2{0, 1}};
+  rig.add_triangle(leaves);
+  const std::vector<ShadePixel> pixels = upper_left_pixels();
+  std::vector<std::uint32_t> alive;
+  rig.shade(0, pixels, &alive);
+  EXPECT_EQ(rig.tsp_stats.alpha_test_killed_samples.value(), 376u);
+  EXPECT_EQ(rig.tsp_stats.shaded_samples.value(), 120u);
+  EXPECT_EQ(rig.tsp_stats.fragment_alu_ops.value(), 544u);
+  ASSERT_EQ(alive.size(), pixels.size());
+  for (std::size_t i = 0; i < pixels.size(); ++i) {
+    EXPECT_EQ(alive[i], pixels[i].x <= 15 ? 0u : 1u) << "pixel " << pixels[i].x << "," << pixels[i].y;
+  }
+}
+
+}  // namespace
+}  // namespace tbdr
