@@ -9,39 +9,13 @@
 
 #include "kernel/errors.hpp"
 #include "kernel/hash.hpp"
+#include "kernel/random.hpp"
 
 namespace tbdr {
 
 namespace {
 
 constexpr float pi = std::numbers::pi_v<float>;
-
-// ---------------------------------------------------------------------------------------------
-// Deterministic randomness: PCG32 (O'Neill), identical on every standard library.
-
-class Pcg32 {
- public:
-  explicit Pcg32(std::uint64_t seed, std::uint64_t stream = 0x9e3779b97f4a7c15ULL)
-      : inc_((stream << 1u) | 1u) {
-    next();
-    state_ += seed;
-    next();
-  }
-  std::uint32_t next() {
-    const std::uint64_t old = state_;
-    state_ = old * 6364136223846793005ULL + inc_;
-    const auto xorshifted = static_cast<std::uint32_t>(((old >> 18u) ^ old) >> 27u);
-    const auto rot = static_cast<std::uint32_t>(old >> 59u);
-    return (xorshifted >> rot) | (xorshifted << ((32u - rot) & 31u));
-  }
-  /// Uniform in [0,1) with 24 random bits (exact in float).
-  float uniform() { return static_cast<float>(next() >> 8) * (1.0f / 16777216.0f); }
-  float range(float lo, float hi) { return lo + (hi - lo) * uniform(); }
-
- private:
-  std::uint64_t state_ = 0;
-  std::uint64_t inc_;
-};
 
 /// Integer hash to [0,1) for texture patterns (stateless, so texel order does not matter).
 float hash01(std::uint32_t x) {
@@ -159,42 +133,27 @@ struct Atrium {
 
   std::uint32_t add_material(const std::string& name, AlphaMode mode, glm::vec4 color, int texture,
                              bool double_sided = false, int mask = -1) {
-    Material m;
-    m.name = name;
-    m.alpha_mode = mode;
-    m.base_color = color;
-    m.base_color_texture = texture;
-    m.double_sided = double_sided;
-    m.alpha_mask = mask;
-    scene.materials.push_back(m);
+    scene.materials.push_back(Material{.name = name, .alpha_mode = mode, .double_sided = double_sided,
+                                       .base_color = color, .base_color_texture = texture, .alpha_mask = mask});
     return static_cast<std::uint32_t>(scene.materials.size() - 1);
   }
   int add_texture(const std::string& name, int w, int h) {
-    TextureInfo ti;
-    ti.name = name;
-    ti.format = "procedural";
-    ti.width = w;
-    ti.height = h;
-    ti.channels = 4;
-    scene.textures.push_back(ti);
+    scene.textures.push_back(TextureInfo{.name = name, .format = "procedural", .width = w, .height = h, .channels = 4});
     return static_cast<int>(scene.textures.size() - 1);
   }
-  /// A new, empty sub-mesh; returns its index (its storage may move as more are added).
-  std::uint32_t add_submesh(const std::string& name, std::uint32_t material, std::uint32_t stride_bytes = 32) {
+  /// A new, empty sub-mesh; returns its index (its storage may move as more are added). Vertices
+  /// are position, normal and uv (12 + 12 + 8 = 32 bytes), indices 32-bit.
+  std::uint32_t add_submesh(const std::string& name, std::uint32_t material) {
     SubMesh sm;
     sm.name = name;
     sm.material = material;
-    sm.vertex_stride_bytes = stride_bytes;  // position, normal, uv: 12 + 12 + 8
+    sm.vertex_stride_bytes = 32;
     sm.index_bytes = 4;
     scene.submeshes.push_back(std::move(sm));
     return static_cast<std::uint32_t>(scene.submeshes.size() - 1);
   }
   void place(std::uint32_t submesh, const glm::mat4& world, const std::string& node) {
-    Instance inst;
-    inst.submesh = submesh;
-    inst.world = world;
-    inst.node = node;
-    scene.instances.push_back(std::move(inst));
+    scene.instances.push_back(Instance{.submesh = submesh, .world = world, .node = node});
   }
 };
 

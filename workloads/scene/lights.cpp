@@ -5,49 +5,13 @@
 #include <cmath>
 #include <fstream>
 #include <optional>
-#include <sstream>
 
 #include "kernel/errors.hpp"
+#include "kernel/random.hpp"
 
 namespace tbdr {
 
 namespace {
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-/// PCG32 (O'Neill): the same sequence with every compiler and standard library.
-class Pcg32 {
- public:
-  explicit Pcg32(std::uint64_t seed) : inc_((splitmix64(seed ^ 0x5851f42d4c957f2dULL) << 1u) | 1u) {
-    next();
-    state_ += splitmix64(seed);
-    next();
-  }
-  std::uint32_t next() {
-    const std::uint64_t old = state_;
-    state_ = old * 6364136223846793005ULL + inc_;
-    const auto xorshifted = static_cast<std::uint32_t>(((old >> 18u) ^ old) >> 27u);
-    const auto rot = static_cast<std::uint32_t>(old >> 59u);
-    return (xorshifted >> rot) | (xorshifted << ((32u - rot) & 31u));
-  }
-  /// Uniform in [0,1): 24 random bits, exact in float.
-  float uniform() { return static_cast<float>(next() >> 8) * (1.0f / 16777216.0f); }
-  /// Uniform in [0,1) with 53 random bits.
-  double uniform_double() {
-    const std::uint64_t hi = next() >> 5, lo = next() >> 6;
-    return (static_cast<double>(hi) * 67108864.0 + static_cast<double>(lo)) * (1.0 / 9007199254740992.0);
-  }
-  float range(float lo, float hi) { return lo + (hi - lo) * uniform(); }
-
- private:
-  std::uint64_t state_ = 0;
-  std::uint64_t inc_;
-};
 
 /// Light colors: warm and cool tints of white and a few saturated hues, linear RGB.
 constexpr glm::vec3 palette[] = {
@@ -166,7 +130,7 @@ LightSet generate_lights(const Scene& scene, const LightSetSpec& spec) {
   set.lights.reserve(spec.count);
   for (std::uint32_t i = 0; i < spec.count; ++i) {
     // One stream per light: light i is the same whatever the count.
-    Pcg32 rng(splitmix64(spec.seed) ^ splitmix64(0x4c49474854ULL + i));
+    Pcg32 rng = Pcg32::from_seed(splitmix64(spec.seed) ^ splitmix64(0x4c49474854ULL + i));
     Light l;
     l.radius = diag * rng.range(spec.min_radius_fraction, spec.max_radius_fraction);
     if (sampler) {
@@ -280,31 +244,6 @@ LightSet read_light_file(const std::string& path) {
   }
   if (!header) throw InputError(path, line_no + 1, "empty light file: missing the header 'tbdrsim-lights 1'");
   return set;
-}
-
-void write_light_file(const LightSet& set, const std::string& path) {
-  std::ostringstream os;
-  os << "tbdrsim-lights 1\n";
-  os << "# " << set.lights.size() << " lights\n";
-  os << "# point x y z radius r g b intensity\n";
-  os << "# spot  x y z radius r g b intensity dx dy dz cos_inner cos_outer\n";
-  for (const Light& l : set.lights) {
-    const bool spot = l.type == Light::Type::Spot;
-    os << (spot ? "spot" : "point");
-    const float common[] = {l.position.x, l.position.y, l.position.z, l.radius, l.color.x, l.color.y, l.color.z,
-                            l.intensity};
-    for (float f : common) os << ' ' << format_float(f);
-    if (spot) {
-      const float extra[] = {l.direction.x, l.direction.y, l.direction.z, l.cos_inner, l.cos_outer};
-      for (float f : extra) os << ' ' << format_float(f);
-    }
-    os << '\n';
-  }
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw InputError(path, "cannot write light file");
-  const std::string text = os.str();
-  out.write(text.data(), static_cast<std::streamsize>(text.size()));
-  if (!out) throw InputError(path, "error while writing light file");
 }
 
 }  // namespace tbdr

@@ -1,6 +1,6 @@
 #pragma once
 // Light sets: point and spot lights with a finite radius, deterministic seeded placement, and a
-// text file format to read and write them. Attenuation is exactly zero at and beyond the radius,
+// text file format to read them from. Attenuation is exactly zero at and beyond the radius,
 // so culling a light by its bounding sphere never changes the image.
 #include <cstdint>
 #include <string>
@@ -43,7 +43,7 @@ struct LightSetSpec {
   bool near_surfaces = true;           ///< place on/near scene triangles instead of uniformly in bounds
 };
 
-/// A set of lights with the spec that made it (if generated).
+/// A set of lights, generated or read from a file.
 struct LightSet {
   std::vector<Light> lights;
 };
@@ -52,7 +52,5 @@ struct LightSet {
 LightSet generate_lights(const Scene& scene, const LightSetSpec& spec);
 /// Reads a light file (format in docs/lights.md); errors name file:line and the token.
 LightSet read_light_file(const std::string& path);
-/// Writes a light file that read_light_file() reads back identically.
-void write_light_file(const LightSet& set, const std::string& path);
 
 }  // namespace tbdr

@@ -76,12 +76,4 @@ void update_bounds(Scene& scene) {
   scene.bounds = any ? Bounds{lo, hi} : Bounds{};
 }
 
-float material_alpha(const Scene& scene, const Material& material, glm::vec2 uv) {
-  float a = material.base_color.w;
-  if (material.alpha_mask >= 0 && static_cast<std::size_t>(material.alpha_mask) < scene.alpha_masks.size()) {
-    a *= scene.alpha_masks[static_cast<std::size_t>(material.alpha_mask)].sample(uv);
-  }
-  return a;
-}
-
 }  // namespace tbdr

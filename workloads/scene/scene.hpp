@@ -101,8 +101,4 @@ struct Scene {
 /// Recomputes scene.bounds from every instance's transformed vertices (zero bounds when empty).
 void update_bounds(Scene& scene);
 
-/// The alpha a material's fragment has at texture coordinate uv: base_color.a times the alpha
-/// mask (when the material has one). A punch-through fragment survives when this is >= alpha_cutoff.
-float material_alpha(const Scene& scene, const Material& material, glm::vec2 uv);
-
 }  // namespace tbdr

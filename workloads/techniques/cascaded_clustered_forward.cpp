@@ -25,27 +25,25 @@ namespace tbdr {
 namespace {
 
 Trace generate_cascaded_clustered_forward(const TraceSetup& setup, const TechniqueOptions& options) {
-  LightGridConfig c;
-  c.technique = "cascaded_clustered_forward";
-  c.kind = options.get_bool("dense") ? LightGridConfig::Kind::DenseClusters : LightGridConfig::Kind::SparseClusters;
-  c.tile_px = static_cast<std::uint32_t>(options.get_int("tile_px", 4, 1024));
-  c.cubical = true;
+  using Kind = LightGridConfig::Kind;
+  LightGridConfig c{.technique = "cascaded_clustered_forward",
+                    .kind = options.get_bool("dense") ? Kind::DenseClusters : Kind::SparseClusters,
+                    .grid = light_grid_option(setup, options, true)};
+  c.grid.cubical = true;
   const Camera& cam = setup.camera;
   if (options.get("min_depth") == "auto") {
-    c.min_depth = std::min(10.0f * cam.near_plane, 0.5f * cam.far_plane);
+    c.grid.min_depth = std::min(10.0f * cam.near_plane, 0.5f * cam.far_plane);
   } else {
-    c.min_depth = options.get_float("min_depth", 0.0f, 1e30f);
-    if (!(c.min_depth > cam.near_plane && c.min_depth < cam.far_plane))
+    c.grid.min_depth = options.get_float("min_depth", 0.0f, 1e30f);
+    if (!(c.grid.min_depth > cam.near_plane && c.grid.min_depth < cam.far_plane))
       throw InputError("option min_depth=" + options.get("min_depth"),
                        "must lie between the camera's near and far planes");
   }
   const std::uint32_t max_slices =
       options.get("slices") == "auto" ? 4096u : static_cast<std::uint32_t>(options.get_int("slices", 1, 4096));
-  c.slices = cubical_slice_count(cam, setup.height, c.tile_px, c.min_depth, max_slices);
-  c.max_lights = list_cap_option(options, "max_lights_per_cluster", setup.lights.lights.size());
-  c.index_bytes = index_bytes_option(options, "index_bytes", setup.lights.lights.size());
+  c.grid.slices = cubical_slice_count(cam, setup.height, c.grid.tile_px, c.grid.min_depth, max_slices);
   c.prez = options.get_bool("prez");
-  if (c.kind == LightGridConfig::Kind::SparseClusters && !c.prez)
+  if (c.kind == Kind::SparseClusters && !c.prez)
     throw InputError("option prez=no", "cascaded_clustered_forward with dense=no needs its stored depth pre-pass");
   return generate_light_grid_forward(setup, options, c);
 }

@@ -28,56 +28,23 @@ namespace tbdr {
 namespace {
 
 Trace generate_clustered_deferred(const TraceSetup& setup, const TechniqueOptions& options) {
-  reject_msaa(setup, "clustered_deferred", "its G-buffer holds one surface per pixel (Billeter 2015: MSAA no)");
-  require_lights(setup, "clustered_deferred");
-  Trace t = begin_trace(setup, "clustered_deferred", options);
+  Trace t = begin_trace(setup, "clustered_deferred", options, {.no_msaa = kGbufferNoMsaa, .needs_lights = true});
   const std::string lights = add_light_buffer(t);
   const GbufferLayout layout = gbuffer_layout_option(options, "gbuffer");
-  const auto tile_px = static_cast<std::uint32_t>(options.get_int("tile_px", 4, 1024));
-  const auto slices = static_cast<std::uint32_t>(options.get_int("slices", 1, 1024));
-  const std::uint32_t cap = list_cap_option(options, "max_lights_per_cluster", t.lights.size());
-  const std::uint32_t index_bytes = index_bytes_option(options, "index_bytes", t.lights.size());
+  LightGrid grid = light_grid_option(setup, options, true);
+  grid.slices = static_cast<std::uint32_t>(options.get_int("slices", 1, 1024));
 
-  const std::uint32_t tiles_x = tiles_for(setup.width, tile_px);
-  const std::uint32_t tiles_y = tiles_for(setup.height, tile_px);
-  const std::uint64_t clusters = std::uint64_t{tiles_x} * tiles_y * slices;
-  const std::string used = add_buffer(t, "used_clusters", 4 + clusters * kUsedClusterEntryBytes,
-                                      TrafficClass::LightLists, BufferContent::UsedClusters);
-  const std::string grid = add_buffer(t, "cluster_grid", clusters * kGridEntryBytes, TrafficClass::LightLists,
-                                      BufferContent::ClusterGrid);
-  const std::string index = add_buffer(t, "light_index", clusters * cap * index_bytes, TrafficClass::LightLists,
-                                       BufferContent::LightIndexList);
-  const std::string frame = add_buffer(t, "color", std::uint64_t(setup.width) * std::uint64_t(setup.height) * 4,
-                                       TrafficClass::Color, BufferContent::Image);
-
-  PassDesc gbuffer = make_gbuffer_pass(t, layout);
-  const auto targets = static_cast<std::uint32_t>(layout.formats.size());
-  t.shaders.push_back(make_shader("clustered_deferred_lit",
-                                  kGbufferDecodeAluOps + kGbufferExtraTargetAluOps * layout.extra_targets() +
-                                      kPositionReconstructAluOps + kClusterLookupAluOps + kAmbientAluOps +
-                                      kOutputAluOps,
-                                  targets + 1, 0, kLightAluOps, LightSource::ClusterList, 1));
-
-  const std::map<std::string, std::string> params = {
-      {"tile_px", std::to_string(tile_px)}, {"slices", std::to_string(slices)}, {"slicing", "log"}};
-  auto assign_params = params;
-  assign_params["dense"] = "no";
-  std::vector<std::string> stored = layout.names;
-  stored.push_back("depth");
-  std::vector<std::string> shade_reads = stored;
-  shade_reads.insert(shade_reads.end(), {lights, grid, index});
-  const std::uint32_t edge = std::min(tile_px, kKernelGroupEdge);
-
-  t.commands.emplace_back(std::move(gbuffer));
-  t.commands.emplace_back(make_barrier(stored));
-  t.commands.emplace_back(make_dispatch("cluster_flag", tiles_x, tiles_y, 1, edge, edge, 1, {"depth"}, {used}, params));
-  t.commands.emplace_back(make_barrier({used}));
-  t.commands.emplace_back(make_dispatch("cluster_light_assign", tiles_x * tiles_y, slices, 1, 64, 1, 1,
-                                        {lights, used}, {grid, index}, assign_params));
-  t.commands.emplace_back(make_barrier({grid, index}));
+  const std::string used = add_used_clusters_buffer(t, grid);
+  add_light_grid_buffers(t, grid);
+  const ShadedGbuffer g =
+      add_compute_gbuffer(t, setup, layout, "clustered_deferred_lit", kClusterLookupAluOps, LightSource::ClusterList);
+  add_sparse_cluster_assignment(t, grid, lights, used);
+  t.commands.emplace_back(make_barrier({grid.grid_buffer(), kLightIndexBuffer}));
+  std::vector<std::string> reads = g.stored;
+  reads.insert(reads.end(), {lights, grid.grid_buffer(), kLightIndexBuffer});
   t.commands.emplace_back(make_dispatch("deferred_shade", tiles_for(setup.width, kKernelGroupEdge),
                                         tiles_for(setup.height, kKernelGroupEdge), 1, kKernelGroupEdge,
-                                        kKernelGroupEdge, 1, shade_reads, {frame},
+                                        kKernelGroupEdge, 1, reads, {g.frame},
                                         {{"shader", "clustered_deferred_lit"},
                                          {"tile_px", std::to_string(kKernelGroupEdge)}}));
   return t;

@@ -22,13 +22,9 @@ namespace tbdr {
 namespace {
 
 Trace generate_clustered_forward(const TraceSetup& setup, const TechniqueOptions& options) {
-  LightGridConfig c;
-  c.technique = "clustered_forward";
-  c.kind = LightGridConfig::Kind::SparseClusters;
-  c.tile_px = static_cast<std::uint32_t>(options.get_int("tile_px", 4, 1024));
-  c.slices = static_cast<std::uint32_t>(options.get_int("slices", 1, 1024));
-  c.max_lights = list_cap_option(options, "max_lights_per_cluster", setup.lights.lights.size());
-  c.index_bytes = index_bytes_option(options, "index_bytes", setup.lights.lights.size());
+  LightGridConfig c{.technique = "clustered_forward", .kind = LightGridConfig::Kind::SparseClusters,
+                    .grid = light_grid_option(setup, options, true)};
+  c.grid.slices = static_cast<std::uint32_t>(options.get_int("slices", 1, 1024));
   c.depth_reload = options.get_bool("depth_reload");
   return generate_light_grid_forward(setup, options, c);
 }

@@ -25,43 +25,28 @@ namespace tbdr {
 namespace {
 
 Trace generate_deferred(const TraceSetup& setup, const TechniqueOptions& options) {
-  reject_msaa(setup, "deferred",
-              "its G-buffer holds one surface per pixel and the light volumes read it as textures");
-  Trace t = begin_trace(setup, "deferred", options);
+  Trace t = begin_trace(setup, "deferred", options,
+                        {.no_msaa = "its G-buffer holds one surface per pixel and the light volumes read it as textures"});
   const std::string lights = add_light_buffer(t);
   const GbufferLayout layout = gbuffer_layout_option(options, "gbuffer");
-  const auto subdivisions = static_cast<std::uint32_t>(options.get_int("sphere_subdivisions", 0, 6));
+  const std::uint32_t subdivisions = sphere_subdivisions_option(options);
   const bool translucent = translucent_forward_option(options);
 
   PassDesc gbuffer = make_gbuffer_pass(t, layout);
 
-  const auto targets = static_cast<std::uint32_t>(layout.formats.size());
-  t.shaders.push_back(make_shader("ambient", kAmbientAluOps + kOutputAluOps, 1, 0, 0, LightSource::None, 1));
-  t.shaders.push_back(make_shader("light_volume",
-                                  kGbufferDecodeAluOps + kGbufferExtraTargetAluOps * layout.extra_targets() +
-                                      kPositionReconstructAluOps + kOutputAluOps,
-                                  targets, kProxyVaryings, kLightAluOps, LightSource::Proxy, 1));
-  t.pipelines.push_back(
-      make_pipeline("ambient", "ambient", false, false, CompareOp::Always, BlendMode::Off, CullMode::None));
-  t.pipelines.push_back(make_pipeline("light_volume", "light_volume", true, false, CompareOp::GreaterEqual,
-                                      BlendMode::Add, CullMode::Front));
-  if (translucent) add_translucent_state(t);
-
   PassDesc lighting;
   lighting.name = "lighting";
-  lighting.attachments.push_back(
-      make_attachment("color", Format::Rgba8, 1, LoadOp::Clear, StoreOp::Store, AttachmentUsage::Color));
-  lighting.attachments.push_back(
-      make_attachment("depth", Format::D24s8, 1, LoadOp::Load, StoreOp::DontCare, AttachmentUsage::Depth));
-  lighting.draws.push_back(make_draw(GeometryKind::Fullscreen, "ambient", {"albedo"}));
-  if (!lights.empty()) {
-    std::vector<std::string> reads = layout.names;
-    reads.push_back(lights);
-    DrawCmd volumes = make_draw(GeometryKind::LightSpheres, "light_volume", reads, {"depth"});
-    volumes.subdivisions = subdivisions;
-    lighting.draws.push_back(volumes);
+  add_color_target(lighting, "color", 1);
+  lighting.attachments.push_back(depth_attachment(1, LoadOp::Load, StoreOp::DontCare));
+  add_ambient(t, lighting, "albedo");
+  const auto targets = static_cast<std::uint32_t>(layout.formats.size());
+  t.shaders.push_back(light_volume_shader("light_volume", targets, layout.extra_targets(), 1));
+  t.pipelines.push_back(light_volume_pipeline("light_volume", "light_volume", BlendMode::Add));
+  add_light_volumes(lighting, "light_volume", lights, subdivisions, layout.names, {"depth"});
+  if (translucent) {
+    add_translucent_state(t);
+    add_translucent_draw(lighting, lights);
   }
-  if (translucent) add_translucent_draw(lighting, lights);
 
   t.commands.emplace_back(std::move(gbuffer));
   t.commands.emplace_back(std::move(lighting));
@@ -78,7 +63,7 @@ TechniqueInfo technique_deferred() {
             "G-buffer color targets in order: albedo, normal, then extra targets (specular, motion, ...) that "
             "only cost bandwidth; default 8 B/px + 4 B depth (the 15-769 lecture's example layout is 4 x 32-bit "
             "targets + D24S8 = 20 B/px: rgba8,rgba8,rgba8,rgba8)"},
-           {"sphere_subdivisions", "1", "icosphere level of the light proxies: 20 x 4^n triangles per light"},
+           sphere_subdivisions_declaration(),
            {"translucent", "forward",
             "BLEND materials cannot live in the G-buffer (Billeter: blending no): forward = draw them in a "
             "forward pass over the lit frame (per-object light lists), skip = leave them out"}},

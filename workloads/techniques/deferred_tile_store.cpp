@@ -25,52 +25,33 @@ namespace tbdr {
 namespace {
 
 Trace generate_deferred_tile_store(const TraceSetup& setup, const TechniqueOptions& options) {
-  reject_msaa(setup, "deferred_tile_store",
-              "its G-buffer lives in pixel local storage, which is not usable with MSAA");
-  Trace t = begin_trace(setup, "deferred_tile_store", options);
+  Trace t = begin_trace(setup, "deferred_tile_store", options,
+                        {.no_msaa = "its G-buffer lives in pixel local storage, which is not usable with MSAA"});
   const std::string lights = add_light_buffer(t);
   const Format albedo = color_format_option(options, "pls_albedo_format");
   const Format normal = color_format_option(options, "pls_normal_format");
   const Format accum = color_format_option(options, "pls_accum_format");
-  const auto subdivisions = static_cast<std::uint32_t>(options.get_int("sphere_subdivisions", 0, 6));
+  const std::uint32_t subdivisions = sphere_subdivisions_option(options);
   const bool translucent = translucent_forward_option(options);
-
-  const std::uint32_t encode = kSurfaceAluOps + kGbufferEncodeAluOps;
-  t.shaders.push_back(make_shader("gbuffer_pls", encode, kSurfaceTexFetches, kSurfaceVaryings, 0, LightSource::None,
-                                  0, PlsAccess::Write));
-  t.shaders.push_back(make_shader("gbuffer_pls_masked", encode + kAlphaTestAluOps, kSurfaceTexFetches,
-                                  kSurfaceVaryings, 0, LightSource::None, 0, PlsAccess::Write, true));
-  t.shaders.push_back(make_shader("light_volume_pls",
-                                  kGbufferDecodeAluOps + kPositionReconstructAluOps + kOutputAluOps, 0,
-                                  kProxyVaryings, kLightAluOps, LightSource::Proxy, 0, PlsAccess::ReadWrite));
-  t.shaders.push_back(make_shader("resolve", kGbufferDecodeAluOps + kAmbientAluOps + kOutputAluOps, 0, 0, 0,
-                                  LightSource::None, 1, PlsAccess::Read));
-  t.pipelines.push_back(
-      make_pipeline("gbuffer_pls", "gbuffer_pls", true, true, CompareOp::Less, BlendMode::Off, CullMode::Back));
-  t.pipelines.push_back(make_pipeline("gbuffer_pls_masked", "gbuffer_pls_masked", true, true, CompareOp::Less,
-                                      BlendMode::Off, CullMode::Back));
-  t.pipelines.push_back(make_pipeline("light_volume_pls", "light_volume_pls", true, false, CompareOp::GreaterEqual,
-                                      BlendMode::Off, CullMode::Front));
-  t.pipelines.push_back(
-      make_pipeline("resolve", "resolve", false, false, CompareOp::Always, BlendMode::Off, CullMode::None));
-  if (translucent) add_translucent_state(t);
 
   PassDesc pass;
   pass.name = "main";
-  pass.attachments.push_back(
-      make_attachment("color", Format::Rgba8, 1, LoadOp::Clear, StoreOp::Store, AttachmentUsage::Color));
-  pass.attachments.push_back(make_attachment("depth", Format::D24s8, 1, LoadOp::Clear, StoreOp::DontCare,
-                                             AttachmentUsage::Depth, true));
+  add_color_target(pass, "color", 1);
+  pass.attachments.push_back(depth_attachment(1, LoadOp::Clear, StoreOp::DontCare));
   pass.pls = {{"albedo", albedo, 0}, {"normal", normal, 0}, {"light_accum", accum, 0}};
-  pass.draws.push_back(scene_draw(SceneSubset::Opaque, "gbuffer_pls"));
-  pass.draws.push_back(scene_draw(SceneSubset::Masked, "gbuffer_pls_masked"));
-  if (!lights.empty()) {
-    DrawCmd volumes = make_draw(GeometryKind::LightSpheres, "light_volume_pls", {lights}, {"depth"});
-    volumes.subdivisions = subdivisions;
-    pass.draws.push_back(volumes);
-  }
+  const ShaderDesc gbuffer = gbuffer_shader("gbuffer_pls", 0, 0, PlsAccess::Write);
+  add_scene_shading(t, pass, "gbuffer_pls", gbuffer, masked_variant(gbuffer));
+  t.shaders.push_back(light_volume_shader("light_volume_pls", 0, 0, 0, PlsAccess::ReadWrite));
+  t.pipelines.push_back(light_volume_pipeline("light_volume_pls", "light_volume_pls", BlendMode::Off));
+  add_light_volumes(pass, "light_volume_pls", lights, subdivisions, {}, {"depth"});
+  t.shaders.push_back(make_shader("resolve", kGbufferDecodeAluOps + kAmbientAluOps + kOutputAluOps, 0, 0, 0,
+                                  LightSource::None, 1, PlsAccess::Read));
+  t.pipelines.push_back(fullscreen_pipeline("resolve", "resolve"));
   pass.draws.push_back(make_draw(GeometryKind::Fullscreen, "resolve"));
-  if (translucent) add_translucent_draw(pass, lights);
+  if (translucent) {
+    add_translucent_state(t);
+    add_translucent_draw(pass, lights);
+  }
   t.commands.emplace_back(std::move(pass));
   return t;
 }
@@ -87,7 +68,7 @@ TechniqueInfo technique_deferred_tile_store() {
            {"pls_accum_format", "r11g11b10f",
             "PLS light accumulator (Martin et al. 2013: r11g11b10f, 4 B; 12 B/px in all, depth read through "
             "framebuffer fetch; the extension guarantees 16 B)"},
-           {"sphere_subdivisions", "1", "icosphere level of the light proxies: 20 x 4^n triangles per light"},
+           sphere_subdivisions_declaration(),
            {"translucent", "forward",
             "BLEND materials cannot live in the PLS G-buffer: forward = draw them after the resolve with "
             "per-object light lists and alpha blending, skip = leave them out"}},

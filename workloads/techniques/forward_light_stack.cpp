@@ -25,35 +25,26 @@ namespace tbdr {
 namespace {
 
 Trace generate_forward_light_stack(const TraceSetup& setup, const TechniqueOptions& options) {
-  reject_msaa(setup, "forward_light_stack", "its light stacks live in pixel local storage, which is not usable with MSAA");
-  Trace t = begin_trace(setup, "forward_light_stack", options);
+  Trace t = begin_trace(setup, "forward_light_stack", options,
+                        {.no_msaa = "its light stacks live in pixel local storage, which is not usable with MSAA"});
   const std::string lights = add_light_buffer(t);
   const auto pls_bytes = static_cast<std::uint32_t>(options.get_int("pls_bytes", 8, 128));
   if (pls_bytes % 4 != 0)
     throw InputError("option pls_bytes=" + options.get("pls_bytes"),
                      "pixel local storage comes in 4-byte variables: give a multiple of 4");
-  const auto subdivisions = static_cast<std::uint32_t>(options.get_int("sphere_subdivisions", 0, 6));
-
-  add_prez_state(t);
-  t.shaders.push_back(make_shader("light_splat", kPlsStackPushAluOps, 0, 0, 0, LightSource::None, 0,
-                                  PlsAccess::ReadWrite));
-  t.pipelines.push_back(make_pipeline("light_splat", "light_splat", true, false, CompareOp::GreaterEqual,
-                                      BlendMode::Off, CullMode::Front));
-  add_translucent_state(t);
+  const std::uint32_t subdivisions = sphere_subdivisions_option(options);
 
   PassDesc pass;
   pass.name = "main";
-  pass.attachments.push_back(
-      make_attachment("color", Format::Rgba8, 1, LoadOp::Clear, StoreOp::Store, AttachmentUsage::Color));
-  pass.attachments.push_back(make_attachment("depth", Format::D24s8, 1, LoadOp::Clear, StoreOp::DontCare,
-                                             AttachmentUsage::Depth, true));
+  add_color_target(pass, "color", 1);
+  pass.attachments.push_back(depth_attachment(1, LoadOp::Clear, StoreOp::DontCare));
   for (std::uint32_t i = 0; i < pls_bytes / 4; ++i) pass.pls.push_back({"stack" + std::to_string(i), Format::R32ui, 0});
-  add_prez_draws(pass);
-  if (!lights.empty()) {
-    DrawCmd splat = make_draw(GeometryKind::LightSpheres, "light_splat", {lights});
-    splat.subdivisions = subdivisions;
-    pass.draws.push_back(splat);
-  }
+  add_prez(t, pass);
+  t.shaders.push_back(make_shader("light_splat", kPlsStackPushAluOps, 0, 0, 0, LightSource::None, 0,
+                                  PlsAccess::ReadWrite));
+  t.pipelines.push_back(light_volume_pipeline("light_splat", "light_splat", BlendMode::Off));
+  add_light_volumes(pass, "light_splat", lights, subdivisions);
+  add_translucent_state(t);  // declared before the lit shader, drawn after it
   ForwardLitSpec lit;
   lit.source = LightSource::PlsStack;
   lit.extra_alu_ops = kPlsStackReadAluOps;
@@ -75,7 +66,7 @@ TechniqueInfo technique_forward_light_stack() {
           {{"pls_bytes", "16",
             "pixel local storage per pixel for the light stack, a multiple of 4: a 4-byte count plus (bytes-4)/2 "
             "16-bit indices (Billeter: about 16 bytes on ARM Mali T6xx, so 6 lights)"},
-           {"sphere_subdivisions", "1", "icosphere level of the light proxies: 20 x 4^n triangles per light"}},
+           sphere_subdivisions_declaration()},
           &generate_forward_light_stack};
 }
 

@@ -39,31 +39,25 @@ Trace generate_forward_multipass(const TraceSetup& setup, const TechniqueOptions
   const auto light_count = static_cast<std::uint32_t>(t.lights.size());
   const LightSource source = light_count > 0 ? LightSource::All : LightSource::None;
 
-  t.shaders.push_back(
-      make_shader("forward_lit", kForwardLitAluOps, kSurfaceTexFetches, kSurfaceVaryings, kLightAluOps, source, 1));
-  t.shaders.push_back(make_shader("forward_lit_masked", kForwardLitAluOps + kAlphaTestAluOps, kSurfaceTexFetches,
-                                  kSurfaceVaryings, kLightAluOps, source, 1, PlsAccess::None, true));
-  if (prez) {
-    add_prez_state(t);
-    t.pipelines.push_back(make_pipeline("first_equal", "forward_lit", true, false, CompareOp::Equal, BlendMode::Off,
-                                        CullMode::Back, AlphaOverride::Opaque));
-  } else {
-    t.pipelines.push_back(
-        make_pipeline("first", "forward_lit", true, true, CompareOp::Less, BlendMode::Off, CullMode::Back));
-    t.pipelines.push_back(make_pipeline("first_masked", "forward_lit_masked", true, true, CompareOp::Less,
-                                        BlendMode::Off, CullMode::Back));
-  }
-  if (light_count > per_pass)
-    t.pipelines.push_back(make_pipeline("additive", "forward_lit", true, false, CompareOp::Equal, BlendMode::Add,
-                                        CullMode::Back, AlphaOverride::Opaque));
-  add_translucent_state(t);
+  const ShaderDesc lit =
+      make_shader("forward_lit", kForwardLitAluOps, kSurfaceTexFetches, kSurfaceVaryings, kLightAluOps, source, 1);
+  const ShaderDesc lit_masked = masked_variant(lit);
+  t.shaders.push_back(lit);
+  t.shaders.push_back(lit_masked);
 
   PassDesc pass;
   pass.name = "main";
   add_color_target(pass, "color", samples);
-  pass.attachments.push_back(make_attachment("depth", Format::D24s8, samples, LoadOp::Clear, StoreOp::DontCare,
-                                             AttachmentUsage::Depth, true));
-  if (prez) add_prez_draws(pass);
+  pass.attachments.push_back(depth_attachment(samples, LoadOp::Clear, StoreOp::DontCare));
+  if (prez) {
+    add_prez(t, pass);
+    t.pipelines.push_back(depth_equal_pipeline("first_equal", lit.name));
+  } else {
+    t.pipelines.push_back(depth_writing_pipeline("first", lit.name));
+    t.pipelines.push_back(depth_writing_pipeline("first_masked", lit_masked.name));
+  }
+  if (light_count > per_pass) t.pipelines.push_back(depth_equal_pipeline("additive", lit.name, BlendMode::Add));
+  add_translucent_state(t);
 
   const std::uint32_t batches = light_count == 0 ? 1 : (light_count + per_pass - 1) / per_pass;
   for (std::uint32_t b = 0; b < batches; ++b) {

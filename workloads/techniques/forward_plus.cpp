@@ -21,12 +21,8 @@ namespace tbdr {
 namespace {
 
 Trace generate_forward_plus(const TraceSetup& setup, const TechniqueOptions& options) {
-  LightGridConfig c;
-  c.technique = "forward_plus";
-  c.kind = LightGridConfig::Kind::Tiles;
-  c.tile_px = static_cast<std::uint32_t>(options.get_int("tile_px", 4, 256));
-  c.max_lights = list_cap_option(options, "max_lights_per_tile", setup.lights.lights.size());
-  c.index_bytes = index_bytes_option(options, "index_bytes", setup.lights.lights.size());
+  LightGridConfig c{.technique = "forward_plus", .kind = LightGridConfig::Kind::Tiles,
+                    .grid = light_grid_option(setup, options, false)};
   c.depth_reload = options.get_bool("depth_reload");
   return generate_light_grid_forward(setup, options, c);
 }

@@ -32,66 +32,46 @@ namespace tbdr {
 namespace {
 
 Trace generate_light_prepass(const TraceSetup& setup, const TechniqueOptions& options) {
-  reject_msaa(setup, "light_prepass", "its normal buffer holds one surface per pixel and is read back as a texture");
-  Trace t = begin_trace(setup, "light_prepass", options);
+  Trace t = begin_trace(setup, "light_prepass", options,
+                        {.no_msaa = "its normal buffer holds one surface per pixel and is read back as a texture"});
   const std::string lights = add_light_buffer(t);
   const Format normal_format = color_format_option(options, "normal_format");
   const Format light_format = color_format_option(options, "light_buffer_format");
-  const auto subdivisions = static_cast<std::uint32_t>(options.get_int("sphere_subdivisions", 0, 6));
+  const std::uint32_t subdivisions = sphere_subdivisions_option(options);
   const bool translucent = translucent_forward_option(options);
-
-  const std::uint32_t normal_alu = kNormalAluOps + kGbufferEncodeAluOps;
-  t.shaders.push_back(make_shader("normals", normal_alu, 1, kNormalVaryings, 0, LightSource::None, 1));
-  t.shaders.push_back(make_shader("normals_masked", normal_alu + kAlphaTestAluOps, 2, kNormalVaryings, 0,
-                                  LightSource::None, 1, PlsAccess::None, true));
-  t.shaders.push_back(make_shader("ambient", kAmbientAluOps + kOutputAluOps, 1, 0, 0, LightSource::None, 1));
-  t.shaders.push_back(make_shader("light_volume", kGbufferDecodeAluOps + kPositionReconstructAluOps + kOutputAluOps,
-                                  1, kProxyVaryings, kLightAluOps, LightSource::Proxy, 1));
-  t.shaders.push_back(make_shader("combine", kForwardLitAluOps, kSurfaceTexFetches + 1, kSurfaceVaryings, 0,
-                                  LightSource::None, 0));
-  t.pipelines.push_back(
-      make_pipeline("normals", "normals", true, true, CompareOp::Less, BlendMode::Off, CullMode::Back));
-  t.pipelines.push_back(
-      make_pipeline("normals_masked", "normals_masked", true, true, CompareOp::Less, BlendMode::Off, CullMode::Back));
-  t.pipelines.push_back(
-      make_pipeline("ambient", "ambient", false, false, CompareOp::Always, BlendMode::Off, CullMode::None));
-  t.pipelines.push_back(make_pipeline("light_volume", "light_volume", true, false, CompareOp::GreaterEqual,
-                                      BlendMode::Add, CullMode::Front));
-  t.pipelines.push_back(make_pipeline("combine", "combine", true, false, CompareOp::Equal, BlendMode::Off,
-                                      CullMode::Back, AlphaOverride::Opaque));
-  if (translucent) add_translucent_state(t);
 
   PassDesc normals;
   normals.name = "normals";
   normals.attachments.push_back(
       make_attachment("normal", normal_format, 1, LoadOp::Clear, StoreOp::Store, AttachmentUsage::Gbuffer));
-  normals.attachments.push_back(
-      make_attachment("depth", Format::D24s8, 1, LoadOp::Clear, StoreOp::Store, AttachmentUsage::Depth));
-  normals.draws.push_back(scene_draw(SceneSubset::Opaque, "normals"));
-  normals.draws.push_back(scene_draw(SceneSubset::Masked, "normals_masked"));
+  normals.attachments.push_back(depth_attachment(1, LoadOp::Clear, StoreOp::Store));
+  const ShaderDesc normal =
+      make_shader("normals", kNormalAluOps + kGbufferEncodeAluOps, 1, kNormalVaryings, 0, LightSource::None, 1);
+  add_scene_shading(t, normals, "normals", normal, masked_variant(normal, 1));  // + the base color alpha fetch
 
   PassDesc lighting;
   lighting.name = "lighting";
-  lighting.attachments.push_back(
-      make_attachment("light_buffer", light_format, 1, LoadOp::Clear, StoreOp::Store, AttachmentUsage::Color));
+  add_color_target(lighting, "light_buffer", 1, light_format);
   // Stored again although unchanged: the final pass reloads it, and the trace format has no
   // store op that keeps the DRAM copy without writing (Vulkan's STORE_OP_NONE): 4 B/px.
-  lighting.attachments.push_back(
-      make_attachment("depth", Format::D24s8, 1, LoadOp::Load, StoreOp::Store, AttachmentUsage::Depth));
-  lighting.draws.push_back(make_draw(GeometryKind::Fullscreen, "ambient", {"normal"}));
-  if (!lights.empty()) {
-    DrawCmd volumes = make_draw(GeometryKind::LightSpheres, "light_volume", {"normal", lights}, {"depth"});
-    volumes.subdivisions = subdivisions;
-    lighting.draws.push_back(volumes);
-  }
-  if (translucent) add_translucent_draw(lighting, lights);
+  lighting.attachments.push_back(depth_attachment(1, LoadOp::Load, StoreOp::Store));
+  add_ambient(t, lighting, "normal");
+  t.shaders.push_back(light_volume_shader("light_volume", 1, 0, 1));
+  t.pipelines.push_back(light_volume_pipeline("light_volume", "light_volume", BlendMode::Add));
+  add_light_volumes(lighting, "light_volume", lights, subdivisions, {"normal"}, {"depth"});
 
+  t.shaders.push_back(make_shader("combine", kForwardLitAluOps, kSurfaceTexFetches + 1, kSurfaceVaryings, 0,
+                                  LightSource::None, 0));
+  t.pipelines.push_back(depth_equal_pipeline("combine", "combine"));
   PassDesc final_pass;
   final_pass.name = "final";
-  final_pass.attachments.push_back(
-      make_attachment("depth", Format::D24s8, 1, LoadOp::Load, StoreOp::DontCare, AttachmentUsage::Depth));
-  final_pass.draws.push_back(scene_draw(SceneSubset::Opaque, "combine", {"light_buffer"}));
-  final_pass.draws.push_back(scene_draw(SceneSubset::Masked, "combine", {"light_buffer"}));
+  final_pass.attachments.push_back(depth_attachment(1, LoadOp::Load, StoreOp::DontCare));
+  add_scene_draws(final_pass, "combine", "combine", {"light_buffer"});
+
+  if (translucent) {  // declared after combine, drawn in the lighting pass
+    add_translucent_state(t);
+    add_translucent_draw(lighting, lights);
+  }
 
   t.commands.emplace_back(std::move(normals));
   t.commands.emplace_back(std::move(lighting));
@@ -110,7 +90,7 @@ TechniqueInfo technique_light_prepass() {
             "in one 32-bit target)"},
            {"light_buffer_format", "rgba16f",
             "format of the light buffer the light volumes accumulate into (HDR diffuse RGB + specular)"},
-           {"sphere_subdivisions", "1", "icosphere level of the light proxies: 20 x 4^n triangles per light"},
+           sphere_subdivisions_declaration(),
            {"translucent", "forward",
             "BLEND materials have no normal-buffer entry: forward = draw them over the light buffer with "
             "per-object light lists and alpha blending, skip = leave them out"}},

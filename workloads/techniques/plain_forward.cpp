@@ -25,83 +25,25 @@ namespace {
 Trace generate_plain_forward(const TraceSetup& setup, const TechniqueOptions& options) {
   Trace t = begin_trace(setup, "plain_forward", options);
   const std::string lights = add_light_buffer(t);
-
-  ShaderDesc lit;
-  lit.name = "forward_lit";
-  lit.alu_ops = static_cast<std::uint32_t>(options.get_int("alu_ops", 0, 100000));
-  lit.tex_fetches = static_cast<std::uint32_t>(options.get_int("tex_fetches", 0, 64));
-  lit.varyings = 8;
-  lit.light_alu_ops = static_cast<std::uint32_t>(options.get_int("light_alu_ops", 0, 100000));
-  lit.light_source = LightSource::All;
-  lit.color_outputs = 1;
-  if (t.lights.empty()) {  // no light to evaluate: the reader rejects a per-light cost with no source
-    lit.light_source = LightSource::None;
-    lit.light_alu_ops = 0;
-  }
-  ShaderDesc masked = lit;
-  masked.name = "forward_lit_masked";
-  masked.alu_ops += 1;  // alpha test
-  masked.discard = true;
+  const auto alu_ops = static_cast<std::uint32_t>(options.get_int("alu_ops", 0, 100000));
+  const auto tex_fetches = static_cast<std::uint32_t>(options.get_int("tex_fetches", 0, 64));
+  const auto light_alu_ops = static_cast<std::uint32_t>(options.get_int("light_alu_ops", 0, 100000));
+  // No light to evaluate: no light source (the reader rejects a per-light cost with no source).
+  const LightSource source = t.lights.empty() ? LightSource::None : LightSource::All;
+  const ShaderDesc lit = make_shader("forward_lit", alu_ops, tex_fetches, kSurfaceVaryings, light_alu_ops, source, 1);
+  const ShaderDesc masked = masked_variant(lit);
   t.shaders = {lit, masked};
-
-  PipelineState opaque;
-  opaque.name = "opaque";
-  opaque.shader = lit.name;
-  opaque.depth_test = true;
-  opaque.depth_write = true;
-  opaque.depth_compare = CompareOp::Less;
-  opaque.blend = BlendMode::Off;
-  opaque.cull = CullMode::Back;  // double-sided materials disable culling per material
-  PipelineState punch = opaque;
-  punch.name = "masked";
-  punch.shader = masked.name;
-  PipelineState blended = opaque;
-  blended.name = "blended";
-  blended.depth_write = false;
-  blended.blend = BlendMode::Alpha;
-  t.pipelines = {opaque, punch, blended};
+  // Double-sided materials disable back-face culling per material.
+  t.pipelines = {depth_writing_pipeline("opaque", lit.name), depth_writing_pipeline("masked", masked.name),
+                 blended_pipeline("blended", lit.name)};
 
   PassDesc pass;
   pass.name = "main";
   const auto samples = static_cast<std::uint32_t>(setup.samples);
-  Attachment color;
-  color.name = "color";
-  color.format = Format::Rgba8;
-  color.samples = 1;
-  color.load = LoadOp::Clear;
-  color.store = StoreOp::Store;
-  color.usage = AttachmentUsage::Color;
-  if (samples > 1) {
-    Attachment color_ms = color;
-    color_ms.name = "color_ms";
-    color_ms.samples = samples;
-    color_ms.store = StoreOp::DontCare;
-    color_ms.transient = true;
-    color_ms.resolve = color.name;
-    color.load = LoadOp::DontCare;  // fully overwritten by the resolve
-    pass.attachments.push_back(color_ms);
-  }
-  pass.attachments.push_back(color);
-  Attachment depth;
-  depth.name = "depth";
-  depth.format = Format::D24s8;
-  depth.samples = samples;
-  depth.load = LoadOp::Clear;
-  depth.store = StoreOp::DontCare;
-  depth.transient = true;
-  depth.usage = AttachmentUsage::Depth;
-  pass.attachments.push_back(depth);
-
-  const std::pair<SceneSubset, const char*> draws[] = {
-      {SceneSubset::Opaque, "opaque"}, {SceneSubset::Masked, "masked"}, {SceneSubset::Blended, "blended"}};
-  for (const auto& [subset, pipeline] : draws) {
-    DrawCmd d;
-    d.geometry = GeometryKind::Scene;
-    d.subset = subset;
-    d.pipeline = pipeline;
-    if (!lights.empty()) d.reads = {lights};
-    pass.draws.push_back(d);
-  }
+  add_color_target(pass, "color", samples);
+  pass.attachments.push_back(depth_attachment(samples, LoadOp::Clear, StoreOp::DontCare));
+  add_scene_draws(pass, "opaque", "masked", {lights});
+  pass.draws.push_back(scene_draw(SceneSubset::Blended, "blended", {lights}));
   t.commands.emplace_back(std::move(pass));
   return t;
 }

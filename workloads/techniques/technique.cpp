@@ -112,7 +112,7 @@ bool TechniqueOptions::get_bool(const std::string& key) const {
   throw InputError("option " + key + "=" + v, "expected yes or no, got '" + v + "'");
 }
 
-// ---- generation ----------------------------------------------------------------------------------
+// ---- starting a trace ----------------------------------------------------------------------------
 
 namespace {
 
@@ -158,7 +158,14 @@ TraceScene trace_scene_for(const TraceSetup& setup) {
   return s;
 }
 
-Trace begin_trace(const TraceSetup& setup, const std::string& technique, const TechniqueOptions& options) {
+Trace begin_trace(const TraceSetup& setup, const std::string& technique, const TechniqueOptions& options,
+                  const TechniqueLimits& limits) {
+  if (!limits.no_msaa.empty() && setup.samples > 1)
+    throw InputError("samples", "technique " + technique + " does not support MSAA (samples=" +
+                                    std::to_string(setup.samples) + "): " + limits.no_msaa + "; use samples=1");
+  if (limits.needs_lights && setup.lights.lights.empty())
+    throw InputError("lights", "technique " + technique +
+                                   " needs at least one light (its kernels cull the light array into lists)");
   Trace t;
   t.technique = technique;
   t.options = options.resolved();
@@ -172,61 +179,96 @@ Trace begin_trace(const TraceSetup& setup, const std::string& technique, const T
   return t;
 }
 
-std::string add_light_buffer(Trace& trace, const std::string& name) {
+std::string add_light_buffer(Trace& trace) {
   if (trace.lights.empty()) return "";
-  BufferDesc b;
-  b.name = name;
-  b.bytes = kLightBufferBytesPerLight * trace.lights.size();
-  b.traffic = TrafficClass::LightData;
-  b.content = BufferContent::Lights;
-  b.upload = true;
-  trace.buffers.push_back(b);
-  return name;
+  return add_buffer(trace, "lights", kLightBufferBytesPerLight * trace.lights.size(), TrafficClass::LightData,
+                    BufferContent::Lights, true);
 }
 
-// ---- building blocks ------------------------------------------------------------------------------
+// ---- shaders ---------------------------------------------------------------------------------------
 
 ShaderDesc make_shader(const std::string& name, std::uint32_t alu_ops, std::uint32_t tex_fetches,
                        std::uint32_t varyings, std::uint32_t light_alu_ops, LightSource source,
                        std::uint32_t color_outputs, PlsAccess pls, bool discard) {
-  ShaderDesc s;
-  s.name = name;
-  s.alu_ops = alu_ops;
-  s.tex_fetches = tex_fetches;
-  s.varyings = varyings;
-  s.light_alu_ops = source == LightSource::None ? 0 : light_alu_ops;
-  s.light_source = source;
-  s.color_outputs = color_outputs;
-  s.pls = pls;
-  s.discard = discard;
-  return s;
+  return ShaderDesc{.name = name,
+                    .alu_ops = alu_ops,
+                    .tex_fetches = tex_fetches,
+                    .varyings = varyings,
+                    .light_alu_ops = source == LightSource::None ? 0 : light_alu_ops,
+                    .light_source = source,
+                    .color_outputs = color_outputs,
+                    .pls = pls,
+                    .discard = discard};
 }
 
-PipelineState make_pipeline(const std::string& name, const std::string& shader, bool depth_test, bool depth_write,
-                            CompareOp compare, BlendMode blend, CullMode cull, AlphaOverride alpha) {
-  PipelineState p;
-  p.name = name;
-  p.shader = shader;
-  p.depth_test = depth_test;
-  p.depth_write = depth_write;
-  p.depth_compare = compare;
-  p.blend = blend;
-  p.cull = cull;
-  p.alpha = alpha;
-  return p;
+ShaderDesc masked_variant(const ShaderDesc& s, std::uint32_t alpha_fetches, std::uint32_t uv_varyings) {
+  ShaderDesc m = s;
+  m.name = s.name + "_masked";
+  m.alu_ops += kAlphaTestAluOps;
+  m.tex_fetches += alpha_fetches;
+  m.varyings += uv_varyings;
+  m.discard = true;
+  return m;
 }
+
+ShaderDesc gbuffer_shader(const std::string& name, std::uint32_t extra_targets, std::uint32_t color_outputs,
+                          PlsAccess pls) {
+  return make_shader(name, kSurfaceAluOps + kGbufferEncodeAluOps + kGbufferExtraTargetAluOps * extra_targets,
+                     kSurfaceTexFetches, kSurfaceVaryings, 0, LightSource::None, color_outputs, pls);
+}
+
+ShaderDesc light_volume_shader(const std::string& name, std::uint32_t fetches, std::uint32_t extra_targets,
+                               std::uint32_t color_outputs, PlsAccess pls) {
+  return make_shader(name,
+                     kGbufferDecodeAluOps + kGbufferExtraTargetAluOps * extra_targets + kPositionReconstructAluOps +
+                         kOutputAluOps,
+                     fetches, kProxyVaryings, kLightAluOps, LightSource::Proxy, color_outputs, pls);
+}
+
+// ---- pipeline states -------------------------------------------------------------------------------
+
+namespace {
+
+PipelineState make_pipeline(const std::string& name, const std::string& shader, bool depth_test, bool depth_write,
+                            CompareOp compare, BlendMode blend, CullMode cull,
+                            AlphaOverride alpha = AlphaOverride::Material) {
+  return PipelineState{.name = name, .shader = shader, .depth_test = depth_test, .depth_write = depth_write,
+                       .depth_compare = compare, .blend = blend, .cull = cull, .alpha = alpha};
+}
+
+}  // namespace
+
+PipelineState depth_writing_pipeline(const std::string& name, const std::string& shader) {
+  return make_pipeline(name, shader, true, true, CompareOp::Less, BlendMode::Off, CullMode::Back);
+}
+
+PipelineState depth_equal_pipeline(const std::string& name, const std::string& shader, BlendMode blend) {
+  return make_pipeline(name, shader, true, false, CompareOp::Equal, blend, CullMode::Back, AlphaOverride::Opaque);
+}
+
+PipelineState blended_pipeline(const std::string& name, const std::string& shader) {
+  return make_pipeline(name, shader, true, false, CompareOp::Less, BlendMode::Alpha, CullMode::Back);
+}
+
+PipelineState light_volume_pipeline(const std::string& name, const std::string& shader, BlendMode blend) {
+  return make_pipeline(name, shader, true, false, CompareOp::GreaterEqual, blend, CullMode::Front);
+}
+
+PipelineState fullscreen_pipeline(const std::string& name, const std::string& shader) {
+  return make_pipeline(name, shader, false, false, CompareOp::Always, BlendMode::Off, CullMode::None);
+}
+
+// ---- attachments and buffers -----------------------------------------------------------------------
 
 Attachment make_attachment(const std::string& name, Format format, std::uint32_t samples, LoadOp load, StoreOp store,
                            AttachmentUsage usage, bool transient) {
-  Attachment a;
-  a.name = name;
-  a.format = format;
-  a.samples = samples;
-  a.load = load;
-  a.store = store;
-  a.usage = usage;
-  a.transient = transient;
-  return a;
+  return Attachment{.name = name, .format = format, .samples = samples, .load = load, .store = store,
+                    .transient = transient, .usage = usage, .resolve = {}};
+}
+
+Attachment depth_attachment(std::uint32_t samples, LoadOp load, StoreOp store, const std::string& name) {
+  const bool transient = load != LoadOp::Load && store == StoreOp::DontCare;
+  return make_attachment(name, Format::D24s8, samples, load, store, AttachmentUsage::Depth, transient);
 }
 
 void add_color_target(PassDesc& pass, const std::string& name, std::uint32_t samples, Format format) {
@@ -240,6 +282,20 @@ void add_color_target(PassDesc& pass, const std::string& name, std::uint32_t sam
   }
   pass.attachments.push_back(color);
 }
+
+std::string add_buffer(Trace& trace, const std::string& name, std::uint64_t bytes, TrafficClass traffic,
+                       BufferContent content, bool upload) {
+  trace.buffers.push_back(
+      BufferDesc{.name = name, .bytes = bytes, .traffic = traffic, .content = content, .upload = upload});
+  return name;
+}
+
+std::string add_frame_buffer(Trace& trace, const TraceSetup& setup) {
+  return add_buffer(trace, "color", std::uint64_t(setup.width) * std::uint64_t(setup.height) * 4, TrafficClass::Color,
+                    BufferContent::Image);
+}
+
+// ---- commands --------------------------------------------------------------------------------------
 
 namespace {
 
@@ -269,16 +325,20 @@ DrawCmd scene_draw(SceneSubset subset, const std::string& pipeline, const std::v
   return d;
 }
 
-std::string add_buffer(Trace& trace, const std::string& name, std::uint64_t bytes, TrafficClass traffic,
-                       BufferContent content, bool upload) {
-  BufferDesc b;
-  b.name = name;
-  b.bytes = bytes;
-  b.traffic = traffic;
-  b.content = content;
-  b.upload = upload;
-  trace.buffers.push_back(b);
-  return name;
+void add_scene_draws(PassDesc& pass, const std::string& opaque, const std::string& masked,
+                     const std::vector<std::string>& reads) {
+  pass.draws.push_back(scene_draw(SceneSubset::Opaque, opaque, reads));
+  pass.draws.push_back(scene_draw(SceneSubset::Masked, masked, reads));
+}
+
+void add_scene_shading(Trace& trace, PassDesc& pass, const std::string& pipeline, const ShaderDesc& shader,
+                       const ShaderDesc& masked, const std::vector<std::string>& reads) {
+  const std::string masked_pipeline = pipeline + "_masked";
+  trace.shaders.push_back(shader);
+  trace.shaders.push_back(masked);
+  trace.pipelines.push_back(depth_writing_pipeline(pipeline, shader.name));
+  trace.pipelines.push_back(depth_writing_pipeline(masked_pipeline, masked.name));
+  add_scene_draws(pass, pipeline, masked_pipeline, reads);
 }
 
 DispatchCmd make_dispatch(const std::string& kernel, std::uint32_t groups_x, std::uint32_t groups_y,
@@ -306,32 +366,16 @@ BarrierCmd make_barrier(const std::vector<std::string>& resources) {
   return b;
 }
 
-void reject_msaa(const TraceSetup& setup, const std::string& technique, const std::string& why) {
-  if (setup.samples <= 1) return;
-  throw InputError("samples", "technique " + technique + " does not support MSAA (samples=" +
-                                  std::to_string(setup.samples) + "): " + why + "; use samples=1");
-}
-
-void require_lights(const TraceSetup& setup, const std::string& technique) {
-  if (!setup.lights.lights.empty()) return;
-  throw InputError("lights", "technique " + technique +
-                                 " needs at least one light (its kernels cull the light array into lists)");
-}
+// ---- options -----------------------------------------------------------------------------------------
 
 std::uint32_t tiles_for(int pixels, std::uint32_t tile_px) {
   const auto p = static_cast<std::uint32_t>(std::max(pixels, 1));
   return (p + tile_px - 1) / tile_px;
 }
 
-std::uint32_t index_bytes_for(std::size_t light_count) {
-  if (light_count <= 256) return 1;
-  if (light_count <= 65536) return 2;
-  return 4;
-}
-
 std::uint32_t index_bytes_option(const TechniqueOptions& options, const std::string& key, std::size_t light_count) {
   const std::string& v = options.get(key);
-  if (v == "auto") return index_bytes_for(light_count);
+  if (v == "auto") return light_count <= 256 ? 1 : light_count <= 65536 ? 2 : 4;
   const auto bytes = static_cast<std::uint32_t>(options.get_int(key, 1, 4));
   if (bytes == 3) throw InputError("option " + key + "=" + v, "light index size must be 1, 2 or 4 bytes (or auto)");
   if (bytes < 4 && light_count > (std::size_t{1} << (8 * bytes)))
@@ -400,40 +444,6 @@ Format color_format_option(const TechniqueOptions& options, const std::string& k
   return parse_color_format(key, v, v);
 }
 
-std::size_t scene_material_count(const TraceSetup& setup) {
-  if (setup.scene) return setup.scene->materials.size();
-  return load_scene(setup.scene_spec).materials.size();
-}
-
-void add_prez_state(Trace& trace) {
-  trace.shaders.push_back(make_shader("depth_only", 0, 0, 0, 0, LightSource::None, 0));
-  // Punch-through materials must run the alpha test even in a depth-only pass: uv (2 varyings),
-  // the base color alpha fetch and the compare.
-  trace.shaders.push_back(make_shader("depth_only_masked", kAlphaTestAluOps, 1, 2, 0, LightSource::None, 0,
-                                      PlsAccess::None, true));
-  trace.pipelines.push_back(
-      make_pipeline("prez", "depth_only", true, true, CompareOp::Less, BlendMode::Off, CullMode::Back));
-  trace.pipelines.push_back(
-      make_pipeline("prez_masked", "depth_only_masked", true, true, CompareOp::Less, BlendMode::Off, CullMode::Back));
-}
-
-void add_prez_draws(PassDesc& pass) {
-  pass.draws.push_back(scene_draw(SceneSubset::Opaque, "prez"));
-  pass.draws.push_back(scene_draw(SceneSubset::Masked, "prez_masked"));
-}
-
-std::string add_translucent_state(Trace& trace) {
-  trace.shaders.push_back(make_shader("forward_translucent", kForwardLitAluOps, kSurfaceTexFetches, kSurfaceVaryings,
-                                      kLightAluOps, LightSource::ObjectList, 1));
-  trace.pipelines.push_back(make_pipeline("translucent", "forward_translucent", true, false, CompareOp::Less,
-                                          BlendMode::Alpha, CullMode::Back));
-  return "translucent";
-}
-
-void add_translucent_draw(PassDesc& pass, const std::string& lights) {
-  pass.draws.push_back(scene_draw(SceneSubset::Blended, "translucent", {lights}));
-}
-
 bool translucent_forward_option(const TechniqueOptions& options) {
   const std::string& v = options.get("translucent");
   if (v == "forward") return true;
@@ -441,55 +451,104 @@ bool translucent_forward_option(const TechniqueOptions& options) {
   throw InputError("option translucent=" + v, "expected forward or skip, got '" + v + "'");
 }
 
+TechniqueOption sphere_subdivisions_declaration() {
+  return {"sphere_subdivisions", "1", "icosphere level of the light proxies: 20 x 4^n triangles per light"};
+}
+
+std::uint32_t sphere_subdivisions_option(const TechniqueOptions& options) {
+  return static_cast<std::uint32_t>(options.get_int("sphere_subdivisions", 0, 6));
+}
+
+std::size_t scene_material_count(const TraceSetup& setup) {
+  if (setup.scene) return setup.scene->materials.size();
+  return load_scene(setup.scene_spec).materials.size();
+}
+
+// ---- passes shared by several techniques -----------------------------------------------------------
+
+void add_prez(Trace& trace, PassDesc& pass) {
+  // Punch-through materials must run the alpha test even in a depth-only pass: uv, the base color
+  // alpha fetch and the compare.
+  const ShaderDesc depth_only = make_shader("depth_only", 0, 0, 0, 0, LightSource::None, 0);
+  add_scene_shading(trace, pass, "prez", depth_only, masked_variant(depth_only, 1, kUvVaryings));
+}
+
+std::string add_translucent_state(Trace& trace) {
+  trace.shaders.push_back(make_shader("forward_translucent", kForwardLitAluOps, kSurfaceTexFetches, kSurfaceVaryings,
+                                      kLightAluOps, LightSource::ObjectList, 1));
+  trace.pipelines.push_back(blended_pipeline("translucent", "forward_translucent"));
+  return "translucent";
+}
+
+void add_translucent_draw(PassDesc& pass, const std::string& lights) {
+  pass.draws.push_back(scene_draw(SceneSubset::Blended, "translucent", {lights}));
+}
+
+void add_ambient(Trace& trace, PassDesc& pass, const std::string& source) {
+  trace.shaders.push_back(make_shader("ambient", kAmbientAluOps + kOutputAluOps, 1, 0, 0, LightSource::None, 1));
+  trace.pipelines.push_back(fullscreen_pipeline("ambient", "ambient"));
+  pass.draws.push_back(make_draw(GeometryKind::Fullscreen, "ambient", {source}));
+}
+
+void add_light_volumes(PassDesc& pass, const std::string& pipeline, const std::string& lights,
+                       std::uint32_t subdivisions, std::vector<std::string> reads,
+                       const std::vector<std::string>& fetch) {
+  if (lights.empty()) return;
+  reads.push_back(lights);
+  DrawCmd volumes = make_draw(GeometryKind::LightSpheres, pipeline, reads, fetch);
+  volumes.subdivisions = subdivisions;
+  pass.draws.push_back(volumes);
+}
+
 void add_forward_lit(Trace& trace, PassDesc& pass, const ForwardLitSpec& spec) {
   LightSource source = spec.source;
   if (trace.lights.empty() && (source == LightSource::All || source == LightSource::ObjectList))
     source = LightSource::None;  // nothing to evaluate: the reader rejects a per-light cost without a source
-  const std::uint32_t alu = kForwardLitAluOps + spec.extra_alu_ops;
-  trace.shaders.push_back(make_shader(spec.shader, alu, kSurfaceTexFetches, kSurfaceVaryings, kLightAluOps, source, 1,
-                                      spec.pls));
+  const ShaderDesc lit = make_shader(spec.shader, kForwardLitAluOps + spec.extra_alu_ops, kSurfaceTexFetches,
+                                     kSurfaceVaryings, kLightAluOps, source, 1, spec.pls);
   if (spec.depth_primed) {
     // The pre-pass resolved visibility (and ran the alpha test): shade exactly the stored depth.
-    // Punch-through geometry is forced opaque: its discarded samples fail the equal test anyway.
     const std::string p = spec.shader + "_equal";
-    trace.pipelines.push_back(make_pipeline(p, spec.shader, true, false, CompareOp::Equal, BlendMode::Off,
-                                            CullMode::Back, AlphaOverride::Opaque));
-    pass.draws.push_back(scene_draw(SceneSubset::Opaque, p, spec.reads));
-    pass.draws.push_back(scene_draw(SceneSubset::Masked, p, spec.reads));
+    trace.shaders.push_back(lit);
+    trace.pipelines.push_back(depth_equal_pipeline(p, spec.shader));
+    add_scene_draws(pass, p, p, spec.reads);
     return;
   }
-  const std::string masked = spec.shader + "_masked";
-  trace.shaders.push_back(make_shader(masked, alu + kAlphaTestAluOps, kSurfaceTexFetches, kSurfaceVaryings,
-                                      kLightAluOps, source, 1, spec.pls, true));
-  trace.pipelines.push_back(
-      make_pipeline(spec.shader, spec.shader, true, true, CompareOp::Less, BlendMode::Off, CullMode::Back));
-  trace.pipelines.push_back(make_pipeline(masked, masked, true, true, CompareOp::Less, BlendMode::Off, CullMode::Back));
-  pass.draws.push_back(scene_draw(SceneSubset::Opaque, spec.shader, spec.reads));
-  pass.draws.push_back(scene_draw(SceneSubset::Masked, masked, spec.reads));
+  add_scene_shading(trace, pass, spec.shader, lit, masked_variant(lit), spec.reads);
 }
 
 PassDesc make_gbuffer_pass(Trace& trace, const GbufferLayout& layout, const std::string& name) {
-  const auto targets = static_cast<std::uint32_t>(layout.formats.size());
-  const std::uint32_t alu = kSurfaceAluOps + kGbufferEncodeAluOps + kGbufferExtraTargetAluOps * layout.extra_targets();
-  trace.shaders.push_back(
-      make_shader("gbuffer", alu, kSurfaceTexFetches, kSurfaceVaryings, 0, LightSource::None, targets));
-  trace.shaders.push_back(make_shader("gbuffer_masked", alu + kAlphaTestAluOps, kSurfaceTexFetches, kSurfaceVaryings,
-                                      0, LightSource::None, targets, PlsAccess::None, true));
-  trace.pipelines.push_back(
-      make_pipeline("gbuffer", "gbuffer", true, true, CompareOp::Less, BlendMode::Off, CullMode::Back));
-  trace.pipelines.push_back(
-      make_pipeline("gbuffer_masked", "gbuffer_masked", true, true, CompareOp::Less, BlendMode::Off, CullMode::Back));
   PassDesc pass;
   pass.name = name;
   for (std::size_t i = 0; i < layout.formats.size(); ++i)
     pass.attachments.push_back(make_attachment(layout.names[i], layout.formats[i], 1, LoadOp::Clear, StoreOp::Store,
                                                AttachmentUsage::Gbuffer));
-  pass.attachments.push_back(
-      make_attachment("depth", Format::D24s8, 1, LoadOp::Clear, StoreOp::Store, AttachmentUsage::Depth));
-  pass.draws.push_back(scene_draw(SceneSubset::Opaque, "gbuffer"));
-  pass.draws.push_back(scene_draw(SceneSubset::Masked, "gbuffer_masked"));
+  pass.attachments.push_back(depth_attachment(1, LoadOp::Clear, StoreOp::Store));
+  const ShaderDesc gbuffer =
+      gbuffer_shader("gbuffer", layout.extra_targets(), static_cast<std::uint32_t>(layout.formats.size()));
+  add_scene_shading(trace, pass, "gbuffer", gbuffer, masked_variant(gbuffer));
   return pass;
 }
+
+ShadedGbuffer add_compute_gbuffer(Trace& trace, const TraceSetup& setup, const GbufferLayout& layout,
+                                  const std::string& shader, std::uint32_t lookup_alu_ops, LightSource source) {
+  ShadedGbuffer out;
+  out.frame = add_frame_buffer(trace, setup);
+  PassDesc gbuffer = make_gbuffer_pass(trace, layout);
+  const auto targets = static_cast<std::uint32_t>(layout.formats.size());
+  trace.shaders.push_back(make_shader(shader,
+                                      kGbufferDecodeAluOps + kGbufferExtraTargetAluOps * layout.extra_targets() +
+                                          kPositionReconstructAluOps + lookup_alu_ops + kAmbientAluOps +
+                                          kOutputAluOps,
+                                      targets + 1, 0, kLightAluOps, source, 1));
+  out.stored = layout.names;
+  out.stored.push_back("depth");
+  trace.commands.emplace_back(std::move(gbuffer));
+  trace.commands.emplace_back(make_barrier(out.stored));
+  return out;
+}
+
+// ---- light lists ---------------------------------------------------------------------------------------
 
 namespace {
 
@@ -501,83 +560,119 @@ std::string float_text(float v) {
 
 }  // namespace
 
+std::uint64_t LightGrid::cells() const {
+  return std::uint64_t{tiles_x()} * tiles_y() * (clusters ? slices : 1);
+}
+
+std::uint32_t LightGrid::group_edge() const { return std::min(tile_px, kKernelGroupEdge); }
+
+std::map<std::string, std::string> LightGrid::cluster_params() const {
+  std::map<std::string, std::string> params = {
+      {"tile_px", std::to_string(tile_px)}, {"slices", std::to_string(slices)}, {"slicing", cubical ? "cubical" : "log"}};
+  if (cubical) params["min_depth"] = float_text(min_depth);
+  return params;
+}
+
+LightGrid light_grid_option(const TraceSetup& setup, const TechniqueOptions& options, bool clusters) {
+  const std::size_t light_count = setup.lights.lights.size();
+  LightGrid g;
+  g.clusters = clusters;
+  g.width = setup.width;
+  g.height = setup.height;
+  g.tile_px = static_cast<std::uint32_t>(options.get_int("tile_px", 4, clusters ? 1024 : 256));
+  g.max_lights = list_cap_option(options, clusters ? "max_lights_per_cluster" : "max_lights_per_tile", light_count);
+  g.index_bytes = index_bytes_option(options, "index_bytes", light_count);
+  return g;
+}
+
+void add_light_grid_buffers(Trace& trace, const LightGrid& grid) {
+  add_buffer(trace, grid.grid_buffer(), grid.cells() * kGridEntryBytes, TrafficClass::LightLists,
+             grid.clusters ? BufferContent::ClusterGrid : BufferContent::TileGrid);
+  add_buffer(trace, kLightIndexBuffer, grid.cells() * grid.max_lights * grid.index_bytes, TrafficClass::LightLists,
+             BufferContent::LightIndexList);
+}
+
+std::string add_used_clusters_buffer(Trace& trace, const LightGrid& grid) {
+  return add_buffer(trace, "used_clusters", 4 + grid.cells() * kUsedClusterEntryBytes, TrafficClass::LightLists,
+                    BufferContent::UsedClusters);
+}
+
+DispatchCmd tile_light_cull_dispatch(const LightGrid& grid, const std::string& lights) {
+  const std::uint32_t edge = grid.group_edge();
+  return make_dispatch("tile_light_cull", grid.tiles_x(), grid.tiles_y(), 1, edge, edge, 1, {"depth", lights},
+                       {grid.grid_buffer(), kLightIndexBuffer},
+                       {{"tile_px", std::to_string(grid.tile_px)},
+                        {"max_lights_per_tile", std::to_string(grid.max_lights)}});
+}
+
+namespace {
+
+// One workgroup per cluster of the grid, its threads looping over the lights (with `used`, the
+// kernel skips the clusters missing from the used list).
+DispatchCmd cluster_light_assign(const LightGrid& grid, const std::string& lights, const std::string& used) {
+  auto params = grid.cluster_params();
+  params["dense"] = used.empty() ? "yes" : "no";
+  return make_dispatch("cluster_light_assign", grid.tiles_x() * grid.tiles_y(), grid.slices, 1, kAssignGroupThreads,
+                       1, 1, {lights, used}, {grid.grid_buffer(), kLightIndexBuffer}, params);
+}
+
+}  // namespace
+
+void add_sparse_cluster_assignment(Trace& trace, const LightGrid& grid, const std::string& lights,
+                                   const std::string& used) {
+  const std::uint32_t edge = grid.group_edge();
+  trace.commands.emplace_back(make_dispatch("cluster_flag", grid.tiles_x(), grid.tiles_y(), 1, edge, edge, 1,
+                                            {"depth"}, {used}, grid.cluster_params()));
+  trace.commands.emplace_back(make_barrier({used}));
+  trace.commands.emplace_back(cluster_light_assign(grid, lights, used));
+}
+
+DispatchCmd dense_cluster_assignment(const LightGrid& grid, const std::string& lights) {
+  return cluster_light_assign(grid, lights, "");
+}
+
 Trace generate_light_grid_forward(const TraceSetup& setup, const TechniqueOptions& options, const LightGridConfig& c) {
   using Kind = LightGridConfig::Kind;
-  require_lights(setup, c.technique);
-  Trace t = begin_trace(setup, c.technique, options);
+  Trace t = begin_trace(setup, c.technique, options, {.needs_lights = true});
   const std::string lights = add_light_buffer(t);
   const auto samples = static_cast<std::uint32_t>(setup.samples);
-  const std::uint32_t tiles_x = tiles_for(setup.width, c.tile_px);
-  const std::uint32_t tiles_y = tiles_for(setup.height, c.tile_px);
-  const std::uint32_t slices = c.kind == Kind::Tiles ? 1 : c.slices;
-  const std::uint64_t cells = std::uint64_t{tiles_x} * tiles_y * slices;
-  const std::uint32_t edge = std::min(c.tile_px, kKernelGroupEdge);
-
+  const LightGrid& grid = c.grid;
   const bool tiles = c.kind == Kind::Tiles;
-  const std::string grid = tiles ? "tile_grid" : "cluster_grid";
-  add_buffer(t, grid, cells * kGridEntryBytes, TrafficClass::LightLists,
-             tiles ? BufferContent::TileGrid : BufferContent::ClusterGrid);
-  const std::string index = add_buffer(t, "light_index", cells * c.max_lights * c.index_bytes,
-                                       TrafficClass::LightLists, BufferContent::LightIndexList);
+  add_light_grid_buffers(t, grid);
   std::string used;
-  if (c.kind == Kind::SparseClusters)
-    used = add_buffer(t, "used_clusters", 4 + cells * kUsedClusterEntryBytes, TrafficClass::LightLists,
-                      BufferContent::UsedClusters);
-
-  std::map<std::string, std::string> cluster_params = {{"tile_px", std::to_string(c.tile_px)},
-                                                       {"slices", std::to_string(slices)},
-                                                       {"slicing", c.cubical ? "cubical" : "log"}};
-  if (c.cubical) cluster_params["min_depth"] = float_text(c.min_depth);
+  if (c.kind == Kind::SparseClusters) used = add_used_clusters_buffer(t, grid);
 
   const bool stored_prepass = c.kind != Kind::DenseClusters;
-  if (stored_prepass || c.prez) add_prez_state(t);
   if (stored_prepass) {
     // The depth pre-pass leaves the chip: the culling kernels read it as a texture (Billeter: "Depth"
     // is clustered forward's off-chip buffer).
     PassDesc prepass;
     prepass.name = "prepass";
-    prepass.attachments.push_back(
-        make_attachment("depth", Format::D24s8, samples, LoadOp::Clear, StoreOp::Store, AttachmentUsage::Depth));
-    add_prez_draws(prepass);
+    prepass.attachments.push_back(depth_attachment(samples, LoadOp::Clear, StoreOp::Store));
+    add_prez(t, prepass);
     t.commands.emplace_back(std::move(prepass));
     t.commands.emplace_back(make_barrier({"depth"}));
-    if (tiles) {
-      t.commands.emplace_back(make_dispatch("tile_light_cull", tiles_x, tiles_y, 1, edge, edge, 1, {"depth", lights},
-                                            {grid, index},
-                                            {{"tile_px", std::to_string(c.tile_px)},
-                                             {"max_lights_per_tile", std::to_string(c.max_lights)}}));
-    } else {
-      t.commands.emplace_back(
-          make_dispatch("cluster_flag", tiles_x, tiles_y, 1, edge, edge, 1, {"depth"}, {used}, cluster_params));
-      t.commands.emplace_back(make_barrier({used}));
-      auto params = cluster_params;
-      params["dense"] = "no";
-      // One workgroup per cluster of the grid, its threads looping over the lights (the kernel
-      // skips clusters missing from the used list).
-      t.commands.emplace_back(make_dispatch("cluster_light_assign", tiles_x * tiles_y, slices, 1, 64, 1, 1,
-                                            {lights, used}, {grid, index}, params));
-    }
+    if (tiles)
+      t.commands.emplace_back(tile_light_cull_dispatch(grid, lights));
+    else
+      add_sparse_cluster_assignment(t, grid, lights, used);
   } else {
-    auto params = cluster_params;
-    params["dense"] = "yes";
-    t.commands.emplace_back(make_dispatch("cluster_light_assign", tiles_x * tiles_y, slices, 1, 64, 1, 1, {lights},
-                                          {grid, index}, params));
+    t.commands.emplace_back(dense_cluster_assignment(grid, lights));
   }
-  t.commands.emplace_back(make_barrier({grid, index}));
+  t.commands.emplace_back(make_barrier({grid.grid_buffer(), kLightIndexBuffer}));
 
   PassDesc pass;
   pass.name = stored_prepass ? "forward" : "main";
   add_color_target(pass, "color", samples);
   bool primed = false;
   if (stored_prepass && c.depth_reload) {
-    pass.attachments.push_back(
-        make_attachment("depth", Format::D24s8, samples, LoadOp::Load, StoreOp::DontCare, AttachmentUsage::Depth));
+    pass.attachments.push_back(depth_attachment(samples, LoadOp::Load, StoreOp::DontCare));
     primed = true;
   } else {
-    pass.attachments.push_back(make_attachment(stored_prepass ? "forward_depth" : "depth", Format::D24s8, samples,
-                                               LoadOp::Clear, StoreOp::DontCare, AttachmentUsage::Depth, true));
+    pass.attachments.push_back(
+        depth_attachment(samples, LoadOp::Clear, StoreOp::DontCare, stored_prepass ? "forward_depth" : "depth"));
     if (!stored_prepass && c.prez) {
-      add_prez_draws(pass);
+      add_prez(t, pass);
       primed = true;
     }
   }
@@ -585,12 +680,11 @@ Trace generate_light_grid_forward(const TraceSetup& setup, const TechniqueOption
   lit.source = tiles ? LightSource::TileList : LightSource::ClusterList;
   lit.extra_alu_ops = tiles ? kTileLookupAluOps : kClusterLookupAluOps;
   lit.depth_primed = primed;
-  lit.reads = {lights, grid, index};
+  lit.reads = {lights, grid.grid_buffer(), kLightIndexBuffer};
   add_forward_lit(t, pass, lit);
   if (c.kind == Kind::DenseClusters) {
     // The dense grid covers the whole frustum, so translucent surfaces use their cluster lists too.
-    t.pipelines.push_back(make_pipeline("translucent", lit.shader, true, false, CompareOp::Less, BlendMode::Alpha,
-                                        CullMode::Back));
+    t.pipelines.push_back(blended_pipeline("translucent", lit.shader));
     pass.draws.push_back(scene_draw(SceneSubset::Blended, "translucent", lit.reads));
   } else {
     // Lists exist only where the pre-pass depth put samples: translucent surfaces in front of it

@@ -1,11 +1,13 @@
 #pragma once
 // Technique generators: one per many-light rendering technique, each turning a scene, camera,
-// light set and frame size into the command trace an application would submit (sim/trace.hpp).
+// light set and frame size into the command trace an application would submit (trace/trace.hpp).
 //
 // Adding a technique: write workloads/techniques/<name>.cpp defining
 //   TechniqueInfo technique_<name>();
 // (name, summary, options with defaults and docs, generator function) and add one line
-// X(<name>) to TBDR_TECHNIQUE_LIST in workloads/technique.cpp.
+// X(<name>) to TBDR_TECHNIQUE_LIST in workloads/techniques/technique.cpp. The generators share the
+// building blocks below: the same pipeline states, attachments, shader costs, light lists and
+// passes are written once here.
 #include <cstdint>
 #include <map>
 #include <string>
@@ -83,20 +85,30 @@ const TechniqueInfo& find_technique(const std::string& name);
 /// technique (listing the known ones), an unknown or malformed option, or an unusable setup.
 Trace generate_trace(const std::string& technique, const TraceSetup& setup);
 
-// ---- helpers shared by the generators ----------------------------------------------------------
+// ---- starting a trace -----------------------------------------------------------------------------
 
 /// Bytes one light occupies in a GPU light buffer: 3 x vec4 (position+radius, color+intensity,
 /// direction+cos_inner+cos_outer packed with std140 padding).
 inline constexpr std::uint64_t kLightBufferBytesPerLight = 48;
 
+/// What a technique cannot do, checked by begin_trace() before anything is written.
+struct TechniqueLimits {
+  std::string no_msaa = {};   ///< why the technique cannot use MSAA ("" when it can)
+  bool needs_lights = false;  ///< its kernels cull the light array into lists: at least one light
+};
+/// Why a technique shading from a one-sample G-buffer cannot use MSAA (Billeter 2015: MSAA no).
+inline constexpr const char* kGbufferNoMsaa = "its G-buffer holds one surface per pixel (Billeter 2015: MSAA no)";
+
 /// The trace's scene line for the setup: atrium + detail, or glTF path + content hash.
 TraceScene trace_scene_for(const TraceSetup& setup);
 /// A trace with the header declarations filled in: technique and resolved options, scene,
-/// frame, camera and lights. Generators add buffers, shaders, pipelines and commands.
-Trace begin_trace(const TraceSetup& setup, const std::string& technique, const TechniqueOptions& options);
-/// Declares the uploaded light array as buffer `name` (traffic light_data) and returns its name,
+/// frame, camera and lights. Generators add buffers, shaders, pipelines and commands. Throws
+/// InputError naming the technique when the setup exceeds its `limits` (MSAA, no light).
+Trace begin_trace(const TraceSetup& setup, const std::string& technique, const TechniqueOptions& options,
+                  const TechniqueLimits& limits = {});
+/// Declares the uploaded light array as buffer `lights` (traffic light_data) and returns its name,
 /// or returns "" when the setup has no lights (nothing to read).
-std::string add_light_buffer(Trace& trace, const std::string& name = "lights");
+std::string add_light_buffer(Trace& trace);
 
 // ---- shader costs shared by every generator ------------------------------------------------------
 //
@@ -117,6 +129,8 @@ inline constexpr std::uint32_t kSurfaceVaryings = 8;
 inline constexpr std::uint32_t kNormalAluOps = 6;
 /// Varyings of a normal-only scene fragment: normal (3), uv (2).
 inline constexpr std::uint32_t kNormalVaryings = 5;
+/// Varyings of the texture coordinate alone (what the alpha test of a shader without uv adds).
+inline constexpr std::uint32_t kUvVaryings = 2;
 /// Ambient term: albedo x ambient constant (3 multiplies).
 inline constexpr std::uint32_t kAmbientAluOps = 3;
 /// Final color: sum, saturate and convert to the output format (~5).
@@ -162,32 +176,78 @@ inline constexpr std::uint64_t kGridEntryBytes = 8;
 inline constexpr std::uint64_t kUsedClusterEntryBytes = 4;
 /// Workgroup edge of the screen-space kernels (16 x 16 = 256 threads; bigger tiles loop).
 inline constexpr std::uint32_t kKernelGroupEdge = 16;
+/// Threads of a cluster_light_assign workgroup, looping over the lights for one cluster.
+inline constexpr std::uint32_t kAssignGroupThreads = 64;
 
-// ---- building blocks for generators ---------------------------------------------------------------
+// ---- shaders ---------------------------------------------------------------------------------------
 
 /// A fragment shader declaration in one call.
 ShaderDesc make_shader(const std::string& name, std::uint32_t alu_ops, std::uint32_t tex_fetches,
                        std::uint32_t varyings, std::uint32_t light_alu_ops, LightSource source,
                        std::uint32_t color_outputs, PlsAccess pls = PlsAccess::None, bool discard = false);
-/// A pipeline declaration in one call (no stencil).
-PipelineState make_pipeline(const std::string& name, const std::string& shader, bool depth_test, bool depth_write,
-                            CompareOp compare, BlendMode blend, CullMode cull,
-                            AlphaOverride alpha = AlphaOverride::Material);
+/// The punch-through (MASK) variant of scene shader `s`: named `<name>_masked`, + kAlphaTestAluOps,
+/// may discard. A shader that does not sample the base color adds its alpha fetch (`alpha_fetches`)
+/// and, without a uv, the uv varyings (`uv_varyings`).
+ShaderDesc masked_variant(const ShaderDesc& s, std::uint32_t alpha_fetches = 0, std::uint32_t uv_varyings = 0);
+/// The G-buffer writing shader `name`: surface + encode (+ kGbufferExtraTargetAluOps per extra
+/// target), kSurfaceTexFetches, kSurfaceVaryings, `color_outputs` targets (0 when it writes PLS).
+ShaderDesc gbuffer_shader(const std::string& name, std::uint32_t extra_targets, std::uint32_t color_outputs,
+                          PlsAccess pls = PlsAccess::None);
+/// A light proxy's shader `name` (the light-volume techniques): decode the surface (+1 per extra
+/// target), reconstruct the position from depth and output (17 ALU with no extra target),
+/// `fetches` G-buffer reads, the view ray (kProxyVaryings) and kLightAluOps for its light.
+ShaderDesc light_volume_shader(const std::string& name, std::uint32_t fetches, std::uint32_t extra_targets,
+                               std::uint32_t color_outputs, PlsAccess pls = PlsAccess::None);
+
+// ---- pipeline states -------------------------------------------------------------------------------
+
+/// Opaque scene geometry: depth test less with write, no blending, back faces culled.
+PipelineState depth_writing_pipeline(const std::string& name, const std::string& shader);
+/// Shading exactly the depth a pre-pass stored (PreZ or reloaded): test equal without write, `blend`;
+/// punch-through geometry is forced opaque (its discarded samples fail the equal test anyway).
+PipelineState depth_equal_pipeline(const std::string& name, const std::string& shader,
+                                   BlendMode blend = BlendMode::Off);
+/// Translucent geometry over the opaque frame: depth test less without write, alpha blending.
+PipelineState blended_pipeline(const std::string& name, const std::string& shader);
+/// Light proxies: back faces (cull=front) that pass depth greater_equal reach the surfaces inside
+/// the volume; no depth write, `blend`.
+PipelineState light_volume_pipeline(const std::string& name, const std::string& shader, BlendMode blend);
+/// A fullscreen draw: no depth test, no culling, no blending.
+PipelineState fullscreen_pipeline(const std::string& name, const std::string& shader);
+
+// ---- attachments and buffers -----------------------------------------------------------------------
+
 /// An attachment in one call.
 Attachment make_attachment(const std::string& name, Format format, std::uint32_t samples, LoadOp load, StoreOp store,
                            AttachmentUsage usage, bool transient = false);
+/// The frame's D24S8 depth attachment `name` with `samples` samples; transient (never in DRAM) when
+/// it is neither loaded nor stored.
+Attachment depth_attachment(std::uint32_t samples, LoadOp load, StoreOp store, const std::string& name = "depth");
 /// Adds the frame's color target `name` (stored): 1-sample, or with MSAA a transient multisampled
 /// `<name>_ms` that resolves into it on chip (only the resolved color leaves the chip).
 void add_color_target(PassDesc& pass, const std::string& name, std::uint32_t samples, Format format = Format::Rgba8);
+/// Declares a DRAM buffer written by a dispatch (upload=no) and returns its name.
+std::string add_buffer(Trace& trace, const std::string& name, std::uint64_t bytes, TrafficClass traffic,
+                       BufferContent content, bool upload = false);
+/// Declares the lit frame a shading kernel writes: buffer `color`, rgba8 (W x H x 4 bytes), content
+/// image; returns its name.
+std::string add_frame_buffer(Trace& trace, const TraceSetup& setup);
+
+// ---- commands --------------------------------------------------------------------------------------
+
 /// A draw; `reads` entries that are empty (e.g. no light buffer) are dropped.
 DrawCmd make_draw(GeometryKind geometry, const std::string& pipeline, const std::vector<std::string>& reads = {},
                   const std::vector<std::string>& fetch = {});
 /// A scene draw of one subset.
 DrawCmd scene_draw(SceneSubset subset, const std::string& pipeline, const std::vector<std::string>& reads = {},
                    const std::vector<std::string>& fetch = {});
-/// Declares a DRAM buffer written by a dispatch (upload=no) and returns its name.
-std::string add_buffer(Trace& trace, const std::string& name, std::uint64_t bytes, TrafficClass traffic,
-                       BufferContent content, bool upload = false);
+/// Appends the opaque scene draw with pipeline `opaque` and the punch-through one with `masked`.
+void add_scene_draws(PassDesc& pass, const std::string& opaque, const std::string& masked,
+                     const std::vector<std::string>& reads = {});
+/// Declares scene shader `shader` and its punch-through variant `masked`, their depth-writing
+/// pipelines `pipeline` and `<pipeline>_masked`, and appends the opaque and masked draws to `pass`.
+void add_scene_shading(Trace& trace, PassDesc& pass, const std::string& pipeline, const ShaderDesc& shader,
+                       const ShaderDesc& masked, const std::vector<std::string>& reads = {});
 /// A dispatch; `reads`/`writes` entries that are empty are dropped.
 DispatchCmd make_dispatch(const std::string& kernel, std::uint32_t groups_x, std::uint32_t groups_y,
                           std::uint32_t groups_z, std::uint32_t size_x, std::uint32_t size_y, std::uint32_t size_z,
@@ -196,17 +256,13 @@ DispatchCmd make_dispatch(const std::string& kernel, std::uint32_t groups_x, std
 /// A barrier on the named resources.
 BarrierCmd make_barrier(const std::vector<std::string>& resources);
 
-/// Throws InputError naming the technique when the setup asks for MSAA (`why`: the reason).
-void reject_msaa(const TraceSetup& setup, const std::string& technique, const std::string& why);
-/// Throws InputError naming the technique when the setup has no light (its kernels need some).
-void require_lights(const TraceSetup& setup, const std::string& technique);
+// ---- options -----------------------------------------------------------------------------------------
 
 /// Number of `tile_px` tiles covering `pixels` (rounded up).
 std::uint32_t tiles_for(int pixels, std::uint32_t tile_px);
-/// Smallest light index size that addresses every light: 1 byte up to 256 lights, 2 up to 65536, else 4.
-std::uint32_t index_bytes_for(std::size_t light_count);
-/// The `key` option as light index bytes: "auto" (index_bytes_for) or 1, 2, 4; InputError when too
-/// small to address `light_count` lights.
+/// The `key` option as light index bytes: "auto" (the smallest size that addresses every light: 1
+/// byte up to 256 lights, 2 up to 65536, else 4) or 1, 2, 4; InputError when too small to address
+/// `light_count` lights.
 std::uint32_t index_bytes_option(const TechniqueOptions& options, const std::string& key, std::size_t light_count);
 /// The `key` option as a light-list cap: "all" (the light count, so no list can overflow and the
 /// image stays exact) or a count in [1, 65535], never more than the light count.
@@ -229,24 +285,38 @@ struct GbufferLayout {
 GbufferLayout gbuffer_layout_option(const TechniqueOptions& options, const std::string& key);
 /// Parses the `key` option as one non-depth format.
 Format color_format_option(const TechniqueOptions& options, const std::string& key);
+/// The `translucent` option of the deferred techniques: true for "forward" (draw BLEND materials
+/// in a forward pass over the lit frame), false for "skip".
+bool translucent_forward_option(const TechniqueOptions& options);
+/// The `sphere_subdivisions` option of the light-volume techniques, declared once.
+TechniqueOption sphere_subdivisions_declaration();
+/// The `sphere_subdivisions` option's value: the icosphere level of the light proxies, 0..6.
+std::uint32_t sphere_subdivisions_option(const TechniqueOptions& options);
 
 /// Number of materials in the setup's scene (loads the scene when only a spec is given).
 std::size_t scene_material_count(const TraceSetup& setup);
 
-/// Declares the depth-only pre-pass shaders and pipelines (`prez`, `prez_masked`): 0 ALU for opaque;
-/// the alpha test (kAlphaTestAluOps, 1 fetch, uv varyings) for punch-through materials.
-void add_prez_state(Trace& trace);
-/// Appends the pre-pass draws (opaque, then masked) to `pass`.
-void add_prez_draws(PassDesc& pass);
+// ---- passes shared by several techniques -----------------------------------------------------------
+
+/// Declares the depth-only pre-pass shaders and pipelines (`prez`, `prez_masked`: 0 ALU for opaque;
+/// the alpha test, one fetch and the uv for punch-through materials) and appends their draws
+/// (opaque, then masked) to `pass`.
+void add_prez(Trace& trace, PassDesc& pass);
 /// Declares the forward shader and pipeline for translucent (BLEND) geometry drawn over a finished
 /// opaque frame: lights from the per-object lists (Billeter's "assign lights per geometry batch"),
 /// depth test without write, alpha blending. Returns the pipeline name (`translucent`).
 std::string add_translucent_state(Trace& trace);
 /// Appends the translucent draw (subset blended, pipeline `translucent`) to `pass`.
 void add_translucent_draw(PassDesc& pass, const std::string& lights);
-/// The `translucent` option of the deferred techniques: true for "forward" (draw BLEND materials
-/// in a forward pass over the lit frame), false for "skip".
-bool translucent_forward_option(const TechniqueOptions& options);
+/// Declares the fullscreen `ambient` shader and pipeline (ambient + output, one fetch) and appends
+/// its draw, reading `source` (the albedo or normal buffer), to `pass`: the ambient term once per
+/// pixel before the light volumes add theirs.
+void add_ambient(Trace& trace, PassDesc& pass, const std::string& source);
+/// Appends the light proxies (one icosphere of `subdivisions` per light) drawn with `pipeline` to
+/// `pass`, reading `reads` and the light buffer and fetching `fetch` on chip; none without lights.
+void add_light_volumes(PassDesc& pass, const std::string& pipeline, const std::string& lights,
+                       std::uint32_t subdivisions, std::vector<std::string> reads = {},
+                       const std::vector<std::string>& fetch = {});
 
 /// How a forward pass shades its opaque and punch-through geometry.
 struct ForwardLitSpec {
@@ -263,10 +333,70 @@ struct ForwardLitSpec {
 /// kLightAluOps per light; +kAlphaTestAluOps and discard for masked geometry unless depth_primed.
 void add_forward_lit(Trace& trace, PassDesc& pass, const ForwardLitSpec& spec);
 
-/// Declares the G-buffer shaders (`gbuffer`, `gbuffer_masked`: surface + encode, one color output
+/// Declares the G-buffer shaders (`gbuffer`, `gbuffer_masked`: gbuffer_shader with one color output
 /// per target) and pipelines, and returns a pass `name` that clears and stores every target of
 /// `layout` and a d24s8 depth, drawing the opaque and masked geometry. 1 sample (deferred).
 PassDesc make_gbuffer_pass(Trace& trace, const GbufferLayout& layout, const std::string& name = "gbuffer");
+
+/// What the shading kernel of a compute-shaded deferred technique reads and writes.
+struct ShadedGbuffer {
+  std::vector<std::string> stored;  ///< the G-buffer targets and depth, as the G-buffer pass stored them
+  std::string frame;                ///< the lit frame buffer the kernel writes (add_frame_buffer)
+};
+/// The G-buffer half of the compute-shaded deferred techniques (tiled and clustered deferred):
+/// declares the frame buffer and the shader `shader` whose cost the shading kernel charges per pixel
+/// (decode (+1 per extra target) + position reconstruction + `lookup_alu_ops` + ambient + output;
+/// one fetch per target and one for depth; kLightAluOps per light from `source`), then appends the
+/// G-buffer pass of `layout` and a barrier on what it stored.
+ShadedGbuffer add_compute_gbuffer(Trace& trace, const TraceSetup& setup, const GbufferLayout& layout,
+                                  const std::string& shader, std::uint32_t lookup_alu_ops, LightSource source);
+
+// ---- light lists ---------------------------------------------------------------------------------------
+
+/// A grid of light lists over the frame (docs/kernels.md): screen tiles, or clusters (tiles cut in
+/// depth slices). Each cell has an (offset, count) entry in the grid buffer (`tile_grid` or
+/// `cluster_grid`) and room for `max_lights` indices in `light_index`.
+struct LightGrid {
+  bool clusters = false;          ///< depth-sliced clusters (else screen tiles)
+  int width = 1;                  ///< frame pixels covered
+  int height = 1;
+  std::uint32_t tile_px = 16;     ///< screen tile edge in pixels
+  std::uint32_t slices = 1;       ///< clusters: depth slices
+  bool cubical = false;           ///< clusters: slicing=cubical from min_depth (else log)
+  float min_depth = 0.0f;         ///< cubical: start of the first slice, world units
+  std::uint32_t max_lights = 1;   ///< list cap per cell: sizes the index list
+  std::uint32_t index_bytes = 4;  ///< bytes per light index in the list
+
+  std::uint32_t tiles_x() const { return tiles_for(width, tile_px); }
+  std::uint32_t tiles_y() const { return tiles_for(height, tile_px); }
+  std::uint64_t cells() const;  ///< tiles x slices (tiles have one slice)
+  /// Workgroup edge of the per-tile kernels: the tile, at most kKernelGroupEdge (bigger tiles loop).
+  std::uint32_t group_edge() const;
+  /// Name of the grid buffer: `cluster_grid` or `tile_grid`.
+  std::string grid_buffer() const { return clusters ? "cluster_grid" : "tile_grid"; }
+  /// The cluster kernels' grid parameters: tile_px, slices, slicing (and min_depth when cubical).
+  std::map<std::string, std::string> cluster_params() const;
+};
+/// Name of the light index list buffer of a LightGrid.
+inline constexpr const char* kLightIndexBuffer = "light_index";
+/// The light grid over the setup's frame with the options every light-list technique declares read:
+/// `tile_px` (4..256 for tiles, 4..1024 for clusters), the list cap `max_lights_per_tile` or
+/// `max_lights_per_cluster` (list_cap_option) and `index_bytes` (index_bytes_option).
+LightGrid light_grid_option(const TraceSetup& setup, const TechniqueOptions& options, bool clusters);
+/// Declares the grid buffer (kGridEntryBytes per cell) and `light_index` (max_lights x index_bytes
+/// per cell), both written by kernels.
+void add_light_grid_buffers(Trace& trace, const LightGrid& grid);
+/// Declares `used_clusters` (a 4-byte counter and kUsedClusterEntryBytes per cluster) and returns its name.
+std::string add_used_clusters_buffer(Trace& trace, const LightGrid& grid);
+/// The tile_light_cull dispatch: one group per tile reads the stored depth and the lights and
+/// writes the tile grid's lists (capped at max_lights).
+DispatchCmd tile_light_cull_dispatch(const LightGrid& grid, const std::string& lights);
+/// Appends cluster_flag (one group per tile: the clusters that hold a stored depth sample go to
+/// `used`), a barrier on `used` and cluster_light_assign dense=no over the used clusters.
+void add_sparse_cluster_assignment(Trace& trace, const LightGrid& grid, const std::string& lights,
+                                   const std::string& used);
+/// The cluster_light_assign dense=yes dispatch: every cluster of the grid, whatever the geometry.
+DispatchCmd dense_cluster_assignment(const LightGrid& grid, const std::string& lights);
 
 /// The light-grid forward family: Forward+ (tiles), clustered forward (sparse clusters from a
 /// stored depth pre-pass), practical and cascaded clustered forward (dense clusters assigned up front).
@@ -279,14 +409,9 @@ struct LightGridConfig {
   };
   std::string technique;
   Kind kind = Kind::Tiles;
-  std::uint32_t tile_px = 16;
-  std::uint32_t slices = 1;         ///< clusters: depth slices (cubical: the count that reaches far)
-  bool cubical = false;             ///< clusters: slicing=cubical (else log)
-  float min_depth = 0.0f;           ///< cubical: start of the first slice, world units
-  std::uint32_t max_lights = 1;     ///< list cap: sizes the index list (and is tile_light_cull's cap)
-  std::uint32_t index_bytes = 4;    ///< bytes per light index in the list
-  bool prez = true;                 ///< dense: depth-only pre-pass in the same render pass
-  bool depth_reload = true;         ///< tiles/sparse: forward pass loads the pre-pass depth, tests equal
+  LightGrid grid;             ///< clusters for the cluster kinds
+  bool prez = true;           ///< dense: depth-only pre-pass in the same render pass
+  bool depth_reload = true;   ///< tiles/sparse: forward pass loads the pre-pass depth, tests equal
 };
 /// Writes the trace of a light-grid forward technique (see LightGridConfig).
 Trace generate_light_grid_forward(const TraceSetup& setup, const TechniqueOptions& options, const LightGridConfig& c);

@@ -24,32 +24,18 @@ namespace tbdr {
 namespace {
 
 Trace generate_tiled_deferred(const TraceSetup& setup, const TechniqueOptions& options) {
-  reject_msaa(setup, "tiled_deferred", "its G-buffer holds one surface per pixel (Billeter 2015: MSAA no)");
-  require_lights(setup, "tiled_deferred");
-  Trace t = begin_trace(setup, "tiled_deferred", options);
+  Trace t = begin_trace(setup, "tiled_deferred", options, {.no_msaa = kGbufferNoMsaa, .needs_lights = true});
   const std::string lights = add_light_buffer(t);
   const GbufferLayout layout = gbuffer_layout_option(options, "gbuffer");
   const auto tile_px = static_cast<std::uint32_t>(options.get_int("tile_px", 4, 256));
   const std::uint32_t cap = list_cap_option(options, "max_lights_per_tile", t.lights.size());
 
-  PassDesc gbuffer = make_gbuffer_pass(t, layout);
-  const std::string frame = add_buffer(t, "color", std::uint64_t(setup.width) * std::uint64_t(setup.height) * 4,
-                                       TrafficClass::Color, BufferContent::Image);
-  const auto targets = static_cast<std::uint32_t>(layout.formats.size());
-  t.shaders.push_back(make_shader("tiled_deferred_lit",
-                                  kGbufferDecodeAluOps + kGbufferExtraTargetAluOps * layout.extra_targets() +
-                                      kPositionReconstructAluOps + kAmbientAluOps + kOutputAluOps,
-                                  targets + 1, 0, kLightAluOps, LightSource::TileList, 1));
-
-  std::vector<std::string> stored = layout.names;
-  stored.push_back("depth");
-  std::vector<std::string> reads = stored;
+  const ShadedGbuffer g = add_compute_gbuffer(t, setup, layout, "tiled_deferred_lit", 0, LightSource::TileList);
+  std::vector<std::string> reads = g.stored;
   reads.push_back(lights);
   const std::uint32_t edge = std::min(tile_px, kKernelGroupEdge);
-  t.commands.emplace_back(std::move(gbuffer));
-  t.commands.emplace_back(make_barrier(stored));
   t.commands.emplace_back(make_dispatch("tiled_deferred_shade", tiles_for(setup.width, tile_px),
-                                        tiles_for(setup.height, tile_px), 1, edge, edge, 1, reads, {frame},
+                                        tiles_for(setup.height, tile_px), 1, edge, edge, 1, reads, {g.frame},
                                         {{"shader", "tiled_deferred_lit"},
                                          {"tile_px", std::to_string(tile_px)},
                                          {"max_lights_per_tile", std::to_string(cap)}}));

@@ -31,62 +31,44 @@ namespace tbdr {
 namespace {
 
 Trace generate_visibility_buffer(const TraceSetup& setup, const TechniqueOptions& options) {
-  require_lights(setup, "visibility_buffer");
-  Trace t = begin_trace(setup, "visibility_buffer", options);
+  Trace t = begin_trace(setup, "visibility_buffer", options, {.needs_lights = true});
   const std::string lights = add_light_buffer(t);
   const std::int64_t id_bytes = options.get_int("id_bytes", 4, 8);
   if (id_bytes != 4 && id_bytes != 8)
     throw InputError("option id_bytes=" + options.get("id_bytes"), "visibility ids are 4 (r32ui) or 8 (rg32ui) bytes");
-  const auto tile_px = static_cast<std::uint32_t>(options.get_int("tile_px", 4, 256));
-  const std::uint32_t cap = list_cap_option(options, "max_lights_per_tile", t.lights.size());
-  const std::uint32_t index_bytes = index_bytes_option(options, "index_bytes", t.lights.size());
+  const LightGrid grid = light_grid_option(setup, options, false);
   const auto samples = static_cast<std::uint32_t>(setup.samples);
 
-  const std::uint32_t tiles_x = tiles_for(setup.width, tile_px);
-  const std::uint32_t tiles_y = tiles_for(setup.height, tile_px);
-  const std::uint64_t tiles = std::uint64_t{tiles_x} * tiles_y;
   const std::uint64_t materials = std::max<std::size_t>(1, scene_material_count(setup));
-  const std::string work = add_buffer(t, "work_lists", tiles * materials * 12 + materials * 8,
+  const std::string work = add_buffer(t, "work_lists", grid.cells() * materials * 12 + materials * 8,
                                       TrafficClass::WorkLists, BufferContent::WorkLists);
-  const std::string grid =
-      add_buffer(t, "tile_grid", tiles * kGridEntryBytes, TrafficClass::LightLists, BufferContent::TileGrid);
-  const std::string index = add_buffer(t, "light_index", tiles * cap * index_bytes, TrafficClass::LightLists,
-                                       BufferContent::LightIndexList);
-  const std::string frame = add_buffer(t, "color", std::uint64_t(setup.width) * std::uint64_t(setup.height) * 4,
-                                       TrafficClass::Color, BufferContent::Image);
-
-  t.shaders.push_back(make_shader("visibility_id", kVisibilityIdAluOps, 0, 0, 0, LightSource::None, 1));
-  t.shaders.push_back(make_shader("visibility_id_masked", kVisibilityIdAluOps + kAlphaTestAluOps, 1, 2, 0,
-                                  LightSource::None, 1, PlsAccess::None, true));
-  t.shaders.push_back(make_shader("vbuffer_lit",
-                                  kVisibilityReconstructAluOps + kSurfaceAluOps + kAmbientAluOps + kOutputAluOps,
-                                  kSurfaceTexFetches + 1, 0, kLightAluOps, LightSource::TileList, 1));
-  t.pipelines.push_back(
-      make_pipeline("visibility", "visibility_id", true, true, CompareOp::Less, BlendMode::Off, CullMode::Back));
-  t.pipelines.push_back(make_pipeline("visibility_masked", "visibility_id_masked", true, true, CompareOp::Less,
-                                      BlendMode::Off, CullMode::Back));
+  add_light_grid_buffers(t, grid);
+  const std::string frame = add_frame_buffer(t, setup);
 
   PassDesc pass;
   pass.name = "visibility";
   pass.attachments.push_back(make_attachment("visibility", id_bytes == 8 ? Format::Rg32ui : Format::R32ui, samples,
                                              LoadOp::Clear, StoreOp::Store, AttachmentUsage::Visibility));
-  pass.attachments.push_back(
-      make_attachment("depth", Format::D24s8, samples, LoadOp::Clear, StoreOp::Store, AttachmentUsage::Depth));
-  pass.draws.push_back(scene_draw(SceneSubset::Opaque, "visibility"));
-  pass.draws.push_back(scene_draw(SceneSubset::Masked, "visibility_masked"));
+  pass.attachments.push_back(depth_attachment(samples, LoadOp::Clear, StoreOp::Store));
+  const ShaderDesc id = make_shader("visibility_id", kVisibilityIdAluOps, 0, 0, 0, LightSource::None, 1);
+  add_scene_shading(t, pass, "visibility", id, masked_variant(id, 1, kUvVaryings));
+  t.shaders.push_back(make_shader("vbuffer_lit",
+                                  kVisibilityReconstructAluOps + kSurfaceAluOps + kAmbientAluOps + kOutputAluOps,
+                                  kSurfaceTexFetches + 1, 0, kLightAluOps, LightSource::TileList, 1));
 
-  const std::uint32_t edge = std::min(tile_px, kKernelGroupEdge);
-  const std::string tp = std::to_string(tile_px);
+  const std::uint32_t edge = grid.group_edge();
+  const std::map<std::string, std::string> tile_px = {{"tile_px", std::to_string(grid.tile_px)}};
   t.commands.emplace_back(std::move(pass));
   t.commands.emplace_back(make_barrier({"visibility", "depth"}));
-  t.commands.emplace_back(
-      make_dispatch("vbuffer_worklists", tiles_x, tiles_y, 1, edge, edge, 1, {"visibility"}, {work}, {{"tile_px", tp}}));
-  t.commands.emplace_back(make_dispatch("tile_light_cull", tiles_x, tiles_y, 1, edge, edge, 1, {"depth", lights},
-                                        {grid, index}, {{"tile_px", tp}, {"max_lights_per_tile", std::to_string(cap)}}));
-  t.commands.emplace_back(make_barrier({work, grid, index}));
-  t.commands.emplace_back(make_dispatch("vbuffer_shade", tiles_x, tiles_y, 1, edge, edge, 1,
-                                        {"visibility", work, lights, grid, index}, {frame},
-                                        {{"shader", "vbuffer_lit"}, {"tile_px", tp}}));
+  t.commands.emplace_back(make_dispatch("vbuffer_worklists", grid.tiles_x(), grid.tiles_y(), 1, edge, edge, 1,
+                                        {"visibility"}, {work}, tile_px));
+  t.commands.emplace_back(tile_light_cull_dispatch(grid, lights));
+  t.commands.emplace_back(make_barrier({work, grid.grid_buffer(), kLightIndexBuffer}));
+  auto shade_params = tile_px;
+  shade_params["shader"] = "vbuffer_lit";
+  t.commands.emplace_back(make_dispatch("vbuffer_shade", grid.tiles_x(), grid.tiles_y(), 1, edge, edge, 1,
+                                        {"visibility", work, lights, grid.grid_buffer(), kLightIndexBuffer}, {frame},
+                                        shade_params));
   return t;
 }
 
