@@ -67,3 +67,28 @@ TEST(Stats, CollectWritesOneRowPerStatisticUnderTheScope) {
 
 }  // namespace
 }  // namespace tbdr
+
+#include "kernel/slot_pool.hpp"
+
+namespace tbdr {
+namespace {
+
+TEST(SlotPool, ReusesTheMostRecentlyReleasedSlot) {
+  SlotPool<int> pool;
+  const auto a = pool.acquire(), b = pool.acquire(), c = pool.acquire();
+  EXPECT_EQ(a, 0u);
+  EXPECT_EQ(b, 1u);
+  EXPECT_EQ(c, 2u);
+  pool[b] = 42;
+  pool.release(a);
+  pool.release(b);
+  EXPECT_EQ(pool.live(), 1u);
+  EXPECT_EQ(pool.acquire(), b);  // last released first
+  EXPECT_EQ(pool[b], 42);        // contents left for the caller to overwrite
+  EXPECT_EQ(pool.acquire(), a);
+  EXPECT_EQ(pool.acquire(), 3u);  // no free slot: a new one
+  EXPECT_EQ(pool.capacity(), 4u);
+}
+
+}  // namespace
+}  // namespace tbdr
