@@ -168,6 +168,36 @@ TEST(UnitIsp, WithoutTagBufferEverySampleThatPassesEarlyDepthIsShaded) {
   EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), 2048u * kDepthBytes);
 }
 
+TEST(UnitIsp, StencilWrittenByOneDrawMasksTheNext) {
+  // Draw 0 (no depth test or write; stencil always passes and replaces with 1) marks UL's 496
+  // samples. Draw 1 (FULL, stencil Equal 1) passes there and fails on LR's 528 samples, which
+  // therefore read no depth. Draw 0's 496 tags are then overwritten by draw 1 (HSR): only draw 1
+  // is shaded, on 496 samples.
+  RenderRig rig;
+  PipelineState mark;
+  mark.depth_test = false;
+  mark.depth_write = false;
+  mark.stencil_test = true;
+  mark.stencil_compare = CompareOp::Always;
+  mark.stencil_pass_op = StencilOp::Replace;
+  mark.stencil_ref = 1;
+  PipelineState masked;
+  masked.stencil_test = true;
+  masked.stencil_compare = CompareOp::Equal;
+  masked.stencil_ref = 1;
+  rig.add_draw(make_shader(1), mark);
+  rig.add_draw(make_shader(1), masked);
+  rig.add_triangle(at(kUpperLeft, 0.5f, 0));
+  rig.add_triangle(at(kFull, 0.25f, 1));
+  rig.render_tile(RenderRig::tile_rect(0, 0));
+  EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), 496u + 1024u);
+  EXPECT_EQ(rig.isp_stats.stencil_test_failed_samples.value(), 528u);
+  EXPECT_EQ(rig.isp_stats.depth_buffer_read_bytes.value(), 496u * kDepthBytes);  // draw 1 where it passed
+  EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), 496u * kDepthBytes);
+  EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), 496u);
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 496u);
+}
+
 /// Opaque FULL behind a punch-through UL (no material: its alpha test keeps every sample).
 void punch_through_over_opaque(RenderRig& rig) {
   rig.add_draw(make_shader(1));
