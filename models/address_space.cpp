@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "kernel/bits.hpp"
+
 namespace tbdr {
 
 namespace {
-
-bool is_pow2(std::uint64_t v) { return v != 0 && (v & (v - 1)) == 0; }
 
 std::uint64_t round_up(std::uint64_t v, std::uint64_t granule) {
   if (v > UINT64_MAX - (granule - 1)) throw std::overflow_error("address space: allocation overflows 64 bits");

@@ -30,6 +30,8 @@ struct AddressRegion {
 /// A deterministic bump allocator of named, page-aligned regions, each with a traffic class.
 class AddressSpace {
  public:
+  /// 4 KiB pages: the GPU MMU's page (and the parameter manager's, ROGUE_PM_PAGE_SIZE in Linux
+  /// drivers/gpu/drm/imagination/pvr_rogue_fwif_client.h), so regions start where a driver's would.
   static constexpr std::uint64_t kDefaultPageBytes = 4096;
 
   /// `page_bytes` (a power of two) is the allocation granule; the first region starts at

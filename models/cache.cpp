@@ -3,19 +3,9 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "kernel/bits.hpp"
+
 namespace tbdr {
-
-namespace {
-
-bool is_pow2(std::uint64_t v) { return v != 0 && (v & (v - 1)) == 0; }
-
-unsigned log2_exact(std::uint64_t v) {
-  unsigned s = 0;
-  while ((std::uint64_t{1} << s) < v) ++s;
-  return s;
-}
-
-}  // namespace
 
 Cache::Cache(std::string scope, const CacheParams& p, double pj_per_byte, bool write_allocate)
     : pj_per_byte_(pj_per_byte), write_allocate_(write_allocate), scope_(scope) {

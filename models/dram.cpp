@@ -5,19 +5,13 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "kernel/bits.hpp"
+
 namespace tbdr {
 
 namespace {
 
-bool is_pow2(std::uint64_t v) { return v != 0 && (v & (v - 1)) == 0; }
-
-unsigned log2_exact(std::uint64_t v) {
-  unsigned s = 0;
-  while ((std::uint64_t{1} << s) < v) ++s;
-  return s;
-}
-
-constexpr std::int64_t kNever = INT64_MAX;
+constexpr std::int64_t kNever = INT64_MAX;  // "no cycle": nothing to schedule
 
 }  // namespace
 
@@ -38,26 +32,22 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
     : name_(scope), eq_(eq), energy_(e), clock_(ClockDomain::from_mhz("dram", p.clock_mhz)) {
   const auto bad = [&](const std::string& why) { throw std::invalid_argument("dram '" + scope + "': " + why); };
   if (p.channels < 1 || p.channels > 1024) bad("channels must be in [1, 1024]");
-  if (p.banks < 1 || p.banks > 64) bad("banks must be in [1, 64]");
+  if (p.banks < 1 || p.banks > kMaxBanks) bad("banks must be in [1, " + std::to_string(kMaxBanks) + "]");
   if (p.burst_bytes < 1 || p.row_bytes < p.burst_bytes || p.row_bytes % p.burst_bytes != 0) {
     bad("row_bytes must be a positive multiple of burst_bytes");
   }
   if (!(p.bandwidth_gbps > 0)) bad("bandwidth_gbps must be positive");
   if (p.read_queue_entries < 1 || p.write_queue_entries < 1) bad("queues need at least one entry");
-  if (p.address_mapping == "row_bank_channel_column") {
-    mapping_ = DramMapping::RowBankChannelColumn;
-  } else if (p.address_mapping == "row_channel_bank_column") {
-    mapping_ = DramMapping::RowChannelBankColumn;
-  } else {
-    bad("unknown address_mapping '" + p.address_mapping + "'");
-  }
+  const auto fraction = [](double v) { return v >= 0 && v <= 1; };
+  if (!fraction(p.write_low_watermark) || !fraction(p.write_high_watermark)) bad("write watermarks must be in [0, 1]");
+  mapping_ = p.address_mapping;
   row_bytes_ = static_cast<std::uint64_t>(p.row_bytes);
   burst_bytes_ = static_cast<std::uint32_t>(p.burst_bytes);
   banks_ = static_cast<std::uint32_t>(p.banks);
   read_cap_ = static_cast<std::size_t>(p.read_queue_entries);
   write_cap_ = static_cast<std::size_t>(p.write_queue_entries);
-  write_high_ = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(static_cast<double>(write_cap_) * kWriteHighWatermark)));
-  write_low_ = std::min(write_high_ - 1, static_cast<std::size_t>(static_cast<double>(write_cap_) * kWriteLowWatermark));
+  write_high_ = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(static_cast<double>(write_cap_) * p.write_high_watermark)));
+  write_low_ = std::min(write_high_ - 1, static_cast<std::size_t>(static_cast<double>(write_cap_) * p.write_low_watermark));
 
   timing_.t_rcd_cycles = ns_to_cycles(p.t_rcd_ns);
   timing_.t_rp_cycles = ns_to_cycles(p.t_rp_ns);
@@ -69,9 +59,11 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
   timing_.burst_ps = static_cast<double>(burst_bytes_) * 1000.0 / (p.bandwidth_gbps / static_cast<double>(p.channels));
 
   pow2_map_ = is_pow2(row_bytes_) && is_pow2(static_cast<std::uint64_t>(p.channels)) && is_pow2(banks_);
-  row_shift_ = log2_exact(row_bytes_);
-  ch_shift_ = log2_exact(static_cast<std::uint64_t>(p.channels));
-  bank_shift_ = log2_exact(banks_);
+  if (pow2_map_) {
+    row_shift_ = log2_exact(row_bytes_);
+    ch_shift_ = log2_exact(static_cast<std::uint64_t>(p.channels));
+    bank_shift_ = log2_exact(banks_);
+  }
 
   channels_.resize(static_cast<std::size_t>(p.channels));
   for (std::size_t c = 0; c < channels_.size(); ++c) {

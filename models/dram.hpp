@@ -57,12 +57,6 @@ struct DramSchedule {
   Tick return_latency{0};
 };
 
-/// Physical address bit order of dram.address_mapping, most significant field first.
-enum class DramMapping : std::uint8_t {
-  RowBankChannelColumn,  ///< consecutive rows' worth of bytes alternate channels, then banks
-  RowChannelBankColumn,  ///< consecutive rows' worth of bytes alternate banks, then channels
-};
-
 /// Where an address lands in the DRAM.
 struct DramCoord {
   std::uint32_t channel = 0;
@@ -162,14 +156,12 @@ struct DramClassStats {
 /// The DRAM devices and their memory controller.
 class Dram final : public Unit {
  public:
-  /// Write-drain watermarks, as fractions of dram.write_queue_entries: writes are served before
-  /// reads from when the write queue reaches the high mark until it falls to the low mark (and
-  /// whenever no read is waiting). Fixed design constants (Ramulator's defaults are similar).
-  static constexpr double kWriteHighWatermark = 0.75;
-  static constexpr double kWriteLowWatermark = 0.25;
   /// FR-FCFS starvation cap: once this many younger requests were served while the oldest one
-  /// waited for its row, the oldest may close a row that younger requests still want.
+  /// waited for its row, the oldest may close a row that younger requests still want. The cap of
+  /// Ramulator's FRFCFS_Cap scheduler (src/Scheduler.h: cap = 16).
   static constexpr std::uint32_t kStarvationCap = 16;
+  /// Most banks per channel: the scheduler keeps one bit per bank in a 64-bit mask.
+  static constexpr std::int64_t kMaxBanks = 64;
 
   /// Validates the parameters (std::invalid_argument on an inconsistent geometry).
   Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::string scope = "dram");
@@ -318,8 +310,8 @@ class Dram final : public Unit {
   std::uint32_t banks_;
   std::size_t read_cap_;
   std::size_t write_cap_;
-  std::size_t write_high_;
-  std::size_t write_low_;
+  std::size_t write_high_;  // write drains start at this many queued lines (dram.write_high_watermark)
+  std::size_t write_low_;   // and end at this many (dram.write_low_watermark)
   // Fast mapping when row size, channels and banks are powers of two.
   bool pow2_map_ = false;
   unsigned row_shift_ = 0, ch_shift_ = 0, bank_shift_ = 0;

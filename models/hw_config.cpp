@@ -14,19 +14,24 @@ ParamRegistry<HwConfig> make_registry() {
   ParamRegistry<HwConfig> r;
   // The defaults describe one complete GPU: a PowerVR Series6XT-class part (GX6450-like: 4 USCs,
   // 32x32 tiles, 128 bits per pixel on chip) with LPDDR3-1600. configs/ holds the other presets.
-  const std::string mesa = "Mesa src/imagination/common/device_info (GX6250/GX6650 tables)";
-  const std::string design = "DESIGN.md hardware model";
+  const std::string mesa = "Mesa src/imagination/common/device_info/gx6250.h";
+  const std::string mesa_gx6650 = "Mesa src/imagination/common/device_info/gx6650.h";
+  const std::string series6xt = "Imagination, PowerVR Series6XT product briefs";
+  const std::string lpddr3_memspec = "DRAMPower memspec MICRON_4Gb_LPDDR3-1600_32bit_A";
+  const std::string pb_layout = "Imagination's parameter buffer layout (control streams, primitive blocks) is not published "
+                                "byte by byte";
 
   r.section("gpu", "Whole-GPU identity, core clock and rendering mode");
   r.add(TBDR_PARAM(gpu.name), std::string("Series6XT-class (GX6450-like), LPDDR3-1600"))
       .doc("Label stored with every run").source("preset label");
   r.add(TBDR_PARAM(gpu.core_clock_mhz), 600.0).unit("MHz").range(50, 3000)
       .doc("Core clock of geometry, tiler, ISP, USC, texture and writeback units")
-      .source("Series6XT parts ship at 450-850 MHz (" + design + ")");
-  r.add(TBDR_PARAM(gpu.mode), std::string("tbdr")).choices({"tbdr", "tbr", "imr"})
+      .source(series6xt + ": 450-850 MHz");
+  r.add(TBDR_PARAM(gpu.mode), GpuMode::Tbdr, kGpuModeNames)
       .doc("tbdr: binning + tag-buffer HSR; tbr: binning, early-Z only (Mali-like); imr: no binning, "
            "framebuffer in DRAM behind caches")
-      .source(design);
+      .source("Imagination, PowerVR Architecture Guide (tile-based deferred rendering); tbr and imr are the "
+              "comparison modes");
 
   r.section("geometry", "Vertex fetch, vertex shading, clip/cull and viewport transform");
   r.add(TBDR_PARAM(geometry.primitives_per_clock), 1.0).unit("primitives/clock").range(0.01, 64)
@@ -40,40 +45,46 @@ ParamRegistry<HwConfig> make_registry() {
       .doc("Vertex shader ALU ops per shaded vertex (transform, normal, varyings)")
       .source("a 4x4 transform (16 FMA) plus normal transform and outputs");
   r.add(TBDR_PARAM(geometry.subpixel_bits), 8).unit("bits").range(0, 12)
-      .doc("Fractional bits of fixed-point screen coordinates").source("PowerVR uses 8 (" + design + ")");
+      .doc("Fractional bits of fixed-point screen coordinates")
+      .source("Mesa src/imagination/vulkan/pvr_physical_device.c: 8 sub-pixel bits on cores without "
+              "simple_internal_parameter_format (Series6XT), 4 on later ones");
 
   r.section("tiling", "Binning of primitives into tiles and the parameter buffer in DRAM");
   r.add(TBDR_PARAM(tiling.tile_width), 32).unit("pixels").range(4, 256)
       .doc("Tile width").source(mesa + ": tile_size_x = 32 on Series6XT");
   r.add(TBDR_PARAM(tiling.tile_height), 32).unit("pixels").range(4, 256)
       .doc("Tile height").source(mesa + ": tile_size_y = 32 on Series6XT");
-  r.add(TBDR_PARAM(tiling.binning), std::string("exact")).choices({"exact", "bbox"})
+  r.add(TBDR_PARAM(tiling.binning), BinningTest::Exact, kBinningTestNames)
       .doc("Tile/triangle overlap test: exact edge test or bounding box only").source("design choice");
-  r.add(TBDR_PARAM(tiling.tile_order), std::string("morton")).choices({"row_major", "morton"})
+  r.add(TBDR_PARAM(tiling.tile_order), TileOrder::Morton, kTileOrderNames)
       .doc("Order in which tiles are dispatched to the ISP").source("design choice");
   r.add(TBDR_PARAM(tiling.primitives_per_clock), 1.0).unit("primitives/clock").range(0.01, 64)
       .doc("Tiling engine throughput").source("no public figure");
   r.add(TBDR_PARAM(tiling.pb_capacity_bytes), static_cast<std::int64_t>(32 * kMiB)).unit("bytes")
       .range(64 * kKiB, 4096 * kMiB)
       .doc("Parameter buffer capacity; when binning exceeds it a partial render flushes")
-      .source("driver-sized free list; no fixed public figure");
+      .source("no fixed figure: the driver sizes the free list (Mesa src/imagination/vulkan/pvr_device.c: "
+              "2 MiB initially, growing by 1 MiB up to 256 MiB); 32 MiB assumed");
   r.add(TBDR_PARAM(tiling.pb_page_bytes), 4096).unit("bytes").range(256, 1 << 20)
-      .doc("Parameter buffer allocation granule").source("4 KB pages (" + design + ")");
+      .doc("Parameter buffer allocation granule")
+      .source("Linux drivers/gpu/drm/imagination/pvr_rogue_fwif_client.h: ROGUE_PM_PAGE_SIZE = 4 KB "
+              "(parameter management pages)");
   r.add(TBDR_PARAM(tiling.region_header_bytes), 6).unit("bytes").range(0, 64)
-      .doc("Region header per tile").source("about 5-6 B per tile (" + design + ")");
+      .doc("Region header per tile")
+      .source("Mesa src/imagination/vulkan/pvr_job_render.c (region header stride): 5-6 B per tile");
   r.add(TBDR_PARAM(tiling.control_stream_block_bytes), 128).unit("bytes").range(16, 4096)
-      .doc("Control stream allocation block").source("128 B blocks (" + design + ")");
+      .doc("Control stream allocation block").source(pb_layout + "; 128 B blocks assumed");
   r.add(TBDR_PARAM(tiling.control_stream_entry_bytes), 8).unit("bytes").range(1, 64)
       .doc("Control stream entry: primitive block pointer plus primitive mask").source("no public figure");
   r.add(TBDR_PARAM(tiling.prim_block_max_vertices), 64).unit("vertices").range(3, 1024)
-      .doc("Vertices per primitive block").source("at most 64 (" + design + ")");
+      .doc("Vertices per primitive block").source(pb_layout + "; 64 assumed (6-bit vertex indices)");
   r.add(TBDR_PARAM(tiling.prim_block_max_primitives), 128).unit("primitives").range(1, 4096)
       .doc("Primitives per primitive block").source("no public figure");
   r.add(TBDR_PARAM(tiling.prim_block_header_bytes), 16).unit("bytes").range(0, 256)
       .doc("Primitive block header (state word, counts, base address)").source("no public figure");
   r.add(TBDR_PARAM(tiling.pb_vertex_position_bytes), 10).unit("bytes").range(1, 64)
       .doc("Screen-space position (x, y fixed point, z, 1/w) per vertex before compression")
-      .source("about 10 B per vertex uncompressed (" + design + ")");
+      .source(pb_layout + "; about 10 B assumed (fixed-point x, y; z; 1/w)");
   r.add(TBDR_PARAM(tiling.pb_varying_bytes), 4).unit("bytes/varying").range(0, 16)
       .doc("Bytes per scalar varying written with each vertex").source("FP32 varyings");
   r.add(TBDR_PARAM(tiling.pb_compression_ratio), 1.0).range(0.05, 1.0)
@@ -81,9 +92,6 @@ ParamRegistry<HwConfig> make_registry() {
   r.add(TBDR_PARAM(tiling.prim_index_bytes), 3).unit("bytes/primitive").range(0, 16)
       .doc("Per-primitive index data inside a block (3 x 6-bit indices + flags)")
       .source("64-vertex blocks need 6-bit indices");
-  r.add(TBDR_PARAM(tiling.macrotiles), 16).unit("macrotiles").range(1, 256)
-      .doc("Macrotiles a render is divided into (partial renders free memory per macrotile)")
-      .source("16 macrotiles per render (" + design + ")");
 
   r.section("isp", "Image synthesis processor: rasterisation, depth/stencil, tag-buffer HSR");
   r.add(TBDR_PARAM(isp.tiles_in_flight), 4).unit("tiles").range(1, 64)
@@ -92,7 +100,8 @@ ParamRegistry<HwConfig> make_registry() {
       .doc("Raster pipes").source(mesa + ": num_raster_pipes = 1 (GX6250)");
   r.add(TBDR_PARAM(isp.samples_per_clock), 32).unit("samples/clock").range(1, 1024)
       .doc("Depth/stencil tested samples per clock per raster pipe")
-      .source("no public figure; 16-32 is a reasonable start (" + design + ")");
+      .source("no public figure for Rogue; Unity, \"Fast mobile shaders\" talk: PowerVR SGX rejects 32 "
+              "hidden pixels per clock");
   r.add(TBDR_PARAM(isp.tag_buffers), 2).unit("buffers").range(1, 16)
       .doc("Tag buffers per tile (layered flushing for punch-through / translucent)")
       .source("PowerVR patents US8446409, US10210596");
@@ -104,21 +113,24 @@ ParamRegistry<HwConfig> make_registry() {
 
   r.section("usc", "Unified shading clusters: fragment, vertex and compute shading");
   r.add(TBDR_PARAM(usc.count), 4).unit("USCs").range(1, 64)
-      .doc("Shader clusters").source("Series6XT: GX6240 2, GX6450 4, GX6650 6 (" + design + ")");
+      .doc("Shader clusters")
+      .source(series6xt + ": GX6240 2, GX6450 4, GX6650 6 (" + mesa_gx6650 + ": num_clusters = 6)");
   r.add(TBDR_PARAM(usc.lanes), 16).unit("lanes").range(1, 128)
-      .doc("SIMD lanes per USC").source("16 lanes (" + design + ")");
+      .doc("SIMD lanes per USC").source(series6xt + ": 16 lanes per USC");
   r.add(TBDR_PARAM(usc.alu_ops_per_lane_per_clock), 2.0).unit("ops/lane/clock").range(0.25, 16)
-      .doc("FP32 ALU ops per lane per clock").source("up to 2 FP32 ops per lane per clock (" + design + ")");
+      .doc("FP32 ALU ops per lane per clock").source(series6xt + ": up to 2 FP32 ops per lane per clock");
   r.add(TBDR_PARAM(usc.tasks_in_flight), 56).unit("tasks").range(1, 4096)
-      .doc("Tasks (32-wide thread groups) resident across the USCs").source(mesa + ": max_usc_tasks = 56");
-  r.add(TBDR_PARAM(usc.task_queue_entries), 32).unit("tasks").range(1, 4096)
-      .doc("Queue between the ISP/TSP and the USCs; full queue stalls the ISP").source(mesa + ": usc_slots = 32");
+      .doc("Tasks resident across the USCs; with threads_per_task they bound the tiles the USCs hold, and "
+           "the ISP stalls when they are full")
+      .source(mesa + ": max_usc_tasks = 56");
+  r.add(TBDR_PARAM(usc.threads_per_task), 32).unit("threads").range(1, 1024)
+      .doc("Threads (instances) of one USC task").source(mesa + ": max_instances_per_pds_task = 32");
 
   r.section("texture", "Texture processing units");
   r.add(TBDR_PARAM(texture.units), 2).unit("TPUs").range(1, 64)
-      .doc("Texture units (two USCs share one)").source("two USCs share a texture unit (" + design + ")");
+      .doc("Texture units (two USCs share one)").source(series6xt + ": one texture unit per two USCs");
   r.add(TBDR_PARAM(texture.texels_per_clock), 4.0).unit("texels/clock").range(0.25, 256)
-      .doc("Filtered texels per clock per texture unit").source("4 bilinear texels per clock (" + design + ")");
+      .doc("Filtered texels per clock per texture unit").source(series6xt + ": 4 bilinear texels per clock");
   r.add(TBDR_PARAM(texture.texels_per_fetch), 4).unit("texels").range(1, 64)
       .doc("Texels read per texture fetch (4 = bilinear)").source("bilinear filtering");
   r.add(TBDR_PARAM(texture.bytes_per_texel), 4).unit("bytes").range(1, 16)
@@ -130,11 +142,13 @@ ParamRegistry<HwConfig> make_registry() {
   r.section("pls", "On-chip tile memory and pixel local storage");
   r.add(TBDR_PARAM(pls.tile_buffer_bits_per_pixel), 128).unit("bits/pixel").range(32, 2048)
       .doc("On-chip color/PLS storage per pixel (depth kept separately)")
-      .source("128 bits on low-end, 256 on high-end parts (" + design + ")");
+      .source("Imagination, PowerVR Performance Recommendations, \"On-Chip Memory Performance\": typically 128 "
+              "bits per pixel on low-end parts, 256 on high-end ones");
   r.add(TBDR_PARAM(pls.max_pls_bytes_per_pixel), 16).unit("bytes/pixel").range(16, 256)
-      .doc("Largest pixel local storage a shader may declare")
-      .source("EXT_shader_pixel_local_storage guarantees at least 16 bytes");
-  r.add(TBDR_PARAM(pls.over_budget), std::string("spill")).choices({"spill", "smaller_tiles"})
+      .doc("Largest pixel local storage a pass may declare; a trace whose pass declares more is refused, as a "
+           "driver refuses such a shader")
+      .source("EXT_shader_pixel_local_storage: MAX_SHADER_PIXEL_LOCAL_STORAGE_SIZE_EXT is at least 16 bytes");
+  r.add(TBDR_PARAM(pls.over_budget), PlsOverBudget::Spill, kPlsOverBudgetNames)
       .doc("When a pass needs more bytes per pixel than the tile buffer holds: spill the excess share of "
            "tile-buffer accesses to memory, or render each tile in strips that fit")
       .source("Mesa src/imagination pvr_mrt.h: render targets beyond the output registers go to memory "
@@ -143,9 +157,17 @@ ParamRegistry<HwConfig> make_registry() {
   r.section("writeback", "Pixel back end: stores tiles that must leave the chip");
   r.add(TBDR_PARAM(writeback.compression_ratio), 1.0).range(0.05, 1.0)
       .doc("Compressed / uncompressed bytes of stored attachments (PVRIC/AFBC); 1 = off")
-      .source("lossless framebuffer compression saves up to 50 % (" + design + ")");
+      .source("Arm, Arm Frame Buffer Compression (AFBC): up to 50 % of framebuffer bandwidth saved; PVRIC is "
+              "Imagination's equivalent; 1 = off");
   r.add(TBDR_PARAM(writeback.bytes_per_clock), 32.0).unit("bytes/clock").range(1, 4096)
       .doc("Pixel back end write throughput").source("no public figure");
+
+  r.section("memory", "The units' DMA streams into the caches and DRAM");
+  r.add(TBDR_PARAM(memory.stream_outstanding_requests), 16).unit("requests").range(1, 4096)
+      .doc("Requests (of up to 4 KB, never crossing a 4 KB boundary) one unit's DMA stream keeps in flight: "
+           "vertex and index fetch, parameter buffer writes and reads, tile loads and stores, compute buffers")
+      .source("no public figure; 16 x 4 KB = 64 KB in flight, several times the 12.8 KB a 12.8 GB/s LPDDR3 "
+              "needs to cover 1 us of latency");
 
   r.section("cache", "Caches of the memory hierarchy");
   r.section("cache.texture", "Texture cache (per GPU, shared by the texture units)");
@@ -184,7 +206,8 @@ ParamRegistry<HwConfig> make_registry() {
   r.add(TBDR_PARAM(dram.burst_bytes), 32).unit("bytes").range(8, 1024)
       .doc("Bytes per burst (BL8 on a 32-bit channel)").source("LPDDR3 BL8 x32");
   r.add(TBDR_PARAM(dram.bandwidth_gbps), 12.8).unit("GB/s").range(0.1, 4096)
-      .doc("Peak bandwidth of all channels together").source("LPDDR3 about 12.8 GB/s (" + design + ")");
+      .doc("Peak bandwidth of all channels together")
+      .source("JESD209-3: LPDDR3-1600 moves 6.4 GB/s per 32-bit channel, 2 channels");
   r.add(TBDR_PARAM(dram.clock_mhz), 800.0).unit("MHz").range(50, 8000)
       .doc("DRAM command clock").source("LPDDR3-1600: 800 MHz");
   r.add(TBDR_PARAM(dram.t_rcd_ns), 18.0).unit("ns").range(0, 1000)
@@ -200,26 +223,39 @@ ParamRegistry<HwConfig> make_registry() {
   r.add(TBDR_PARAM(dram.controller_latency_ns), 30.0).unit("ns").range(0, 10000)
       .doc("Memory controller and interconnect latency each way").source("no public figure");
   r.add(TBDR_PARAM(dram.read_queue_entries), 32).unit("requests").range(1, 4096)
-      .doc("Read queue per channel, in line requests (a burst chain takes one entry per line)").source("no public figure");
+      .doc("Read queue per channel, in line requests (a burst chain takes one entry per line)")
+      .source("no public figure for a GPU's controller; Ramulator's controller queues hold 32 (src/Controller.h)");
   r.add(TBDR_PARAM(dram.write_queue_entries), 32).unit("requests").range(1, 4096)
-      .doc("Write queue per channel, in line requests (a burst chain takes one entry per line)").source("no public figure");
+      .doc("Write queue per channel, in line requests (a burst chain takes one entry per line)")
+      .source("no public figure for a GPU's controller; Ramulator's controller queues hold 32 (src/Controller.h)");
+  r.add(TBDR_PARAM(dram.write_high_watermark), 0.75).range(0, 1)
+      .doc("Write queue occupancy, as a fraction of write_queue_entries, at which the controller starts serving "
+           "writes before reads (a write drain)")
+      .source("Ramulator src/Controller.h and Ramulator 2.0 GenericDRAMController drain from 0.8 to 0.2 of the "
+              "queue; 0.75 / 0.25 here");
+  r.add(TBDR_PARAM(dram.write_low_watermark), 0.25).range(0, 1)
+      .doc("Write queue occupancy, as a fraction of write_queue_entries, at which a write drain ends (writes are "
+           "also served whenever no read waits)")
+      .source("Ramulator src/Controller.h and Ramulator 2.0 GenericDRAMController drain from 0.8 to 0.2 of the "
+              "queue; 0.75 / 0.25 here");
   r.add(TBDR_PARAM(dram.max_chain_bytes), 1024).unit("bytes").range(0, 65536)
       .doc("Longest run of consecutive lines of one row that one memory request misses in the SLC and "
            "the controller queues as one entry and serves as back-to-back bursts (0: one line per entry)")
       .source("design choice: a streaming unit's consecutive misses are row hits served back to back anyway");
-  r.add(TBDR_PARAM(dram.address_mapping), std::string("row_bank_channel_column"))
-      .choices({"row_bank_channel_column", "row_channel_bank_column"})
+  r.add(TBDR_PARAM(dram.address_mapping), DramMapping::RowBankChannelColumn, kDramMappingNames)
       .doc("Physical address bit order, most significant first").source("design choice");
 
   r.section("energy", "Energy per access and static power");
   r.add(TBDR_PARAM(energy.dram_read_pj_per_bit), 5.1).unit("pJ/bit").range(0, 1000)
-      .doc("DRAM read energy per bit (core)").source("DRAMPower LPDDR3-1600 memspec (" + design + ")");
+      .doc("DRAM read energy per bit (core)").source(lpddr3_memspec);
   r.add(TBDR_PARAM(energy.dram_write_pj_per_bit), 5.9).unit("pJ/bit").range(0, 1000)
-      .doc("DRAM write energy per bit (core)").source("DRAMPower LPDDR3-1600 memspec (" + design + ")");
+      .doc("DRAM write energy per bit (core)").source(lpddr3_memspec);
   r.add(TBDR_PARAM(energy.dram_io_pj_per_bit), 0.0).unit("pJ/bit").range(0, 1000)
-      .doc("DRAM I/O energy per bit transferred").source("not in the LPDDR3 core figure; LPDDR4 about 3.2");
+      .doc("DRAM I/O energy per bit transferred")
+      .source("not in the LPDDR3 core figure; LPDDR4 about 3.2 (DRAMPower memspec MICRON_6Gb_LPDDR4-3200_32bit_A, "
+              "I/O from Micron's power calculator)");
   r.add(TBDR_PARAM(energy.dram_activate_precharge_nj), 4.3).unit("nJ").range(0, 1000)
-      .doc("Energy of one activate + precharge pair").source("DRAMPower LPDDR3-1600 memspec (" + design + ")");
+      .doc("Energy of one activate + precharge pair").source(lpddr3_memspec);
   r.add(TBDR_PARAM(energy.tile_buffer_pj_per_byte), 1.25).unit("pJ/byte").range(0, 1000)
       .doc("On-chip tile buffer access").source("Horowitz ISSCC 2014: 8 KB SRAM 1.25 pJ/B");
   r.add(TBDR_PARAM(energy.tag_buffer_pj_per_byte), 1.25).unit("pJ/byte").range(0, 1000)

@@ -1,7 +1,9 @@
 #pragma once
 // The hardware configuration every unit reads: plain members grouped by the INI section that sets
 // them. The declarations (defaults, units, ranges, docs, sources) live in hw_config.cpp, once;
-// `tbdrsim params` prints them. Units convert choice strings to enums when they are built.
+// `tbdrsim params` prints them. Choice parameters are enums here: their text (what config files,
+// `tbdrsim params` and the database show) is looked up once, when the configuration is built.
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -10,11 +12,60 @@
 
 namespace tbdr {
 
+/// How the GPU renders (gpu.mode): the three architectures one trace can be compared across.
+enum class GpuMode : std::uint8_t {
+  Tbdr,  ///< binning + tag-buffer hidden-surface removal before shading (PowerVR)
+  Tbr,   ///< binning, early-Z only (Mali-like)
+  Imr,   ///< no binning, framebuffer in DRAM behind caches
+};
+inline constexpr std::array<ChoiceName<GpuMode>, 3> kGpuModeNames{
+    {{GpuMode::Tbdr, "tbdr"}, {GpuMode::Tbr, "tbr"}, {GpuMode::Imr, "imr"}}};
+
+/// How the tiler decides that a primitive touches a tile (tiling.binning).
+enum class BinningTest : std::uint8_t {
+  Exact,        ///< the triangle's edges against the tile's samples
+  BoundingBox,  ///< the triangle's bounding box only (more tile references, cheaper test)
+};
+inline constexpr std::array<ChoiceName<BinningTest>, 2> kBinningTestNames{
+    {{BinningTest::Exact, "exact"}, {BinningTest::BoundingBox, "bbox"}}};
+
+/// Order in which the tiles of a render are dispatched to the ISP (tiling.tile_order).
+enum class TileOrder : std::uint8_t {
+  RowMajor,  ///< left to right, top to bottom
+  Morton,    ///< Z-order: interleaved bits of the tile coordinates
+};
+inline constexpr std::array<ChoiceName<TileOrder>, 2> kTileOrderNames{
+    {{TileOrder::RowMajor, "row_major"}, {TileOrder::Morton, "morton"}}};
+
+/// What a pass that needs more bytes per pixel than the tile buffer holds pays (pls.over_budget).
+enum class PlsOverBudget : std::uint8_t {
+  Spill,         ///< the excess share of tile-buffer accesses goes to memory
+  SmallerTiles,  ///< each tile is rendered in strips that fit
+};
+inline constexpr std::array<ChoiceName<PlsOverBudget>, 2> kPlsOverBudgetNames{
+    {{PlsOverBudget::Spill, "spill"}, {PlsOverBudget::SmallerTiles, "smaller_tiles"}}};
+
+/// Physical address bit order of dram.address_mapping, most significant field first.
+enum class DramMapping : std::uint8_t {
+  RowBankChannelColumn,  ///< consecutive rows' worth of bytes alternate channels, then banks
+  RowChannelBankColumn,  ///< consecutive rows' worth of bytes alternate banks, then channels
+};
+inline constexpr std::array<ChoiceName<DramMapping>, 2> kDramMappingNames{
+    {{DramMapping::RowBankChannelColumn, "row_bank_channel_column"},
+     {DramMapping::RowChannelBankColumn, "row_channel_bank_column"}}};
+
+/// The config-file spelling of each choice.
+inline const char* to_string(GpuMode v) { return choice_name<GpuMode>(kGpuModeNames, v); }
+inline const char* to_string(BinningTest v) { return choice_name<BinningTest>(kBinningTestNames, v); }
+inline const char* to_string(TileOrder v) { return choice_name<TileOrder>(kTileOrderNames, v); }
+inline const char* to_string(PlsOverBudget v) { return choice_name<PlsOverBudget>(kPlsOverBudgetNames, v); }
+inline const char* to_string(DramMapping v) { return choice_name<DramMapping>(kDramMappingNames, v); }
+
 /// [gpu] whole-GPU identity, clock and rendering mode.
 struct GpuParams {
   std::string name;
   double core_clock_mhz = 0;
-  std::string mode;  ///< tbdr | tbr | imr
+  GpuMode mode = GpuMode::Tbdr;
 };
 
 /// [geometry] vertex fetch, vertex shading and primitive setup (clip, cull, viewport).
@@ -30,8 +81,8 @@ struct GeometryParams {
 struct TilingParams {
   std::int64_t tile_width = 0;
   std::int64_t tile_height = 0;
-  std::string binning;  ///< exact | bbox
-  std::string tile_order;  ///< row_major | morton
+  BinningTest binning = BinningTest::Exact;
+  TileOrder tile_order = TileOrder::Morton;
   double primitives_per_clock = 0;
   std::int64_t pb_capacity_bytes = 0;
   std::int64_t pb_page_bytes = 0;
@@ -45,7 +96,6 @@ struct TilingParams {
   std::int64_t pb_varying_bytes = 0;
   double pb_compression_ratio = 0;
   std::int64_t prim_index_bytes = 0;
-  std::int64_t macrotiles = 0;
 };
 
 /// [isp] image synthesis processor: rasterisation, depth/stencil, hidden-surface removal.
@@ -64,7 +114,7 @@ struct UscParams {
   std::int64_t lanes = 0;
   double alu_ops_per_lane_per_clock = 0;
   std::int64_t tasks_in_flight = 0;
-  std::int64_t task_queue_entries = 0;
+  std::int64_t threads_per_task = 0;
 };
 
 /// [texture] texture processing units.
@@ -80,7 +130,12 @@ struct TextureParams {
 struct PlsParams {
   std::int64_t tile_buffer_bits_per_pixel = 0;
   std::int64_t max_pls_bytes_per_pixel = 0;
-  std::string over_budget;  ///< smaller_tiles | spill
+  PlsOverBudget over_budget = PlsOverBudget::Spill;
+};
+
+/// [memory] the units' DMA streams: how they issue their byte ranges to the memory system.
+struct MemoryParams {
+  std::int64_t stream_outstanding_requests = 0;
 };
 
 /// [writeback] the pixel back end that stores tiles to DRAM.
@@ -122,7 +177,9 @@ struct DramParams {
   std::int64_t read_queue_entries = 0;
   std::int64_t write_queue_entries = 0;
   std::int64_t max_chain_bytes = 0;  ///< consecutive line misses queued as one entry (burst chain)
-  std::string address_mapping;  ///< row_bank_channel_column | row_channel_bank_column
+  DramMapping address_mapping = DramMapping::RowBankChannelColumn;
+  double write_high_watermark = 0;  ///< fraction of write_queue_entries that starts a write drain
+  double write_low_watermark = 0;   ///< fraction of write_queue_entries that ends it
 };
 
 /// [energy] energy per access and static power.
@@ -151,6 +208,7 @@ struct HwConfig {
   TextureParams texture;
   PlsParams pls;
   WritebackParams writeback;
+  MemoryParams memory;
   CachesParams cache;
   DramParams dram;
   EnergyParams energy;

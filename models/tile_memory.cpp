@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+
+#include "kernel/errors.hpp"
 
 namespace tbdr {
 
@@ -40,8 +43,23 @@ bool is_resolve_target(const PassDesc& pass, const Attachment& a) {
 
 }  // namespace
 
+std::uint32_t pls_light_stack_capacity(std::uint32_t pls_bytes_per_pixel) {
+  return pls_bytes_per_pixel > kPlsStackCountBytes ? (pls_bytes_per_pixel - kPlsStackCountBytes) / kPlsLightIndexBytes
+                                                   : 0;
+}
+
+void check_pls_layout(const PlsParams& p, const PassDesc& pass) {
+  const std::uint32_t bytes = pass.pls_bytes_per_pixel();
+  if (static_cast<std::int64_t>(bytes) > p.max_pls_bytes_per_pixel) {
+    throw InputError("pass '" + pass.name + "' (trace line " + std::to_string(pass.line) + ")",
+                     "declares " + std::to_string(bytes) + " bytes of pixel local storage per pixel, more than "
+                     "pls.max_pls_bytes_per_pixel = " + std::to_string(p.max_pls_bytes_per_pixel));
+  }
+}
+
 TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats) : ctx_(ctx), stats_(stats) {
   const PassDesc& pass = *ctx.pass;
+  check_pls_layout(ctx.hw->pls, pass);
   for (const auto& a : pass.attachments) {
     if (is_depth_format(a.format) || is_resolve_target(pass, a)) continue;  // depth lives in the ISP
     need_ += a.bytes_per_pixel();
@@ -49,7 +67,7 @@ TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats) : ctx_(ctx), 
   need_ += pass.pls_bytes_per_pixel();
   budget_ = static_cast<std::uint32_t>(ctx.hw->pls.tile_buffer_bits_per_pixel / 8);
   if (need_ > budget_) {
-    if (ctx.hw->pls.over_budget == "spill") {
+    if (ctx.hw->pls.over_budget == PlsOverBudget::Spill) {
       spill_fraction_ = static_cast<double>(need_ - budget_) / static_cast<double>(need_);
     } else {
       split_ = static_cast<int>((need_ + budget_ - 1) / budget_);

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "models/hw_config.hpp"
 #include "models/render_state.hpp"
 #include "models/traffic.hpp"
 #include "kernel/stats.hpp"
@@ -37,6 +38,19 @@ struct TileMemoryStats {
   TBDR_STATS(TBDR_TILE_MEMORY_STATS)
 };
 
+/// The forward light stack's layout in a pixel's local storage (docs/kernels.md; the
+/// forward_light_stack generator writes it; Billeter 2015, "Forward Light Stack"): a 32-bit count,
+/// then 16-bit light indices.
+inline constexpr std::uint32_t kPlsStackCountBytes = 4;
+inline constexpr std::uint32_t kPlsLightIndexBytes = 2;
+/// Light indices a stack of `pls_bytes_per_pixel` bytes of pixel local storage holds.
+std::uint32_t pls_light_stack_capacity(std::uint32_t pls_bytes_per_pixel);
+
+/// Refuses a pass whose pixel local storage layout exceeds pls.max_pls_bytes_per_pixel, as a
+/// driver refuses a shader that declares more than MAX_SHADER_PIXEL_LOCAL_STORAGE_SIZE_EXT
+/// (InputError naming the pass and its trace line, its bytes and the limit).
+void check_pls_layout(const PlsParams& p, const PassDesc& pass);
+
 /// The DRAM traffic class of an attachment usage.
 DramClass traffic_class_of(AttachmentUsage u);
 /// The DRAM traffic class of a trace buffer's declared traffic.
@@ -45,7 +59,8 @@ DramClass traffic_class_of(TrafficClass t);
 /// Tile memory of one pass.
 class TileMemory {
  public:
-  /// Computes the pass's on-chip needs against the budget and records them in `stats`.
+  /// Computes the pass's on-chip needs against the budget and records them in `stats`; refuses a
+  /// pass whose pixel local storage exceeds pls.max_pls_bytes_per_pixel (check_pls_layout).
   TileMemory(RenderContext& ctx, TileMemoryStats& stats);
 
   std::uint32_t need_bytes_per_pixel() const { return need_; }

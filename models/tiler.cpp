@@ -8,7 +8,7 @@ namespace tbdr {
 Tiler::Tiler(const HwConfig& hw, const Viewport& viewport, const SamplePattern& pattern)
     : hw_(hw),
       pattern_(pattern),
-      test_(hw.tiling.binning == "bbox" ? TileTest::BoundingBox : TileTest::Exact),
+      test_(hw.tiling.binning == BinningTest::BoundingBox ? TileTest::BoundingBox : TileTest::Exact),
       tile_w_(static_cast<int>(hw.tiling.tile_width)),
       tile_h_(static_cast<int>(hw.tiling.tile_height)),
       tiles_x_((viewport.width_px + tile_w_ - 1) / tile_w_),

@@ -18,9 +18,16 @@ namespace tbdr {
 
 namespace {
 
-constexpr std::uint64_t kChunkBytes = 4096;     // bytes per memory request a stream issues
-constexpr std::uint32_t kStreamOutstanding = 16;  // requests a stream keeps in flight
-constexpr std::uint64_t kThreadsPerTask = 32;   // threads of one USC task
+// Bytes per memory request a DMA stream issues: a stream cuts its ranges at 4 KB boundaries, as
+// no AMBA AXI burst may cross a 4 KB address boundary (Arm, AMBA AXI protocol specification).
+// How many of them a stream keeps in flight is memory.stream_outstanding_requests.
+constexpr std::uint64_t kChunkBytes = 4096;
+// Address layout of the regions the timing model allocates (addresses set cache sets and DRAM
+// banks, so these are fixed: they must not move when a parameter is swept). Every region gets at
+// least one 4 KB page, the address space's granule; per-tile framebuffer areas and command buffers
+// are whole 64-byte units, the default cache line (not cache.*.line_bytes, which a sweep varies).
+constexpr std::uint64_t kMinRegionBytes = 4096;
+constexpr std::uint64_t kRegionAlignBytes = 64;
 
 /// A FIFO server with a throughput: jobs reserve it in arrival order.
 struct Server {
@@ -36,7 +43,7 @@ class TimingSim;
 /// flight, retrying when the memory system pushes back; calls `done` when every byte completed.
 class MemStream {
  public:
-  MemStream(TimingSim& sim, Client client, bool write, DramClass cls, std::uint32_t outstanding = kStreamOutstanding)
+  MemStream(TimingSim& sim, Client client, bool write, DramClass cls, std::uint32_t outstanding)
       : sim_(sim), client_(client), write_(write), cls_(cls), outstanding_(outstanding) {}
   void add(std::uint64_t addr, std::uint64_t bytes);
   void start(std::function<void()> done);
@@ -82,7 +89,8 @@ class TimingSim final : public Unit {
     tex_rate_ = static_cast<double>(hw.texture.units) * hw.texture.texels_per_clock;
     raster_rate_ = static_cast<double>(hw.isp.samples_per_clock * hw.isp.raster_pipes);
     const std::uint64_t tile_px = static_cast<std::uint64_t>(hw.tiling.tile_width * hw.tiling.tile_height);
-    usc_queue_tiles_ = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(hw.usc.tasks_in_flight) * kThreadsPerTask / tile_px);
+    usc_queue_tiles_ = std::max<std::uint64_t>(
+        1, static_cast<std::uint64_t>(hw.usc.tasks_in_flight) * static_cast<std::uint64_t>(hw.usc.threads_per_task) / tile_px);
     texture_line_bytes_ = static_cast<std::uint64_t>(hw.cache.texture.line_bytes);
     allocate_regions();
   }
@@ -176,13 +184,13 @@ class TimingSim final : public Unit {
 
   void allocate_regions() {
     auto& space = mem_.address_space();
-    std::uint64_t pb_bytes = 4096, vertex_bytes = 4096, buffer_bytes = 4096;
+    std::uint64_t pb_bytes = kMinRegionBytes, vertex_bytes = kMinRegionBytes, buffer_bytes = kMinRegionBytes;
     for (std::size_t c = 0; c < work_.commands.size(); ++c) {
       const auto& cmd = work_.commands[c];
       std::uint64_t cmd_bytes = 0;
       for (std::size_t k = 0; k < kDramClassCount; ++k) cmd_bytes += cmd.read_bytes[k] + cmd.write_bytes[k];
       buffer_bytes = std::max(buffer_bytes, cmd_bytes);
-      std::uint64_t stride = 64;
+      std::uint64_t stride = kRegionAlignBytes;
       for (const auto& r : cmd.renders) {
         std::uint64_t extent = r.binning.pb_write_bytes;
         for (const auto& t : r.tiles) {
@@ -197,14 +205,14 @@ class TimingSim final : public Unit {
         pb_bytes = std::max(pb_bytes, extent);
         vertex_bytes += r.binning.vertex_fetch_bytes + r.binning.index_fetch_bytes;
       }
-      stride = (stride + 63) / 64 * 64;
+      stride = (stride + kRegionAlignBytes - 1) / kRegionAlignBytes * kRegionAlignBytes;
       fb_stride_.push_back(stride);
       std::uint64_t max_tile = 1;
       for (const auto& r : cmd.renders) {
         for (const auto& t : r.tiles) max_tile = std::max<std::uint64_t>(max_tile, static_cast<std::uint64_t>(t.tile_y * work_.tiles_x + t.tile_x + 1));
       }
       fb_base_.push_back(cmd.is_dispatch ? 0 : space.allocate("framebuffer." + cmd.name, stride * max_tile, DramClass::Color));
-      cmd_base_.push_back(space.allocate("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, 64), DramClass::Other));
+      cmd_base_.push_back(space.allocate("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, kRegionAlignBytes), DramClass::Other));
     }
     if (work_.texture_bytes > 0) texture_base_ = space.allocate("textures", work_.texture_bytes, DramClass::Textures);
     pb_base_[0] = space.allocate("parameter_buffer.0", pb_bytes, DramClass::ParameterBuffer);
@@ -212,7 +220,10 @@ class TimingSim final : public Unit {
     vertex_base_ = space.allocate("vertex_and_index_buffers", vertex_bytes, DramClass::Vertices);
   }
 
-  MemStream* new_stream(Client c, bool write, DramClass cls, std::uint32_t outstanding = kStreamOutstanding) {
+  MemStream* new_stream(Client c, bool write, DramClass cls) {
+    return new_stream(c, write, cls, static_cast<std::uint32_t>(hw_.memory.stream_outstanding_requests));
+  }
+  MemStream* new_stream(Client c, bool write, DramClass cls, std::uint32_t outstanding) {
     streams_.push_back(std::make_unique<MemStream>(*this, c, write, cls, outstanding));
     return streams_.back().get();
   }
@@ -540,7 +551,7 @@ class TimingSim final : public Unit {
   std::uint64_t pb_base_[2] = {0, 0};
   std::uint64_t vertex_base_ = 0, vertex_cursor_ = 0;
   std::uint64_t texture_base_ = 0;
-  std::uint64_t texture_line_bytes_ = 64;
+  std::uint64_t texture_line_bytes_ = 0;  // cache.texture.line_bytes
   std::vector<std::uint64_t> fb_base_, fb_stride_, cmd_base_;
   // The render whose tiles are in flight.
   const RenderWork* render_ = nullptr;

@@ -14,7 +14,7 @@
 //     at a time, in the configured tile order;
 //   USCs: max(ALU ops / (usc.count x usc.lanes x usc.alu_ops_per_lane_per_clock), texels /
 //     (texture.units x texture.texels_per_clock)) per tile or dispatch; the ISP stalls when the
-//     USCs' queue (usc.tasks_in_flight tasks of 32 threads, in tiles) is full;
+//     USCs' queue (usc.tasks_in_flight tasks of usc.threads_per_task threads, in tiles) is full;
 //   pixel back end: stored bytes / writeback.bytes_per_clock, while the stores stream to memory.
 // Phases: a render's tiles start when its binning is done; binning of the next pass overlaps the
 // tiles of the current one (two parameter buffers), but after a partial render the next binning

@@ -23,6 +23,7 @@
 #include "models/dram.hpp"
 #include "models/hw_config.hpp"
 #include "models/memory_system.hpp"
+#include "kernel/errors.hpp"
 #include "kernel/event_queue.hpp"
 #include "kernel/time.hpp"
 
@@ -52,7 +53,7 @@ HwConfig test_config() {
   hw.dram.controller_latency_ns = 30;
   hw.dram.read_queue_entries = 32;
   hw.dram.write_queue_entries = 32;
-  hw.dram.address_mapping = "row_bank_channel_column";
+  hw.dram.address_mapping = DramMapping::RowBankChannelColumn;
   return hw;
 }
 
@@ -324,7 +325,7 @@ TEST(DramTest, AddressMappings) {
     EXPECT_EQ(d.map(16 * 4096).row, 1u);
     EXPECT_EQ(d.map(16 * 4096).bank, 0u);
   }
-  hw.dram.address_mapping = "row_channel_bank_column";
+  hw.dram.address_mapping = DramMapping::RowChannelBankColumn;
   {
     Dram d(hw.dram, hw.energy, eq);  // row | channel | bank | column
     EXPECT_EQ(d.map(4096).channel, 0u);
@@ -335,7 +336,7 @@ TEST(DramTest, AddressMappings) {
     EXPECT_EQ(d.map(16 * 4096 + 7).column, 7u);
   }
   hw.dram.channels = 3;  // not a power of two: the division path
-  hw.dram.address_mapping = "row_bank_channel_column";
+  hw.dram.address_mapping = DramMapping::RowBankChannelColumn;
   {
     Dram d(hw.dram, hw.energy, eq);
     EXPECT_EQ(d.map(2 * 4096).channel, 2u);
@@ -343,7 +344,9 @@ TEST(DramTest, AddressMappings) {
     EXPECT_EQ(d.map(3 * 4096).bank, 1u);
     EXPECT_EQ(d.map(24 * 4096).row, 1u);
   }
-  hw.dram.address_mapping = "interleaved";
+  // The mapping is an enum: an unknown spelling never reaches the DRAM, the configuration refuses it.
+  EXPECT_THROW(resolve_config({}, {"dram.address_mapping=interleaved"}), InputError);
+  hw.dram.write_high_watermark = 1.5;
   EXPECT_THROW(Dram(hw.dram, hw.energy, eq), std::invalid_argument);
 }
 

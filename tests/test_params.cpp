@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "models/hw_config.hpp"
+#include "models/tile_memory.hpp"
 #include "kernel/errors.hpp"
 
 namespace tbdr {
@@ -47,7 +48,7 @@ TEST(Params, DefaultsDescribeTheSeries6xtPreset) {
   EXPECT_EQ(rc.hw.usc.count, 4);
   EXPECT_EQ(rc.hw.pls.tile_buffer_bits_per_pixel, 128);
   EXPECT_DOUBLE_EQ(rc.hw.energy.dram_read_pj_per_bit, 5.1);
-  EXPECT_EQ(rc.hw.gpu.mode, "tbdr");
+  EXPECT_EQ(rc.hw.gpu.mode, GpuMode::Tbdr);
   EXPECT_EQ(rc.params.config_name, "default");
   for (const auto& o : rc.params.origins) EXPECT_EQ(o.text, "default");
 }
@@ -58,7 +59,7 @@ TEST(Params, FileThenSetLayeringAndOrigins) {
   const ResolvedConfig rc = resolve_config({a, b}, {"usc.count=8", "dram.bandwidth_gbps=34"});
   EXPECT_EQ(rc.hw.tiling.tile_width, 16);
   EXPECT_EQ(rc.hw.usc.count, 8);
-  EXPECT_EQ(rc.hw.gpu.mode, "tbr");
+  EXPECT_EQ(rc.hw.gpu.mode, GpuMode::Tbr);
   EXPECT_DOUBLE_EQ(rc.hw.dram.bandwidth_gbps, 34.0);
   const auto& t = hw_params().table();
   EXPECT_EQ(rc.params.origins[static_cast<std::size_t>(t.find("tiling.tile_width"))].text, a + ":3");
@@ -117,6 +118,70 @@ TEST(Params, ShippedPresetsLoad) {
   EXPECT_EQ(m.hw.pls.tile_buffer_bits_per_pixel, 256);
   const ResolvedConfig s = resolve_config({dir + "series6xt_gx6450.ini"}, {});
   EXPECT_EQ(s.hash, resolve_config({}, {}).hash) << "the first preset is the declared defaults";
+}
+
+TEST(Params, ChoicesBecomeEnumsOnceTheTextStaysTheValue) {
+  const ResolvedConfig d = resolve_config({}, {});
+  EXPECT_EQ(d.hw.tiling.binning, BinningTest::Exact);
+  EXPECT_EQ(d.hw.tiling.tile_order, TileOrder::Morton);
+  EXPECT_EQ(d.hw.pls.over_budget, PlsOverBudget::Spill);
+  EXPECT_EQ(d.hw.dram.address_mapping, DramMapping::RowBankChannelColumn);
+  const ResolvedConfig rc = resolve_config({}, {"gpu.mode=imr", "tiling.binning=bbox", "tiling.tile_order=row_major",
+                                                "pls.over_budget=smaller_tiles",
+                                                "dram.address_mapping=row_channel_bank_column"});
+  EXPECT_EQ(rc.hw.gpu.mode, GpuMode::Imr);
+  EXPECT_EQ(rc.hw.tiling.binning, BinningTest::BoundingBox);
+  EXPECT_EQ(rc.hw.tiling.tile_order, TileOrder::RowMajor);
+  EXPECT_EQ(rc.hw.pls.over_budget, PlsOverBudget::SmallerTiles);
+  EXPECT_EQ(rc.hw.dram.address_mapping, DramMapping::RowChannelBankColumn);
+  // The resolved value (stored with every run, printed by `tbdrsim params`) is still the text.
+  const auto& t = hw_params().table();
+  EXPECT_EQ(std::get<std::string>(rc.params.values[static_cast<std::size_t>(t.find("gpu.mode"))]), "imr");
+  EXPECT_EQ(t.decls()[static_cast<std::size_t>(t.find("tiling.tile_order"))].range_text(), "one of row_major|morton");
+  EXPECT_STREQ(to_string(rc.hw.pls.over_budget), "smaller_tiles");
+  EXPECT_STREQ(to_string(DramMapping::RowChannelBankColumn), "row_channel_bank_column");
+  // Every enumerator round-trips through its spelling.
+  for (const auto& n : kGpuModeNames) {
+    EXPECT_EQ(resolve_config({}, {std::string("gpu.mode=") + n.name}).hw.gpu.mode, n.value) << n.name;
+  }
+}
+
+TEST(Params, MaxPlsBytesRefusesALargerLayout) {
+  PassDesc pass;
+  pass.name = "main";
+  pass.line = 12;
+  for (int i = 0; i < 4; ++i) pass.pls.push_back({"stack" + std::to_string(i), Format::R32ui, 0});  // 16 B
+  PlsParams p = resolve_config({}, {}).hw.pls;
+  EXPECT_EQ(p.max_pls_bytes_per_pixel, 16);
+  EXPECT_NO_THROW(check_pls_layout(p, pass));
+  pass.pls.push_back({"stack4", Format::R32ui, 0});  // 20 B
+  try {
+    check_pls_layout(p, pass);
+    ADD_FAILURE() << "a 20-byte layout passed a 16-byte limit";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("pass 'main' (trace line 12)"), std::string::npos) << what;
+    EXPECT_NE(what.find("20 bytes"), std::string::npos) << what;
+    EXPECT_NE(what.find("pls.max_pls_bytes_per_pixel = 16"), std::string::npos) << what;
+  }
+  p.max_pls_bytes_per_pixel = 32;
+  EXPECT_NO_THROW(check_pls_layout(p, pass));
+}
+
+TEST(Params, PlsLightStackHoldsSixteenBitIndicesAfterTheCount) {
+  EXPECT_EQ(pls_light_stack_capacity(0), 0u);
+  EXPECT_EQ(pls_light_stack_capacity(4), 0u);
+  EXPECT_EQ(pls_light_stack_capacity(8), 2u);
+  EXPECT_EQ(pls_light_stack_capacity(16), 6u);  // Billeter: 16 bytes hold 6 lights
+}
+
+TEST(Params, SourcesNameShippedFilesOrPrimarySources) {
+  // A source must be followable by a reader of `tbdrsim params`: never the team's design notes,
+  // which the project does not ship.
+  for (const auto& d : hw_params().table().decls()) {
+    EXPECT_EQ(d.source.find("DESIGN.md"), std::string::npos) << d.key;
+    EXPECT_EQ(d.doc.find("DESIGN.md"), std::string::npos) << d.key;
+  }
 }
 
 }  // namespace

@@ -302,7 +302,7 @@ TEST(TraceErrors, MissingRequiredKey) {
   expect_error(base({{8, "shader s alu_ops=1 tex_fetches=0 varyings=0 light_source=all color_outputs=1"}}), 8,
                "'light_alu_ops'");
   expect_error(base({{2, "scene gltf path=x.gltf"}}), 2, "'hash'");
-  expect_error(base() + "end\ndispatch k groups=1,1,1\n", 14, "'group_size'");
+  expect_error(base() + "end\ndispatch depth_bounds groups=1,1,1\n", 14, "'group_size'");
 }
 
 TEST(TraceErrors, DuplicateNames) {
@@ -321,7 +321,7 @@ TEST(TraceErrors, UndeclaredReferences) {
   expect_error(base() + "  draw scene pipeline=q\nend\n", 13, "'q'");
   expect_error(base() + "  draw scene pipeline=p reads=nobuf\nend\n", 13, "'nobuf'");
   expect_error(base() + "  draw scene pipeline=p fetch=albedo\nend\n", 13, "'albedo'");
-  expect_error(base() + "end\ndispatch k groups=1,1,1 group_size=8,8,1 writes=nowhere\n", 14, "'nowhere'");
+  expect_error(base() + "end\ndispatch depth_bounds groups=1,1,1 group_size=8,8,1 writes=nowhere\n", 14, "'nowhere'");
   expect_error(base() + "end\nbarrier resources=ghost\n", 14, "'ghost'");
 }
 
@@ -352,7 +352,7 @@ TEST(TraceErrors, PassStructure) {
   expect_error(base() + "end\nend\n", 14, "'end' without an open pass");
   expect_error(base() + "end\ndraw scene pipeline=p\n", 14, "outside a pass");
   expect_error(base() + "pass inner\n", 13, "'inner'");
-  expect_error(base() + "  dispatch k groups=1,1,1 group_size=1,1,1\nend\n", 13, "'dispatch' inside pass");
+  expect_error(base() + "  dispatch depth_bounds groups=1,1,1 group_size=1,1,1\nend\n", 13, "'dispatch' inside pass");
   expect_error(base() + "  draw scene pipeline=p\n  attachment x format=rgba8 samples=1 load=clear store=store usage=color\nend\n",
                14, "after the first draw");
   expect_error(base() + "end\nlight point position=0,0,0 radius=1 color=1,1,1 intensity=1\n", 14, "'light'");
@@ -387,22 +387,32 @@ TEST(TraceErrors, SemanticChecks) {
                    "  draw fullscreen pipeline=p\nend\n",
                13, "proxy");
   // buffer read before anything wrote it
-  expect_error(base() + "end\ndispatch k groups=1,1,1 group_size=1,1,1 reads=grid\n", 14, "'grid'");
+  expect_error(base() + "end\ndispatch depth_bounds groups=1,1,1 group_size=1,1,1 reads=grid\n", 14, "'grid'");
   // a dispatch's output read without a barrier
-  expect_error(base() + "end\ndispatch k groups=1,1,1 group_size=1,1,1 writes=grid\n"
-                        "dispatch k2 groups=1,1,1 group_size=1,1,1 reads=grid\n",
+  expect_error(base() + "end\ndispatch depth_bounds groups=1,1,1 group_size=1,1,1 writes=grid\n"
+                        "dispatch tile_light_cull groups=1,1,1 group_size=1,1,1 reads=grid\n",
                15, "barrier");
   // a pass's stored attachment read by a dispatch without a barrier
-  expect_error(base() + "end\ndispatch k groups=1,1,1 group_size=1,1,1 reads=color\n", 14, "barrier");
+  expect_error(base() + "end\ndispatch depth_bounds groups=1,1,1 group_size=1,1,1 reads=color\n", 14, "barrier");
   // quoting mistakes
   expect_error(base({{4, "camera eye=0,0,5 target=0,0,0 up=0,1,0 fov_y_deg=60 near=0.1 far=100 name=\"open"}}), 4, "unterminated");
   expect_error(base({{4, "camera eye=0,0,5 target=0,0,0 up=0,1,0 fov_y_deg=60 near=0.1 far=100 name=a\"b\""}}), 4, "quote");
 }
 
+TEST(TraceErrors, UnknownKernelNamesLineAndKnownKernels) {
+  expect_error(base() + "end\ndispatch cluster_assign groups=1,1,1 group_size=1,1,1\n", 14, "unknown kernel 'cluster_assign'");
+  expect_error(base() + "end\ndispatch cluster_assign groups=1,1,1 group_size=1,1,1\n", 14, "cluster_light_assign");
+  for (std::size_t k = 0; k < kComputeKernelCount; ++k) {
+    const auto kernel = static_cast<ComputeKernel>(k);
+    EXPECT_EQ(parse_compute_kernel(to_string(kernel)), kernel) << to_string(kernel);
+  }
+  EXPECT_FALSE(parse_compute_kernel("k").has_value());
+}
+
 TEST(TraceErrors, BarrierResolvesHazard) {
-  const Trace t = parse(base() + "end\ndispatch k groups=1,1,1 group_size=1,1,1 writes=grid\n"
+  const Trace t = parse(base() + "end\ndispatch depth_bounds groups=1,1,1 group_size=1,1,1 writes=grid\n"
                                  "barrier resources=grid,color\n"
-                                 "dispatch k2 groups=1,1,1 group_size=1,1,1 reads=grid,color\n");
+                                 "dispatch tile_light_cull groups=1,1,1 group_size=1,1,1 reads=grid,color\n");
   EXPECT_EQ(t.commands.size(), 4u);
 }
 

@@ -7,7 +7,10 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <span>
+#include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -52,6 +55,22 @@ struct ParamDecl {
   /// to what was expected.
   bool parse(const std::string& text, ParamValue& out, std::string& why) const;
 };
+
+/// One enumerator of a choice parameter bound to an enum, and its spelling in config files.
+template <class E>
+struct ChoiceName {
+  E value;
+  const char* name;
+};
+
+/// The spelling of `v` in `names` ("?" when it is not listed).
+template <class E>
+constexpr const char* choice_name(std::span<const ChoiceName<E>> names, E v) {
+  for (const auto& n : names) {
+    if (n.value == v) return n.name;
+  }
+  return "?";
+}
 
 /// Where a resolved value came from: the declaration, a config file line, or a --set argument.
 struct ParamOrigin {
@@ -137,6 +156,29 @@ class ParamRegistry {
   ParamTable::Builder add(std::string key, std::string& (*acc)(Config&), std::string def) {
     binders_.push_back([acc](Config& c, const ParamValue& v) { acc(c) = std::get<std::string>(v); });
     return table_.declare(std::move(key), ParamType::Text, std::move(def));
+  }
+  /// Choice parameters bound to an enum member. `names` spells every enumerator, in the order the
+  /// choices are listed, and must outlive the registry (a static table). The text stays the
+  /// parameter's value (config files, `tbdrsim params`, the database); the struct gets the
+  /// enumerator, looked up once when the config is built, so units never compare strings.
+  template <class E>
+    requires std::is_enum_v<E>
+  ParamTable::Builder add(std::string key, std::type_identity_t<E& (*)(Config&)> acc, E def,
+                          std::type_identity_t<std::span<const ChoiceName<E>>> names) {
+    std::vector<std::string> choices;
+    for (const auto& n : names) choices.emplace_back(n.name);
+    const std::string def_name = choice_name(names, def);
+    binders_.push_back([acc, names, key](Config& c, const ParamValue& v) {
+      const auto& text = std::get<std::string>(v);
+      for (const auto& n : names) {
+        if (text == n.name) {
+          acc(c) = n.value;
+          return;
+        }
+      }
+      throw std::logic_error("parameter " + key + ": '" + text + "' is not one of its choices");
+    });
+    return table_.declare(std::move(key), ParamType::Text, def_name).choices(std::move(choices));
   }
   void section(std::string name, std::string doc) { table_.section(std::move(name), std::move(doc)); }
 

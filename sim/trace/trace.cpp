@@ -36,6 +36,10 @@ constexpr std::array kContentNames = {"lights",       "light_index_list", "tile_
                                       "used_clusters", "depth_bounds",    "work_lists", "image",
                                       "other"};
 constexpr std::array kSceneKindNames = {"atrium", "gltf"};
+constexpr std::array kComputeKernelNames = {"depth_bounds",   "tile_light_cull",      "cluster_flag",
+                                            "cluster_light_assign", "deferred_shade", "tiled_deferred_shade",
+                                            "vbuffer_worklists", "vbuffer_shade"};
+static_assert(kComputeKernelNames.size() == kComputeKernelCount);
 
 template <typename E, std::size_t N>
 const char* name_of(const std::array<const char*, N>& names, E v) {
@@ -74,6 +78,13 @@ const char* to_string(SceneSubset v) { return name_of(kSubsetNames, v); }
 const char* to_string(TrafficClass v) { return name_of(kTrafficNames, v); }
 const char* to_string(BufferContent v) { return name_of(kContentNames, v); }
 const char* to_string(SceneKind v) { return name_of(kSceneKindNames, v); }
+const char* to_string(ComputeKernel v) { return name_of(kComputeKernelNames, v); }
+
+std::string compute_kernel_list() {
+  std::string s;
+  for (const char* n : kComputeKernelNames) s += (s.empty() ? "" : ", ") + std::string(n);
+  return s;
+}
 
 std::optional<Format> parse_format(std::string_view s) { return parse_of<Format>(kFormatNames, s); }
 std::optional<LoadOp> parse_load_op(std::string_view s) { return parse_of<LoadOp>(kLoadOpNames, s); }
@@ -103,6 +114,9 @@ std::optional<BufferContent> parse_buffer_content(std::string_view s) {
   return parse_of<BufferContent>(kContentNames, s);
 }
 std::optional<SceneKind> parse_scene_kind(std::string_view s) { return parse_of<SceneKind>(kSceneKindNames, s); }
+std::optional<ComputeKernel> parse_compute_kernel(std::string_view s) {
+  return parse_of<ComputeKernel>(kComputeKernelNames, s);
+}
 
 std::uint64_t LightSelection::count(std::uint64_t light_count) const {
   if (all) return light_count;

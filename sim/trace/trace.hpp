@@ -102,6 +102,19 @@ enum class BufferContent : std::uint8_t {
 /// Name of the scene source kind.
 enum class SceneKind : std::uint8_t { Atrium, Gltf };
 
+/// A compute kernel the simulator implements (docs/kernels.md), as a `dispatch` line names it.
+enum class ComputeKernel : std::uint8_t {
+  DepthBounds,         ///< depth_bounds: per-tile min/max depth
+  TileLightCull,       ///< tile_light_cull: per-tile light lists (Harada; Olsson & Assarsson)
+  ClusterFlag,         ///< cluster_flag: the clusters holding visible samples (Olsson)
+  ClusterLightAssign,  ///< cluster_light_assign: per-cluster light lists
+  DeferredShade,       ///< deferred_shade: shading from G-buffer images
+  TiledDeferredShade,  ///< tiled_deferred_shade: Andersson's single-pass tiled deferred shading
+  VbufferWorklists,    ///< vbuffer_worklists: per-tile, per-material work lists (Burns & Hunt)
+  VbufferShade,        ///< vbuffer_shade: shading from a visibility buffer
+};
+inline constexpr std::size_t kComputeKernelCount = 8;
+
 const char* to_string(Format v);
 const char* to_string(LoadOp v);
 const char* to_string(StoreOp v);
@@ -118,6 +131,9 @@ const char* to_string(SceneSubset v);
 const char* to_string(TrafficClass v);
 const char* to_string(BufferContent v);
 const char* to_string(SceneKind v);
+const char* to_string(ComputeKernel v);
+/// Every kernel's spelling, comma-separated in enum order (for "known: ..." error messages).
+std::string compute_kernel_list();
 
 std::optional<Format> parse_format(std::string_view s);
 std::optional<LoadOp> parse_load_op(std::string_view s);
@@ -135,6 +151,7 @@ std::optional<SceneSubset> parse_scene_subset(std::string_view s);
 std::optional<TrafficClass> parse_traffic_class(std::string_view s);
 std::optional<BufferContent> parse_buffer_content(std::string_view s);
 std::optional<SceneKind> parse_scene_kind(std::string_view s);
+std::optional<ComputeKernel> parse_compute_kernel(std::string_view s);
 
 // ---------------------------------------------------------------------------------------------
 // Declarations
@@ -269,9 +286,10 @@ struct PassDesc {
   std::vector<const Attachment*> color_targets() const;
 };
 
-/// A compute dispatch of a named kernel (the simulator validates the kernel name and its params).
+/// A compute dispatch of a named kernel. The reader refuses a kernel name that is not a
+/// ComputeKernel (file:line); the simulator validates the kernel's parameters.
 struct DispatchCmd {
-  std::string kernel;
+  std::string kernel;  ///< a ComputeKernel's spelling (parse_compute_kernel)
   std::uint32_t groups[3] = {1, 1, 1};      ///< workgroups in x, y, z
   std::uint32_t group_size[3] = {1, 1, 1};  ///< threads per workgroup in x, y, z
   std::vector<std::string> reads;           ///< buffers and stored images read

@@ -849,6 +849,7 @@ void Reader::on_dispatch(const Line& l) {
   if (!first_command_line_) first_command_line_ = l.number;
   DispatchCmd d;
   d.kernel = positional_ident(l, "kernel name");
+  if (!parse_compute_kernel(d.kernel)) fail(l.number, "unknown kernel " + q(d.kernel) + " (known: " + compute_kernel_list() + ")");
   d.line = l.number;
   get_u32x3(l, "groups", d.groups);
   get_u32x3(l, "group_size", d.group_size);
