@@ -138,6 +138,17 @@ TEST(Atrium, WellFormedGeometryWithConsistentWinding) {
   EXPECT_GT(s.bounds.extent().z, 18.0f);
 }
 
+TEST(Atrium, SpecsParseOnce) {
+  EXPECT_FALSE(parse_atrium_spec("scene.glb"));
+  EXPECT_FALSE(parse_atrium_spec("atriums"));
+  ASSERT_TRUE(parse_atrium_spec("atrium"));
+  EXPECT_FALSE(parse_atrium_spec("atrium")->detail);  // the default, default_atrium_detail
+  EXPECT_EQ(parse_atrium_spec("atrium:4")->detail, 4);
+  EXPECT_THROW(parse_atrium_spec("atrium:x"), InputError);
+  EXPECT_THROW(parse_atrium_spec("atrium:-1"), InputError);
+  EXPECT_THROW(parse_atrium_spec("atrium:2.5"), InputError);
+}
+
 TEST(Atrium, InvalidDetailThrows) {
   EXPECT_THROW(make_atrium(0), InputError);
   EXPECT_THROW(make_atrium(6), InputError);

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "kernel/errors.hpp"
+#include "kernel/random.hpp"
 #include "scene/atrium.hpp"
 #include "scene/lights.hpp"
 
@@ -44,6 +45,17 @@ bool same_light(const Light& a, const Light& b) {
           (same_bits(a.direction.x, b.direction.x) && same_bits(a.direction.y, b.direction.y) &&
            same_bits(a.direction.z, b.direction.z) && same_bits(a.cos_inner, b.cos_inner) &&
            same_bits(a.cos_outer, b.cos_outer)));
+}
+
+TEST(Lights, Pcg32IsTheReferenceGenerator) {
+  // pcg32-demo (pcg-random.org, pcg32_srandom_r(42, 54)): the first outputs of the reference code.
+  Pcg32 rng(42, 54);
+  for (std::uint32_t expected : {0xa15c02b7u, 0x7b47f409u, 0xba1d3330u, 0x83d2f293u, 0xbfa4784bu, 0xcbed606eu})
+    EXPECT_EQ(rng.next(), expected);
+  // from_seed mixes one value into seed and stream.
+  Pcg32 a = Pcg32::from_seed(7), b(splitmix64(7), splitmix64(7 ^ 0x5851f42d4c957f2dULL));
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(a.next(), b.next());
+  EXPECT_EQ(splitmix64(0), 0xe220a8397b1dcdafULL);  // SplitMix64's first output from state 0
 }
 
 TEST(Lights, GenerationIsDeterministicAndSeeded) {

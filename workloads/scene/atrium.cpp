@@ -50,6 +50,21 @@ class Builder {
     tri(a, b, c);
     tri(a, c, d);
   }
+  /// The quads of a lattice of (rows + 1) x (cols + 1) vertices added row by row from `base`: cell
+  /// (r, c) has corner a = base + r (cols + 1) + c, wound a, a + 1, a + cols + 2, a + cols + 1
+  /// (next column, then next row), or the other way round with `flip`.
+  void lattice(std::uint32_t base, int rows, int cols, bool flip = false) {
+    const auto row = static_cast<std::uint32_t>(cols + 1);
+    for (int r = 0; r < rows; ++r) {
+      for (int c = 0; c < cols; ++c) {
+        const std::uint32_t a = base + static_cast<std::uint32_t>(r) * row + static_cast<std::uint32_t>(c);
+        if (flip)
+          quad(a, a + row, a + row + 1, a + 1);
+        else
+          quad(a, a + 1, a + row + 1, a + row);
+      }
+    }
+  }
 
   /// A planar rectangle origin + s*u + t*v (s,t in [0,1]) in nu x nv cells, front face toward
   /// cross(u, v). uv = (s*|u|, t*|v|) / uv_meters.
@@ -66,13 +81,7 @@ class Builder {
         vertex(origin + u * s + v * t, n, glm::vec2(s * lu, t * lv));
       }
     }
-    const auto row = static_cast<std::uint32_t>(nu + 1);
-    for (int j = 0; j < nv; ++j) {
-      for (int i = 0; i < nu; ++i) {
-        const std::uint32_t a = base + static_cast<std::uint32_t>(j) * row + static_cast<std::uint32_t>(i);
-        quad(a, a + 1, a + 1 + row, a + row);
-      }
-    }
+    lattice(base, nv, nu);
   }
 
   /// An axis-aligned box with outward faces; cells of at most `cell_m` meters per side.
@@ -107,14 +116,8 @@ class Builder {
                glm::vec2(static_cast<float>(j) / static_cast<float>(radial), profile[i].y));
       }
     }
-    const auto row = static_cast<std::uint32_t>(radial + 1);
-    for (std::size_t i = 0; i + 1 < k; ++i) {
-      for (int j = 0; j < radial; ++j) {
-        const std::uint32_t a = base + static_cast<std::uint32_t>(i) * row + static_cast<std::uint32_t>(j);
-        // (i,j) -> (i+1,j) -> (i+1,j+1): outward (see the derivation in docs/scenes.md).
-        quad(a, a + row, a + row + 1, a + 1);
-      }
-    }
+    // (i,j) -> (i+1,j) -> (i+1,j+1): outward (see the derivation in docs/scenes.md).
+    lattice(base, static_cast<int>(k) - 1, radial, true);
   }
 
   SubMesh& mesh() { return m_; }
@@ -331,18 +334,9 @@ void build_arch_bay(Builder& b, float span, float radius, float wall_h, float de
         b.vertex({p.x, p.y, z}, nrm, {(p.x + hs) / 2.0f, p.y / 2.0f});
       }
     }
-    const auto row = static_cast<std::uint32_t>(rings + 1);
-    for (int i = 0; i < n; ++i) {
-      for (int r = 0; r < rings; ++r) {
-        const std::uint32_t a = base + static_cast<std::uint32_t>(i) * row + static_cast<std::uint32_t>(r);
-        // The arc index grows counter-clockwise seen from +z (right to left), the ring index
-        // outward: (i,r) -> (i,r+1) -> (i+1,r+1) is counter-clockwise seen from +z.
-        if (face == 0)
-          b.quad(a, a + 1, a + row + 1, a + row);
-        else
-          b.quad(a, a + row, a + row + 1, a + 1);
-      }
-    }
+    // The arc index grows counter-clockwise seen from +z (right to left), the ring index
+    // outward: (i,r) -> (i,r+1) -> (i+1,r+1) is counter-clockwise seen from +z.
+    b.lattice(base, n, rings, face != 0);
   }
   // Intrados: faces toward the arch's center.
   const auto base = static_cast<std::uint32_t>(b.mesh().positions.size());
@@ -354,13 +348,7 @@ void build_arch_bay(Builder& b, float span, float radius, float wall_h, float de
       b.vertex({p.x, p.y, z}, nrm, {static_cast<float>(i) / static_cast<float>(n), z});
     }
   }
-  const auto row = static_cast<std::uint32_t>(rings + 1);
-  for (int i = 0; i < n; ++i) {
-    for (int k = 0; k < rings; ++k) {
-      const std::uint32_t a = base + static_cast<std::uint32_t>(i) * row + static_cast<std::uint32_t>(k);
-      b.quad(a, a + 1, a + row + 1, a + row);
-    }
-  }
+  b.lattice(base, n, rings);
 }
 
 /// A hanging banner: top edge at y=0, width w, length h downward, in the z=0 plane with folds
@@ -381,14 +369,8 @@ void build_banner(Builder& b, float w, float h, float phase, int t) {
       b.vertex({(u - 0.5f) * w, -v * h, z}, n, {u, v});
     }
   }
-  const auto row = static_cast<std::uint32_t>(nu + 1);
-  for (int j = 0; j < nv; ++j) {
-    for (int i = 0; i < nu; ++i) {
-      const std::uint32_t a = base + static_cast<std::uint32_t>(j) * row + static_cast<std::uint32_t>(i);
-      // Rows go down (-y) and columns right (+x): (i,j) -> (i,j+1) -> (i+1,j+1) faces +z.
-      b.quad(a, a + row, a + row + 1, a + 1);
-    }
-  }
+  // Rows go down (-y) and columns right (+x): (i,j) -> (i,j+1) -> (i+1,j+1) faces +z.
+  b.lattice(base, nv, nu, true);
 }
 
 /// A plant's foliage: `leaves` folded leaf cards around a crown above y=0, each 4 triangles.

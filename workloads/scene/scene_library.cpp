@@ -40,17 +40,20 @@ std::string fmt_bytes(std::uint64_t b) {
 
 }  // namespace
 
-Scene load_scene(const std::string& spec) {
-  if (spec == "atrium") return make_atrium(default_atrium_detail);
-  if (spec.rfind("atrium:", 0) == 0) {
-    const std::string n = spec.substr(7);
-    int detail = 0;
-    const auto [ptr, ec] = std::from_chars(n.data(), n.data() + n.size(), detail);
-    if (n.empty() || ec != std::errc() || ptr != n.data() + n.size()) {
-      throw InputError(spec, "atrium detail must be an integer in 1..5, got '" + n + "'");
-    }
-    return make_atrium(detail);
+std::optional<AtriumSpec> parse_atrium_spec(const std::string& spec) {
+  if (spec == "atrium") return AtriumSpec{};
+  if (spec.rfind("atrium:", 0) != 0) return std::nullopt;
+  const std::string n = spec.substr(7);
+  int detail = 0;
+  const auto [ptr, ec] = std::from_chars(n.data(), n.data() + n.size(), detail);
+  if (n.empty() || ec != std::errc() || ptr != n.data() + n.size() || detail < 0) {
+    throw InputError(spec, "atrium detail must be an integer in 1..5, got '" + n + "'");
   }
+  return AtriumSpec{detail};
+}
+
+Scene load_scene(const std::string& spec) {
+  if (const auto atrium = parse_atrium_spec(spec)) return make_atrium(atrium->detail.value_or(default_atrium_detail));
   if (ends_with_ci(spec, ".gltf") || ends_with_ci(spec, ".glb")) return load_gltf(spec);
   throw InputError(spec, "unknown scene: expected 'atrium', 'atrium:N' (N in 1..5) or a .gltf/.glb file");
 }

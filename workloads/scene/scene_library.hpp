@@ -1,6 +1,7 @@
 #pragma once
 // One entry point for every scene a run can name: the built-in atrium or a glTF file, and a
 // human-readable summary of a loaded scene (what `tbdrsim scene-info` prints).
+#include <optional>
 #include <ostream>
 #include <string>
 
@@ -10,6 +11,14 @@ namespace tbdr {
 
 /// Detail level of a plain "atrium" spec.
 inline constexpr int default_atrium_detail = 3;
+
+/// An atrium scene spec: "atrium" or "atrium:N".
+struct AtriumSpec {
+  std::optional<int> detail;  ///< N of "atrium:N"; none for a plain "atrium" (default_atrium_detail)
+};
+/// The atrium spec `spec` names, or nullopt when it names something else; throws InputError naming
+/// the spec when N is not a non-negative integer (make_atrium checks the range 1..5).
+std::optional<AtriumSpec> parse_atrium_spec(const std::string& spec);
 
 /// Loads a scene from a spec: "atrium" (detail 3), "atrium:N" (N in 1..5), or a path ending in
 /// .gltf or .glb. Throws InputError naming the spec (or the file) when it cannot.

@@ -15,8 +15,6 @@
 //   cluster_flag and assignment over the used clusters, as clustered_forward); barrier; pass `main`
 //   (as practical_clustered_forward): PreZ, lit draws with light_source=cluster_list (20 + 6 ALU,
 //   2 fetches, 8 varyings, 12 per light), BLEND geometry with the same lists.
-#include <algorithm>
-
 #include "kernel/errors.hpp"
 #include "techniques/technique.hpp"
 
@@ -26,23 +24,10 @@ namespace {
 
 Trace generate_cascaded_clustered_forward(const TraceSetup& setup, const TechniqueOptions& options) {
   using Kind = LightGridConfig::Kind;
-  LightGridConfig c{.technique = "cascaded_clustered_forward",
-                    .kind = options.get_bool("dense") ? Kind::DenseClusters : Kind::SparseClusters,
-                    .grid = light_grid_option(setup, options, true)};
-  c.grid.cubical = true;
-  const Camera& cam = setup.camera;
-  if (options.get("min_depth") == "auto") {
-    c.grid.min_depth = std::min(10.0f * cam.near_plane, 0.5f * cam.far_plane);
-  } else {
-    c.grid.min_depth = options.get_float("min_depth", 0.0f, 1e30f);
-    if (!(c.grid.min_depth > cam.near_plane && c.grid.min_depth < cam.far_plane))
-      throw InputError("option min_depth=" + options.get("min_depth"),
-                       "must lie between the camera's near and far planes");
-  }
-  const std::uint32_t max_slices =
-      options.get("slices") == "auto" ? 4096u : static_cast<std::uint32_t>(options.get_int("slices", 1, 4096));
-  c.grid.slices = cubical_slice_count(cam, setup.height, c.grid.tile_px, c.grid.min_depth, max_slices);
-  c.prez = options.get_bool("prez");
+  const LightGridConfig c{.technique = "cascaded_clustered_forward",
+                          .kind = options.get_bool("dense") ? Kind::DenseClusters : Kind::SparseClusters,
+                          .grid = light_grid_option(setup, options, GridOptions::CubicalClusters),
+                          .prez = options.get_bool("prez")};
   if (c.kind == Kind::SparseClusters && !c.prez)
     throw InputError("option prez=no", "cascaded_clustered_forward with dense=no needs its stored depth pre-pass");
   return generate_light_grid_forward(setup, options, c);

@@ -19,8 +19,6 @@
 //   target) + position reconstruction 8 + cluster lookup 6 + ambient 3 + output 5 ALU, one fetch per
 //   G-buffer target + 1 for depth, light_source=cluster_list, 12 ALU per light.
 // Translucent (BLEND) geometry is not drawn (see tiled_deferred.cpp and docs/techniques.md).
-#include <algorithm>
-
 #include "techniques/technique.hpp"
 
 namespace tbdr {
@@ -31,8 +29,7 @@ Trace generate_clustered_deferred(const TraceSetup& setup, const TechniqueOption
   Trace t = begin_trace(setup, "clustered_deferred", options, {.no_msaa = kGbufferNoMsaa, .needs_lights = true});
   const std::string lights = add_light_buffer(t);
   const GbufferLayout layout = gbuffer_layout_option(options, "gbuffer");
-  LightGrid grid = light_grid_option(setup, options, true);
-  grid.slices = static_cast<std::uint32_t>(options.get_int("slices", 1, 1024));
+  const LightGrid grid = light_grid_option(setup, options, GridOptions::LogClusters);
 
   const std::string used = add_used_clusters_buffer(t, grid);
   add_light_grid_buffers(t, grid);
@@ -42,11 +39,8 @@ Trace generate_clustered_deferred(const TraceSetup& setup, const TechniqueOption
   t.commands.emplace_back(make_barrier({grid.grid_buffer(), kLightIndexBuffer}));
   std::vector<std::string> reads = g.stored;
   reads.insert(reads.end(), {lights, grid.grid_buffer(), kLightIndexBuffer});
-  t.commands.emplace_back(make_dispatch("deferred_shade", tiles_for(setup.width, kKernelGroupEdge),
-                                        tiles_for(setup.height, kKernelGroupEdge), 1, kKernelGroupEdge,
-                                        kKernelGroupEdge, 1, reads, {g.frame},
-                                        {{"shader", "clustered_deferred_lit"},
-                                         {"tile_px", std::to_string(kKernelGroupEdge)}}));
+  t.commands.emplace_back(
+      shading_dispatch("deferred_shade", "clustered_deferred_lit", setup, kKernelGroupEdge, reads, g.frame));
   return t;
 }
 

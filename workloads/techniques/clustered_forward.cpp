@@ -22,11 +22,11 @@ namespace tbdr {
 namespace {
 
 Trace generate_clustered_forward(const TraceSetup& setup, const TechniqueOptions& options) {
-  LightGridConfig c{.technique = "clustered_forward", .kind = LightGridConfig::Kind::SparseClusters,
-                    .grid = light_grid_option(setup, options, true)};
-  c.grid.slices = static_cast<std::uint32_t>(options.get_int("slices", 1, 1024));
-  c.depth_reload = options.get_bool("depth_reload");
-  return generate_light_grid_forward(setup, options, c);
+  return generate_light_grid_forward(setup, options,
+                                     {.technique = "clustered_forward",
+                                      .kind = LightGridConfig::Kind::SparseClusters,
+                                      .grid = light_grid_option(setup, options, GridOptions::LogClusters),
+                                      .depth_reload = options.get_bool("depth_reload")});
 }
 
 }  // namespace

@@ -21,10 +21,11 @@ namespace tbdr {
 namespace {
 
 Trace generate_forward_plus(const TraceSetup& setup, const TechniqueOptions& options) {
-  LightGridConfig c{.technique = "forward_plus", .kind = LightGridConfig::Kind::Tiles,
-                    .grid = light_grid_option(setup, options, false)};
-  c.depth_reload = options.get_bool("depth_reload");
-  return generate_light_grid_forward(setup, options, c);
+  return generate_light_grid_forward(setup, options,
+                                     {.technique = "forward_plus",
+                                      .kind = LightGridConfig::Kind::Tiles,
+                                      .grid = light_grid_option(setup, options, GridOptions::Tiles),
+                                      .depth_reload = options.get_bool("depth_reload")});
 }
 
 }  // namespace

@@ -22,11 +22,11 @@ namespace tbdr {
 namespace {
 
 Trace generate_practical_clustered_forward(const TraceSetup& setup, const TechniqueOptions& options) {
-  LightGridConfig c{.technique = "practical_clustered_forward", .kind = LightGridConfig::Kind::DenseClusters,
-                    .grid = light_grid_option(setup, options, true)};
-  c.grid.slices = static_cast<std::uint32_t>(options.get_int("slices", 1, 1024));
-  c.prez = options.get_bool("prez");
-  return generate_light_grid_forward(setup, options, c);
+  return generate_light_grid_forward(setup, options,
+                                     {.technique = "practical_clustered_forward",
+                                      .kind = LightGridConfig::Kind::DenseClusters,
+                                      .grid = light_grid_option(setup, options, GridOptions::LogClusters),
+                                      .prez = options.get_bool("prez")});
 }
 
 }  // namespace

@@ -121,31 +121,19 @@ bool is_hash16(const std::string& h) {
          std::all_of(h.begin(), h.end(), [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); });
 }
 
-// "atrium" -> nullopt detail; "atrium:3" -> 3; anything else -> not an atrium spec.
-bool atrium_spec(const std::string& spec, std::optional<int>& detail) {
-  detail.reset();
-  if (spec == "atrium") return true;
-  if (spec.rfind("atrium:", 0) != 0) return false;
-  const std::string d = spec.substr(7);
-  int v = 0;
-  const auto r = std::from_chars(d.data(), d.data() + d.size(), v);
-  if (r.ec != std::errc() || r.ptr != d.data() + d.size() || v < 0)
-    throw InputError("scene " + spec, "malformed atrium detail level '" + d + "'");
-  detail = v;
-  return true;
-}
-
 }  // namespace
 
 TraceScene trace_scene_for(const TraceSetup& setup) {
   const std::string spec = !setup.scene_spec.empty() ? setup.scene_spec : (setup.scene ? setup.scene->source : "");
   if (spec.empty()) throw InputError("scene", "no scene given (neither a scene spec nor a loaded scene)");
   TraceScene s;
-  std::optional<int> detail;
-  if (atrium_spec(spec, detail)) {
+  if (const auto atrium = parse_atrium_spec(spec)) {
     s.kind = SceneKind::Atrium;
-    std::optional<int> loaded_detail;
-    if (setup.scene && atrium_spec(setup.scene->source, loaded_detail) && loaded_detail) detail = loaded_detail;
+    std::optional<int> detail = atrium->detail;
+    if (setup.scene) {  // the loaded scene knows the detail a plain "atrium" stands for
+      const auto loaded = parse_atrium_spec(setup.scene->source);
+      if (loaded && loaded->detail) detail = loaded->detail;
+    }
     if (!detail) throw InputError("scene " + spec, "atrium detail level unknown (give atrium:<detail>)");
     s.detail = *detail;
     if (setup.scene && is_hash16(setup.scene->content_hash)) s.content_hash = setup.scene->content_hash;
@@ -373,6 +361,8 @@ std::uint32_t tiles_for(int pixels, std::uint32_t tile_px) {
   return (p + tile_px - 1) / tile_px;
 }
 
+std::uint32_t kernel_group_edge(std::uint32_t tile_px) { return std::min(tile_px, kKernelGroupEdge); }
+
 std::uint32_t index_bytes_option(const TechniqueOptions& options, const std::string& key, std::size_t light_count) {
   const std::string& v = options.get(key);
   if (v == "auto") return light_count <= 256 ? 1 : light_count <= 65536 ? 2 : 4;
@@ -388,17 +378,6 @@ std::uint32_t list_cap_option(const TechniqueOptions& options, const std::string
   const auto all = static_cast<std::uint32_t>(std::max<std::size_t>(light_count, 1));
   if (options.get(key) == "all") return all;
   return std::min(all, static_cast<std::uint32_t>(options.get_int(key, 1, 65535)));
-}
-
-std::uint32_t cubical_slice_count(const Camera& camera, int height, std::uint32_t tile_px, float min_depth,
-                                  std::uint32_t max_slices) {
-  // As docs/kernels.md: slice k+1 starts at z_k * (1 + 2 tan(fov_y/2) * tile_px / height); the first
-  // slice ends at min_depth (never nearer than the near plane); the last reaches the far plane.
-  const float tan_half_y = std::tan(camera.fov_y_deg * 3.14159265358979f / 360.0f);
-  const float ratio = 1.0f + 2.0f * tan_half_y * static_cast<float>(tile_px) / static_cast<float>(std::max(height, 1));
-  const float start = std::max(min_depth, camera.near_plane);
-  const int needed = 1 + static_cast<int>(std::ceil(std::log(camera.far_plane / start) / std::log(ratio)));
-  return static_cast<std::uint32_t>(std::max(1, std::min(static_cast<int>(max_slices), needed)));
 }
 
 std::uint32_t GbufferLayout::bytes_per_sample() const {
@@ -473,11 +452,10 @@ void add_prez(Trace& trace, PassDesc& pass) {
   add_scene_shading(trace, pass, "prez", depth_only, masked_variant(depth_only, 1, kUvVaryings));
 }
 
-std::string add_translucent_state(Trace& trace) {
+void add_translucent_state(Trace& trace) {
   trace.shaders.push_back(make_shader("forward_translucent", kForwardLitAluOps, kSurfaceTexFetches, kSurfaceVaryings,
                                       kLightAluOps, LightSource::ObjectList, 1));
   trace.pipelines.push_back(blended_pipeline("translucent", "forward_translucent"));
-  return "translucent";
 }
 
 void add_translucent_draw(PassDesc& pass, const std::string& lights) {
@@ -564,7 +542,7 @@ std::uint64_t LightGrid::cells() const {
   return std::uint64_t{tiles_x()} * tiles_y() * (clusters ? slices : 1);
 }
 
-std::uint32_t LightGrid::group_edge() const { return std::min(tile_px, kKernelGroupEdge); }
+std::uint32_t LightGrid::group_edge() const { return kernel_group_edge(tile_px); }
 
 std::map<std::string, std::string> LightGrid::cluster_params() const {
   std::map<std::string, std::string> params = {
@@ -573,14 +551,51 @@ std::map<std::string, std::string> LightGrid::cluster_params() const {
   return params;
 }
 
-LightGrid light_grid_option(const TraceSetup& setup, const TechniqueOptions& options, bool clusters) {
+namespace {
+
+// Number of depth slices of a cubical cluster grid (docs/kernels.md, Billeter 2015): as many as
+// reach the far plane from `min_depth` with tiles of `tile_px`, at most `max_slices`. The same
+// formula the cluster kernels use, so buffer sizes match their grids.
+std::uint32_t cubical_slice_count(const Camera& camera, int height, std::uint32_t tile_px, float min_depth,
+                                  std::uint32_t max_slices) {
+  // As docs/kernels.md: slice k+1 starts at z_k * (1 + 2 tan(fov_y/2) * tile_px / height); the first
+  // slice ends at min_depth (never nearer than the near plane); the last reaches the far plane.
+  const float tan_half_y = std::tan(camera.fov_y_deg * 3.14159265358979f / 360.0f);
+  const float ratio = 1.0f + 2.0f * tan_half_y * static_cast<float>(tile_px) / static_cast<float>(std::max(height, 1));
+  const float start = std::max(min_depth, camera.near_plane);
+  const int needed = 1 + static_cast<int>(std::ceil(std::log(camera.far_plane / start) / std::log(ratio)));
+  return static_cast<std::uint32_t>(std::max(1, std::min(static_cast<int>(max_slices), needed)));
+}
+
+// The cubical grid's min_depth and slices options (GridOptions::CubicalClusters), into `g`.
+void cubical_slices_option(const TraceSetup& setup, const TechniqueOptions& options, LightGrid& g) {
+  const Camera& cam = setup.camera;
+  g.cubical = true;
+  if (options.get("min_depth") == "auto") {
+    g.min_depth = std::min(10.0f * cam.near_plane, 0.5f * cam.far_plane);
+  } else {
+    g.min_depth = options.get_float("min_depth", 0.0f, 1e30f);
+    if (!(g.min_depth > cam.near_plane && g.min_depth < cam.far_plane))
+      throw InputError("option min_depth=" + options.get("min_depth"),
+                       "must lie between the camera's near and far planes");
+  }
+  const std::uint32_t max_slices =
+      options.get("slices") == "auto" ? 4096u : static_cast<std::uint32_t>(options.get_int("slices", 1, 4096));
+  g.slices = cubical_slice_count(cam, setup.height, g.tile_px, g.min_depth, max_slices);
+}
+
+}  // namespace
+
+LightGrid light_grid_option(const TraceSetup& setup, const TechniqueOptions& options, GridOptions form) {
   const std::size_t light_count = setup.lights.lights.size();
   LightGrid g;
-  g.clusters = clusters;
+  g.clusters = form != GridOptions::Tiles;
   g.width = setup.width;
   g.height = setup.height;
-  g.tile_px = static_cast<std::uint32_t>(options.get_int("tile_px", 4, clusters ? 1024 : 256));
-  g.max_lights = list_cap_option(options, clusters ? "max_lights_per_cluster" : "max_lights_per_tile", light_count);
+  g.tile_px = static_cast<std::uint32_t>(options.get_int("tile_px", 4, g.clusters ? 1024 : 256));
+  if (form == GridOptions::LogClusters) g.slices = static_cast<std::uint32_t>(options.get_int("slices", 1, 1024));
+  if (form == GridOptions::CubicalClusters) cubical_slices_option(setup, options, g);
+  g.max_lights = list_cap_option(options, g.clusters ? "max_lights_per_cluster" : "max_lights_per_tile", light_count);
   g.index_bytes = index_bytes_option(options, "index_bytes", light_count);
   return g;
 }
@@ -629,6 +644,16 @@ void add_sparse_cluster_assignment(Trace& trace, const LightGrid& grid, const st
 
 DispatchCmd dense_cluster_assignment(const LightGrid& grid, const std::string& lights) {
   return cluster_light_assign(grid, lights, "");
+}
+
+DispatchCmd shading_dispatch(const std::string& kernel, const std::string& shader, const TraceSetup& setup,
+                             std::uint32_t tile_px, const std::vector<std::string>& reads, const std::string& frame,
+                             std::map<std::string, std::string> params) {
+  params["shader"] = shader;
+  params["tile_px"] = std::to_string(tile_px);
+  const std::uint32_t edge = kernel_group_edge(tile_px);
+  return make_dispatch(kernel, tiles_for(setup.width, tile_px), tiles_for(setup.height, tile_px), 1, edge, edge, 1,
+                       reads, {frame}, params);
 }
 
 Trace generate_light_grid_forward(const TraceSetup& setup, const TechniqueOptions& options, const LightGridConfig& c) {

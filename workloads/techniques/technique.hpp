@@ -256,10 +256,12 @@ DispatchCmd make_dispatch(const std::string& kernel, std::uint32_t groups_x, std
 /// A barrier on the named resources.
 BarrierCmd make_barrier(const std::vector<std::string>& resources);
 
-// ---- options -----------------------------------------------------------------------------------------
+// ---- sizes and options ---------------------------------------------------------------------------------
 
 /// Number of `tile_px` tiles covering `pixels` (rounded up).
 std::uint32_t tiles_for(int pixels, std::uint32_t tile_px);
+/// Workgroup edge of a per-tile kernel: the tile, at most kKernelGroupEdge (bigger tiles loop).
+std::uint32_t kernel_group_edge(std::uint32_t tile_px);
 /// The `key` option as light index bytes: "auto" (the smallest size that addresses every light: 1
 /// byte up to 256 lights, 2 up to 65536, else 4) or 1, 2, 4; InputError when too small to address
 /// `light_count` lights.
@@ -267,11 +269,6 @@ std::uint32_t index_bytes_option(const TechniqueOptions& options, const std::str
 /// The `key` option as a light-list cap: "all" (the light count, so no list can overflow and the
 /// image stays exact) or a count in [1, 65535], never more than the light count.
 std::uint32_t list_cap_option(const TechniqueOptions& options, const std::string& key, std::size_t light_count);
-/// Number of depth slices of a cubical cluster grid (docs/kernels.md, Billeter 2015): as many as
-/// reach the far plane from `min_depth` with tiles of `tile_px`, at most `max_slices`. The same
-/// formula the cluster kernels use, so buffer sizes match their grids.
-std::uint32_t cubical_slice_count(const Camera& camera, int height, std::uint32_t tile_px, float min_depth,
-                                  std::uint32_t max_slices);
 
 /// A G-buffer layout: the color targets of a G-buffer pass, albedo first, normal second, then
 /// extra targets (specular, motion, ...) that only cost bandwidth and encode/decode work.
@@ -304,8 +301,8 @@ std::size_t scene_material_count(const TraceSetup& setup);
 void add_prez(Trace& trace, PassDesc& pass);
 /// Declares the forward shader and pipeline for translucent (BLEND) geometry drawn over a finished
 /// opaque frame: lights from the per-object lists (Billeter's "assign lights per geometry batch"),
-/// depth test without write, alpha blending. Returns the pipeline name (`translucent`).
-std::string add_translucent_state(Trace& trace);
+/// depth test without write, alpha blending: pipeline `translucent`.
+void add_translucent_state(Trace& trace);
 /// Appends the translucent draw (subset blended, pipeline `translucent`) to `pass`.
 void add_translucent_draw(PassDesc& pass, const std::string& lights);
 /// Declares the fullscreen `ambient` shader and pipeline (ambient + output, one fetch) and appends
@@ -370,8 +367,7 @@ struct LightGrid {
   std::uint32_t tiles_x() const { return tiles_for(width, tile_px); }
   std::uint32_t tiles_y() const { return tiles_for(height, tile_px); }
   std::uint64_t cells() const;  ///< tiles x slices (tiles have one slice)
-  /// Workgroup edge of the per-tile kernels: the tile, at most kKernelGroupEdge (bigger tiles loop).
-  std::uint32_t group_edge() const;
+  std::uint32_t group_edge() const;  ///< kernel_group_edge(tile_px)
   /// Name of the grid buffer: `cluster_grid` or `tile_grid`.
   std::string grid_buffer() const { return clusters ? "cluster_grid" : "tile_grid"; }
   /// The cluster kernels' grid parameters: tile_px, slices, slicing (and min_depth when cubical).
@@ -379,10 +375,18 @@ struct LightGrid {
 };
 /// Name of the light index list buffer of a LightGrid.
 inline constexpr const char* kLightIndexBuffer = "light_index";
-/// The light grid over the setup's frame with the options every light-list technique declares read:
-/// `tile_px` (4..256 for tiles, 4..1024 for clusters), the list cap `max_lights_per_tile` or
-/// `max_lights_per_cluster` (list_cap_option) and `index_bytes` (index_bytes_option).
-LightGrid light_grid_option(const TraceSetup& setup, const TechniqueOptions& options, bool clusters);
+/// How a technique's options describe its light grid (each reads them in this order).
+enum class GridOptions : std::uint8_t {
+  Tiles,        ///< tile_px (4..256), max_lights_per_tile, index_bytes
+  LogClusters,  ///< tile_px (4..1024), slices (1..1024, exponential), max_lights_per_cluster, index_bytes
+  /// tile_px (4..1024), min_depth (auto: 10 x near, at most far/2), slices (auto or a maximum,
+  /// 1..4096: as many near-cubical slices as reach the far plane, the formula of docs/kernels.md),
+  /// max_lights_per_cluster, index_bytes
+  CubicalClusters,
+};
+/// The light grid over the setup's frame as the technique's options give it (`form`); list caps
+/// with list_cap_option, index sizes with index_bytes_option.
+LightGrid light_grid_option(const TraceSetup& setup, const TechniqueOptions& options, GridOptions form);
 /// Declares the grid buffer (kGridEntryBytes per cell) and `light_index` (max_lights x index_bytes
 /// per cell), both written by kernels.
 void add_light_grid_buffers(Trace& trace, const LightGrid& grid);
@@ -397,6 +401,14 @@ void add_sparse_cluster_assignment(Trace& trace, const LightGrid& grid, const st
                                    const std::string& used);
 /// The cluster_light_assign dense=yes dispatch: every cluster of the grid, whatever the geometry.
 DispatchCmd dense_cluster_assignment(const LightGrid& grid, const std::string& lights);
+
+/// A shading kernel's dispatch over the frame (tiled_deferred_shade, deferred_shade, vbuffer_shade):
+/// one group per `tile_px` tile (kernel_group_edge threads on a side), the
+/// per-pixel cost of shader `shader`, reading `reads` and writing the lit frame `frame`; `params`
+/// adds to shader and tile_px.
+DispatchCmd shading_dispatch(const std::string& kernel, const std::string& shader, const TraceSetup& setup,
+                             std::uint32_t tile_px, const std::vector<std::string>& reads, const std::string& frame,
+                             std::map<std::string, std::string> params = {});
 
 /// The light-grid forward family: Forward+ (tiles), clustered forward (sparse clusters from a
 /// stored depth pre-pass), practical and cascaded clustered forward (dense clusters assigned up front).

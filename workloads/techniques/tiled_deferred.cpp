@@ -15,8 +15,6 @@
 //   the workgroup's: no lookup cost.
 // Translucent (BLEND) geometry is not drawn: docs/kernels.md has no way to composite a raster pass
 // over a kernel-written image (see docs/techniques.md).
-#include <algorithm>
-
 #include "techniques/technique.hpp"
 
 namespace tbdr {
@@ -33,12 +31,8 @@ Trace generate_tiled_deferred(const TraceSetup& setup, const TechniqueOptions& o
   const ShadedGbuffer g = add_compute_gbuffer(t, setup, layout, "tiled_deferred_lit", 0, LightSource::TileList);
   std::vector<std::string> reads = g.stored;
   reads.push_back(lights);
-  const std::uint32_t edge = std::min(tile_px, kKernelGroupEdge);
-  t.commands.emplace_back(make_dispatch("tiled_deferred_shade", tiles_for(setup.width, tile_px),
-                                        tiles_for(setup.height, tile_px), 1, edge, edge, 1, reads, {g.frame},
-                                        {{"shader", "tiled_deferred_lit"},
-                                         {"tile_px", std::to_string(tile_px)},
-                                         {"max_lights_per_tile", std::to_string(cap)}}));
+  t.commands.emplace_back(shading_dispatch("tiled_deferred_shade", "tiled_deferred_lit", setup, tile_px, reads,
+                                           g.frame, {{"max_lights_per_tile", std::to_string(cap)}}));
   return t;
 }
 

@@ -36,7 +36,7 @@ Trace generate_visibility_buffer(const TraceSetup& setup, const TechniqueOptions
   const std::int64_t id_bytes = options.get_int("id_bytes", 4, 8);
   if (id_bytes != 4 && id_bytes != 8)
     throw InputError("option id_bytes=" + options.get("id_bytes"), "visibility ids are 4 (r32ui) or 8 (rg32ui) bytes");
-  const LightGrid grid = light_grid_option(setup, options, false);
+  const LightGrid grid = light_grid_option(setup, options, GridOptions::Tiles);
   const auto samples = static_cast<std::uint32_t>(setup.samples);
 
   const std::uint64_t materials = std::max<std::size_t>(1, scene_material_count(setup));
@@ -57,18 +57,14 @@ Trace generate_visibility_buffer(const TraceSetup& setup, const TechniqueOptions
                                   kSurfaceTexFetches + 1, 0, kLightAluOps, LightSource::TileList, 1));
 
   const std::uint32_t edge = grid.group_edge();
-  const std::map<std::string, std::string> tile_px = {{"tile_px", std::to_string(grid.tile_px)}};
   t.commands.emplace_back(std::move(pass));
   t.commands.emplace_back(make_barrier({"visibility", "depth"}));
   t.commands.emplace_back(make_dispatch("vbuffer_worklists", grid.tiles_x(), grid.tiles_y(), 1, edge, edge, 1,
-                                        {"visibility"}, {work}, tile_px));
+                                        {"visibility"}, {work}, {{"tile_px", std::to_string(grid.tile_px)}}));
   t.commands.emplace_back(tile_light_cull_dispatch(grid, lights));
   t.commands.emplace_back(make_barrier({work, grid.grid_buffer(), kLightIndexBuffer}));
-  auto shade_params = tile_px;
-  shade_params["shader"] = "vbuffer_lit";
-  t.commands.emplace_back(make_dispatch("vbuffer_shade", grid.tiles_x(), grid.tiles_y(), 1, edge, edge, 1,
-                                        {"visibility", work, lights, grid.grid_buffer(), kLightIndexBuffer}, {frame},
-                                        shade_params));
+  t.commands.emplace_back(shading_dispatch("vbuffer_shade", "vbuffer_lit", setup, grid.tile_px,
+                                           {"visibility", work, lights, grid.grid_buffer(), kLightIndexBuffer}, frame));
   return t;
 }
 
