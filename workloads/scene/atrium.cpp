@@ -210,10 +210,7 @@ glm::mat4 side_rotation(const Side& s) {
 // Alpha masks
 
 AlphaMask cloth_mask(int w, int h) {
-  AlphaMask m;
-  m.width = w;
-  m.height = h;
-  m.alpha.assign(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), 255);
+  AlphaMask m{w, h, std::vector<std::uint8_t>(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), 255)};
   // Moth holes: a dozen circles at hashed places in the body.
   struct Hole { float u, v, r; };
   std::vector<Hole> holes;
@@ -254,10 +251,7 @@ AlphaMask cloth_mask(int w, int h) {
 }
 
 AlphaMask leaf_mask(int w, int h) {
-  AlphaMask m;
-  m.width = w;
-  m.height = h;
-  m.alpha.assign(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), 0);
+  AlphaMask m{w, h, std::vector<std::uint8_t>(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), 0)};
   for (int y = 0; y < h; ++y) {
     // v runs from the leaf's base (row 0) to its tip (last row).
     const float v = (static_cast<float>(y) + 0.5f) / static_cast<float>(h);

@@ -34,10 +34,7 @@ Trace generate_deferred(const TraceSetup& setup, const TechniqueOptions& options
 
   PassDesc gbuffer = make_gbuffer_pass(t, layout);
 
-  PassDesc lighting;
-  lighting.name = "lighting";
-  add_color_target(lighting, "color", 1);
-  lighting.attachments.push_back(depth_attachment(1, LoadOp::Load, StoreOp::DontCare));
+  PassDesc lighting = color_pass("lighting", 1, LoadOp::Load);  // the light volumes are depth tested
   add_ambient(t, lighting, "albedo");
   const auto targets = static_cast<std::uint32_t>(layout.formats.size());
   t.shaders.push_back(light_volume_shader("light_volume", targets, layout.extra_targets(), 1));

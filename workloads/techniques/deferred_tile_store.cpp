@@ -34,10 +34,7 @@ Trace generate_deferred_tile_store(const TraceSetup& setup, const TechniqueOptio
   const std::uint32_t subdivisions = sphere_subdivisions_option(options);
   const bool translucent = translucent_forward_option(options);
 
-  PassDesc pass;
-  pass.name = "main";
-  add_color_target(pass, "color", 1);
-  pass.attachments.push_back(depth_attachment(1, LoadOp::Clear, StoreOp::DontCare));
+  PassDesc pass = color_pass("main", 1);
   pass.pls = {{"albedo", albedo, 0}, {"normal", normal, 0}, {"light_accum", accum, 0}};
   const ShaderDesc gbuffer = gbuffer_shader("gbuffer_pls", 0, 0, PlsAccess::Write);
   add_scene_shading(t, pass, "gbuffer_pls", gbuffer, masked_variant(gbuffer));

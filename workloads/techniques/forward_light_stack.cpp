@@ -34,10 +34,7 @@ Trace generate_forward_light_stack(const TraceSetup& setup, const TechniqueOptio
                      "pixel local storage comes in 4-byte variables: give a multiple of 4");
   const std::uint32_t subdivisions = sphere_subdivisions_option(options);
 
-  PassDesc pass;
-  pass.name = "main";
-  add_color_target(pass, "color", 1);
-  pass.attachments.push_back(depth_attachment(1, LoadOp::Clear, StoreOp::DontCare));
+  PassDesc pass = color_pass("main", 1);
   for (std::uint32_t i = 0; i < pls_bytes / 4; ++i) pass.pls.push_back({"stack" + std::to_string(i), Format::R32ui, 0});
   add_prez(t, pass);
   t.shaders.push_back(make_shader("light_splat", kPlsStackPushAluOps, 0, 0, 0, LightSource::None, 0,

@@ -45,10 +45,7 @@ Trace generate_forward_multipass(const TraceSetup& setup, const TechniqueOptions
   t.shaders.push_back(lit);
   t.shaders.push_back(lit_masked);
 
-  PassDesc pass;
-  pass.name = "main";
-  add_color_target(pass, "color", samples);
-  pass.attachments.push_back(depth_attachment(samples, LoadOp::Clear, StoreOp::DontCare));
+  PassDesc pass = color_pass("main", samples);
   if (prez) {
     add_prez(t, pass);
     t.pipelines.push_back(depth_equal_pipeline("first_equal", lit.name));

@@ -37,11 +37,7 @@ Trace generate_plain_forward(const TraceSetup& setup, const TechniqueOptions& op
   t.pipelines = {depth_writing_pipeline("opaque", lit.name), depth_writing_pipeline("masked", masked.name),
                  blended_pipeline("blended", lit.name)};
 
-  PassDesc pass;
-  pass.name = "main";
-  const auto samples = static_cast<std::uint32_t>(setup.samples);
-  add_color_target(pass, "color", samples);
-  pass.attachments.push_back(depth_attachment(samples, LoadOp::Clear, StoreOp::DontCare));
+  PassDesc pass = color_pass("main", static_cast<std::uint32_t>(setup.samples));
   add_scene_draws(pass, "opaque", "masked", {lights});
   pass.draws.push_back(scene_draw(SceneSubset::Blended, "blended", {lights}));
   t.commands.emplace_back(std::move(pass));

@@ -271,6 +271,14 @@ void add_color_target(PassDesc& pass, const std::string& name, std::uint32_t sam
   pass.attachments.push_back(color);
 }
 
+PassDesc color_pass(const std::string& name, std::uint32_t samples, LoadOp depth_load, const std::string& depth) {
+  PassDesc pass;
+  pass.name = name;
+  add_color_target(pass, "color", samples);
+  pass.attachments.push_back(depth_attachment(samples, depth_load, StoreOp::DontCare, depth));
+  return pass;
+}
+
 std::string add_buffer(Trace& trace, const std::string& name, std::uint64_t bytes, TrafficClass traffic,
                        BufferContent content, bool upload) {
   trace.buffers.push_back(
@@ -686,20 +694,14 @@ Trace generate_light_grid_forward(const TraceSetup& setup, const TechniqueOption
   }
   t.commands.emplace_back(make_barrier({grid.grid_buffer(), kLightIndexBuffer}));
 
-  PassDesc pass;
-  pass.name = stored_prepass ? "forward" : "main";
-  add_color_target(pass, "color", samples);
-  bool primed = false;
-  if (stored_prepass && c.depth_reload) {
-    pass.attachments.push_back(depth_attachment(samples, LoadOp::Load, StoreOp::DontCare));
+  // The forward pass reloads the pre-pass depth (and tests equal) or renders a fresh on-chip depth.
+  const bool reload = stored_prepass && c.depth_reload;
+  PassDesc pass = color_pass(stored_prepass ? "forward" : "main", samples, reload ? LoadOp::Load : LoadOp::Clear,
+                             stored_prepass && !reload ? "forward_depth" : "depth");
+  bool primed = reload;
+  if (!stored_prepass && c.prez) {
+    add_prez(t, pass);
     primed = true;
-  } else {
-    pass.attachments.push_back(
-        depth_attachment(samples, LoadOp::Clear, StoreOp::DontCare, stored_prepass ? "forward_depth" : "depth"));
-    if (!stored_prepass && c.prez) {
-      add_prez(t, pass);
-      primed = true;
-    }
   }
   ForwardLitSpec lit;
   lit.source = tiles ? LightSource::TileList : LightSource::ClusterList;

@@ -226,6 +226,11 @@ Attachment depth_attachment(std::uint32_t samples, LoadOp load, StoreOp store, c
 /// Adds the frame's color target `name` (stored): 1-sample, or with MSAA a transient multisampled
 /// `<name>_ms` that resolves into it on chip (only the resolved color leaves the chip).
 void add_color_target(PassDesc& pass, const std::string& name, std::uint32_t samples, Format format = Format::Rgba8);
+/// A render pass `name` that clears and stores the frame's color (add_color_target) over the depth
+/// `depth`: cleared and transient (never in DRAM), or loaded (`depth_load`, a stored pre-pass depth)
+/// and not stored again.
+PassDesc color_pass(const std::string& name, std::uint32_t samples, LoadOp depth_load = LoadOp::Clear,
+                    const std::string& depth = "depth");
 /// Declares a DRAM buffer written by a dispatch (upload=no) and returns its name.
 std::string add_buffer(Trace& trace, const std::string& name, std::uint64_t bytes, TrafficClass traffic,
                        BufferContent content, bool upload = false);
