@@ -60,13 +60,6 @@ std::vector<int> tile_order(int tiles_x, int tiles_y, TileOrder order) {
   return out;
 }
 
-bool is_resolve_target(const PassDesc& pass, const Attachment& a) {
-  for (const auto& o : pass.attachments) {
-    if (o.resolve == a.name) return true;
-  }
-  return false;
-}
-
 /// Renders one pass through the units: geometry and binning of its draws, a render (every
 /// touched tile through tile memory, ISP and TSP) whenever the parameter buffer fills and at the
 /// end, and the work each render and tile hands to the timing model.
@@ -320,7 +313,7 @@ class FrameSimulator {
   void prepare_attachments(const PassDesc& pass, RenderContext& ctx) {
     int samples = -1;
     for (const auto& a : pass.attachments) {
-      if (is_resolve_target(pass, a)) {
+      if (pass.is_resolve_target(a)) {
         if (a.samples != 1) throw InputError(path_, a.line, "resolve target '" + a.name + "' must have 1 sample");
         continue;
       }

@@ -212,13 +212,8 @@ bool Dram::enqueue(DramRequest&& req) {
   e.tag = req.tag;
   if (e.report) {
     if (!schedule_cb_) throw std::logic_error("dram: report_when_scheduled without a schedule callback");
-  } else if (free_done_.empty()) {
-    e.slot = static_cast<std::uint32_t>(done_.size());
-    done_.emplace_back();
-    done_[e.slot] = std::move(req.on_complete);
   } else {
-    e.slot = free_done_.back();
-    free_done_.pop_back();
+    e.slot = done_.acquire();
     done_[e.slot] = std::move(req.on_complete);
   }
   e.enqueued = now;
@@ -327,7 +322,7 @@ void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::in
 void Dram::complete(std::uint32_t slot) {
   EventCallback cb = std::move(done_[slot]);
   done_[slot].reset();
-  free_done_.push_back(slot);
+  done_.release(slot);
   --in_flight_;
   ++stats_.completed;
   last_completion_ = std::max(last_completion_, eq_.now());

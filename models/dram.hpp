@@ -25,6 +25,7 @@
 #include "models/traffic.hpp"
 #include "kernel/event_queue.hpp"
 #include "kernel/run_loop.hpp"
+#include "kernel/slot_pool.hpp"
 #include "kernel/stats.hpp"
 #include "kernel/time.hpp"
 
@@ -317,8 +318,7 @@ class Dram final : public Unit {
   unsigned row_shift_ = 0, ch_shift_ = 0, bank_shift_ = 0;
 
   std::vector<Channel> channels_;
-  std::vector<EventCallback> done_;        // on_complete of accepted requests, by slot
-  std::vector<std::uint32_t> free_done_;
+  SlotPool<EventCallback> done_;           // on_complete of accepted requests, by slot
   std::uint64_t in_flight_ = 0;
   bool any_timed_ = false;
   Tick first_enqueue_{0};

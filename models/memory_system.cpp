@@ -82,14 +82,7 @@ bool MemorySystem::issue(Client client, std::uint64_t addr, std::uint32_t bytes,
     ++cs.reads;
     cs.read_bytes += bytes;
   }
-  std::uint32_t t;
-  if (free_txns_.empty()) {
-    t = static_cast<std::uint32_t>(txns_.size());
-    txns_.emplace_back();
-  } else {
-    t = free_txns_.back();
-    free_txns_.pop_back();
-  }
+  const std::uint32_t t = txns_.acquire();
   const Tick now = eq_.now();
   Txn& x = txns_[t];
   x.on_complete = std::move(on_complete);
@@ -442,14 +435,7 @@ void MemorySystem::resolve_txn(std::uint32_t t, Tick arrival) {
 }
 
 std::uint32_t MemorySystem::new_fill(Cache* cache, std::uint32_t slot) {
-  std::uint32_t f;
-  if (free_fills_.empty()) {
-    f = static_cast<std::uint32_t>(fills_.size());
-    fills_.emplace_back();
-  } else {
-    f = free_fills_.back();
-    free_fills_.pop_back();
-  }
+  const std::uint32_t f = fills_.acquire();
   Fill& x = fills_[f];
   x.cache = cache;
   x.slot = slot;
@@ -481,7 +467,7 @@ void MemorySystem::resolve_fill(std::uint32_t f, Tick arrival) {
     }
   }
   x.waiters.clear();
-  free_fills_.push_back(f);
+  fills_.release(f);
 }
 
 void MemorySystem::finish_txn(std::uint32_t t) {
@@ -491,7 +477,7 @@ void MemorySystem::finish_txn(std::uint32_t t) {
   cs.latency_total_ps += static_cast<std::uint64_t>((eq_.now() - x.issued).ps());
   EventCallback cb = std::move(x.on_complete);
   x.on_complete.reset();
-  free_txns_.push_back(t);
+  txns_.release(t);
   --live_txns_;
   ++completed_;
   if (cb) cb();

@@ -29,6 +29,7 @@
 #include "models/traffic.hpp"
 #include "kernel/event_queue.hpp"
 #include "kernel/run_loop.hpp"
+#include "kernel/slot_pool.hpp"
 #include "kernel/stats.hpp"
 #include "kernel/time.hpp"
 
@@ -260,12 +261,10 @@ class MemorySystem final : public Unit {
   Tick memo_base_{-1};
   std::int64_t memo_edge_ = 0, memo_cycles_ = -1;
   Tick memo_tick_{0};
-  std::vector<Txn> txns_;
-  std::vector<std::uint32_t> free_txns_;
+  SlotPool<Txn> txns_;
   std::uint64_t live_txns_ = 0;
   std::uint64_t completed_ = 0;
-  std::vector<Fill> fills_;
-  std::vector<std::uint32_t> free_fills_;
+  SlotPool<Fill> fills_;
 
   // DRAM requests refused by a full DRAM queue, per channel and direction, in order.
   std::vector<std::array<std::deque<DramRequest>, 2>> overflow_;

@@ -34,13 +34,6 @@ DramClass traffic_class_of(TrafficClass t) {
 
 namespace {
 
-bool is_resolve_target(const PassDesc& pass, const Attachment& a) {
-  for (const auto& o : pass.attachments) {
-    if (o.resolve == a.name) return true;
-  }
-  return false;
-}
-
 }  // namespace
 
 std::uint32_t pls_light_stack_capacity(std::uint32_t pls_bytes_per_pixel) {
@@ -61,7 +54,7 @@ TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats) : ctx_(ctx), 
   const PassDesc& pass = *ctx.pass;
   check_pls_layout(ctx.hw->pls, pass);
   for (const auto& a : pass.attachments) {
-    if (is_depth_format(a.format) || is_resolve_target(pass, a)) continue;  // depth lives in the ISP
+    if (is_depth_format(a.format) || pass.is_resolve_target(a)) continue;  // depth lives in the ISP
     need_ += a.bytes_per_pixel();
   }
   need_ += pass.pls_bytes_per_pixel();

@@ -1,5 +1,7 @@
 #include "app/sweep_progress.hpp"
 
+#include "kernel/params.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <iomanip>

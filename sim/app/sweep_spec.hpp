@@ -61,7 +61,5 @@ SweepSlice parse_slice(const std::string& text);
 /// The points of one slice (their index and group are kept).
 std::vector<SweepPoint> slice_points(const std::vector<SweepPoint>& points, SweepSlice slice);
 
-/// The text without its leading and trailing blanks (spaces, tabs, CR, LF).
-std::string trim(const std::string& s);
 
 }  // namespace tbdr

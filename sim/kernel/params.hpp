@@ -21,6 +21,9 @@ struct IniEntry {
   std::string key;    ///< "section.key"
   std::string value;  ///< raw value text
 };
+/// `s` without its leading and trailing blanks (space, tab, CR, LF).
+std::string trim(const std::string& s);
+
 /// Reads every entry of an INI file with Boost.Program_options (allow_unregistered), in file
 /// order; `what` names the file kind in errors ("config file", "sweep file"). Throws InputError
 /// naming the file when Boost refuses it or when it does not find `expected_entries` entries (the

@@ -158,11 +158,13 @@ std::vector<const Attachment*> PassDesc::color_targets() const {
   std::vector<const Attachment*> out;
   for (const auto& a : attachments) {
     if (a.usage == AttachmentUsage::Depth) continue;
-    const bool is_resolve_target = std::any_of(attachments.begin(), attachments.end(),
-                                               [&](const Attachment& b) { return b.resolve == a.name; });
-    if (!is_resolve_target) out.push_back(&a);
+    if (!is_resolve_target(a)) out.push_back(&a);
   }
   return out;
+}
+
+bool PassDesc::is_resolve_target(const Attachment& a) const {
+  return std::any_of(attachments.begin(), attachments.end(), [&](const Attachment& b) { return b.resolve == a.name; });
 }
 
 namespace {

@@ -284,6 +284,8 @@ struct PassDesc {
   const Attachment* find_attachment(std::string_view name) const;
   /// Attachments a shader's color outputs write, in order: non-depth ones that are not resolve targets.
   std::vector<const Attachment*> color_targets() const;
+  /// Whether another attachment of the pass resolves into `a` (its MSAA resolve target).
+  bool is_resolve_target(const Attachment& a) const;
 };
 
 /// A compute dispatch of a named kernel. The reader refuses a kernel name that is not a

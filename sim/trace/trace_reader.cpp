@@ -730,9 +730,7 @@ void Reader::finish_layout() {
       if (t->format != a.format || t->usage != a.usage)
         fail(a.line, "resolve target " + q(a.resolve) + " must have the same format and usage as " + q(a.name));
     }
-    const bool is_target = std::any_of(p.attachments.begin(), p.attachments.end(),
-                                       [&](const Attachment& b) { return b.resolve == a.name; });
-    if (is_target) continue;
+    if (p.is_resolve_target(a)) continue;
     if (samples == 0) {
       samples = a.samples;
       samples_line = a.line;
