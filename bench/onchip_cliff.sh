@@ -2,7 +2,7 @@
 # Benchmark (prints figures): the on-chip cliff. Traditional deferred on the atrium at 1920x1080
 # with 256 lights, its G-buffer pass widened one 32-bit target at a time (96 .. 288 bits per pixel
 # of color targets), on the default GPU (128 bits per pixel on chip) and with 256 bits per pixel,
-# beside the GX6250 measurements of DESIGN.md (ms per frame: 20, 21, 23, 24, 28, 29, 39).
+# beside the GX6250 measurements of Imagination, PowerVR Performance Recommendations, "On-Chip Memory Performance" (ms per frame: 20, 21, 23, 24, 28, 29, 39).
 # Usage: bash bench/onchip_cliff.sh [build-dir]
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -333,17 +333,7 @@ class FrameSimulator {
     for (const auto& a : pass.attachments) {
       auto it = result_.images.attachments.find(a.name);
       if (it == result_.images.attachments.end()) {
-        AttachmentImage img;
-        img.format = a.format;
-        img.samples = a.samples;
-        img.usage = a.usage;
-        if (is_depth_format(a.format)) {
-          img.depth.assign(pixels * a.samples, 1.0f);
-          img.stencil.assign(pixels * a.samples, 0);
-        } else {
-          img.color.assign(pixels * a.samples, glm::vec4(0.0f));
-        }
-        it = result_.images.attachments.emplace(a.name, std::move(img)).first;
+        it = result_.images.attachments.emplace(a.name, AttachmentImage::cleared(a, pixels)).first;
       } else if (it->second.format != a.format || it->second.samples != a.samples) {
         throw InputError(path_, a.line, "attachment '" + a.name + "' was declared earlier with another format or sample count");
       }

@@ -92,6 +92,20 @@ struct AttachmentImage {
   /// first such attachment a shader writes; width*height*samples) and whether it was written.
   std::vector<SurfacePoint> surface;
   std::vector<std::uint8_t> surface_valid;
+  /// A cleared image for attachment `a` over `pixels` pixels (depth 1, stencil 0, color 0).
+  static AttachmentImage cleared(const Attachment& a, std::size_t pixels) {
+    AttachmentImage img;
+    img.format = a.format;
+    img.samples = a.samples;
+    img.usage = a.usage;
+    if (is_depth_format(a.format)) {
+      img.depth.assign(pixels * a.samples, 1.0f);
+      img.stencil.assign(pixels * a.samples, 0);
+    } else {
+      img.color.assign(pixels * a.samples, glm::vec4(0.0f));
+    }
+    return img;
+  }
 };
 
 /// Pixel local storage of one pass, functionally: per pixel the stored surface, a light

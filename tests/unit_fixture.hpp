@@ -191,17 +191,7 @@ class RenderRig {
     images.counters.resize(pixels);
     int samples = -1;
     for (const auto& a : pass.attachments) {
-      AttachmentImage img;
-      img.format = a.format;
-      img.samples = a.samples;
-      img.usage = a.usage;
-      if (is_depth_format(a.format)) {
-        img.depth.assign(pixels * a.samples, 1.0f);
-        img.stencil.assign(pixels * a.samples, 0);
-      } else {
-        img.color.assign(pixels * a.samples, glm::vec4(0.0f));
-      }
-      images.attachments.emplace(a.name, std::move(img));
+      images.attachments.emplace(a.name, AttachmentImage::cleared(a, pixels));
       bool resolve_target = false;
       for (const auto& o : pass.attachments) resolve_target = resolve_target || o.resolve == a.name;
       if (!resolve_target && samples < 0) samples = static_cast<int>(a.samples);

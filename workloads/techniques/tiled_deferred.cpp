@@ -44,7 +44,7 @@ TechniqueInfo technique_tiled_deferred() {
           "memory, shading (Andersson 2011, Battlefield 3)",
           {{"gbuffer", "rgba8,rgba8,rgba8,rgba8",
             "G-buffer color targets: albedo, normal, extras; default Andersson's 4 x RGBA8 (+ D24S8 = 20 B/px, "
-            "per CMU 15-769 and DESIGN.md)"},
+            "per CMU 15-769 and Andersson 2011, Battlefield 3)"},
            {"tile_px", "16", "screen tile edge in pixels of one workgroup (Andersson: 16x16 tiles)"},
            {"max_lights_per_tile", "all",
             "capacity of the group-shared light list (Andersson's MAX_LIGHTS); all = the light count, so no "
