@@ -469,6 +469,7 @@ class FrameSimulator {
     ctx.images = &result_.images;
     ctx.defer_shading = hw_.gpu.mode == GpuMode::Tbdr;
     ctx.framebuffer_in_dram = hw_.gpu.mode == GpuMode::Imr;
+    check_pls_layout(hw_.pls, pass, path_);  // before any work, naming the trace file
     prepare_attachments(pass, ctx);
     resolve_draws(pass, ctx);
     count_geometry_passes(pass);

@@ -41,12 +41,14 @@ std::uint32_t pls_light_stack_capacity(std::uint32_t pls_bytes_per_pixel) {
                                                    : 0;
 }
 
-void check_pls_layout(const PlsParams& p, const PassDesc& pass) {
+void check_pls_layout(const PlsParams& p, const PassDesc& pass, const std::string& trace_path) {
   const std::uint32_t bytes = pass.pls_bytes_per_pixel();
   if (static_cast<std::int64_t>(bytes) > p.max_pls_bytes_per_pixel) {
-    throw InputError("pass '" + pass.name + "' (trace line " + std::to_string(pass.line) + ")",
-                     "declares " + std::to_string(bytes) + " bytes of pixel local storage per pixel, more than "
-                     "pls.max_pls_bytes_per_pixel = " + std::to_string(p.max_pls_bytes_per_pixel));
+    const std::string what = "pass '" + pass.name + "' declares " + std::to_string(bytes) +
+                             " bytes of pixel local storage per pixel, more than pls.max_pls_bytes_per_pixel = " +
+                             std::to_string(p.max_pls_bytes_per_pixel);
+    if (!trace_path.empty()) throw InputError(trace_path, pass.line, what);
+    throw InputError("pass '" + pass.name + "' (trace line " + std::to_string(pass.line) + ")", what);
   }
 }
 

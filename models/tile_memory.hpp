@@ -49,7 +49,7 @@ std::uint32_t pls_light_stack_capacity(std::uint32_t pls_bytes_per_pixel);
 /// Refuses a pass whose pixel local storage layout exceeds pls.max_pls_bytes_per_pixel, as a
 /// driver refuses a shader that declares more than MAX_SHADER_PIXEL_LOCAL_STORAGE_SIZE_EXT
 /// (InputError naming the pass and its trace line, its bytes and the limit).
-void check_pls_layout(const PlsParams& p, const PassDesc& pass);
+void check_pls_layout(const PlsParams& p, const PassDesc& pass, const std::string& trace_path = {});
 
 /// The DRAM traffic class of an attachment usage.
 DramClass traffic_class_of(AttachmentUsage u);
