@@ -11,7 +11,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 
 namespace tbdr {
 

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "models/hw_config.hpp"
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
 
 namespace tbdr {

@@ -428,7 +428,7 @@ class FrameSimulator {
   }
 
   void run_dispatch_cmd(const DispatchCmd& d, int index) {
-    const std::string prefix = "dispatch" + std::to_string(index) + "." + d.kernel;
+    const std::string prefix = "dispatch" + std::to_string(index) + "." + to_string(d.kernel);
     ComputeStats stats;
     DramTraffic dram;
     ComputeContext cc;
@@ -476,11 +476,6 @@ class FrameSimulator {
     ctx.dram = &dram;
     ctx.frame_prim_base = prim_base_;
     ctx.textures = textures_.get();
-    PlsState pls;
-    if (!pass.pls.empty()) {
-      pls = make_pls(pass);
-      ctx.pls = &pls;
-    }
     CommandWork cw;
     cw.name = prefix;
     cw.read_bytes = book_buffer_reads(pass, dram).read_bytes;  // buffers read once per pass, at its start
@@ -519,20 +514,6 @@ class FrameSimulator {
     }
   }
 
-  /// The pass's pixel local storage, sized from its declared layout.
-  PlsState make_pls(const PassDesc& pass) const {
-    PlsState pls;
-    const std::size_t pixels = static_cast<std::size_t>(viewport_.width_px) * static_cast<std::size_t>(viewport_.height_px);
-    pls.stack_capacity = pls_light_stack_capacity(pass.pls_bytes_per_pixel());
-    pls.surface.assign(pixels, SurfacePoint{});
-    pls.valid.assign(pixels, 0);
-    pls.accum.assign(pixels, glm::vec3(0.0f));
-    pls.stack.assign(pixels * pls.stack_capacity, 0);
-    pls.stack_count.assign(pixels, 0);
-    pls.overflow.assign(pixels, 0);
-    return pls;
-  }
-
   /// Buffers the draws read (lights, light lists): booked once per pass (re-reads hit on chip).
   DramTraffic book_buffer_reads(const PassDesc& pass, DramTraffic& dram) const {
     DramTraffic reads;
@@ -543,7 +524,7 @@ class FrameSimulator {
         if (!b || !seen.insert(n).second) continue;
         auto w = result_.images.buffer_bytes_written.find(n);
         const std::uint64_t bytes = w == result_.images.buffer_bytes_written.end() ? b->bytes : w->second;
-        reads.read(traffic_class_of(b->traffic), bytes);
+        reads.read(b->traffic, bytes);
       }
     }
     dram += reads;

@@ -15,7 +15,7 @@
 #include "models/tile_memory.hpp"
 #include "models/tiler.hpp"
 #include "models/tsp.hpp"
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
 #include "trace/trace.hpp"
 #include "scene/scene.hpp"

@@ -53,7 +53,7 @@ class Dispatch {
       : ctx_(ctx), cmd_(cmd), stats_(stats), dram_(dram) {}
 
   [[noreturn]] void fail(const std::string& msg) const {
-    throw InputError(*ctx_.trace_path, cmd_.line, "kernel '" + cmd_.kernel + "': " + msg);
+    throw InputError(*ctx_.trace_path, cmd_.line, "kernel '" + std::string(to_string(cmd_.kernel)) + "': " + msg);
   }
   void allow(std::initializer_list<const char*> keys) {
     for (const auto& [k, v] : cmd_.params) {
@@ -147,13 +147,13 @@ class Dispatch {
       }
       const BufferDesc* b = ctx_.trace->find_buffer(n);
       if (!b) continue;
-      dram_.read(traffic_class_of(b->traffic), written_bytes(n, b->bytes));
+      dram_.read(b->traffic, written_bytes(n, b->bytes));
     }
   }
   /// Books a write of `bytes` to buffer `name` and remembers the size for later readers.
   void charge_write(const std::string& name, std::uint64_t bytes) {
     const BufferDesc* b = ctx_.trace->find_buffer(name);
-    const DramClass c = b ? traffic_class_of(b->traffic) : DramClass::Other;
+    const DramClass c = b ? b->traffic : DramClass::Other;
     dram_.write(c, bytes);
     ctx_.images->buffer_bytes_written[name] = bytes;
   }
@@ -264,11 +264,7 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
 void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStats& stats, DramTraffic& dram,
                   std::string& image_written) {
   Dispatch k(ctx, cmd, stats, dram);
-  // The kernel's name is looked up once: the trace reader refuses unknown names, a trace built in
-  // memory may still carry one.
-  const std::optional<ComputeKernel> parsed = parse_compute_kernel(cmd.kernel);
-  if (!parsed) k.fail("unknown kernel (known: " + compute_kernel_list() + ")");
-  const ComputeKernel kernel = *parsed;
+  const ComputeKernel kernel = cmd.kernel;
   const int W = ctx.viewport.width_px, H = ctx.viewport.height_px;
   const std::uint64_t pixels = static_cast<std::uint64_t>(W) * static_cast<std::uint64_t>(H);
   const auto n_lights = static_cast<std::uint64_t>(ctx.trace->lights.size());

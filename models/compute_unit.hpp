@@ -10,7 +10,7 @@
 #include "models/hw_config.hpp"
 #include "models/light_lists.hpp"
 #include "models/render_state.hpp"
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
 #include "trace/trace.hpp"
 

@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "models/hw_config.hpp"
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 #include "kernel/event_queue.hpp"
 #include "kernel/run_loop.hpp"
 #include "kernel/slot_pool.hpp"

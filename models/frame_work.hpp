@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "models/rasterizer.hpp"
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 
 namespace tbdr {
 

@@ -9,7 +9,7 @@
 
 #include "models/hw_config.hpp"
 #include "models/render_state.hpp"
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
 #include "scene/scene.hpp"
 

@@ -78,9 +78,11 @@ bool MemorySystem::issue(Client client, std::uint64_t addr, std::uint32_t bytes,
   if (is_write) {
     ++cs.writes;
     cs.write_bytes += bytes;
+    requested_.write(cls, bytes);
   } else {
     ++cs.reads;
     cs.read_bytes += bytes;
+    requested_.read(cls, bytes);
   }
   const std::uint32_t t = txns_.acquire();
   const Tick now = eq_.now();

@@ -26,7 +26,7 @@
 #include "models/cache.hpp"
 #include "models/dram.hpp"
 #include "models/hw_config.hpp"
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 #include "kernel/event_queue.hpp"
 #include "kernel/run_loop.hpp"
 #include "kernel/slot_pool.hpp"
@@ -133,8 +133,10 @@ class MemorySystem final : public Unit {
   const ClockDomain& core_clock() const { return core_; }
   bool caches_enabled() const { return caches_enabled_; }
 
-  /// DRAM bytes per traffic class so far.
+  /// DRAM bytes per traffic class so far (after the caches).
   DramTraffic traffic() const { return dram_.traffic(); }
+  /// Bytes the units asked for per traffic class so far (accepted timed requests, before the caches).
+  const DramTraffic& requested() const { return requested_; }
   /// Caches + DRAM energy so far, pJ.
   double energy_pj() const;
   /// Timed requests accepted and not yet completed.
@@ -283,6 +285,7 @@ class MemorySystem final : public Unit {
 
   MemorySystemStats stats_;
   std::array<MemoryClientStats, kClientCount> client_stats_;
+  DramTraffic requested_;
 };
 
 }  // namespace tbdr

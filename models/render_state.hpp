@@ -14,7 +14,7 @@
 #include "models/hw_config.hpp"
 #include "models/rasterizer.hpp"
 #include "models/shading.hpp"
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 #include "trace/trace.hpp"
 #include "scene/camera.hpp"
 #include "scene/scene.hpp"

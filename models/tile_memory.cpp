@@ -18,23 +18,6 @@ DramClass traffic_class_of(AttachmentUsage u) {
   return DramClass::Other;
 }
 
-DramClass traffic_class_of(TrafficClass t) {
-  switch (t) {
-    case TrafficClass::LightData: return DramClass::LightData;
-    case TrafficClass::LightLists: return DramClass::LightLists;
-    case TrafficClass::Gbuffer: return DramClass::Gbuffer;
-    case TrafficClass::Color: return DramClass::Color;
-    case TrafficClass::Depth: return DramClass::DepthStencil;
-    case TrafficClass::Visibility: return DramClass::Visibility;
-    case TrafficClass::WorkLists: return DramClass::WorkLists;
-    case TrafficClass::Other: return DramClass::Other;
-  }
-  return DramClass::Other;
-}
-
-namespace {
-
-}  // namespace
 
 std::uint32_t pls_light_stack_capacity(std::uint32_t pls_bytes_per_pixel) {
   return pls_bytes_per_pixel > kPlsStackCountBytes ? (pls_bytes_per_pixel - kPlsStackCountBytes) / kPlsLightIndexBytes
@@ -67,6 +50,18 @@ TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats) : ctx_(ctx), 
     } else {
       split_ = static_cast<int>((need_ + budget_ - 1) / budget_);
     }
+  }
+  if (!pass.pls.empty()) {
+    // The pass's pixel local storage lives in tile memory: sized from its declared layout.
+    const std::size_t pixels = static_cast<std::size_t>(ctx.viewport.width_px) * static_cast<std::size_t>(ctx.viewport.height_px);
+    pls_.stack_capacity = pls_light_stack_capacity(pass.pls_bytes_per_pixel());
+    pls_.surface.assign(pixels, SurfacePoint{});
+    pls_.valid.assign(pixels, 0);
+    pls_.accum.assign(pixels, glm::vec3(0.0f));
+    pls_.stack.assign(pixels * pls_.stack_capacity, 0);
+    pls_.stack_count.assign(pixels, 0);
+    pls_.overflow.assign(pixels, 0);
+    ctx.pls = &pls_;
   }
   stats_.onchip_need_bytes_per_pixel += need_;
   stats_.onchip_budget_bytes_per_pixel += budget_;

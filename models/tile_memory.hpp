@@ -15,7 +15,7 @@
 
 #include "models/hw_config.hpp"
 #include "models/render_state.hpp"
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
 
 namespace tbdr {
@@ -53,15 +53,16 @@ void check_pls_layout(const PlsParams& p, const PassDesc& pass, const std::strin
 
 /// The DRAM traffic class of an attachment usage.
 DramClass traffic_class_of(AttachmentUsage u);
-/// The DRAM traffic class of a trace buffer's declared traffic.
-DramClass traffic_class_of(TrafficClass t);
 
 /// Tile memory of one pass.
 class TileMemory {
  public:
   /// Computes the pass's on-chip needs against the budget and records them in `stats`; refuses a
   /// pass whose pixel local storage exceeds pls.max_pls_bytes_per_pixel (check_pls_layout).
+  /// Holds the pass's pixel local storage (if it declares one) and points `ctx.pls` at it.
   TileMemory(RenderContext& ctx, TileMemoryStats& stats);
+  TileMemory(const TileMemory&) = delete;
+  TileMemory& operator=(const TileMemory&) = delete;
 
   std::uint32_t need_bytes_per_pixel() const { return need_; }
   std::uint32_t budget_bytes_per_pixel() const { return budget_; }
@@ -85,6 +86,7 @@ class TileMemory {
   std::uint32_t budget_ = 0;
   int split_ = 1;
   double spill_fraction_ = 0;
+  PlsState pls_;  ///< the pass's pixel local storage (empty when it declares none)
 };
 
 }  // namespace tbdr

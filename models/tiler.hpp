@@ -12,7 +12,7 @@
 #include "models/hw_config.hpp"
 #include "models/rasterizer.hpp"
 #include "models/render_state.hpp"
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
 
 namespace tbdr {

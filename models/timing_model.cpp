@@ -8,7 +8,10 @@
 #include <tuple>
 #include <memory>
 
+#include "models/dma_stream.hpp"
+#include "models/frame_address_map.hpp"
 #include "models/memory_system.hpp"
+#include "models/tile_records.hpp"
 #include "kernel/errors.hpp"
 #include "kernel/event_queue.hpp"
 #include "kernel/run_loop.hpp"
@@ -18,50 +21,12 @@ namespace tbdr {
 
 namespace {
 
-// Bytes per memory request a DMA stream issues: a stream cuts its ranges at 4 KB boundaries, as
-// no AMBA AXI burst may cross a 4 KB address boundary (Arm, AMBA AXI protocol specification).
-// How many of them a stream keeps in flight is memory.stream_outstanding_requests.
-constexpr std::uint64_t kChunkBytes = 4096;
-// Address layout of the regions the timing model allocates (addresses set cache sets and DRAM
-// banks, so these are fixed: they must not move when a parameter is swept). Every region gets at
-// least one 4 KB page, the address space's granule; per-tile framebuffer areas and command buffers
-// are whole 64-byte units, the default cache line (not cache.*.line_bytes, which a sweep varies).
-constexpr std::uint64_t kMinRegionBytes = 4096;
-constexpr std::uint64_t kRegionAlignBytes = 64;
-
 /// A FIFO server with a throughput: jobs reserve it in arrival order.
 struct Server {
   std::string name;
   Tick free_at{0};
   double busy_cycles = 0;
   double stalled_cycles = 0;
-};
-
-class TimingSim;
-
-/// Streams byte ranges of one traffic class to memory as chunked requests, a bounded number in
-/// flight, retrying when the memory system pushes back; calls `done` when every byte completed.
-class MemStream {
- public:
-  MemStream(TimingSim& sim, Client client, bool write, DramClass cls, std::uint32_t outstanding)
-      : sim_(sim), client_(client), write_(write), cls_(cls), outstanding_(outstanding) {}
-  void add(std::uint64_t addr, std::uint64_t bytes);
-  void start(std::function<void()> done);
-  bool empty() const { return chunks_.empty(); }
-
- private:
-  void pump();
-  TimingSim& sim_;
-  Client client_;
-  bool write_;
-  DramClass cls_;
-  std::uint32_t outstanding_;
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> chunks_;
-  std::size_t next_ = 0;
-  std::size_t completed_ = 0;
-  std::uint32_t in_flight_ = 0;
-  bool waiting_ = false;
-  std::function<void()> done_;
 };
 
 /// Scheduling state of one tile of the current render.
@@ -80,7 +45,8 @@ class TimingSim final : public Unit {
       : hw_(hw),
         work_(work),
         core_(ClockDomain::from_mhz("core", hw.gpu.core_clock_mhz)),
-        mem_(hw, eq_, "mem") {
+        mem_(hw, eq_, "mem"),
+        map_(work, mem_.address_space()) {
     isp_.name = "isp";
     usc_.name = "usc";
     pbe_.name = "pixel_back_end";
@@ -92,7 +58,6 @@ class TimingSim final : public Unit {
     usc_queue_tiles_ = std::max<std::uint64_t>(
         1, static_cast<std::uint64_t>(hw.usc.tasks_in_flight) * static_cast<std::uint64_t>(hw.usc.threads_per_task) / tile_px);
     texture_line_bytes_ = static_cast<std::uint64_t>(hw.cache.texture.line_bytes);
-    allocate_regions();
   }
 
   TimingResult run() {
@@ -129,6 +94,7 @@ class TimingSim final : public Unit {
                      {usc_.name, usc_.busy_cycles, usc_.stalled_cycles},
                      {pbe_.name, pbe_.busy_cycles, pbe_.stalled_cycles}};
     result_.dram = mem_.traffic();
+    result_.requested = mem_.requested();
     mem_.collect(result_.memory_stats);
     result_.memory = mem_.stats();
     result_.events = eq_.events_executed();
@@ -141,6 +107,7 @@ class TimingSim final : public Unit {
       }
     }
     result_.texture_cache_misses = mem_.texture_cache().class_stats(DramClass::Textures).read_misses.value();
+    result_.tiles = tile_records_.take();
     return std::move(result_);
   }
 
@@ -153,15 +120,6 @@ class TimingSim final : public Unit {
            "/" + std::to_string(tiles_.size()) + ", tiles in flight " + std::to_string(in_flight_);
   }
 
-  EventQueue& eq() { return eq_; }
-  MemorySystem& mem() { return mem_; }
-  void count_issued(DramClass c, bool write, std::uint64_t bytes) {
-    if (write) {
-      result_.issued.write(c, bytes);
-    } else {
-      result_.issued.read(c, bytes);
-    }
-  }
 
  private:
   struct Job {
@@ -182,49 +140,11 @@ class TimingSim final : public Unit {
     return end;
   }
 
-  void allocate_regions() {
-    auto& space = mem_.address_space();
-    std::uint64_t pb_bytes = kMinRegionBytes, vertex_bytes = kMinRegionBytes, buffer_bytes = kMinRegionBytes;
-    for (std::size_t c = 0; c < work_.commands.size(); ++c) {
-      const auto& cmd = work_.commands[c];
-      std::uint64_t cmd_bytes = 0;
-      for (std::size_t k = 0; k < kDramClassCount; ++k) cmd_bytes += cmd.read_bytes[k] + cmd.write_bytes[k];
-      buffer_bytes = std::max(buffer_bytes, cmd_bytes);
-      std::uint64_t stride = kRegionAlignBytes;
-      for (const auto& r : cmd.renders) {
-        std::uint64_t extent = r.binning.pb_write_bytes;
-        for (const auto& t : r.tiles) {
-          for (const auto& br : t.pb_reads) extent = std::max(extent, br.offset + br.bytes);
-          std::uint64_t l = 0, s = 0;
-          for (std::size_t k = 0; k < kDramClassCount; ++k) {
-            l += t.load_bytes[k];
-            s += t.store_bytes[k];
-          }
-          stride = std::max(stride, std::max(l, s));
-        }
-        pb_bytes = std::max(pb_bytes, extent);
-        vertex_bytes += r.binning.vertex_fetch_bytes + r.binning.index_fetch_bytes;
-      }
-      stride = (stride + kRegionAlignBytes - 1) / kRegionAlignBytes * kRegionAlignBytes;
-      fb_stride_.push_back(stride);
-      std::uint64_t max_tile = 1;
-      for (const auto& r : cmd.renders) {
-        for (const auto& t : r.tiles) max_tile = std::max<std::uint64_t>(max_tile, static_cast<std::uint64_t>(t.tile_y * work_.tiles_x + t.tile_x + 1));
-      }
-      fb_base_.push_back(cmd.is_dispatch ? 0 : space.allocate("framebuffer." + cmd.name, stride * max_tile, DramClass::Color));
-      cmd_base_.push_back(space.allocate("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, kRegionAlignBytes), DramClass::Other));
-    }
-    if (work_.texture_bytes > 0) texture_base_ = space.allocate("textures", work_.texture_bytes, DramClass::Textures);
-    pb_base_[0] = space.allocate("parameter_buffer.0", pb_bytes, DramClass::ParameterBuffer);
-    pb_base_[1] = space.allocate("parameter_buffer.1", pb_bytes, DramClass::ParameterBuffer);
-    vertex_base_ = space.allocate("vertex_and_index_buffers", vertex_bytes, DramClass::Vertices);
-  }
-
-  MemStream* new_stream(Client c, bool write, DramClass cls) {
+  DmaStream* new_stream(Client c, bool write, DramClass cls) {
     return new_stream(c, write, cls, static_cast<std::uint32_t>(hw_.memory.stream_outstanding_requests));
   }
-  MemStream* new_stream(Client c, bool write, DramClass cls, std::uint32_t outstanding) {
-    streams_.push_back(std::make_unique<MemStream>(*this, c, write, cls, outstanding));
+  DmaStream* new_stream(Client c, bool write, DramClass cls, std::uint32_t outstanding) {
+    streams_.push_back(std::make_unique<DmaStream>(eq_, mem_, c, write, cls, outstanding));
     return streams_.back().get();
   }
 
@@ -264,20 +184,20 @@ class TimingSim final : public Unit {
     };
     const std::uint64_t fetch = b.vertex_fetch_bytes + b.index_fetch_bytes;
     if (fetch > 0) {
-      MemStream* s = new_stream(Client::Geometry, false, DramClass::Vertices);
+      DmaStream* s = new_stream(Client::Geometry, false, DramClass::Vertices);
       // Vertices and indices: one sequential stream per render (classes booked separately).
-      if (b.vertex_fetch_bytes) s->add(vertex_base_ + vertex_cursor_, b.vertex_fetch_bytes);
+      if (b.vertex_fetch_bytes) s->add(map_.vertices() + vertex_cursor_, b.vertex_fetch_bytes);
       vertex_cursor_ += b.vertex_fetch_bytes;
-      MemStream* si = new_stream(Client::Geometry, false, DramClass::Indices);
-      if (b.index_fetch_bytes) si->add(vertex_base_ + vertex_cursor_, b.index_fetch_bytes);
+      DmaStream* si = new_stream(Client::Geometry, false, DramClass::Indices);
+      if (b.index_fetch_bytes) si->add(map_.vertices() + vertex_cursor_, b.index_fetch_bytes);
       vertex_cursor_ += b.index_fetch_bytes;
       *pending += 2;
       s->start(finish);
       si->start(finish);
     }
     if (b.pb_write_bytes > 0) {
-      MemStream* s = new_stream(Client::Tiler, true, DramClass::ParameterBuffer);
-      s->add(pb_base_[k % 2], b.pb_write_bytes);
+      DmaStream* s = new_stream(Client::Tiler, true, DramClass::ParameterBuffer);
+      s->add(map_.parameter_buffer(k), b.pb_write_bytes);
       ++*pending;
       s->start(finish);
     }
@@ -332,13 +252,13 @@ class TimingSim final : public Unit {
       if (--*pending > 0) return;
       eq_.schedule(std::max(eq_.now(), compute_end), [this, f] { fragment_finished(f); });
     };
-    const std::uint64_t base = cmd_base_[frag_jobs_[f].command];
+    const std::uint64_t base = map_.buffers(frag_jobs_[f].command);
     std::uint64_t offset = 0;
     for (int write = 0; write < 2; ++write) {
       for (std::size_t c = 0; c < kDramClassCount; ++c) {
         const std::uint64_t bytes = write ? cmd.write_bytes[c] : cmd.read_bytes[c];
         if (bytes == 0) continue;
-        MemStream* s = new_stream(Client::Compute, write != 0, static_cast<DramClass>(c));
+        DmaStream* s = new_stream(Client::Compute, write != 0, static_cast<DramClass>(c));
         s->add(base + offset, bytes);
         offset += bytes;
         ++*pending;
@@ -352,7 +272,7 @@ class TimingSim final : public Unit {
     render_ = &cmd.renders[r];
     render_job_ = f;
     render_command_ = frag_jobs_[f].command;
-    render_pb_base_ = pb_base_[bin_index_of(frag_jobs_[f]) % 2];
+    render_pb_base_ = map_.parameter_buffer(bin_index_of(frag_jobs_[f]));
     tiles_.assign(render_->tiles.size(), TileState{});
     next_dispatch_ = 0;
     next_isp_ = 0;
@@ -364,8 +284,8 @@ class TimingSim final : public Unit {
       std::uint64_t offset = 0;
       for (std::size_t c = 0; c < kDramClassCount; ++c) {
         if (cmd.read_bytes[c] == 0) continue;
-        MemStream* s = new_stream(Client::Texture, false, static_cast<DramClass>(c));
-        s->add(cmd_base_[render_command_] + offset, cmd.read_bytes[c]);
+        DmaStream* s = new_stream(Client::Texture, false, static_cast<DramClass>(c));
+        s->add(map_.buffers(render_command_) + offset, cmd.read_bytes[c]);
         offset += cmd.read_bytes[c];
         s->start([] {});
       }
@@ -377,9 +297,7 @@ class TimingSim final : public Unit {
     dispatch_tiles();
   }
 
-  std::uint64_t tile_address(const TileWork& t) const {
-    return fb_base_[render_command_] + static_cast<std::uint64_t>(t.tile_y * work_.tiles_x + t.tile_x) * fb_stride_[render_command_];
-  }
+  std::uint64_t tile_address(const TileWork& t) const { return map_.tile(render_command_, t, work_.tiles_x); }
 
   void dispatch_tiles() {
     while (in_flight_ < static_cast<std::size_t>(hw_.isp.tiles_in_flight) && next_dispatch_ < tiles_.size()) {
@@ -396,7 +314,7 @@ class TimingSim final : public Unit {
         advance_isp();
       };
       if (!t.pb_reads.empty()) {
-        MemStream* s = new_stream(Client::Isp, false, DramClass::ParameterBuffer);
+        DmaStream* s = new_stream(Client::Isp, false, DramClass::ParameterBuffer);
         for (const auto& br : t.pb_reads) s->add(render_pb_base_ + br.offset, br.bytes);
         ++ts.pending_streams;
         s->start(on_stream);
@@ -404,7 +322,7 @@ class TimingSim final : public Unit {
       std::uint64_t offset = 0;
       for (std::size_t c = 0; c < kDramClassCount; ++c) {
         if (t.load_bytes[c] == 0) continue;
-        MemStream* s = new_stream(Client::PixelBackEnd, false, static_cast<DramClass>(c));
+        DmaStream* s = new_stream(Client::PixelBackEnd, false, static_cast<DramClass>(c));
         s->add(tile_address(t) + offset, t.load_bytes[c]);
         offset += t.load_bytes[c];
         ++ts.pending_streams;
@@ -451,7 +369,7 @@ class TimingSim final : public Unit {
 
   void fetch_textures(std::size_t i) {
     const TileWork& t = render_->tiles[i];
-    MemStream* s = new_stream(Client::Texture, false, DramClass::Textures,
+    DmaStream* s = new_stream(Client::Texture, false, DramClass::Textures,
                               static_cast<std::uint32_t>(hw_.texture.outstanding_requests));
     const std::uint64_t line = texture_line_bytes_;
     // Consecutive lines go as one range (the memory system still looks each line up).
@@ -459,7 +377,7 @@ class TimingSim final : public Unit {
     while (k < t.texture_lines.size()) {
       std::size_t e = k + 1;
       while (e < t.texture_lines.size() && t.texture_lines[e] == t.texture_lines[e - 1] + line) ++e;
-      s->add(texture_base_ + t.texture_lines[k], (e - k) * line);
+      s->add(map_.textures() + t.texture_lines[k], (e - k) * line);
       k = e;
     }
     s->start([this, i] {
@@ -500,7 +418,7 @@ class TimingSim final : public Unit {
     std::uint64_t offset = 0;
     for (std::size_t c = 0; c < kDramClassCount; ++c) {
       if (t.store_bytes[c] == 0) continue;
-      MemStream* s = new_stream(Client::PixelBackEnd, true, static_cast<DramClass>(c));
+      DmaStream* s = new_stream(Client::PixelBackEnd, true, static_cast<DramClass>(c));
       s->add(tile_address(t) + offset, t.store_bytes[c]);
       offset += t.store_bytes[c];
       ++*pending;
@@ -510,18 +428,7 @@ class TimingSim final : public Unit {
   }
 
   void tile_done(std::size_t i) {
-    const TileWork& t = render_->tiles[i];
-    std::uint64_t bytes = 0;
-    for (std::size_t c = 0; c < kDramClassCount; ++c) bytes += t.load_bytes[c] + t.store_bytes[c];
-    for (const auto& br : t.pb_reads) bytes += br.bytes;
-    // One row per command and tile: strips and partial renders of the same tile add up.
-    const auto key = std::make_tuple(render_command_, t.tile_x, t.tile_y);
-    auto [it, inserted] = tile_rows_.try_emplace(key, result_.tiles.size());
-    if (inserted) result_.tiles.push_back({static_cast<std::int64_t>(render_command_), t.tile_x, t.tile_y, 0, 0, 0});
-    TileRecord& row = result_.tiles[it->second];
-    row.cycles += cycles_of(eq_.now()) - cycles_of(tiles_[i].fetch_start);
-    row.samples += static_cast<double>(t.samples);
-    row.dram_bytes += static_cast<double>(bytes);
+    tile_records_.add(render_command_, render_->tiles[i], cycles_of(eq_.now()) - cycles_of(tiles_[i].fetch_start));
     --in_flight_;
     ++tiles_done_;
     if (tiles_done_ == tiles_.size()) {
@@ -536,23 +443,21 @@ class TimingSim final : public Unit {
   ClockDomain core_;
   EventQueue eq_;
   MemorySystem mem_;
+  FrameAddressMap map_;
+  TileRecordBook tile_records_;
   TimingResult result_;
   Server binner_, isp_, usc_, pbe_;
   double alu_rate_ = 1, tex_rate_ = 1, raster_rate_ = 1;
   std::uint64_t usc_queue_tiles_ = 1;
   double fetch_busy_cycles_ = 0;
-  std::vector<std::unique_ptr<MemStream>> streams_;
+  std::vector<std::unique_ptr<DmaStream>> streams_;
   std::vector<Job> bin_jobs_, frag_jobs_;
   std::vector<bool> bin_done_, frag_done_;
   std::size_t next_bin_ = 0, next_frag_ = 0;
   bool binning_busy_ = false, frag_busy_ = false;
   Tick end_tick_{0};
-  // Address space.
-  std::uint64_t pb_base_[2] = {0, 0};
-  std::uint64_t vertex_base_ = 0, vertex_cursor_ = 0;
-  std::uint64_t texture_base_ = 0;
-  std::uint64_t texture_line_bytes_ = 0;  // cache.texture.line_bytes
-  std::vector<std::uint64_t> fb_base_, fb_stride_, cmd_base_;
+  std::uint64_t vertex_cursor_ = 0;       ///< next vertex/index byte to stream (renders follow each other)
+  std::uint64_t texture_line_bytes_ = 0;  ///< cache.texture.line_bytes
   // The render whose tiles are in flight.
   const RenderWork* render_ = nullptr;
   std::size_t render_job_ = 0, render_command_ = 0;
@@ -561,50 +466,8 @@ class TimingSim final : public Unit {
   std::size_t next_dispatch_ = 0, next_isp_ = 0, tiles_done_ = 0, in_flight_ = 0;
   std::deque<Tick> usc_ends_;
   std::deque<std::size_t> store_queue_;
-  std::map<std::tuple<std::size_t, int, int>, std::size_t> tile_rows_;  ///< (command, x, y) -> row in result_.tiles
   bool store_busy_ = false;
 };
-
-void MemStream::add(std::uint64_t addr, std::uint64_t bytes) {
-  sim_.count_issued(cls_, write_, bytes);
-  while (bytes > 0) {
-    const std::uint64_t n = std::min<std::uint64_t>(bytes, kChunkBytes - (addr % kChunkBytes));
-    chunks_.push_back({addr, static_cast<std::uint32_t>(n)});
-    addr += n;
-    bytes -= n;
-  }
-}
-
-void MemStream::start(std::function<void()> done) {
-  done_ = std::move(done);
-  if (chunks_.empty()) {
-    sim_.eq().schedule(sim_.eq().now(), [this] { done_(); });
-    return;
-  }
-  pump();
-}
-
-void MemStream::pump() {
-  waiting_ = false;
-  while (in_flight_ < outstanding_ && next_ < chunks_.size()) {
-    const auto& ch = chunks_[next_];
-    const bool ok = sim_.mem().issue(client_, ch.first, ch.second, write_, cls_, [this] {
-      --in_flight_;
-      if (++completed_ == chunks_.size()) {
-        done_();
-        return;
-      }
-      if (!waiting_) pump();
-    });
-    if (!ok) {
-      waiting_ = true;
-      sim_.mem().notify_when_ready([this] { pump(); });
-      return;
-    }
-    ++in_flight_;
-    ++next_;
-  }
-}
 
 }  // namespace
 

@@ -27,7 +27,7 @@
 #include "models/frame_work.hpp"
 #include "models/hw_config.hpp"
 #include "models/memory_system.hpp"
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
 
 namespace tbdr {
@@ -53,8 +53,8 @@ struct TimingResult {
   double frame_time_ps = 0;
   std::vector<CommandTime> commands;
   std::vector<UnitTime> units;
-  DramTraffic issued;                 ///< bytes the units requested, per class (before caches)
-  DramTraffic dram;                   ///< bytes DRAM transferred, per class (after caches)
+  DramTraffic requested;              ///< bytes the units requested, per class (before the caches)
+  DramTraffic dram;                   ///< bytes DRAM transferred, per class (after the caches)
   MemorySystemStats memory;           ///< the memory system's own totals (energies of caches and DRAM)
   std::vector<StatRecord> memory_stats;  ///< rows of caches, DRAM, clients for the database
   std::vector<TileRecord> tiles;      ///< per tile: cycles, samples, DRAM bytes

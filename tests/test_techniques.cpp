@@ -119,7 +119,7 @@ const BufferDesc& buffer(const Trace& t, const std::string& name) {
 
 const DispatchCmd* find_dispatch(const Trace& t, const std::string& kernel) {
   for (const auto& c : t.commands)
-    if (const auto* d = std::get_if<DispatchCmd>(&c); d && d->kernel == kernel) return d;
+    if (const auto* d = std::get_if<DispatchCmd>(&c); d && to_string(d->kernel) == kernel) return d;
   return nullptr;
 }
 

@@ -170,8 +170,8 @@ TEST(TimingConservation, IssuedBytesEqualFunctionalBytesPerClass) {
   for (const char* budget : {"pls.tile_buffer_bits_per_pixel=128", "tiling.pb_capacity_bytes=65536"}) {
     const Timed r = run_timed(t, s, {budget});
     for (std::size_t c = 0; c < kDramClassCount; ++c) {
-      EXPECT_EQ(r.timing.issued.read_bytes[c], r.frame.dram.read_bytes[c]) << to_string(static_cast<DramClass>(c));
-      EXPECT_EQ(r.timing.issued.write_bytes[c], r.frame.dram.write_bytes[c]) << to_string(static_cast<DramClass>(c));
+      EXPECT_EQ(r.timing.requested.read_bytes[c], r.frame.dram.read_bytes[c]) << to_string(static_cast<DramClass>(c));
+      EXPECT_EQ(r.timing.requested.write_bytes[c], r.frame.dram.write_bytes[c]) << to_string(static_cast<DramClass>(c));
     }
   }
 }

@@ -187,7 +187,7 @@ TEST(TraceRoundTrip, HandWrittenCompleteTrace) {
   EXPECT_FALSE(barrier.all);
   EXPECT_EQ(barrier.resources, std::vector<std::string>{"depth"});
   const auto& dispatch = std::get<DispatchCmd>(t.commands[2]);
-  EXPECT_EQ(dispatch.kernel, "tile_light_cull");
+  EXPECT_EQ(dispatch.kernel, ComputeKernel::TileLightCull);
   EXPECT_EQ(dispatch.line, 34);
   EXPECT_EQ(dispatch.group_count(), 40u * 23u);
   EXPECT_EQ(dispatch.params.at("tile_px"), "16");

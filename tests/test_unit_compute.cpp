@@ -32,10 +32,10 @@ ComputeSpec four_lights() {
   ComputeSpec s;
   s.lights = {light_at(world_at_pixel(16, 16, 10), 0.5f), light_at(world_at_pixel(32, 32, 10), 0.5f),
               light_at(world_at_pixel(48, 48, 10), 0.5f), light_at({0, 0, 5}, 1.0f)};
-  s.buffers = {make_buffer("grid", BufferContent::TileGrid, TrafficClass::LightLists),
-               make_buffer("indices", BufferContent::LightIndexList, TrafficClass::LightLists),
-               make_buffer("bounds", BufferContent::DepthBounds, TrafficClass::Other),
-               make_buffer("lit", BufferContent::Image, TrafficClass::Color)};
+  s.buffers = {make_buffer("grid", BufferContent::TileGrid, DramClass::LightLists),
+               make_buffer("indices", BufferContent::LightIndexList, DramClass::LightLists),
+               make_buffer("bounds", BufferContent::DepthBounds, DramClass::Other),
+               make_buffer("lit", BufferContent::Image, DramClass::Color)};
   return s;
 }
 

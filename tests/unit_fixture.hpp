@@ -32,7 +32,7 @@
 #include "models/tile_memory.hpp"
 #include "models/tiler.hpp"
 #include "models/timing_model.hpp"
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 #include "models/tsp.hpp"
 #include "trace/trace.hpp"
 #include "scene/camera.hpp"
@@ -449,7 +449,7 @@ struct ComputeSpec {
 };
 
 /// A buffer declaration of the trace.
-inline BufferDesc make_buffer(const std::string& name, BufferContent content, TrafficClass traffic, std::uint64_t bytes = 0) {
+inline BufferDesc make_buffer(const std::string& name, BufferContent content, DramClass traffic, std::uint64_t bytes = 0) {
   BufferDesc b;
   b.name = name;
   b.content = content;
@@ -550,7 +550,7 @@ class ComputeRig {
 inline DispatchCmd make_dispatch(const std::string& kernel, std::vector<std::string> reads, std::vector<std::string> writes,
                                  std::map<std::string, std::string> params = {}) {
   DispatchCmd d;
-  d.kernel = kernel;
+  d.kernel = parse_compute_kernel(kernel).value();
   d.reads = std::move(reads);
   d.writes = std::move(writes);
   d.params = std::move(params);

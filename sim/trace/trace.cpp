@@ -30,8 +30,17 @@ constexpr std::array kCullNames = {"none", "back", "front"};
 constexpr std::array kAlphaNames = {"material", "opaque", "punch_through", "translucent"};
 constexpr std::array kGeometryNames = {"scene", "fullscreen", "light_spheres", "light_quads"};
 constexpr std::array kSubsetNames = {"all", "opaque", "masked", "blended"};
-constexpr std::array kTrafficNames = {"light_data", "light_lists", "gbuffer",    "color",
-                                      "depth",      "visibility",  "work_lists", "other"};
+/// The DRAM classes a trace buffer may be booked to, with their trace spellings ("depth" is the
+/// database's depth_stencil).
+struct BufferTraffic {
+  DramClass cls;
+  const char* name;
+};
+constexpr std::array kBufferTraffic = {
+    BufferTraffic{DramClass::LightData, "light_data"}, BufferTraffic{DramClass::LightLists, "light_lists"},
+    BufferTraffic{DramClass::Gbuffer, "gbuffer"},       BufferTraffic{DramClass::Color, "color"},
+    BufferTraffic{DramClass::DepthStencil, "depth"},    BufferTraffic{DramClass::Visibility, "visibility"},
+    BufferTraffic{DramClass::WorkLists, "work_lists"},  BufferTraffic{DramClass::Other, "other"}};
 constexpr std::array kContentNames = {"lights",       "light_index_list", "tile_grid",  "cluster_grid",
                                       "used_clusters", "depth_bounds",    "work_lists", "image",
                                       "other"};
@@ -75,7 +84,6 @@ const char* to_string(CullMode v) { return name_of(kCullNames, v); }
 const char* to_string(AlphaOverride v) { return name_of(kAlphaNames, v); }
 const char* to_string(GeometryKind v) { return name_of(kGeometryNames, v); }
 const char* to_string(SceneSubset v) { return name_of(kSubsetNames, v); }
-const char* to_string(TrafficClass v) { return name_of(kTrafficNames, v); }
 const char* to_string(BufferContent v) { return name_of(kContentNames, v); }
 const char* to_string(SceneKind v) { return name_of(kSceneKindNames, v); }
 const char* to_string(ComputeKernel v) { return name_of(kComputeKernelNames, v); }
@@ -107,8 +115,15 @@ std::optional<GeometryKind> parse_geometry_kind(std::string_view s) {
   return parse_of<GeometryKind>(kGeometryNames, s);
 }
 std::optional<SceneSubset> parse_scene_subset(std::string_view s) { return parse_of<SceneSubset>(kSubsetNames, s); }
-std::optional<TrafficClass> parse_traffic_class(std::string_view s) {
-  return parse_of<TrafficClass>(kTrafficNames, s);
+std::optional<DramClass> parse_buffer_traffic(std::string_view s) {
+  for (const auto& t : kBufferTraffic)
+    if (s == t.name) return t.cls;
+  return std::nullopt;
+}
+const char* buffer_traffic_name(DramClass c) {
+  for (const auto& t : kBufferTraffic)
+    if (c == t.cls) return t.name;
+  return to_string(c);
 }
 std::optional<BufferContent> parse_buffer_content(std::string_view s) {
   return parse_of<BufferContent>(kContentNames, s);

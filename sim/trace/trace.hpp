@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "scene/camera.hpp"
+#include "trace/traffic.hpp"
 #include "scene/lights.hpp"
 
 namespace tbdr {
@@ -84,8 +85,6 @@ enum class GeometryKind : std::uint8_t {
 /// Which scene instances a `draw scene` submits, by material alpha mode.
 enum class SceneSubset : std::uint8_t { All, Opaque, Masked, Blended };
 
-/// DRAM traffic class of a buffer (how the results database books its bytes).
-enum class TrafficClass : std::uint8_t { LightData, LightLists, Gbuffer, Color, Depth, Visibility, WorkLists, Other };
 /// What a buffer holds (what the kernels and shaders that use it find there).
 enum class BufferContent : std::uint8_t {
   Lights,          ///< the light array (positions, radii, colors, spot cones)
@@ -128,7 +127,6 @@ const char* to_string(CullMode v);
 const char* to_string(AlphaOverride v);
 const char* to_string(GeometryKind v);
 const char* to_string(SceneSubset v);
-const char* to_string(TrafficClass v);
 const char* to_string(BufferContent v);
 const char* to_string(SceneKind v);
 const char* to_string(ComputeKernel v);
@@ -148,7 +146,11 @@ std::optional<CullMode> parse_cull_mode(std::string_view s);
 std::optional<AlphaOverride> parse_alpha_override(std::string_view s);
 std::optional<GeometryKind> parse_geometry_kind(std::string_view s);
 std::optional<SceneSubset> parse_scene_subset(std::string_view s);
-std::optional<TrafficClass> parse_traffic_class(std::string_view s);
+/// The DRAM class a `buffer ... traffic=T` line names; only the classes a buffer can hold
+/// (light_data, light_lists, gbuffer, color, depth, visibility, work_lists, other).
+std::optional<DramClass> parse_buffer_traffic(std::string_view s);
+/// The trace's spelling of a buffer's DRAM class (the inverse of parse_buffer_traffic).
+const char* buffer_traffic_name(DramClass c);
 std::optional<BufferContent> parse_buffer_content(std::string_view s);
 std::optional<SceneKind> parse_scene_kind(std::string_view s);
 std::optional<ComputeKernel> parse_compute_kernel(std::string_view s);
@@ -222,7 +224,7 @@ struct PipelineState {
 struct BufferDesc {
   std::string name;
   std::uint64_t bytes = 0;
-  TrafficClass traffic = TrafficClass::Other;
+  DramClass traffic = DramClass::Other;
   BufferContent content = BufferContent::Other;
   bool upload = false;  ///< filled by the CPU before the frame (else a dispatch must write it first)
   int line = 0;
@@ -288,10 +290,10 @@ struct PassDesc {
   bool is_resolve_target(const Attachment& a) const;
 };
 
-/// A compute dispatch of a named kernel. The reader refuses a kernel name that is not a
-/// ComputeKernel (file:line); the simulator validates the kernel's parameters.
+/// A compute dispatch of one of the simulator's kernels. The reader refuses a kernel name that is
+/// not a ComputeKernel (file:line); the simulator validates the kernel's parameters.
 struct DispatchCmd {
-  std::string kernel;  ///< a ComputeKernel's spelling (parse_compute_kernel)
+  ComputeKernel kernel = ComputeKernel::DepthBounds;  ///< the kernel the dispatch runs
   std::uint32_t groups[3] = {1, 1, 1};      ///< workgroups in x, y, z
   std::uint32_t group_size[3] = {1, 1, 1};  ///< threads per workgroup in x, y, z
   std::vector<std::string> reads;           ///< buffers and stored images read

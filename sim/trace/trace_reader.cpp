@@ -569,7 +569,7 @@ void Reader::on_buffer(const Line& l) {
   check_new_resource_name(l, b.name);
   b.bytes = to_u64(l, "bytes", require(l, "bytes"), ~std::uint64_t{0});
   if (b.bytes == 0) fail(l.number, "buffer " + q(b.name) + " has bytes=0");
-  b.traffic = get_enum(l, "traffic", parse_traffic_class);
+  b.traffic = get_enum(l, "traffic", parse_buffer_traffic);
   b.content = get_enum(l, "content", parse_buffer_content);
   b.upload = get_bool(l, "upload", false);
   b.line = l.number;
@@ -846,8 +846,10 @@ void Reader::on_dispatch(const Line& l) {
     fail(l.number, "'dispatch' inside pass " + q(pass().name) + " (close the pass with 'end' first)");
   if (!first_command_line_) first_command_line_ = l.number;
   DispatchCmd d;
-  d.kernel = positional_ident(l, "kernel name");
-  if (!parse_compute_kernel(d.kernel)) fail(l.number, "unknown kernel " + q(d.kernel) + " (known: " + compute_kernel_list() + ")");
+  const std::string kernel = positional_ident(l, "kernel name");
+  const std::optional<ComputeKernel> parsed = parse_compute_kernel(kernel);
+  if (!parsed) fail(l.number, "unknown kernel " + q(kernel) + " (known: " + compute_kernel_list() + ")");
+  d.kernel = *parsed;
   d.line = l.number;
   get_u32x3(l, "groups", d.groups);
   get_u32x3(l, "group_size", d.group_size);

@@ -136,7 +136,7 @@ void write_trace(const Trace& t, std::ostream& out) {
   }
 
   for (const auto& b : t.buffers)
-    out << "buffer " << b.name << " bytes=" << b.bytes << " traffic=" << to_string(b.traffic)
+    out << "buffer " << b.name << " bytes=" << b.bytes << " traffic=" << buffer_traffic_name(b.traffic)
         << " content=" << to_string(b.content) << " upload=" << yes_no(b.upload) << "\n";
 
   for (const auto& sh : t.shaders)
@@ -159,7 +159,7 @@ void write_trace(const Trace& t, std::ostream& out) {
     if (const auto* p = std::get_if<PassDesc>(&cmd)) {
       write_pass(*p, out);
     } else if (const auto* d = std::get_if<DispatchCmd>(&cmd)) {
-      out << "dispatch " << d->kernel << " groups=" << fmt_u32x3(d->groups)
+      out << "dispatch " << to_string(d->kernel) << " groups=" << fmt_u32x3(d->groups)
           << " group_size=" << fmt_u32x3(d->group_size);
       if (!d->reads.empty()) out << " reads=" << fmt_list(d->reads);
       if (!d->writes.empty()) out << " writes=" << fmt_list(d->writes);

@@ -40,7 +40,7 @@ Trace generate_clustered_deferred(const TraceSetup& setup, const TechniqueOption
   std::vector<std::string> reads = g.stored;
   reads.insert(reads.end(), {lights, grid.grid_buffer(), kLightIndexBuffer});
   t.commands.emplace_back(
-      shading_dispatch("deferred_shade", "clustered_deferred_lit", setup, kKernelGroupEdge, reads, g.frame));
+      shading_dispatch(ComputeKernel::DeferredShade, "clustered_deferred_lit", setup, kKernelGroupEdge, reads, g.frame));
   return t;
 }
 

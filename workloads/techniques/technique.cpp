@@ -169,7 +169,7 @@ Trace begin_trace(const TraceSetup& setup, const std::string& technique, const T
 
 std::string add_light_buffer(Trace& trace) {
   if (trace.lights.empty()) return "";
-  return add_buffer(trace, "lights", kLightBufferBytesPerLight * trace.lights.size(), TrafficClass::LightData,
+  return add_buffer(trace, "lights", kLightBufferBytesPerLight * trace.lights.size(), DramClass::LightData,
                     BufferContent::Lights, true);
 }
 
@@ -279,7 +279,7 @@ PassDesc color_pass(const std::string& name, std::uint32_t samples, LoadOp depth
   return pass;
 }
 
-std::string add_buffer(Trace& trace, const std::string& name, std::uint64_t bytes, TrafficClass traffic,
+std::string add_buffer(Trace& trace, const std::string& name, std::uint64_t bytes, DramClass traffic,
                        BufferContent content, bool upload) {
   trace.buffers.push_back(
       BufferDesc{.name = name, .bytes = bytes, .traffic = traffic, .content = content, .upload = upload});
@@ -287,7 +287,7 @@ std::string add_buffer(Trace& trace, const std::string& name, std::uint64_t byte
 }
 
 std::string add_frame_buffer(Trace& trace, const TraceSetup& setup) {
-  return add_buffer(trace, "color", std::uint64_t(setup.width) * std::uint64_t(setup.height) * 4, TrafficClass::Color,
+  return add_buffer(trace, "color", std::uint64_t(setup.width) * std::uint64_t(setup.height) * 4, DramClass::Color,
                     BufferContent::Image);
 }
 
@@ -337,7 +337,7 @@ void add_scene_shading(Trace& trace, PassDesc& pass, const std::string& pipeline
   add_scene_draws(pass, pipeline, masked_pipeline, reads);
 }
 
-DispatchCmd make_dispatch(const std::string& kernel, std::uint32_t groups_x, std::uint32_t groups_y,
+DispatchCmd make_dispatch(ComputeKernel kernel, std::uint32_t groups_x, std::uint32_t groups_y,
                           std::uint32_t groups_z, std::uint32_t size_x, std::uint32_t size_y, std::uint32_t size_z,
                           const std::vector<std::string>& reads, const std::vector<std::string>& writes,
                           const std::map<std::string, std::string>& params) {
@@ -609,20 +609,20 @@ LightGrid light_grid_option(const TraceSetup& setup, const TechniqueOptions& opt
 }
 
 void add_light_grid_buffers(Trace& trace, const LightGrid& grid) {
-  add_buffer(trace, grid.grid_buffer(), grid.cells() * kGridEntryBytes, TrafficClass::LightLists,
+  add_buffer(trace, grid.grid_buffer(), grid.cells() * kGridEntryBytes, DramClass::LightLists,
              grid.clusters ? BufferContent::ClusterGrid : BufferContent::TileGrid);
-  add_buffer(trace, kLightIndexBuffer, grid.cells() * grid.max_lights * grid.index_bytes, TrafficClass::LightLists,
+  add_buffer(trace, kLightIndexBuffer, grid.cells() * grid.max_lights * grid.index_bytes, DramClass::LightLists,
              BufferContent::LightIndexList);
 }
 
 std::string add_used_clusters_buffer(Trace& trace, const LightGrid& grid) {
-  return add_buffer(trace, "used_clusters", 4 + grid.cells() * kUsedClusterEntryBytes, TrafficClass::LightLists,
+  return add_buffer(trace, "used_clusters", 4 + grid.cells() * kUsedClusterEntryBytes, DramClass::LightLists,
                     BufferContent::UsedClusters);
 }
 
 DispatchCmd tile_light_cull_dispatch(const LightGrid& grid, const std::string& lights) {
   const std::uint32_t edge = grid.group_edge();
-  return make_dispatch("tile_light_cull", grid.tiles_x(), grid.tiles_y(), 1, edge, edge, 1, {"depth", lights},
+  return make_dispatch(ComputeKernel::TileLightCull, grid.tiles_x(), grid.tiles_y(), 1, edge, edge, 1, {"depth", lights},
                        {grid.grid_buffer(), kLightIndexBuffer},
                        {{"tile_px", std::to_string(grid.tile_px)},
                         {"max_lights_per_tile", std::to_string(grid.max_lights)}});
@@ -635,7 +635,7 @@ namespace {
 DispatchCmd cluster_light_assign(const LightGrid& grid, const std::string& lights, const std::string& used) {
   auto params = grid.cluster_params();
   params["dense"] = used.empty() ? "yes" : "no";
-  return make_dispatch("cluster_light_assign", grid.tiles_x() * grid.tiles_y(), grid.slices, 1, kAssignGroupThreads,
+  return make_dispatch(ComputeKernel::ClusterLightAssign, grid.tiles_x() * grid.tiles_y(), grid.slices, 1, kAssignGroupThreads,
                        1, 1, {lights, used}, {grid.grid_buffer(), kLightIndexBuffer}, params);
 }
 
@@ -644,7 +644,7 @@ DispatchCmd cluster_light_assign(const LightGrid& grid, const std::string& light
 void add_sparse_cluster_assignment(Trace& trace, const LightGrid& grid, const std::string& lights,
                                    const std::string& used) {
   const std::uint32_t edge = grid.group_edge();
-  trace.commands.emplace_back(make_dispatch("cluster_flag", grid.tiles_x(), grid.tiles_y(), 1, edge, edge, 1,
+  trace.commands.emplace_back(make_dispatch(ComputeKernel::ClusterFlag, grid.tiles_x(), grid.tiles_y(), 1, edge, edge, 1,
                                             {"depth"}, {used}, grid.cluster_params()));
   trace.commands.emplace_back(make_barrier({used}));
   trace.commands.emplace_back(cluster_light_assign(grid, lights, used));
@@ -654,7 +654,7 @@ DispatchCmd dense_cluster_assignment(const LightGrid& grid, const std::string& l
   return cluster_light_assign(grid, lights, "");
 }
 
-DispatchCmd shading_dispatch(const std::string& kernel, const std::string& shader, const TraceSetup& setup,
+DispatchCmd shading_dispatch(ComputeKernel kernel, const std::string& shader, const TraceSetup& setup,
                              std::uint32_t tile_px, const std::vector<std::string>& reads, const std::string& frame,
                              std::map<std::string, std::string> params) {
   params["shader"] = shader;

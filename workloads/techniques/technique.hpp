@@ -232,7 +232,7 @@ void add_color_target(PassDesc& pass, const std::string& name, std::uint32_t sam
 PassDesc color_pass(const std::string& name, std::uint32_t samples, LoadOp depth_load = LoadOp::Clear,
                     const std::string& depth = "depth");
 /// Declares a DRAM buffer written by a dispatch (upload=no) and returns its name.
-std::string add_buffer(Trace& trace, const std::string& name, std::uint64_t bytes, TrafficClass traffic,
+std::string add_buffer(Trace& trace, const std::string& name, std::uint64_t bytes, DramClass traffic,
                        BufferContent content, bool upload = false);
 /// Declares the lit frame a shading kernel writes: buffer `color`, rgba8 (W x H x 4 bytes), content
 /// image; returns its name.
@@ -254,7 +254,7 @@ void add_scene_draws(PassDesc& pass, const std::string& opaque, const std::strin
 void add_scene_shading(Trace& trace, PassDesc& pass, const std::string& pipeline, const ShaderDesc& shader,
                        const ShaderDesc& masked, const std::vector<std::string>& reads = {});
 /// A dispatch; `reads`/`writes` entries that are empty are dropped.
-DispatchCmd make_dispatch(const std::string& kernel, std::uint32_t groups_x, std::uint32_t groups_y,
+DispatchCmd make_dispatch(ComputeKernel kernel, std::uint32_t groups_x, std::uint32_t groups_y,
                           std::uint32_t groups_z, std::uint32_t size_x, std::uint32_t size_y, std::uint32_t size_z,
                           const std::vector<std::string>& reads, const std::vector<std::string>& writes,
                           const std::map<std::string, std::string>& params);
@@ -411,7 +411,7 @@ DispatchCmd dense_cluster_assignment(const LightGrid& grid, const std::string& l
 /// one group per `tile_px` tile (kernel_group_edge threads on a side), the
 /// per-pixel cost of shader `shader`, reading `reads` and writing the lit frame `frame`; `params`
 /// adds to shader and tile_px.
-DispatchCmd shading_dispatch(const std::string& kernel, const std::string& shader, const TraceSetup& setup,
+DispatchCmd shading_dispatch(ComputeKernel kernel, const std::string& shader, const TraceSetup& setup,
                              std::uint32_t tile_px, const std::vector<std::string>& reads, const std::string& frame,
                              std::map<std::string, std::string> params = {});
 

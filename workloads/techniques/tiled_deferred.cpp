@@ -31,7 +31,7 @@ Trace generate_tiled_deferred(const TraceSetup& setup, const TechniqueOptions& o
   const ShadedGbuffer g = add_compute_gbuffer(t, setup, layout, "tiled_deferred_lit", 0, LightSource::TileList);
   std::vector<std::string> reads = g.stored;
   reads.push_back(lights);
-  t.commands.emplace_back(shading_dispatch("tiled_deferred_shade", "tiled_deferred_lit", setup, tile_px, reads,
+  t.commands.emplace_back(shading_dispatch(ComputeKernel::TiledDeferredShade, "tiled_deferred_lit", setup, tile_px, reads,
                                            g.frame, {{"max_lights_per_tile", std::to_string(cap)}}));
   return t;
 }

@@ -41,7 +41,7 @@ Trace generate_visibility_buffer(const TraceSetup& setup, const TechniqueOptions
 
   const std::uint64_t materials = std::max<std::size_t>(1, scene_material_count(setup));
   const std::string work = add_buffer(t, "work_lists", grid.cells() * materials * 12 + materials * 8,
-                                      TrafficClass::WorkLists, BufferContent::WorkLists);
+                                      DramClass::WorkLists, BufferContent::WorkLists);
   add_light_grid_buffers(t, grid);
   const std::string frame = add_frame_buffer(t, setup);
 
@@ -59,11 +59,11 @@ Trace generate_visibility_buffer(const TraceSetup& setup, const TechniqueOptions
   const std::uint32_t edge = grid.group_edge();
   t.commands.emplace_back(std::move(pass));
   t.commands.emplace_back(make_barrier({"visibility", "depth"}));
-  t.commands.emplace_back(make_dispatch("vbuffer_worklists", grid.tiles_x(), grid.tiles_y(), 1, edge, edge, 1,
+  t.commands.emplace_back(make_dispatch(ComputeKernel::VbufferWorklists, grid.tiles_x(), grid.tiles_y(), 1, edge, edge, 1,
                                         {"visibility"}, {work}, {{"tile_px", std::to_string(grid.tile_px)}}));
   t.commands.emplace_back(tile_light_cull_dispatch(grid, lights));
   t.commands.emplace_back(make_barrier({work, grid.grid_buffer(), kLightIndexBuffer}));
-  t.commands.emplace_back(shading_dispatch("vbuffer_shade", "vbuffer_lit", setup, grid.tile_px,
+  t.commands.emplace_back(shading_dispatch(ComputeKernel::VbufferShade, "vbuffer_lit", setup, grid.tile_px,
                                            {"visibility", work, lights, grid.grid_buffer(), kLightIndexBuffer}, frame));
   return t;
 }

@@ -1,6 +1,7 @@
 #pragma once
 // DRAM traffic classes: every byte that crosses the chip boundary is booked to one of them, so a
-// run can say which buffers of a technique went off chip.
+// run can say which buffers of a technique went off chip. A trace's buffers name the class their
+// bytes are booked to (`buffer ... traffic=T`), so the classes live with the trace.
 #include <array>
 #include <cstdint>
 #include <string>

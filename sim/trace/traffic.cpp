@@ -1,4 +1,4 @@
-#include "models/traffic.hpp"
+#include "trace/traffic.hpp"
 
 namespace tbdr {
 

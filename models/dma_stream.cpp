@@ -1,0 +1,47 @@
+#include "models/dma_stream.hpp"
+
+#include <algorithm>
+
+namespace tbdr {
+
+void DmaStream::add(std::uint64_t addr, std::uint64_t bytes) {
+  while (bytes > 0) {
+    const std::uint64_t n = std::min<std::uint64_t>(bytes, kChunkBytes - (addr % kChunkBytes));
+    chunks_.push_back({addr, static_cast<std::uint32_t>(n)});
+    addr += n;
+    bytes -= n;
+  }
+}
+
+void DmaStream::start(std::function<void()> done) {
+  done_ = std::move(done);
+  if (chunks_.empty()) {
+    eq_.schedule(eq_.now(), [this] { done_(); });
+    return;
+  }
+  pump();
+}
+
+void DmaStream::pump() {
+  waiting_ = false;
+  while (in_flight_ < outstanding_ && next_ < chunks_.size()) {
+    const auto& ch = chunks_[next_];
+    const bool ok = mem_.issue(client_, ch.first, ch.second, write_, cls_, [this] {
+      --in_flight_;
+      if (++completed_ == chunks_.size()) {
+        done_();
+        return;
+      }
+      if (!waiting_) pump();
+    });
+    if (!ok) {
+      waiting_ = true;
+      mem_.notify_when_ready([this] { pump(); });
+      return;
+    }
+    ++in_flight_;
+    ++next_;
+  }
+}
+
+}  // namespace tbdr

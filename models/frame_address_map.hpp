@@ -1,0 +1,39 @@
+#pragma once
+// Where the timing model places a frame's data in the simulated address space: two parameter
+// buffers (binning of one render overlaps the tiles of the previous one), the vertex and index
+// buffers, the textures, per command a framebuffer area (one fixed-size slot per tile) and a buffer
+// area (lights, light lists, compute buffers). Addresses decide cache sets and DRAM banks, so the
+// layout is a pure function of the frame's work: the same work always gets the same addresses.
+#include <cstdint>
+#include <vector>
+
+#include "models/address_space.hpp"
+#include "models/frame_work.hpp"
+
+namespace tbdr {
+
+/// The address map of one frame's regions (allocated once, before the frame runs).
+class FrameAddressMap {
+ public:
+  /// Allocates every region the frame's work touches in `space`.
+  FrameAddressMap(const FrameWork& work, AddressSpace& space);
+
+  /// Base of parameter buffer `which` (0 or 1: binning job k uses buffer k % 2).
+  std::uint64_t parameter_buffer(std::size_t which) const { return pb_base_[which % 2]; }
+  /// Base of the vertex and index buffers (renders stream them one after another).
+  std::uint64_t vertices() const { return vertex_base_; }
+  /// Base of the texture address space (FrameWork::texture_bytes; TileWork::texture_lines are offsets in it).
+  std::uint64_t textures() const { return texture_base_; }
+  /// Base of a command's buffer area (a dispatch's reads and writes, a pass's once-read buffers).
+  std::uint64_t buffers(std::size_t command) const { return cmd_base_[command]; }
+  /// Base of one tile's framebuffer slot of a pass (loads and stores of all its classes follow each other).
+  std::uint64_t tile(std::size_t command, const TileWork& t, int tiles_x) const;
+
+ private:
+  std::uint64_t pb_base_[2] = {0, 0};
+  std::uint64_t vertex_base_ = 0;
+  std::uint64_t texture_base_ = 0;
+  std::vector<std::uint64_t> fb_base_, fb_stride_, cmd_base_;
+};
+
+}  // namespace tbdr
