@@ -120,8 +120,9 @@ ParamRegistry<HwConfig> make_registry() {
   r.add(TBDR_PARAM(usc.alu_ops_per_lane_per_clock), 2.0).unit("ops/lane/clock").range(0.25, 16)
       .doc("FP32 ALU ops per lane per clock").source(series6xt + ": up to 2 FP32 ops per lane per clock");
   r.add(TBDR_PARAM(usc.tasks_in_flight), 56).unit("tasks").range(1, 4096)
-      .doc("Tasks resident across the USCs; with threads_per_task they bound the tiles the USCs hold, and "
-           "the ISP stalls when they are full")
+      .doc("Tasks resident per USC: the work that hides memory latency (a tile's shading holds one slot per task "
+           "of threads_per_task threads; several tiles are resident while slots last; the ISP stalls when a "
+           "resolved tile finds too few free)")
       .source(mesa + ": max_usc_tasks = 56");
   r.add(TBDR_PARAM(usc.threads_per_task), 32).unit("threads").range(1, 1024)
       .doc("Threads (instances) of one USC task").source(mesa + ": max_instances_per_pds_task = 32");

@@ -11,6 +11,7 @@
 #include "models/dma_stream.hpp"
 #include "models/frame_address_map.hpp"
 #include "models/memory_system.hpp"
+#include "models/task_slots.hpp"
 #include "models/tile_records.hpp"
 #include "kernel/errors.hpp"
 #include "kernel/event_queue.hpp"
@@ -20,6 +21,9 @@
 namespace tbdr {
 
 namespace {
+
+/// Lanes of a 2x2 quad: the unit fragment shading runs in (helpers included).
+constexpr std::uint64_t kLanesPerQuad = 4;
 
 /// A FIFO server with a throughput: jobs reserve it in arrival order.
 struct Server {
@@ -35,7 +39,8 @@ struct TileState {
   bool fetched = false;
   int pending_streams = 0;
   int pending_shading = 0;  ///< USC work and texture fetch still to finish
-  Tick usc_end{0};
+  Tick usc_end{0};          ///< when its ALU and filtering work is done
+  std::uint64_t slots = 0;  ///< task slots it holds while resident on the USCs
 };
 
 /// The scheduler of the frame's work; a Unit so the run loop's watchdog can name it when stuck.
@@ -46,17 +51,16 @@ class TimingSim final : public Unit {
         work_(work),
         core_(ClockDomain::from_mhz("core", hw.gpu.core_clock_mhz)),
         mem_(hw, eq_, "mem"),
-        map_(work, mem_.address_space()) {
+        map_(work, mem_.address_space()),
+        slots_(static_cast<std::uint64_t>(hw.usc.count * hw.usc.tasks_in_flight)) {
     isp_.name = "isp";
     usc_.name = "usc";
+    tpu_.name = "texture";
     pbe_.name = "pixel_back_end";
     binner_.name = "binning";
     alu_rate_ = static_cast<double>(hw.usc.count * hw.usc.lanes) * hw.usc.alu_ops_per_lane_per_clock;
     tex_rate_ = static_cast<double>(hw.texture.units) * hw.texture.texels_per_clock;
     raster_rate_ = static_cast<double>(hw.isp.samples_per_clock * hw.isp.raster_pipes);
-    const std::uint64_t tile_px = static_cast<std::uint64_t>(hw.tiling.tile_width * hw.tiling.tile_height);
-    usc_queue_tiles_ = std::max<std::uint64_t>(
-        1, static_cast<std::uint64_t>(hw.usc.tasks_in_flight) * static_cast<std::uint64_t>(hw.usc.threads_per_task) / tile_px);
     texture_line_bytes_ = static_cast<std::uint64_t>(hw.cache.texture.line_bytes);
   }
 
@@ -92,6 +96,7 @@ class TimingSim final : public Unit {
                      {"tile_fetch", fetch_busy_cycles_, 0},
                      {isp_.name, isp_.busy_cycles, isp_.stalled_cycles},
                      {usc_.name, usc_.busy_cycles, usc_.stalled_cycles},
+                     {tpu_.name, tpu_.busy_cycles, tpu_.stalled_cycles},
                      {pbe_.name, pbe_.busy_cycles, pbe_.stalled_cycles}};
     result_.dram = mem_.traffic();
     result_.requested = mem_.requested();
@@ -161,13 +166,15 @@ class TimingSim final : public Unit {
     binning_busy_ = true;
     ++next_bin_;
     const BinningWork& b = rw.binning;
-    const double cycles = std::max({static_cast<double>(b.vertex_alu_ops) / alu_rate_,
-                                    static_cast<double>(b.primitives_in) / hw_.geometry.primitives_per_clock,
+    // Fixed-function geometry and tiling on the binning engine; the vertex shaders run on the
+    // unified shading clusters, competing with the fragment and compute work queued there.
+    const double cycles = std::max({static_cast<double>(b.primitives_in) / hw_.geometry.primitives_per_clock,
                                     static_cast<double>(b.primitives_binned) / hw_.tiling.primitives_per_clock,
                                     static_cast<double>(b.vertex_fetch_bytes + b.index_fetch_bytes) / hw_.geometry.vertex_fetch_bytes_per_clock});
     const Tick start = eq_.now();
     if (result_.commands[j.command].start_cycle < 0) result_.commands[j.command].start_cycle = cycles_of(start);
-    const Tick compute_end = reserve(binner_, start, cycles);
+    const Tick compute_end = std::max(reserve(binner_, start, cycles),
+                                      reserve(usc_, start, static_cast<double>(b.vertex_alu_ops) / alu_rate_));
     auto pending = std::make_shared<int>(1);
     auto finish = [this, k, compute_end, pending]() {
       if (--*pending > 0) return;
@@ -245,8 +252,8 @@ class TimingSim final : public Unit {
 
   void start_dispatch(std::size_t f, const CommandWork& cmd) {
     const Tick start = eq_.now();
-    const double cycles = std::max(static_cast<double>(cmd.compute_alu_ops) / alu_rate_, static_cast<double>(cmd.compute_texels) / tex_rate_);
-    const Tick compute_end = reserve(usc_, start, cycles);
+    const Tick compute_end = std::max(reserve(usc_, start, static_cast<double>(cmd.compute_alu_ops) / alu_rate_),
+                                      reserve(tpu_, start, static_cast<double>(cmd.compute_texels) / tex_rate_));
     auto pending = std::make_shared<int>(1);
     auto finish = [this, f, compute_end, pending]() {
       if (--*pending > 0) return;
@@ -278,7 +285,7 @@ class TimingSim final : public Unit {
     next_isp_ = 0;
     tiles_done_ = 0;
     in_flight_ = 0;
-    usc_ends_.clear();
+    isp_busy_ = false;
     // Buffers a pass reads once (lights, light lists) at the start of its first render.
     if (r == 0) {
       std::uint64_t offset = 0;
@@ -332,54 +339,72 @@ class TimingSim final : public Unit {
     }
   }
 
-  /// Tiles enter the ISP in order once fetched; their ISP, USC and pixel back end times are
-  /// reserved on the servers, with the USC queue pushing back on the ISP.
+  /// Tiles enter the ISP in order once fetched. A resolved tile waits in the ISP for task slots
+  /// on the USCs (usc.tasks_in_flight), and the ISP does not start the next tile meanwhile: that
+  /// wait is the ISP's stall. Several tiles are resident on the USCs at once, as many as their
+  /// tasks fit in the slots.
   void advance_isp() {
-    while (next_isp_ < tiles_.size() && tiles_[next_isp_].fetched) {
-      const std::size_t i = next_isp_++;
-      const TileWork& t = render_->tiles[i];
-      const double isp_cycles = std::max(static_cast<double>(t.primitives), static_cast<double>(t.samples) / raster_rate_);
-      Tick isp_end = reserve(isp_, eq_.now(), isp_cycles);
-      // Backpressure: the USCs hold usc_queue_tiles_ tiles; wait for the oldest to leave.
-      while (!usc_ends_.empty() && usc_ends_.front() <= isp_end) usc_ends_.pop_front();
-      if (usc_ends_.size() >= usc_queue_tiles_) {
-        const Tick free = usc_ends_[usc_ends_.size() - usc_queue_tiles_];
-        if (free > isp_end) {
-          isp_.stalled_cycles += cycles_of(free) - cycles_of(isp_end);
-          isp_end = free;
-          isp_.free_at = std::max(isp_.free_at, free);
-        }
-      }
-      const double usc_cycles = std::max(static_cast<double>(t.alu_ops) / alu_rate_, static_cast<double>(t.texels) / tex_rate_);
-      const Tick usc_start = std::max(isp_end, usc_.free_at);
-      const Tick usc_end = reserve(usc_, isp_end, usc_cycles);
-      usc_ends_.push_back(usc_end);
-      TileState& ts = tiles_[i];
-      ts.usc_end = usc_end;
-      ts.pending_shading = 1;
-      eq_.schedule(usc_end, [this, i] { shading_part_done(i); });
-      // The tile's texture footprint streams through the texture cache while it shades; the tile
-      // leaves the USCs when both its ALU work and its texture data are done.
-      if (!t.texture_lines.empty()) {
-        ++ts.pending_shading;
-        eq_.schedule(usc_start, [this, i] { fetch_textures(i); });
-      }
+    if (isp_busy_ || next_isp_ >= tiles_.size() || !tiles_[next_isp_].fetched) return;
+    const std::size_t i = next_isp_++;
+    const TileWork& t = render_->tiles[i];
+    const double isp_cycles = std::max(static_cast<double>(t.primitives), static_cast<double>(t.samples) / raster_rate_);
+    isp_busy_ = true;
+    eq_.schedule(reserve(isp_, eq_.now(), isp_cycles), [this, i] { request_slots(i); });
+  }
+
+  /// Tasks of a tile's fragment shading: its shaded quads' lanes in tasks of usc.threads_per_task.
+  std::uint64_t tasks_of(const TileWork& t) const {
+    const auto threads = static_cast<std::uint64_t>(hw_.usc.threads_per_task);
+    return (t.quads * kLanesPerQuad + threads - 1) / threads;
+  }
+
+  void request_slots(std::size_t i) {
+    const Tick resolved = eq_.now();
+    TileState& ts = tiles_[i];
+    ts.slots = slots_.slots_for(tasks_of(render_->tiles[i]));
+    slots_.acquire(ts.slots, [this, i, resolved] {
+      isp_.stalled_cycles += cycles_of(eq_.now()) - cycles_of(resolved);
+      isp_busy_ = false;
+      --in_flight_;  // the tile has left the ISP: the tile fetch may bring the next one
+      start_shading(i);
+      dispatch_tiles();
+      advance_isp();
+    });
+  }
+
+  /// A resident tile's shading: its ALU work on the clusters and its filtering on the texture
+  /// units (throughput shared, in arrival order, with every other resident tile, the vertex
+  /// shaders and compute), while its texture footprint streams through the texture cache with
+  /// the lines of its resident tasks in flight (up to texture.outstanding_requests): with few
+  /// tasks the reads' latency is exposed, with many it hides behind the other tasks' work.
+  void start_shading(std::size_t i) {
+    const TileWork& t = render_->tiles[i];
+    TileState& ts = tiles_[i];
+    const Tick now = eq_.now();
+    ts.usc_end = std::max(reserve(usc_, now, static_cast<double>(t.alu_ops) / alu_rate_),
+                          reserve(tpu_, now, static_cast<double>(t.texels) / tex_rate_));
+    ts.pending_shading = 1;
+    eq_.schedule(ts.usc_end, [this, i] { shading_part_done(i); });
+    if (!t.texture_lines.empty()) {
+      ++ts.pending_shading;
+      fetch_textures(i);
     }
   }
 
   void fetch_textures(std::size_t i) {
     const TileWork& t = render_->tiles[i];
-    DmaStream* s = new_stream(Client::Texture, false, DramClass::Textures,
-                              static_cast<std::uint32_t>(hw_.texture.outstanding_requests));
+    // A task issues its texture reads together (a material's fetches do not depend on each other)
+    // and waits for them: the lines in flight are the resident tasks' lines, a task's share of the
+    // tile's per-quad line accesses (quads of one task share lines, so this is an upper bound).
+    const auto quads_per_task = static_cast<std::uint64_t>(hw_.usc.threads_per_task) / kLanesPerQuad;
+    const std::uint64_t lines_per_task =
+        t.quads == 0 ? 1 : std::max<std::uint64_t>(1, (t.texture_line_accesses * std::max<std::uint64_t>(1, quads_per_task) + t.quads - 1) / t.quads);
+    const auto outstanding = static_cast<std::uint32_t>(std::clamp<std::uint64_t>(
+        std::max<std::uint64_t>(1, tiles_[i].slots) * lines_per_task, 1, static_cast<std::uint64_t>(hw_.texture.outstanding_requests)));
+    DmaStream* s = new_stream(Client::Texture, false, DramClass::Textures, outstanding);
     const std::uint64_t line = texture_line_bytes_;
-    // Consecutive lines go as one range (the memory system still looks each line up).
-    std::size_t k = 0;
-    while (k < t.texture_lines.size()) {
-      std::size_t e = k + 1;
-      while (e < t.texture_lines.size() && t.texture_lines[e] == t.texture_lines[e - 1] + line) ++e;
-      s->add(map_.textures() + t.texture_lines[k], (e - k) * line);
-      k = e;
-    }
+    // One request per line: the memory system looks each line up in the texture cache.
+    for (const std::uint64_t l : t.texture_lines) s->add(map_.textures() + l, line);
     s->start([this, i] {
       const Tick usc_end = tiles_[i].usc_end;
       if (eq_.now() > usc_end) usc_.stalled_cycles += cycles_of(eq_.now()) - cycles_of(usc_end);
@@ -389,6 +414,7 @@ class TimingSim final : public Unit {
 
   void shading_part_done(std::size_t i) {
     if (--tiles_[i].pending_shading > 0) return;
+    slots_.release(tiles_[i].slots);
     store_queue_.push_back(i);
     pump_stores();
   }
@@ -429,7 +455,6 @@ class TimingSim final : public Unit {
 
   void tile_done(std::size_t i) {
     tile_records_.add(render_command_, render_->tiles[i], cycles_of(eq_.now()) - cycles_of(tiles_[i].fetch_start));
-    --in_flight_;
     ++tiles_done_;
     if (tiles_done_ == tiles_.size()) {
       fragment_finished(render_job_);
@@ -446,9 +471,10 @@ class TimingSim final : public Unit {
   FrameAddressMap map_;
   TileRecordBook tile_records_;
   TimingResult result_;
-  Server binner_, isp_, usc_, pbe_;
+  Server binner_, isp_, usc_, tpu_, pbe_;
+  TaskSlots slots_;  ///< resident tasks across the USCs (usc.count x usc.tasks_in_flight)
+  bool isp_busy_ = false;  ///< the ISP is resolving a tile or holds one waiting for task slots
   double alu_rate_ = 1, tex_rate_ = 1, raster_rate_ = 1;
-  std::uint64_t usc_queue_tiles_ = 1;
   double fetch_busy_cycles_ = 0;
   std::vector<std::unique_ptr<DmaStream>> streams_;
   std::vector<Job> bin_jobs_, frag_jobs_;
@@ -464,7 +490,6 @@ class TimingSim final : public Unit {
   std::uint64_t render_pb_base_ = 0;
   std::vector<TileState> tiles_;
   std::size_t next_dispatch_ = 0, next_isp_ = 0, tiles_done_ = 0, in_flight_ = 0;
-  std::deque<Tick> usc_ends_;
   std::deque<std::size_t> store_queue_;
   bool store_busy_ = false;
 };

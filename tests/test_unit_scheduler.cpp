@@ -1,8 +1,9 @@
 // The scheduler of the timing model on hand-made work (no memory traffic, so every time is a
 // service time): default rates are 4 USCs x 16 lanes x 2 ops = 128 ALU ops per clock, 32 samples
 // per clock on 1 raster pipe, 2 texture units x 4 texels = 8 texels per clock, 1 primitive per
-// clock of geometry; 4 tiles in flight; the USCs hold 56 tasks x 32 threads / 1024 pixels = 1
-// tile. Cycles are whole core cycles; every service time below is exact.
+// clock of geometry; 4 tiles in flight in the ISP; the 4 USCs hold 56 resident tasks of 32
+// threads each, 224 in all (a tile of 1792 shaded quads is 1792 x 4 / 32 = 224 tasks). Cycles are whole core cycles; every
+// service time below is exact.
 #include <gtest/gtest.h>
 
 #include <vector>
@@ -58,9 +59,11 @@ TEST(UnitScheduler, AFillBoundTileTakesItsSamplesOverTheRasterRate) {
 }
 
 TEST(UnitScheduler, ATextureBoundTileTakesItsTexelsOverTheTextureRate) {
-  // 8000 texels / (2 units x 4 texels per clock) = 1000 cycles (> 128 ops / 128 = 1).
+  // 8000 texels / (2 units x 4 texels per clock) = 1000 cycles on the texture units, while the
+  // ALU work takes 128 ops / 128 = 1 cycle on the USCs.
   const TimingResult r = run_schedule(one_render({tile_work(0, 0, 0, 0, 128, 8000)}));
-  EXPECT_EQ(unit_time(r, "usc").busy_cycles, 1000.0);
+  EXPECT_EQ(unit_time(r, "texture").busy_cycles, 1000.0);
+  EXPECT_EQ(unit_time(r, "usc").busy_cycles, 1.0);
   EXPECT_EQ(r.frame_cycles, 1000.0);
   const TimingResult more = run_schedule(one_render({tile_work(0, 0, 0, 0, 128, 8000)}), {"texture.units=4"});
   EXPECT_EQ(more.frame_cycles, 500.0);
@@ -72,32 +75,55 @@ FrameWork four_balanced_tiles() {
                      tile_work(0, 1, 1, 32000, 128000), tile_work(1, 1, 1, 32000, 128000)});
 }
 
-TEST(UnitScheduler, TilesInFlightOverlapOneTilesShadingWithTheNextOnesRasterisation) {
-  // 4 in flight: ISP 0-1000, 1000-2000, ..., 3000-4000; each tile's shading follows its ISP
-  // work: USCs 1000-2000, ..., 4000-5000. Frame 1000 + 4 x 1000 = 5000.
-  const TimingResult four = run_schedule(four_balanced_tiles());
-  EXPECT_EQ(four.frame_cycles, 5000.0);
-  EXPECT_EQ(unit_time(four, "isp").busy_cycles, 4000.0);
-  EXPECT_EQ(unit_time(four, "usc").busy_cycles, 4000.0);
-  // 1 in flight: a tile starts when the previous one is stored: 4 x (1000 + 1000) = 8000.
-  const TimingResult one = run_schedule(four_balanced_tiles(), {"isp.tiles_in_flight=1"});
-  EXPECT_EQ(one.frame_cycles, 8000.0);
+TEST(UnitScheduler, OneTilesShadingOverlapsTheNextOnesRasterisation) {
+  // ISP 0-1000, 1000-2000, ..., 3000-4000; each tile's shading follows its ISP work: USCs
+  // 1000-2000, ..., 4000-5000. Frame 1000 + 4 x 1000 = 5000. A tile leaves the ISP's tiles in
+  // flight when the USCs take it, so even 1 tile in flight keeps the ISP and USCs overlapped
+  // (with no memory traffic the tile fetch takes no time).
+  for (const char* set : {"isp.tiles_in_flight=4", "isp.tiles_in_flight=1"}) {
+    const TimingResult r = run_schedule(four_balanced_tiles(), {set});
+    EXPECT_EQ(r.frame_cycles, 5000.0) << set;
+    EXPECT_EQ(unit_time(r, "isp").busy_cycles, 4000.0) << set;
+    EXPECT_EQ(unit_time(r, "usc").busy_cycles, 4000.0) << set;
+  }
 }
 
-TEST(UnitScheduler, AFullUscQueueStallsTheIsp) {
-  // Three tiles of 100 ISP cycles (3200 samples) and 1000 USC cycles. The USCs hold one tile:
-  // tile 1 leaves the ISP at 200 but waits until tile 0 leaves the USCs at 1100 (900 stalled);
-  // tile 2 rasterises 1100-1200 and waits for 2100 (900). Frame: 100 + 3 x 1000 = 3100.
-  const FrameWork w = one_render({tile_work(0, 0, 1, 3200, 128000), tile_work(1, 0, 1, 3200, 128000),
-                                  tile_work(0, 1, 1, 3200, 128000)});
+TEST(UnitScheduler, FullTaskSlotsStallTheIsp) {
+  // Three tiles of 100 ISP cycles (3200 samples), 1000 USC cycles and 1792 quads = 224 tasks
+  // each. 4 x 56 = 224 slots hold one such tile: tile 1 is resolved at 200 but waits until tile 0
+  // leaves the USCs at 1100 (900 stalled); tile 2 rasterises 1100-1200 and waits for 2100 (900).
+  // Frame: 100 + 3 x 1000 = 3100.
+  std::vector<TileWork> tiles = {tile_work(0, 0, 1, 3200, 128000), tile_work(1, 0, 1, 3200, 128000),
+                                 tile_work(0, 1, 1, 3200, 128000)};
+  for (auto& t : tiles) t.quads = 1792;
+  const FrameWork w = one_render(tiles);
   const TimingResult r = run_schedule(w);
   EXPECT_EQ(r.frame_cycles, 3100.0);
   EXPECT_EQ(unit_time(r, "isp").busy_cycles, 300.0);
   EXPECT_NEAR(unit_time(r, "isp").stalled_cycles, 1800.0, kTickRounding);
-  // 112 tasks x 32 threads / 1024 = 3 tiles queued: no stall, the same USC-bound frame.
-  const TimingResult deep = run_schedule(w, {"usc.tasks_in_flight=112"});
+  // 4 x 168 = 672 slots hold all three tiles (3 x 224): no stall, the same ALU-bound frame.
+  const TimingResult deep = run_schedule(w, {"usc.tasks_in_flight=168"});
   EXPECT_NEAR(unit_time(deep, "isp").stalled_cycles, 0.0, kTickRounding);
   EXPECT_EQ(deep.frame_cycles, 3100.0);
+  // 4 x 167 = 668 slots hold two (448 + 224 > 668): tile 2, resolved at 300, waits for tile 0 to
+  // leave at 1100: 800 stalled.
+  const TimingResult two = run_schedule(w, {"usc.tasks_in_flight=167"});
+  EXPECT_NEAR(unit_time(two, "isp").stalled_cycles, 800.0, kTickRounding);
+}
+
+TEST(UnitScheduler, VertexShadingCompetesWithFragmentShadingForTheUscs) {
+  // Pass a: one 1000-cycle ALU tile. Pass b bins 1000 primitives (1000 cycles on the binning
+  // engine) whose vertex shaders need 128000 ops = 1000 USC cycles. b's binning starts at 0
+  // (before a's tile: a's binning has nothing to do) and reserves the USCs 0-1000; a's tile then
+  // shades 1000-2000; b's tile 2000-3000. Were the vertex shaders on a unit of their own, a's
+  // tile would shade 0-1000 and the frame end at 2000.
+  BinningWork vs = binning_work(1000);
+  vs.vertex_alu_ops = 128000;
+  const RenderWork a = render_work({tile_work(0, 0, 0, 0, 128000)});
+  const RenderWork b = render_work({tile_work(0, 0, 0, 0, 128000)}, vs);
+  const TimingResult r = run_schedule(frame_work({pass_work("a", {a}), pass_work("b", {b})}));
+  EXPECT_EQ(unit_time(r, "usc").busy_cycles, 3000.0);
+  EXPECT_EQ(r.frame_cycles, 3000.0);
 }
 
 TEST(UnitScheduler, BinningOfTheNextPassOverlapsTheTilesOfThisOne) {
