@@ -166,7 +166,8 @@ class PassRenderer {
     isp_.render_tile(r, prims, stats_.isp, stats_.tsp);
     const IspStats tile_isp = stats_.isp - isp0;
     const TspStats tile_tsp = stats_.tsp - tsp0;
-    tile_memory_.spill(tile_tsp.tile_buffer_read_bytes.value(), tile_tsp.tile_buffer_write_bytes.value(), dram_);
+    DramTraffic spill;
+    tile_memory_.spill(tile_tsp.tile_buffer_read_bytes.value(), tile_tsp.tile_buffer_write_bytes.value(), spill);
     tile_memory_.end_tile(r, partial, dram_);
     TileWork tw;
     tw.tile_x = t % tiler_.tiles_x();
@@ -189,7 +190,13 @@ class PassRenderer {
     // The footprint is what the texture unit requests (before the texture cache), booked like
     // the parameter buffer reads: after the tile's loads and stores were taken from `dram_`.
     dram_.read(DramClass::Textures, tw.texture_lines.size() * static_cast<std::uint64_t>(hw_.cache.texture.line_bytes));
-    tw.tile_buffer_bytes = tile_tsp.tile_buffer_read_bytes.value() + tile_tsp.tile_buffer_write_bytes.value();
+    tw.spill_read_bytes = spill.reads(DramClass::Spill);
+    tw.spill_write_bytes = spill.writes(DramClass::Spill);
+    // The spilled share of the shaders' tile-buffer accesses goes to memory instead of the on-chip
+    // port (spill reads = the spilled share of the reads + the read-back of the spilled writes).
+    tw.tile_buffer_bytes = tile_tsp.tile_buffer_read_bytes.value() + tile_tsp.tile_buffer_write_bytes.value() -
+                           (tw.spill_read_bytes - tw.spill_write_bytes) - tw.spill_write_bytes;
+    dram_ += spill;  // booked after the tile's loads and stores were taken from `dram_`
     tw.tag_bytes = tile_isp.tag_buffer_read_bytes.value() + tile_isp.tag_buffer_write_bytes.value();
     tw.depth_bytes = tile_isp.depth_buffer_read_bytes.value() + tile_isp.depth_buffer_write_bytes.value();
     if (!ctx_.framebuffer_in_dram) {

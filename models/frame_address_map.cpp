@@ -24,13 +24,14 @@ FrameAddressMap::FrameAddressMap(const FrameWork& work, AddressSpace& space) {
   std::uint64_t pb_bytes = kMinRegionBytes, vertex_bytes = kMinRegionBytes;
   for (const auto& cmd : work.commands) {
     const std::uint64_t cmd_bytes = sum(cmd.read_bytes) + sum(cmd.write_bytes);
-    std::uint64_t stride = kRegionAlignBytes;
+    std::uint64_t stride = kRegionAlignBytes, spill_stride = 0;
     std::uint64_t max_tile = 1;
     for (const auto& r : cmd.renders) {
       std::uint64_t extent = r.binning.pb_write_bytes;
       for (const auto& t : r.tiles) {
         for (const auto& br : t.pb_reads) extent = std::max(extent, br.offset + br.bytes);
         stride = std::max({stride, sum(t.load_bytes), sum(t.store_bytes)});
+        spill_stride = std::max({spill_stride, t.spill_read_bytes, t.spill_write_bytes});
         max_tile = std::max<std::uint64_t>(max_tile, static_cast<std::uint64_t>(t.tile_y * work.tiles_x + t.tile_x + 1));
       }
       pb_bytes = std::max(pb_bytes, extent);
@@ -40,11 +41,19 @@ FrameAddressMap::FrameAddressMap(const FrameWork& work, AddressSpace& space) {
     fb_stride_.push_back(stride);
     fb_base_.push_back(cmd.is_dispatch ? 0 : space.allocate("framebuffer." + cmd.name, stride * max_tile, DramClass::Color));
     cmd_base_.push_back(space.allocate("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, kRegionAlignBytes), DramClass::Other));
+    spill_stride = (spill_stride + kRegionAlignBytes - 1) / kRegionAlignBytes * kRegionAlignBytes;
+    spill_stride_.push_back(spill_stride);
+    // Allocated only when the pass spills, so that passes that fit keep their addresses.
+    spill_base_.push_back(spill_stride == 0 ? 0 : space.allocate("tile_spill." + cmd.name, spill_stride * max_tile, DramClass::Spill));
   }
   if (work.texture_bytes > 0) texture_base_ = space.allocate("textures", work.texture_bytes, DramClass::Textures);
   pb_base_[0] = space.allocate("parameter_buffer.0", pb_bytes, DramClass::ParameterBuffer);
   pb_base_[1] = space.allocate("parameter_buffer.1", pb_bytes, DramClass::ParameterBuffer);
   vertex_base_ = space.allocate("vertex_and_index_buffers", vertex_bytes, DramClass::Vertices);
+}
+
+std::uint64_t FrameAddressMap::spill(std::size_t command, const TileWork& t, int tiles_x) const {
+  return spill_base_[command] + static_cast<std::uint64_t>(t.tile_y * tiles_x + t.tile_x) * spill_stride_[command];
 }
 
 std::uint64_t FrameAddressMap::tile(std::size_t command, const TileWork& t, int tiles_x) const {

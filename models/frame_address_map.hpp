@@ -28,12 +28,14 @@ class FrameAddressMap {
   std::uint64_t buffers(std::size_t command) const { return cmd_base_[command]; }
   /// Base of one tile's framebuffer slot of a pass (loads and stores of all its classes follow each other).
   std::uint64_t tile(std::size_t command, const TileWork& t, int tiles_x) const;
+  /// Base of one tile's slot of tile-buffer bytes spilled to memory (pls.over_budget = spill).
+  std::uint64_t spill(std::size_t command, const TileWork& t, int tiles_x) const;
 
  private:
   std::uint64_t pb_base_[2] = {0, 0};
   std::uint64_t vertex_base_ = 0;
   std::uint64_t texture_base_ = 0;
-  std::vector<std::uint64_t> fb_base_, fb_stride_, cmd_base_;
+  std::vector<std::uint64_t> fb_base_, fb_stride_, cmd_base_, spill_base_, spill_stride_;
 };
 
 }  // namespace tbdr

@@ -39,6 +39,10 @@ struct TileWork {
   std::vector<std::uint64_t> texture_lines;
   std::uint64_t texture_line_accesses = 0;  ///< distinct lines per quad and fetch, summed (before merging)
   std::uint64_t tile_buffer_bytes = 0;    ///< on-chip tile buffer bytes read + written
+  /// Tile-buffer bytes past the on-chip budget (pls.over_budget = spill) that the shaders read and
+  /// write in memory instead: their own loads and stores during shading, not tile loads/stores.
+  std::uint64_t spill_read_bytes = 0;
+  std::uint64_t spill_write_bytes = 0;
   std::uint64_t tag_bytes = 0;            ///< tag buffer bytes read + written
   std::uint64_t depth_bytes = 0;          ///< on-chip depth/stencil bytes read + written
 };

@@ -145,6 +145,12 @@ ParamRegistry<HwConfig> make_registry() {
       .doc("On-chip color/PLS storage per pixel (depth kept separately)")
       .source("Imagination, PowerVR Performance Recommendations, \"On-Chip Memory Performance\": typically 128 "
               "bits per pixel on low-end parts, 256 on high-end ones");
+  r.add(TBDR_PARAM(pls.tile_buffer_bytes_per_clock), 16.0).unit("bytes/clock").range(1, 4096)
+      .doc("On-chip tile buffer bandwidth per USC: colour/PLS bytes the shaders read and write in tile memory "
+           "(outputs, blending, PLS) per clock; a tile's shading takes at least its tile-buffer bytes over this x usc.count")
+      .source("no public figure; one 128-bit output-register port per USC assumed. The finite on-chip bandwidth is "
+              "what Imagination's PowerVR Performance Recommendations, \"On-Chip Memory Performance\", measures "
+              "as the slope of frame time with G-buffer width within the on-chip budget (GX6250)");
   r.add(TBDR_PARAM(pls.max_pls_bytes_per_pixel), 16).unit("bytes/pixel").range(16, 256)
       .doc("Largest pixel local storage a pass may declare; a trace whose pass declares more is refused, as a "
            "driver refuses such a shader")

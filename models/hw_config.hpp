@@ -129,6 +129,7 @@ struct TextureParams {
 /// [pls] on-chip tile memory and pixel local storage.
 struct PlsParams {
   std::int64_t tile_buffer_bits_per_pixel = 0;
+  double tile_buffer_bytes_per_clock = 0;  ///< per USC
   std::int64_t max_pls_bytes_per_pixel = 0;
   PlsOverBudget over_budget = PlsOverBudget::Spill;
 };

@@ -38,11 +38,16 @@ void check_pls_layout(const PlsParams& p, const PassDesc& pass, const std::strin
 TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats) : ctx_(ctx), stats_(stats) {
   const PassDesc& pass = *ctx.pass;
   check_pls_layout(ctx.hw->pls, pass);
+  std::uint32_t color = 0;
   for (const auto& a : pass.attachments) {
     if (is_depth_format(a.format) || pass.is_resolve_target(a)) continue;  // depth lives in the ISP
-    need_ += a.bytes_per_pixel();
+    color += a.bytes_per_pixel();
   }
-  need_ += pass.pls_bytes_per_pixel();
+  // Pixel local storage and the colour attachments share the same per-pixel storage
+  // (EXT_shader_pixel_local_storage: "the pixel local storage ... shares storage with the
+  // framebuffer's color"; writing colour while PLS is live makes PLS undefined): a pass needs the
+  // larger of the two, not their sum.
+  need_ = std::max(color, pass.pls_bytes_per_pixel());
   budget_ = static_cast<std::uint32_t>(ctx.hw->pls.tile_buffer_bits_per_pixel / 8);
   if (need_ > budget_) {
     if (ctx.hw->pls.over_budget == PlsOverBudget::Spill) {

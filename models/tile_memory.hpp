@@ -22,7 +22,7 @@ namespace tbdr {
 
 // Declared once: X(type, member = stored name, unit, Sum | Gauge, description).
 #define TBDR_TILE_MEMORY_STATS(X) \
-  X(Counter, onchip_need_bytes_per_pixel, "bytes/pixel", Gauge, "Tile memory the pass needs per pixel (attachments x samples + PLS)") \
+  X(Counter, onchip_need_bytes_per_pixel, "bytes/pixel", Gauge, "Tile memory the pass needs per pixel: the larger of its colour attachments x samples and its PLS (they share storage)") \
   X(Counter, onchip_budget_bytes_per_pixel, "bytes/pixel", Gauge, "Tile memory available per pixel") \
   X(Counter, tile_split_factor, "strips", Gauge, "Strips each tile is rendered in to fit the budget (1 = fits)") \
   X(Counter, tile_load_bytes, "bytes", Sum, "Attachment bytes loaded from DRAM into tile memory (uncompressed)") \

@@ -22,6 +22,10 @@ namespace tbdr {
 
 namespace {
 
+/// Bytes of one USC memory load or store of spilled tile-buffer data: a 64-byte line, the cache
+/// line of the SLC it goes through (the default cache line; addresses are fixed as in the map).
+constexpr std::uint64_t kUscAccessBytes = 64;
+
 /// Lanes of a 2x2 quad: the unit fragment shading runs in (helpers included).
 constexpr std::uint64_t kLanesPerQuad = 4;
 
@@ -56,6 +60,8 @@ class TimingSim final : public Unit {
     isp_.name = "isp";
     usc_.name = "usc";
     tpu_.name = "texture";
+    tile_buffer_.name = "tile_buffer";
+    tile_buffer_rate_ = static_cast<double>(hw.usc.count) * hw.pls.tile_buffer_bytes_per_clock;
     pbe_.name = "pixel_back_end";
     binner_.name = "binning";
     alu_rate_ = static_cast<double>(hw.usc.count * hw.usc.lanes) * hw.usc.alu_ops_per_lane_per_clock;
@@ -97,6 +103,7 @@ class TimingSim final : public Unit {
                      {isp_.name, isp_.busy_cycles, isp_.stalled_cycles},
                      {usc_.name, usc_.busy_cycles, usc_.stalled_cycles},
                      {tpu_.name, tpu_.busy_cycles, tpu_.stalled_cycles},
+                     {tile_buffer_.name, tile_buffer_.busy_cycles, tile_buffer_.stalled_cycles},
                      {pbe_.name, pbe_.busy_cycles, pbe_.stalled_cycles}};
     result_.dram = mem_.traffic();
     result_.requested = mem_.requested();
@@ -381,13 +388,33 @@ class TimingSim final : public Unit {
     const TileWork& t = render_->tiles[i];
     TileState& ts = tiles_[i];
     const Tick now = eq_.now();
-    ts.usc_end = std::max(reserve(usc_, now, static_cast<double>(t.alu_ops) / alu_rate_),
-                          reserve(tpu_, now, static_cast<double>(t.texels) / tex_rate_));
+    ts.usc_end = std::max({reserve(usc_, now, static_cast<double>(t.alu_ops) / alu_rate_),
+                           reserve(tpu_, now, static_cast<double>(t.texels) / tex_rate_),
+                           reserve(tile_buffer_, now, static_cast<double>(t.tile_buffer_bytes) / tile_buffer_rate_)});
     ts.pending_shading = 1;
     eq_.schedule(ts.usc_end, [this, i] { shading_part_done(i); });
     if (!t.texture_lines.empty()) {
       ++ts.pending_shading;
       fetch_textures(i);
+    }
+    if (t.spill_read_bytes + t.spill_write_bytes > 0) access_spill(i);
+  }
+
+  /// Tile-buffer bytes past the on-chip budget live in memory: the shaders write them and read
+  /// them back with their own loads and stores, through the SLC, one line per resident task in
+  /// flight, while the tile is resident (its slots held): the latency shows when tasks are few.
+  void access_spill(std::size_t i) {
+    const TileWork& t = render_->tiles[i];
+    const std::uint64_t base = map_.spill(render_command_, t, work_.tiles_x);
+    const auto outstanding = static_cast<std::uint32_t>(std::max<std::uint64_t>(1, tiles_[i].slots));
+    for (int write = 0; write < 2; ++write) {
+      const std::uint64_t bytes = write ? t.spill_write_bytes : t.spill_read_bytes;
+      if (bytes == 0) continue;
+      DmaStream* s = new_stream(Client::PixelBackEnd, write != 0, DramClass::Spill, outstanding);
+      // Reads come back from where the writes went (the slot holds the larger of the two).
+      for (std::uint64_t off = 0; off < bytes; off += kUscAccessBytes) s->add(base + off, std::min(kUscAccessBytes, bytes - off));
+      ++tiles_[i].pending_shading;
+      s->start([this, i] { shading_part_done(i); });
     }
   }
 
@@ -471,10 +498,10 @@ class TimingSim final : public Unit {
   FrameAddressMap map_;
   TileRecordBook tile_records_;
   TimingResult result_;
-  Server binner_, isp_, usc_, tpu_, pbe_;
+  Server binner_, isp_, usc_, tpu_, tile_buffer_, pbe_;
   TaskSlots slots_;  ///< resident tasks across the USCs (usc.count x usc.tasks_in_flight)
   bool isp_busy_ = false;  ///< the ISP is resolving a tile or holds one waiting for task slots
-  double alu_rate_ = 1, tex_rate_ = 1, raster_rate_ = 1;
+  double alu_rate_ = 1, tex_rate_ = 1, raster_rate_ = 1, tile_buffer_rate_ = 1;
   double fetch_busy_cycles_ = 0;
   std::vector<std::unique_ptr<DmaStream>> streams_;
   std::vector<Job> bin_jobs_, frag_jobs_;

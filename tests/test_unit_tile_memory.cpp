@@ -214,19 +214,21 @@ TEST(UnitTileMemory, SpillSendsTheOverBudgetShareOfShaderAccessesToDram) {
   EXPECT_EQ(rig.tm_stats.spill_bytes.value(), 500u);
 }
 
-TEST(UnitTileMemory, PixelLocalStorageCountsAgainstTheBudget) {
-  // rgba8 color (4 B) + PLS rgba16f + r32ui (8 + 4 B) = 16 B: exactly the budget; one more rgba8
-  // PLS variable makes 20 B: over, a fifth spilled.
+TEST(UnitTileMemory, PixelLocalStorageSharesTheColourStorageAndCountsAgainstTheBudget) {
+  // PLS and colour share per-pixel storage (EXT_shader_pixel_local_storage): rgba8 colour (4 B)
+  // beside PLS rgba16f + r32ui (8 + 4 B) needs max(4, 12) = 12 B, not 16. One more rgba8 PLS
+  // variable makes 16 B of PLS: over a 96-bit (12 B) budget, a quarter spilled.
   RenderSpec fits;
   fits.pls = {PlsVariable{"light", Format::Rgba16f, 0}, PlsVariable{"count", Format::R32ui, 0}};
   RenderRig a(fits);
-  EXPECT_EQ(a.need_bytes_per_pixel(), 16u);
+  EXPECT_EQ(a.need_bytes_per_pixel(), 12u);
   EXPECT_EQ(a.spill_fraction(), 0.0);
   RenderSpec over = fits;
   over.pls.push_back(PlsVariable{"albedo", Format::Rgba8, 0});
+  over.sets = {"pls.tile_buffer_bits_per_pixel=96"};
   RenderRig b(over);
-  EXPECT_EQ(b.need_bytes_per_pixel(), 20u);
-  EXPECT_DOUBLE_EQ(b.spill_fraction(), 4.0 / 20.0);
+  EXPECT_EQ(b.need_bytes_per_pixel(), 16u);
+  EXPECT_DOUBLE_EQ(b.spill_fraction(), 4.0 / 16.0);
 }
 
 }  // namespace
