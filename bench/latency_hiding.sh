@@ -18,6 +18,6 @@ for tech in deferred plain_forward; do
     db="$TMP/$tech.$tasks.db"
     "$BUILD/tbdrsim" run --trace "$TMP/$tech.trace" --db "$db" --set usc.tasks_in_flight=$tasks --quiet
     printf "%-14s %-6s %-10s %-14s %-14s\n" "$tech" "$tasks" "$(q "$db" frame/timing frame_time_ms)" \
-      "$(q "$db" frame/timing/usc stalled_cycles)" "$(q "$db" mem/client.texture avg_latency_ns)"
+      "$(q "$db" frame/unit.usc stalled_cycles)" "$(q "$db" mem/client.texture avg_latency_ns)"
   done
 done

@@ -195,7 +195,8 @@ class PassRenderer {
     // The spilled share of the shaders' tile-buffer accesses goes to memory instead of the on-chip
     // port (spill reads = the spilled share of the reads + the read-back of the spilled writes).
     tw.tile_buffer_bytes = tile_tsp.tile_buffer_read_bytes.value() + tile_tsp.tile_buffer_write_bytes.value() -
-                           (tw.spill_read_bytes - tw.spill_write_bytes) - tw.spill_write_bytes;
+                           (tw.spill_read_bytes - tw.spill_write_bytes) - tw.spill_write_bytes +
+                           tile_tsp.pls_bytes_accessed.value();
     dram_ += spill;  // booked after the tile's loads and stores were taken from `dram_`
     tw.tag_bytes = tile_isp.tag_buffer_read_bytes.value() + tile_isp.tag_buffer_write_bytes.value();
     tw.depth_bytes = tile_isp.depth_buffer_read_bytes.value() + tile_isp.depth_buffer_write_bytes.value();
@@ -388,6 +389,10 @@ class FrameSimulator {
       const auto u = it->second.usage;
       return (u == AttachmentUsage::Gbuffer || u == AttachmentUsage::Visibility) ? &it->second : nullptr;
     };
+    for (const auto& n : cmd.fetch) {
+      const Attachment* a = pass.find_attachment(n);
+      if (a && !is_depth_format(a->format)) d.fetch_bytes += a->bytes_per_pixel();
+    }
     if (cmd.geometry != GeometryKind::Scene) {
       for (const auto& n : cmd.fetch) {
         if (!d.surface_source) d.surface_source = surfaces_of(n);

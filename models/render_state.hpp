@@ -56,6 +56,8 @@ struct DrawContext {
   const ClusterGrid* cluster_grid = nullptr;        ///< light_source=cluster_list: the grid it reads
   /// Stored images the shader samples at its own pixel (reads=): bytes per invocation per DRAM class.
   std::vector<std::pair<DramClass, std::uint32_t>> per_pixel_reads;
+  /// Attachments of the pass the shader reads on chip at its own pixel (fetch=): bytes per invocation.
+  std::uint32_t fetch_bytes = 0;
   const PipelineState* pipeline = nullptr;
   const ShaderDesc* shader = nullptr;
   std::vector<std::uint32_t> lights;  ///< indices of the lights the draw selects

@@ -306,6 +306,8 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     // Pixel local storage traffic: the pass's whole PLS layout, read and/or written per fragment.
     if (pls_reads) stats.pls_bytes_accessed += pls_bytes;
     if (pls_writes && outputs == 0) stats.pls_bytes_accessed += pls_bytes;
+    // Framebuffer fetch: the fetched attachments are read from the tile buffer at this pixel.
+    stats.tile_buffer_read_bytes += d.fetch_bytes;
     if (from_triangle && sh.light_source != LightSource::None && sh.light_source != LightSource::Proxy) ++stats.lit_surface_invocations;
     for (const auto& [cls, bytes] : d.per_pixel_reads) ctx_.dram->read(cls, bytes);
     stats.fragment_alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * fl.count;

@@ -314,6 +314,32 @@ TEST(TimingCliff, OnChipGbufferCostsTileBufferBandwidthThenSpills) {
   EXPECT_GE(c.back(), c[c.size() - 2]) << "spilling never makes the pass faster";
 }
 
+TEST(TimingCliff, FramebufferFetchReadsTheTileBuffer) {
+  // A draw that fetches a 4-byte G-buffer attachment of its pass reads it from the tile buffer
+  // at every shaded pixel: 256 x 256 pixels x 4 B more tile-buffer reads than the same draw
+  // without the fetch.
+  Scene s = base_scene();
+  add_quad(s, "wall", 3, -512, 1024, 0);
+  double read[2] = {0, 0};
+  for (int fetch = 0; fetch < 2; ++fetch) {
+    Trace t = frame_of(256);
+    t.shaders[0].tex_fetches = 0;
+    PassDesc p = base_pass();
+    Attachment g = p.attachments[0];
+    g.name = "g1";
+    g.usage = AttachmentUsage::Gbuffer;
+    g.store = StoreOp::DontCare;
+    g.transient = true;
+    p.attachments.push_back(g);
+    DrawCmd d = draw_of("wall");
+    if (fetch) d.fetch = {"g1"};
+    p.draws = {d};
+    t.commands.push_back(p);
+    read[fetch] = stat(run_timed(t, s, {}).frame.stats, "frame/tsp", "tile_buffer_read_bytes");
+  }
+  EXPECT_EQ(read[1] - read[0], 256.0 * 256.0 * 4.0);
+}
+
 TEST(TimingCliff, PixelLocalStorageSharesTheColourStorage) {
   // EXT_shader_pixel_local_storage: PLS aliases the colour attachments' storage, so a pass with
   // 16 B of PLS and a 4 B colour target needs 16 B per pixel, not 20: it fits 128 bits.
