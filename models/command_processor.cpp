@@ -163,7 +163,9 @@ class PassRenderer {
     const TspStats tsp0 = stats_.tsp;
     tile_texture_lines_.clear();
     tile_memory_.begin_tile(r, resumed_[static_cast<std::size_t>(t)] != 0, dram_);
+    const DramTraffic loaded = dram_;
     isp_.render_tile(r, prims, stats_.isp, stats_.tsp);
+    const DramTraffic shaded = dram_;  // what the shaders read from stored images (reads=)
     const IspStats tile_isp = stats_.isp - isp0;
     const TspStats tile_tsp = stats_.tsp - tsp0;
     DramTraffic spill;
@@ -174,7 +176,8 @@ class PassRenderer {
     tw.tile_y = t / tiler_.tiles_x();
     tw.rect = r;
     for (std::size_t c = 0; c < kDramClassCount; ++c) {
-      tw.load_bytes[c] = dram_.read_bytes[c] - before.read_bytes[c];
+      tw.image_read_bytes[c] = shaded.read_bytes[c] - loaded.read_bytes[c];
+      tw.load_bytes[c] = dram_.read_bytes[c] - before.read_bytes[c] - tw.image_read_bytes[c];
       tw.store_bytes[c] = dram_.write_bytes[c] - before.write_bytes[c];
     }
     tw.primitives = tile_isp.primitives_fetched.value();

@@ -30,7 +30,7 @@ FrameAddressMap::FrameAddressMap(const FrameWork& work, AddressSpace& space) {
       std::uint64_t extent = r.binning.pb_write_bytes;
       for (const auto& t : r.tiles) {
         for (const auto& br : t.pb_reads) extent = std::max(extent, br.offset + br.bytes);
-        stride = std::max({stride, sum(t.load_bytes), sum(t.store_bytes)});
+        stride = std::max({stride, sum(t.load_bytes) + sum(t.image_read_bytes), sum(t.store_bytes)});
         spill_stride = std::max({spill_stride, t.spill_read_bytes, t.spill_write_bytes});
         max_tile = std::max<std::uint64_t>(max_tile, static_cast<std::uint64_t>(t.tile_y * work.tiles_x + t.tile_x + 1));
       }

@@ -26,7 +26,10 @@ struct TileWork {
   int tile_y = 0;
   PixelRect rect;
   std::vector<ByteRange> pb_reads;        ///< parameter buffer ranges read by the ISP
-  std::array<std::uint64_t, kDramClassCount> load_bytes{};   ///< tile loads (load ops, partial reloads, spill) and shader image reads
+  std::array<std::uint64_t, kDramClassCount> load_bytes{};   ///< tile loads (load ops, partial reloads)
+  /// Stored images the shaders read at their pixels (G-buffer, visibility ids: `reads=`): the
+  /// shaders' own reads through the texture cache and SLC while the tile shades.
+  std::array<std::uint64_t, kDramClassCount> image_read_bytes{};
   std::array<std::uint64_t, kDramClassCount> store_bytes{};  ///< tile stores (store ops, partial stores, spill)
   std::uint64_t primitives = 0;           ///< primitives fetched and set up
   std::uint64_t samples = 0;              ///< samples rasterised and depth tested

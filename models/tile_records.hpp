@@ -17,7 +17,7 @@ class TileRecordBook {
   /// Books a finished tile render of `command` that took `cycles` from fetch to stored.
   void add(std::size_t command, const TileWork& t, double cycles) {
     std::uint64_t bytes = 0;
-    for (std::size_t c = 0; c < kDramClassCount; ++c) bytes += t.load_bytes[c] + t.store_bytes[c];
+    for (std::size_t c = 0; c < kDramClassCount; ++c) bytes += t.load_bytes[c] + t.image_read_bytes[c] + t.store_bytes[c];
     for (const auto& br : t.pb_reads) bytes += br.bytes;
     auto [it, inserted] = index_.try_emplace(std::make_tuple(command, t.tile_x, t.tile_y), rows_.size());
     if (inserted) rows_.push_back({static_cast<std::int64_t>(command), t.tile_x, t.tile_y, 0, 0, 0});

@@ -398,6 +398,33 @@ class TimingSim final : public Unit {
       fetch_textures(i);
     }
     if (t.spill_read_bytes + t.spill_write_bytes > 0) access_spill(i);
+    read_images(i);
+  }
+
+  /// Stored images the shaders read at their own pixels (a G-buffer under light volumes): their
+  /// loads go through the texture cache and the SLC like texture fetches, one line per resident
+  /// task in flight, so their latency is exposed with few tasks and hidden with many. They
+  /// follow the tile's loads in its framebuffer slot.
+  void read_images(std::size_t i) {
+    const TileWork& t = render_->tiles[i];
+    std::uint64_t offset = 0;
+    for (auto b : t.load_bytes) offset += b;
+    const auto outstanding = static_cast<std::uint32_t>(std::clamp<std::uint64_t>(
+        tiles_[i].slots, 1, static_cast<std::uint64_t>(hw_.texture.outstanding_requests)));
+    for (std::size_t c = 0; c < kDramClassCount; ++c) {
+      const std::uint64_t bytes = t.image_read_bytes[c];
+      if (bytes == 0) continue;
+      DmaStream* s = new_stream(Client::Texture, false, static_cast<DramClass>(c), outstanding);
+      const std::uint64_t base = tile_address(t) + offset;
+      for (std::uint64_t off = 0; off < bytes; off += texture_line_bytes_) s->add(base + off, std::min(texture_line_bytes_, bytes - off));
+      offset += bytes;
+      ++tiles_[i].pending_shading;
+      s->start([this, i] {
+        const Tick usc_end = tiles_[i].usc_end;
+        if (eq_.now() > usc_end) usc_.stalled_cycles += cycles_of(eq_.now()) - cycles_of(usc_end);
+        shading_part_done(i);
+      });
+    }
   }
 
   /// Tile-buffer bytes past the on-chip budget live in memory: the shaders write them and read
