@@ -19,7 +19,7 @@ trap 'rm -rf "$TMP"' EXIT
 stat() {  # db scope name
   sqlite3 "$1" "SELECT value FROM stats WHERE run_id = (SELECT max(id) FROM runs) AND scope = '$2' AND name = '$3'"
 }
-mhz=$("$BUILD/tbdrsim" params | awk '$1 == "gpu.core_clock_mhz" { print $2; exit }')
+mhz=$("$BUILD/tbdrsim" params | awk '$1 == "gpu.core_clock_mhz" { v = $2 } END { print v }')
 printf "%-18s %4s %9s %9s %9s %12s %8s %8s %12s\n" "workload" "tags" "frame ms" "ISP ms" "USC ms" "invocations" "flushes" "resolves" "HSR removed"
 for w in pass/entrance submesh/entrance submesh/banners submesh/street; do
   order=${w%/*}
