@@ -186,6 +186,8 @@ class PassRenderer {
     tw.quads = tile_tsp.shaded_quads.value();
     tw.alu_ops = tile_tsp.fragment_alu_ops.value();
     tw.texels = tile_tsp.texels_filtered.value();
+    tw.isp_wait_alu_ops = tile_isp.resolve_wait_alu_ops.value();
+    tw.isp_wait_texels = tile_isp.resolve_wait_texels.value();
     tw.texture_line_accesses = tile_tsp.texture_line_accesses.value();
     std::sort(tile_texture_lines_.begin(), tile_texture_lines_.end());
     tw.texture_lines.assign(tile_texture_lines_.begin(), std::unique(tile_texture_lines_.begin(), tile_texture_lines_.end()));

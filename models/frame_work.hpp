@@ -37,6 +37,10 @@ struct TileWork {
   std::uint64_t quads = 0;
   std::uint64_t alu_ops = 0;              ///< fragment ALU ops (helpers included)
   std::uint64_t texels = 0;
+  /// Part of alu_ops / texels the ISP waited for before it could go on (punch-through depth
+  /// resolves, models/isp.hpp): the tile's ISP time includes the USCs' time for it.
+  std::uint64_t isp_wait_alu_ops = 0;
+  std::uint64_t isp_wait_texels = 0;
   /// Texture lines the tile's fragment shading touched (its footprint): sorted, unique offsets in
   /// the texture address space (FrameWork::texture_bytes; models/texture_unit.hpp).
   std::vector<std::uint64_t> texture_lines;

@@ -103,8 +103,11 @@ ParamRegistry<HwConfig> make_registry() {
       .source("no public figure for Rogue; Unity, \"Fast mobile shaders\" talk: PowerVR SGX rejects 32 "
               "hidden pixels per clock");
   r.add(TBDR_PARAM(isp.tag_buffers), 2).unit("buffers").range(1, 16)
-      .doc("Tag buffers per tile (layered flushing for punch-through / translucent)")
-      .source("PowerVR patents US8446409, US10210596");
+      .doc("Tag buffers per tile: layers of pending translucent / punch-through tags per sample before a flush "
+           "(an opaque sample in front clears every layer unshaded)")
+      .source("Imagination, US 8,446,409 (Howson): translucent and punch-through tags stay in further tag buffers "
+              "and are passed to shading only when an object must overwrite an occupied location; an opaque "
+              "surface visible at a pixel clears the tags of all the tag buffers; US 10,210,596");
   r.add(TBDR_PARAM(isp.tag_bits), 32).unit("bits").range(8, 64)
       .doc("Bits per tag (triangle id) per sample").source("no public figure");
   r.add(TBDR_PARAM(isp.depth_stencil_bytes_per_sample), 4).unit("bytes").range(2, 8)

@@ -52,19 +52,46 @@ void Isp::build_batch(const PendingSample* begin, const PendingSample* end, std:
   }
 }
 
-void Isp::flush(const PixelRect& rect, const std::vector<std::uint8_t>* select, bool mid_tile, IspStats& isp,
-                TspStats& tsp) {
+void Isp::write_punch_depth(const PendingSample* begin, const PendingSample* end, IspStats& isp) {
+  const PipelineState& pl = *ctx_.draws[ctx_.prims[begin->tag].draw].pipeline;
+  if (!ctx_.depth || !pl.depth_write) return;
+  float* depth = ctx_.depth->depth.data();
+  const int W = ctx_.viewport.width_px;
+  const int S = ctx_.pattern.count;
+  const std::uint64_t ds_bytes = static_cast<std::uint64_t>(ctx_.hw->isp.depth_stencil_bytes_per_sample);
+  // batch_[i] is the i-th distinct pixel of [begin, end), alive_[i] its samples kept by the alpha test.
+  std::size_t i = 0;
+  for (const PendingSample* s = begin; s != end; ++s) {
+    while (i < batch_.size() && (batch_[i].x != s->x || batch_[i].y != s->y)) ++i;
+    if (i >= batch_.size() || !(alive_[i] & s->bit)) continue;
+    int k = 0;
+    while (!(s->bit & (1u << k))) ++k;
+    const std::size_t gi = (static_cast<std::size_t>(s->y) * W + static_cast<std::size_t>(s->x)) * S + static_cast<std::size_t>(k);
+    // A later translucent layer may have written a nearer depth meanwhile: keep the nearer one.
+    if (pl.depth_test && !passes<float>(pl.depth_compare, s->z, depth[gi])) continue;
+    depth[gi] = s->z;
+    isp.depth_buffer_write_bytes += ds_bytes;
+  }
+}
+
+void Isp::flush(const PixelRect& rect, bool mid_tile, IspStats& isp, TspStats& tsp) {
   const int S = ctx_.pattern.count;
   const int rw = rect.width();
+  const int L = layers_per_sample_;
   flush_samples_.clear();
+  bool resolves = false;
   for (int y = rect.y0; y < rect.y1; ++y) {
     for (int x = rect.x0; x < rect.x1; ++x) {
       const std::size_t base = (static_cast<std::size_t>(y - rect.y0) * rw + static_cast<std::size_t>(x - rect.x0)) * S;
       for (int s = 0; s < S; ++s) {
         const std::size_t li = base + static_cast<std::size_t>(s);
-        if (tags_[li] == kNoTag || (select && !(*select)[li])) continue;
-        flush_samples_.push_back({tags_[li], x, y, 1u << s});
-        tags_[li] = kNoTag;
+        const int n = depth_of_[li];
+        for (int k = 0; k < n; ++k) {
+          const Layer& l = layers_[li * static_cast<std::size_t>(L) + static_cast<std::size_t>(k)];
+          flush_samples_.push_back({l.tag, x, y, 1u << s, l.z, l.unresolved});
+          resolves = resolves || l.unresolved;
+        }
+        depth_of_[li] = 0;
       }
     }
   }
@@ -74,7 +101,8 @@ void Isp::flush(const PixelRect& rect, const std::vector<std::uint8_t>* select, 
     isp.tag_flushed_samples += flush_samples_.size();
   }
   isp.tag_buffer_read_bytes += flush_samples_.size() * static_cast<std::uint64_t>(ctx_.hw->isp.tag_bits / 8);
-  // Shade primitive by primitive, in submission order; raster order within each.
+  // Shade primitive by primitive, in submission order (a sample's layers were pushed in that
+  // order, so each sample's layers are shaded bottom first); raster order within each.
   std::stable_sort(flush_samples_.begin(), flush_samples_.end(),
                    [](const PendingSample& a, const PendingSample& b) { return a.tag < b.tag; });
   std::size_t i = 0;
@@ -82,9 +110,20 @@ void Isp::flush(const PixelRect& rect, const std::vector<std::uint8_t>* select, 
     std::size_t j = i;
     while (j < flush_samples_.size() && flush_samples_[j].tag == flush_samples_[i].tag) ++j;
     build_batch(flush_samples_.data() + i, flush_samples_.data() + j, batch_);
-    tsp_.shade(flush_samples_[i].tag, batch_, nullptr, tsp);
+    const bool punch = ctx_.prims[flush_samples_[i].tag].hsr == HsrClass::PunchThrough;
+    // A mid-tile flush waits for the alpha test of the unresolved punch-through layers (their
+    // shaders; the layers beneath need not finish first: only the color writes are ordered).
+    const bool waited = mid_tile && punch && flush_samples_[i].unresolved;
+    const std::uint64_t alu0 = tsp.fragment_alu_ops.value(), texels0 = tsp.texels_filtered.value();
+    tsp_.shade(flush_samples_[i].tag, batch_, punch ? &alive_ : nullptr, tsp);
+    if (waited) {
+      isp.resolve_wait_alu_ops += tsp.fragment_alu_ops.value() - alu0;
+      isp.resolve_wait_texels += tsp.texels_filtered.value() - texels0;
+    }
+    if (punch) write_punch_depth(flush_samples_.data() + i, flush_samples_.data() + j, isp);
     i = j;
   }
+  if (mid_tile && resolves) ++isp.resolve_flushes;
 }
 
 void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& prims, IspStats& isp, TspStats& tsp) {
@@ -92,7 +131,12 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
   const int W = ctx_.viewport.width_px;
   const int rw = rect.width();
   const std::size_t tile_samples = static_cast<std::size_t>(rw) * static_cast<std::size_t>(rect.height()) * S;
-  tags_.assign(tile_samples, kNoTag);
+  layers_per_sample_ = static_cast<int>(std::max<std::int64_t>(1, ctx_.hw->isp.tag_buffers));
+  const int L = layers_per_sample_;
+  if (ctx_.defer_shading) {
+    depth_of_.assign(tile_samples, 0);
+    layers_.resize(tile_samples * static_cast<std::size_t>(L));
+  }
   ++isp.tiles_rendered;
   const std::uint64_t ds_bytes = static_cast<std::uint64_t>(ctx_.hw->isp.depth_stencil_bytes_per_sample);
   const std::uint64_t tag_bytes = static_cast<std::uint64_t>(ctx_.hw->isp.tag_bits / 8);
@@ -101,6 +145,12 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
   std::uint8_t* stencil = depth_img ? depth_img->stencil.data() : nullptr;
   const bool has_st = depth_img && has_stencil(depth_img->format);
   auto& overdraw = ctx_.images->counters.rasterised_samples;
+  auto global_index = [&](std::int32_t x, std::int32_t y, std::uint32_t bit) {
+    int s = 0;
+    while (!(bit & (1u << s))) ++s;
+    return (static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x)) * static_cast<std::size_t>(S) +
+           static_cast<std::size_t>(s);
+  };
 
   for (const std::uint32_t prim_index : prims) {
     const Primitive& p = ctx_.prims[prim_index];
@@ -110,10 +160,9 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     const bool write_on = depth && pl.depth_write;
     const bool stencil_on = has_st && pl.stencil_test;
     const auto ref = static_cast<std::uint8_t>(pl.stencil_ref & 0xffu);
-    const bool deferred_opaque = ctx_.defer_shading && p.hsr == HsrClass::Opaque;
     const bool early_write = !ctx_.defer_shading && p.hsr == HsrClass::Opaque && write_on;
+    candidates_.clear();
     pending_.clear();
-    pending_depth_.clear();
 
     rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) {
       const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
@@ -130,6 +179,17 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
             continue;
           }
         }
+        if (ctx_.defer_shading) {
+          // The depth test's verdict may change if a flush resolves punch-through depth first:
+          // the stencil ops that depend on it wait for the final verdict.
+          bool pass = true;
+          if (depth_on) {
+            isp.depth_buffer_read_bytes += ds_bytes;
+            pass = passes<float>(pl.depth_compare, z[s], depth[gi]);
+          }
+          candidates_.push_back({static_cast<std::uint32_t>(lbase + static_cast<std::size_t>(s)), x, y, 1u << s, z[s], pass});
+          continue;
+        }
         if (depth_on) {
           isp.depth_buffer_read_bytes += ds_bytes;
           if (!passes<float>(pl.depth_compare, z[s], depth[gi])) {
@@ -139,74 +199,95 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
           }
         }
         if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_pass_op, stencil[gi], ref);
-        if (deferred_opaque) {
-          const std::size_t li = lbase + static_cast<std::size_t>(s);
-          if (tags_[li] != kNoTag) ++isp.hsr_removed_samples;
-          tags_[li] = prim_index;
-          isp.tag_buffer_write_bytes += tag_bytes;
-          if (write_on) {
-            depth[gi] = z[s];
-            isp.depth_buffer_write_bytes += ds_bytes;
-          }
-        } else {
-          pending_.push_back({prim_index, x, y, 1u << s});
-          pending_depth_.push_back(z[s]);
-          if (early_write) {
-            depth[gi] = z[s];
-            isp.depth_buffer_write_bytes += ds_bytes;
-          }
+        pending_.push_back({prim_index, x, y, 1u << s, z[s], false});
+        if (early_write) {
+          depth[gi] = z[s];
+          isp.depth_buffer_write_bytes += ds_bytes;
         }
       }
     });
+
+    if (ctx_.defer_shading) {
+      if (candidates_.empty()) continue;
+      // Can every sample take this primitive without knowing a punch-through's alpha result or
+      // without a free layer? If not, flush the tile's layers first.
+      const bool layered = p.hsr != HsrClass::Opaque;
+      bool conflict = false;
+      for (const Candidate& c : candidates_) {
+        const int n = depth_of_[c.li];
+        if (layered && c.depth_pass && n >= L) {
+          conflict = true;
+          break;
+        }
+        if (!depth_on) continue;
+        // The verdict is open when a punch-through layer's depth, if its alpha test keeps the
+        // sample, would change it (either way: a greater test may pass only against it).
+        const Layer* stack = &layers_[static_cast<std::size_t>(c.li) * static_cast<std::size_t>(L)];
+        for (int k = 0; k < n && !conflict; ++k) {
+          conflict = stack[k].unresolved && passes<float>(pl.depth_compare, c.z, stack[k].z) != c.depth_pass;
+        }
+        if (conflict) break;
+      }
+      if (conflict) {
+        flush(rect, true, isp, tsp);
+        if (depth_on) {
+          // The flush wrote the punch-through depths: test again against them.
+          for (Candidate& c : candidates_) {
+            isp.depth_buffer_read_bytes += ds_bytes;
+            c.depth_pass = passes<float>(pl.depth_compare, c.z, depth[global_index(c.x, c.y, c.bit)]);
+          }
+        }
+      }
+      // Final verdicts: stencil ops, then the passing samples become tags.
+      std::size_t kept = 0;
+      for (const Candidate& c : candidates_) {
+        const std::size_t gi = global_index(c.x, c.y, c.bit);
+        if (!c.depth_pass) {
+          ++isp.depth_test_failed_samples;
+          if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
+          continue;
+        }
+        if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_pass_op, stencil[gi], ref);
+        candidates_[kept++] = c;
+      }
+      candidates_.resize(kept);
+      const bool unresolved = p.hsr == HsrClass::PunchThrough && write_on;
+      for (const Candidate& c : candidates_) {
+        Layer* stack = &layers_[static_cast<std::size_t>(c.li) * static_cast<std::size_t>(L)];
+        std::uint8_t& n = depth_of_[c.li];
+        if (!layered) {
+          isp.hsr_removed_samples += n;  // every layer beneath is hidden: never shaded
+          n = 0;
+        }
+        stack[n++] = {prim_index, c.z, unresolved};
+        isp.tag_buffer_write_bytes += tag_bytes;
+        // Opaque and translucent depth is known now; punch-through depth waits for the alpha test.
+        if (write_on && p.hsr != HsrClass::PunchThrough) {
+          depth[global_index(c.x, c.y, c.bit)] = c.z;
+          isp.depth_buffer_write_bytes += ds_bytes;
+        }
+      }
+      if (p.hsr == HsrClass::PunchThrough) isp.punch_through_samples += candidates_.size();
+      if (p.hsr == HsrClass::Translucent) isp.translucent_samples += candidates_.size();
+      continue;
+    }
+
+    // tbr / imr: shade at once, in submission order.
     if (pending_.empty()) continue;
     if (p.hsr == HsrClass::PunchThrough) isp.punch_through_samples += pending_.size();
     if (p.hsr == HsrClass::Translucent) isp.translucent_samples += pending_.size();
-    if (ctx_.defer_shading) {
-      // What lies beneath must be shaded before this primitive can be.
-      if (ctx_.hw->isp.tag_buffers <= 1) {
-        flush(rect, nullptr, true, isp, tsp);
-      } else {
-        select_.assign(tile_samples, 0);
-        for (const auto& ps : pending_) {
-          int s = 0;
-          while (!(ps.bit & (1u << s))) ++s;
-          select_[(static_cast<std::size_t>(ps.y - rect.y0) * rw + static_cast<std::size_t>(ps.x - rect.x0)) * S +
-                  static_cast<std::size_t>(s)] = 1;
-        }
-        flush(rect, &select_, true, isp, tsp);
-      }
-    }
     build_batch(pending_.data(), pending_.data() + pending_.size(), batch_);
     const bool punch = p.hsr == HsrClass::PunchThrough;
     tsp_.shade(prim_index, batch_, punch ? &alive_ : nullptr, tsp);
+    if (punch) write_punch_depth(pending_.data(), pending_.data() + pending_.size(), isp);
     if (p.hsr == HsrClass::Translucent && write_on) {
-      for (std::size_t k = 0; k < pending_.size(); ++k) {
-        int s = 0;
-        while (!(pending_[k].bit & (1u << s))) ++s;
-        depth[(static_cast<std::size_t>(pending_[k].y) * W + static_cast<std::size_t>(pending_[k].x)) * S +
-              static_cast<std::size_t>(s)] = pending_depth_[k];
+      for (const PendingSample& ps : pending_) {
+        depth[global_index(ps.x, ps.y, ps.bit)] = ps.z;
         isp.depth_buffer_write_bytes += ds_bytes;
       }
     }
-    if (punch && write_on) {
-      // Depth is written only where the alpha test kept the sample.
-      std::size_t k = 0;
-      for (std::size_t i = 0; i < batch_.size(); ++i) {
-        while (k < pending_.size() && pending_[k].x == batch_[i].x && pending_[k].y == batch_[i].y) {
-          if (alive_[i] & pending_[k].bit) {
-            int s = 0;
-            while (!(pending_[k].bit & (1u << s))) ++s;
-            const std::size_t gi = (static_cast<std::size_t>(pending_[k].y) * W + static_cast<std::size_t>(pending_[k].x)) * S +
-                                   static_cast<std::size_t>(s);
-            depth[gi] = pending_depth_[k];
-            isp.depth_buffer_write_bytes += ds_bytes;
-          }
-          ++k;
-        }
-      }
-    }
   }
-  flush(rect, nullptr, false, isp, tsp);
+  if (ctx_.defer_shading) flush(rect, false, isp, tsp);
 }
 
 }  // namespace tbdr

@@ -1,12 +1,30 @@
 #pragma once
 // The ISP (image synthesis processor): per tile, rasterises the tile's primitives in submission
 // order, runs the depth and stencil tests against on-chip depth/stencil, and removes hidden
-// surfaces with a tag buffer that holds one primitive id per sample. Opaque primitives only
-// overwrite tags; punch-through primitives flush the tags they cover (all tags with a single tag
-// buffer) to the TSP, are shaded, and write depth only for samples that survive their alpha
-// test; translucent primitives flush the tags they cover and are shaded with blending at once.
-// What is left in the tag buffer is shaded when the tile ends. In tbr/imr modes there is no tag
-// buffer: every fragment that passes early depth testing is shaded immediately.
+// surfaces with isp.tag_buffers tag buffers that hold, per sample, a stack of primitive ids
+// (layers) still to be shaded, bottom first (Imagination, US 8,446,409, Howson: "Method and
+// apparatus for rendering computer graphic images of translucent and opaque objects"):
+// - an opaque sample that passes the depth test clears every layer at the sample (those tags are
+//   never shaded) and becomes the only layer; it writes depth at once;
+// - a translucent or punch-through sample is pushed as a further layer; a punch-through layer's
+//   depth is unresolved until its shader has run the alpha test;
+// - the tag buffers are flushed to the TSP (every layer of the tile, in submission order) when a
+//   sample needs a layer and all isp.tag_buffers are taken, or when a primitive's depth test at a
+//   sample depends on an unresolved punch-through layer (its verdict against the layer's depth
+//   differs from the one against the depth buffer); the flush shades the punch-through layers,
+//   writes depth where their alpha test kept the sample, and the primitive is then depth tested
+//   again (its stencil ops wait for that final verdict);
+// - a mid-tile flush that resolves punch-through depth makes the ISP wait until the USCs have run
+//   the unresolved punch-through primitives' shaders (Imagination, PowerVR Architecture Guide,
+//   "Do Not Use Discard": alpha-tested primitives write depth only after the fragment shader ran,
+//   and "subsequent primitives cannot be processed until the depth buffers are updated"); the
+//   layers beneath need not finish first (only color writes are ordered per sample). That shading
+//   work is counted in resolve_wait_alu_ops / resolve_wait_texels and the timing model adds its
+//   USC time to the tile's ISP time.
+// What is left in the layers is shaded when the tile ends. With one tag buffer every translucent
+// or punch-through sample over a pending tag flushes the tile; with more, layers wait and a later
+// opaque primitive in front removes them unshaded. In tbr/imr modes there is no tag buffer: every
+// fragment that passes early depth testing is shaded immediately, in submission order.
 #include <cstdint>
 #include <vector>
 
@@ -23,9 +41,12 @@ namespace tbdr {
   X(Counter, samples_rasterised, "samples", Sum, "Samples covered by rasterised primitives") \
   X(Counter, depth_test_failed_samples, "samples", Sum, "Samples failing the depth test") \
   X(Counter, stencil_test_failed_samples, "samples", Sum, "Samples failing the stencil test") \
-  X(Counter, hsr_removed_samples, "samples", Sum, "Samples whose pending tag was overwritten before shading") \
-  X(Counter, tag_flushes, "flushes", Sum, "Mid-tile tag buffer flushes forced by punch-through or translucent primitives") \
+  X(Counter, hsr_removed_samples, "samples", Sum, "Pending tags (any layer) removed by a later opaque sample before shading") \
+  X(Counter, tag_flushes, "flushes", Sum, "Mid-tile tag buffer flushes (no free layer, or a depth test needing a punch-through's alpha result)") \
   X(Counter, tag_flushed_samples, "samples", Sum, "Samples sent to the TSP by mid-tile flushes") \
+  X(Counter, resolve_flushes, "flushes", Sum, "Mid-tile flushes that resolved punch-through depth (the ISP waits for their shading)") \
+  X(Counter, resolve_wait_alu_ops, "ops", Sum, "Fragment ALU ops the ISP waited for at punch-through depth resolves") \
+  X(Counter, resolve_wait_texels, "texels", Sum, "Texels the ISP waited for at punch-through depth resolves") \
   X(Counter, punch_through_samples, "samples", Sum, "Punch-through samples passing depth test") \
   X(Counter, translucent_samples, "samples", Sum, "Translucent samples passing depth test") \
   X(Counter, depth_buffer_read_bytes, "bytes", Sum, "On-chip depth/stencil bytes read by tests") \
@@ -46,23 +67,44 @@ class Isp {
   void render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& prims, IspStats& isp, TspStats& tsp);
 
  private:
+  /// One layer of a sample's stack: the primitive and, for punch-through, its depth there.
+  struct Layer {
+    std::uint32_t tag;
+    float z;
+    bool unresolved;  ///< punch-through that writes depth and has not been alpha tested yet
+  };
+  /// A sample of the current primitive that passed the stencil test (its stencil pass or
+  /// depth-fail op is applied once the depth test's final verdict is known).
+  struct Candidate {
+    std::uint32_t li;  ///< sample index in the tile
+    std::int32_t x, y;
+    std::uint32_t bit;
+    float z;
+    bool depth_pass;  ///< against the depth buffer as it is now
+  };
   struct PendingSample {
     std::uint32_t tag;
     std::int32_t x, y;
     std::uint32_t bit;
+    float z;
+    bool unresolved;
   };
-  /// Shades the tags of the samples selected by `select` (all valid tags when null).
-  void flush(const PixelRect& rect, const std::vector<std::uint8_t>* select, bool mid_tile, IspStats& isp, TspStats& tsp);
+  /// Shades every layer of the tile in submission order and empties the stacks; a mid-tile flush
+  /// that resolves punch-through depth makes the ISP wait for those punch-through shaders.
+  void flush(const PixelRect& rect, bool mid_tile, IspStats& isp, TspStats& tsp);
+  /// Writes a punch-through primitive's depth where its alpha test kept the sample.
+  void write_punch_depth(const PendingSample* begin, const PendingSample* end, IspStats& isp);
   /// Merges consecutive samples of one pixel into ShadePixels (samples are in raster order).
   static void build_batch(const PendingSample* begin, const PendingSample* end, std::vector<ShadePixel>& batch);
 
   RenderContext& ctx_;
   Tsp& tsp_;
-  std::vector<std::uint32_t> tags_;
+  int layers_per_sample_ = 1;           ///< isp.tag_buffers
+  std::vector<Layer> layers_;           ///< tile samples x layers_per_sample_
+  std::vector<std::uint8_t> depth_of_;  ///< per tile sample: layers in use
+  std::vector<Candidate> candidates_;
   std::vector<PendingSample> pending_;
   std::vector<PendingSample> flush_samples_;
-  std::vector<float> pending_depth_;
-  std::vector<std::uint8_t> select_;
   std::vector<ShadePixel> batch_;
   std::vector<std::uint32_t> alive_;
 };

@@ -354,7 +354,9 @@ class TimingSim final : public Unit {
     if (isp_busy_ || next_isp_ >= tiles_.size() || !tiles_[next_isp_].fetched) return;
     const std::size_t i = next_isp_++;
     const TileWork& t = render_->tiles[i];
-    const double isp_cycles = std::max(static_cast<double>(t.primitives), static_cast<double>(t.samples) / raster_rate_);
+    // Plus the shading the ISP waited for at punch-through depth resolves (models/isp.hpp).
+    const double isp_cycles = std::max(static_cast<double>(t.primitives), static_cast<double>(t.samples) / raster_rate_) +
+                              std::max(static_cast<double>(t.isp_wait_alu_ops) / alu_rate_, static_cast<double>(t.isp_wait_texels) / tex_rate_);
     isp_busy_ = true;
     eq_.schedule(reserve(isp_, eq_.now(), isp_cycles), [this, i] { request_slots(i); });
   }

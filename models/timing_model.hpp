@@ -10,8 +10,9 @@
 //     vertex/index reads and parameter-buffer writes stream through memory;
 //   tile fetch (DMA): a tile's parameter-buffer reads and tile loads, up to isp.tiles_in_flight
 //     tiles at once;
-//   ISP: max(primitives, samples / (isp.samples_per_clock x isp.raster_pipes)) per tile, one tile
-//     at a time, in the configured tile order;
+//   ISP: max(primitives, samples / (isp.samples_per_clock x isp.raster_pipes)) per tile, plus
+//     the USC time of the shading it waited for at punch-through depth resolves, one tile at a
+//     time, in the configured tile order;
 //   USCs: max(ALU ops / (usc.count x usc.lanes x usc.alu_ops_per_lane_per_clock), texels /
 //     (texture.units x texture.texels_per_clock)) per tile or dispatch; the ISP stalls when the
 //     USCs' queue (usc.tasks_in_flight tasks of usc.threads_per_task threads, in tiles) is full;

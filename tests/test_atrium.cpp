@@ -138,6 +138,47 @@ TEST(Atrium, WellFormedGeometryWithConsistentWinding) {
   EXPECT_GT(s.bounds.extent().z, 18.0f);
 }
 
+TEST(Atrium, OuterWallsFaceTheAislesInsideAndTheStreetOutside) {
+  // Each vertical triangle of the outer walls: its counter-clockwise (front) face normal dotted
+  // with the horizontal vector from the triangle toward the atrium's centre (0, y, 0). The inner
+  // faces (|x| = outer_half_x or |z| = outer_half_z) must face the centre (dot > 0, about +1 for
+  // unit vectors since the walls are axis aligned), the outer faces half a meter further out must
+  // face away from it (dot < 0). Until generator version 2 both were inside out: the inner faces
+  // were culled from inside, leaving a black band between the floor (ending at the inner face)
+  // and the outer face behind it.
+  const Scene s = make_atrium(2);
+  const AtriumLayout L = atrium_layout();
+  const SubMesh* walls = nullptr;
+  for (const SubMesh& sm : s.submeshes)
+    if (sm.name == "outer_walls") walls = &sm;
+  ASSERT_NE(walls, nullptr);
+  std::size_t inner = 0, outer = 0;
+  for (std::size_t t = 0; t < walls->indices.size(); t += 3) {
+    const glm::vec3 a = walls->positions[walls->indices[t]], b = walls->positions[walls->indices[t + 1]],
+                    c = walls->positions[walls->indices[t + 2]];
+    const glm::vec3 n = glm::normalize(glm::cross(b - a, c - a));
+    if (std::abs(n.y) > 0.5f) continue;  // the wall tops' horizontal faces
+    const glm::vec3 centroid = (a + b + c) / 3.0f;
+    const glm::vec3 to_centre = glm::normalize(glm::vec3(-centroid.x, 0.0f, -centroid.z));
+    // Only the long faces: the wall-top boxes' end faces are small and counted neither way.
+    const bool at_inner = std::abs(std::abs(centroid.x) - L.outer_half_x) < 1e-3f ||
+                          std::abs(std::abs(centroid.z) - L.outer_half_z) < 1e-3f;
+    const bool at_outer = std::abs(std::abs(centroid.x) - (L.outer_half_x + 0.5f)) < 1e-3f ||
+                          std::abs(std::abs(centroid.z) - (L.outer_half_z + 0.5f)) < 1e-3f;
+    if (centroid.y > L.roof_height - 1e-3f) continue;  // wall tops
+    if (at_inner) {
+      ++inner;
+      EXPECT_GT(glm::dot(n, to_centre), 0.2f) << "inner face at " << centroid.x << "," << centroid.y << "," << centroid.z;
+    } else if (at_outer) {
+      ++outer;
+      EXPECT_LT(glm::dot(n, to_centre), -0.2f) << "outer face at " << centroid.x << "," << centroid.y << "," << centroid.z;
+    }
+  }
+  // Four inner and four outer faces of several cells each.
+  EXPECT_GE(inner, 8u * 4u);
+  EXPECT_GE(outer, 2u * 4u);
+}
+
 TEST(Atrium, SpecsParseOnce) {
   EXPECT_FALSE(parse_atrium_spec("scene.glb"));
   EXPECT_FALSE(parse_atrium_spec("atriums"));

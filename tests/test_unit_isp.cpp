@@ -2,6 +2,8 @@
 // count derived by hand (sample positions at pixel centres for 1x, the top-left fill rule).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <string>
 #include <vector>
 
 #include "unit_fixture.hpp"
@@ -206,66 +208,125 @@ void punch_through_over_opaque(RenderRig& rig) {
   rig.render_tile(RenderRig::tile_rect(0, 0));
 }
 
-TEST(UnitIsp, PunchThroughFlushesAllTagsWithOneTagBuffer) {
-  // One tag buffer: the punch-through primitive flushes all 1024 pending opaque tags (1 mid-tile
-  // flush), is shaded itself (496), and nothing is left for the end of the tile.
+TEST(UnitIsp, PunchThroughOverAPendingTagFlushesTheTileWithOneTagBuffer) {
+  // One tag buffer: the punch-through samples need a second layer over the 1024 pending opaque
+  // tags, so the tile is flushed (1 mid-tile flush of 1024 samples; no punch-through depth is
+  // pending yet, so the ISP does not wait); the punch-through tags (496) are then the only layer
+  // and are shaded at the end of the tile, writing depth where the alpha test kept them (all).
   RenderRig rig(RenderSpec{.sets = {"isp.tag_buffers=1"}});
   punch_through_over_opaque(rig);
   EXPECT_EQ(rig.isp_stats.tag_flushes.value(), 1u);
   EXPECT_EQ(rig.isp_stats.tag_flushed_samples.value(), 1024u);
+  EXPECT_EQ(rig.isp_stats.resolve_flushes.value(), 0u);
+  EXPECT_EQ(rig.isp_stats.resolve_wait_alu_ops.value(), 0u);
   EXPECT_EQ(rig.isp_stats.punch_through_samples.value(), 496u);
-  EXPECT_EQ(rig.isp_stats.tag_buffer_read_bytes.value(), 1024u * kTagBytes);
+  EXPECT_EQ(rig.isp_stats.tag_buffer_read_bytes.value(), (1024u + 496u) * kTagBytes);
   EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 1024u + 496u);
-  // Depth: 1024 opaque writes, then 496 punch-through writes after its (passing) alpha test.
+  // Depth: 1024 opaque writes, then 496 punch-through writes after its (passing) alpha test;
+  // reads: 1024 + 496, and the 496 punch-through samples again after the flush.
   EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), (1024u + 496u) * kDepthBytes);
+  EXPECT_EQ(rig.isp_stats.depth_buffer_read_bytes.value(), (1024u + 496u + 496u) * kDepthBytes);
+  EXPECT_FLOAT_EQ(rig.depth_at(3, 3), 0.25f);
 }
 
-TEST(UnitIsp, PunchThroughFlushesOnlyTheCoveredTagsWithTwoTagBuffers) {
-  // Two tag buffers: only the 496 tags under the punch-through primitive are flushed; the other
-  // 528 opaque tags are shaded at the end of the tile: 496 + 496 + 528 = 1520 invocations.
+TEST(UnitIsp, PunchThroughWaitsAsASecondLayerWithTwoTagBuffers) {
+  // Two tag buffers: the punch-through tags go to the second layer, nothing is flushed mid-tile;
+  // the end of the tile shades both layers in submission order: 1024 + 496 invocations, the same
+  // as with one buffer (nothing hid them), and the same depth.
   RenderRig rig(RenderSpec{.sets = {"isp.tag_buffers=2"}});
   punch_through_over_opaque(rig);
-  EXPECT_EQ(rig.isp_stats.tag_flushes.value(), 1u);
-  EXPECT_EQ(rig.isp_stats.tag_flushed_samples.value(), 496u);
-  EXPECT_EQ(rig.isp_stats.tag_buffer_read_bytes.value(), (496u + 528u) * kTagBytes);
-  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 496u + 496u + 528u);
+  EXPECT_EQ(rig.isp_stats.tag_flushes.value(), 0u);
+  EXPECT_EQ(rig.isp_stats.tag_buffer_read_bytes.value(), (1024u + 496u) * kTagBytes);
+  EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 1024u + 496u);
+  EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), (1024u + 496u) * kDepthBytes);
+  EXPECT_FLOAT_EQ(rig.depth_at(3, 3), 0.25f);
+  EXPECT_FLOAT_EQ(rig.depth_at(30, 30), 0.75f);
 }
 
-/// Opaque A (FULL, z 0.75), punch-through P1 (the corner (0,0),(8,0),(0,8), z 0.25), opaque B
-/// (LR, z 0.5), punch-through P2 (the corner (24,32),(32,24),(32,32), z 0.25).
-void two_punch_throughs(RenderRig& rig) {
+/// The interleaved workload: opaque A (FULL, z 0.75), punch-through P (UL, z 0.5), translucent T
+/// (the corner (24,32),(32,24),(32,32), z 0.4, inside LR), then opaque B (FULL, z 0.25) in front
+/// of everything: what an unsorted engine submits when a near object follows foliage and glass.
+void interleaved(RenderRig& rig) {
   rig.add_draw(make_shader(1));
+  PipelineState blend;
+  blend.depth_write = false;
+  blend.blend = BlendMode::Alpha;
+  rig.add_draw(make_shader(1), blend);
   rig.add_triangle(at(kFull, 0.75f));
-  rig.add_triangle(at(ScreenTri{{0, 0}, {8, 0}, {0, 8}}, 0.25f, 0, HsrClass::PunchThrough));
-  rig.add_triangle(at(kLowerRight, 0.5f));
-  rig.add_triangle(at(ScreenTri{{24, 32}, {32, 24}, {32, 32}}, 0.25f, 0, HsrClass::PunchThrough));
+  rig.add_triangle(at(kUpperLeft, 0.5f, 0, HsrClass::PunchThrough));
+  rig.add_triangle(at(ScreenTri{{24, 32}, {32, 24}, {32, 32}}, 0.4f, 1, HsrClass::Translucent));
+  rig.add_triangle(at(kFull, 0.25f));
   rig.render_tile(RenderRig::tile_rect(0, 0));
 }
 
-TEST(UnitIsp, MoreTagBuffersNeverFlushMoreSamples) {
-  // P1 covers x + y <= 6 (its hypotenuse is a bottom-right edge): 1+2+...+7 = 28 samples.
-  // P2 covers x + y >= 55 inside [24,32)^2 (its hypotenuse is a left edge): sums 55..62 have
-  // 8, 7, ..., 1 pixels: 36 samples, all inside B's region (x + y >= 31).
-  // One tag buffer: P1 flushes all 1024 A tags; B writes 528 tags; P2 flushes those 528:
-  //   1552 flushed samples; shaded 1024 + 28 + 528 + 36 = 1616.
-  // Two or more: P1 flushes the 28 A tags under it; B overwrites 528 A tags (HSR); P2 flushes
-  //   the 36 B tags under it: 64 flushed; the end shades A's 1024 - 28 - 528 = 468 and B's
-  //   528 - 36 = 492: shaded 28 + 28 + 36 + 36 + 468 + 492 = 1088.
-  const std::uint64_t flushed[] = {1552, 64, 64, 64};
-  const std::uint64_t shaded[] = {1616, 1088, 1088, 1088};
-  const std::uint64_t hsr[] = {0, 528, 528, 528};
-  std::uint64_t previous = ~std::uint64_t{0};
-  for (int buffers = 1; buffers <= 4; ++buffers) {
+TEST(UnitIsp, MoreTagBuffersNeverShadeMoreOnTheInterleavedWorkload) {
+  // T covers x + y >= 55 inside [24,32)^2 (its hypotenuse is a left edge): sums 55..62 hold
+  // 8, 7, ..., 1 pixels = 36 samples; P covers UL's 496. T and P do not overlap.
+  // One tag buffer: P needs a second layer over A's 1024 tags: the tile is flushed (A shaded,
+  //   1024). P's 496 and T's 36 then sit alone in the only layer; B (in front of P's unresolved
+  //   depth: 0.25 < 0.5) clears them (496 + 36 removed) and is shaded at the end (1024):
+  //   2048 invocations, 1 flush.
+  // Two or more: P and T become second layers over A; B clears all three layers (1024 + 496 +
+  //   36 = 1556 removed), only B is shaded: 1024 invocations, no flush.
+  // So 2, 4 and 8 buffers shade 1024 / 2048 = half of what 1 does, and never more than fewer.
+  const std::uint64_t shaded[] = {2048, 1024, 1024, 1024};
+  const std::uint64_t flushes[] = {1, 0, 0, 0};
+  const std::uint64_t removed[] = {496 + 36, 1024 + 496 + 36, 1024 + 496 + 36, 1024 + 496 + 36};
+  std::uint64_t previous_alu = ~std::uint64_t{0}, one_buffer_alu = 0;
+  int i = 0;
+  for (int buffers : {1, 2, 4, 8}) {
     RenderRig rig(RenderSpec{.sets = {"isp.tag_buffers=" + std::to_string(buffers)}});
-    two_punch_throughs(rig);
+    interleaved(rig);
     SCOPED_TRACE("isp.tag_buffers=" + std::to_string(buffers));
-    EXPECT_EQ(rig.isp_stats.punch_through_samples.value(), 28u + 36u);
-    EXPECT_EQ(rig.isp_stats.tag_flushes.value(), 2u);
-    EXPECT_EQ(rig.isp_stats.tag_flushed_samples.value(), flushed[buffers - 1]);
-    EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), hsr[buffers - 1]);
-    EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), shaded[buffers - 1]);
-    EXPECT_LE(rig.isp_stats.tag_flushed_samples.value(), previous);
-    previous = rig.isp_stats.tag_flushed_samples.value();
+    const int k = std::min(i, 3);
+    EXPECT_EQ(rig.isp_stats.punch_through_samples.value(), 496u);
+    EXPECT_EQ(rig.isp_stats.translucent_samples.value(), 36u);
+    EXPECT_EQ(rig.isp_stats.tag_flushes.value(), flushes[k]);
+    EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), removed[k]);
+    EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), shaded[k]);
+    EXPECT_EQ(rig.isp_stats.resolve_flushes.value(), 0u);
+    // The picture is B everywhere whatever the buffers.
+    EXPECT_FLOAT_EQ(rig.depth_at(3, 3), 0.25f);
+    // Fragment ALU ops (helpers included): never more than with fewer buffers, and with 2 or more
+    // strictly less than with one.
+    const std::uint64_t alu = rig.tsp_stats.fragment_alu_ops.value();
+    EXPECT_LE(alu, previous_alu);
+    if (buffers == 1) one_buffer_alu = alu;
+    if (buffers > 1) {
+      EXPECT_LT(alu, one_buffer_alu);
+    }
+    previous_alu = alu;
+    ++i;
+  }
+}
+
+TEST(UnitIsp, DepthTestBehindAnUnresolvedPunchThroughMakesTheIspWaitForItsShader) {
+  // A (FULL, z 0.75), punch-through P (UL, z 0.5), opaque C (FULL, z 0.6): behind P, in front of
+  // A. C's depth test on UL depends on P's alpha test, so the layers are flushed (A, then P: P's
+  // depth is written) and the ISP waits until P's shader has run (its 496 samples' quads, alone:
+  // the same ALU ops as UL shaded on its own); C then fails on UL's 496 samples and is shaded on
+  // LR's 528: 1024 + 496 + 528 = 2048 invocations, whatever the number of tag buffers (with one,
+  // A was flushed when P arrived, without a wait).
+  RenderRig ul_only;
+  ul_only.add_draw(make_shader(1));
+  ul_only.add_triangle(at(kUpperLeft, 0.5f));
+  ul_only.render_tile(RenderRig::tile_rect(0, 0));
+  const std::uint64_t ul_alu = ul_only.tsp_stats.fragment_alu_ops.value();
+  for (int buffers : {1, 2, 4}) {
+    RenderRig rig(RenderSpec{.sets = {"isp.tag_buffers=" + std::to_string(buffers)}});
+    rig.add_draw(make_shader(1));
+    rig.add_triangle(at(kFull, 0.75f));
+    rig.add_triangle(at(kUpperLeft, 0.5f, 0, HsrClass::PunchThrough));
+    rig.add_triangle(at(kFull, 0.6f));
+    rig.render_tile(RenderRig::tile_rect(0, 0));
+    SCOPED_TRACE("isp.tag_buffers=" + std::to_string(buffers));
+    EXPECT_EQ(rig.isp_stats.resolve_flushes.value(), 1u);
+    EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 2048u);
+    EXPECT_EQ(rig.isp_stats.depth_test_failed_samples.value(), 496u);
+    EXPECT_EQ(rig.isp_stats.resolve_wait_alu_ops.value(), ul_alu);
+    EXPECT_GT(ul_alu, 0u);
+    EXPECT_FLOAT_EQ(rig.depth_at(3, 3), 0.5f);
+    EXPECT_FLOAT_EQ(rig.depth_at(30, 30), 0.6f);
   }
 }
 
@@ -292,10 +353,10 @@ TEST(UnitIsp, PunchThroughWritesDepthOnlyWhereTheAlphaTestKeptTheSample) {
   EXPECT_EQ(rig.tsp_stats.shaded_samples.value(), 1024u + 120u);
 }
 
-TEST(UnitIsp, TranslucentPrimitiveIsShadedAtOnceAndHidesNothing) {
+TEST(UnitIsp, TranslucentPrimitiveIsALayerAndHidesNothing) {
   // Blended UL (z 0.25, no depth write) over opaque FULL (z 0.75), two tag buffers: the 496
-  // opaque tags beneath are flushed first, the translucent samples blended (496 read-modify-
-  // writes of 4 B), and the other 528 opaque tags shaded at the end.
+  // translucent tags are a second layer; the end of the tile shades the opaque 1024, then blends
+  // the 496 translucent samples (496 read-modify-writes of 4 B). No mid-tile flush.
   RenderRig rig;
   rig.add_draw(make_shader(1));
   PipelineState blend;
@@ -306,7 +367,8 @@ TEST(UnitIsp, TranslucentPrimitiveIsShadedAtOnceAndHidesNothing) {
   rig.add_triangle(at(kUpperLeft, 0.25f, 1, HsrClass::Translucent));
   rig.render_tile(RenderRig::tile_rect(0, 0));
   EXPECT_EQ(rig.isp_stats.translucent_samples.value(), 496u);
-  EXPECT_EQ(rig.isp_stats.tag_flushed_samples.value(), 496u);
+  EXPECT_EQ(rig.isp_stats.tag_flushes.value(), 0u);
+  EXPECT_EQ(rig.isp_stats.tag_flushed_samples.value(), 0u);
   EXPECT_EQ(rig.tsp_stats.blended_samples.value(), 496u);
   EXPECT_EQ(rig.tsp_stats.tile_buffer_read_bytes.value(), 496u * 4);
   EXPECT_EQ(rig.tsp_stats.tile_buffer_write_bytes.value(), (1024u + 496u) * 4);

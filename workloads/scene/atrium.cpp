@@ -619,17 +619,18 @@ Scene make_atrium(int detail) {
     const float ox = L.outer_half_x, oz = L.outer_half_z, th = 0.5f;
     const float h_in = L.storey2_height, h_out = L.roof_height;
     const float outer_cell = 2.0f * cell;
-    // Inner faces (toward the aisles) up to the upper ceiling.
-    wb.grid({-ox, 0, oz}, {2 * ox, 0, 0}, {0, h_in, 0}, cells_for(2 * ox, cell), cells_for(h_in, cell));      // north, faces -z
-    wb.grid({ox, 0, -oz}, {-2 * ox, 0, 0}, {0, h_in, 0}, cells_for(2 * ox, cell), cells_for(h_in, cell));     // south, faces +z
-    wb.grid({ox, 0, oz}, {0, 0, -2 * oz}, {0, h_in, 0}, cells_for(2 * oz, cell), cells_for(h_in, cell));      // east, faces -x
-    wb.grid({-ox, 0, -oz}, {0, 0, 2 * oz}, {0, h_in, 0}, cells_for(2 * oz, cell), cells_for(h_in, cell));     // west, faces +x
-    // Outer faces, full height, coarser.
+    // Inner faces (toward the aisles) up to the upper ceiling. Builder::grid's front face points
+    // along cross(u, v) with v = +y: u = -x faces -z, +x faces +z, +z faces -x, -z faces +x.
+    wb.grid({ox, 0, oz}, {-2 * ox, 0, 0}, {0, h_in, 0}, cells_for(2 * ox, cell), cells_for(h_in, cell));      // north, faces -z
+    wb.grid({-ox, 0, -oz}, {2 * ox, 0, 0}, {0, h_in, 0}, cells_for(2 * ox, cell), cells_for(h_in, cell));     // south, faces +z
+    wb.grid({ox, 0, -oz}, {0, 0, 2 * oz}, {0, h_in, 0}, cells_for(2 * oz, cell), cells_for(h_in, cell));      // east, faces -x
+    wb.grid({-ox, 0, oz}, {0, 0, -2 * oz}, {0, h_in, 0}, cells_for(2 * oz, cell), cells_for(h_in, cell));     // west, faces +x
+    // Outer faces (toward the outside), full height, coarser.
     const float ex = ox + th, ez = oz + th;
-    wb.grid({ex, 0, ez}, {-2 * ex, 0, 0}, {0, h_out, 0}, cells_for(2 * ex, outer_cell), cells_for(h_out, outer_cell));
-    wb.grid({-ex, 0, -ez}, {2 * ex, 0, 0}, {0, h_out, 0}, cells_for(2 * ex, outer_cell), cells_for(h_out, outer_cell));
-    wb.grid({ex, 0, -ez}, {0, 0, 2 * ez}, {0, h_out, 0}, cells_for(2 * ez, outer_cell), cells_for(h_out, outer_cell));
-    wb.grid({-ex, 0, ez}, {0, 0, -2 * ez}, {0, h_out, 0}, cells_for(2 * ez, outer_cell), cells_for(h_out, outer_cell));
+    wb.grid({-ex, 0, ez}, {2 * ex, 0, 0}, {0, h_out, 0}, cells_for(2 * ex, outer_cell), cells_for(h_out, outer_cell));   // north, faces +z
+    wb.grid({ex, 0, -ez}, {-2 * ex, 0, 0}, {0, h_out, 0}, cells_for(2 * ex, outer_cell), cells_for(h_out, outer_cell));  // south, faces -z
+    wb.grid({ex, 0, ez}, {0, 0, -2 * ez}, {0, h_out, 0}, cells_for(2 * ez, outer_cell), cells_for(h_out, outer_cell));   // east, faces +x
+    wb.grid({-ex, 0, -ez}, {0, 0, 2 * ez}, {0, h_out, 0}, cells_for(2 * ez, outer_cell), cells_for(h_out, outer_cell));  // west, faces -x
     // Wall tops.
     wb.box({-ex, h_out, oz}, {ex, h_out + 0.3f, ez});
     wb.box({-ex, h_out, -ez}, {ex, h_out + 0.3f, -oz});

@@ -30,6 +30,10 @@ struct AtriumView {
 std::vector<AtriumView> atrium_views() {
   const AtriumLayout L = atrium_layout();
   const float eye_h = 1.7f;  // standing eye height, meters
+  // The street view: at 60.5 m from the facade a 15 degree view spans 60.5 tan(7.5 deg) = +-7.96 m
+  // vertically (y 0.04 .. 15.96 at eye height 8) and +-14.2 m horizontally at 16:9: only facade,
+  // which spans 0 .. 16.3 m in height and 39 m in length.
+  const float street_eye_h = 8.0f, street_distance_m = 60.0f;
   return {
       // At the west end of the courtyard, eye height, looking east along its length: both
       // colonnades recede in rows, banners and plants overlap the arcades.
@@ -45,6 +49,11 @@ std::vector<AtriumView> atrium_views() {
       {"aisle", {-L.court_half_x + 0.5f, eye_h, -L.court_half_z - 0.5f * L.aisle_depth}, {L.court_half_x, 2.0f, -L.court_half_z + 1.0f}, 60.0f},
       // In the courtyard looking up at the banners hanging in front of the north upper arcade.
       {"banners", {2.0f, eye_h, -L.court_half_z + 1.5f}, {0.0f, L.storey1_height, L.court_half_z}, 60.0f},
+      // Outside, 60 m in front of the south facade, a 15 degree telephoto at mid height: the
+      // facade fills the frame and the whole interior behind it (both arcades, glass, banners,
+      // plants) is submitted and rasterised, as by an engine without occlusion culling; the
+      // atrium's deepest view (bench/hsr_anchor.sh).
+      {"street", {0.0f, street_eye_h, -L.outer_half_z - street_distance_m}, {0.0f, street_eye_h, 0.0f}, 15.0f},
   };
 }
 

@@ -16,7 +16,11 @@
 //                       finite-radius attenuation (1-(d/r)^2)^2 (~3), N.L clamp (~2), accumulate (~2)
 //   varyings = 8        world position (3), normal (3), uv (2)
 // The masked shader adds 1 ALU op for the alpha test and may discard.
+// draw_order = submesh: one draw per sub-mesh in scene order (opaque after punch-through and
+// blended geometry), the workload of bench/tag_buffers.sh.
 #include "techniques/technique.hpp"
+
+#include "kernel/errors.hpp"
 
 namespace tbdr {
 
@@ -38,8 +42,23 @@ Trace generate_plain_forward(const TraceSetup& setup, const TechniqueOptions& op
                  blended_pipeline("blended", lit.name)};
 
   PassDesc pass = color_pass("main", static_cast<std::uint32_t>(setup.samples));
-  add_scene_draws(pass, "opaque", "masked", {lights});
-  pass.draws.push_back(scene_draw(SceneSubset::Blended, "blended", {lights}));
+  const std::string& order = options.get("draw_order");
+  if (order == "pass") {
+    add_scene_draws(pass, "opaque", "masked", {lights});
+    pass.draws.push_back(scene_draw(SceneSubset::Blended, "blended", {lights}));
+  } else if (order == "submesh" && setup.scene) {
+    // One draw per sub-mesh in the scene's order, with its material's pipeline: opaque sub-meshes
+    // declared after punch-through or blended ones are drawn after them.
+    for (const SubMesh& sm : setup.scene->submeshes) {
+      const AlphaMode mode = setup.scene->materials[sm.material].alpha_mode;
+      DrawCmd d = scene_draw(SceneSubset::All, mode == AlphaMode::Opaque ? "opaque" : mode == AlphaMode::PunchThrough ? "masked" : "blended",
+                             {lights});
+      d.submesh = sm.name;
+      pass.draws.push_back(std::move(d));
+    }
+  } else {
+    throw InputError("option draw_order=" + order, order == "submesh" ? "needs the loaded scene" : "expected pass or submesh, got '" + order + "'");
+  }
   t.commands.emplace_back(std::move(pass));
   return t;
 }
@@ -51,7 +70,11 @@ TechniqueInfo technique_plain_forward() {
           "one pass, every fragment evaluates every light; only color leaves the chip (Billeter 2015)",
           {{"alu_ops", "20", "FP32 ALU ops per fragment, excluding lights"},
            {"tex_fetches", "2", "bilinear texture fetches per fragment (base color, normal map)"},
-           {"light_alu_ops", "12", "FP32 ALU ops per light evaluated per fragment"}},
+           {"light_alu_ops", "12", "FP32 ALU ops per light evaluated per fragment"},
+           {"draw_order", "pass",
+            "pass: opaque, then masked, then blended draws (as sorted engines submit); submesh: one draw per sub-mesh "
+            "in the scene's order, so opaque geometry follows punch-through and blended geometry (an unsorted "
+            "engine walking its scene; shows what the ISP's tag buffers do)"}},
           &generate_plain_forward};
 }
 
