@@ -199,17 +199,6 @@ class RenderRig {
     ctx_.pattern = standard_sample_pattern(samples < 0 ? 1 : samples, ctx_.viewport.subpixel_bits);
     for (const Attachment* a : pass.color_targets()) ctx_.color_targets.push_back(&images.attachments.at(a->name));
     if (const Attachment* d = pass.depth_attachment()) ctx_.depth = &images.attachments.at(d->name);
-    if (!pass.pls.empty()) {
-      const std::uint32_t bytes = pass.pls_bytes_per_pixel();
-      pls_.stack_capacity = pls_light_stack_capacity(bytes);
-      pls_.surface.assign(pixels, SurfacePoint{});
-      pls_.valid.assign(pixels, 0);
-      pls_.accum.assign(pixels, glm::vec3(0.0f));
-      pls_.stack.assign(pixels * pls_.stack_capacity, 0);
-      pls_.stack_count.assign(pixels, 0);
-      pls_.overflow.assign(pixels, 0);
-      ctx_.pls = &pls_;
-    }
     light_bins_ = every_light_everywhere(lights.size(), spec.width, spec.height);
     ctx_.light_bins = &light_bins_;
 
@@ -292,7 +281,6 @@ class RenderRig {
   std::deque<ShaderDesc> shaders_;
   std::deque<PipelineState> pipelines_;
   std::deque<DrawCmd> cmds_;
-  PlsState pls_;
   LightScreenBins light_bins_;
   RenderContext ctx_;
   std::unique_ptr<TileMemory> tile_memory_;
