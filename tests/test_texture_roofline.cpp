@@ -54,28 +54,31 @@ std::uint64_t frame_texels(const Timed& r) {
   return texels;
 }
 
+// 256 x 256 pixels = 16384 quads, plus the 128 quads on the quad's diagonal that both of its
+// triangles launch: 16512 quads x 4 lanes x 16 fetches = 1056768 bilinear fetches.
+constexpr std::uint64_t kFetches = (16384 + 128) * 4 * 16;
+
 TEST(TextureRoofline, BilinearFetchIsOneFilteredTexel) {
-  // 256 x 256 pixels = 16384 quads x 4 lanes x 16 fetches = 1048576 bilinear fetches, each one
-  // filtered texel (texture.filtered_texels_per_fetch = 1), not the 4 texels it reads.
+  // Each bilinear fetch is one filtered texel (texture.filtered_texels_per_fetch = 1), not the 4
+  // texels it reads; a trilinear one (= 2) two.
   const Timed r = textured_frame(256, 1, 16, {});
-  EXPECT_EQ(frame_texels(r), 1048576u);
-  // Trilinear: two filtered texels per fetch.
+  EXPECT_EQ(frame_texels(r), kFetches);
   const Timed tri = textured_frame(256, 1, 16, {"texture.filtered_texels_per_fetch=2"});
-  EXPECT_EQ(frame_texels(tri), 2u * 1048576u);
+  EXPECT_EQ(frame_texels(tri), 2 * kFetches);
 }
 
 TEST(TextureRoofline, TextureBoundFrameTakesTexelsOverTheTextureRate) {
-  // Bound: 1048576 filtered texels / (2 units x 4 per clock) = 131072 cycles. The other units are
-  // far below it: ALU 65536 ops / (4 USCs x 16 lanes x 2) = 512 cycles, ISP 65536 samples / 32 =
+  // Bound: 1056768 filtered texels / (2 units x 4 per clock) = 132096 cycles. The other units are
+  // far below it: ALU 66048 lanes / (4 USCs x 16 lanes x 2) = 516 cycles, ISP 65536 samples / 32 =
   // 2048 cycles, colour store 256 KiB / 12.8 GB/s x 600 MHz = 12288 cycles (overlapped with
   // shading). Within 3 %: what is left is the first tile's ISP work before the USCs start and the
   // last tile's store after they finish (a few hundred cycles).
   const Timed two = textured_frame(256, 1, 16, {});
-  const double bound2 = 1048576.0 / (2 * 4);
+  const double bound2 = static_cast<double>(kFetches) / (2 * 4);
   EXPECT_NEAR(two.timing.frame_cycles, bound2, 0.03 * bound2);
-  // Twice the texture units: half the bound (65536 cycles), and the frame follows it.
+  // Twice the texture units: half the bound (66048 cycles), and the frame follows it.
   const Timed four = textured_frame(256, 1, 16, {"texture.units=4"});
-  const double bound4 = 1048576.0 / (4 * 4);
+  const double bound4 = static_cast<double>(kFetches) / (4 * 4);
   EXPECT_NEAR(four.timing.frame_cycles, bound4, 0.03 * bound4);
   EXPECT_NEAR(four.timing.frame_cycles / two.timing.frame_cycles, 0.5, 0.03);
   // Twice the rate per unit: the same as twice the units.
@@ -84,11 +87,12 @@ TEST(TextureRoofline, TextureBoundFrameTakesTexelsOverTheTextureRate) {
 }
 
 TEST(TextureRoofline, AluBoundFrameIgnoresTheTextureUnits) {
-  // Past the knee: 1024 ALU ops and 16 fetches per fragment. ALU 65536 x 1024 / 128 = 524288
-  // cycles against 131072 for the texture units: more texture units change nothing (within 1 %).
+  // Past the knee: 1024 ALU ops and 16 fetches per fragment. ALU 66048 lanes x 1024 / 128 =
+  // 528384 cycles against 132096 for the texture units: more texture units change nothing
+  // (within 1 %).
   const Timed two = textured_frame(256, 1024, 16, {});
   const Timed four = textured_frame(256, 1024, 16, {"texture.units=4"});
-  const double alu_bound = 65536.0 * 1024 / 128;
+  const double alu_bound = (16384.0 + 128) * 4 * 1024 / 128;
   EXPECT_NEAR(two.timing.frame_cycles, alu_bound, 0.03 * alu_bound);
   EXPECT_NEAR(four.timing.frame_cycles, two.timing.frame_cycles, 0.01 * two.timing.frame_cycles);
 }
