@@ -20,7 +20,7 @@ PIXELS=$((W * H))
 write_trace() {  # $1 = ALU ops per fragment, $2 = output
   cat > "$2" <<EOF
 tbdrsim-trace 1
-scene atrium detail=0
+scene atrium detail=1
 frame width=$W height=$H samples=1
 camera eye=0,1.7,0 target=1,1.7,0 up=0,1,0 fov_y_deg=60 near=0.1 far=40
 shader roofline alu_ops=$1 tex_fetches=$FETCHES varyings=2 light_alu_ops=0 light_source=none color_outputs=1
@@ -41,7 +41,7 @@ cycles() {  # $1 = trace, rest = --set overrides
 }
 printf "%-10s %-14s | %-12s %-12s %-12s | %-12s %-12s %-12s\n" "ALU ops" "ops/filt.texel" \
   "cycles" "tex bound" "ALU bound" "cycles 4TPU" "tex bound" "ALU bound"
-for A in 1 4 8 12 16 20 24 32 48 64; do
+for A in 16 64 96 128 160 192 224 256 320 384 512 1024; do
   write_trace "$A" "$TMP/a$A.trace"
   c2=$(cycles "$TMP/a$A.trace")
   c4=$(cycles "$TMP/a$A.trace" --set texture.units=4)
