@@ -124,7 +124,7 @@ TEST(ImageTruth, VisibilityBufferKernelReadsTheTextureLinesFragmentShadingReads)
   BufferDesc frame;
   frame.name = "frame";
   frame.bytes = kSize * kSize * 4;
-  frame.traffic = TrafficClass::Color;
+  frame.traffic = DramClass::Color;
   frame.content = BufferContent::Image;
   vb.buffers.push_back(frame);
   PassDesc vis = base_pass();
@@ -138,7 +138,7 @@ TEST(ImageTruth, VisibilityBufferKernelReadsTheTextureLinesFragmentShadingReads)
   barrier.resources = {"visibility"};
   vb.commands.push_back(barrier);
   DispatchCmd shade;
-  shade.kernel = "vbuffer_shade";
+  shade.kernel = ComputeKernel::VbufferShade;
   shade.groups[0] = shade.groups[1] = 2;
   shade.group_size[0] = shade.group_size[1] = 32;
   shade.reads = {"visibility"};
