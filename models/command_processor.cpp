@@ -453,6 +453,9 @@ class FrameSimulator {
     cc.trace = &trace_;
     cc.trace_path = &path_;
     cc.images = &result_.images;
+    std::vector<std::uint64_t> texture_lines;
+    cc.textures = textures_.get();
+    cc.texture_lines = &texture_lines;
     std::string image;
     run_dispatch(cc, d, stats, dram, image);
     CommandWork cw;
@@ -461,9 +464,13 @@ class FrameSimulator {
     cw.depends_on_previous = true;  // a dispatch follows a barrier on what it reads
     cw.compute_alu_ops = stats.compute_alu_ops.value();
     cw.compute_threads = stats.threads.value();
-    cw.compute_texels = stats.compute_texture_fetches.value() * static_cast<std::uint64_t>(hw_.texture.texels_per_fetch);
+    cw.compute_texels = stats.compute_texture_fetches.value() * static_cast<std::uint64_t>(hw_.texture.filtered_texels_per_fetch);
     cw.read_bytes = dram.read_bytes;
     cw.write_bytes = dram.write_bytes;
+    // Material texture lines go through the texture cache, not as a plain read stream.
+    cw.read_bytes[static_cast<std::size_t>(DramClass::Textures)] = 0;
+    cw.texture_lines = std::move(texture_lines);
+    cw.texture_line_accesses = stats.compute_texture_line_accesses.value();
     result_.work.commands.push_back(std::move(cw));
     if (!image.empty()) result_.final_color = image;
     collect_stats(stats, prefix + "/compute", result_.stats);

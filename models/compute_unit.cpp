@@ -27,7 +27,8 @@ constexpr std::uint64_t kLightIndexBytes = 4;       // one light index
 constexpr std::uint64_t kDepthBoundsTileBytes = 8;  // min and max depth per tile, FP32 each
 constexpr std::uint64_t kUsedClusterBytes = 4;      // one cluster index in the compact used list
 constexpr std::uint64_t kWorkListEntryBytes = 8;    // (tile, material) per work list entry
-constexpr std::uint64_t kImageBytesPerPixel = 4;    // an image buffer is rgba8
+constexpr Format kImageFormat = Format::Rgba8;      // an image buffer is rgba8 (what the kernels store)
+constexpr std::uint64_t kImageBytesPerPixel = 4;    // bytes of kImageFormat
 // Culling stays conservative against float rounding: a tile's depth range is widened by 0.1 %.
 constexpr float kBoundsFarScale = 1.001f;
 constexpr float kBoundsNearScale = 0.999f;
@@ -124,6 +125,13 @@ class Dispatch {
     }
     return nullptr;
   }
+  /// Fetches of shader `sh` that sample material textures: those beyond one per image read
+  /// (G-buffer targets, depth, visibility ids are each fetched once per shaded sample).
+  std::uint32_t material_fetches(const ShaderDesc& sh) const {
+    std::uint32_t images = 0;
+    for (const auto& n : cmd_.reads) images += ctx_.images->attachments.count(n) > 0 ? 1u : 0u;
+    return sh.tex_fetches > images ? sh.tex_fetches - images : 0;
+  }
   /// The first buffer in `names` holding `content`, or "".
   std::string buffer_with(const std::vector<std::string>& names, BufferContent content) const {
     for (const auto& n : names) {
@@ -198,6 +206,61 @@ glm::vec3 shade_surface(const ComputeContext& ctx, const SurfacePoint& s, int x,
   return c;
 }
 
+/// The texture lines of a shading kernel's material fetches (slots 0 .. fetches-1 of each surface's
+/// material texture): per workgroup tile of `group_px` pixels, every (2x2 quad, triangle) with a
+/// stored surface reads the bilinear footprint of its quad uvs (SurfacePoint::quad_uv, what the TSP
+/// computes for the same quad), the tile's lines sorted and kept once and appended to
+/// ctx.texture_lines, and the lines booked as texture reads (what the texture unit requests, before
+/// the texture cache), as render tiles' footprints are.
+void material_texture_lines(const ComputeContext& ctx, const AttachmentImage& surfaces, std::uint32_t fetches, int group_px,
+                            ComputeStats& stats, DramTraffic& dram) {
+  if (fetches == 0 || ctx.textures == nullptr || ctx.texture_lines == nullptr) return;
+  const TextureLayout& layout = *ctx.textures;
+  const int W = ctx.viewport.width_px, H = ctx.viewport.height_px;
+  const std::size_t S = surfaces.samples;
+  const int g = std::max(1, group_px);
+  std::vector<std::pair<std::uint64_t, std::size_t>> quads;  // ((quad << 32) | triangle, surface index)
+  std::vector<std::uint64_t> lines;
+  QuadFootprint fp;
+  std::uint64_t accesses = 0, total = 0;
+  for (int ty = 0; ty < H; ty += g) {
+    for (int tx = 0; tx < W; tx += g) {
+      quads.clear();
+      for (int y = ty; y < std::min(H, ty + g); ++y) {
+        for (int x = tx; x < std::min(W, tx + g); ++x) {
+          const std::size_t p = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
+          for (std::size_t smp = 0; smp < S; ++smp) {
+            const std::size_t k = p * S + smp;
+            if (!surfaces.surface_valid[k] || surfaces.surface[k].material == kNoMaterial) continue;
+            // Quad index within the frame (at most 8192 x 8192 quads) above the triangle id.
+            const std::uint64_t quad = static_cast<std::uint64_t>(y >> 1) * 8192u + static_cast<std::uint64_t>(x >> 1);
+            quads.push_back({(quad << 32) | surfaces.surface[k].triangle, k});
+          }
+        }
+      }
+      std::sort(quads.begin(), quads.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      lines.clear();
+      for (std::size_t i = 0; i < quads.size(); ++i) {
+        if (i > 0 && quads[i].first == quads[i - 1].first) continue;
+        const SurfacePoint& s = surfaces.surface[quads[i].second];
+        const TextureStorage& tex = layout.of_material(s.material);
+        layout.quad_footprint(tex, s.quad_uv, fp);
+        accesses += std::uint64_t{fp.count} * fetches;
+        for (std::uint32_t j = 0; j < fp.count; ++j) {
+          for (std::uint32_t f = 0; f < fetches; ++f) lines.push_back(fp.lines[j] + std::uint64_t{f} * tex.slot_bytes);
+        }
+      }
+      std::sort(lines.begin(), lines.end());
+      lines.erase(std::unique(lines.begin(), lines.end()), lines.end());
+      ctx.texture_lines->insert(ctx.texture_lines->end(), lines.begin(), lines.end());
+      total += lines.size();
+    }
+  }
+  stats.compute_texture_line_accesses += accesses;
+  stats.compute_texture_tile_lines += total;
+  dram.read(DramClass::Textures, total * layout.line_bytes());
+}
+
 /// Shades every stored surface of an image with the shader's light source (every light, a tile
 /// grid's or a cluster grid's lists) and resolves multisampled surfaces; with `refetch_tile_px` > 0
 /// (visibility buffer) each tile re-fetches the three vertices of every triangle it shades.
@@ -246,7 +309,7 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
         }
         sum += shaded_colors[k];
       }
-      if (n_shaded > 0) img.color[p] = glm::vec4(sum / static_cast<float>(S), 1.0f);
+      if (n_shaded > 0) img.color[p] = FormatPrecision::color(kImageFormat, glm::vec4(sum / static_cast<float>(S), 1.0f));
     }
   }
   // Threads of uncovered pixels exit after reading their G-buffer sample: no texture fetches.
@@ -361,6 +424,7 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     const std::string out = k.buffer_with(cmd.writes, BufferContent::Image);
     if (out.empty()) k.fail("needs an image buffer in writes=");
     ImageBuffer img = shade_surfaces(ctx, *surfaces, sh, grid.get(), nullptr, 0, stats, dram);
+    material_texture_lines(ctx, *surfaces, k.material_fetches(sh), tile_px, stats, dram);
     write_image(out, std::move(img));
     return;
   }
@@ -471,6 +535,7 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     const bool vbuffer = kernel == ComputeKernel::VbufferShade;
     const int tile_px = k.get_int("tile_px", kDefaultTilePx, 1, 1024);
     ImageBuffer img = shade_surfaces(ctx, *surfaces, sh, tgrid, cgrid, vbuffer ? tile_px : 0, stats, dram);
+    material_texture_lines(ctx, *surfaces, k.material_fetches(sh), tile_px, stats, dram);
     write_image(out, std::move(img));
     return;
   }

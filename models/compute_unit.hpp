@@ -3,6 +3,8 @@
 // bounds, tile light culling, cluster flagging and light assignment, deferred shading, visibility
 // buffer work lists and shading) compute their outputs from the frame's images and the lights,
 // and are charged like draws: ALU operations, texture/buffer reads and writes per DRAM class.
+// A shading kernel's fetches beyond one per image it reads sample the surface's material textures:
+// their lines are computed per 2x2 quad as the TSP computes a fragment quad's (SurfacePoint::quad_uv).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -10,6 +12,7 @@
 #include "models/hw_config.hpp"
 #include "models/light_lists.hpp"
 #include "models/render_state.hpp"
+#include "models/texture_unit.hpp"
 #include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
 #include "trace/trace.hpp"
@@ -29,6 +32,8 @@ namespace tbdr {
   X(Counter, compute_shaded_pixels, "pixels", Sum, "Pixels shaded by compute kernels") \
   X(Counter, compute_light_evaluations, "evaluations", Sum, "Lights evaluated by compute shading") \
   X(Counter, compute_texture_fetches, "fetches", Sum, "Texture fetches of compute shading") \
+  X(Counter, compute_texture_line_accesses, "lines", Sum, "Texture cache line accesses of compute shading's material fetches: distinct lines per quad and fetch") \
+  X(Counter, compute_texture_tile_lines, "lines", Sum, "Distinct texture lines each workgroup tile's material fetches touched (its footprint), summed over tiles") \
   X(Counter, work_list_entries, "entries", Sum, "Per-material tile work list entries") \
   X(Counter, refetched_vertices, "vertices", Sum, "Vertices re-fetched by visibility-buffer shading")
 /// Statistics of compute dispatches.
@@ -42,6 +47,11 @@ struct ComputeContext : FrameInputs {
   const Trace* trace = nullptr;
   const std::string* trace_path = nullptr;
   FrameImages* images = nullptr;
+  /// The frame's texture address space and where the material fetches' lines go (each
+  /// workgroup tile's footprint, sorted and distinct, appended in dispatch order); either null:
+  /// no addresses.
+  const TextureLayout* textures = nullptr;
+  std::vector<std::uint64_t>* texture_lines = nullptr;
 };
 
 /// Runs one dispatch; InputError (trace:line) for an unknown kernel, a bad parameter or a

@@ -29,8 +29,8 @@ EnergyBreakdown compute_energy(const HwConfig& hw, const FrameStats& frame, cons
   term("alu", "ops",
        d(tsp.fragment_alu_ops) + d(frame.render.geometry.vertex_alu_ops) + d(frame.compute.compute_alu_ops),
        e.alu_op_pj);
-  term("texture", "texels",
-       d(tsp.texels_filtered) + d(frame.compute.compute_texture_fetches) * static_cast<double>(hw.texture.texels_per_fetch),
+  term("texture", "filtered texels",
+       d(tsp.texels_filtered) + d(frame.compute.compute_texture_fetches) * static_cast<double>(hw.texture.filtered_texels_per_fetch),
        e.texel_pj);
   // Static: mW x ps = 1e-3 W x 1e-12 s = 1e-15 J = 1e-3 pJ.
   term("static", "mW x ps", e.static_power_mw * frame_time_ps, 1e-3);

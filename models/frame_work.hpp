@@ -36,7 +36,7 @@ struct TileWork {
   std::uint64_t invocations = 0;          ///< fragment shader invocations
   std::uint64_t quads = 0;
   std::uint64_t alu_ops = 0;              ///< fragment ALU ops (helpers included)
-  std::uint64_t texels = 0;
+  std::uint64_t texels = 0;              ///< bilinear-filtered texels (texture.texels_per_clock's unit)
   /// Part of alu_ops / texels the ISP waited for before it could go on (punch-through depth
   /// resolves, models/isp.hpp): the tile's ISP time includes the USCs' time for it.
   std::uint64_t isp_wait_alu_ops = 0;
@@ -84,7 +84,12 @@ struct CommandWork {
   // dispatches
   std::uint64_t compute_alu_ops = 0;
   std::uint64_t compute_threads = 0;
-  std::uint64_t compute_texels = 0;
+  std::uint64_t compute_texels = 0;  ///< bilinear-filtered texels (texture.texels_per_clock's unit)
+  /// Texture lines the dispatch's material fetches touched: each workgroup tile's footprint
+  /// (sorted, unique offsets in the texture address space, as TileWork::texture_lines) one after
+  /// another in dispatch order. Their bytes are not in read_bytes: they go through the texture cache.
+  std::vector<std::uint64_t> texture_lines;
+  std::uint64_t texture_line_accesses = 0;  ///< distinct lines per quad and fetch, summed (before merging)
 };
 
 /// The whole frame's work.

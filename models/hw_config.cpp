@@ -133,10 +133,19 @@ ParamRegistry<HwConfig> make_registry() {
   r.section("texture", "Texture processing units");
   r.add(TBDR_PARAM(texture.units), 2).unit("TPUs").range(1, 64)
       .doc("Texture units (two USCs share one)").source(series6xt + ": one texture unit per two USCs");
-  r.add(TBDR_PARAM(texture.texels_per_clock), 4.0).unit("texels/clock").range(0.25, 256)
-      .doc("Filtered texels per clock per texture unit").source(series6xt + ": 4 bilinear texels per clock");
-  r.add(TBDR_PARAM(texture.texels_per_fetch), 4).unit("texels").range(1, 64)
-      .doc("Texels read per texture fetch (4 = bilinear)").source("bilinear filtering");
+  // A "texel" of the texture rate is a filtered texel: one bilinear sample, 4 texels read and
+  // blended. Imagination quotes Rogue texture rates in these units, the way GPU vendors quote
+  // texture fill rates (bilinear texels per clock); a trilinear fetch costs two.
+  r.add(TBDR_PARAM(texture.texels_per_clock), 4.0).unit("filtered texels/clock").range(0.25, 256)
+      .doc("Bilinear-filtered texels (bilinear samples, 4 texels read and blended each) per clock per texture unit; "
+           "a fetch costs texture.filtered_texels_per_fetch of them")
+      .source("AnandTech, \"PowerVR Series 6XT\" (Feb. 2014, after Imagination's Rogue disclosure): texels/clock "
+              "GX6650 12, G6430 8, G6230 4, beside NVIDIA K1's 8 (8 TMUs of one bilinear texel each); Imagination, "
+              "PowerVR Rogue Architecture for Developers: a USC pair shares one texture processing unit, so 4 per TPU");
+  r.add(TBDR_PARAM(texture.filtered_texels_per_fetch), 1).unit("filtered texels").range(1, 64)
+      .doc("Filtered texels one texture fetch costs the texture unit: 1 bilinear, 2 trilinear (two mip levels blended). "
+           "Sets the rate and energy charge only; the footprint is always one mip level's bilinear texels")
+      .source("OpenGL ES 3.2 section 8.14.3: LINEAR_MIPMAP_LINEAR blends two bilinear samples of adjacent levels");
   r.add(TBDR_PARAM(texture.bytes_per_texel), 4).unit("bytes").range(1, 16)
       .doc("Bytes per texel in memory (RGBA8 uncompressed)").source("RGBA8");
   r.add(TBDR_PARAM(texture.outstanding_requests), 64).unit("requests").range(1, 4096)
@@ -279,8 +288,9 @@ ParamRegistry<HwConfig> make_registry() {
   r.add(TBDR_PARAM(energy.alu_op_pj), 2.0).unit("pJ/op").range(0, 1000)
       .doc("One FP32 ALU op including operand delivery")
       .source("Horowitz ISSCC 2014 (45 nm): FP32 add 0.9 pJ, mult 3.7 pJ");
-  r.add(TBDR_PARAM(energy.texel_pj), 8.0).unit("pJ/texel").range(0, 1000)
-      .doc("Filtering one texel (address, weights, blend)").source("no public figure; about 4 FP32 ops");
+  r.add(TBDR_PARAM(energy.texel_pj), 32.0).unit("pJ/filtered texel").range(0, 1000)
+      .doc("Producing one bilinear-filtered texel (texture.texels_per_clock's unit): 4 texel reads, weights, blend")
+      .source("no public figure; about 4 FP32 ops per texel read, 4 texels read");
   r.add(TBDR_PARAM(energy.static_power_mw), 100.0).unit("mW").range(0, 100000)
       .doc("Leakage and clock tree of the whole GPU while a frame runs").source("no public figure");
   return r;

@@ -120,8 +120,8 @@ struct UscParams {
 /// [texture] texture processing units.
 struct TextureParams {
   std::int64_t units = 0;
-  double texels_per_clock = 0;
-  std::int64_t texels_per_fetch = 0;
+  double texels_per_clock = 0;            ///< bilinear-filtered texels per clock per unit
+  std::int64_t filtered_texels_per_fetch = 0;  ///< filtered texels one fetch costs (1 bilinear, 2 trilinear)
   std::int64_t bytes_per_texel = 0;
   std::int64_t outstanding_requests = 0;  ///< memory requests in flight per tile footprint
 };
@@ -195,7 +195,7 @@ struct EnergyParams {
   double vertex_cache_pj_per_byte = 0;
   double slc_pj_per_byte = 0;
   double alu_op_pj = 0;
-  double texel_pj = 0;
+  double texel_pj = 0;  ///< per filtered texel
   double static_power_mw = 0;
 };
 

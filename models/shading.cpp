@@ -1,5 +1,6 @@
 #include "models/shading.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace tbdr {
@@ -25,6 +26,114 @@ glm::vec3 ShadingModel::lit_contribution(const SurfacePoint& s, glm::vec3 eye, c
   const glm::vec3 h = glm::normalize(l + v);
   const float spec = std::pow(glm::max(glm::dot(s.normal, h), 0.0f), kShininess) * kSpecular;
   return light.color * (light.intensity * atten * cone) * (s.albedo * n_dot_l + glm::vec3(spec * n_dot_l));
+}
+
+namespace {
+
+/// A unorm channel of `bits` bits: clamped to [0, 1], rounded to the nearest of 2^bits - 1 steps.
+float unorm(float x, int bits) {
+  const auto steps = static_cast<float>((1u << bits) - 1u);
+  if (!(x > 0.0f)) return 0.0f;  // also NaN
+  if (x >= 1.0f) return 1.0f;
+  return std::nearbyint(x * steps) / steps;
+}
+
+/// A small float channel: `mantissa` bits, exponent bias 15 (fp16, r11g11b10f's 5-bit exponent),
+/// rounded to nearest even, saturating at the largest finite value; unsigned ones clamp
+/// negatives to 0.
+float small_float(float x, int mantissa, bool is_signed) {
+  constexpr int kMinExponent = -14;  // smallest normal exponent with a 5-bit exponent, bias 15
+  constexpr int kMaxExponent = 15;
+  if (std::isnan(x)) return 0.0f;
+  if (!is_signed && x < 0.0f) return 0.0f;
+  const float a = std::fabs(x);
+  if (a == 0.0f) return x;
+  int e = 0;
+  std::frexp(a, &e);  // a = f 2^e, f in [0.5, 1): the leading bit is 2^(e-1)
+  const int lead = std::max(e - 1, kMinExponent);  // below the normals: the denormal step
+  const float step = std::ldexp(1.0f, lead - mantissa);
+  const float largest = std::ldexp(2.0f - std::ldexp(1.0f, -mantissa), kMaxExponent);
+  const float q = std::min(std::nearbyint(a / step) * step, largest);
+  return std::copysign(q, x);
+}
+
+/// Octahedral encoding of a unit vector into [-1, 1]^2 and back (Cigolle et al. 2014, "A Survey
+/// of Efficient Representations for Independent Unit Vectors").
+glm::vec2 octahedral(glm::vec3 n) {
+  n /= (std::fabs(n.x) + std::fabs(n.y) + std::fabs(n.z));
+  glm::vec2 p(n.x, n.y);
+  if (n.z < 0.0f) {
+    p = glm::vec2((1.0f - std::fabs(n.y)) * (n.x >= 0.0f ? 1.0f : -1.0f), (1.0f - std::fabs(n.x)) * (n.y >= 0.0f ? 1.0f : -1.0f));
+  }
+  return p;
+}
+glm::vec3 from_octahedral(glm::vec2 p) {
+  glm::vec3 n(p.x, p.y, 1.0f - std::fabs(p.x) - std::fabs(p.y));
+  if (n.z < 0.0f) {
+    n = glm::vec3((1.0f - std::fabs(p.y)) * (p.x >= 0.0f ? 1.0f : -1.0f), (1.0f - std::fabs(p.x)) * (p.y >= 0.0f ? 1.0f : -1.0f), n.z);
+  }
+  return n;
+}
+
+/// Channels a colour format stores (0 for integer and depth formats: nothing to quantise).
+int channels_of(Format f) {
+  switch (f) {
+    case Format::R8: case Format::R16f: case Format::R32f: return 1;
+    case Format::Rg8: case Format::Rg16f: case Format::Rg32f: return 2;
+    case Format::R11g11b10f: return 3;
+    case Format::Rgba8: case Format::Rgb10a2: case Format::Rgba16f: case Format::Rgba32f: return 4;
+    default: return 0;
+  }
+}
+
+/// Channel c of a value written to format f (c < channels_of(f)).
+float channel(Format f, int c, float x) {
+  switch (f) {
+    case Format::R8: case Format::Rg8: case Format::Rgba8: return unorm(x, 8);
+    case Format::Rgb10a2: return unorm(x, c < 3 ? 10 : 2);
+    case Format::R11g11b10f: return small_float(x, c < 2 ? 6 : 5, false);
+    case Format::R16f: case Format::Rg16f: case Format::Rgba16f: return small_float(x, 10, true);
+    default: return x;  // 32-bit float
+  }
+}
+
+bool is_unorm(Format f) {
+  return f == Format::R8 || f == Format::Rg8 || f == Format::Rgba8 || f == Format::Rgb10a2;
+}
+
+}  // namespace
+
+glm::vec4 FormatPrecision::color(Format f, glm::vec4 v) {
+  const int n = channels_of(f);
+  if (n == 0) return v;
+  glm::vec4 out(0.0f, 0.0f, 0.0f, 1.0f);
+  for (int c = 0; c < n; ++c) out[c] = channel(f, c, v[c]);
+  return out;
+}
+
+void FormatPrecision::surface(const std::string& name, Format f, SurfacePoint& s) {
+  const int n = channels_of(f);
+  if (n == 0) return;
+  if (name == "albedo") {
+    for (int c = 0; c < std::min(n, 3); ++c) s.albedo[c] = channel(f, c, s.albedo[c]);
+    if (n == 4) s.alpha = channel(f, 3, s.alpha);
+  } else if (name == "normal") {
+    glm::vec3 q = s.normal;
+    if (n >= 3) {
+      const bool unsigned_range = is_unorm(f) || f == Format::R11g11b10f;
+      for (int c = 0; c < 3; ++c) {
+        q[c] = unsigned_range ? channel(f, c, q[c] * 0.5f + 0.5f) * 2.0f - 1.0f : channel(f, c, q[c]);
+      }
+    } else if (n == 2) {
+      glm::vec2 p = octahedral(q);
+      for (int c = 0; c < 2; ++c) p[c] = is_unorm(f) ? channel(f, c, p[c] * 0.5f + 0.5f) * 2.0f - 1.0f : channel(f, c, p[c]);
+      q = from_octahedral(p);
+    } else {
+      return;  // one channel cannot hold a normal
+    }
+    const float len = glm::length(q);
+    if (len > 0.0f) s.normal = q / len;
+  }
 }
 
 }  // namespace tbdr

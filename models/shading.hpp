@@ -4,12 +4,15 @@
 // different techniques can be compared pixel for pixel. Which lights a fragment evaluates is the
 // technique's business; lights beyond their radius contribute exactly zero, so any conservative
 // culling gives the same color.
+#include <array>
 #include <cstdint>
 #include <span>
+#include <string>
 
 #include <glm/glm.hpp>
 
 #include "scene/lights.hpp"
+#include "trace/trace.hpp"
 
 namespace tbdr {
 
@@ -21,6 +24,12 @@ struct SurfacePoint {
   float alpha = 1.0f;        ///< coverage / opacity
   std::uint32_t material = 0xffffffffu;  ///< scene material (visibility-buffer work lists)
   std::uint32_t triangle = 0xffffffffu;  ///< frame-unique primitive id (visibility-buffer re-fetch)
+  /// The uvs at the 4 pixel centres of the pixel's 2x2 quad, (x,y), (x+1,y), (x,y+1), (x+1,y+1)
+  /// from its even corner, on the triangle's perspective-correct uv plane (helper lanes
+  /// extrapolate it), exactly as the TSP computes them for its texture fetches: a kernel that
+  /// reads the surface samples the material's textures at the same level and texels. Set for
+  /// surfaces of scene triangles (material != none).
+  std::array<glm::vec2, 4> quad_uv{};
 };
 
 /// Constants of the shading model.
@@ -40,6 +49,23 @@ struct ShadingModel {
   static glm::vec3 lit_contribution(const SurfacePoint& s, glm::vec3 eye, const Light& light);
   /// The ambient term.
   static glm::vec3 ambient(const SurfacePoint& s) { return s.albedo * kAmbient; }
+};
+
+/// What an attachment (or PLS variable) of a given format keeps of the values written to it: the
+/// formats' precision, applied at every write (blending reads back what was stored).
+struct FormatPrecision {
+  /// The colour a target of format `f` holds after `v` is written: unorm formats clamp to [0, 1]
+  /// and round to 2^bits - 1 steps (rgba8 8 bits, rgb10a2 10 and 2 for alpha); float formats round
+  /// to their mantissa (fp16 10 bits, r11g11b10f 6/6/5 bits, unsigned) and saturate at their
+  /// largest finite value; 32-bit float formats keep v. Channels the format lacks read back 0
+  /// (alpha 1), Vulkan's "Conversion to RGBA" rule. Integer and depth formats keep v.
+  static glm::vec4 color(Format f, glm::vec4 v);
+  /// The surface a G-buffer target (or PLS variable) named `name` of format `f` keeps: `albedo`
+  /// stores the base colour (rgb, then alpha where the format has a fourth channel), `normal` the
+  /// normal (unorm formats as n/2 + 1/2, two-channel formats octahedral, float formats n; read
+  /// back renormalised). The generators lay G-buffers out this way (workloads/techniques:
+  /// albedo, normal, then targets holding nothing the model uses); other names keep the surface.
+  static void surface(const std::string& name, Format f, SurfacePoint& s);
 };
 
 }  // namespace tbdr

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "models/shading.hpp"
 #include "kernel/errors.hpp"
 
 namespace tbdr {
@@ -158,7 +159,7 @@ void TileMemory::end_tile(const PixelRect& r, bool partial, DramTraffic& dram) {
           const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
           glm::vec4 sum(0.0f);
           for (std::size_t s = 0; s < S; ++s) sum += src.color[p * S + s];
-          dst.color[p] = sum / static_cast<float>(S);
+          dst.color[p] = FormatPrecision::color(dst.format, sum / static_cast<float>(S));  // what the target keeps
         }
       }
       stats_.resolved_samples += static_cast<std::uint64_t>(r.width()) * static_cast<std::uint64_t>(r.height()) * S;

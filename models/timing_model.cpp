@@ -117,6 +117,8 @@ class TimingSim final : public Unit {
           result_.texture_footprint_lines += t.texture_lines.size();
         }
       }
+      result_.texture_line_accesses += cmd.texture_line_accesses;
+      result_.texture_footprint_lines += cmd.texture_lines.size();
     }
     result_.texture_cache_misses = mem_.texture_cache().class_stats(DramClass::Textures).read_misses.value();
     result_.tiles = tile_records_.take();
@@ -278,6 +280,15 @@ class TimingSim final : public Unit {
         ++*pending;
         s->start(finish);
       }
+    }
+    // The material fetches' texture lines go through the texture cache as a tile's footprint does
+    // (one request per line); every USC's tasks are resident, so the texture units' cap is in flight.
+    if (!cmd.texture_lines.empty()) {
+      DmaStream* s = new_stream(Client::Texture, false, DramClass::Textures,
+                                static_cast<std::uint32_t>(hw_.texture.outstanding_requests));
+      for (const std::uint64_t l : cmd.texture_lines) s->add(map_.textures() + l, texture_line_bytes_);
+      ++*pending;
+      s->start(finish);
     }
     finish();
   }

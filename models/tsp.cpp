@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <optional>
 
 #if defined(__SSE2__)
 #include <xmmintrin.h>
@@ -200,7 +201,9 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   stats.shaded_quads += quads;
   stats.helper_lanes += helpers;
   stats.texture_fetches += quads * 4 * sh.tex_fetches;
-  stats.texels_filtered += quads * 4 * sh.tex_fetches * static_cast<std::uint64_t>(hw.texture.texels_per_fetch);
+  // The texture units' work is counted in filtered texels (texture.texels_per_clock's unit): a
+  // bilinear fetch is one, whatever the 4 texels it reads.
+  stats.texels_filtered += quads * 4 * sh.tex_fetches * static_cast<std::uint64_t>(hw.texture.filtered_texels_per_fetch);
 
   const bool from_triangle = p.material != kNoMaterial && ctx_.scene != nullptr;
   const Material* mat = from_triangle ? &ctx_.scene->materials[p.material] : nullptr;
@@ -216,10 +219,43 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   for (std::uint32_t o = 0; o < outputs; ++o) out_bytes_per_sample += bytes_per_sample(ctx_.color_targets[o]->format);
   const BlendMode blend = d.pipeline->blend;
   if (alive) alive->assign(pixels.size(), 0);
+  // Every write keeps what its target's format holds (FormatPrecision): colour targets per format;
+  // the surface a G-buffer stands for per the targets (or PLS variables) holding its attributes.
+  if (formats_pass_ != ctx_.pass) {
+    formats_pass_ = ctx_.pass;
+    target_formats_.clear();
+    for (const Attachment* a : ctx_.pass->color_targets()) target_formats_.push_back({&a->name, a->format});
+    pls_formats_.clear();
+    pls_accum_format_.reset();
+    for (const PlsVariable& v : ctx_.pass->pls) {
+      pls_formats_.push_back({&v.name, v.format});
+      if (v.name == kPlsAccumulatorName) pls_accum_format_ = v.format;
+    }
+  }
+  const std::optional<Format> pls_accum_format = pls_accum_format_;
+  auto stored_surface = [&](bool pls, SurfacePoint q) {
+    if (pls) {
+      for (const auto& [name, format] : pls_formats_) FormatPrecision::surface(*name, format, q);
+    } else {
+      for (std::uint32_t o = 0; o < outputs && o < target_formats_.size(); ++o) {
+        if (ctx_.color_targets[o]->usage != AttachmentUsage::Color) FormatPrecision::surface(*target_formats_[o].first, target_formats_[o].second, q);
+      }
+    }
+    return q;
+  };
 
   // Texture addresses of scene triangles (other primitives read attachments or on-chip data).
   if (from_triangle && sh.tex_fetches > 0 && ctx_.textures && ctx_.texture_lines) {
     texture_addresses(p, sh.tex_fetches, static_cast<std::size_t>(quads), stats);
+  }
+  // The quad uvs every surface of a scene triangle carries (SurfacePoint::quad_uv), computed as
+  // texture_addresses computes them.
+  std::optional<UvPlane> uv_plane;
+  std::optional<QuadUv> quad_uv;
+  if (from_triangle) {
+    const std::int64_t step = std::int64_t{1} << bits;
+    uv_plane.emplace(p.setup, p.uv);
+    quad_uv.emplace(*uv_plane, p.setup.a[1] * step, p.setup.b[1] * step, p.setup.a[2] * step, p.setup.b[2] * step);
   }
   std::uint64_t light_sum = 0;
 
@@ -243,6 +279,11 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       s.alpha = mat->base_color.w;
       s.material = p.material;
       s.triangle = ctx_.frame_prim_base + prim_index;
+      {
+        const std::int64_t qx = px.x & ~std::int32_t{1}, qy = px.y & ~std::int32_t{1};
+        const std::int64_t x0 = (qx << bits) + half, y0 = (qy << bits) + half;
+        quad_uv->at(edge_value(p.setup, 1, x0, y0), edge_value(p.setup, 2, x0, y0), s.quad_uv);
+      }
       have_surface = true;
       if (p.hsr == HsrClass::PunchThrough) {
         const glm::vec2 uv = p.uv[0] * b.x + p.uv[1] * b.y + p.uv[2] * b.z;
@@ -315,7 +356,9 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     ctx_.images->counters.shaded[pixel] += 1;
     ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(fl.count);
     if (write_mask == 0) continue;
-    ctx_.images->counters.triangle_id[pixel] = prim_index + 1;
+    // The frame-unique id (as SurfacePoint::triangle): a partial render restarts the render's
+    // primitive indices, not the frame's.
+    ctx_.images->counters.triangle_id[pixel] = ctx_.frame_prim_base + prim_index + 1;
 
     // Sum of the evaluated lights' contributions at the surface.
     auto lighting = [&]() {
@@ -341,13 +384,17 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     // Pixel local storage effects of shaders without color outputs.
     if (pls_writes && outputs == 0) {
       if (from_triangle) {
-        ctx_.pls->surface[pixel] = s;
+        ctx_.pls->surface[pixel] = stored_surface(true, s);
         ctx_.pls->valid[pixel] = 1;
         ctx_.pls->accum[pixel] = glm::vec3(0.0f);
         ctx_.pls->stack_count[pixel] = 0;
         ctx_.pls->overflow[pixel] = 0;
       } else if (sh.light_source == LightSource::Proxy) {
-        if (have_surface) ctx_.pls->accum[pixel] += lighting();
+        if (have_surface) {
+          glm::vec3& acc = ctx_.pls->accum[pixel];
+          acc += lighting();
+          if (pls_accum_format) acc = glm::vec3(FormatPrecision::color(*pls_accum_format, glm::vec4(acc, 1.0f)));
+        }
       } else if (p.proxy_light >= 0) {
         auto& n = ctx_.pls->stack_count[pixel];
         if (n < ctx_.pls->stack_capacity) {
@@ -380,18 +427,20 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       AttachmentImage* target = ctx_.color_targets[o];
       if (target->usage == AttachmentUsage::Color) {
         glm::vec4* dst = target->color.data() + pixel * static_cast<std::size_t>(S);
+        const Format format = target->format;
         for (int smp = 0; smp < S; ++smp) {
           if (!(write_mask & (1u << smp))) continue;
           switch (blend) {
-            case BlendMode::Off: dst[smp] = src; break;
-            case BlendMode::Add: dst[smp] += glm::vec4(glm::vec3(src), 0.0f); break;
+            case BlendMode::Off: dst[smp] = FormatPrecision::color(format, src); break;
+            case BlendMode::Add: dst[smp] = FormatPrecision::color(format, dst[smp] + glm::vec4(glm::vec3(src), 0.0f)); break;
             case BlendMode::Alpha:
-              dst[smp] = glm::vec4(glm::vec3(src) * src.w + glm::vec3(dst[smp]) * (1.0f - src.w),
-                                   src.w + dst[smp].w * (1.0f - src.w));
+              dst[smp] = FormatPrecision::color(format, glm::vec4(glm::vec3(src) * src.w + glm::vec3(dst[smp]) * (1.0f - src.w),
+                                                                  src.w + dst[smp].w * (1.0f - src.w)));
               break;
           }
         }
       } else if (!surface_stored && have_surface) {
+        const SurfacePoint stored = stored_surface(false, s);
         // G-buffer / visibility: the first such target keeps the surface the data stands for.
         if (target->surface.empty()) {
           target->surface.assign(target->color.size(), SurfacePoint{});
@@ -399,7 +448,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         }
         for (int smp = 0; smp < S; ++smp) {
           if (!(write_mask & (1u << smp))) continue;
-          target->surface[pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(smp)] = s;
+          target->surface[pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(smp)] = stored;
           target->surface_valid[pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(smp)] = 1;
         }
         surface_stored = true;

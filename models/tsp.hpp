@@ -7,7 +7,10 @@
 // (models/texture_unit.hpp) and appends them to the tile's list (RenderContext::texture_lines).
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "models/render_state.hpp"
@@ -25,7 +28,7 @@ namespace tbdr {
   X(Counter, shaded_samples, "samples", Sum, "Samples whose color a shader wrote") \
   X(Counter, fragment_alu_ops, "ops", Sum, "Fragment shader ALU ops, helper lanes included") \
   X(Counter, texture_fetches, "fetches", Sum, "Texture fetches, helper lanes included") \
-  X(Counter, texels_filtered, "texels", Sum, "Texels read by the texture units") \
+  X(Counter, texels_filtered, "texels", Sum, "Bilinear-filtered texels the texture units produced: fetches (helper lanes included) x texture.filtered_texels_per_fetch") \
   X(Counter, texture_line_accesses, "lines", Sum, "Texture cache line accesses: distinct lines per quad and fetch, before merging within the tile") \
   X(Counter, texture_tile_lines, "lines", Sum, "Distinct texture lines each tile touched (its footprint), summed over tiles") \
   X(Counter, light_evaluations, "evaluations", Sum, "Lights evaluated by covered fragments") \
@@ -48,6 +51,10 @@ struct ShadePixel {
   std::uint32_t mask = 0;
 };
 
+/// The PLS variable a light accumulation is kept in (deferred_tile_store's layout): what is added
+/// to it keeps its format's precision.
+inline constexpr const char* kPlsAccumulatorName = "light_accum";
+
 /// The fragment shading stage.
 class Tsp {
  public:
@@ -66,6 +73,11 @@ class Tsp {
 
   RenderContext& ctx_;
   std::vector<std::uint64_t> quad_seen_;  ///< scratch: quads launched in this batch
+  /// The current pass's colour targets and PLS variables (name, format), for FormatPrecision.
+  const PassDesc* formats_pass_ = nullptr;
+  std::vector<std::pair<const std::string*, Format>> target_formats_;
+  std::vector<std::pair<const std::string*, Format>> pls_formats_;
+  std::optional<Format> pls_accum_format_;
   std::array<QuadFootprint, 2> footprints_;  ///< scratch: the current and the previous quad's texture lines
   /// Texture lines recently appended to the tile's list (direct mapped; valid for the epoch).
   struct LineFilterEntry {

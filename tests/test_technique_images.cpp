@@ -1,10 +1,14 @@
-// Every technique computes the same image: conservative culling never changes a pixel. Compared
+// Every technique computes the same image up to what its attachment formats keep: conservative
+// culling never changes a pixel, and every write is quantised to its target's format
+// (FormatPrecision), so each technique's tolerance follows from its formats (kTolerances). Compared
 // on the atrium without its translucent glass (the deferred family does not blend, Billeter's
-// table), at a small resolution, with plain forward as the reference, within 1/255 per channel.
+// table), at a small resolution, with plain forward (one rgba8 write of the float sum) as the
+// reference.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <map>
 
 #include "models/hw_config.hpp"
 #include "models/command_processor.hpp"
@@ -36,8 +40,51 @@ ImageRGB8 final_image(const FrameResult& f) {
   return color_to_image(f.images.image_buffers.at(f.final_color).color, f.images.width, f.images.height);
 }
 
+/// How far a technique's image may be from plain forward's, per channel in 1/255 steps: the
+/// largest difference and the share of channels more than 1/255 off.
+struct Tolerance {
+  int worst = 1;
+  double share_over_one = 0.0;
+};
+
+/// Each technique's tolerance from its formats (default: 1/255 everywhere).
+/// - One rgba8 write (or rgba8 image) of the same float sum as the reference: the forward
+///   family with light lists, forward_light_stack, visibility_buffer at 1 sample: 1/255 from
+///   the summation order.
+/// - forward_multipass: an rgba8 target accumulates one additive pass per light (64 here), and
+///   every pass whose light reaches the pixel rounds the sum to 1/255 again (up to 1/2 step each):
+///   the error grows with the lights overlapping a pixel (measured 9/255 on 2 % of channels).
+/// - deferred: its light volumes add into the rgba8 frame one light at a time, the rounding of
+///   forward_multipass (the same 1352 channels with an exact rgba32f G-buffer); the G-buffer adds
+///   its own: the albedo rounds to 1/255 and is multiplied by the light falling on the pixel
+///   (several times 1 near the lights), the 10-bit normal moves the Blinn-Phong lobe (exponent 32)
+///   by up to 32 x 1.4e-3 of its height (56 more channels; an rgba8 normal 400 more).
+/// - clustered_deferred (albedo rgba8, normal rgb10a2) and tiled_deferred (Andersson's 4 x rgba8:
+///   an 8-bit normal): one rgba8 image write, so only the G-buffer's rounding: measured 9/255 on
+///   0.3 % and 1.3 %.
+/// - light_prepass (rgba8 normal buffer, rgba16f light buffer): the 8-bit normal changes every
+///   lit pixel's N.L by up to 1/255 rad x the light (measured 7/255 on half the channels); fp16
+///   accumulation adds at most 2^-11 of the sum per light volume.
+/// - deferred_tile_store (PLS albedo and light accumulator r11g11b10f, normal rgb10a2): 6- and
+///   5-bit mantissas: the albedo and every accumulated light volume round to 1/64 .. 1/32 of their
+///   value (measured 9/255 on 10 %).
+/// - visibility_buffer with MSAA: the kernel resolves its samples in float and writes rgba8 once,
+///   plain forward clamps each sample to [0, 1] in its rgba8 target before the resolve: on edges
+///   between an over-bright and a dark surface they differ by up to the over-bright part (31/255
+///   measured, on edge pixels only: 2.5 % of channels).
+const std::map<std::string, Tolerance> kTolerances = {
+    {"forward_multipass", {12, 0.04}},  {"deferred", {12, 0.04}},           {"clustered_deferred", {12, 0.04}},
+    {"tiled_deferred", {12, 0.04}},     {"light_prepass", {10, 0.60}},      {"deferred_tile_store", {12, 0.15}},
+};
+/// The same at 4 samples per pixel.
+const std::map<std::string, Tolerance> kMsaaTolerances = {
+    {"forward_multipass", {12, 0.04}},
+    {"visibility_buffer", {40, 0.04}},
+};
+
 /// Renders every technique of `names` and compares it with plain forward (see the file comment).
-void compare_with_plain_forward(int samples, const std::vector<std::string>& names) {
+void compare_with_plain_forward(int samples, const std::vector<std::string>& names,
+                                const std::map<std::string, Tolerance>& tolerances) {
   const Scene scene = opaque_atrium();
   TraceSetup setup = testing_support::atrium_entrance_setup(scene, 64, 192, 108);
   setup.samples = samples;
@@ -71,24 +118,57 @@ void compare_with_plain_forward(int samples, const std::vector<std::string>& nam
     const ImageRGB8 img = final_image(f);
     ASSERT_EQ(img.rgb.size(), ref_img.rgb.size());
     int worst = 0;
-    std::size_t differing = 0;
+    std::size_t differing = 0, compared = 0;
     for (std::size_t i = 0; i < img.rgb.size(); ++i) {
       if (ambiguous[i / 3]) continue;
       const int d = std::abs(static_cast<int>(img.rgb[i]) - static_cast<int>(ref_img.rgb[i]));
       worst = std::max(worst, d);
       differing += d > 1 ? 1 : 0;
+      ++compared;
     }
-    std::printf("[ image    ] %dx %-28s largest difference %d/255, %zu channels over 1/255\n", samples, name.c_str(), worst,
-                differing);
-    EXPECT_LE(worst, 1) << name;
+    const auto it = tolerances.find(name);
+    const Tolerance tol = it == tolerances.end() ? Tolerance{} : it->second;
+    const double share = static_cast<double>(differing) / static_cast<double>(compared);
+    std::printf("[ image    ] %dx %-28s largest difference %d/255 (tolerance %d), %zu channels over 1/255 (%.2f %%, "
+                "tolerance %.0f %%)\n",
+                samples, name.c_str(), worst, tol.worst, differing, 100.0 * share, 100.0 * tol.share_over_one);
+    EXPECT_LE(worst, tol.worst) << name;
+    EXPECT_LE(share, tol.share_over_one) << name;
   }
 }
 
-TEST(TechniqueImages, EveryTechniqueMatchesPlainForward) { compare_with_plain_forward(1, technique_names()); }
+TEST(TechniqueImages, EveryTechniqueMatchesPlainForward) { compare_with_plain_forward(1, technique_names(), kTolerances); }
 
 TEST(TechniqueImages, MsaaTechniquesMatchPlainForwardAt4x) {
   compare_with_plain_forward(4, {"forward_multipass", "forward_plus", "clustered_forward", "practical_clustered_forward",
-                                 "cascaded_clustered_forward", "visibility_buffer"});
+                                 "cascaded_clustered_forward", "visibility_buffer"},
+                             kMsaaTolerances);
+}
+
+TEST(TechniqueImages, CoarserFormatsCostPrecision) {
+  // The tolerances above are the formats' doing: deferred's difference from plain forward grows as
+  // its G-buffer gets coarser, from a 32-bit float one (rgba32f albedo and normal: what is left is
+  // the rgba8 accumulation of its light volumes, as forward_multipass') to the default rgba8
+  // albedo + rgb10a2 normal to an 8-bit normal (rgba8,rgba8).
+  const Scene scene = opaque_atrium();
+  const TraceSetup setup = testing_support::atrium_entrance_setup(scene, 64, 192, 108);
+  const HwConfig hw = resolve_config({}, {}).hw;
+  const ImageRGB8 ref = final_image(simulate_frame(generate_trace("plain_forward", setup), "pf", scene, hw));
+  auto worst_with = [&](const std::string& layout) {
+    TraceSetup with = setup;
+    with.options["gbuffer"] = layout;
+    const ImageRGB8 img = final_image(simulate_frame(generate_trace("deferred", with), "d", scene, hw));
+    std::size_t over = 0;
+    for (std::size_t i = 0; i < img.rgb.size(); ++i) {
+      over += std::abs(static_cast<int>(img.rgb[i]) - static_cast<int>(ref.rgb[i])) > 1 ? 1 : 0;
+    }
+    return over;
+  };
+  const std::size_t exact = worst_with("rgba32f,rgba32f"), ten = worst_with("rgba8,rgb10a2"), eight = worst_with("rgba8,rgba8");
+  std::printf("[ image    ] deferred channels over 1/255: rgba32f G-buffer %zu, rgba8+rgb10a2 %zu, rgba8+rgba8 %zu\n", exact,
+              ten, eight);
+  EXPECT_GT(ten, exact);
+  EXPECT_GT(eight, ten);
 }
 
 }  // namespace

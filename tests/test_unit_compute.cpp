@@ -5,6 +5,8 @@
 // index.
 #include <gtest/gtest.h>
 
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "unit_fixture.hpp"
@@ -170,6 +172,49 @@ TEST(UnitCompute, TiledShadingEvaluatesOnlyTheTilesLists) {
   EXPECT_EQ(rig.stats.compute_alu_ops.value() - cull_ops, 20u * 20u + 7u * 30u);
   // The light lists are read at the size the culling wrote: 32 + 24 B.
   EXPECT_EQ(rig.dram.reads(DramClass::LightLists), 32u + 24u);
+}
+
+TEST(UnitCompute, ShadingKernelsMaterialFetchesAreTheFetchesBeyondTheImagesRead) {
+  // deferred_shade reads one image (the G-buffer); a shader with 3 fetches spends 1 on it and 2 on
+  // the material textures. 100 surfaces of the scene's material 0 (here the 4x4 default texture:
+  // one 64 B line per copy), each its own triangle, in the first 11 rows: 4 workgroup tiles of
+  // 16 px hold them, each reads line 0 of copies 0 and 1: 8 footprint lines, 512 B booked as
+  // texture reads; 100 (quad, triangle) pairs x 1 line x 2 fetches = 200 line accesses.
+  for (const auto& [fetches, lines] : {std::pair{1u, 0u}, std::pair{3u, 8u}}) {
+    ComputeSpec s = four_lights();
+    ShaderDesc sh = make_shader(20, 7, LightSource::All, 0, fetches);
+    sh.name = "resolve";
+    s.shaders = {sh};
+    ComputeRig rig(s);
+    std::vector<std::uint8_t> valid(kPixels, 0);
+    for (std::size_t p = 0; p < 100; ++p) valid[p * 7] = 1;
+    rig.add_gbuffer("gbuf", valid);
+    for (auto& surface : rig.images.attachments.at("gbuf").surface) surface.material = 0;
+    const TextureLayout layout(&rig.scene, rig.hw, 3);
+    const LightScreenBins bins = every_light_everywhere(rig.trace.lights.size(), 64, 64);
+    std::vector<std::uint64_t> texture_lines;
+    ComputeContext cc;
+    cc.hw = &rig.hw;
+    cc.scene = &rig.scene;
+    cc.lights = &rig.trace.lights;
+    cc.camera = rig.camera;
+    cc.viewport = rig.viewport;
+    cc.frustum = &rig.frustum;
+    cc.light_bins = &bins;
+    cc.trace = &rig.trace;
+    const std::string path = "unit.trace";
+    cc.trace_path = &path;
+    cc.images = &rig.images;
+    cc.textures = &layout;
+    cc.texture_lines = &texture_lines;
+    run_dispatch(cc, make_dispatch("deferred_shade", {"gbuf"}, {"lit"}, {{"shader", "resolve"}}), rig.stats, rig.dram,
+                 rig.image_written);
+    EXPECT_EQ(texture_lines.size(), lines) << fetches << " fetches";
+    EXPECT_EQ(rig.stats.compute_texture_tile_lines.value(), lines);
+    EXPECT_EQ(rig.stats.compute_texture_line_accesses.value(), lines == 0 ? 0u : 200u);
+    EXPECT_EQ(rig.dram.reads(DramClass::Textures), lines * 64u);
+    EXPECT_EQ(rig.stats.compute_texture_fetches.value(), 100u * fetches) << "every fetch is charged to the texture units";
+  }
 }
 
 }  // namespace

@@ -2,6 +2,9 @@
 // quads, helper lanes, ALU ops, texture fetches and tile buffer bytes derived by hand.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <tuple>
 #include <vector>
 
 #include "unit_fixture.hpp"
@@ -41,10 +44,11 @@ TEST(UnitTsp, OnePixelLaunchesAQuadWithThreeHelperLanes) {
   EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 1u);
   EXPECT_EQ(rig.tsp_stats.shaded_quads.value(), 1u);
   EXPECT_EQ(rig.tsp_stats.helper_lanes.value(), 3u);
-  // Every lane runs: 4 x 10 ALU ops; 4 lanes x 2 fetches = 8 fetches of 4 texels (bilinear).
+  // Every lane runs: 4 x 10 ALU ops; 4 lanes x 2 fetches = 8 bilinear fetches, one filtered
+  // texel each (texture.texels_per_clock's unit), whatever the 4 texels each reads.
   EXPECT_EQ(rig.tsp_stats.fragment_alu_ops.value(), 40u);
   EXPECT_EQ(rig.tsp_stats.texture_fetches.value(), 8u);
-  EXPECT_EQ(rig.tsp_stats.texels_filtered.value(), 32u);
+  EXPECT_EQ(rig.tsp_stats.texels_filtered.value(), 8u);
   // One rgba8 sample written: 4 B of tile buffer.
   EXPECT_EQ(rig.tsp_stats.shaded_samples.value(), 1u);
   EXPECT_EQ(rig.tsp_stats.tile_buffer_write_bytes.value(), 4u);
@@ -189,6 +193,80 @@ TEST(UnitTsp, AlphaTestKillsTheMaskedSamples) {
   for (std::size_t i = 0; i < pixels.size(); ++i) {
     EXPECT_EQ(alive[i], pixels[i].x <= 15 ? 0u : 1u) << "pixel " << pixels[i].x << "," << pixels[i].y;
   }
+}
+
+TEST(UnitTsp, ColorWritesKeepTheTargetFormatsPrecision) {
+  // No lights: the colour is the ambient term, 0.03 x albedo 1 = 0.03. rgba8 keeps
+  // round(0.03 x 255) / 255 = 8/255; rgba32f keeps 0.03 exactly; the alpha (1) survives both.
+  RenderSpec spec;
+  spec.attachments = {make_attachment("c8", Format::Rgba8), make_attachment("c32", Format::Rgba32f),
+                      make_attachment("depth", Format::D24s8)};
+  spec.attachments[2].usage = AttachmentUsage::Depth;
+  RenderRig rig(spec);
+  rig.add_draw(make_shader(1, 0, LightSource::None, 2));
+  ScreenTri t = kUpperLeft;
+  t.material = 0;  // a scene triangle: it has a surface
+  const std::uint32_t p = rig.add_triangle(t);
+  rig.shade(p, {{5, 7, 1u}});
+  const std::size_t px = 7 * kViewportPx + 5;
+  EXPECT_EQ(rig.images.attachments.at("c8").color[px], glm::vec4(8.0f / 255.0f, 8.0f / 255.0f, 8.0f / 255.0f, 1.0f));
+  EXPECT_EQ(rig.images.attachments.at("c32").color[px], glm::vec4(0.03f, 0.03f, 0.03f, 1.0f));
+}
+
+TEST(UnitTsp, AdditiveBlendingAccumulatesInTheTargetsPrecision) {
+  // 0.001 added 100 times: rgba8 rounds every sum back to 0 (0.001 < 0.5/255); rgba16f keeps the
+  // sum within its 10-bit mantissa (about 0.1, error under 100 x 2^-11 x 0.1); rgba32f within 1e-5.
+  for (const auto& [format, want, tolerance] : {std::tuple{Format::Rgba8, 0.0f, 0.0f}, std::tuple{Format::Rgba16f, 0.1f, 0.005f},
+                                                std::tuple{Format::Rgba32f, 0.1f, 1e-5f}}) {
+    glm::vec4 acc(0.0f);
+    for (int i = 0; i < 100; ++i) acc = FormatPrecision::color(format, acc + glm::vec4(0.001f, 0.0f, 0.0f, 0.0f));
+    EXPECT_NEAR(acc.x, want, tolerance) << bytes_per_sample(format);
+  }
+}
+
+TEST(UnitTsp, FormatPrecisionOfEachFormat) {
+  const glm::vec4 v(0.5f, 1.0f / 3.0f, -0.25f, 0.4f);
+  // unorm8: 0.5 -> 128/255 (127.5 rounds to even), 1/3 -> 85/255, negatives clamp to 0.
+  EXPECT_EQ(FormatPrecision::color(Format::Rgba8, v), glm::vec4(128.0f / 255, 85.0f / 255, 0.0f, 102.0f / 255));
+  // rgb10a2: 0.5 x 1023 = 511.5 -> 512; 1/3 -> 341; alpha in 2 bits: 0.4 x 3 = 1.2 -> 1/3.
+  EXPECT_EQ(FormatPrecision::color(Format::Rgb10a2, v), glm::vec4(512.0f / 1023, 341.0f / 1023, 0.0f, 1.0f / 3));
+  // fp16: 1/3 -> 0x3555 = 1365/4096; saturates at 65504.
+  EXPECT_EQ(FormatPrecision::color(Format::Rgba16f, v), glm::vec4(0.5f, 1365.0f / 4096, -0.25f, 0.39990234375f));
+  EXPECT_EQ(FormatPrecision::color(Format::R16f, glm::vec4(1e6f)).x, 65504.0f);
+  // r11g11b10f: 1/3 with 6 mantissa bits = 85/256, blue (5 bits) -> 0 for a negative, no alpha (1).
+  EXPECT_EQ(FormatPrecision::color(Format::R11g11b10f, v), glm::vec4(0.5f, 85.0f / 256, 0.0f, 1.0f));
+  // Channels the format lacks read back 0, alpha 1.
+  EXPECT_EQ(FormatPrecision::color(Format::R8, v), glm::vec4(128.0f / 255, 0.0f, 0.0f, 1.0f));
+  EXPECT_EQ(FormatPrecision::color(Format::Rgba32f, v), v);
+}
+
+TEST(UnitTsp, GbufferTargetsKeepTheSurfaceAtTheirPrecision) {
+  // G-buffer targets albedo rgba8 and normal rgb10a2: the stored surface's albedo 0.3 becomes
+  // round(76.5) = 76 (even) / 255; the normal (0, 0, 1) stored as n/2 + 1/2 = (0.5, 0.5, 1) in
+  // 10 bits reads back (1/1023, 1/1023, 1) renormalised: off by about 1.4e-3 rad; the lighting the
+  // deferred pass computes is what that precision gives.
+  RenderSpec spec;
+  spec.attachments = {make_attachment("albedo", Format::Rgba8), make_attachment("normal", Format::Rgb10a2),
+                      make_attachment("depth", Format::D24s8)};
+  spec.attachments[0].usage = AttachmentUsage::Gbuffer;
+  spec.attachments[1].usage = AttachmentUsage::Gbuffer;
+  spec.attachments[2].usage = AttachmentUsage::Depth;
+  RenderRig rig(spec);
+  rig.scene.materials[0].base_color = glm::vec4(0.3f, 0.3f, 0.3f, 1.0f);
+  rig.add_draw(make_shader(1, 0, LightSource::None, 2));
+  ScreenTri t = kUpperLeft;
+  t.material = 0;
+  const std::uint32_t p = rig.add_triangle(t);
+  rig.shade(p, {{5, 7, 1u}});
+  const AttachmentImage& g = rig.images.attachments.at("albedo");
+  ASSERT_FALSE(g.surface.empty());
+  const SurfacePoint& s = g.surface[7 * kViewportPx + 5];
+  EXPECT_EQ(s.albedo, glm::vec3(76.0f / 255));
+  const glm::vec3 n = s.normal;
+  EXPECT_NEAR(glm::length(n), 1.0f, 1e-6f);
+  const float off = std::acos(std::min(1.0f, std::fabs(n.z)));
+  EXPECT_GT(off, 1e-3f);
+  EXPECT_LT(off, 2e-3f);
 }
 
 }  // namespace
