@@ -70,7 +70,7 @@ struct Tolerance {
 ///   value (measured 9/255 on 10 %).
 /// - visibility_buffer with MSAA: the kernel resolves its samples in float and writes rgba8 once,
 ///   plain forward clamps each sample to [0, 1] in its rgba8 target before the resolve: on edges
-///   between an over-bright and a dark surface they differ by up to the over-bright part (31/255
+///   between an over-bright and a dark surface they differ by up to the over-bright part (41/255
 ///   measured, on edge pixels only: 2.5 % of channels).
 const std::map<std::string, Tolerance> kTolerances = {
     {"forward_multipass", {12, 0.04}},  {"deferred", {12, 0.04}},           {"clustered_deferred", {12, 0.04}},
@@ -79,7 +79,7 @@ const std::map<std::string, Tolerance> kTolerances = {
 /// The same at 4 samples per pixel.
 const std::map<std::string, Tolerance> kMsaaTolerances = {
     {"forward_multipass", {12, 0.04}},
-    {"visibility_buffer", {40, 0.04}},
+    {"visibility_buffer", {48, 0.04}},
 };
 
 /// Renders every technique of `names` and compares it with plain forward (see the file comment).
