@@ -24,7 +24,10 @@
 namespace tbdr {
 
 /// The trace format version this build reads and writes. See docs/trace-format.md for what bumps it.
-inline constexpr int kTraceVersion = 1;
+inline constexpr int kTraceVersion = 2;
+/// The version that lets an attachment name a `content=image` buffer (a pass loading the frame a
+/// dispatch wrote); version 1 readers refuse the name as a duplicate.
+inline constexpr int kImageAttachmentVersion = 2;
 
 // ---------------------------------------------------------------------------------------------
 // Enums. Each has to_string() giving the trace spelling and parse_<enum>() returning nullopt for
