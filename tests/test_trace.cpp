@@ -293,6 +293,12 @@ TEST(TraceImageAttachments, APassLoadsTheImageADispatchWrote) {
   EXPECT_EQ(pass.attachments[0].name, "frame");
   EXPECT_EQ(t.find_buffer("frame")->content, BufferContent::Image);
   EXPECT_EQ(write(parse(write(t))), write(t));
+  // An earlier pass may already have used the image (not storing it): the dispatch's write counts.
+  std::string earlier = kImageHead;
+  const std::string albedo = "  attachment albedo format=rgba8 samples=1 load=clear store=store usage=gbuffer\n";
+  earlier.replace(earlier.find(albedo), albedo.size(),
+                  albedo + "  attachment frame format=rgba8 samples=1 load=clear store=dont_care usage=color\n");
+  EXPECT_NO_THROW(parse("tbdrsim-trace 2\n" + earlier + "barrier resources=frame\n" + image_pass(kImageAttachment)));
 }
 
 TEST(TraceImageAttachments, TheImageIsAnRgba8FrameWrittenBeforeABarrierInVersion2) {

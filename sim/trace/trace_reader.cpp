@@ -885,6 +885,7 @@ void Reader::on_dispatch(const Line& l) {
   for (const auto& name : d.writes) {
     if (buffer_lines_.count(name)) {
       written_buffers_.insert(name);
+      if (auto it = images_.find(name); it != images_.end()) it->second.in_dram = true;  // an image buffer's frame
     } else if (auto it = images_.find(name); it != images_.end()) {
       it->second.in_dram = true;
     } else {
