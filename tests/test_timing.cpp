@@ -127,23 +127,16 @@ TEST(TimingRoofline, StoreBoundFrameMatchesDramBandwidth) {
 
 /// One full-frame 512x512 quad mapping an 8192x8192 texture (mip level 4: one texel per pixel),
 /// its shader 1 ALU op and `fetches` fetch slots; the trace and scene of the texture tests below.
-Trace textured_wall(Scene& s, std::uint32_t fetches) {
-  s = base_scene();
+WallFrame textured_wall(std::uint32_t fetches) {
+  WallFrame w = wall_frame(512, 1, fetches, 0, 64);
   TextureInfo tex;
   tex.name = "big";
   tex.format = "procedural";
   tex.width = tex.height = 8192;
   tex.channels = 4;
-  s.textures.push_back(tex);
-  s.materials[0].base_color_texture = 0;
-  Trace t = frame_of(512);
-  t.shaders[0].alu_ops = 1;
-  t.shaders[0].tex_fetches = fetches;
-  add_quad(s, "wall", 3, 0, 64, 0);
-  PassDesc p = base_pass();
-  p.draws = {draw_of("wall")};
-  t.commands.push_back(p);
-  return t;
+  w.scene.textures.push_back(tex);
+  w.scene.materials[0].base_color_texture = 0;
+  return w;
 }
 
 TEST(TimingLatencyHiding, MoreResidentTasksHideTextureLatencyUntilTheBandwidthBound) {
@@ -156,11 +149,10 @@ TEST(TimingLatencyHiding, MoreResidentTasksHideTextureLatencyUntilTheBandwidthBo
   // tile. From 16 per USC (64 slots) two 32-task tiles are resident, from 32 four: their reads
   // overlap until the DRAM's 12.8 GB/s binds: 1 MiB + the 1 MiB colour store = 2 MiB / 12.8 GB/s
   // x 600 MHz = 98 k cycles.
-  Scene s;
-  const Trace t = textured_wall(s, 1);
+  const WallFrame w = textured_wall(1);
   std::vector<double> cycles;
   for (int tasks : {1, 2, 4, 8, 16, 32, 64}) {
-    const Timed r = run_timed(t, s, {"texture.texels_per_clock=64", "usc.tasks_in_flight=" + std::to_string(tasks)});
+    const Timed r = run_wall(w, {"texture.texels_per_clock=64", "usc.tasks_in_flight=" + std::to_string(tasks)});
     cycles.push_back(r.timing.frame_cycles);
   }
   // Never slower by more than the row-buffer conflicts more interleaved tile streams cause
@@ -179,15 +171,7 @@ TEST(TimingRoofline, TextureBoundFrameMatchesDramBandwidth) {
   // 1 MiB colour store. With the default 8 texels per clock the texture units would bind first
   // (8.4 M texels / 8 = 1.05 M cycles); at 64 per clock the bound is the DRAM:
   // bytes moved / dram.bandwidth_gbps (12.8 GB/s), at 600 MHz.
-  WallFrame w = wall_frame(512, 1, 8, 0, 64);
-  TextureInfo tex;
-  tex.name = "big";
-  tex.format = "procedural";
-  tex.width = tex.height = 8192;
-  tex.channels = 4;
-  w.scene.textures.push_back(tex);
-  w.scene.materials[0].base_color_texture = 0;
-  const Timed r = run_wall(w, {"texture.texels_per_clock=64"});
+  const Timed r = run_wall(textured_wall(8), {"texture.texels_per_clock=64"});
   const double footprint = static_cast<double>(r.timing.texture_footprint_lines * 64);
   const double texture = static_cast<double>(r.timing.dram.reads(DramClass::Textures));
   const double moved = static_cast<double>(r.timing.dram.total_read() + r.timing.dram.total_written());
