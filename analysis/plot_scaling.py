@@ -11,40 +11,29 @@ Run with Debian's interpreter, which has pandas and matplotlib (scripts/install_
     /usr/bin/python3 analysis/plot_scaling.py --db out/lights.db --metric dram_total_mb --where "config_name = 'x'"
 """
 import argparse
-import sqlite3
 import sys
 
-import matplotlib
+import plot_common  # first: it selects matplotlib's file-only backend before pyplot loads
 
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--db", required=True, help="results database")
-    ap.add_argument("--out", default="scaling.png", help="PNG to write (default: scaling.png)")
-    ap.add_argument("--metric", default="frame_time_ms",
-                    help="a v_metric name (default frame_time_ms; lights_per_pixel, dram_total_mb, "
-                         "energy_total_mj, tsp.light_evaluations, ...)")
-    ap.add_argument("--where", help="SQL condition on v_run_summary's columns")
-    ap.add_argument("--config", help="only runs of this config_name")
+    plot_common.add_common_args(ap, "scaling.png", "frame_time_ms",
+                                "a v_metric name (default frame_time_ms; lights_per_pixel, dram_total_mb, "
+                                "energy_total_mj, tsp.light_evaluations, ...)")
+    plot_common.add_selection_args(ap)
     ap.add_argument("--linear", action="store_true", help="linear axes (default: log-log when the range is wide)")
     args = ap.parse_args()
 
-    db = sqlite3.connect("file:%s?mode=ro" % args.db, uri=True)
-    conds, caption = ["s.status = 'ok'"], []
-    if args.where:
-        conds.append("(" + args.where + ")")
-        caption.append(args.where)
-    if args.config:
-        conds.append("s.config_name = '" + args.config.replace("'", "''") + "'")
-        caption.append("config " + args.config)
+    db = plot_common.connect(args.db)
+    where, caption = plot_common.selection(args, "s")
     d = pd.read_sql_query(
         "SELECT s.run_id, s.technique, p.value_num AS lights, m.value, m.unit "
         "FROM v_run_summary s JOIN v_param p ON p.run_id = s.run_id AND p.key = 'trace.lights' "
-        "JOIN v_metric m ON m.run_id = s.run_id AND m.metric = ? WHERE " + " AND ".join(conds),
+        "JOIN v_metric m ON m.run_id = s.run_id AND m.metric = ? WHERE " + where,
         db, params=(args.metric,))
     d = d.dropna(subset=["value", "lights"])
     if d.empty:
@@ -53,11 +42,10 @@ def main():
     unit = d.unit.iloc[0]
     g = d.groupby(["technique", "lights"]).value.mean().reset_index()
     fig, ax = plt.subplots(figsize=(8, 5.5))
-    markers = "os^vD<>pP*Xhd"
     last = g.sort_values("lights").groupby("technique").value.last().sort_values(ascending=False)
     for i, tech in enumerate(last.index):
         t = g[g.technique == tech].sort_values("lights")
-        ax.plot(t.lights, t.value, marker=markers[i % len(markers)], color=plt.cm.tab20(i % 20), label=tech)
+        ax.plot(t.lights, t.value, label=tech, **plot_common.technique_style(i))
     wide = g.lights.max() >= 4 * max(1.0, g.lights.min())
     if wide and not args.linear:
         ax.set_xscale("log", base=2)

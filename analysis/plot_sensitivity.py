@@ -13,12 +13,10 @@ Run with Debian's interpreter, which has pandas and matplotlib (scripts/install_
     /usr/bin/python3 analysis/plot_sensitivity.py --db out/tile_size.db --param isp.tag_buffers --metric cycles
 """
 import argparse
-import sqlite3
 import sys
 
-import matplotlib
+import plot_common  # first: it selects matplotlib's file-only backend before pyplot loads
 
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 
@@ -32,24 +30,18 @@ PARAM_UNITS = {
 }
 
 
-MARKERS = "os^vD<>pP*Xhd"
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--db", required=True, help="results database")
-    ap.add_argument("--out", default="sensitivity.png", help="PNG to write (default: sensitivity.png)")
-    ap.add_argument("--metric", default="frame_time_ms",
-                    help="a v_metric name (default frame_time_ms; dram_total_mb, energy_total_mj, dram_spill_mb, ...)")
+    plot_common.add_common_args(ap, "sensitivity.png", "frame_time_ms",
+                                "a v_metric name (default frame_time_ms; dram_total_mb, energy_total_mj, dram_spill_mb, ...)")
     ap.add_argument("--param", action="append",
                     help="parameter key for the x axis; repeatable "
                          "(default: tiling.tile_width and pls.tile_buffer_bits_per_pixel)")
-    ap.add_argument("--where", help="SQL condition on v_run_summary's columns")
     ap.add_argument("--linear", action="store_true", help="linear y axis (default: log when values span > 20x)")
     args = ap.parse_args()
     params = args.param or ["tiling.tile_width", "pls.tile_buffer_bits_per_pixel"]
 
-    db = sqlite3.connect("file:%s?mode=ro" % args.db, uri=True)
+    db = plot_common.connect(args.db)
     cond = ""
     if args.where:
         cond = " AND run_id IN (SELECT run_id FROM v_run_summary WHERE " + args.where + ")"
@@ -75,8 +67,7 @@ def main():
         for tech in sorted(g.technique.unique()):
             t = g[g.technique == tech].sort_values("value_num")
             i = techniques.index(tech)  # the same colour and marker in every panel
-            (line,) = ax.plot(t.value_num, t.metric_value, marker=MARKERS[i % len(MARKERS)],
-                              color=plt.cm.tab20(i % 20), label=tech)
+            (line,) = ax.plot(t.value_num, t.metric_value, label=tech, **plot_common.technique_style(i))
             handles.setdefault(tech, line)
         positive = g.metric_value[g.metric_value > 0]
         if not args.linear and len(positive) == len(g) and positive.max() > 20 * positive.min():

@@ -11,12 +11,10 @@ Run with Debian's interpreter, which has pandas and matplotlib (scripts/install_
     /usr/bin/python3 analysis/plot_techniques.py --db out/techniques.db --metric frame_time_ms --lights 1024
 """
 import argparse
-import sqlite3
 import sys
 
-import matplotlib
+import plot_common  # first: it selects matplotlib's file-only backend before pyplot loads
 
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 
@@ -25,35 +23,18 @@ CLASS_ORDER = ["parameter_buffer", "vertices", "indices", "textures", "color", "
                "visibility", "light_data", "light_lists", "work_lists", "spill", "other"]
 
 
-def selection(args):
-    """SQL condition on v_run_summary selecting the runs to plot, and a caption describing it."""
-    conds, caption = ["status = 'ok'"], []
-    if args.where:
-        conds.append("(" + args.where + ")")
-        caption.append(args.where)
-    if args.config:
-        conds.append("config_name = '" + args.config.replace("'", "''") + "'")
-        caption.append("config " + args.config)
-    if args.lights is not None:
-        conds.append("lights = %d" % args.lights)
-        caption.append("%d lights" % args.lights)
-    return " AND ".join(conds), ", ".join(caption)
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--db", required=True, help="results database")
-    ap.add_argument("--out", default="techniques.png", help="PNG to write (default: techniques.png)")
-    ap.add_argument("--metric", default="dram_classes",
-                    help="dram_classes (stacked DRAM MB per class, default) or a v_metric name "
-                         "(frame_time_ms, cycles, energy_total_mj, overshading, ...)")
-    ap.add_argument("--where", help="SQL condition on v_run_summary's columns, e.g. \"lights = 256\"")
-    ap.add_argument("--config", help="only runs of this config_name")
-    ap.add_argument("--lights", type=int, help="only runs with this light count")
+    plot_common.add_common_args(ap, "techniques.png", "dram_classes",
+                                "dram_classes (stacked DRAM MB per class, default) or a v_metric name "
+                                "(frame_time_ms, cycles, energy_total_mj, overshading, ...)",
+                                "SQL condition on v_run_summary's columns, e.g. \"lights = 256\"")
+    plot_common.add_selection_args(ap, lights=True)
     args = ap.parse_args()
 
-    db = sqlite3.connect("file:%s?mode=ro" % args.db, uri=True)
-    where, caption = selection(args)
+    db = plot_common.connect(args.db)
+    where, captions = plot_common.selection(args)
+    caption = ", ".join(captions)
     runs = pd.read_sql_query("SELECT run_id, technique, config_hash, lights, scene FROM v_run_summary WHERE " + where,
                              db)
     if runs.empty:

@@ -36,32 +36,6 @@ WITH f AS (
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tiler' AND name = 'partial_renders') AS partial_renders,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram' AND name = 'read_bytes') AS dram_read_bytes,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram' AND name = 'write_bytes') AS dram_write_bytes,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.parameter_buffer' AND name = 'read_bytes') AS pb_r,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.parameter_buffer' AND name = 'write_bytes') AS pb_w,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.vertices' AND name = 'read_bytes') AS vtx_r,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.vertices' AND name = 'write_bytes') AS vtx_w,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.indices' AND name = 'read_bytes') AS idx_r,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.indices' AND name = 'write_bytes') AS idx_w,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.textures' AND name = 'read_bytes') AS tex_r,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.textures' AND name = 'write_bytes') AS tex_w,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.color' AND name = 'read_bytes') AS col_r,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.color' AND name = 'write_bytes') AS col_w,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.depth_stencil' AND name = 'read_bytes') AS ds_r,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.depth_stencil' AND name = 'write_bytes') AS ds_w,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.gbuffer' AND name = 'read_bytes') AS gb_r,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.gbuffer' AND name = 'write_bytes') AS gb_w,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.visibility' AND name = 'read_bytes') AS vis_r,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.visibility' AND name = 'write_bytes') AS vis_w,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.light_data' AND name = 'read_bytes') AS ld_r,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.light_data' AND name = 'write_bytes') AS ld_w,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.light_lists' AND name = 'read_bytes') AS ll_r,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.light_lists' AND name = 'write_bytes') AS ll_w,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.work_lists' AND name = 'read_bytes') AS wl_r,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.work_lists' AND name = 'write_bytes') AS wl_w,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.spill' AND name = 'read_bytes') AS sp_r,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.spill' AND name = 'write_bytes') AS sp_w,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.other' AND name = 'read_bytes') AS oth_r,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram.other' AND name = 'write_bytes') AS oth_w,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'mem/dram' AND name = 'read_bytes') AS device_read_bytes,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'mem/dram' AND name = 'write_bytes') AS device_write_bytes,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/timing' AND name = 'frame_cycles') AS cycles,
@@ -77,32 +51,52 @@ WITH f AS (
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/host' AND name = 'simulation_wall_seconds') AS sim_wall_seconds
   FROM runs r
 ),
+dram AS (
+  -- DRAM MB per traffic class (frame/dram.<class>), read and written: one index range per run.
+  SELECT r.id AS run_id,
+    sum(CASE WHEN s.scope = 'frame/dram.parameter_buffer' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_parameter_buffer_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.parameter_buffer' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_parameter_buffer_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.vertices' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_vertices_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.vertices' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_vertices_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.indices' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_indices_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.indices' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_indices_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.textures' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_textures_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.textures' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_textures_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.color' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_color_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.color' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_color_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.depth_stencil' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_depth_stencil_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.depth_stencil' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_depth_stencil_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.gbuffer' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_gbuffer_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.gbuffer' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_gbuffer_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.visibility' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_visibility_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.visibility' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_visibility_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.light_data' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_light_data_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.light_data' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_light_data_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.light_lists' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_light_lists_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.light_lists' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_light_lists_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.work_lists' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_work_lists_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.work_lists' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_work_lists_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.spill' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_spill_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.spill' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_spill_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.other' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_other_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.other' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_other_write_mb
+  FROM runs r LEFT JOIN stats s ON s.run_id = r.id AND s.scope > 'frame/dram.' AND s.scope < 'frame/dram/'
+  GROUP BY r.id
+),
 g AS (
   SELECT f.*,
     CASE WHEN f.tsp_light_evaluations IS NULL AND f.compute_light_evaluations IS NULL THEN NULL
          ELSE coalesce(f.tsp_light_evaluations, 0) + coalesce(f.compute_light_evaluations, 0) END AS light_evaluations
   FROM f
 )
-SELECT r.id AS run_id, r.technique, r.scene, r.config_name, r.status, r.error,
+SELECT d.*,  -- run_id, then dram_<class>_read_mb and dram_<class>_write_mb for every traffic class
+  r.technique, r.scene, r.config_name, r.status, r.error,
   r.config_hash, r.trace_hash, r.trace_path, r.started_at, r.host,
   f.width, f.height, f.samples_per_pixel, f.lights, f.passes, f.geometry_passes, f.dispatches,
   f.shaded_samples, f.shader_invocations, f.light_evaluations, f.samples_rasterised, f.partial_renders,
   f.shaded_samples / nullif(f.width * f.height * coalesce(f.samples_per_pixel, 1), 0) AS overshading,
   f.light_evaluations / nullif(f.width * f.height, 0) AS lights_per_pixel,
   f.light_evaluations / nullif(f.shader_invocations, 0) AS lights_per_fragment,
-  f.pb_r / 1e6 AS dram_parameter_buffer_read_mb, f.pb_w / 1e6 AS dram_parameter_buffer_write_mb,
-  f.vtx_r / 1e6 AS dram_vertices_read_mb, f.vtx_w / 1e6 AS dram_vertices_write_mb,
-  f.idx_r / 1e6 AS dram_indices_read_mb, f.idx_w / 1e6 AS dram_indices_write_mb,
-  f.tex_r / 1e6 AS dram_textures_read_mb, f.tex_w / 1e6 AS dram_textures_write_mb,
-  f.col_r / 1e6 AS dram_color_read_mb, f.col_w / 1e6 AS dram_color_write_mb,
-  f.ds_r / 1e6 AS dram_depth_stencil_read_mb, f.ds_w / 1e6 AS dram_depth_stencil_write_mb,
-  f.gb_r / 1e6 AS dram_gbuffer_read_mb, f.gb_w / 1e6 AS dram_gbuffer_write_mb,
-  f.vis_r / 1e6 AS dram_visibility_read_mb, f.vis_w / 1e6 AS dram_visibility_write_mb,
-  f.ld_r / 1e6 AS dram_light_data_read_mb, f.ld_w / 1e6 AS dram_light_data_write_mb,
-  f.ll_r / 1e6 AS dram_light_lists_read_mb, f.ll_w / 1e6 AS dram_light_lists_write_mb,
-  f.wl_r / 1e6 AS dram_work_lists_read_mb, f.wl_w / 1e6 AS dram_work_lists_write_mb,
-  f.sp_r / 1e6 AS dram_spill_read_mb, f.sp_w / 1e6 AS dram_spill_write_mb,
-  f.oth_r / 1e6 AS dram_other_read_mb, f.oth_w / 1e6 AS dram_other_write_mb,
   f.dram_read_bytes / 1e6 AS dram_read_mb,
   f.dram_write_bytes / 1e6 AS dram_write_mb,
   (f.dram_read_bytes + f.dram_write_bytes) / 1e6 AS dram_total_mb,
@@ -119,7 +113,7 @@ SELECT r.id AS run_id, r.technique, r.scene, r.config_name, r.status, r.error,
   f.e_texture_pj * 1e-9 AS energy_texture_mj,
   f.e_static_pj * 1e-9 AS energy_static_mj,
   f.sim_wall_seconds
-FROM runs r JOIN g AS f ON f.run_id = r.id;
+FROM runs r JOIN g AS f ON f.run_id = r.id JOIN dram d ON d.run_id = r.id;
 
 -- Every parameter of every run, one row each, for pivoting and grouping: the resolved hardware
 -- parameters (run_params) plus what the trace and the run fixed, under pseudo-keys:

@@ -4,12 +4,8 @@
 # Usage: bash bench/frame_bench.sh [build-dir] [repetitions]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-BUILD=${1:-build}
-REPS=${2:-3}
-TMP=$(mktemp -d)
-trap 'rm -rf "$TMP"' EXIT
-"$BUILD/tbdrsim" trace --technique plain_forward --scene atrium:3 --lights 256 --camera entrance \
-  --resolution 1920x1080 --out "$TMP/pf.trace" > /dev/null
+. bench/common.sh
+bench_reference_frame 3 "$@"
 for i in $(seq 1 "$REPS"); do
   start=$(date +%s.%N)
   "$BUILD/tbdrsim" run --trace "$TMP/pf.trace" --db "$TMP/bench.db" --quiet

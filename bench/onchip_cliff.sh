@@ -6,9 +6,9 @@
 # Usage: bash bench/onchip_cliff.sh [build-dir]
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. bench/common.sh
 BUILD=${1:-build}
-TMP=$(mktemp -d)
-trap 'rm -rf "$TMP"' EXIT
+bench_scratch
 gx6250=(20 21 23 24 28 29 39)
 layout="rgba8,rgba8"
 printf "%-12s %-50s %-16s %-16s %-10s\n" "bits/pixel" "G-buffer" "ms @128 on chip" "ms @256 on chip" "GX6250 ms"

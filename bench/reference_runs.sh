@@ -11,6 +11,7 @@
 # (scope frame/host) are left out: they are the only figures allowed to differ between two builds.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. bench/common.sh
 ROOT=$(pwd)
 mode=${1:-}
 case "$mode" in
@@ -20,8 +21,7 @@ case "$mode" in
     [ -x "$BIN" ] || { echo "reference_runs: no binary at $BIN" >&2; exit 2; }
     mkdir -p "$OUT"
     OUT=$(cd "$OUT" && pwd)
-    TMP=$(mktemp -d)
-    trap 'rm -rf "$TMP"' EXIT
+    bench_scratch
     cp "$BIN" "$TMP/tbdrsim"  # one binary for every run, even if the build folder is rebuilt meanwhile
     BIN="$TMP/tbdrsim"
     techniques=(plain_forward forward_multipass deferred tiled_deferred clustered_deferred forward_plus

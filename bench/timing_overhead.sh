@@ -5,12 +5,8 @@
 # Usage: bash bench/timing_overhead.sh [build-dir] [repetitions]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-BUILD=${1:-build}
-REPS=${2:-5}
-TMP=$(mktemp -d)
-trap 'rm -rf "$TMP"' EXIT
-"$BUILD/tbdrsim" trace --technique plain_forward --scene atrium:3 --lights 256 --camera entrance \
-  --resolution 1920x1080 --out "$TMP/pf.trace" > /dev/null
+. bench/common.sh
+bench_reference_frame 5 "$@"
 for i in $(seq 1 "$REPS"); do "$BUILD/tbdrsim" run --trace "$TMP/pf.trace" --db "$TMP/b.db" --quiet; done
 sqlite3 -separator ' ' "$TMP/b.db" "
   SELECT 'functional CPU s (best):', printf('%.3f', min(value)) FROM stats WHERE scope='frame/host' AND name='simulation_cpu_seconds';

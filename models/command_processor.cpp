@@ -346,7 +346,13 @@ class FrameSimulator {
     for (const auto& a : pass.attachments) {
       auto it = result_.images.attachments.find(a.name);
       if (it == result_.images.attachments.end()) {
-        it = result_.images.attachments.emplace(a.name, AttachmentImage::cleared(a, pixels)).first;
+        AttachmentImage img = AttachmentImage::cleared(a, pixels);
+        // An attachment named after an image buffer (trace version 2) is that image, as a dispatch wrote it.
+        if (auto ib = result_.images.image_buffers.find(a.name); ib != result_.images.image_buffers.end()) {
+          img.color = ib->second.color;
+          img.defined = true;
+        }
+        it = result_.images.attachments.emplace(a.name, std::move(img)).first;
       } else if (it->second.format != a.format || it->second.samples != a.samples) {
         throw InputError(path_, a.line, "attachment '" + a.name + "' was declared earlier with another format or sample count");
       }
@@ -472,7 +478,10 @@ class FrameSimulator {
     cw.texture_lines = std::move(texture_lines);
     cw.texture_line_accesses = stats.compute_texture_line_accesses.value();
     result_.work.commands.push_back(std::move(cw));
-    if (!image.empty()) result_.final_color = image;
+    if (!image.empty()) {
+      result_.final_color = image;
+      result_.images.attachments.erase(image);  // a later pass that loads it starts from what the dispatch wrote
+    }
     collect_stats(stats, prefix + "/compute", result_.stats);
     result_.totals.compute += stats;
     collect_dram(prefix, dram, result_.stats);

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <initializer_list>
 #include <memory>
 #include <ostream>
 #include <random>
@@ -393,6 +394,22 @@ class FakeUnit : public Unit {
   std::string reason_;
 };
 
+// Runs a loop that must stop with a StallError; returns its message ("" and a failure otherwise).
+std::string stall_message(RunLoop& loop) {
+  try {
+    loop.run();
+  } catch (const StallError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected StallError";
+  return "";
+}
+
+// Expects every one of `parts` in `msg`.
+void expect_contains(const std::string& msg, std::initializer_list<const char*> parts) {
+  for (const char* part : parts) EXPECT_NE(msg.find(part), std::string::npos) << part << " not in: " << msg;
+}
+
 TEST(RunLoopTest, NormalCompletionReturnsSummary) {
   const ClockDomain core("core", 600'000'000);
   EventQueue q;
@@ -439,18 +456,10 @@ TEST(RunLoopTest, DeadlockNamesTheStuckUnitAndItsReason) {
   };
   q.schedule(Tick{0}, [&] { produce(); });
   RunLoop loop(q, {&idle, &producer, &consumer});
-  try {
-    loop.run();
-    FAIL() << "expected StallError";
-  } catch (const StallError& e) {
-    const std::string msg = e.what();
-    EXPECT_NE(msg.find("deadlock"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("tsp0: waiting for input queue 'tiles' (empty)"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("tiler: output queue 'tiles' full"), std::string::npos) << msg;
-    EXPECT_EQ(msg.find("isp0"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("tick 1000 ps"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("after 2 events"), std::string::npos) << msg;
-  }
+  const std::string msg = stall_message(loop);
+  expect_contains(msg, {"deadlock", "tsp0: waiting for input queue 'tiles' (empty)", "tiler: output queue 'tiles' full",
+                        "tick 1000 ps", "after 2 events"});
+  EXPECT_EQ(msg.find("isp0"), std::string::npos) << msg;
 }
 
 TEST(RunLoopTest, LivelockOverTimeWindowThrows) {
@@ -461,17 +470,10 @@ TEST(RunLoopTest, LivelockOverTimeWindowThrows) {
   std::function<void()> retry = [&] { q.schedule_in(Tick{1000}, [&] { retry(); }); };
   q.schedule(Tick{0}, [&] { retry(); });
   RunLoop loop(q, {&dram}, WatchdogConfig{Tick::from_us(1), 1'000'000});
-  try {
-    loop.run();
-    FAIL() << "expected StallError";
-  } catch (const StallError& e) {
-    const std::string msg = e.what();
-    EXPECT_NE(msg.find("livelock"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("dram: waiting for a refresh that never ends"), std::string::npos) << msg;
-    // Detected within a window and a bit (the check runs 8 times per window).
-    EXPECT_GT(q.now(), Tick::from_us(1));
-    EXPECT_LE(q.now(), Tick::from_ns(1200));
-  }
+  expect_contains(stall_message(loop), {"livelock", "dram: waiting for a refresh that never ends"});
+  // Detected within a window and a bit (the check runs 8 times per window).
+  EXPECT_GT(q.now(), Tick::from_us(1));
+  EXPECT_LE(q.now(), Tick::from_ns(1200));
 }
 
 TEST(RunLoopTest, ZeroTimeLivelockThrows) {
@@ -479,16 +481,8 @@ TEST(RunLoopTest, ZeroTimeLivelockThrows) {
   std::function<void()> spin = [&] { q.schedule(q.now(), [&] { spin(); }); };
   q.schedule(Tick{42}, [&] { spin(); });
   RunLoop loop(q, {}, WatchdogConfig{Tick::from_us(1), 10'000});
-  try {
-    loop.run();
-    FAIL() << "expected StallError";
-  } catch (const StallError& e) {
-    const std::string msg = e.what();
-    EXPECT_NE(msg.find("livelock"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("no unit reports pending work"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("tick 42 ps"), std::string::npos) << msg;
-    EXPECT_LE(q.events_executed(), 20'000u);
-  }
+  expect_contains(stall_message(loop), {"livelock", "no unit reports pending work", "tick 42 ps"});
+  EXPECT_LE(q.events_executed(), 20'000u);
 }
 
 }  // namespace

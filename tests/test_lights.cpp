@@ -59,10 +59,7 @@ TEST(Lights, Pcg32IsTheReferenceGenerator) {
 }
 
 TEST(Lights, GenerationIsDeterministicAndSeeded) {
-  LightSetSpec spec;
-  spec.count = 200;
-  spec.seed = 42;
-  spec.spot_fraction = 0.3f;
+  LightSetSpec spec{.count = 200, .seed = 42, .spot_fraction = 0.3f};
   const LightSet a = generate_lights(atrium1(), spec);
   const LightSet b = generate_lights(atrium1(), spec);
   ASSERT_EQ(a.lights.size(), 200u);
@@ -86,12 +83,8 @@ TEST(Lights, EachLightDependsOnlyOnSeedAndIndex) {
 
 TEST(Lights, RadiiPositionsAndSpotsFollowTheSpec) {
   const Scene& s = atrium1();
-  LightSetSpec spec;
-  spec.count = 400;
-  spec.seed = 7;
-  spec.min_radius_fraction = 0.01f;
-  spec.max_radius_fraction = 0.05f;
-  spec.spot_fraction = 0.25f;
+  const LightSetSpec spec{
+      .count = 400, .seed = 7, .min_radius_fraction = 0.01f, .max_radius_fraction = 0.05f, .spot_fraction = 0.25f};
   const LightSet set = generate_lights(s, spec);
   const float diag = glm::length(s.bounds.extent());
   std::size_t spots = 0;
@@ -178,10 +171,7 @@ std::string light_line(const Light& l) {
 }
 
 TEST(Lights, NineDigitFloatsReadBackBitIdentical) {
-  LightSetSpec spec;
-  spec.count = 300;
-  spec.seed = 99;
-  spec.spot_fraction = 0.5f;
+  const LightSetSpec spec{.count = 300, .seed = 99, .spot_fraction = 0.5f};
   const LightSet set = generate_lights(atrium1(), spec);
   const std::string p = temp_path("nine_digits.lights");
   {

@@ -36,25 +36,15 @@ namespace {
 /// The declared defaults with DRAM timing in whole nanoseconds at a 1 GHz DRAM clock and a 1 GHz
 /// core: tRCD 18, tRP 18, RL 15, tRAS 42, tWR 15 cycles; controller 30 ns each way; 2 channels
 /// of 6.4 GB/s, so a 64 B line occupies a channel's data bus for exactly 10 ns.
-HwConfig test_config() {
-  HwConfig hw = resolve_config({}, {}).hw;
-  hw.gpu.core_clock_mhz = 1000;
-  hw.dram.clock_mhz = 1000;
-  hw.dram.channels = 2;
-  hw.dram.banks = 8;
-  hw.dram.row_bytes = 4096;
-  hw.dram.burst_bytes = 32;
-  hw.dram.bandwidth_gbps = 12.8;
-  hw.dram.t_rcd_ns = 18;
-  hw.dram.t_rp_ns = 18;
-  hw.dram.t_cl_ns = 15;
-  hw.dram.t_ras_ns = 42;
-  hw.dram.t_wr_ns = 15;
-  hw.dram.controller_latency_ns = 30;
-  hw.dram.read_queue_entries = 32;
-  hw.dram.write_queue_entries = 32;
-  hw.dram.address_mapping = DramMapping::RowBankChannelColumn;
-  return hw;
+/// `sets` (section.key=value, as --set) apply on top.
+HwConfig test_config(const std::vector<std::string>& sets = {}) {
+  std::vector<std::string> all = {"gpu.core_clock_mhz=1000", "dram.clock_mhz=1000", "dram.channels=2", "dram.banks=8",
+                                  "dram.row_bytes=4096", "dram.burst_bytes=32", "dram.bandwidth_gbps=12.8",
+                                  "dram.t_rcd_ns=18", "dram.t_rp_ns=18", "dram.t_cl_ns=15", "dram.t_ras_ns=42",
+                                  "dram.t_wr_ns=15", "dram.controller_latency_ns=30", "dram.read_queue_entries=32",
+                                  "dram.write_queue_entries=32", "dram.address_mapping=row_bank_channel_column"};
+  all.insert(all.end(), sets.begin(), sets.end());  // the test's own settings win
+  return resolve_config({}, all).hw;
 }
 
 constexpr std::int64_t kNs = 1000;  // ps
@@ -549,8 +539,7 @@ TEST(DramTest, ReadsBeforeWritesBelowTheWatermark) {
 }
 
 TEST(DramTest, WriteDrainAtHighWatermark) {
-  HwConfig hw = test_config();
-  hw.dram.write_queue_entries = 8;  // high watermark 6, low 2
+  const HwConfig hw = test_config({"dram.write_queue_entries=8"});  // high watermark 6, low 2
   EventQueue eq;
   Dram d(hw.dram, hw.energy, eq);
   DramFeeder f(d, eq);
@@ -623,11 +612,9 @@ TEST(DramTest, Deterministic) {
 }
 
 TEST(DramTest, EnergyConservation) {
-  HwConfig hw = test_config();
-  hw.energy.dram_read_pj_per_bit = 5.3;  // LPDDR4-like, so every term is non-zero
-  hw.energy.dram_write_pj_per_bit = 3.9;
-  hw.energy.dram_io_pj_per_bit = 3.2;
-  hw.energy.dram_activate_precharge_nj = 1.2;
+  // LPDDR4-like, so every term is non-zero
+  const HwConfig hw = test_config({"energy.dram_read_pj_per_bit=5.3", "energy.dram_write_pj_per_bit=3.9",
+                                   "energy.dram_io_pj_per_bit=3.2", "energy.dram_activate_precharge_nj=1.2"});
   EventQueue eq;
   Dram d(hw.dram, hw.energy, eq);
   run_mixed(d, eq, 7, 3000);
@@ -893,8 +880,7 @@ TEST(MemorySystemTest, ConsecutiveMissesOfARowFormOneBurstChain) {
   // done at 30 (controller) + 18 (tRCD) + 15 (RL) + 640 (data) + 30 (controller) = 733 ns, plus
   // the SLC lookup that found the misses (20 ns).
   for (const std::int64_t chain : {std::int64_t{0}, std::int64_t{1024}}) {
-    HwConfig hw = test_config();
-    hw.dram.max_chain_bytes = chain;
+    const HwConfig hw = test_config({"dram.max_chain_bytes=" + std::to_string(chain)});
     EventQueue eq;
     MemorySystem m(hw, eq);
     Tick done{-1};
@@ -910,9 +896,7 @@ TEST(MemorySystemTest, ConsecutiveMissesOfARowFormOneBurstChain) {
     EXPECT_EQ(done.ps(), (733 + 20) * kNs) << chain;
   }
   // A chain never takes more lines than a queue holds: 8-entry queues, 4 KiB chains -> 8 lines each.
-  HwConfig hw = test_config();
-  hw.dram.max_chain_bytes = 4096;
-  hw.dram.read_queue_entries = 8;
+  const HwConfig hw = test_config({"dram.max_chain_bytes=4096", "dram.read_queue_entries=8"});
   EventQueue eq;
   MemorySystem m(hw, eq);
   ASSERT_TRUE(m.issue(Client::PixelBackEnd, 0x100000, 4096, false, DramClass::Color));
@@ -931,8 +915,7 @@ TEST(MemorySystemTest, EachLineOfAChainArrivesWithItsOwnBursts) {
   // A 1 KiB compute read misses 16 SLC lines: one chain whose data occupies the bus for 160 ns.
   // Its first line is back after 30 + 18 + 15 + 10 + 30 = 103 ns, the last after 253 ns; a
   // request for the first line issued at the same time waits only for that line.
-  HwConfig hw = test_config();
-  hw.dram.max_chain_bytes = 1024;
+  const HwConfig hw = test_config({"dram.max_chain_bytes=1024"});
   EventQueue eq;
   MemorySystem m(hw, eq);
   Tick whole{-1}, first{-1};
@@ -997,8 +980,7 @@ TEST(MemorySystemTest, PixelBackEndStreamsPastTheSlc) {
 }
 
 TEST(MemorySystemTest, BackpressurePropagatesAndNothingIsLost) {
-  HwConfig hw = test_config();
-  hw.dram.read_queue_entries = 4;
+  const HwConfig hw = test_config({"dram.read_queue_entries=4"});
   EventQueue eq;
   MemorySystem m(hw, eq);
   // 2000 texture reads of distinct lines in one 4 KiB-row-sized stripe per channel: misses all the way.

@@ -15,6 +15,7 @@
 #include "analysis/sql.hpp"
 #include "app/cli.hpp"
 #include "kernel/errors.hpp"
+#include "db_query.hpp"
 #include "scratch_dir.hpp"
 
 namespace tbdr {
@@ -73,12 +74,7 @@ RunRecord synthetic_run(const std::string& technique, int tile_width, double sha
   return r;
 }
 
-double real_of(const ResultsDb& db, const std::string& sql) {
-  SqlStatement q(db.sql(), sql);
-  EXPECT_TRUE(q.step()) << sql;
-  EXPECT_FALSE(q.is_null(0)) << sql;
-  return q.real(0);
-}
+double real_of(const ResultsDb& db, const std::string& sql) { return testing_support::query_number(db, sql); }
 
 bool is_null(const ResultsDb& db, const std::string& sql) {
   SqlStatement q(db.sql(), sql);
@@ -199,18 +195,19 @@ TEST(ReportViews, ParametersPivotAndSensitivity) {
   failed.error = "boom";
   failed.stats.clear();
   db.write_run(failed);
-  EXPECT_DOUBLE_EQ(real_of(db, "SELECT value_num FROM v_param WHERE key = 'tiling.tile_width' AND run_id = 2"), 32);
-  EXPECT_DOUBLE_EQ(real_of(db, "SELECT value_num FROM v_param WHERE key = 'writeback.compression_ratio' LIMIT 1"), 0.5);
   EXPECT_TRUE(is_null(db, "SELECT value_num FROM v_param WHERE key = 'gpu.mode' LIMIT 1"));
-  EXPECT_DOUBLE_EQ(real_of(db, "SELECT value_num FROM v_param WHERE key = 'trace.lights' LIMIT 1"), 64);
-  EXPECT_EQ(real_of(db, "SELECT count(*) FROM v_param WHERE key = 'trace.technique'"), 3);
-  EXPECT_EQ(real_of(db, "SELECT count(*) FROM v_sensitivity WHERE key = 'tiling.tile_width' AND metric = 'overshading'"), 2);
-  EXPECT_DOUBLE_EQ(real_of(db, "SELECT metric_value FROM v_sensitivity WHERE key = 'tiling.tile_width' AND value = '32' "
-                               "AND metric = 'overshading'"),
-                   1.2);
-  // The failed run has its parameters and a summary row, but no figures and no sensitivity rows.
-  EXPECT_EQ(real_of(db, "SELECT count(*) FROM v_run_summary WHERE status = 'failed' AND error = 'boom'"), 1);
-  EXPECT_EQ(real_of(db, "SELECT count(*) FROM v_sensitivity WHERE run_id = 3"), 0);
+  // The failed run (3) has its parameters and a summary row, but no figures and no sensitivity rows.
+  testing_support::expect_numbers(
+      db, {{"SELECT value_num FROM v_param WHERE key = 'tiling.tile_width' AND run_id = 2", 32},
+           {"SELECT value_num FROM v_param WHERE key = 'writeback.compression_ratio' LIMIT 1", 0.5},
+           {"SELECT value_num FROM v_param WHERE key = 'trace.lights' LIMIT 1", 64},
+           {"SELECT count(*) FROM v_param WHERE key = 'trace.technique'", 3},
+           {"SELECT count(*) FROM v_sensitivity WHERE key = 'tiling.tile_width' AND metric = 'overshading'", 2},
+           {"SELECT metric_value FROM v_sensitivity WHERE key = 'tiling.tile_width' AND value = '32' "
+            "AND metric = 'overshading'",
+            1.2},
+           {"SELECT count(*) FROM v_run_summary WHERE status = 'failed' AND error = 'boom'", 1},
+           {"SELECT count(*) FROM v_sensitivity WHERE run_id = 3", 0}});
 }
 
 TEST(Report, GroupsByTechniqueAveragingRepetitions) {

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -21,6 +22,7 @@
 #include "app/cli.hpp"
 #include "app/sweep.hpp"
 #include "kernel/errors.hpp"
+#include "db_query.hpp"
 #include "scratch_dir.hpp"
 
 namespace tbdr {
@@ -76,9 +78,7 @@ int wait_tool(pid_t pid) {
 }
 
 std::int64_t scalar(const std::string& db_path, const std::string& sql) {
-  ResultsDb db(db_path);
-  SqlStatement q(db.sql(), sql);
-  return q.step() ? q.int64(0) : -1;
+  return std::llround(testing_support::query_number(db_path, sql));
 }
 
 /// Rows of runs: ok count, distinct ok (config, trace) count, all rows.
@@ -407,12 +407,13 @@ TEST_F(SweepRun, FailedPointIsRecordedAndOthersRun) {
   const std::string db = (dir / "r.db").string();
   EXPECT_EQ(run_tool({"sweep", file.string(), "--db", db, "-j", "2"}, &out), 1) << out;
   EXPECT_NE(out.find("FAILED"), std::string::npos) << out;
-  EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE status = 'ok'"), 2);
-  EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE status = 'failed' AND error LIKE '%Box0.bin%'"), 2);
-  EXPECT_EQ(scalar(db, "SELECT count(*) FROM run_params p JOIN runs r ON r.id = p.run_id WHERE r.status = 'failed' "
-                       "AND p.key = 'isp.tag_buffers'"),
-            2);
-  EXPECT_EQ(scalar(db, "SELECT count(*) FROM stats s JOIN runs r ON r.id = s.run_id WHERE r.status = 'failed'"), 0);
+  testing_support::expect_numbers(
+      db, {{"SELECT count(*) FROM runs WHERE status = 'ok'", 2},
+           {"SELECT count(*) FROM runs WHERE status = 'failed' AND error LIKE '%Box0.bin%'", 2},
+           {"SELECT count(*) FROM run_params p JOIN runs r ON r.id = p.run_id WHERE r.status = 'failed' "
+            "AND p.key = 'isp.tag_buffers'",
+            2},
+           {"SELECT count(*) FROM stats s JOIN runs r ON r.id = s.run_id WHERE r.status = 'failed'", 0}});
 }
 
 TEST_F(SweepRun, SlurmScriptAndMergedShardsMatchOneDatabase) {

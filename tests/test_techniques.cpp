@@ -499,15 +499,15 @@ TEST(TechniqueStructure, MatchesTheExpectedBilleterRows) {
       {"plain_forward", {"color"}, 1, true},
       {"forward_multipass", {"color"}, 17, true},
       {"deferred", {"gbuffer", "depth", "color"}, 1, true},
-      {"tiled_deferred", {"gbuffer", "depth", "color"}, 1, false},
-      {"clustered_deferred", {"gbuffer", "depth", "color"}, 1, false},
+      {"tiled_deferred", {"gbuffer", "depth", "color"}, 1, true},
+      {"clustered_deferred", {"gbuffer", "depth", "color"}, 1, true},
       {"forward_plus", {"depth", "color"}, 2, true},
       {"clustered_forward", {"depth", "color"}, 2, true},
       {"practical_clustered_forward", {"color"}, 1, true},
       {"cascaded_clustered_forward", {"color"}, 2, true},
       {"deferred_tile_store", {"color"}, 1, true},
       {"forward_light_stack", {"color"}, 2, true},
-      {"visibility_buffer", {"visibility", "depth", "color"}, 1, false},
+      {"visibility_buffer", {"visibility", "depth", "color"}, 1, true},
       {"light_prepass", {"gbuffer", "depth", "color"}, 2, true},
   };
   const Scene scene = tiny_scene();
@@ -524,8 +524,53 @@ TEST(TechniqueStructure, MatchesTheExpectedBilleterRows) {
   EXPECT_EQ(geometry_passes(generate_trace("forward_multipass", prez)), 16);
   TraceSetup skip = tiny_setup(scene);
   skip.options["translucent"] = "skip";
-  for (const auto& name : {"deferred", "deferred_tile_store", "light_prepass"})
+  for (const auto& name : {"deferred", "deferred_tile_store", "light_prepass", "tiled_deferred", "clustered_deferred",
+                           "visibility_buffer"})
     EXPECT_FALSE(draws_blended(generate_trace(name, skip))) << name;
+}
+
+TEST(TechniqueStructure, ComputeLitFramesGetATranslucentPass) {
+  // After the shading dispatch wrote the lit frame `color` (an image buffer): a barrier on it, then
+  // pass `translucent` whose color attachment is that image (rgba8, 1 sample, loaded and stored
+  // again) over the stored depth (loaded, not stored), drawing the blended subset alpha-blended
+  // without depth writes. The last command of the frame.
+  const Scene scene = tiny_scene();
+  for (const auto& name : {"tiled_deferred", "clustered_deferred", "visibility_buffer"}) {
+    SCOPED_TRACE(name);
+    const Trace t = generate_trace(name, tiny_setup(scene));
+    ASSERT_GE(t.commands.size(), 3u);
+    const auto* shade = std::get_if<DispatchCmd>(&t.commands[t.commands.size() - 3]);
+    ASSERT_NE(shade, nullptr);
+    EXPECT_EQ(shade->writes, std::vector<std::string>{"color"});
+    EXPECT_EQ(buffer(t, "color").content, BufferContent::Image);
+    const auto* barrier = std::get_if<BarrierCmd>(&t.commands[t.commands.size() - 2]);
+    ASSERT_NE(barrier, nullptr);
+    EXPECT_EQ(barrier->resources, std::vector<std::string>{"color"});
+    const auto* pass = std::get_if<PassDesc>(&t.commands.back());
+    ASSERT_NE(pass, nullptr);
+    EXPECT_EQ(pass->name, "translucent");
+    ASSERT_EQ(pass->attachments.size(), 2u);
+    const Attachment& color = pass->attachments[0];
+    EXPECT_EQ(color.name, "color");
+    EXPECT_EQ(color.format, Format::Rgba8);
+    EXPECT_EQ(color.samples, 1u);
+    EXPECT_EQ(color.load, LoadOp::Load);
+    EXPECT_EQ(color.store, StoreOp::Store);
+    EXPECT_EQ(color.usage, AttachmentUsage::Color);
+    const Attachment& depth = pass->attachments[1];
+    EXPECT_EQ(depth.name, "depth");
+    EXPECT_EQ(depth.load, LoadOp::Load);
+    EXPECT_EQ(depth.store, StoreOp::DontCare);
+    ASSERT_EQ(pass->draws.size(), 1u);
+    EXPECT_EQ(pass->draws[0].subset, SceneSubset::Blended);
+    const PipelineState* ps = t.find_pipeline(pass->draws[0].pipeline);
+    ASSERT_NE(ps, nullptr);
+    EXPECT_EQ(ps->blend, BlendMode::Alpha);
+    EXPECT_TRUE(ps->depth_test);
+    EXPECT_FALSE(ps->depth_write);
+  }
+  // With MSAA (the visibility buffer) the stored depth is multisampled and the frame is not: no pass.
+  EXPECT_EQ(find_pass(generate_trace("visibility_buffer", tiny_setup(scene, 4)), "translucent"), nullptr);
 }
 
 TEST(TechniqueStructure, MultipassBatchesCoverEveryLightOnce) {

@@ -44,6 +44,40 @@ Trace frame_of(int size) {
   return t;
 }
 
+/// A `size` x `size` frame whose pass draws one quad "wall" at depth 3 (add_quad over pixels px0
+/// to px1 of the 64-pixel synthetic view) with a shader of `alu_ops` ALU ops and `tex_fetches`
+/// fetches; run_wall appends the pass, so a test can widen it first.
+struct WallFrame {
+  Scene scene = base_scene();
+  Trace trace;
+  PassDesc pass = base_pass();
+};
+WallFrame wall_frame(int size, std::uint32_t alu_ops, std::uint32_t tex_fetches, float px0, float px1) {
+  WallFrame w;
+  w.trace = frame_of(size);
+  w.trace.shaders[0].alu_ops = alu_ops;
+  w.trace.shaders[0].tex_fetches = tex_fetches;
+  add_quad(w.scene, "wall", 3, px0, px1, 0);
+  w.pass.draws = {draw_of("wall")};
+  return w;
+}
+Timed run_wall(WallFrame w, const std::vector<std::string>& sets) {
+  w.trace.commands.push_back(w.pass);
+  return run_timed(w.trace, w.scene, sets);
+}
+
+/// Adds color targets to `w` until its pass has `targets`, copies of the first named `prefix`<i>
+/// with `usage`, and lets the shader write them all.
+void widen(WallFrame& w, int targets, const std::string& prefix, AttachmentUsage usage) {
+  for (int i = 1; i < targets; ++i) {
+    Attachment a = w.pass.attachments[0];
+    a.name = prefix + std::to_string(i);
+    a.usage = usage;
+    w.pass.attachments.push_back(a);
+  }
+  w.trace.shaders[0].color_outputs = static_cast<std::uint32_t>(targets);
+}
+
 TEST(TimingRoofline, FillBoundFrameMatchesTheRasterRate) {
   // 64 opaque full-frame quads front to back at 256x256: every layer is rasterised and depth
   // tested (64 x 65536 samples), only the front one is shaded (1 ALU op). Bound:
@@ -69,15 +103,7 @@ TEST(TimingRoofline, FillBoundFrameMatchesTheRasterRate) {
 TEST(TimingRoofline, AluBoundFrameMatchesTheUscRate) {
   // One full-frame quad, 4000 ALU ops per fragment, 256x256 (no helper lanes: whole quads).
   // Bound: cycles = 65536 x 4000 / (usc.count 4 x lanes 16 x 2 ops per clock) = 2048000.
-  Scene s = base_scene();
-  Trace t = frame_of(256);
-  t.shaders[0].alu_ops = 4000;
-  t.shaders[0].tex_fetches = 0;
-  add_quad(s, "wall", 3, -256, 512, 0);
-  PassDesc p = base_pass();
-  p.draws = {draw_of("wall")};
-  t.commands.push_back(p);
-  const Timed r = run_timed(t, s, {});
+  const Timed r = run_wall(wall_frame(256, 4000, 0, -256, 512), {});
   // The quad's two triangles split the 2x2 quads along its diagonal: each launches those quads,
   // so 256 helper lanes run the shader too.
   EXPECT_EQ(stat(r.frame.stats, "frame/tsp", "helper_lanes"), 256);
@@ -90,22 +116,10 @@ TEST(TimingRoofline, StoreBoundFrameMatchesDramBandwidth) {
   // One cheap full-frame quad at 512x512 writing 8 rgba32f targets that are all stored:
   // 512 x 512 x 128 B = 33554432 B. Bound: bytes / dram.bandwidth_gbps (12.8 GB/s) = 2.6214 ms
   // = 1572864 cycles at 600 MHz (the pixel back end alone would need 1048576 cycles).
-  Scene s = base_scene();
-  Trace t = frame_of(512);
-  t.shaders[0].alu_ops = 1;
-  t.shaders[0].tex_fetches = 0;
-  t.shaders[0].color_outputs = 8;
-  add_quad(s, "wall", 3, -512, 1024, 0);
-  PassDesc p = base_pass();
-  p.attachments[0].format = Format::Rgba32f;
-  for (int i = 1; i < 8; ++i) {
-    Attachment a = p.attachments[0];
-    a.name = "mrt" + std::to_string(i);
-    p.attachments.push_back(a);
-  }
-  p.draws = {draw_of("wall")};
-  t.commands.push_back(p);
-  const Timed r = run_timed(t, s, {"pls.tile_buffer_bits_per_pixel=2048"});
+  WallFrame w = wall_frame(512, 1, 0, -512, 1024);
+  w.pass.attachments[0].format = Format::Rgba32f;
+  widen(w, 8, "mrt", w.pass.attachments[0].usage);
+  const Timed r = run_wall(w, {"pls.tile_buffer_bits_per_pixel=2048"});
   ASSERT_EQ(r.frame.dram.writes(DramClass::Color), 512u * 512u * 128u);
   const double bound = 512.0 * 512 * 128 / 12.8e9 * 600e6;
   EXPECT_NEAR(r.timing.frame_cycles, bound, 0.05 * bound) << "DRAM bound " << bound;
@@ -113,23 +127,16 @@ TEST(TimingRoofline, StoreBoundFrameMatchesDramBandwidth) {
 
 /// One full-frame 512x512 quad mapping an 8192x8192 texture (mip level 4: one texel per pixel),
 /// its shader 1 ALU op and `fetches` fetch slots; the trace and scene of the texture tests below.
-Trace textured_wall(Scene& s, std::uint32_t fetches) {
-  s = base_scene();
+WallFrame textured_wall(std::uint32_t fetches) {
+  WallFrame w = wall_frame(512, 1, fetches, 0, 64);
   TextureInfo tex;
   tex.name = "big";
   tex.format = "procedural";
   tex.width = tex.height = 8192;
   tex.channels = 4;
-  s.textures.push_back(tex);
-  s.materials[0].base_color_texture = 0;
-  Trace t = frame_of(512);
-  t.shaders[0].alu_ops = 1;
-  t.shaders[0].tex_fetches = fetches;
-  add_quad(s, "wall", 3, 0, 64, 0);
-  PassDesc p = base_pass();
-  p.draws = {draw_of("wall")};
-  t.commands.push_back(p);
-  return t;
+  w.scene.textures.push_back(tex);
+  w.scene.materials[0].base_color_texture = 0;
+  return w;
 }
 
 TEST(TimingLatencyHiding, MoreResidentTasksHideTextureLatencyUntilTheBandwidthBound) {
@@ -142,11 +149,10 @@ TEST(TimingLatencyHiding, MoreResidentTasksHideTextureLatencyUntilTheBandwidthBo
   // tile. From 16 per USC (64 slots) two 32-task tiles are resident, from 32 four: their reads
   // overlap until the DRAM's 12.8 GB/s binds: 1 MiB + the 1 MiB colour store = 2 MiB / 12.8 GB/s
   // x 600 MHz = 98 k cycles.
-  Scene s;
-  const Trace t = textured_wall(s, 1);
+  const WallFrame w = textured_wall(1);
   std::vector<double> cycles;
   for (int tasks : {1, 2, 4, 8, 16, 32, 64}) {
-    const Timed r = run_timed(t, s, {"texture.texels_per_clock=64", "usc.tasks_in_flight=" + std::to_string(tasks)});
+    const Timed r = run_wall(w, {"texture.texels_per_clock=64", "usc.tasks_in_flight=" + std::to_string(tasks)});
     cycles.push_back(r.timing.frame_cycles);
   }
   // Never slower by more than the row-buffer conflicts more interleaved tile streams cause
@@ -166,22 +172,7 @@ TEST(TimingRoofline, TextureBoundFrameMatchesDramBandwidth) {
   // filtered texels per clock the texture units take 262 k cycles, near the DRAM bound; at 16 per
   // clock (66 k cycles) the bound is the DRAM: bytes moved / dram.bandwidth_gbps (12.8 GB/s), at
   // 600 MHz.
-  Scene s = base_scene();
-  TextureInfo tex;
-  tex.name = "big";
-  tex.format = "procedural";
-  tex.width = tex.height = 8192;
-  tex.channels = 4;
-  s.textures.push_back(tex);
-  s.materials[0].base_color_texture = 0;
-  Trace t = frame_of(512);
-  t.shaders[0].alu_ops = 1;
-  t.shaders[0].tex_fetches = 8;
-  add_quad(s, "wall", 3, 0, 64, 0);
-  PassDesc p = base_pass();
-  p.draws = {draw_of("wall")};
-  t.commands.push_back(p);
-  const Timed r = run_timed(t, s, {"texture.texels_per_clock=16"});
+  const Timed r = run_wall(textured_wall(8), {"texture.texels_per_clock=16"});
   const double footprint = static_cast<double>(r.timing.texture_footprint_lines * 64);
   const double texture = static_cast<double>(r.timing.dram.reads(DramClass::Textures));
   const double moved = static_cast<double>(r.timing.dram.total_read() + r.timing.dram.total_written());

@@ -257,6 +257,72 @@ TEST(TraceRoundTrip, HashIdentifiesCanonicalText) {
   EXPECT_NE(trace_hash(a), trace_hash(b));
 }
 
+// ---- a pass over the image a dispatch wrote (version 2) ----------------------------------------------
+
+// A G-buffer pass and a shading dispatch writing the image buffer `frame` (64 x 64 x 4 B): lines 1-16.
+const std::string kImageHead =
+    "scene atrium detail=1\n"
+    "frame width=64 height=64 samples=1\n"
+    "camera eye=0,0,5 target=0,0,0 up=0,1,0 fov_y_deg=60 near=0.1 far=100\n"
+    "light point position=0,0,0 radius=1 color=1,1,1 intensity=1\n"
+    "buffer lights bytes=48 traffic=light_data content=lights upload=yes\n"
+    "buffer frame bytes=16384 traffic=color content=image\n"
+    "shader s alu_ops=1 tex_fetches=0 varyings=0 light_alu_ops=0 light_source=none color_outputs=1\n"
+    "pipeline p shader=s depth_test=yes depth_write=no blend=alpha cull=none\n"
+    "pass gbuffer\n"
+    "  attachment albedo format=rgba8 samples=1 load=clear store=store usage=gbuffer\n"
+    "  attachment depth format=d24s8 samples=1 load=clear store=store usage=depth\n"
+    "  draw fullscreen pipeline=p\n"
+    "end\n"
+    "barrier resources=albedo,depth\n"
+    "dispatch deferred_shade groups=4,4,1 group_size=16,16,1 reads=albedo,depth,lights writes=frame shader=s\n";
+// A pass whose color attachment is that image (first line given).
+std::string image_pass(const std::string& attachment) {
+  return "pass translucent\n" + attachment + "\n" +
+         "  attachment depth format=d24s8 samples=1 load=load store=dont_care usage=depth\n"
+         "  draw fullscreen pipeline=p\n"
+         "end\n";
+}
+const std::string kImageAttachment = "  attachment frame format=rgba8 samples=1 load=load store=store usage=color";
+
+TEST(TraceImageAttachments, APassLoadsTheImageADispatchWrote) {
+  const std::string text = "tbdrsim-trace 2\n" + kImageHead + "barrier resources=frame\n" + image_pass(kImageAttachment);
+  const Trace t = parse(text);
+  EXPECT_EQ(t.version, 2);
+  const auto& pass = std::get<PassDesc>(t.commands.back());
+  EXPECT_EQ(pass.attachments[0].name, "frame");
+  EXPECT_EQ(t.find_buffer("frame")->content, BufferContent::Image);
+  EXPECT_EQ(write(parse(write(t))), write(t));
+  // An earlier pass may already have used the image (not storing it): the dispatch's write counts.
+  std::string earlier = kImageHead;
+  const std::string albedo = "  attachment albedo format=rgba8 samples=1 load=clear store=store usage=gbuffer\n";
+  earlier.replace(earlier.find(albedo), albedo.size(),
+                  albedo + "  attachment frame format=rgba8 samples=1 load=clear store=dont_care usage=color\n");
+  EXPECT_NO_THROW(parse("tbdrsim-trace 2\n" + earlier + "barrier resources=frame\n" + image_pass(kImageAttachment)));
+}
+
+TEST(TraceImageAttachments, TheImageIsAnRgba8FrameWrittenBeforeABarrierInVersion2) {
+  const std::string v2 = "tbdrsim-trace 2\n" + kImageHead;
+  // Line 17 is the barrier (or the pass), the attachment follows the pass line.
+  expect_error(v2 + image_pass(kImageAttachment), 18, "no barrier in between");
+  expect_error("tbdrsim-trace 1\n" + kImageHead + "barrier resources=frame\n" + image_pass(kImageAttachment), 19,
+               "needs trace version 2");
+  expect_error(v2 + "barrier resources=frame\n" +
+                   image_pass("  attachment frame format=rgba16f samples=1 load=load store=store usage=color"),
+               19, "must be format=rgba8 samples=1 usage=color");
+  expect_error(v2 + "barrier resources=frame\n" +
+                   image_pass("  attachment frame format=rgba8 samples=1 load=load store=store usage=gbuffer"),
+               19, "must be format=rgba8 samples=1 usage=color");
+  expect_error("tbdrsim-trace 2\n" + kImageHead.substr(0, kImageHead.find("buffer frame")) +
+                   "buffer frame bytes=4096 traffic=color content=image\n" +
+                   kImageHead.substr(kImageHead.find("shader s")) + "barrier resources=frame\n" + image_pass(kImageAttachment),
+               19, "16384 bytes");
+  // Any other buffer's name stays taken.
+  expect_error(v2 + "barrier resources=frame\n" +
+                   image_pass("  attachment lights format=rgba8 samples=1 load=clear store=store usage=color"),
+               19, "already a buffer");
+}
+
 // ---- reader errors: file:line and the offending token ------------------------------------------------
 
 TEST(TraceErrors, UnknownVersionIsRefused) {
@@ -264,7 +330,7 @@ TEST(TraceErrors, UnknownVersionIsRefused) {
     parse("tbdrsim-trace 7\n");
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("t.trace:1: trace version 7 is newer than this reader (1)", 0), 0u)
+    EXPECT_EQ(std::string(e.what()).rfind("t.trace:1: trace version 7 is newer than this reader (2)", 0), 0u)
         << e.what();
   }
   expect_error("tbdrsim-trace 0\n", 1, "'0'");

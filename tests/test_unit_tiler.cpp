@@ -8,6 +8,7 @@
 // no compression; 4 KiB pages.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <vector>
 
 #include "unit_fixture.hpp"
@@ -17,24 +18,20 @@ namespace {
 
 using namespace unit;
 
+// A triangle of draw `draw` with 8 varyings whose vertices carry the keys `keys` (shared vertices
+// share keys).
+ScreenTri keyed(ScreenTri t, std::array<std::uint32_t, 3> keys, std::uint32_t draw) {
+  t.draw = draw;
+  t.varyings = 8;
+  t.keys = {keys[0], keys[1], keys[2]};
+  return t;
+}
 // The upper-left half of the viewport: covers samples with x + y <= 62, in tiles 0, 1, 2 (tile 3's
 // nearest sample, (32.5, 32.5), has x + y = 65 > 64).
-ScreenTri upper_left_64(std::uint32_t draw = 0) {
-  ScreenTri t{{0, 0}, {64, 0}, {0, 64}};
-  t.draw = draw;
-  t.varyings = 8;
-  t.keys = {1, 2, 3};
-  return t;
-}
+ScreenTri upper_left_64(std::uint32_t draw = 0) { return keyed({{0, 0}, {64, 0}, {0, 64}}, {1, 2, 3}, draw); }
 // The lower-right half, sharing the vertices (64,0) and (0,64): its diagonal is its left edge,
 // samples with x + y >= 63, in tiles 1, 2, 3.
-ScreenTri lower_right_64(std::uint32_t draw = 0) {
-  ScreenTri t{{64, 0}, {64, 64}, {0, 64}};
-  t.draw = draw;
-  t.varyings = 8;
-  t.keys = {2, 4, 3};
-  return t;
-}
+ScreenTri lower_right_64(std::uint32_t draw = 0) { return keyed({{64, 0}, {64, 64}, {0, 64}}, {2, 4, 3}, draw); }
 
 std::vector<std::uint32_t> prims_of(TilerRig& rig, int tx, int ty) { return rig.tiler().tile_primitives(rig.tile(tx, ty)); }
 
@@ -89,18 +86,18 @@ TEST(UnitTiler, ParameterBufferBytesOfAQuadFollowTheParameters) {
   ASSERT_TRUE(rig.bin(upper_left_64()));
   ASSERT_TRUE(rig.bin(lower_right_64()));
   rig.finish_render();
-  EXPECT_EQ(rig.stats.primitives_binned.value(), 2u);
-  EXPECT_EQ(rig.stats.tile_references.value(), 6u);
-  EXPECT_EQ(rig.stats.primitive_blocks.value(), 1u);
-  EXPECT_EQ(rig.stats.pb_vertices.value(), 4u);
-  EXPECT_EQ(rig.stats.control_stream_entries.value(), 4u);
-  EXPECT_EQ(rig.stats.pb_primitive_block_bytes.value(), 190u);
-  EXPECT_EQ(rig.stats.pb_control_stream_bytes.value(), 512u);
-  EXPECT_EQ(rig.stats.pb_region_header_bytes.value(), 24u);
-  EXPECT_EQ(rig.stats.pb_bytes_written.value(), 726u);
-  EXPECT_EQ(rig.dram.writes(DramClass::ParameterBuffer), 726u);
   // Allocated in 4 KiB pages, blocks, control streams and headers each rounded up: 3 pages.
-  EXPECT_EQ(rig.stats.pb_peak_allocated_bytes.value(), 3u * 4096u);
+  expect_counters(rig.stats, {{&TilerStats::primitives_binned, 2},
+                              {&TilerStats::tile_references, 6},
+                              {&TilerStats::primitive_blocks, 1},
+                              {&TilerStats::pb_vertices, 4},
+                              {&TilerStats::control_stream_entries, 4},
+                              {&TilerStats::pb_primitive_block_bytes, 190},
+                              {&TilerStats::pb_control_stream_bytes, 512},
+                              {&TilerStats::pb_region_header_bytes, 24},
+                              {&TilerStats::pb_bytes_written, 726},
+                              {&TilerStats::pb_peak_allocated_bytes, 3 * 4096}});
+  EXPECT_EQ(rig.dram.writes(DramClass::ParameterBuffer), 726u);
   // What the ISP reads for a tile: its header (6), its stream's 1 entry (8), the block (190).
   EXPECT_EQ(rig.tiler().tile_read_bytes(rig.tile(0, 0)), 204u);
   EXPECT_EQ(rig.tiler().tile_read_bytes(rig.tile(1, 1)), 204u);
@@ -124,11 +121,12 @@ TEST(UnitTiler, ANewDrawOrTheVertexLimitStartsANewBlock) {
     ASSERT_TRUE(rig.bin(upper_left_64(0)));
     ASSERT_TRUE(rig.bin(lower_right_64(1)));
     rig.finish_render();
-    EXPECT_EQ(rig.stats.primitive_blocks.value(), 2u);
-    EXPECT_EQ(rig.stats.pb_vertices.value(), 6u);
-    EXPECT_EQ(rig.stats.pb_primitive_block_bytes.value(), 290u);
-    EXPECT_EQ(rig.stats.control_stream_entries.value(), 6u);
-    EXPECT_EQ(rig.stats.pb_control_stream_bytes.value(), 512u);  // 2 entries still fit a block
+    // 2 entries still fit a control stream block: 512 B.
+    expect_counters(rig.stats, {{&TilerStats::primitive_blocks, 2},
+                                {&TilerStats::pb_vertices, 6},
+                                {&TilerStats::pb_primitive_block_bytes, 290},
+                                {&TilerStats::control_stream_entries, 6},
+                                {&TilerStats::pb_control_stream_bytes, 512}});
     EXPECT_EQ(rig.tiler().tile_read_bytes(rig.tile(1, 0)), 6u + 2u * 8u + 290u);
   }
   // At most 3 vertices per block: the same split within one draw.
@@ -188,10 +186,10 @@ TEST(UnitTiler, AFullParameterBufferRefusesThePrimitiveForAPartialRender) {
   EXPECT_EQ(binned, 76);
   EXPECT_EQ(rig.stats.primitives_binned.value(), 76u);
   rig.finish_render();
-  EXPECT_EQ(rig.stats.primitive_blocks.value(), 4u);
-  EXPECT_EQ(rig.stats.pb_vertices.value(), 76u * 3u);
-  EXPECT_EQ(rig.stats.pb_primitive_block_bytes.value(), 3u * 15829u + 16u + 13u * 753u);
-  EXPECT_EQ(rig.stats.pb_peak_allocated_bytes.value(), 65536u);
+  expect_counters(rig.stats, {{&TilerStats::primitive_blocks, 4},
+                              {&TilerStats::pb_vertices, 76 * 3},
+                              {&TilerStats::pb_primitive_block_bytes, 3 * 15829 + 16 + 13 * 753},
+                              {&TilerStats::pb_peak_allocated_bytes, 65536}});
   // After the partial render the buffer is free again: the refused triangle bins.
   rig.reset();
   EXPECT_TRUE(rig.tiler().empty());

@@ -12,14 +12,17 @@
 #include <cmath>
 #include <cstdint>
 #include <deque>
+#include <initializer_list>
 #include <map>
 #include <memory>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
+#include <gtest/gtest.h>
 
 #include "models/compute_unit.hpp"
 #include "models/frame_work.hpp"
@@ -40,6 +43,19 @@
 #include "scene/scene.hpp"
 
 namespace tbdr::unit {
+
+/// One expected value of a counter of the statistics set `S` (expect_counters).
+template <class S>
+struct CounterIs {
+  Counter S::*counter;
+  std::uint64_t value;
+};
+/// Expects every listed counter of `stats` to hold its value; a failure names the entry's position.
+template <class S>
+void expect_counters(const S& stats, std::initializer_list<CounterIs<std::type_identity_t<S>>> expected) {
+  std::size_t i = 0;
+  for (const auto& e : expected) EXPECT_EQ((stats.*e.counter).value(), e.value) << "expected counter #" << i++;
+}
 
 inline constexpr int kViewportPx = 64;  ///< the rigs' default viewport: 64x64 pixels
 inline constexpr int kTilePx = 32;      ///< the default tile size (tiling.tile_width/height)
@@ -143,6 +159,32 @@ inline LightScreenBins every_light_everywhere(std::size_t lights, int width, int
   return b;
 }
 
+/// The draws a rig has run: their commands, shaders and pipelines kept at stable addresses, and
+/// the DrawContext the command processor would give the units for each.
+class DrawStore {
+ public:
+  /// Stores one draw; returns its context selecting `selected_lights` among `light_count` lights.
+  DrawContext add(const DrawCmd& cmd, const ShaderDesc& shader, const PipelineState& pipeline,
+                  const std::vector<std::uint32_t>& selected_lights, std::size_t light_count) {
+    cmds_.push_back(cmd);
+    shaders_.push_back(shader);
+    pipelines_.push_back(pipeline);
+    DrawContext d;
+    d.cmd = &cmds_.back();
+    d.shader = &shaders_.back();
+    d.pipeline = &pipelines_.back();
+    d.lights = selected_lights;
+    d.light_selected.assign(light_count, 0);
+    for (std::uint32_t l : selected_lights) d.light_selected[l] = 1;
+    return d;
+  }
+
+ private:
+  std::deque<DrawCmd> cmds_;
+  std::deque<ShaderDesc> shaders_;
+  std::deque<PipelineState> pipelines_;
+};
+
 /// What a render rig holds: the hardware, the pass, the lights.
 struct RenderSpec {
   std::vector<std::string> sets{};  ///< hardware overrides
@@ -213,16 +255,7 @@ class RenderRig {
   std::uint32_t add_draw(const ShaderDesc& shader, const PipelineState& pipeline = {},
                          const std::vector<std::uint32_t>& selected_lights = {},
                          std::vector<std::pair<DramClass, std::uint32_t>> per_pixel_reads = {}) {
-    shaders_.push_back(shader);
-    pipelines_.push_back(pipeline);
-    cmds_.emplace_back();
-    DrawContext d;
-    d.cmd = &cmds_.back();
-    d.pipeline = &pipelines_.back();
-    d.shader = &shaders_.back();
-    d.lights = selected_lights;
-    d.light_selected.assign(lights.size(), 0);
-    for (std::uint32_t l : selected_lights) d.light_selected[l] = 1;
+    DrawContext d = draws_.add(DrawCmd{}, shader, pipeline, selected_lights, lights.size());
     d.per_pixel_reads = std::move(per_pixel_reads);
     d.pass_draw_index = static_cast<std::uint32_t>(ctx_.draws.size());
     ctx_.draws.push_back(std::move(d));
@@ -278,9 +311,7 @@ class RenderRig {
   TileMemoryStats tm_stats;
 
  private:
-  std::deque<ShaderDesc> shaders_;
-  std::deque<PipelineState> pipelines_;
-  std::deque<DrawCmd> cmds_;
+  DrawStore draws_;
   LightScreenBins light_bins_;
   RenderContext ctx_;
   std::unique_ptr<TileMemory> tile_memory_;
@@ -373,16 +404,7 @@ class GeometryRig {
   /// Runs one draw through the geometry unit (primitives appended to `prims`).
   void run(const DrawCmd& cmd, const ShaderDesc& shader = make_shader(1), const PipelineState& pipeline = {},
            const std::vector<std::uint32_t>& selected_lights = {}) {
-    cmds_.push_back(cmd);
-    shaders_.push_back(shader);
-    pipelines_.push_back(pipeline);
-    DrawContext d;
-    d.cmd = &cmds_.back();
-    d.shader = &shaders_.back();
-    d.pipeline = &pipelines_.back();
-    d.lights = selected_lights;
-    d.light_selected.assign(lights.size(), 0);
-    for (std::uint32_t l : selected_lights) d.light_selected[l] = 1;
+    const DrawContext d = store_.add(cmd, shader, pipeline, selected_lights, lights.size());
     unit_->run_draw(d, draws_++, prims, object_lights, stats, dram);
   }
 
@@ -397,9 +419,7 @@ class GeometryRig {
   std::vector<std::vector<std::uint32_t>> object_lights;
 
  private:
-  std::deque<DrawCmd> cmds_;
-  std::deque<ShaderDesc> shaders_;
-  std::deque<PipelineState> pipelines_;
+  DrawStore store_;
   std::unique_ptr<GeometryUnit> unit_;
   std::uint32_t draws_ = 0;
 };
@@ -438,12 +458,7 @@ struct ComputeSpec {
 
 /// A buffer declaration of the trace.
 inline BufferDesc make_buffer(const std::string& name, BufferContent content, DramClass traffic, std::uint64_t bytes = 0) {
-  BufferDesc b;
-  b.name = name;
-  b.content = content;
-  b.traffic = traffic;
-  b.bytes = bytes;
-  return b;
+  return BufferDesc{.name = name, .bytes = bytes, .traffic = traffic, .content = content};
 }
 
 /// Compute dispatches on the frame's images.
@@ -583,12 +598,7 @@ inline CommandWork pass_work(const std::string& name, std::vector<RenderWork> re
 }
 /// A dispatch of `alu_ops` ALU operations and `texels` texels (no memory traffic).
 inline CommandWork dispatch_work(const std::string& name, std::uint64_t alu_ops, std::uint64_t texels = 0) {
-  CommandWork c;
-  c.name = name;
-  c.is_dispatch = true;
-  c.compute_alu_ops = alu_ops;
-  c.compute_texels = texels;
-  return c;
+  return CommandWork{.name = name, .is_dispatch = true, .renders = {}, .compute_alu_ops = alu_ops, .compute_texels = texels};
 }
 /// A 64x64 frame of 32x32 tiles made of `commands`.
 inline FrameWork frame_work(std::vector<CommandWork> commands) {

@@ -123,58 +123,6 @@ std::vector<std::string> expand_range(const std::string& text, const std::string
 // ---------------------------------------------------------------------------------------------
 // The sweep file
 
-/// One "key = value" line of the sweep file with its section and line number.
-struct SweepLine {
-  std::string section;
-  std::string name;   ///< the key within its section
-  std::string full;   ///< section + "." + name, as Boost.Program_options reports it
-  std::string value;
-  long line = 0;
-};
-
-/// Scans the file like Boost.Program_options reads it ('#' comments, [section], key = value) to
-/// keep line numbers; sections must be sweep, set, vary or zip.NAME.
-std::vector<SweepLine> scan_sweep_file(const std::string& path, std::istream& in, std::map<std::string, long>& section_lines) {
-  std::vector<SweepLine> out;
-  std::map<std::string, long> seen;
-  std::string line, section;
-  long n = 0;
-  while (std::getline(in, line)) {
-    ++n;
-    if (auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
-    const std::string s = trim(line);
-    if (s.empty()) continue;
-    if (s.front() == '[') {
-      if (s.back() != ']') throw InputError(path, n, "malformed section header '" + s + "' (expected [name])");
-      section = trim(s.substr(1, s.size() - 2));
-      const bool zip = section.rfind("zip.", 0) == 0 && section.size() > 4;
-      if (section != "sweep" && section != "set" && section != "vary" && !zip) {
-        throw InputError(path, n, "unknown section [" + section + "] (known: [sweep], [set], [vary], [zip.NAME])");
-      }
-      if (section_lines.count(section)) {
-        throw InputError(path, n, "section [" + section + "] appears twice (first at line " +
-                                      std::to_string(section_lines[section]) + ")");
-      }
-      section_lines[section] = n;
-      continue;
-    }
-    const auto eq = s.find('=');
-    if (eq == std::string::npos) throw InputError(path, n, "expected 'key = value' or '[section]', found '" + s + "'");
-    if (section.empty()) throw InputError(path, n, "'" + s + "' is outside any section (start with [sweep])");
-    const std::string name = trim(s.substr(0, eq));
-    if (name.empty()) throw InputError(path, n, "missing key before '='");
-    const std::string full = section + "." + name;
-    const bool repeatable = section == "sweep" && (name == "config" || name == "trace");
-    if (auto it = seen.find(full); it != seen.end() && !repeatable) {
-      throw InputError(path, n, "key '" + name + "' set twice in [" + section + "] (first at line " +
-                                    std::to_string(it->second) + ")");
-    }
-    seen[full] = n;
-    out.push_back({section, name, full, trim(s.substr(eq + 1)), n});
-  }
-  return out;
-}
-
 /// Checks that `key` is a hardware parameter and `value` a valid value for it.
 void check_param_value(const std::string& key, const std::string& value, const std::string& where) {
   const ParamTable& table = hw_params().table();
@@ -229,7 +177,7 @@ std::vector<std::string> expand_value_list(const std::string& text, const std::s
 namespace {
 
 /// Applies one [sweep] line: name, config (base files), trace (files or globs), repetitions.
-void apply_sweep_key(SweepSpec& spec, const SweepLine& l, const std::string& value, const std::string& where,
+void apply_sweep_key(SweepSpec& spec, const IniLine& l, const std::string& value, const std::string& where,
                      const fs::path& base_dir) {
   if (l.name == "name") {
     if (value.empty()) throw InputError(where, "empty name");
@@ -261,7 +209,7 @@ void apply_sweep_key(SweepSpec& spec, const SweepLine& l, const std::string& val
 
 /// The checked values of one [vary] or [zip.NAME] line: config files (a plain list, paths may
 /// contain "..", made relative to the working directory) or parameter values (ranges expanded).
-std::vector<std::string> axis_values(const SweepLine& l, const std::string& value, const std::string& where,
+std::vector<std::string> axis_values(const IniLine& l, const std::string& value, const std::string& where,
                                      const fs::path& base_dir) {
   if (l.name != "config") {
     std::vector<std::string> values = expand_value_list(value, where);
@@ -282,7 +230,7 @@ std::vector<std::string> axis_values(const SweepLine& l, const std::string& valu
 }
 
 /// Adds one key of a zip group to its axis (created at the group's first key).
-void add_zip_key(SweepSpec& spec, std::map<std::string, std::size_t>& zip_axis, const SweepLine& l,
+void add_zip_key(SweepSpec& spec, std::map<std::string, std::size_t>& zip_axis, const IniLine& l,
                  const std::vector<std::string>& values, const std::string& where) {
   auto z = zip_axis.find(l.section);
   if (z == zip_axis.end()) {
@@ -305,13 +253,17 @@ void add_zip_key(SweepSpec& spec, std::map<std::string, std::size_t>& zip_axis, 
 }  // namespace
 
 SweepSpec parse_sweep_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "cannot open sweep file");
+  IniRules rules;
+  rules.what = "sweep file";
+  rules.known_section = [](const std::string& section) {
+    return section == "sweep" || section == "set" || section == "vary" || (section.rfind("zip.", 0) == 0 && section.size() > 4);
+  };
+  rules.known_sections = "sweep, set, vary, zip.NAME";
+  rules.keys_need_section = true;
+  rules.sections_once = true;
+  rules.may_repeat = [](const IniLine& l) { return l.section == "sweep" && (l.name == "config" || l.name == "trace"); };
   std::map<std::string, long> section_lines;
-  const std::vector<SweepLine> lines = scan_sweep_file(path, in, section_lines);
-
-  // Boost.Program_options reads the values; the scan supplies line numbers and strictness.
-  const std::vector<IniEntry> parsed = read_ini_entries(path, "sweep file", lines.size());
+  const std::vector<IniLine> lines = read_ini_file(path, rules, &section_lines);
 
   SweepSpec spec;
   spec.path = path;
@@ -320,10 +272,9 @@ SweepSpec parse_sweep_file(const std::string& path) {
   std::map<std::string, std::string> key_where;  // every key set or swept, for conflicts
   std::map<std::string, std::size_t> zip_axis;   // zip group -> axis index
   for (std::size_t i = 0; i < lines.size(); ++i) {
-    const SweepLine& l = lines[i];
+    const IniLine& l = lines[i];
     const std::string where = path + ":" + std::to_string(l.line);
-    if (parsed[i].key != l.full) throw InputError(where, "sweep file parse mismatch at key '" + l.name + "'");
-    const std::string value = trim(parsed[i].value);
+    const std::string value = trim(l.value);
     if (l.section == "sweep") {
       apply_sweep_key(spec, l, value, where, base_dir);
       continue;

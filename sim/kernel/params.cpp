@@ -189,54 +189,6 @@ ResolvedParams ParamTable::defaults() const {
 
 namespace {
 
-/// One "key = value" line found by the line scan, with its line number.
-struct ScannedEntry {
-  std::string key;
-  std::string value;
-  long line = 0;
-};
-
-/// Scans an INI file the way Boost.Program_options reads it ('#' starts a comment anywhere,
-/// [section] headers, key=value), keeping line numbers, which Boost does not report.
-std::vector<ScannedEntry> scan_ini(const std::string& path, std::istream& in, const ParamTable& table) {
-  std::vector<ScannedEntry> out;
-  std::map<std::string, long> seen;
-  std::string line;
-  std::string section;
-  long n = 0;
-  while (std::getline(in, line)) {
-    ++n;
-    auto hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
-    const std::string s = trim(line);
-    if (s.empty()) continue;
-    if (s.front() == '[') {
-      if (s.back() != ']') throw InputError(path, n, "malformed section header '" + s + "' (expected [name])");
-      section = trim(s.substr(1, s.size() - 2));
-      if (!table.has_section(section)) {
-        std::string known;
-        for (const auto& sec : table.sections()) known += (known.empty() ? "" : ", ") + sec.first;
-        throw InputError(path, n, "unknown section [" + section + "] (known sections: " + known + ")");
-      }
-      continue;
-    }
-    const auto eq = s.find('=');
-    if (eq == std::string::npos) {
-      throw InputError(path, n, "expected 'key = value' or '[section]', found '" + s + "'");
-    }
-    const std::string name = trim(s.substr(0, eq));
-    if (name.empty()) throw InputError(path, n, "missing key before '='");
-    const std::string key = section.empty() ? name : section + "." + name;
-    if (auto it = seen.find(key); it != seen.end()) {
-      throw InputError(path, n, "key '" + key + "' set twice in one file (first at line " +
-                                    std::to_string(it->second) + ")");
-    }
-    seen[key] = n;
-    out.push_back({key, trim(s.substr(eq + 1)), n});
-  }
-  return out;
-}
-
 std::string closest_key(const ParamTable& table, const std::string& key) {
   // Suggest a declared key of the same section, or with the same name, when one is close.
   const auto dot = key.rfind('.');
@@ -292,41 +244,90 @@ void apply_one(const ParamTable& table, ResolvedParams& p, const std::string& wh
 }  // namespace
 
 void ParamTable::apply_config_file(ResolvedParams& p, const std::string& path) const {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "cannot open config file");
-  const std::vector<ScannedEntry> scanned = scan_ini(path, in, *this);
-
-  // Boost.Program_options reads the values; the scan above supplies line numbers and strictness.
-  const std::vector<IniEntry> parsed = read_ini_entries(path, "config file", scanned.size());
-  for (std::size_t i = 0; i < scanned.size(); ++i) {
-    const std::string where = path + ":" + std::to_string(scanned[i].line);
-    if (parsed[i].key != scanned[i].key) {
-      throw InputError(where, "config file parse mismatch at key '" + scanned[i].key + "'");
-    }
-    apply_one(*this, p, where, parsed[i].key, parsed[i].value);
-  }
+  IniRules rules;
+  rules.what = "config file";
+  rules.known_section = [this](const std::string& section) { return has_section(section); };
+  for (const auto& sec : sections()) rules.known_sections += (rules.known_sections.empty() ? "" : ", ") + sec.first;
+  for (const IniLine& l : read_ini_file(path, rules)) apply_one(*this, p, path + ":" + std::to_string(l.line), l.key, l.value);
   p.config_name = std::filesystem::path(path).stem().string();
 }
 
-std::vector<IniEntry> read_ini_entries(const std::string& path, const char* what, std::size_t expected_entries) {
+namespace {
+
+/// The line scan of read_ini_file: every `key = value` line with its section and line number
+/// (Boost.Program_options reports neither), refusing what `rules` do not allow.
+std::vector<IniLine> scan_ini_lines(const std::string& path, std::istream& in, const IniRules& rules,
+                                    std::map<std::string, long>& section_lines) {
+  std::vector<IniLine> out;
+  std::map<std::string, long> seen;
+  std::string line, section;
+  long n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+    const std::string s = trim(line);
+    if (s.empty()) continue;
+    if (s.front() == '[') {
+      if (s.back() != ']') throw InputError(path, n, "malformed section header '" + s + "' (expected [name])");
+      section = trim(s.substr(1, s.size() - 2));
+      if (!rules.known_section(section)) {
+        throw InputError(path, n, "unknown section [" + section + "] (known sections: " + rules.known_sections + ")");
+      }
+      if (auto it = section_lines.find(section); it != section_lines.end() && rules.sections_once) {
+        throw InputError(path, n, "section [" + section + "] appears twice (first at line " + std::to_string(it->second) + ")");
+      }
+      section_lines.emplace(section, n);
+      continue;
+    }
+    const auto eq = s.find('=');
+    if (eq == std::string::npos) throw InputError(path, n, "expected 'key = value' or '[section]', found '" + s + "'");
+    if (section.empty() && rules.keys_need_section) {
+      throw InputError(path, n, "'" + s + "' is outside any section (known sections: " + rules.known_sections + ")");
+    }
+    IniLine l;
+    l.section = section;
+    l.name = trim(s.substr(0, eq));
+    if (l.name.empty()) throw InputError(path, n, "missing key before '='");
+    l.key = section.empty() ? l.name : section + "." + l.name;
+    l.line = n;
+    if (auto it = seen.find(l.key); it != seen.end() && !(rules.may_repeat && rules.may_repeat(l))) {
+      throw InputError(path, n, "key '" + l.key + "' set twice in one file (first at line " + std::to_string(it->second) + ")");
+    }
+    seen.emplace(l.key, n);
+    out.push_back(std::move(l));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<IniLine> read_ini_file(const std::string& path, const IniRules& rules, std::map<std::string, long>* section_lines) {
   namespace po = boost::program_options;
+  std::map<std::string, long> own_section_lines;
+  std::ifstream scan(path);
+  if (!scan) throw InputError(path, std::string("cannot open ") + rules.what);
+  std::vector<IniLine> lines = scan_ini_lines(path, scan, rules, section_lines ? *section_lines : own_section_lines);
+
   std::ifstream in(path);
-  if (!in) throw InputError(path, std::string("cannot open ") + what);
   po::options_description none;
   po::parsed_options parsed(&none);
   try {
     parsed = po::parse_config_file(in, none, /*allow_unregistered=*/true);
   } catch (const po::error& e) {
-    throw InputError(path, std::string("cannot parse ") + what + ": " + e.what());
+    throw InputError(path, std::string("cannot parse ") + rules.what + ": " + e.what());
   }
-  if (parsed.options.size() != expected_entries) {
-    throw InputError(path, std::string(what) + " parse mismatch (" + std::to_string(parsed.options.size()) +
-                               " entries read, " + std::to_string(expected_entries) + " expected)");
+  if (parsed.options.size() != lines.size()) {
+    throw InputError(path, std::string(rules.what) + " parse mismatch (" + std::to_string(parsed.options.size()) +
+                               " entries read, " + std::to_string(lines.size()) + " expected)");
   }
-  std::vector<IniEntry> out;
-  out.reserve(parsed.options.size());
-  for (const auto& opt : parsed.options) out.push_back({opt.string_key, opt.value.empty() ? std::string{} : opt.value.front()});
-  return out;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const po::option& opt = parsed.options[i];
+    if (opt.string_key != lines[i].key) {
+      throw InputError(path, lines[i].line, std::string(rules.what) + " parse mismatch at key '" + lines[i].key + "'");
+    }
+    lines[i].value = opt.value.empty() ? std::string{} : opt.value.front();
+  }
+  return lines;
 }
 
 void ParamTable::apply_override(ResolvedParams& p, const std::string& assignment) const {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <map>
 #include <memory>
 #include <span>
 #include <stdexcept>
@@ -16,19 +17,35 @@
 
 namespace tbdr {
 
-/// One "section.key = value" entry of an INI file as Boost.Program_options read it.
-struct IniEntry {
-  std::string key;    ///< "section.key"
-  std::string value;  ///< raw value text
-};
 /// `s` without its leading and trailing blanks (space, tab, CR, LF).
 std::string trim(const std::string& s);
 
-/// Reads every entry of an INI file with Boost.Program_options (allow_unregistered), in file
-/// order; `what` names the file kind in errors ("config file", "sweep file"). Throws InputError
-/// naming the file when Boost refuses it or when it does not find `expected_entries` entries (the
-/// count a caller's own line scan found, so the two stay in step).
-std::vector<IniEntry> read_ini_entries(const std::string& path, const char* what, std::size_t expected_entries);
+/// One `key = value` line of an INI file (a config file, a sweep file), with its line number.
+struct IniLine {
+  std::string section;  ///< the [section] it stands in ("" before the first header)
+  std::string name;     ///< the key within its section
+  std::string key;      ///< "section.name" (or the bare name outside any section), as Boost.Program_options reports it
+  std::string value;    ///< the value text as Boost.Program_options read it
+  long line = 0;        ///< 1-based line in the file
+};
+
+/// What one kind of INI file may hold; read_ini_file refuses everything else.
+struct IniRules {
+  const char* what = "config file";                        ///< the file kind in errors
+  std::function<bool(const std::string&)> known_section;   ///< is [section] allowed?
+  std::string known_sections;                              ///< listed when a section is not
+  bool keys_need_section = false;                          ///< refuse keys before the first [section]
+  bool sections_once = false;                              ///< refuse a [section] header met twice
+  std::function<bool(const IniLine&)> may_repeat;          ///< keys that may be set again (empty: none)
+};
+
+/// Reads an INI file: a line scan that keeps line numbers and is strict (the rules; '#' starts a
+/// comment anywhere, [section] headers, key = value; a key set twice), then Boost.Program_options
+/// (allow_unregistered) for the values, checked to find the same keys in the same order. Every
+/// error is an InputError naming file:line. `section_lines`, when given, receives the first line
+/// of each [section].
+std::vector<IniLine> read_ini_file(const std::string& path, const IniRules& rules,
+                                   std::map<std::string, long>* section_lines = nullptr);
 
 /// The value of one parameter: integer, real, boolean, or text (free text or one of a choice list).
 using ParamValue = std::variant<std::int64_t, double, bool, std::string>;

@@ -18,53 +18,51 @@
 
 namespace tbdr {
 
+/// What Tick and Cycles share: a strong 64-bit count that compares, adds, subtracts and scales
+/// only with its own kind `D` (a Tick plus a Cycles does not compile).
+template <class D>
+class StrongCount {
+ public:
+  friend constexpr auto operator<=>(StrongCount, StrongCount) = default;
+  friend constexpr D operator+(D a, D b) { return D{a.n_ + b.n_}; }
+  friend constexpr D operator-(D a, D b) { return D{a.n_ - b.n_}; }
+  friend constexpr D operator*(D a, std::int64_t k) { return D{a.n_ * k}; }
+  friend constexpr D operator*(std::int64_t k, D a) { return D{a.n_ * k}; }
+  constexpr D& operator+=(D b) { n_ += b.n_; return static_cast<D&>(*this); }
+  constexpr D& operator-=(D b) { n_ -= b.n_; return static_cast<D&>(*this); }
+
+ protected:
+  constexpr StrongCount() = default;
+  constexpr explicit StrongCount(std::int64_t n) : n_(n) {}
+  std::int64_t n_ = 0;
+};
+
 /// A point in (or span of) simulated time, in integer picoseconds; the event queue's time base.
-class Tick {
+class Tick : public StrongCount<Tick> {
  public:
   constexpr Tick() = default;
-  constexpr explicit Tick(std::int64_t ps) : ps_(ps) {}
+  constexpr explicit Tick(std::int64_t ps) : StrongCount(ps) {}
 
   static constexpr Tick zero() { return Tick{0}; }
   static constexpr Tick max() { return Tick{INT64_MAX}; }
   static constexpr Tick from_ns(std::int64_t ns) { return Tick{ns * 1000}; }
   static constexpr Tick from_us(std::int64_t us) { return Tick{us * 1'000'000}; }
 
-  constexpr std::int64_t ps() const { return ps_; }
+  constexpr std::int64_t ps() const { return n_; }
   /// For reports only: the tick in seconds as a double.
-  constexpr double seconds() const { return static_cast<double>(ps_) * 1e-12; }
-
-  friend constexpr auto operator<=>(Tick, Tick) = default;
-  friend constexpr Tick operator+(Tick a, Tick b) { return Tick{a.ps_ + b.ps_}; }
-  friend constexpr Tick operator-(Tick a, Tick b) { return Tick{a.ps_ - b.ps_}; }
-  friend constexpr Tick operator*(Tick a, std::int64_t k) { return Tick{a.ps_ * k}; }
-  friend constexpr Tick operator*(std::int64_t k, Tick a) { return Tick{a.ps_ * k}; }
-  constexpr Tick& operator+=(Tick b) { ps_ += b.ps_; return *this; }
-  constexpr Tick& operator-=(Tick b) { ps_ -= b.ps_; return *this; }
-
- private:
-  std::int64_t ps_ = 0;
+  constexpr double seconds() const { return static_cast<double>(n_) * 1e-12; }
 };
 
 /// A count of clock cycles of some ClockDomain; converts to Tick only through that domain.
-class Cycles {
+class Cycles : public StrongCount<Cycles> {
  public:
   constexpr Cycles() = default;
-  constexpr explicit Cycles(std::int64_t n) : n_(n) {}
+  constexpr explicit Cycles(std::int64_t n) : StrongCount(n) {}
 
   constexpr std::int64_t count() const { return n_; }
 
-  friend constexpr auto operator<=>(Cycles, Cycles) = default;
-  friend constexpr Cycles operator+(Cycles a, Cycles b) { return Cycles{a.n_ + b.n_}; }
-  friend constexpr Cycles operator-(Cycles a, Cycles b) { return Cycles{a.n_ - b.n_}; }
-  friend constexpr Cycles operator*(Cycles a, std::int64_t k) { return Cycles{a.n_ * k}; }
-  friend constexpr Cycles operator*(std::int64_t k, Cycles a) { return Cycles{a.n_ * k}; }
-  constexpr Cycles& operator+=(Cycles b) { n_ += b.n_; return *this; }
-  constexpr Cycles& operator-=(Cycles b) { n_ -= b.n_; return *this; }
   constexpr Cycles& operator++() { ++n_; return *this; }
   constexpr Cycles operator++(int) { Cycles old = *this; ++n_; return old; }
-
- private:
-  std::int64_t n_ = 0;
 };
 
 /// A named clock (core, memory, ...) with an exact integer frequency; maps cycles <-> ticks.

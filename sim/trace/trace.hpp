@@ -24,7 +24,10 @@
 namespace tbdr {
 
 /// The trace format version this build reads and writes. See docs/trace-format.md for what bumps it.
-inline constexpr int kTraceVersion = 1;
+inline constexpr int kTraceVersion = 2;
+/// The version that lets an attachment name a `content=image` buffer (a pass loading the frame a
+/// dispatch wrote); version 1 readers refuse the name as a duplicate.
+inline constexpr int kImageAttachmentVersion = 2;
 
 // ---------------------------------------------------------------------------------------------
 // Enums. Each has to_string() giving the trace spelling and parse_<enum>() returning nullopt for
@@ -114,46 +117,40 @@ enum class ComputeKernel : std::uint8_t {
 };
 inline constexpr std::size_t kComputeKernelCount = 8;
 
-const char* to_string(Format v);
-const char* to_string(LoadOp v);
-const char* to_string(StoreOp v);
-const char* to_string(AttachmentUsage v);
-const char* to_string(LightSource v);
-const char* to_string(PlsAccess v);
-const char* to_string(CompareOp v);
-const char* to_string(StencilOp v);
-const char* to_string(BlendMode v);
-const char* to_string(CullMode v);
-const char* to_string(AlphaOverride v);
-const char* to_string(GeometryKind v);
-const char* to_string(SceneSubset v);
-const char* to_string(BufferContent v);
-const char* to_string(SceneKind v);
-const char* to_string(ComputeKernel v);
+/// Every enum above as X(Type, spelling): each has `const char* to_string(Type)` and
+/// `std::optional<Type> parse_<spelling>(std::string_view)`, both from one table of spellings
+/// (`<spelling>_names` in trace.cpp).
+#define TBDR_TRACE_ENUMS(X) \
+  X(Format, format) \
+  X(LoadOp, load_op) \
+  X(StoreOp, store_op) \
+  X(AttachmentUsage, attachment_usage) \
+  X(LightSource, light_source) \
+  X(PlsAccess, pls_access) \
+  X(CompareOp, compare_op) \
+  X(StencilOp, stencil_op) \
+  X(BlendMode, blend_mode) \
+  X(CullMode, cull_mode) \
+  X(AlphaOverride, alpha_override) \
+  X(GeometryKind, geometry_kind) \
+  X(SceneSubset, scene_subset) \
+  X(BufferContent, buffer_content) \
+  X(SceneKind, scene_kind) \
+  X(ComputeKernel, compute_kernel)
+
+#define TBDR_DECLARE_TRACE_ENUM(Type, spelling) \
+  const char* to_string(Type v);                  \
+  std::optional<Type> parse_##spelling(std::string_view s);
+TBDR_TRACE_ENUMS(TBDR_DECLARE_TRACE_ENUM)
+#undef TBDR_DECLARE_TRACE_ENUM
+
 /// Every kernel's spelling, comma-separated in enum order (for "known: ..." error messages).
 std::string compute_kernel_list();
-
-std::optional<Format> parse_format(std::string_view s);
-std::optional<LoadOp> parse_load_op(std::string_view s);
-std::optional<StoreOp> parse_store_op(std::string_view s);
-std::optional<AttachmentUsage> parse_attachment_usage(std::string_view s);
-std::optional<LightSource> parse_light_source(std::string_view s);
-std::optional<PlsAccess> parse_pls_access(std::string_view s);
-std::optional<CompareOp> parse_compare_op(std::string_view s);
-std::optional<StencilOp> parse_stencil_op(std::string_view s);
-std::optional<BlendMode> parse_blend_mode(std::string_view s);
-std::optional<CullMode> parse_cull_mode(std::string_view s);
-std::optional<AlphaOverride> parse_alpha_override(std::string_view s);
-std::optional<GeometryKind> parse_geometry_kind(std::string_view s);
-std::optional<SceneSubset> parse_scene_subset(std::string_view s);
 /// The DRAM class a `buffer ... traffic=T` line names; only the classes a buffer can hold
 /// (light_data, light_lists, gbuffer, color, depth, visibility, work_lists, other).
 std::optional<DramClass> parse_buffer_traffic(std::string_view s);
 /// The trace's spelling of a buffer's DRAM class (the inverse of parse_buffer_traffic).
 const char* buffer_traffic_name(DramClass c);
-std::optional<BufferContent> parse_buffer_content(std::string_view s);
-std::optional<SceneKind> parse_scene_kind(std::string_view s);
-std::optional<ComputeKernel> parse_compute_kernel(std::string_view s);
 
 // ---------------------------------------------------------------------------------------------
 // Declarations

@@ -135,6 +135,9 @@ class Reader {
   };
   PassDesc& pass() { return std::get<PassDesc>(trace_.commands[*current_pass_]); }
   void check_new_resource_name(const Line& l, const std::string& name);
+  /// An attachment named after a buffer: allowed for a `content=image` buffer (version 2), which
+  /// it then is (rgba8, 1 sample, usage color, the frame's size).
+  void check_image_buffer_attachment(const Line& l, const Attachment& a);
   /// A read by a draw (`reads=`) or a dispatch of a buffer or stored image.
   void read_resource(const Line& l, const std::string& name, bool by_dispatch);
   void check_hazard(const Line& l, const std::string& name, bool by_dispatch);
@@ -561,6 +564,24 @@ void Reader::check_new_resource_name(const Line& l, const std::string& name) {
     fail(l.number, "duplicate name " + q(name) + ": already an attachment (line " + std::to_string(it->second.line) + ")");
 }
 
+void Reader::check_image_buffer_attachment(const Line& l, const Attachment& a) {
+  const int line = buffer_lines_.at(a.name);
+  const BufferDesc* b = trace_.find_buffer(a.name);
+  if (b->content != BufferContent::Image)
+    fail(l.number, "duplicate name " + q(a.name) + ": already a buffer (line " + std::to_string(line) +
+                       "; only a content=image buffer can be an attachment)");
+  if (trace_.version < kImageAttachmentVersion)
+    fail(l.number, "attachment " + q(a.name) + " is the image buffer of line " + std::to_string(line) +
+                       ", which needs trace version " + std::to_string(kImageAttachmentVersion) + " (this trace is version " +
+                       std::to_string(trace_.version) + ")");
+  const std::uint64_t bytes = static_cast<std::uint64_t>(trace_.frame.width) * static_cast<std::uint64_t>(trace_.frame.height) *
+                              bytes_per_sample(Format::Rgba8);
+  if (a.format != Format::Rgba8 || a.samples != 1 || a.usage != AttachmentUsage::Color || a.transient || b->bytes != bytes)
+    fail(l.number, "attachment " + q(a.name) + " is the image buffer of line " + std::to_string(line) +
+                       ": it must be format=rgba8 samples=1 usage=color, not transient, and the buffer " +
+                       std::to_string(bytes) + " bytes (width x height x 4)");
+}
+
 void Reader::on_buffer(const Line& l) {
   declaration_allowed(l, false);
   check_keys(l, {"bytes", "traffic", "content", "upload"});
@@ -657,8 +678,6 @@ void Reader::on_attachment(const Line& l) {
   if (const auto* prev = pass().find_attachment(a.name))
     fail(l.number, "duplicate attachment " + q(a.name) + " in pass " + q(pass().name) + " (line " +
                        std::to_string(prev->line) + ")");
-  if (buffer_lines_.count(a.name))
-    fail(l.number, "duplicate name " + q(a.name) + ": already a buffer (line " + std::to_string(buffer_lines_[a.name]) + ")");
   a.format = get_enum(l, "format", parse_format);
   a.samples = get_u32(l, "samples", 8);
   if (a.samples != 1 && a.samples != 2 && a.samples != 4 && a.samples != 8)
@@ -681,6 +700,8 @@ void Reader::on_attachment(const Line& l) {
   if (!a.resolve.empty() && a.samples == 1)
     fail(l.number, "attachment " + q(a.name) + " has resolve=" + a.resolve + " but only 1 sample");
 
+  if (buffer_lines_.count(a.name)) check_image_buffer_attachment(l, a);
+
   if (auto it = images_.find(a.name); it != images_.end()) {
     const Image& img = it->second;
     if (img.format != a.format || img.samples != a.samples || img.usage != a.usage)
@@ -689,7 +710,8 @@ void Reader::on_attachment(const Line& l) {
                          std::to_string(img.line) + " declared it " + to_string(img.format) + "/" +
                          std::to_string(img.samples) + " samples/" + to_string(img.usage));
   } else {
-    images_.emplace(a.name, Image{a.format, a.samples, a.usage, l.number});
+    // An image buffer a dispatch wrote is in DRAM before any pass stores it.
+    images_.emplace(a.name, Image{a.format, a.samples, a.usage, l.number, written_buffers_.count(a.name) > 0});
   }
   if (a.load == LoadOp::Load) {
     if (!images_.at(a.name).in_dram)
@@ -836,6 +858,7 @@ void Reader::on_end(const Line& l) {
   for (const auto& a : p.attachments) {
     if (a.store != StoreOp::Store) continue;
     images_.at(a.name).in_dram = true;
+    if (buffer_lines_.count(a.name)) written_buffers_.insert(a.name);  // an image buffer's frame
     pending_[a.name] = PendingWrite{l.number, false};
   }
   current_pass_.reset();
@@ -862,6 +885,7 @@ void Reader::on_dispatch(const Line& l) {
   for (const auto& name : d.writes) {
     if (buffer_lines_.count(name)) {
       written_buffers_.insert(name);
+      if (auto it = images_.find(name); it != images_.end()) it->second.in_dram = true;  // an image buffer's frame
     } else if (auto it = images_.find(name); it != images_.end()) {
       it->second.in_dram = true;
     } else {

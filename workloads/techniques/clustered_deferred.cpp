@@ -4,7 +4,7 @@
 // (every light against every used cluster) and shading (one pixel per invocation, looping over its
 // cluster's list).
 // Billeter's table: off-chip buffers = G-buffers; 1 geometry pass; overshading no; MSAA no;
-// blending no.
+// blending no (here: a forward pass over the lit frame, as engines do).
 //
 // Pass `gbuffer`: option `gbuffer` targets (albedo rgba8 + normal rgb10a2) + depth d24s8, stored.
 // barrier; dispatch cluster_flag (tiles_x x tiles_y groups, one per tile as in the thesis; reads
@@ -18,7 +18,8 @@
 // Shader `clustered_deferred_lit` (the per-pixel cost of deferred_shade): decode 4 (+1 per extra
 //   target) + position reconstruction 8 + cluster lookup 6 + ambient 3 + output 5 ALU, one fetch per
 //   G-buffer target + 1 for depth, light_source=cluster_list, 12 ALU per light.
-// Translucent (BLEND) geometry is not drawn (see tiled_deferred.cpp and docs/techniques.md).
+// translucent=forward (default): barrier on `color`, then pass `translucent` drawing the BLEND
+//   geometry over the lit frame and the G-buffer depth (as tiled_deferred.cpp).
 #include "techniques/technique.hpp"
 
 namespace tbdr {
@@ -26,22 +27,17 @@ namespace tbdr {
 namespace {
 
 Trace generate_clustered_deferred(const TraceSetup& setup, const TechniqueOptions& options) {
-  Trace t = begin_trace(setup, "clustered_deferred", options, {.no_msaa = kGbufferNoMsaa, .needs_lights = true});
-  const std::string lights = add_light_buffer(t);
-  const GbufferLayout layout = gbuffer_layout_option(options, "gbuffer");
+  ComputeDeferred c = begin_compute_deferred(setup, "clustered_deferred", options);
   const LightGrid grid = light_grid_option(setup, options, GridOptions::LogClusters);
 
-  const std::string used = add_used_clusters_buffer(t, grid);
-  add_light_grid_buffers(t, grid);
-  const ShadedGbuffer g =
-      add_compute_gbuffer(t, setup, layout, "clustered_deferred_lit", kClusterLookupAluOps, LightSource::ClusterList);
-  add_sparse_cluster_assignment(t, grid, lights, used);
-  t.commands.emplace_back(make_barrier({grid.grid_buffer(), kLightIndexBuffer}));
-  std::vector<std::string> reads = g.stored;
-  reads.insert(reads.end(), {lights, grid.grid_buffer(), kLightIndexBuffer});
-  t.commands.emplace_back(
-      shading_dispatch(ComputeKernel::DeferredShade, "clustered_deferred_lit", setup, kKernelGroupEdge, reads, g.frame));
-  return t;
+  const std::string used = add_used_clusters_buffer(c.trace, grid);
+  add_light_grid_buffers(c.trace, grid);
+  const ShadedGbuffer g = add_compute_gbuffer(c.trace, setup, c.layout, "clustered_deferred_lit", kClusterLookupAluOps,
+                                              LightSource::ClusterList);
+  add_sparse_cluster_assignment(c.trace, grid, c.lights, used);
+  c.trace.commands.emplace_back(make_barrier({grid.grid_buffer(), kLightIndexBuffer}));
+  return finish_compute_deferred(c, g, setup, options, ComputeKernel::DeferredShade, "clustered_deferred_lit",
+                                 kKernelGroupEdge, {grid.grid_buffer(), kLightIndexBuffer});
 }
 
 }  // namespace
@@ -59,7 +55,8 @@ TechniqueInfo technique_clustered_deferred() {
             "1 KB per cluster); all = the light count, so no list can overflow"},
            {"index_bytes", "auto",
             "bytes per light index: 1, 2, 4 or auto (smallest that addresses every light; the thesis uses 8-bit "
-            "indices)"}},
+            "indices)"},
+           translucent_pass_declaration()},
           &generate_clustered_deferred};
 }
 

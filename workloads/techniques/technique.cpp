@@ -438,6 +438,13 @@ bool translucent_forward_option(const TechniqueOptions& options) {
   throw InputError("option translucent=" + v, "expected forward or skip, got '" + v + "'");
 }
 
+TechniqueOption translucent_pass_declaration() {
+  return {"translucent", "forward",
+          "BLEND materials cannot live in the G-buffer: forward = draw them in a render pass that loads the "
+          "kernel-written frame as its color and tests the stored depth (per-object light lists; 1 sample only), "
+          "skip = leave them out"};
+}
+
 TechniqueOption sphere_subdivisions_declaration() {
   return {"sphere_subdivisions", "1", "icosphere level of the light proxies: 20 x 4^n triangles per light"};
 }
@@ -468,6 +475,19 @@ void add_translucent_state(Trace& trace) {
 
 void add_translucent_draw(PassDesc& pass, const std::string& lights) {
   pass.draws.push_back(scene_draw(SceneSubset::Blended, "translucent", {lights}));
+}
+
+void add_translucent_pass(Trace& trace, const TraceSetup& setup, const TechniqueOptions& options,
+                          const std::string& frame, const std::string& lights, const std::string& depth) {
+  if (!translucent_forward_option(options) || setup.samples > 1) return;
+  trace.commands.emplace_back(make_barrier({frame}));
+  PassDesc pass;
+  pass.name = "translucent";
+  pass.attachments.push_back(make_attachment(frame, Format::Rgba8, 1, LoadOp::Load, StoreOp::Store, AttachmentUsage::Color));
+  pass.attachments.push_back(depth_attachment(1, LoadOp::Load, StoreOp::DontCare, depth));
+  add_translucent_state(trace);
+  add_translucent_draw(pass, lights);
+  trace.commands.emplace_back(std::move(pass));
 }
 
 void add_ambient(Trace& trace, PassDesc& pass, const std::string& source) {
@@ -516,6 +536,15 @@ PassDesc make_gbuffer_pass(Trace& trace, const GbufferLayout& layout, const std:
   return pass;
 }
 
+ComputeDeferred begin_compute_deferred(const TraceSetup& setup, const std::string& technique,
+                                       const TechniqueOptions& options) {
+  ComputeDeferred c;
+  c.trace = begin_trace(setup, technique, options, {.no_msaa = kGbufferNoMsaa, .needs_lights = true});
+  c.lights = add_light_buffer(c.trace);
+  c.layout = gbuffer_layout_option(options, "gbuffer");
+  return c;
+}
+
 ShadedGbuffer add_compute_gbuffer(Trace& trace, const TraceSetup& setup, const GbufferLayout& layout,
                                   const std::string& shader, std::uint32_t lookup_alu_ops, LightSource source) {
   ShadedGbuffer out;
@@ -532,6 +561,18 @@ ShadedGbuffer add_compute_gbuffer(Trace& trace, const TraceSetup& setup, const G
   trace.commands.emplace_back(std::move(gbuffer));
   trace.commands.emplace_back(make_barrier(out.stored));
   return out;
+}
+
+Trace finish_compute_deferred(ComputeDeferred& c, const ShadedGbuffer& g, const TraceSetup& setup,
+                              const TechniqueOptions& options, ComputeKernel kernel, const std::string& shader,
+                              std::uint32_t tile_px, const std::vector<std::string>& extra_reads,
+                              std::map<std::string, std::string> params) {
+  std::vector<std::string> reads = g.stored;
+  reads.push_back(c.lights);
+  reads.insert(reads.end(), extra_reads.begin(), extra_reads.end());
+  c.trace.commands.emplace_back(shading_dispatch(kernel, shader, setup, tile_px, reads, g.frame, std::move(params)));
+  add_translucent_pass(c.trace, setup, options, g.frame, c.lights);
+  return std::move(c.trace);
 }
 
 // ---- light lists ---------------------------------------------------------------------------------------

@@ -290,6 +290,8 @@ Format color_format_option(const TechniqueOptions& options, const std::string& k
 /// The `translucent` option of the deferred techniques: true for "forward" (draw BLEND materials
 /// in a forward pass over the lit frame), false for "skip".
 bool translucent_forward_option(const TechniqueOptions& options);
+/// The `translucent` option of the compute-shaded techniques (add_translucent_pass), declared once.
+TechniqueOption translucent_pass_declaration();
 /// The `sphere_subdivisions` option of the light-volume techniques, declared once.
 TechniqueOption sphere_subdivisions_declaration();
 /// The `sphere_subdivisions` option's value: the icosphere level of the light proxies, 0..6.
@@ -310,6 +312,15 @@ void add_prez(Trace& trace, PassDesc& pass);
 void add_translucent_state(Trace& trace);
 /// Appends the translucent draw (subset blended, pipeline `translucent`) to `pass`.
 void add_translucent_draw(PassDesc& pass, const std::string& lights);
+/// The transparency pass of the compute-shaded techniques (tiled and clustered deferred, the
+/// visibility buffer), as engines composite transparency over a compute-lit frame: when option
+/// `translucent` is forward and the frame has 1 sample, a barrier on the lit frame `frame` (the
+/// image buffer the shading kernel wrote), then pass `translucent` whose color attachment is that
+/// image (rgba8, loaded and stored again) over the stored depth `depth` (loaded, not stored),
+/// drawing the BLEND geometry as add_translucent_state / add_translucent_draw. With MSAA the stored
+/// depth is multisampled and the frame is not: nothing is added.
+void add_translucent_pass(Trace& trace, const TraceSetup& setup, const TechniqueOptions& options,
+                          const std::string& frame, const std::string& lights, const std::string& depth = "depth");
 /// Declares the fullscreen `ambient` shader and pipeline (ambient + output, one fetch) and appends
 /// its draw, reading `source` (the albedo or normal buffer), to `pass`: the ambient term once per
 /// pixel before the light volumes add theirs.
@@ -340,6 +351,18 @@ void add_forward_lit(Trace& trace, PassDesc& pass, const ForwardLitSpec& spec);
 /// `layout` and a d24s8 depth, drawing the opaque and masked geometry. 1 sample (deferred).
 PassDesc make_gbuffer_pass(Trace& trace, const GbufferLayout& layout, const std::string& name = "gbuffer");
 
+/// A compute-shaded deferred technique's trace as it is built (tiled and clustered deferred): begun
+/// (no MSAA: kGbufferNoMsaa; at least one light), with its light buffer and the G-buffer layout of
+/// option `gbuffer`.
+struct ComputeDeferred {
+  Trace trace;
+  std::string lights;    ///< the light buffer
+  GbufferLayout layout;  ///< option `gbuffer`
+};
+/// Begins the trace of compute-shaded deferred technique `technique` (see ComputeDeferred).
+ComputeDeferred begin_compute_deferred(const TraceSetup& setup, const std::string& technique,
+                                       const TechniqueOptions& options);
+
 /// What the shading kernel of a compute-shaded deferred technique reads and writes.
 struct ShadedGbuffer {
   std::vector<std::string> stored;  ///< the G-buffer targets and depth, as the G-buffer pass stored them
@@ -352,6 +375,13 @@ struct ShadedGbuffer {
 /// G-buffer pass of `layout` and a barrier on what it stored.
 ShadedGbuffer add_compute_gbuffer(Trace& trace, const TraceSetup& setup, const GbufferLayout& layout,
                                   const std::string& shader, std::uint32_t lookup_alu_ops, LightSource source);
+/// Ends a compute-shaded deferred trace: the shading dispatch `kernel` (shading_dispatch of shader
+/// `shader`, `tile_px` and `params`) reading what the G-buffer pass stored, the lights and
+/// `extra_reads` and writing the lit frame, then add_translucent_pass. Returns the trace.
+Trace finish_compute_deferred(ComputeDeferred& c, const ShadedGbuffer& g, const TraceSetup& setup,
+                              const TechniqueOptions& options, ComputeKernel kernel, const std::string& shader,
+                              std::uint32_t tile_px, const std::vector<std::string>& extra_reads,
+                              std::map<std::string, std::string> params = {});
 
 // ---- light lists ---------------------------------------------------------------------------------------
 

@@ -5,7 +5,8 @@
 // vertex work, interpolates the surface and shades it with the tile's light list (Burns & Hunt use
 // pre-culled per-tile light lists: here a `tile_light_cull` dispatch builds them).
 // Billeter's table (not listed; by the same criteria): off-chip buffers = visibility ids + depth;
-// 1 geometry pass; overshading no; MSAA yes (ids per sample, shading per unique id); blending no.
+// 1 geometry pass; overshading no; MSAA yes (ids per sample, shading per unique id); blending no
+// (Burns & Hunt do not handle it; here: a forward pass over the lit frame at 1 sample, as engines do).
 //
 // Pass `visibility`: visibility r32ui (id_bytes=8: rg32ui) and depth d24s8, S samples, cleared and
 //   stored; opaque + masked with `visibility_id` (pack ids: 2 ALU, no fetch, no varying; masked:
@@ -20,7 +21,8 @@
 // Shader `vbuffer_lit` (vbuffer_shade's per-sample cost): reconstruction 120 + surface 12 +
 //   ambient 3 + output 5 ALU, 2 material fetches + 1 id fetch, light_source=tile_list, 12 per
 //   light; the tile is the workgroup's: no lookup. The vertex re-fetch is DRAM traffic the kernel books.
-// Translucent (BLEND) geometry is not drawn (Burns & Hunt do not handle it; see docs/techniques.md).
+// translucent=forward (default, 1 sample): barrier on `color`, then pass `translucent` drawing the
+//   BLEND geometry over the lit frame and the visibility pass's depth (as tiled_deferred.cpp).
 #include <algorithm>
 
 #include "kernel/errors.hpp"
@@ -65,6 +67,7 @@ Trace generate_visibility_buffer(const TraceSetup& setup, const TechniqueOptions
   t.commands.emplace_back(make_barrier({work, grid.grid_buffer(), kLightIndexBuffer}));
   t.commands.emplace_back(shading_dispatch(ComputeKernel::VbufferShade, "vbuffer_lit", setup, grid.tile_px,
                                            {"visibility", work, lights, grid.grid_buffer(), kLightIndexBuffer}, frame));
+  add_translucent_pass(t, setup, options, frame, lights);
   return t;
 }
 
@@ -83,7 +86,8 @@ TechniqueInfo technique_visibility_buffer() {
            {"max_lights_per_tile", "all",
             "light index list capacity per tile, sizes light_index and is the kernel's cap; all = the light "
             "count, so no list can overflow"},
-           {"index_bytes", "4", "bytes per light index: 1, 2, 4 or auto (32-bit indices as forward_plus)"}},
+           {"index_bytes", "4", "bytes per light index: 1, 2, 4 or auto (32-bit indices as forward_plus)"},
+           translucent_pass_declaration()},
           &generate_visibility_buffer};
 }
 
