@@ -7,19 +7,13 @@
 #include "models/hw_config.hpp"
 #include "models/command_processor.hpp"
 #include "synthetic_scene.hpp"
+#include "stat_lookup.hpp"
 
 namespace tbdr {
 namespace {
 
 using namespace synthetic;
 
-double stat(const FrameResult& f, const std::string& scope, const std::string& name) {
-  for (const auto& r : f.stats) {
-    if (r.scope == scope && r.name == name) return r.value;
-  }
-  ADD_FAILURE() << "no statistic " << scope << " " << name;
-  return -1;
-}
 
 /// A full-frame quad behind an 80x80 grid of small quads (12800 triangles: about 280 KB of
 /// parameter buffer, so 64 KiB forces partial renders; see test_pipeline.cpp).

@@ -12,19 +12,13 @@
 #include "scene/scene_library.hpp"
 #include "techniques/technique.hpp"
 #include "synthetic_scene.hpp"
+#include "stat_lookup.hpp"
 
 namespace tbdr {
 namespace {
 
 using namespace synthetic;
 
-double stat(const FrameResult& f, const std::string& scope, const std::string& name) {
-  for (const auto& r : f.stats) {
-    if (r.scope == scope && r.name == name) return r.value;
-  }
-  ADD_FAILURE() << "no statistic " << scope << " " << name;
-  return -1;
-}
 
 FrameResult run(const Scene& s, const std::vector<DrawCmd>& draws, const std::vector<std::string>& sets = {}) {
   Trace t = base_trace();

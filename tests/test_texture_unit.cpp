@@ -15,6 +15,7 @@
 #include "models/texture_unit.hpp"
 #include "models/command_processor.hpp"
 #include "synthetic_scene.hpp"
+#include "stat_lookup.hpp"
 
 namespace tbdr {
 namespace {
@@ -317,13 +318,6 @@ FrameResult run_frame(const Scene& s, std::uint32_t tex_fetches, const std::vect
   return simulate_frame(t, "synthetic.trace", s, resolve_config({}, {}).hw);
 }
 
-double stat(const FrameResult& f, const std::string& scope, const std::string& name) {
-  for (const auto& r : f.stats) {
-    if (r.scope == scope && r.name == name) return r.value;
-  }
-  ADD_FAILURE() << "no statistic " << scope << " " << name;
-  return -1;
-}
 
 TEST(TextureTileFootprint, FullScreenOneToOneTextureSplitsIntoTileFootprints) {
   Scene s = textured_scene(64, 64);

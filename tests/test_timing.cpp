@@ -8,19 +8,13 @@
 #include "models/command_processor.hpp"
 #include "app/run_driver.hpp"
 #include "synthetic_scene.hpp"
+#include "stat_lookup.hpp"
 
 namespace tbdr {
 namespace {
 
 using namespace synthetic;
 
-double stat(const std::vector<StatRecord>& st, const std::string& scope, const std::string& name) {
-  for (const auto& r : st) {
-    if (r.scope == scope && r.name == name) return r.value;
-  }
-  ADD_FAILURE() << "no statistic " << scope << " " << name;
-  return -1;
-}
 
 struct Timed {
   FrameResult frame;

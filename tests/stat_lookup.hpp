@@ -1,0 +1,29 @@
+#pragma once
+// Looking a statistic up by scope and name in a run's rows (tests only: the simulator itself never
+// looks figures up by name). A missing row fails the test and reads as -1.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "kernel/stats.hpp"
+
+namespace tbdr {
+
+/// The value of the row (scope, name) of `st`.
+inline double stat(const std::vector<StatRecord>& st, const std::string& scope, const std::string& name) {
+  for (const auto& r : st) {
+    if (r.scope == scope && r.name == name) return r.value;
+  }
+  ADD_FAILURE() << "no statistic " << scope << " " << name;
+  return -1;
+}
+
+/// The value of the row (scope, name) of a result that holds its rows in `stats` (a FrameResult).
+template <class Result>
+  requires requires(const Result& r) { r.stats; }
+double stat(const Result& result, const std::string& scope, const std::string& name) {
+  return stat(result.stats, scope, name);
+}
+
+}  // namespace tbdr
