@@ -127,7 +127,15 @@ class TimingSim final : public Unit {
 
   std::string_view name() const override { return "gpu_scheduler"; }
   bool has_pending_work() const override { return next_frag_ < frag_jobs_.size() || frag_busy_; }
-  std::uint64_t progress() const override { return next_frag_ * 1000000 + tiles_done_ + next_bin_; }
+  /// Jobs and tiles finished, plus the time itself while a unit is working off reserved work: a
+  /// tile whose shading takes longer than the watchdog window (thousands of lights per pixel) is
+  /// progress, not a livelock.
+  std::uint64_t progress() const override {
+    const Tick now = eq_.now();
+    bool working = false;
+    for (const Server* s : {&binner_, &isp_, &usc_, &tpu_, &tile_buffer_, &pbe_}) working = working || s->free_at > now;
+    return next_frag_ * 1000000 + tiles_done_ + next_bin_ + (working ? static_cast<std::uint64_t>(now.ps()) : 0);
+  }
   std::string stall_reason() const override {
     return "fragment job " + std::to_string(next_frag_) + "/" + std::to_string(frag_jobs_.size()) + ", binning job " +
            std::to_string(next_bin_) + "/" + std::to_string(bin_jobs_.size()) + ", tiles done " + std::to_string(tiles_done_) +
