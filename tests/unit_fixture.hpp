@@ -598,7 +598,12 @@ inline CommandWork pass_work(const std::string& name, std::vector<RenderWork> re
 }
 /// A dispatch of `alu_ops` ALU operations and `texels` texels (no memory traffic).
 inline CommandWork dispatch_work(const std::string& name, std::uint64_t alu_ops, std::uint64_t texels = 0) {
-  return CommandWork{.name = name, .is_dispatch = true, .renders = {}, .compute_alu_ops = alu_ops, .compute_texels = texels};
+  CommandWork c;
+  c.name = name;
+  c.is_dispatch = true;
+  c.compute_alu_ops = alu_ops;
+  c.compute_texels = texels;
+  return c;
 }
 /// A 64x64 frame of 32x32 tiles made of `commands`.
 inline FrameWork frame_work(std::vector<CommandWork> commands) {
