@@ -5,17 +5,21 @@
 // and the banked DRAM at real addresses (models/memory_system.hpp).
 //
 // Units and their service times (cycles of the core clock):
-//   binning engine (geometry + tiler): max(vertex ALU ops / USC ALU rate, primitives in /
-//     geometry.primitives_per_clock, primitives binned / tiling.primitives_per_clock), while its
-//     vertex/index reads and parameter-buffer writes stream through memory;
+//   binning engine (geometry + tiler): max(primitives in / geometry.primitives_per_clock,
+//     primitives binned / tiling.primitives_per_clock), while its vertex shaders reserve the USCs'
+//     ALU server and its vertex/index reads and parameter-buffer writes stream through memory;
 //   tile fetch (DMA): a tile's parameter-buffer reads and tile loads, up to isp.tiles_in_flight
-//     tiles at once;
+//     tiles between fetch and leaving the ISP;
 //   ISP: max(primitives, samples / (isp.samples_per_clock x isp.raster_pipes)) per tile, plus
 //     the USC time of the shading it waited for at punch-through depth resolves, one tile at a
-//     time, in the configured tile order;
-//   USCs: max(ALU ops / (usc.count x usc.lanes x usc.alu_ops_per_lane_per_clock), texels /
-//     (texture.units x texture.texels_per_clock)) per tile or dispatch; the ISP stalls when the
-//     USCs' queue (usc.tasks_in_flight tasks of usc.threads_per_task threads, in tiles) is full;
+//     time, in the configured tile order; a resolved tile waits in the ISP (ISP stall) until the
+//     USCs have task slots for it (usc.count x usc.tasks_in_flight resident tasks of
+//     usc.threads_per_task threads; models/task_slots.hpp);
+//   USCs: several resident tiles share, in arrival order, the ALU server (ALU ops / (usc.count x
+//     usc.lanes x usc.alu_ops_per_lane_per_clock)), the texture units (texels / (texture.units x
+//     texture.texels_per_clock)) and the tile buffer (bytes / (usc.count x
+//     pls.tile_buffer_bytes_per_clock)), while their texture lines, shader image reads and spilled
+//     tile-buffer bytes go through the caches with the resident tasks' requests in flight;
 //   pixel back end: stored bytes / writeback.bytes_per_clock, while the stores stream to memory.
 // Phases: a render's tiles start when its binning is done; binning of the next pass overlaps the
 // tiles of the current one (two parameter buffers), but after a partial render the next binning
