@@ -7,25 +7,13 @@
 #include "models/command_processor.hpp"
 #include "app/run_driver.hpp"
 #include "synthetic_scene.hpp"
+#include "timed_run.hpp"
 
 namespace tbdr {
 namespace {
 
 using namespace synthetic;
 
-struct Timed {
-  FrameResult frame;
-  TimingResult timing;
-};
-
-Timed run_timed(const Trace& t, const Scene& s, const std::vector<std::string>& sets) {
-  const HwConfig hw = resolve_config({}, sets).hw;
-  Timed r;
-  r.frame = simulate_frame(t, "t.trace", s, hw);
-  EnergyBreakdown energy;
-  time_frame(hw, r.frame, r.timing, energy);
-  return r;
-}
 
 /// One opaque quad covering a `size` x `size` frame, shaded with `alu_ops` ALU ops and
 /// `tex_fetches` bilinear fetches per fragment; its material has no texture, so every fetch reads

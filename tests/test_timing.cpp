@@ -8,6 +8,7 @@
 #include "models/command_processor.hpp"
 #include "app/run_driver.hpp"
 #include "synthetic_scene.hpp"
+#include "timed_run.hpp"
 #include "stat_lookup.hpp"
 
 namespace tbdr {
@@ -16,19 +17,6 @@ namespace {
 using namespace synthetic;
 
 
-struct Timed {
-  FrameResult frame;
-  TimingResult timing;
-  EnergyBreakdown energy;
-};
-
-Timed run_timed(const Trace& t, const Scene& s, const std::vector<std::string>& sets) {
-  const HwConfig hw = resolve_config({}, sets).hw;
-  Timed r;
-  r.frame = simulate_frame(t, "t.trace", s, hw);
-  time_frame(hw, r.frame, r.timing, r.energy);
-  return r;
-}
 
 /// A frame of `size` x `size` pixels.
 Trace frame_of(int size) {
