@@ -107,5 +107,33 @@ inline DrawCmd draw_of(const std::string& submesh, const std::string& pipeline =
   return d;
 }
 
+/// A full-frame quad behind an 80x80 grid of small quads (12800 triangles: about 280 KB of
+/// parameter buffer, so 64 KiB forces partial renders).
+inline Scene partial_render_grid_scene() {
+  Scene s = base_scene();
+  add_quad(s, "back", 6, -32, 96, 0);
+  SubMesh grid;
+  grid.name = "grid";
+  grid.material = 0;
+  const int n = 80;
+  const float d = 3, h = d * kTan30;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      grid.positions.push_back({-h + 2 * h * static_cast<float>(i) / n, -h + 2 * h * static_cast<float>(j) / n, -d});
+      grid.normals.push_back({0, 0, 1});
+      grid.uvs.push_back({0, 0});
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const auto a = static_cast<std::uint32_t>(j * (n + 1) + i), b = a + 1, c = a + n + 1, e = c + 1;
+      grid.indices.insert(grid.indices.end(), {a, b, e, a, e, c});
+    }
+  }
+  s.submeshes.push_back(grid);
+  s.instances.push_back({static_cast<std::uint32_t>(s.submeshes.size() - 1), glm::mat4(1.0f), "grid"});
+  return s;
+}
+
 }  // namespace synthetic
 }  // namespace tbdr

@@ -151,28 +151,7 @@ TEST(PipelineWriteback, PlainForwardWritesColorOnceAndDepthNeverLeavesTheChip) {
 TEST(PipelinePartialRender, SmallParameterBufferForcesPartialRendersWithDepthTraffic) {
   // An 80x80 grid of small quads (12800 triangles, 6561 vertices of 10 + 8x4 bytes in the
   // parameter buffer: about 280 KB) in front of a full-frame quad.
-  Scene s = base_scene();
-  add_quad(s, "back", 6, -32, 96, 0);
-  SubMesh grid;
-  grid.name = "grid";
-  grid.material = 0;
-  const int n = 80;
-  const float d = 3, h = d * kTan30;
-  for (int j = 0; j <= n; ++j) {
-    for (int i = 0; i <= n; ++i) {
-      grid.positions.push_back({-h + 2 * h * i / n, -h + 2 * h * j / n, -d});
-      grid.normals.push_back({0, 0, 1});
-      grid.uvs.push_back({0, 0});
-    }
-  }
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const std::uint32_t a = static_cast<std::uint32_t>(j * (n + 1) + i), b = a + 1, c = a + n + 1, e = c + 1;
-      grid.indices.insert(grid.indices.end(), {a, b, e, a, e, c});
-    }
-  }
-  s.submeshes.push_back(grid);
-  s.instances.push_back({static_cast<std::uint32_t>(s.submeshes.size() - 1), glm::mat4(1.0f), "grid"});
+  const Scene s = partial_render_grid_scene();
   const std::vector<DrawCmd> draws = {draw_of("back"), draw_of("grid")};
   const FrameResult big = run(s, draws);
   const FrameResult small = run(s, draws, {"tiling.pb_capacity_bytes=65536"});
