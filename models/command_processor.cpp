@@ -80,6 +80,11 @@ class PassRenderer {
   void run() {
     std::vector<Primitive> staged;
     for (std::uint32_t i = 0; i < ctx_.draws.size(); ++i) {
+      if (static_cast<int>(i) == tile_memory_.split_draw()) {
+        // pls.over_budget = split_render: the driver ends the render at this subpass boundary.
+        render(true);
+        tile_memory_.begin_split_render(ctx_.draws);
+      }
       staged.clear();
       geometry_.run_draw(ctx_.draws[i], i, staged, ctx_.object_lights, stats_.geometry, dram_);
       for (const Primitive& p : staged) {
@@ -197,10 +202,12 @@ class PassRenderer {
     dram_.read(DramClass::Textures, tw.texture_lines.size() * static_cast<std::uint64_t>(hw_.cache.texture.line_bytes));
     tw.spill_read_bytes = spill.reads(DramClass::Spill);
     tw.spill_write_bytes = spill.writes(DramClass::Spill);
-    // The spilled share of the shaders' tile-buffer accesses goes to memory instead of the on-chip
-    // port (spill reads = the spilled share of the reads + the read-back of the spilled writes).
-    tw.tile_buffer_bytes = tile_tsp.tile_buffer_read_bytes.value() + tile_tsp.tile_buffer_write_bytes.value() -
-                           (tw.spill_read_bytes - tw.spill_write_bytes) - tw.spill_write_bytes +
+    // The spilled share of the shaders' tile-buffer accesses goes to memory (spill reads = the
+    // spilled share of the reads + the read-back of the spilled writes) on top of passing the USC's
+    // pixel data path: a memory tile buffer is reached by the shader's own loads and stores, whose
+    // data moves between the USC and memory no faster than between the USC and its on-chip tile
+    // buffer, so a pass past the budget is never cheaper than one that fits.
+    tw.tile_buffer_bytes = tile_tsp.tile_buffer_read_bytes.value() + tile_tsp.tile_buffer_write_bytes.value() +
                            tile_tsp.pls_bytes_accessed.value();
     dram_ += spill;  // booked after the tile's loads and stores were taken from `dram_`
     tw.tag_bytes = tile_isp.tag_buffer_read_bytes.value() + tile_isp.tag_buffer_write_bytes.value();
@@ -402,7 +409,14 @@ class FrameSimulator {
     };
     for (const auto& n : cmd.fetch) {
       const Attachment* a = pass.find_attachment(n);
-      if (a && !is_depth_format(a->format)) d.fetch_bytes += a->bytes_per_pixel();
+      if (!a || is_depth_format(a->format)) continue;
+      d.fetch_bytes += a->bytes_per_pixel();
+      // An attachment of this pass that earlier draws write: its surfaces are stored as they shade.
+      AttachmentImage& img = result_.images.attachments.at(n);
+      if (img.surface.empty() && (img.usage == AttachmentUsage::Gbuffer || img.usage == AttachmentUsage::Visibility)) {
+        img.surface.assign(img.color.size(), SurfacePoint{});
+        img.surface_valid.assign(img.color.size(), 0);
+      }
     }
     if (cmd.geometry != GeometryKind::Scene) {
       for (const auto& n : cmd.fetch) {

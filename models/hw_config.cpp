@@ -167,11 +167,17 @@ ParamRegistry<HwConfig> make_registry() {
       .doc("Largest pixel local storage a pass may declare; a trace whose pass declares more is refused, as a "
            "driver refuses such a shader")
       .source("EXT_shader_pixel_local_storage: MAX_SHADER_PIXEL_LOCAL_STORAGE_SIZE_EXT is at least 16 bytes");
-  r.add(TBDR_PARAM(pls.over_budget), PlsOverBudget::Spill, kPlsOverBudgetNames)
-      .doc("When a pass needs more bytes per pixel than the tile buffer holds: spill the excess share of "
-           "tile-buffer accesses to memory, or render each tile in strips that fit")
-      .source("Mesa src/imagination pvr_mrt.h: render targets beyond the output registers go to memory "
-              "tile buffers (USC_MRT_RESOURCE_TYPE_MEMORY)");
+  r.add(TBDR_PARAM(pls.over_budget), PlsOverBudget::SplitRender, kPlsOverBudgetNames)
+      .doc("When a pass needs more bytes per pixel than the tile buffer holds: split_render = end the render "
+           "before the first draw that fetches an attachment an earlier draw wrote (a subpass boundary): every "
+           "attachment is stored, and the rest of the pass is a new render that reads the fetched attachments "
+           "from memory as images and keeps only the others on chip (spill when the pass has no such "
+           "boundary or the rest still does not fit); spill = the excess share of tile-buffer accesses goes to "
+           "memory; smaller_tiles = render each tile in strips that fit")
+      .source("Mesa src/imagination/vulkan/pvr_hw_pass.c pvr_is_subpass_space_available: \"Avoid merging "
+              "subpasses which result in tile buffers having to be used\" (the render is closed, "
+              "pvr_close_render); pvr_mrt.h: render targets beyond the output registers go to memory tile "
+              "buffers (USC_MRT_RESOURCE_TYPE_MEMORY)");
 
   r.section("writeback", "Pixel back end: stores tiles that must leave the chip");
   r.add(TBDR_PARAM(writeback.compression_ratio), 1.0).range(0.05, 1.0)

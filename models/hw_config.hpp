@@ -39,11 +39,13 @@ inline constexpr std::array<ChoiceName<TileOrder>, 2> kTileOrderNames{
 
 /// What a pass that needs more bytes per pixel than the tile buffer holds pays (pls.over_budget).
 enum class PlsOverBudget : std::uint8_t {
+  SplitRender,   ///< end the render before the first draw that reads back what does not fit; else spill
   Spill,         ///< the excess share of tile-buffer accesses goes to memory
   SmallerTiles,  ///< each tile is rendered in strips that fit
 };
-inline constexpr std::array<ChoiceName<PlsOverBudget>, 2> kPlsOverBudgetNames{
-    {{PlsOverBudget::Spill, "spill"}, {PlsOverBudget::SmallerTiles, "smaller_tiles"}}};
+inline constexpr std::array<ChoiceName<PlsOverBudget>, 3> kPlsOverBudgetNames{
+    {{PlsOverBudget::SplitRender, "split_render"}, {PlsOverBudget::Spill, "spill"},
+     {PlsOverBudget::SmallerTiles, "smaller_tiles"}}};
 
 /// Physical address bit order of dram.address_mapping, most significant field first.
 enum class DramMapping : std::uint8_t {
@@ -131,7 +133,7 @@ struct PlsParams {
   std::int64_t tile_buffer_bits_per_pixel = 0;
   double tile_buffer_bytes_per_clock = 0;  ///< per USC
   std::int64_t max_pls_bytes_per_pixel = 0;
-  PlsOverBudget over_budget = PlsOverBudget::Spill;
+  PlsOverBudget over_budget = PlsOverBudget::SplitRender;
 };
 
 /// [memory] the units' DMA streams: how they issue their byte ranges to the memory system.

@@ -58,6 +58,9 @@ struct DrawContext {
   std::vector<std::pair<DramClass, std::uint32_t>> per_pixel_reads;
   /// Attachments of the pass the shader reads on chip at its own pixel (fetch=): bytes per invocation.
   std::uint32_t fetch_bytes = 0;
+  /// Attachments of the pass it reads as images through the texture unit instead (fetches per
+  /// invocation): those left in memory by a split render (pls.over_budget = split_render).
+  std::uint32_t image_fetches = 0;
   const PipelineState* pipeline = nullptr;
   const ShaderDesc* shader = nullptr;
   std::vector<std::uint32_t> lights;  ///< indices of the lights the draw selects

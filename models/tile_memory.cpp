@@ -36,27 +36,16 @@ void check_pls_layout(const PlsParams& p, const PassDesc& pass, const std::strin
   }
 }
 
-TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats) : ctx_(ctx), stats_(stats) {
+TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats)
+    : ctx_(ctx), stats_(stats), in_memory_(ctx.pass->attachments.size(), 0), evicted_(ctx.pass->attachments.size(), 0) {
   const PassDesc& pass = *ctx.pass;
   check_pls_layout(ctx.hw->pls, pass);
-  std::uint32_t color = 0;
-  for (const auto& a : pass.attachments) {
-    if (is_depth_format(a.format) || pass.is_resolve_target(a)) continue;  // depth lives in the ISP
-    color += a.bytes_per_pixel();
-  }
-  // Pixel local storage and the colour attachments share the same per-pixel storage
-  // (EXT_shader_pixel_local_storage: "the pixel local storage ... shares storage with the
-  // framebuffer's color"; writing colour while PLS is live makes PLS undefined): a pass needs the
-  // larger of the two, not their sum.
-  need_ = std::max(color, pass.pls_bytes_per_pixel());
+  need_ = onchip_bytes_per_pixel();
   budget_ = static_cast<std::uint32_t>(ctx.hw->pls.tile_buffer_bits_per_pixel / 8);
-  if (need_ > budget_) {
-    if (ctx.hw->pls.over_budget == PlsOverBudget::Spill) {
-      spill_fraction_ = static_cast<double>(need_ - budget_) / static_cast<double>(need_);
-    } else {
-      split_ = static_cast<int>((need_ + budget_ - 1) / budget_);
-    }
-  }
+  if (need_ > budget_ && ctx.hw->pls.over_budget == PlsOverBudget::SplitRender) find_split();
+  // Within one render (before a split, after it, or without one) what does not fit spills, as the
+  // driver then places it in memory tile buffers; unless the policy renders smaller tiles.
+  fit_budget(ctx.hw->pls.over_budget == PlsOverBudget::SmallerTiles ? PlsOverBudget::SmallerTiles : PlsOverBudget::Spill);
   if (!pass.pls.empty()) {
     // The pass's pixel local storage lives in tile memory: sized from its declared layout.
     const std::size_t pixels = static_cast<std::size_t>(ctx.viewport.width_px) * static_cast<std::size_t>(ctx.viewport.height_px);
@@ -72,6 +61,92 @@ TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats) : ctx_(ctx), 
   stats_.onchip_need_bytes_per_pixel += need_;
   stats_.onchip_budget_bytes_per_pixel += budget_;
   stats_.tile_split_factor += static_cast<std::uint64_t>(split_);
+}
+
+std::uint32_t TileMemory::onchip_bytes_per_pixel() const {
+  const PassDesc& pass = *ctx_.pass;
+  std::uint32_t color = 0;
+  for (std::size_t i = 0; i < pass.attachments.size(); ++i) {
+    const Attachment& a = pass.attachments[i];
+    if (is_depth_format(a.format) || pass.is_resolve_target(a) || in_memory_[i]) continue;  // depth lives in the ISP
+    color += a.bytes_per_pixel();
+  }
+  // Pixel local storage and the colour attachments share the same per-pixel storage
+  // (EXT_shader_pixel_local_storage: "the pixel local storage ... shares storage with the
+  // framebuffer's color"; writing colour while PLS is live makes PLS undefined): a pass needs the
+  // larger of the two, not their sum.
+  return std::max(color, pass.pls_bytes_per_pixel());
+}
+
+void TileMemory::fit_budget(PlsOverBudget policy) {
+  const std::uint32_t need = onchip_bytes_per_pixel();
+  spill_fraction_ = 0;
+  split_ = 1;
+  if (need <= budget_) return;
+  if (policy == PlsOverBudget::SmallerTiles) {
+    split_ = static_cast<int>((need + budget_ - 1) / budget_);
+  } else {
+    spill_fraction_ = static_cast<double>(need - budget_) / static_cast<double>(need);
+  }
+}
+
+void TileMemory::find_split() {
+  const PassDesc& pass = *ctx_.pass;
+  if (!pass.pls.empty()) return;  // pixel local storage cannot leave the chip between renders
+  // Colour attachment k is written by a draw whose shader has more than k colour outputs.
+  const std::vector<const Attachment*> targets = pass.color_targets();
+  auto target_index = [&](const std::string& name) -> int {
+    for (std::size_t k = 0; k < targets.size(); ++k) {
+      if (targets[k]->name == name) return static_cast<int>(k);
+    }
+    return -1;
+  };
+  std::uint32_t outputs_before = 0;  // colour outputs written by the draws so far
+  const auto& draws = ctx_.draws;
+  for (std::size_t i = 0; i < draws.size() && split_draw_ < 0; ++i) {
+    for (const auto& n : draws[i].cmd->fetch) {
+      const int k = target_index(n);
+      if (k >= 0 && static_cast<std::uint32_t>(k) < outputs_before) split_draw_ = static_cast<int>(i);
+    }
+    outputs_before = std::max(outputs_before, draws[i].shader->color_outputs);
+  }
+  if (split_draw_ < 0) return;
+  // What the rest of the pass only reads stays in memory; what it writes comes back on chip.
+  std::uint32_t outputs_after = 0;
+  for (std::size_t i = static_cast<std::size_t>(split_draw_); i < draws.size(); ++i)
+    outputs_after = std::max(outputs_after, draws[i].shader->color_outputs);
+  bool any = false;
+  for (std::size_t i = static_cast<std::size_t>(split_draw_); i < draws.size(); ++i) {
+    for (const auto& n : draws[i].cmd->fetch) {
+      const int k = target_index(n);
+      if (k < 0 || static_cast<std::uint32_t>(k) < outputs_after) continue;
+      for (std::size_t a = 0; a < pass.attachments.size(); ++a) {
+        if (pass.attachments[a].name == n) evicted_[a] = 1;
+      }
+      any = true;
+    }
+  }
+  if (!any) split_draw_ = -1;  // the rest writes all it fetches: no subpass boundary helps
+}
+
+void TileMemory::begin_split_render(std::vector<DrawContext>& draws) {
+  const PassDesc& pass = *ctx_.pass;
+  in_memory_ = evicted_;
+  for (std::size_t i = static_cast<std::size_t>(split_draw_); i < draws.size(); ++i) {
+    DrawContext& d = draws[i];
+    for (const auto& n : d.cmd->fetch) {
+      for (std::size_t a = 0; a < pass.attachments.size(); ++a) {
+        const Attachment& att = pass.attachments[a];
+        if (att.name != n || !in_memory_[a]) continue;
+        d.fetch_bytes -= att.bytes_per_pixel();
+        d.per_pixel_reads.emplace_back(traffic_class_of(att.usage), att.bytes_per_pixel());
+        ++d.image_fetches;  // an input attachment in memory is sampled through the texture unit
+      }
+    }
+  }
+  ++stats_.split_renders;
+  // The new render holds the rest; if that still does not fit, its excess spills.
+  fit_budget(PlsOverBudget::Spill);
 }
 
 std::vector<PixelRect> TileMemory::strips(const PixelRect& tile) const {
@@ -92,7 +167,9 @@ std::uint64_t TileMemory::attachment_bytes(const Attachment& a, const PixelRect&
 void TileMemory::begin_tile(const PixelRect& r, bool resumed, DramTraffic& dram) {
   const double ratio = ctx_.hw->writeback.compression_ratio;
   const int W = ctx_.viewport.width_px;
-  for (const auto& a : ctx_.pass->attachments) {
+  for (std::size_t ai = 0; ai < ctx_.pass->attachments.size(); ++ai) {
+    const Attachment& a = ctx_.pass->attachments[ai];
+    if (in_memory_[ai]) continue;  // after a split render: read from memory as an image
     AttachmentImage& img = ctx_.images->attachments.at(a.name);
     const std::uint64_t bytes = attachment_bytes(a, r);
     if (ctx_.framebuffer_in_dram) {
@@ -139,7 +216,9 @@ void TileMemory::spill(std::uint64_t read_bytes, std::uint64_t write_bytes, Dram
 void TileMemory::end_tile(const PixelRect& r, bool partial, DramTraffic& dram) {
   const double ratio = ctx_.hw->writeback.compression_ratio;
   const int W = ctx_.viewport.width_px;
-  for (const auto& a : ctx_.pass->attachments) {
+  for (std::size_t ai = 0; ai < ctx_.pass->attachments.size(); ++ai) {
+    const Attachment& a = ctx_.pass->attachments[ai];
+    if (in_memory_[ai]) continue;  // stored when the render before the split ended
     const std::uint64_t bytes = attachment_bytes(a, r);
     if (ctx_.framebuffer_in_dram && a.resolve.empty()) continue;  // imr: already in DRAM
     const auto compressed = static_cast<std::uint64_t>(std::ceil(static_cast<double>(bytes) * ratio));

@@ -4,12 +4,16 @@
 // the load ops at the start of a tile (clear / load from DRAM / don't care), the store ops and
 // the writeback at its end (with the framebuffer compression ratio), the resolve of multisampled
 // attachments, and the stores and reloads of a partial render. Transient attachments never
-// touch DRAM. A pass over budget pays per pls.over_budget: `spill` (the default, as the Mesa
-// PowerVR driver places render targets that do not fit the USC output registers in memory-backed
-// "tile buffers", USC_MRT_RESOURCE_TYPE_MEMORY) sends the share of every shader tile-buffer access
-// that exceeds the budget to DRAM, and reads the spilled writes back at the end of the tile;
-// `smaller_tiles` renders each tile as several strips that fit (each strip re-reads the tile's
-// parameter buffer data and re-rasterises its primitives).
+// touch DRAM. A pass over budget pays per pls.over_budget: `split_render` (the default, as the Mesa
+// PowerVR driver does not merge a subpass into a render when its attachments would not fit the USC
+// output registers, pvr_hw_pass.c) ends the render before the first draw that fetches an attachment
+// an earlier draw wrote: everything is stored, and the rest of the pass is a new render that reads
+// the fetched attachments from memory as images; `spill` (what that driver does within one
+// subpass: render targets that do not fit go to memory-backed "tile buffers",
+// USC_MRT_RESOURCE_TYPE_MEMORY) sends the share of every shader tile-buffer access that exceeds the
+// budget to DRAM, and reads the spilled writes back at the end of the tile; `smaller_tiles` renders
+// each tile as several strips that fit (each strip re-reads the tile's parameter buffer data and
+// re-rasterises its primitives).
 #include <cstdint>
 #include <vector>
 
@@ -32,6 +36,7 @@ namespace tbdr {
   X(Counter, partial_render_store_bytes, "bytes", Sum, "Bytes stored to DRAM at partial renders") \
   X(Counter, partial_render_reload_bytes, "bytes", Sum, "Bytes reloaded after partial renders") \
   X(Counter, spill_bytes, "bytes", Sum, "Tile buffer bytes spilled to DRAM and read back (pls.over_budget = spill)") \
+  X(Counter, split_renders, "renders", Sum, "Renders begun at a subpass boundary because the pass does not fit on chip (pls.over_budget = split_render; stores and reloads booked as a partial render's)") \
   X(Counter, resolved_samples, "samples", Sum, "Multisampled samples averaged into resolve targets")
 /// Statistics of tile memory and writeback.
 struct TileMemoryStats {
@@ -77,15 +82,31 @@ class TileMemory {
   void spill(std::uint64_t tile_buffer_read_bytes, std::uint64_t tile_buffer_write_bytes, DramTraffic& dram);
   /// Share of tile buffer accesses that go to memory (0 when the pass fits or tiles are split).
   double spill_fraction() const { return spill_fraction_; }
+  /// pls.over_budget = split_render on a pass over budget: the index of the draw before which the
+  /// render ends (the first draw that fetches a colour attachment an earlier draw wrote), or -1.
+  int split_draw() const { return split_draw_; }
+  /// Starts the render after the split: the attachments the rest of the pass only fetches stay in
+  /// memory (not reloaded, not stored again), the draws read them as images (their fetch bytes
+  /// become per-pixel reads of the attachment's DRAM class), and the budget holds the rest.
+  void begin_split_render(std::vector<DrawContext>& draws);
 
  private:
   std::uint64_t attachment_bytes(const Attachment& a, const PixelRect& r) const;
+  /// Bytes per pixel the pass keeps on chip: its colour-like attachments not in memory, or its PLS.
+  std::uint32_t onchip_bytes_per_pixel() const;
+  /// Sets spill_fraction_ (policy spill) or split_ (smaller_tiles) for the current need.
+  void fit_budget(PlsOverBudget policy);
+  /// The split point and the attachments that then stay in memory (pls.over_budget = split_render).
+  void find_split();
   RenderContext& ctx_;
   TileMemoryStats& stats_;
   std::uint32_t need_ = 0;
   std::uint32_t budget_ = 0;
   int split_ = 1;
   double spill_fraction_ = 0;
+  int split_draw_ = -1;
+  std::vector<std::uint8_t> in_memory_;  ///< per attachment of the pass: 1 after the split
+  std::vector<std::uint8_t> evicted_;    ///< per attachment: stays in memory after the split
   PlsState pls_;  ///< the pass's pixel local storage (empty when it declares none)
 };
 

@@ -200,10 +200,12 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   stats.shader_invocations += pixels.size();
   stats.shaded_quads += quads;
   stats.helper_lanes += helpers;
-  stats.texture_fetches += quads * 4 * sh.tex_fetches;
+  // The shader's fetches plus the attachments it reads as images after a split render.
+  const std::uint64_t fetches = sh.tex_fetches + d.image_fetches;
+  stats.texture_fetches += quads * 4 * fetches;
   // The texture units' work is counted in filtered texels (texture.texels_per_clock's unit): a
   // bilinear fetch is one, whatever the 4 texels it reads.
-  stats.texels_filtered += quads * 4 * sh.tex_fetches * static_cast<std::uint64_t>(hw.texture.filtered_texels_per_fetch);
+  stats.texels_filtered += quads * 4 * fetches * static_cast<std::uint64_t>(hw.texture.filtered_texels_per_fetch);
 
   const bool from_triangle = p.material != kNoMaterial && ctx_.scene != nullptr;
   const Material* mat = from_triangle ? &ctx_.scene->materials[p.material] : nullptr;

@@ -124,7 +124,7 @@ TEST(Params, ChoicesBecomeEnumsOnceTheTextStaysTheValue) {
   const ResolvedConfig d = resolve_config({}, {});
   EXPECT_EQ(d.hw.tiling.binning, BinningTest::Exact);
   EXPECT_EQ(d.hw.tiling.tile_order, TileOrder::Morton);
-  EXPECT_EQ(d.hw.pls.over_budget, PlsOverBudget::Spill);
+  EXPECT_EQ(d.hw.pls.over_budget, PlsOverBudget::SplitRender);
   EXPECT_EQ(d.hw.dram.address_mapping, DramMapping::RowBankChannelColumn);
   const ResolvedConfig rc = resolve_config({}, {"gpu.mode=imr", "tiling.binning=bbox", "tiling.tile_order=row_major",
                                                 "pls.over_budget=smaller_tiles",

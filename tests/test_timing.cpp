@@ -277,15 +277,93 @@ TEST(TimingCliff, OnChipGbufferCostsTileBufferBandwidthThenSpills) {
   // on chip. Within the budget each target adds 4 B/pixel of tile-buffer writes at 2 USCs x 16
   // B/clock = 32 B/clock: 512 x 512 x 4 / 32 = 32768 cycles a step (the finite on-chip bandwidth,
   // the slope of Imagination's GX6250 table). Past it the over-budget 32 of 288 bits of every
-  // tile-buffer access go to memory instead of the on-chip port: 1 MiB written and read back
-  // (2 MiB of spill traffic), while the on-chip bytes stay at 256 bits' worth.
-  // Known gap: on this write-only pass the spill's DRAM traffic and latency hide behind the
-  // tile-buffer bound (3 MiB at 12.8 GB/s = 147 k cycles < 262 k), so the step past the budget is
-  // about 0, where the GX6250 measured x1.34 on a full deferred frame.
+  // tile-buffer access also go to memory: 1 MiB written and read back (2 MiB of spill traffic),
+  // on top of the same USC data-path bytes. This pass has no subpass boundary to split at, so
+  // split_render spills too; its spill traffic hides behind the tile-buffer bound (3 MiB at 12.8
+  // GB/s = 147 k cycles < 262 k), so the last step is the slope again (the cliff of a pass with
+  // subpasses is SubpassesPastTheBudgetSplitTheRender).
   const std::vector<double> c = onchip_gbuffer_cliff(4, 8);
   for (std::size_t i = 0; i < c.size(); ++i) std::printf("[ cliff    ] %3zu bits/pixel: %.3f ms\n", 32 * (5 + i), c[i] / 600e3);
-  for (std::size_t i = 1; i + 1 < c.size(); ++i) EXPECT_NEAR(c[i] - c[i - 1], 32768.0, 0.02 * 32768.0) << "step " << i;
-  EXPECT_GE(c.back(), c[c.size() - 2]) << "spilling never makes the pass faster";
+  for (std::size_t i = 1; i < c.size(); ++i) EXPECT_NEAR(c[i] - c[i - 1], 32768.0, 0.02 * 32768.0) << "step " << i;
+}
+
+/// Frame cycles and split renders of a 512x512 pass with subpasses, as deferred shading keeps its
+/// G-buffer on chip: a wall writes the colour plus k 32-bit transient G-buffer targets, then a
+/// fullscreen draw fetches the k targets at every pixel and adds onto the colour; on the GX6250
+/// preset's 256 bits per pixel (2 USCs, one texture unit) plus `sets`.
+struct SubpassCliff {
+  std::vector<double> cycles;
+  std::vector<double> split_renders;
+};
+SubpassCliff onchip_subpass_cliff(int k_first, int k_last, std::vector<std::string> sets = {}) {
+  Scene s = base_scene();
+  add_quad(s, "wall", 3, -512, 1024, 0);
+  sets.insert(sets.begin(), {"usc.count=2", "texture.units=1", "pls.tile_buffer_bits_per_pixel=256"});
+  SubpassCliff out;
+  for (int k = k_first; k <= k_last; ++k) {
+    Trace t = frame_of(512);
+    t.shaders[0].alu_ops = 4;
+    t.shaders[0].tex_fetches = 0;
+    t.shaders[0].color_outputs = static_cast<std::uint32_t>(k + 1);
+    ShaderDesc light = t.shaders[0];
+    light.name = "light";
+    light.color_outputs = 1;
+    t.shaders.push_back(light);
+    PipelineState add = t.pipelines[0];
+    add.name = "add";
+    add.shader = "light";
+    add.depth_test = false;
+    add.depth_write = false;
+    add.blend = BlendMode::Add;
+    t.pipelines.push_back(add);
+    PassDesc p = base_pass();
+    DrawCmd fullscreen;
+    fullscreen.pipeline = "add";
+    fullscreen.geometry = GeometryKind::Fullscreen;
+    for (int i = 1; i <= k; ++i) {
+      Attachment a = p.attachments[0];
+      a.name = "g" + std::to_string(i);
+      a.usage = AttachmentUsage::Gbuffer;
+      a.store = StoreOp::DontCare;
+      a.transient = true;
+      p.attachments.push_back(a);
+      fullscreen.fetch.push_back(a.name);
+    }
+    p.draws = {draw_of("wall"), fullscreen};
+    t.commands.push_back(p);
+    const Timed r = run_timed(t, s, sets);
+    out.cycles.push_back(r.timing.frame_cycles);
+    out.split_renders.push_back(stat(r.frame.stats, "frame/tile_memory", "split_renders"));
+  }
+  return out;
+}
+
+TEST(TimingCliff, SubpassesPastTheBudgetSplitTheRender) {
+  // k = 4..8 G-buffer targets + the colour: 160 .. 288 bits per pixel against 256 on chip.
+  // Within the budget each target adds 4 B/pixel of tile-buffer writes (the wall) and 4 B of
+  // framebuffer-fetch reads (the fullscreen draw): 512 x 512 x 8 B / (2 USCs x 16 B/clock) = 65536
+  // cycles a step. Past it (288 bits) the driver ends the render before the fullscreen draw
+  // (pls.over_budget = split_render, Mesa pvr_hw_pass.c): 8 MiB of G-buffer and the 1 MiB colour
+  // go to memory, the colour and depth come back, and the fullscreen draw reads the 8 MiB
+  // G-buffer as images through the texture unit (8 fetches x 262144 pixels on one unit) and the
+  // caches: at least 3x the earlier steps, as the GX6250's 288-bit step (+10 ms) is 5.6x its
+  // earlier steps' mean (+1.8 ms). Under spill the same pass pays only its spilled share: less.
+  const SubpassCliff c = onchip_subpass_cliff(4, 8);
+  for (std::size_t i = 0; i < c.cycles.size(); ++i)
+    std::printf("[ cliff    ] %3zu bits/pixel: %.3f ms, %g split renders\n", 32 * (5 + i), c.cycles[i] / 600e3, c.split_renders[i]);
+  double mean = 0;
+  for (std::size_t i = 1; i + 1 < c.cycles.size(); ++i) {
+    EXPECT_NEAR(c.cycles[i] - c.cycles[i - 1], 65536.0, 0.02 * 65536.0) << "step " << i;
+    EXPECT_EQ(c.split_renders[i], 0.0);
+    mean += (c.cycles[i] - c.cycles[i - 1]) / static_cast<double>(c.cycles.size() - 2);
+  }
+  EXPECT_EQ(c.split_renders.back(), 1.0);
+  const double last = c.cycles.back() - c.cycles[c.cycles.size() - 2];
+  EXPECT_GE(last, 3.0 * mean);
+  const SubpassCliff spill = onchip_subpass_cliff(8, 8, {"pls.over_budget=spill"});
+  EXPECT_EQ(spill.split_renders[0], 0.0);
+  EXPECT_LT(spill.cycles[0], c.cycles.back());
+  EXPECT_GE(spill.cycles[0], c.cycles[c.cycles.size() - 2]) << "spilling never makes the pass faster than fitting";
 }
 
 TEST(TimingCliff, FramebufferFetchReadsTheTileBuffer) {

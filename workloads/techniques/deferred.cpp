@@ -18,7 +18,21 @@
 //      decode 4 (+1 per extra target) + position reconstruction 8 + output 5 = 17 ALU,
 //      one fetch per G-buffer target, 3 varyings (view ray), 12 ALU for its light.
 //   3. translucent=forward: BLEND geometry, forward-lit from per-object light lists, alpha blend.
+//
+// gbuffer_storage=onchip: the same frame as one render pass with subpasses, as the PowerVR SDK's
+// Deferred Shading example renders it (the workload of Imagination's "On-Chip Memory Performance"
+// measurements, PowerVR Performance Recommendations): pass `main` holds color rgba8 (clear, store),
+// the G-buffer targets (clear, store=dont_care, transient) and depth d24s8 (transient).
+//   1. opaque + masked `gbuffer_onchip`: the gbuffer shader with one more output, the ambient term
+//      into color (1 + targets outputs; the light volumes add onto it).
+//   2. light_spheres `light_volume_onchip`: as above, but the G-buffer and depth are read on chip
+//      (fetch=: framebuffer fetch / input attachments), no texture fetch.
+//   3. translucent=forward as above.
+// Over the on-chip budget the driver ends the render before the light volumes
+// (pls.over_budget = split_render): the G-buffer goes to memory and is read back as images.
 #include "techniques/technique.hpp"
+
+#include "kernel/errors.hpp"
 
 namespace tbdr {
 
@@ -31,6 +45,31 @@ Trace generate_deferred(const TraceSetup& setup, const TechniqueOptions& options
   const GbufferLayout layout = gbuffer_layout_option(options, "gbuffer");
   const std::uint32_t subdivisions = sphere_subdivisions_option(options);
   const bool translucent = translucent_forward_option(options);
+
+  const std::string& storage = options.get("gbuffer_storage");
+  if (storage == "onchip") {
+    const auto targets = static_cast<std::uint32_t>(layout.formats.size());
+    PassDesc pass = color_pass("main", 1);
+    for (std::size_t i = 0; i < layout.formats.size(); ++i)
+      pass.attachments.insert(pass.attachments.end() - 1,
+                              make_attachment(layout.names[i], layout.formats[i], 1, LoadOp::Clear, StoreOp::DontCare,
+                                              AttachmentUsage::Gbuffer, true));
+    const ShaderDesc gbuffer = gbuffer_shader("gbuffer_onchip", layout.extra_targets(), 1 + targets);
+    add_scene_shading(t, pass, "gbuffer_onchip", gbuffer, masked_variant(gbuffer));
+    t.shaders.push_back(light_volume_shader("light_volume_onchip", 0, layout.extra_targets(), 1));
+    t.pipelines.push_back(light_volume_pipeline("light_volume_onchip", "light_volume_onchip", BlendMode::Add));
+    std::vector<std::string> fetch = layout.names;
+    fetch.push_back("depth");
+    add_light_volumes(pass, "light_volume_onchip", lights, subdivisions, {}, fetch);
+    if (translucent) {
+      add_translucent_state(t);
+      add_translucent_draw(pass, lights);
+    }
+    t.commands.emplace_back(std::move(pass));
+    return t;
+  }
+  if (storage != "memory")
+    throw InputError("option gbuffer_storage=" + storage, "expected memory or onchip, got '" + storage + "'");
 
   PassDesc gbuffer = make_gbuffer_pass(t, layout);
 
@@ -60,6 +99,10 @@ TechniqueInfo technique_deferred() {
             "G-buffer color targets in order: albedo, normal, then extra targets (specular, motion, ...) that "
             "only cost bandwidth; default 8 B/px + 4 B depth (the 15-769 lecture's example layout is 4 x 32-bit "
             "targets + D24S8 = 20 B/px: rgba8,rgba8,rgba8,rgba8)"},
+           {"gbuffer_storage", "memory",
+            "memory = the G-buffer pass stores its targets and a lighting pass reads them as textures; onchip = "
+            "one render pass with subpasses (the PowerVR SDK Deferred Shading example): transient G-buffer "
+            "targets the light volumes read on chip (framebuffer fetch / input attachments)"},
            sphere_subdivisions_declaration(),
            {"translucent", "forward",
             "BLEND materials cannot live in the G-buffer (Billeter: blending no): forward = draw them in a "
