@@ -16,6 +16,7 @@
 #include "app/image_output.hpp"
 #include "scene/lights.hpp"
 #include "scene/scene_library.hpp"
+#include "stat_lookup.hpp"
 #include "techniques/technique.hpp"
 #include "atrium_trace_setup.hpp"
 
@@ -228,6 +229,26 @@ TEST(TechniqueImages, GlassOverComputeLitFramesMatchesPlainForward) {
   setup.options["translucent"] = "forward";
   const ImageDiff drawn = diff_from(final_image(simulate_frame(generate_trace("tiled_deferred", setup), "td", full, hw)), ref);
   EXPECT_LT(drawn.pixels_over_1, skipped.pixels_over_1 - glass.pixels_over_1 + glass.pixels_over_1 / 10);
+}
+
+TEST(TechniqueImages, OnChipDeferredMatchesStoredDeferredWhetherItFitsOrSplits) {
+  // Deferred with its G-buffer kept on chip (gbuffer_storage=onchip: one pass, the light volumes
+  // fetch the G-buffer) computes the same image as deferred with a stored G-buffer: the formats
+  // round the same values. Also when the pass does not fit 64 bits per pixel and the driver splits
+  // the render (split_render: the light volumes then read the G-buffer from memory).
+  const Scene scene = opaque_atrium();
+  TraceSetup setup = testing_support::atrium_entrance_setup(scene, 64, 192, 108);
+  const HwConfig hw = resolve_config({}, {}).hw;
+  const ImageRGB8 stored = final_image(simulate_frame(generate_trace("deferred", setup), "d", scene, hw));
+  setup.options["gbuffer_storage"] = "onchip";
+  const Trace onchip = generate_trace("deferred", setup);
+  const FrameResult fits = simulate_frame(onchip, "fits", scene, hw);
+  const FrameResult split =
+      simulate_frame(onchip, "split", scene, resolve_config({}, {"pls.tile_buffer_bits_per_pixel=64"}).hw);
+  EXPECT_EQ(stat(fits.stats, "frame/tile_memory", "split_renders"), 0.0);
+  EXPECT_EQ(stat(split.stats, "frame/tile_memory", "split_renders"), 1.0);
+  EXPECT_EQ(final_image(fits).rgb, stored.rgb);
+  EXPECT_EQ(final_image(split).rgb, stored.rgb);
 }
 
 }  // namespace

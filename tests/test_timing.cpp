@@ -294,6 +294,7 @@ TEST(TimingCliff, OnChipGbufferCostsTileBufferBandwidthThenSpills) {
 struct SubpassCliff {
   std::vector<double> cycles;
   std::vector<double> split_renders;
+  std::vector<double> gbuffer_written, gbuffer_read;  ///< DRAM bytes of class gbuffer (requested)
 };
 SubpassCliff onchip_subpass_cliff(int k_first, int k_last, std::vector<std::string> sets = {}) {
   Scene s = base_scene();
@@ -334,6 +335,8 @@ SubpassCliff onchip_subpass_cliff(int k_first, int k_last, std::vector<std::stri
     const Timed r = run_timed(t, s, sets);
     out.cycles.push_back(r.timing.frame_cycles);
     out.split_renders.push_back(stat(r.frame.stats, "frame/tile_memory", "split_renders"));
+    out.gbuffer_written.push_back(static_cast<double>(r.frame.dram.writes(DramClass::Gbuffer)));
+    out.gbuffer_read.push_back(static_cast<double>(r.frame.dram.reads(DramClass::Gbuffer)));
   }
   return out;
 }
@@ -358,6 +361,11 @@ TEST(TimingCliff, SubpassesPastTheBudgetSplitTheRender) {
     mean += (c.cycles[i] - c.cycles[i - 1]) / static_cast<double>(c.cycles.size() - 2);
   }
   EXPECT_EQ(c.split_renders.back(), 1.0);
+  // Only the split moves G-buffer bytes: 8 targets x 4 B x 512 x 512 = 8 MiB stored at the
+  // split and read back once by the fullscreen draw's pixels.
+  EXPECT_EQ(c.gbuffer_written[c.cycles.size() - 2], 0.0);
+  EXPECT_EQ(c.gbuffer_written.back(), 8.0 * 1024 * 1024);
+  EXPECT_EQ(c.gbuffer_read.back(), 8.0 * 1024 * 1024);
   const double last = c.cycles.back() - c.cycles[c.cycles.size() - 2];
   EXPECT_GE(last, 3.0 * mean);
   const SubpassCliff spill = onchip_subpass_cliff(8, 8, {"pls.over_budget=spill"});
