@@ -17,8 +17,14 @@
 //   varyings = 8        world position (3), normal (3), uv (2)
 // The masked shader adds 1 ALU op for the alpha test and may discard.
 // draw_order = submesh: one draw per sub-mesh in scene order (opaque after punch-through and
-// blended geometry), the workload of bench/tag_buffers.sh.
+// blended geometry), the workload of bench/tag_buffers.sh. draw_order = near_to_far / far_to_near:
+// opaque, then masked sub-meshes sorted by camera distance, then the blended geometry: the best and
+// worst submission orders for a TBR's per-tile early-Z (bench/hsr_anchor.sh).
 #include "techniques/technique.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
 
 #include "kernel/errors.hpp"
 
@@ -56,8 +62,38 @@ Trace generate_plain_forward(const TraceSetup& setup, const TechniqueOptions& op
       d.submesh = sm.name;
       pass.draws.push_back(std::move(d));
     }
+  } else if ((order == "near_to_far" || order == "far_to_near") && setup.scene) {
+    // Opaque, then masked sub-meshes, each sorted by the camera distance of their nearest
+    // instance's bounds centre (near_to_far: what an engine sorting for early-Z submits;
+    // far_to_near: a painter's order, early-Z's worst case), then the blended geometry.
+    for (const AlphaMode mode : {AlphaMode::Opaque, AlphaMode::PunchThrough}) {
+      std::vector<std::pair<float, const SubMesh*>> sorted;
+      for (std::size_t m = 0; m < setup.scene->submeshes.size(); ++m) {
+        const SubMesh& sm = setup.scene->submeshes[m];
+        if (setup.scene->materials[sm.material].alpha_mode != mode) continue;
+        Bounds local{glm::vec3(std::numeric_limits<float>::infinity()), glm::vec3(-std::numeric_limits<float>::infinity())};
+        for (const glm::vec3& v : sm.positions) {
+          local.min = glm::min(local.min, v);
+          local.max = glm::max(local.max, v);
+        }
+        float nearest = std::numeric_limits<float>::infinity();
+        for (const Instance& inst : setup.scene->instances) {
+          if (inst.submesh != m || sm.positions.empty()) continue;
+          const glm::vec3 centre = glm::vec3(inst.world * glm::vec4(local.center(), 1.0f));
+          nearest = std::min(nearest, glm::length(centre - setup.camera.eye));
+        }
+        if (std::isfinite(nearest)) sorted.emplace_back(order == "near_to_far" ? nearest : -nearest, &sm);
+      }
+      std::stable_sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      for (const auto& [key, sm] : sorted) {
+        DrawCmd d = scene_draw(SceneSubset::All, mode == AlphaMode::Opaque ? "opaque" : "masked", {lights});
+        d.submesh = sm->name;
+        pass.draws.push_back(std::move(d));
+      }
+    }
+    pass.draws.push_back(scene_draw(SceneSubset::Blended, "blended", {lights}));
   } else {
-    throw InputError("option draw_order=" + order, order == "submesh" ? "needs the loaded scene" : "expected pass or submesh, got '" + order + "'");
+    throw InputError("option draw_order=" + order, order != "pass" ? "needs the loaded scene" : "expected pass, submesh, near_to_far or far_to_near, got '" + order + "'");
   }
   t.commands.emplace_back(std::move(pass));
   return t;
@@ -74,7 +110,9 @@ TechniqueInfo technique_plain_forward() {
            {"draw_order", "pass",
             "pass: opaque, then masked, then blended draws (as sorted engines submit); submesh: one draw per sub-mesh "
             "in the scene's order, so opaque geometry follows punch-through and blended geometry (an unsorted "
-            "engine walking its scene; shows what the ISP's tag buffers do)"}},
+            "engine walking its scene; shows what the ISP's tag buffers do); near_to_far / far_to_near: opaque "
+            "then masked sub-meshes sorted by camera distance (an engine sorting for early-Z; a painter's "
+            "order, early-Z's worst case), then the blended geometry (the range a TBR's early-Z spans)"}},
           &generate_plain_forward};
 }
 
