@@ -277,7 +277,11 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       n = len > 0.0f ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
       if (!p.setup.front_facing) n = -n;
       s.normal = n;
+      const glm::vec2 uv = p.uv[0] * b.x + p.uv[1] * b.y + p.uv[2] * b.z;
       s.albedo = glm::vec3(mat->base_color);
+      // The base colour texture the fetches are charged for, sampled at the pixel (glTF: factor x texel).
+      if (mat->base_color_texels >= 0)
+        s.albedo *= ctx_.scene->base_color_texels[static_cast<std::size_t>(mat->base_color_texels)].sample_linear_rgb(uv);
       s.alpha = mat->base_color.w;
       s.material = p.material;
       s.triangle = ctx_.frame_prim_base + prim_index;
@@ -288,7 +292,6 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       }
       have_surface = true;
       if (p.hsr == HsrClass::PunchThrough) {
-        const glm::vec2 uv = p.uv[0] * b.x + p.uv[1] * b.y + p.uv[2] * b.z;
         const float a = s.alpha * (mask_tex ? mask_tex->sample(uv) : 1.0f);
         if (a < mat->alpha_cutoff) {
           stats.alpha_test_killed_samples += static_cast<std::uint64_t>(std::popcount(write_mask));

@@ -394,6 +394,12 @@ TEST(GltfLoad, MaskMaterialDecodesAlphaAndBlendOpaqueDoNot) {
   EXPECT_FLOAT_EQ(mask.sample({0.9f, 0.5f}), 1.0f);
   EXPECT_FLOAT_EQ(mask.sample({1.9f, -0.5f}), 1.0f);  // repeat wrapping
   EXPECT_FLOAT_EQ(cut.base_color.w, 0.8f);  // a fragment's alpha: base_color.w x mask
+  // Every textured material's image is decoded once for the albedo: cut.png and rgb.png.
+  ASSERT_EQ(s.base_color_texels.size(), 2u);
+  EXPECT_EQ(cut.base_color_texels, s.materials[1].base_color_texels);
+  EXPECT_NE(s.materials[2].base_color_texels, -1);
+  EXPECT_EQ(s.materials[3].base_color_texels, -1);
+  EXPECT_EQ(s.base_color_texels[static_cast<std::size_t>(s.materials[2].base_color_texels)].rgba[0], 90);
   EXPECT_EQ(s.materials[1].alpha_mode, AlphaMode::Translucent);
   EXPECT_EQ(s.materials[1].alpha_mask, -1);
   EXPECT_EQ(s.materials[2].alpha_mask, -1);  // texture without alpha

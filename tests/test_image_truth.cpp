@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 
 #include "models/hw_config.hpp"
 #include "models/command_processor.hpp"
@@ -50,6 +52,34 @@ Scene textured_wall() {
   s.materials[0].base_color_texture = 0;
   add_quad(s, "wall", 3, 0, kSize, 0);
   return s;
+}
+
+TEST(ImageTruth, TheAlbedoIsTheBaseColourTexelTheFetchIsChargedFor) {
+  // A wall whose 2x1 base colour texture is red on the left half of its uv range and blue on the
+  // right: the shaded colour follows the texel (glTF: base colour = factor x texel, the texel
+  // sRGB-decoded), where the factor alone would give one colour everywhere.
+  Scene s = textured_wall();
+  ColorTexels texels;
+  texels.width = 2;
+  texels.height = 1;
+  texels.rgba = {255, 0, 0, 255, 0, 0, 255, 255};
+  s.base_color_texels.push_back(texels);
+  s.materials[0].base_color = {1, 1, 1, 1};
+  s.materials[0].base_color_texels = 0;
+  Trace t = base_trace();
+  PassDesc p = base_pass();
+  p.draws = {draw_of("wall")};
+  t.commands.push_back(p);
+  const FrameResult f = simulate_frame(t, "texels.trace", s, resolve_config({}, {}).hw);
+  const auto& c = f.images.attachments.at("color").color;
+  const glm::vec4 left = c[32 * kSize + 8], right = c[32 * kSize + 56];
+  std::printf("[ texels   ] left (%.3f %.3f %.3f), right (%.3f %.3f %.3f)\n", left.x, left.y, left.z, right.x, right.y, right.z);
+  EXPECT_GT(left.x, 4 * left.z);
+  EXPECT_GT(right.z, 4 * right.x);
+  EXPECT_EQ(left.y, 0.0f);
+  // The sRGB decode: code 200 is 0.578 linear ((200/255 + 0.055) / 1.055)^2.4.
+  ColorTexels grey{1, 1, {200, 200, 200, 255}};
+  EXPECT_NEAR(grey.sample_linear_rgb({0.5f, 0.5f}).x, std::pow((200.0 / 255.0 + 0.055) / 1.055, 2.4), 1e-6);
 }
 
 /// Every tile's (or workgroup tile's) texture line list of a command, sorted among themselves.

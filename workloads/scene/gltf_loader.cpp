@@ -203,8 +203,8 @@ const char* mode_name(int mode) {
 
 /// Accessors larger than this (elements) are rejected before anything is allocated.
 constexpr std::size_t max_accessor_elements = std::size_t{1} << 28;
-/// Alpha masks are decoded only up to this many texels (a 8192 x 8192 texture).
-constexpr std::size_t max_mask_texels = std::size_t{1} << 26;
+/// Base colour images are decoded only up to this many texels (a 8192 x 8192 texture, 256 MiB as RGBA8).
+constexpr std::size_t max_decoded_texels = std::size_t{1} << 26;
 
 // Reads one component as a double (exact for every glTF component type).
 double read_component(const unsigned char* p, int ct, bool normalized) {
@@ -377,13 +377,18 @@ class Converter {
   void check_node_graph();
   void place_node(int node, const glm::mat4& parent);
   glm::mat4 local_matrix(int node) const;
-  int alpha_mask_for_image(int image, const std::string& material_desc);
+  /// A base colour image decoded once: its texels and, if any texel is not opaque, its alpha mask.
+  struct DecodedImage {
+    int texels = -1;  ///< index into Scene::base_color_texels (-1: not decoded)
+    int mask = -1;    ///< index into Scene::alpha_masks (-1: no alpha)
+  };
+  const DecodedImage& decode_base_color(int image, const std::string& material_desc);
 
   std::string file_;
   const tinygltf::Model& m_;
   Scene& scene_;
   std::map<int, std::vector<std::uint32_t>> mesh_cache_;
-  std::map<int, int> mask_cache_;  // image -> alpha mask index (-1: no alpha)
+  std::map<int, DecodedImage> decoded_;  // image -> what decode_base_color made of it
   std::vector<int> material_texcoord_;  // per glTF material: TEXCOORD set of its base color texture
   int default_material_ = -1;
   std::vector<int> parent_;  // per node, -1 for roots (filled by check_node_graph)
@@ -521,43 +526,49 @@ void Converter::collect_textures() {
   }
 }
 
-int Converter::alpha_mask_for_image(int image, const std::string& material_desc) {
-  auto it = mask_cache_.find(image);
-  if (it != mask_cache_.end()) return it->second;
-  int result = -1;
+const Converter::DecodedImage& Converter::decode_base_color(int image, const std::string& material_desc) {
+  auto it = decoded_.find(image);
+  if (it != decoded_.end()) return it->second;
+  DecodedImage out;
   const tinygltf::Image& img = m_.images[static_cast<std::size_t>(image)];
   const auto header = parse_image_header(img.image.data(), img.image.size());
-  if (header && static_cast<std::size_t>(header->width) * static_cast<std::size_t>(header->height) > max_mask_texels) {
+  if (header && static_cast<std::size_t>(header->width) * static_cast<std::size_t>(header->height) > max_decoded_texels) {
     scene_.warnings.push_back(material_desc + ": base color image " + std::to_string(image) + " is too large (" +
                               std::to_string(header->width) + "x" + std::to_string(header->height) +
-                              ") to decode as an alpha mask; alpha test uses the factor's alpha");
+                              ") to decode; the shader uses the base color factor");
   } else if (!img.image.empty()) {
     int w = 0, h = 0, comp = 0;
     stbi_uc* px = stbi_load_from_memory(img.image.data(), static_cast<int>(img.image.size()), &w, &h, &comp, 4);
     if (px == nullptr) {
       scene_.warnings.push_back(material_desc + ": base color image " + std::to_string(image) +
                                 " could not be decoded (" + stbi_failure_reason() +
-                                "); alpha test uses the factor's alpha");
+                                "); the shader uses the base color factor");
     } else {
+      const std::size_t texels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+      ColorTexels color;
+      color.width = w;
+      color.height = h;
+      color.rgba.assign(px, px + texels * 4);
       AlphaMask mask;
       mask.width = w;
       mask.height = h;
-      mask.alpha.resize(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
+      mask.alpha.resize(texels);
       bool any_transparent = false;
-      for (std::size_t i = 0; i < mask.alpha.size(); ++i) {
+      for (std::size_t i = 0; i < texels; ++i) {
         mask.alpha[i] = px[i * 4 + 3];
         any_transparent |= mask.alpha[i] != 255;
       }
       stbi_image_free(px);
+      out.texels = static_cast<int>(scene_.base_color_texels.size());
+      scene_.base_color_texels.push_back(std::move(color));
       // An image without alpha (or fully opaque) leaves the factor's alpha alone: no mask.
       if (any_transparent) {
-        result = static_cast<int>(scene_.alpha_masks.size());
+        out.mask = static_cast<int>(scene_.alpha_masks.size());
         scene_.alpha_masks.push_back(std::move(mask));
       }
     }
   }
-  mask_cache_[image] = result;
-  return result;
+  return decoded_.emplace(image, out).first->second;
 }
 
 void Converter::convert_materials() {
@@ -596,7 +607,9 @@ void Converter::convert_materials() {
         check_index(t.source, m_.images.size(), "texture " + std::to_string(tex) + quoted_name(t.name), "image");
         mat.base_color_texture = t.source;
         material_texcoord_[i] = gm.pbrMetallicRoughness.baseColorTexture.texCoord;
-        if (mat.alpha_mode == AlphaMode::PunchThrough) mat.alpha_mask = alpha_mask_for_image(t.source, desc);
+        const DecodedImage& decoded = decode_base_color(t.source, desc);
+        mat.base_color_texels = decoded.texels;
+        if (mat.alpha_mode == AlphaMode::PunchThrough) mat.alpha_mask = decoded.mask;
       } else {
         scene_.warnings.push_back("texture " + std::to_string(tex) + quoted_name(t.name) +
                                   ": no source image (extension-only textures are not supported); " + desc +

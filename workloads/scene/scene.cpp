@@ -1,6 +1,7 @@
 #include "scene/scene.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -26,6 +27,26 @@ float AlphaMask::sample(glm::vec2 uv) const {
   x = std::clamp(x, 0, width - 1);
   y = std::clamp(y, 0, height - 1);
   return static_cast<float>(alpha[static_cast<std::size_t>(y) * width + x]) * (1.0f / 255.0f);
+}
+
+glm::vec3 ColorTexels::sample_linear_rgb(glm::vec2 uv) const {
+  if (width <= 0 || height <= 0 || rgba.size() < static_cast<std::size_t>(width) * height * 4) return glm::vec3(1.0f);
+  if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return glm::vec3(0.0f);
+  const float fu = uv.x - std::floor(uv.x);
+  const float fv = uv.y - std::floor(uv.y);
+  const int x = std::clamp(static_cast<int>(fu * static_cast<float>(width)), 0, width - 1);
+  const int y = std::clamp(static_cast<int>(fv * static_cast<float>(height)), 0, height - 1);
+  // sRGB EOTF (IEC 61966-2-1), one table for the 256 codes.
+  static const std::array<float, 256> kLinear = [] {
+    std::array<float, 256> t{};
+    for (int i = 0; i < 256; ++i) {
+      const float c = static_cast<float>(i) / 255.0f;
+      t[static_cast<std::size_t>(i)] = c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+    }
+    return t;
+  }();
+  const std::uint8_t* p = &rgba[(static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)) * 4];
+  return {kLinear[p[0]], kLinear[p[1]], kLinear[p[2]]};
 }
 
 std::uint64_t TextureInfo::gpu_bytes() const {

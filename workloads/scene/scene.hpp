@@ -28,6 +28,18 @@ struct AlphaMask {
   float sample(glm::vec2 uv) const;
 };
 
+/// A decoded base colour image (RGBA8, sRGB-encoded colour as glTF stores it), kept so the shader
+/// samples the albedo it is charged for fetching.
+struct ColorTexels {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> rgba;  ///< row-major, width*height*4
+  /// Linear RGB at texture coordinate uv: the nearest texel at the base level with repeat
+  /// wrapping (AlphaMask::sample's convention), its sRGB colour decoded (glTF 2.0: "The base
+  /// color texture MUST contain 8-bit values encoded with the sRGB opto-electronic transfer function").
+  glm::vec3 sample_linear_rgb(glm::vec2 uv) const;
+};
+
 /// A texture as the GPU would hold it: size and format read from the image header.
 struct TextureInfo {
   std::string name;      ///< uri or image name
@@ -50,6 +62,7 @@ struct Material {
   glm::vec4 base_color{1.0f};           ///< linear RGBA base color factor
   int base_color_texture = -1;          ///< index into Scene::textures, -1 for none
   int alpha_mask = -1;                  ///< index into Scene::alpha_masks (punch-through only)
+  int base_color_texels = -1;           ///< index into Scene::base_color_texels, -1 when not decoded
 };
 
 /// A triangle list with one material: the unit a draw call submits.
@@ -89,6 +102,7 @@ struct Scene {
   std::vector<Material> materials;
   std::vector<TextureInfo> textures;
   std::vector<AlphaMask> alpha_masks;
+  std::vector<ColorTexels> base_color_texels;  ///< decoded base colour images (Material::base_color_texels)
   std::vector<SubMesh> submeshes;
   std::vector<Instance> instances;
   Bounds bounds;                        ///< world-space bounds of all instances
