@@ -55,33 +55,34 @@ struct Tolerance {
 ///   the summation order.
 /// - forward_multipass: an rgba8 target accumulates one additive pass per light (64 here), and
 ///   every pass whose light reaches the pixel rounds the sum to 1/255 again (up to 1/2 step each):
-///   the error grows with the lights overlapping a pixel (measured 9/255 on 2 % of channels).
+///   the error grows with the lights overlapping a pixel (measured 9/255 on 2 % of channels with
+///   untextured albedo, 13/255 on 2.3 % with the atrium's textured albedo: the tolerance is 16).
 /// - deferred: its light volumes add into the rgba8 frame one light at a time, the rounding of
 ///   forward_multipass (the same 1352 channels with an exact rgba32f G-buffer); the G-buffer adds
 ///   its own: the albedo rounds to 1/255 and is multiplied by the light falling on the pixel
 ///   (several times 1 near the lights), the 10-bit normal moves the Blinn-Phong lobe (exponent 32)
 ///   by up to 32 x 1.4e-3 of its height (56 more channels; an rgba8 normal 400 more).
 /// - clustered_deferred (albedo rgba8, normal rgb10a2) and tiled_deferred (Andersson's 4 x rgba8:
-///   an 8-bit normal): one rgba8 image write, so only the G-buffer's rounding: measured 9/255 on
-///   0.3 % and 1.3 %.
+///   an 8-bit normal): one rgba8 image write, so only the G-buffer's rounding: measured 13/255 on
+///   1.0 % and 1.4 % (textured albedo).
 /// - light_prepass (rgba8 normal buffer, rgba16f light buffer): the 8-bit normal changes every
 ///   lit pixel's N.L by up to 1/255 rad x the light (measured 7/255 on half the channels); fp16
 ///   accumulation adds at most 2^-11 of the sum per light volume.
 /// - deferred_tile_store (PLS albedo and light accumulator r11g11b10f, normal rgb10a2): 6- and
 ///   5-bit mantissas: the albedo and every accumulated light volume round to 1/64 .. 1/32 of their
-///   value (measured 9/255 on 10 %).
+///   value (measured 13/255 on 3.2 %, textured albedo).
 /// - visibility_buffer with MSAA: the kernel resolves its samples in float and writes rgba8 once,
 ///   plain forward clamps each sample to [0, 1] in its rgba8 target before the resolve: on edges
 ///   between an over-bright and a dark surface they differ by up to the over-bright part (41/255
 ///   measured, on edge pixels only: 2.5 % of channels).
 const std::map<std::string, Tolerance> kTolerances = {
-    {"forward_multipass", {12, 0.04}},  {"deferred", {12, 0.04}},           {"clustered_deferred", {12, 0.04}},
-    {"tiled_deferred", {12, 0.04}},     {"light_prepass", {10, 0.60}},      {"deferred_tile_store", {12, 0.15}},
+    {"forward_multipass", {16, 0.04}},  {"deferred", {16, 0.04}},           {"clustered_deferred", {16, 0.04}},
+    {"tiled_deferred", {16, 0.04}},     {"light_prepass", {10, 0.60}},      {"deferred_tile_store", {16, 0.15}},
 };
 /// The same at 4 samples per pixel.
 const std::map<std::string, Tolerance> kMsaaTolerances = {
-    {"forward_multipass", {12, 0.04}},
-    {"visibility_buffer", {48, 0.04}},
+    {"forward_multipass", {16, 0.04}},
+    {"visibility_buffer", {48, 0.05}},
 };
 
 /// Plain forward's image of a scene, and its pixels whose visible face depends on the depth test.
@@ -233,13 +234,15 @@ TEST(TechniqueImages, GlassOverComputeLitFramesMatchesPlainForward) {
 
 TEST(TechniqueImages, OnChipDeferredMatchesStoredDeferredWhetherItFitsOrSplits) {
   // Deferred with its G-buffer kept on chip (gbuffer_storage=onchip: one pass, the light volumes
-  // fetch the G-buffer) computes the same image as deferred with a stored G-buffer: the formats
-  // round the same values. Also when the pass does not fit 64 bits per pixel and the driver splits
-  // the render (split_render: the light volumes then read the G-buffer from memory).
+  // fetch the G-buffer) computes the image of deferred with a stored G-buffer: the formats round
+  // the same values, except the ambient term, which the on-chip G-buffer shader writes from the
+  // exact albedo and the stored variant's ambient pass from the rgba8 one (1/255 at most). Also
+  // when the pass does not fit 64 bits per pixel and the driver splits the render (split_render:
+  // the light volumes then read the G-buffer from memory): then exactly the fitting image.
   const Scene scene = opaque_atrium();
   TraceSetup setup = testing_support::atrium_entrance_setup(scene, 64, 192, 108);
   const HwConfig hw = resolve_config({}, {}).hw;
-  const ImageRGB8 stored = final_image(simulate_frame(generate_trace("deferred", setup), "d", scene, hw));
+  const FrameResult stored_frame = simulate_frame(generate_trace("deferred", setup), "d", scene, hw);
   setup.options["gbuffer_storage"] = "onchip";
   const Trace onchip = generate_trace("deferred", setup);
   const FrameResult fits = simulate_frame(onchip, "fits", scene, hw);
@@ -247,8 +250,16 @@ TEST(TechniqueImages, OnChipDeferredMatchesStoredDeferredWhetherItFitsOrSplits) 
       simulate_frame(onchip, "split", scene, resolve_config({}, {"pls.tile_buffer_bits_per_pixel=64"}).hw);
   EXPECT_EQ(stat(fits.stats, "frame/tile_memory", "split_renders"), 0.0);
   EXPECT_EQ(stat(split.stats, "frame/tile_memory", "split_renders"), 1.0);
-  EXPECT_EQ(final_image(fits).rgb, stored.rgb);
-  EXPECT_EQ(final_image(split).rgb, stored.rgb);
+  // Compared in the rgba8 target's linear values (the sRGB image magnifies 1/255 near black).
+  const auto& on = fits.images.attachments.at("color").color;
+  const auto& ref = stored_frame.images.attachments.at("color").color;
+  ASSERT_EQ(on.size(), ref.size());
+  float worst = 0;
+  for (std::size_t i = 0; i < on.size(); ++i) {
+    for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(on[i][c] - ref[i][c]));
+  }
+  EXPECT_LE(worst, 1.0f / 255.0f + 1e-6f);
+  EXPECT_EQ(final_image(split).rgb, final_image(fits).rgb);
 }
 
 }  // namespace

@@ -136,12 +136,36 @@ struct Atrium {
 
   std::uint32_t add_material(const std::string& name, AlphaMode mode, glm::vec4 color, int texture,
                              bool double_sided = false, int mask = -1) {
+    // Texture i's texels are base_color_texels[i] (add_texture adds both).
     scene.materials.push_back(Material{.name = name, .alpha_mode = mode, .double_sided = double_sided,
-                                       .base_color = color, .base_color_texture = texture, .alpha_mask = mask});
+                                       .base_color = color, .base_color_texture = texture, .alpha_mask = mask,
+                                       .base_color_texels = texture});
     return static_cast<std::uint32_t>(scene.materials.size() - 1);
   }
-  int add_texture(const std::string& name, int w, int h) {
+  /// A w x h texture and its texels: a cells_x x cells_y grid of blocks (stones, tiles, planks),
+  /// each a little lighter or darker, with texel noise and darker joints between them, as a
+  /// grey the material's colour factor tints (1 x 1 cells: noise only).
+  int add_texture(const std::string& name, int w, int h, int cells_x, int cells_y) {
     scene.textures.push_back(TextureInfo{.name = name, .format = "procedural", .width = w, .height = h, .channels = 4});
+    const auto seed = static_cast<std::uint32_t>(scene.textures.size()) * 0x9e3779b9U;
+    ColorTexels texels{w, h, std::vector<std::uint8_t>(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4, 255)};
+    const int cw = std::max(1, w / cells_x), ch = std::max(1, h / cells_y);
+    const int joint_x = cells_x > 1 ? std::max(1, cw / 24) : 0, joint_y = cells_y > 1 ? std::max(1, ch / 24) : 0;
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const int cx = x / cw, cy = y / ch;
+        const bool joint = (x % cw) < joint_x || (y % ch) < joint_y;
+        const float cell = 0.82f + 0.18f * hash01(seed ^ static_cast<std::uint32_t>(cy * 4099 + cx));
+        const float noise = 0.08f * (hash01(seed + static_cast<std::uint32_t>(y * w + x)) - 0.5f);
+        const float linear = std::clamp(joint ? 0.5f : cell + noise, 0.0f, 1.0f);
+        // Stored sRGB-encoded, as a glTF base colour texture is (ColorTexels decodes it).
+        const float srgb = linear <= 0.0031308f ? 12.92f * linear : 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
+        const auto code = static_cast<std::uint8_t>(std::lround(255.0f * srgb));
+        const std::size_t i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)) * 4;
+        texels.rgba[i] = texels.rgba[i + 1] = texels.rgba[i + 2] = code;
+      }
+    }
+    scene.base_color_texels.push_back(std::move(texels));
     return static_cast<int>(scene.textures.size() - 1);
   }
   /// A new, empty sub-mesh; returns its index (its storage may move as more are added). Vertices
@@ -440,15 +464,15 @@ Scene make_atrium(int detail) {
   S.source = "atrium:" + std::to_string(detail);
   S.content_hash = fnv1a_hex(S.source + ":generator" + std::to_string(atrium_generator_version));
 
-  // Textures (sizes only, except the two masks) and materials.
-  const int tex_stone = A.add_texture("stone_albedo", 1024, 1024);
-  const int tex_floor = A.add_texture("floor_tiles_albedo", 1024, 1024);
-  const int tex_plaster = A.add_texture("plaster_albedo", 1024, 1024);
-  const int tex_wood = A.add_texture("wood_albedo", 512, 512);
-  const int tex_cloth = A.add_texture("cloth_albedo_alpha", 256, 512);
-  const int tex_leaf = A.add_texture("leaf_albedo_alpha", 128, 256);
-  const int tex_terracotta = A.add_texture("terracotta_albedo", 512, 512);
-  const int tex_roof = A.add_texture("roof_tiles_albedo", 512, 512);
+  // Textures (procedural grey patterns the materials tint, and the two masks) and materials.
+  const int tex_stone = A.add_texture("stone_albedo", 1024, 1024, 4, 8);        // ashlar blocks
+  const int tex_floor = A.add_texture("floor_tiles_albedo", 1024, 1024, 8, 8);  // square tiles
+  const int tex_plaster = A.add_texture("plaster_albedo", 1024, 1024, 1, 1);    // noise only
+  const int tex_wood = A.add_texture("wood_albedo", 512, 512, 1, 16);           // planks
+  const int tex_cloth = A.add_texture("cloth_albedo_alpha", 256, 512, 1, 1);
+  const int tex_leaf = A.add_texture("leaf_albedo_alpha", 128, 256, 1, 1);
+  const int tex_terracotta = A.add_texture("terracotta_albedo", 512, 512, 1, 1);
+  const int tex_roof = A.add_texture("roof_tiles_albedo", 512, 512, 8, 16);     // tile rows
   S.alpha_masks.push_back(cloth_mask(256, 512));
   S.alpha_masks.push_back(leaf_mask(128, 256));
   const int mask_cloth = 0, mask_leaf = 1;

@@ -14,7 +14,7 @@
 namespace tbdr {
 
 /// Bump when the generator's output changes: it is part of the atrium's content hash.
-inline constexpr int atrium_generator_version = 2;
+inline constexpr int atrium_generator_version = 3;  // 3: base colour texels
 
 /// The atrium's main dimensions in meters (what cameras need to place themselves).
 struct AtriumLayout {
