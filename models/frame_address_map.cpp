@@ -46,10 +46,87 @@ FrameAddressMap::FrameAddressMap(const FrameWork& work, AddressSpace& space) {
     // Allocated only when the pass spills, so that passes that fit keep their addresses.
     spill_base_.push_back(spill_stride == 0 ? 0 : space.allocate("tile_spill." + cmd.name, spill_stride * max_tile, DramClass::Spill));
   }
+  // What each command wrote where, and whose data each command reads (the latest earlier writer
+  // of the class): addresses as the timing model issues them, tile stores class after class from
+  // the tile's slot, a dispatch's writes after its reads in its buffer area.
+  std::array<int, kDramClassCount> last_writer{};
+  last_writer.fill(-1);
+  written_.resize(work.commands.size());
+  for (std::size_t c = 0; c < work.commands.size(); ++c) {
+    const CommandWork& cmd = work.commands[c];
+    source_.push_back(last_writer);
+    auto& w = written_[c];
+    if (cmd.is_dispatch) {
+      std::uint64_t offset = sum(cmd.read_bytes);
+      for (std::size_t k = 0; k < kDramClassCount; ++k) {
+        if (cmd.write_bytes[k] == 0) continue;
+        w[k].all = {cmd_base_[c] + offset, cmd.write_bytes[k]};
+        offset += cmd.write_bytes[k];
+        last_writer[k] = static_cast<int>(c);
+      }
+      continue;
+    }
+    for (const auto& r : cmd.renders) {
+      for (const auto& t : r.tiles) {
+        const auto index = static_cast<std::size_t>(t.tile_y * work.tiles_x + t.tile_x);
+        std::uint64_t offset = 0;
+        for (std::size_t k = 0; k < kDramClassCount; ++k) {
+          if (t.store_bytes[k] == 0) continue;
+          auto& tiles = w[k].tiles;
+          if (tiles.size() <= index) tiles.resize(index + 1, ByteRange{0, 0});
+          tiles[index] = {tile(c, t, work.tiles_x) + offset, t.store_bytes[k]};  // the last render's stores
+          w[k].per_tile = true;
+          offset += t.store_bytes[k];
+          last_writer[k] = static_cast<int>(c);
+        }
+      }
+    }
+  }
   if (work.texture_bytes > 0) texture_base_ = space.allocate("textures", work.texture_bytes, DramClass::Textures);
   pb_base_[0] = space.allocate("parameter_buffer.0", pb_bytes, DramClass::ParameterBuffer);
   pb_base_[1] = space.allocate("parameter_buffer.1", pb_bytes, DramClass::ParameterBuffer);
   vertex_base_ = space.allocate("vertex_and_index_buffers", vertex_bytes, DramClass::Vertices);
+}
+
+std::vector<ByteRange> FrameAddressMap::produced(std::size_t command, DramClass k, int tile_index, std::uint64_t bytes,
+                                                std::uint64_t piece) const {
+  std::vector<ByteRange> out;
+  const int writer = source_[command][static_cast<std::size_t>(k)];
+  if (writer < 0 || bytes == 0 || piece == 0) return out;
+  const Written& w = written_[static_cast<std::size_t>(writer)][static_cast<std::size_t>(k)];
+  // The ranges to cycle over, and where in them to start.
+  std::vector<ByteRange> src;
+  std::uint64_t start = 0;
+  if (!w.per_tile) {
+    if (w.all.bytes == 0) return out;
+    src.push_back(w.all);
+    if (tile_index >= 0) start = (static_cast<std::uint64_t>(tile_index) * bytes) % w.all.bytes;
+  } else if (tile_index >= 0) {
+    const auto i = static_cast<std::size_t>(tile_index);
+    if (i >= w.tiles.size() || w.tiles[i].bytes == 0) return out;
+    src.push_back(w.tiles[i]);
+  } else {
+    for (const ByteRange& r : w.tiles) {
+      if (r.bytes > 0) src.push_back(r);
+    }
+    if (src.empty()) return out;
+  }
+  // Walk the ranges from `start`, piece by piece, until `bytes` are covered.
+  std::size_t ri = 0;
+  std::uint64_t in = start;
+  while (ri < src.size() && in >= src[ri].bytes) in -= src[ri++].bytes;
+  for (std::uint64_t done = 0; done < bytes;) {
+    const ByteRange& r = src[ri];
+    const std::uint64_t n = std::min({piece, r.bytes - in, bytes - done});
+    out.push_back({r.offset + in, n});
+    done += n;
+    in += n;
+    if (in == r.bytes) {
+      in = 0;
+      ri = (ri + 1) % src.size();
+    }
+  }
+  return out;
 }
 
 std::uint64_t FrameAddressMap::spill(std::size_t command, const TileWork& t, int tiles_x) const {

@@ -4,6 +4,7 @@
 // buffers, the textures, per command a framebuffer area (one fixed-size slot per tile) and a buffer
 // area (lights, light lists, compute buffers). Addresses decide cache sets and DRAM banks, so the
 // layout is a pure function of the frame's work: the same work always gets the same addresses.
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -31,11 +32,30 @@ class FrameAddressMap {
   /// Base of one tile's slot of tile-buffer bytes spilled to memory (pls.over_budget = spill).
   std::uint64_t spill(std::size_t command, const TileWork& t, int tiles_x) const;
 
+  /// Where `command` reads `bytes` of class `k` that an earlier command produced: the addresses
+  /// that command wrote them to (the latest earlier command writing class `k`: a pass's tile
+  /// stores, a dispatch's writes), cut into pieces of at most `piece` bytes. A tile's reads
+  /// (`tile_index` >= 0) come from the same tile's stores of a pass (or the dispatch's data from
+  /// the tile's share on); a dispatch's reads (`tile_index` < 0) from all of it in order. Reads
+  /// beyond what was written cycle over it again (light volumes re-reading a tile's G-buffer hit
+  /// in the caches as on hardware). Empty when nothing earlier wrote class `k` there: the reader
+  /// then uses its own slot.
+  std::vector<ByteRange> produced(std::size_t command, DramClass k, int tile_index, std::uint64_t bytes,
+                                  std::uint64_t piece) const;
+
  private:
   std::uint64_t pb_base_[2] = {0, 0};
   std::uint64_t vertex_base_ = 0;
   std::uint64_t texture_base_ = 0;
   std::vector<std::uint64_t> fb_base_, fb_stride_, cmd_base_, spill_base_, spill_stride_;
+  /// What one command wrote of one class: per tile index (passes) or one range (dispatches).
+  struct Written {
+    std::vector<ByteRange> tiles;  ///< by tile index; bytes 0 where the tile stored none
+    ByteRange all;                 ///< a dispatch's range
+    bool per_tile = false;
+  };
+  std::vector<std::array<Written, kDramClassCount>> written_;           ///< per command
+  std::vector<std::array<int, kDramClassCount>> source_;                ///< per command: the writer it reads, or -1
 };
 
 }  // namespace tbdr

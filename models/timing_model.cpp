@@ -283,7 +283,12 @@ class TimingSim final : public Unit {
         const std::uint64_t bytes = write ? cmd.write_bytes[c] : cmd.read_bytes[c];
         if (bytes == 0) continue;
         DmaStream* s = new_stream(Client::Compute, write != 0, static_cast<DramClass>(c));
-        s->add(base + offset, bytes);
+        // Reads of what an earlier command wrote (a G-buffer, depth, light lists) come from where
+        // it was written; anything else from the dispatch's own area.
+        const std::vector<ByteRange> from =
+            write ? std::vector<ByteRange>{} : map_.produced(frag_jobs_[f].command, static_cast<DramClass>(c), -1, bytes, bytes);
+        if (from.empty()) s->add(base + offset, bytes);
+        for (const ByteRange& r : from) s->add(r.offset, r.bytes);
         offset += bytes;
         ++*pending;
         s->start(finish);
@@ -305,6 +310,7 @@ class TimingSim final : public Unit {
     render_ = &cmd.renders[r];
     render_job_ = f;
     render_command_ = frag_jobs_[f].command;
+    render_index_ = r;
     render_pb_base_ = map_.parameter_buffer(bin_index_of(frag_jobs_[f]));
     tiles_.assign(render_->tiles.size(), TileState{});
     next_dispatch_ = 0;
@@ -331,6 +337,7 @@ class TimingSim final : public Unit {
   }
 
   std::uint64_t tile_address(const TileWork& t) const { return map_.tile(render_command_, t, work_.tiles_x); }
+  int tile_index(const TileWork& t) const { return t.tile_y * work_.tiles_x + t.tile_x; }
 
   void dispatch_tiles() {
     while (in_flight_ < static_cast<std::size_t>(hw_.isp.tiles_in_flight) && next_dispatch_ < tiles_.size()) {
@@ -356,7 +363,13 @@ class TimingSim final : public Unit {
       for (std::size_t c = 0; c < kDramClassCount; ++c) {
         if (t.load_bytes[c] == 0) continue;
         DmaStream* s = new_stream(Client::PixelBackEnd, false, static_cast<DramClass>(c));
-        s->add(tile_address(t) + offset, t.load_bytes[c]);
+        // A load op reads what an earlier command stored for this tile, where it stored it; a
+        // later render's reloads (after a partial render) read this pass's own stores.
+        const std::vector<ByteRange> from =
+            render_index_ == 0 ? map_.produced(render_command_, static_cast<DramClass>(c), tile_index(t), t.load_bytes[c], t.load_bytes[c])
+                               : std::vector<ByteRange>{};
+        if (from.empty()) s->add(tile_address(t) + offset, t.load_bytes[c]);
+        for (const ByteRange& r : from) s->add(r.offset, r.bytes);
         offset += t.load_bytes[c];
         ++ts.pending_streams;
         s->start(on_stream);
@@ -436,8 +449,14 @@ class TimingSim final : public Unit {
       const std::uint64_t bytes = t.image_read_bytes[c];
       if (bytes == 0) continue;
       DmaStream* s = new_stream(Client::Texture, false, static_cast<DramClass>(c), outstanding);
+      // From where the producer stored the tile's data (re-reads cycle over it, so they can hit
+      // in the texture cache and the SLC), else from the tile's own slot.
+      const std::vector<ByteRange> from = map_.produced(render_command_, static_cast<DramClass>(c), tile_index(t), bytes, texture_line_bytes_);
       const std::uint64_t base = tile_address(t) + offset;
-      for (std::uint64_t off = 0; off < bytes; off += texture_line_bytes_) s->add(base + off, std::min(texture_line_bytes_, bytes - off));
+      if (from.empty()) {
+        for (std::uint64_t off = 0; off < bytes; off += texture_line_bytes_) s->add(base + off, std::min(texture_line_bytes_, bytes - off));
+      }
+      for (const ByteRange& r : from) s->add(r.offset, r.bytes);
       offset += bytes;
       ++tiles_[i].pending_shading;
       s->start([this, i] {
@@ -565,6 +584,7 @@ class TimingSim final : public Unit {
   std::uint64_t render_pb_base_ = 0;
   std::vector<TileState> tiles_;
   std::size_t next_dispatch_ = 0, next_isp_ = 0, tiles_done_ = 0, in_flight_ = 0;
+  std::size_t render_index_ = 0;  ///< which render of its pass the current one is
   std::deque<std::size_t> store_queue_;
   bool store_busy_ = false;
 };

@@ -374,6 +374,60 @@ TEST(TimingCliff, SubpassesPastTheBudgetSplitTheRender) {
   EXPECT_GE(spill.cycles[0], c.cycles[c.cycles.size() - 2]) << "spilling never makes the pass faster than fitting";
 }
 
+TEST(TimingCaches, ReReadsOfAStoredGbufferComeFromWhereItWasStoredAndHitTheCaches) {
+  // A pass stores a 4-byte G-buffer target of 256 x 256 pixels (256 KiB); a second pass draws k
+  // fullscreen layers that each read it at every pixel (reads=g1), as light volumes do: the
+  // shaders request k x 256 KiB. The reads go to the addresses the first pass stored to, tile by
+  // tile, and a tile's 4 KiB is re-read k times while it shades: DRAM delivers about the 256 KiB
+  // once (within 10 %), not k times, and requests stay k x 256 KiB.
+  Scene s = base_scene();
+  add_quad(s, "wall", 3, -512, 1024, 0);
+  auto gbuffer_dram_reads = [&](int k) {
+    Trace t = frame_of(256);
+    t.shaders[0].tex_fetches = 0;
+    t.shaders[0].color_outputs = 2;
+    ShaderDesc light = t.shaders[0];
+    light.name = "light";
+    light.color_outputs = 1;
+    t.shaders.push_back(light);
+    PipelineState add = t.pipelines[0];
+    add.name = "add";
+    add.shader = "light";
+    add.depth_test = false;
+    add.depth_write = false;
+    add.blend = BlendMode::Add;
+    t.pipelines.push_back(add);
+    PassDesc g = base_pass();
+    g.name = "gbuffer";
+    Attachment g1 = g.attachments[0];
+    g1.name = "g1";
+    g1.usage = AttachmentUsage::Gbuffer;
+    g.attachments.push_back(g1);
+    g.draws = {draw_of("wall")};
+    PassDesc l = base_pass();
+    l.name = "lighting";
+    l.attachments[0].name = "lit";
+    for (int i = 0; i < k; ++i) {
+      DrawCmd d;
+      d.pipeline = "add";
+      d.geometry = GeometryKind::Fullscreen;
+      d.reads = {"g1"};
+      l.draws.push_back(d);
+    }
+    t.commands = {g, l};
+    const Timed r = run_timed(t, s, {});
+    return std::pair<double, double>{static_cast<double>(r.timing.dram.reads(DramClass::Gbuffer)),
+                                     static_cast<double>(r.timing.requested.reads(DramClass::Gbuffer))};
+  };
+  const double stored = 256.0 * 256.0 * 4.0;
+  for (int k : {1, 8}) {
+    const auto [dram, requested] = gbuffer_dram_reads(k);
+    std::printf("[ caches   ] %d layers: G-buffer requested %.0f B, from DRAM %.0f B\n", k, requested, dram);
+    EXPECT_EQ(requested, k * stored);
+    EXPECT_NEAR(dram, stored, 0.1 * stored);
+  }
+}
+
 TEST(TimingCliff, FramebufferFetchReadsTheTileBuffer) {
   // A draw that fetches a 4-byte G-buffer attachment of its pass reads it from the tile buffer
   // at every shaded pixel: 256 x 256 pixels x 4 B more tile-buffer reads than the same draw
