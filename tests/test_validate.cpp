@@ -1,0 +1,40 @@
+// `tbdrsim validate`: the published anchors. docs/validation.md is the command's output (a model
+// change that moves a figure must regenerate it: `tbdrsim validate --markdown docs/validation.md`),
+// and every anchor that is arithmetic holds.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "app/cli.hpp"
+#include "scratch_dir.hpp"
+
+namespace tbdr {
+namespace {
+
+const testing_scratch::ScratchCleanup cleanup{"validate"};
+
+TEST(Validate, DocsValidationIsTheCommandsTableAndEveryExactAnchorHolds) {
+  const auto dir = testing_scratch::scratch_dir("validate", "run");
+  const std::string md = (dir / "validation.md").string();
+  std::ostringstream out, err;
+  ASSERT_EQ(cli_main({"validate", "--out", (dir / "v").string(), "--markdown", md}, out, err), 0) << err.str();
+  std::ifstream generated(md), docs(std::string(TBDRSIM_SOURCE_DIR) + "/docs/validation.md");
+  std::stringstream g, d;
+  g << generated.rdbuf();
+  d << docs.rdbuf();
+  EXPECT_EQ(g.str(), d.str()) << "regenerate docs/validation.md with `tbdrsim validate --markdown docs/validation.md`";
+  // Every exact anchor's row ends "| exact | yes |".
+  std::istringstream rows(g.str());
+  int exact = 0;
+  for (std::string line; std::getline(rows, line);) {
+    if (line.find("| exact |") == std::string::npos) continue;
+    ++exact;
+    EXPECT_NE(line.find("| exact | yes |"), std::string::npos) << line;
+  }
+  EXPECT_GE(exact, 6);
+}
+
+}  // namespace
+}  // namespace tbdr
