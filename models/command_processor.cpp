@@ -517,6 +517,13 @@ class FrameSimulator {
     ctx.defer_shading = hw_.gpu.mode == GpuMode::Tbdr;
     ctx.framebuffer_in_dram = hw_.gpu.mode == GpuMode::Imr;
     check_pls_layout(hw_.pls, pass, path_);  // before any work, naming the trace file
+    if (hw_.gpu.mode == GpuMode::Imr && !pass.pls.empty()) {
+      // EXT_shader_pixel_local_storage keeps per-pixel data in tile memory for the life of a
+      // pass: an immediate-mode GPU has none to offer, so the extension is not there.
+      throw InputError(path_, pass.line, "pass '" + pass.name + "' declares pixel local storage, which an immediate-mode GPU "
+                                         "(gpu.mode=imr) does not have: run it with gpu.mode=tbdr or tbr, or use a technique "
+                                         "without PLS");
+    }
     prepare_attachments(pass, ctx);
     resolve_draws(pass, ctx);
     count_geometry_passes(pass);

@@ -29,7 +29,7 @@ ParamRegistry<HwConfig> make_registry() {
       .source(series6xt + ": 450-850 MHz");
   r.add(TBDR_PARAM(gpu.mode), GpuMode::Tbdr, kGpuModeNames)
       .doc("tbdr: binning + tag-buffer HSR; tbr: binning, early-Z only (Mali-like); imr: no binning, "
-           "framebuffer in DRAM behind caches")
+           "framebuffer in DRAM (a pass with pixel local storage is refused: no tile memory to keep it in)")
       .source("Imagination, PowerVR Architecture Guide (tile-based deferred rendering); tbr and imr are the "
               "comparison modes");
 

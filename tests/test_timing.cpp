@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "kernel/errors.hpp"
 #include "models/hw_config.hpp"
 #include "models/command_processor.hpp"
 #include "app/run_driver.hpp"
@@ -452,6 +453,27 @@ TEST(TimingCliff, FramebufferFetchReadsTheTileBuffer) {
     read[fetch] = stat(run_timed(t, s, {}).frame.stats, "frame/tsp", "tile_buffer_read_bytes");
   }
   EXPECT_EQ(read[1] - read[0], 256.0 * 256.0 * 4.0);
+}
+
+TEST(TimingCliff, PixelLocalStorageIsRefusedOnAnImmediateModeGpu) {
+  // An IMR has no tile memory to keep PLS in (EXT_shader_pixel_local_storage): the pass is refused,
+  // naming it, instead of its PLS traffic going unpaid.
+  PassDesc p = base_pass();
+  p.name = "stack_pass";
+  p.pls = {PlsVariable{"stack", Format::Rgba32ui, 0}};
+  Scene s = base_scene();
+  add_quad(s, "wall", 3, -512, 1024, 0);
+  Trace t = frame_of(64);
+  p.draws = {draw_of("wall")};
+  t.commands.push_back(p);
+  try {
+    simulate_frame(t, "pls.trace", s, resolve_config({}, {"gpu.mode=imr"}).hw);
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("pass 'stack_pass' declares pixel local storage"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("pls.trace"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(simulate_frame(t, "pls.trace", s, resolve_config({}, {"gpu.mode=tbr"}).hw));
 }
 
 TEST(TimingCliff, PixelLocalStorageSharesTheColourStorage) {
