@@ -14,7 +14,8 @@
 # draws come in the trace's order (opaque in scene order first, so much hidden geometry arrives
 # after what hides it).
 # A second table shows the TBR figure across submission orders (draw_order near_to_far, pass,
-# far_to_near): early-Z removes more when near geometry comes first.
+# far_to_near): early-Z removes more when near geometry comes first; a third with forward pixel
+# kill windows (isp.forward_pixel_kill_window).
 # Usage: bash bench/hsr_anchor.sh [build-dir] [WIDTHxHEIGHT] [scene]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -59,3 +60,14 @@ for order in near_to_far pass far_to_near; do
     'BEGIN { printf "%-12s %12.2f %12.2f %12.2f\n", order, tbr / px, tbdr / px, tbr / tbdr }'
 done
 echo "(sorting is per sub-mesh: the depth complexity inside one sub-mesh keeps its triangle order)"
+echo
+echo "TBR with forward pixel kill (Arm Mali; isp.forward_pixel_kill_window primitives queued behind early-Z), street view, draw_order=pass:"
+printf "%-8s %12s %14s\n" "window" "TBR shad/px" "killed/px"
+"$BUILD/tbdrsim" trace --technique plain_forward --scene "$SCENE" --camera street --lights 64 --resolution "$RES" \
+  --out "$TMP/f.trace" > /dev/null
+for window in 0 4 16 64; do
+  "$BUILD/tbdrsim" run --trace "$TMP/f.trace" --db "$TMP/fpk.db" --set gpu.mode=tbr --set isp.forward_pixel_kill_window=$window --quiet
+  awk -v px=$((W * H)) -v window="$window" -v tbr="$(stat "$TMP/fpk.db" frame/tsp shader_invocations)" \
+    -v killed="$(stat "$TMP/fpk.db" frame/isp forward_pixel_kill_samples)" \
+    'BEGIN { printf "%-8s %12.2f %14.2f\n", window, tbr / px, killed / px }'
+done

@@ -108,6 +108,12 @@ ParamRegistry<HwConfig> make_registry() {
       .source("Imagination, US 8,446,409 (Howson): translucent and punch-through tags stay in further tag buffers "
               "and are passed to shading only when an object must overwrite an occupied location; an opaque "
               "surface visible at a pixel clears the tags of all the tag buffers; US 10,210,596");
+  r.add(TBDR_PARAM(isp.forward_pixel_kill_window), 0).unit("primitives").range(0, 256)
+      .doc("gpu.mode=tbr: primitives between early-Z and shading whose queued fragments a later opaque "
+           "fragment at the same sample kills before they are shaded (forward pixel kill); 0 = off")
+      .source("Arm, \"Killing Pixels - A New Optimization for Shading on ARM Mali GPUs\" (Arm community blog, "
+              "2013): fragments still queued for shading are killed when a later opaque fragment covers them; "
+              "the queue depth has no public figure");
   r.add(TBDR_PARAM(isp.tag_bits), 32).unit("bits").range(8, 64)
       .doc("Bits per tag (triangle id) per sample").source("no public figure");
   r.add(TBDR_PARAM(isp.depth_stencil_bytes_per_sample), 4).unit("bytes").range(2, 8)

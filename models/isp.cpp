@@ -1,6 +1,7 @@
 #include "models/isp.hpp"
 
 #include <algorithm>
+#include <bit>
 
 namespace tbdr {
 
@@ -137,6 +138,15 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     depth_of_.assign(tile_samples, 0);
     layers_.resize(tile_samples * static_cast<std::size_t>(L));
   }
+  // tbr: forward pixel kill queues this many primitives between early-Z and shading.
+  const std::size_t fpk_window = (!ctx_.defer_shading && !ctx_.framebuffer_in_dram)
+                                     ? static_cast<std::size_t>(std::max<std::int64_t>(0, ctx_.hw->isp.forward_pixel_kill_window))
+                                     : 0;
+  std::uint32_t arrivals = 0;
+  if (fpk_window > 0) {
+    kill_seq_.assign(tile_samples, 0);
+    queue_.clear();
+  }
   ++isp.tiles_rendered;
   const std::uint64_t ds_bytes = static_cast<std::uint64_t>(ctx_.hw->isp.depth_stencil_bytes_per_sample);
   const std::uint64_t tag_bytes = static_cast<std::uint64_t>(ctx_.hw->isp.tag_bits / 8);
@@ -272,12 +282,32 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
       continue;
     }
 
-    // tbr / imr: shade at once, in submission order.
+    // tbr / imr: shade in submission order.
     if (pending_.empty()) continue;
     if (p.hsr == HsrClass::PunchThrough) isp.punch_through_samples += pending_.size();
     if (p.hsr == HsrClass::Translucent) isp.translucent_samples += pending_.size();
-    build_batch(pending_.data(), pending_.data() + pending_.size(), batch_);
     const bool punch = p.hsr == HsrClass::PunchThrough;
+    if (fpk_window > 0 && !punch) {
+      // Forward pixel kill: queue the samples; an opaque, depth-writing, unblended primitive marks
+      // its samples, killing what earlier primitives still queued there.
+      const DrawContext& d = ctx_.draws[p.draw];
+      const std::uint32_t seq = ++arrivals;
+      if (early_write && pl.blend == BlendMode::Off) {
+        for (const PendingSample& ps : pending_) kill_seq_[tile_sample(rect, ps)] = seq;
+      }
+      queue_.push_back({seq, prim_index, d.shader->pls == PlsAccess::None && d.fetch_bytes == 0, pending_});
+      if (p.hsr == HsrClass::Translucent && write_on) {
+        for (const PendingSample& ps : pending_) {
+          depth[global_index(ps.x, ps.y, ps.bit)] = ps.z;
+          isp.depth_buffer_write_bytes += ds_bytes;
+        }
+      }
+      while (queue_.size() > fpk_window) shade_queued(rect, isp, tsp);
+      continue;
+    }
+    // A punch-through primitive's depth waits for its alpha test: what is queued is shaded first.
+    while (!queue_.empty()) shade_queued(rect, isp, tsp);
+    build_batch(pending_.data(), pending_.data() + pending_.size(), batch_);
     tsp_.shade(prim_index, batch_, punch ? &alive_ : nullptr, tsp);
     if (punch) write_punch_depth(pending_.data(), pending_.data() + pending_.size(), isp);
     if (p.hsr == HsrClass::Translucent && write_on) {
@@ -288,6 +318,29 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     }
   }
   if (ctx_.defer_shading) flush(rect, false, isp, tsp);
+  while (!queue_.empty()) shade_queued(rect, isp, tsp);
+}
+
+std::size_t Isp::tile_sample(const PixelRect& rect, const PendingSample& ps) const {
+  const auto S = static_cast<std::size_t>(ctx_.pattern.count);
+  const auto col = static_cast<std::size_t>(ps.x - rect.x0), row = static_cast<std::size_t>(ps.y - rect.y0);
+  return (row * static_cast<std::size_t>(rect.width()) + col) * S + static_cast<std::size_t>(std::countr_zero(ps.bit));
+}
+
+void Isp::shade_queued(const PixelRect& rect, IspStats& isp, TspStats& tsp) {
+  Queued q = std::move(queue_.front());
+  queue_.pop_front();
+  std::size_t kept = 0;
+  for (const PendingSample& ps : q.samples) {
+    if (q.killable && kill_seq_[tile_sample(rect, ps)] > q.seq) {
+      ++isp.forward_pixel_kill_samples;
+      continue;
+    }
+    q.samples[kept++] = ps;
+  }
+  if (kept == 0) return;
+  build_batch(q.samples.data(), q.samples.data() + kept, batch_);
+  tsp_.shade(q.prim, batch_, nullptr, tsp);
 }
 
 }  // namespace tbdr

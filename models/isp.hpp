@@ -24,8 +24,11 @@
 // What is left in the layers is shaded when the tile ends. With one tag buffer every translucent
 // or punch-through sample over a pending tag flushes the tile; with more, layers wait and a later
 // opaque primitive in front removes them unshaded. In tbr/imr modes there is no tag buffer: every
-// fragment that passes early depth testing is shaded immediately, in submission order.
+// fragment that passes early depth testing is shaded in submission order, at once, or in tbr with
+// forward pixel kill (Arm Mali) after the next isp.forward_pixel_kill_window primitives, unless
+// one of them wrote an opaque sample over it meanwhile.
 #include <cstdint>
+#include <deque>
 #include <vector>
 
 #include "models/render_state.hpp"
@@ -52,7 +55,8 @@ namespace tbdr {
   X(Counter, depth_buffer_read_bytes, "bytes", Sum, "On-chip depth/stencil bytes read by tests") \
   X(Counter, depth_buffer_write_bytes, "bytes", Sum, "On-chip depth/stencil bytes written") \
   X(Counter, tag_buffer_read_bytes, "bytes", Sum, "Tag buffer bytes read (flushes)") \
-  X(Counter, tag_buffer_write_bytes, "bytes", Sum, "Tag buffer bytes written")
+  X(Counter, tag_buffer_write_bytes, "bytes", Sum, "Tag buffer bytes written") \
+  X(Counter, forward_pixel_kill_samples, "samples", Sum, "gpu.mode=tbr: queued samples killed before shading by a later opaque sample (isp.forward_pixel_kill_window)")
 /// Statistics of the ISP.
 struct IspStats {
   TBDR_STATS(TBDR_ISP_STATS)
@@ -94,6 +98,17 @@ class Isp {
   void flush(const PixelRect& rect, bool mid_tile, IspStats& isp, TspStats& tsp);
   /// Writes a punch-through primitive's depth where its alpha test kept the sample.
   void write_punch_depth(const PendingSample* begin, const PendingSample* end, IspStats& isp);
+  /// tbr forward pixel kill: a primitive's early-Z survivors waiting to be shaded.
+  struct Queued {
+    std::uint32_t seq;   ///< arrival order in the tile
+    std::uint32_t prim;
+    bool killable;       ///< its shader has no side effect beyond its colour (no PLS, no fetch)
+    std::vector<PendingSample> samples;
+  };
+  /// Shades the oldest queued primitive's samples that no later opaque sample killed.
+  void shade_queued(const PixelRect& rect, IspStats& isp, TspStats& tsp);
+  /// Tile sample index of a pending sample.
+  std::size_t tile_sample(const PixelRect& rect, const PendingSample& ps) const;
   /// Merges consecutive samples of one pixel into ShadePixels (samples are in raster order).
   static void build_batch(const PendingSample* begin, const PendingSample* end, std::vector<ShadePixel>& batch);
 
@@ -107,6 +122,8 @@ class Isp {
   std::vector<PendingSample> flush_samples_;
   std::vector<ShadePixel> batch_;
   std::vector<std::uint32_t> alive_;
+  std::deque<Queued> queue_;             ///< tbr forward pixel kill: primitives waiting to be shaded
+  std::vector<std::uint32_t> kill_seq_;  ///< per tile sample: 1 + arrival of the latest opaque sample there
 };
 
 }  // namespace tbdr
