@@ -243,6 +243,22 @@ TEST(TimingDeterminism, SameRunTwiceGivesIdenticalFigures) {
   }
 }
 
+/// Adds k transient 32-bit G-buffer targets g1..gk (copies of the colour, store=dont_care) to a
+/// pass; returns their names.
+std::vector<std::string> add_transient_gbuffer(PassDesc& p, int k) {
+  std::vector<std::string> names;
+  for (int i = 1; i <= k; ++i) {
+    Attachment a = p.attachments[0];
+    a.name = "g" + std::to_string(i);
+    a.usage = AttachmentUsage::Gbuffer;
+    a.store = StoreOp::DontCare;
+    a.transient = true;
+    p.attachments.push_back(a);
+    names.push_back(a.name);
+  }
+  return names;
+}
+
 /// Frame cycles of a 512x512 pass keeping k 32-bit G-buffer targets on chip (transient,
 /// store=dont_care) beside its stored colour, one cheap full-frame layer, on the GX6250 preset's
 /// 256 bits per pixel (2 USCs) plus `sets`.
@@ -257,14 +273,7 @@ std::vector<double> onchip_gbuffer_cliff(int k_first, int k_last, std::vector<st
     t.shaders[0].tex_fetches = 0;
     t.shaders[0].color_outputs = static_cast<std::uint32_t>(k + 1);
     PassDesc p = base_pass();
-    for (int i = 1; i <= k; ++i) {
-      Attachment a = p.attachments[0];
-      a.name = "g" + std::to_string(i);
-      a.usage = AttachmentUsage::Gbuffer;
-      a.store = StoreOp::DontCare;
-      a.transient = true;
-      p.attachments.push_back(a);
-    }
+    add_transient_gbuffer(p, k);
     p.draws = {draw_of("wall")};
     t.commands.push_back(p);
     const Timed r = run_timed(t, s, sets);
@@ -288,6 +297,22 @@ TEST(TimingCliff, OnChipGbufferCostsTileBufferBandwidthThenSpills) {
   for (std::size_t i = 1; i < c.size(); ++i) EXPECT_NEAR(c[i] - c[i - 1], 32768.0, 0.02 * 32768.0) << "step " << i;
 }
 
+/// Adds shader "light" (the first shader's cost, one colour output) and pipeline "add" (no depth
+/// test, additive blend): what a full-screen light layer draws with.
+void add_fullscreen_light(Trace& t) {
+  ShaderDesc light = t.shaders[0];
+  light.name = "light";
+  light.color_outputs = 1;
+  t.shaders.push_back(light);
+  PipelineState add = t.pipelines[0];
+  add.name = "add";
+  add.shader = "light";
+  add.depth_test = false;
+  add.depth_write = false;
+  add.blend = BlendMode::Add;
+  t.pipelines.push_back(add);
+}
+
 /// Frame cycles and split renders of a 512x512 pass with subpasses, as deferred shading keeps its
 /// G-buffer on chip: a wall writes the colour plus k 32-bit transient G-buffer targets, then a
 /// fullscreen draw fetches the k targets at every pixel and adds onto the colour; on the GX6250
@@ -307,30 +332,12 @@ SubpassCliff onchip_subpass_cliff(int k_first, int k_last, std::vector<std::stri
     t.shaders[0].alu_ops = 4;
     t.shaders[0].tex_fetches = 0;
     t.shaders[0].color_outputs = static_cast<std::uint32_t>(k + 1);
-    ShaderDesc light = t.shaders[0];
-    light.name = "light";
-    light.color_outputs = 1;
-    t.shaders.push_back(light);
-    PipelineState add = t.pipelines[0];
-    add.name = "add";
-    add.shader = "light";
-    add.depth_test = false;
-    add.depth_write = false;
-    add.blend = BlendMode::Add;
-    t.pipelines.push_back(add);
+    add_fullscreen_light(t);
     PassDesc p = base_pass();
     DrawCmd fullscreen;
     fullscreen.pipeline = "add";
     fullscreen.geometry = GeometryKind::Fullscreen;
-    for (int i = 1; i <= k; ++i) {
-      Attachment a = p.attachments[0];
-      a.name = "g" + std::to_string(i);
-      a.usage = AttachmentUsage::Gbuffer;
-      a.store = StoreOp::DontCare;
-      a.transient = true;
-      p.attachments.push_back(a);
-      fullscreen.fetch.push_back(a.name);
-    }
+    fullscreen.fetch = add_transient_gbuffer(p, k);
     p.draws = {draw_of("wall"), fullscreen};
     t.commands.push_back(p);
     const Timed r = run_timed(t, s, sets);
@@ -387,17 +394,7 @@ TEST(TimingCaches, ReReadsOfAStoredGbufferComeFromWhereItWasStoredAndHitTheCache
     Trace t = frame_of(256);
     t.shaders[0].tex_fetches = 0;
     t.shaders[0].color_outputs = 2;
-    ShaderDesc light = t.shaders[0];
-    light.name = "light";
-    light.color_outputs = 1;
-    t.shaders.push_back(light);
-    PipelineState add = t.pipelines[0];
-    add.name = "add";
-    add.shader = "light";
-    add.depth_test = false;
-    add.depth_write = false;
-    add.blend = BlendMode::Add;
-    t.pipelines.push_back(add);
+    add_fullscreen_light(t);
     PassDesc g = base_pass();
     g.name = "gbuffer";
     Attachment g1 = g.attachments[0];
