@@ -86,16 +86,18 @@ ResultsDb::ResultsDb(const std::string& path, int target_version) : conn_(path) 
 
 void ResultsDb::setup(int target_version) {
   conn_.exec("PRAGMA foreign_keys = ON");
-  // Check what the file is before changing anything in it.
+  // Check what the file is before changing anything in it. Both figures come from one statement,
+  // so from one read transaction: read apart, another writer could commit the schema and the id
+  // (one transaction, migrate()) between the two reads, and a new tbdrsim database would look
+  // like a foreign one (id 0 with schema objects).
   int app_id = 0;
   int object_count = 0;
   {
-    SqlStatement s(conn_, "PRAGMA application_id");
-    if (s.step()) app_id = static_cast<int>(s.int64(0));
-  }
-  {
-    SqlStatement s(conn_, "SELECT count(*) FROM sqlite_master");
-    if (s.step()) object_count = static_cast<int>(s.int64(0));
+    SqlStatement s(conn_, "SELECT (SELECT application_id FROM pragma_application_id), (SELECT count(*) FROM sqlite_master)");
+    if (s.step()) {
+      app_id = static_cast<int>(s.int64(0));
+      object_count = static_cast<int>(s.int64(1));
+    }
   }
   if (app_id != kApplicationId && (app_id != 0 || object_count != 0)) {
     throw InputError(path(), "not a tbdrsim results database (SQLite application_id " +
