@@ -70,6 +70,21 @@ CREATE TABLE tile_stats(
 );
 CREATE INDEX runs_by_inputs ON runs(config_hash, trace_hash, status);
 )sql",
+    // v3: claims of the sweep points being run, so that sweeps sharing a database run each point
+    // once (app/sweep.cpp): the point (its inputs and repetition), the sweep that runs it (owner
+    // token, host, process id) and when its claim lapses unless renewed (Unix seconds).
+    R"sql(
+CREATE TABLE sweep_claims(
+  config_hash TEXT NOT NULL,
+  trace_hash TEXT NOT NULL,
+  repetition INTEGER NOT NULL,
+  owner TEXT NOT NULL,
+  host TEXT NOT NULL,
+  pid INTEGER NOT NULL,
+  lease_until REAL NOT NULL,
+  PRIMARY KEY(config_hash, trace_hash, repetition)
+);
+)sql",
 };
 static_assert(sizeof(kMigrations) / sizeof(kMigrations[0]) == ResultsDb::kSchemaVersion);
 

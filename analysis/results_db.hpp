@@ -44,7 +44,7 @@ struct RunRecord {
 /// with an InputError naming the file.
 class ResultsDb {
  public:
-  static constexpr int kSchemaVersion = 2;
+  static constexpr int kSchemaVersion = 3;
   static constexpr int kApplicationId = 0x54424452;  ///< "TBDR"
 
   /// Opens (creating if absent) and migrates up to `target_version` (tests use older versions).

@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -381,6 +382,78 @@ TEST_F(SweepRun, TwoSweepsOnOneDatabaseLoseNoRows) {
   EXPECT_EQ(c.all, 24);
   EXPECT_EQ(c.distinct_ok, 24);
   EXPECT_EQ(scalar(db, "SELECT count(*) FROM stats") % 24, 0);
+}
+
+// Two identical sweeps started together on one (new) database: each point is claimed in the
+// database by the sweep that runs it, so the 12 points (4 tag-buffer counts x 3 traces) are run
+// once in all: 12 rows, 12 distinct. (Before the claims, each sweep ran nearly every point: the
+// issue saw 103 rows for 52 points.)
+TEST_F(SweepRun, TwoIdenticalSweepsOnOneDatabaseRunEachPointOnce) {
+  const fs::path dir = scratch("same");
+  const std::string file = sweep_file(dir, "isp.tag_buffers = 1..4\n");
+  const std::string db = (dir / "shared.db").string();
+  const pid_t pa = start_tool({"sweep", file, "--db", db, "-j", "2"}, dir / "a.log");
+  const pid_t pb = start_tool({"sweep", file, "--db", db, "-j", "2"}, dir / "b.log");
+  EXPECT_EQ(wait_tool(pa), 0);
+  EXPECT_EQ(wait_tool(pb), 0);
+  const auto c = run_counts(db);
+  EXPECT_EQ(c.all, 12);
+  EXPECT_EQ(c.distinct_ok, 12);
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM sweep_claims"), 0);  // both released theirs
+}
+
+// Claims left in the database: one of a live process on this host (held: the point is left to
+// it), one of a process that no longer exists and one whose lease lapsed on another host (both
+// taken over). Of 6 points, 3 are removed and claimed that way: the rerun runs 2, leaves 1, skips 3.
+TEST_F(SweepRun, DeadOrLapsedClaimsAreTakenOverLiveOnesAreLeft) {
+  const fs::path dir = scratch("claims");
+  const std::string db = (dir / "r.db").string();
+  SweepSpec spec = parse_sweep_file(sweep_file(dir, "isp.tag_buffers = 1, 2\n"));
+  SweepOptions opt;
+  opt.db_path = db;
+  opt.jobs = 2;
+  opt.binary = TBDRSIM_BINARY;
+  opt.progress = SweepProgress::None;
+  std::ostringstream out;
+  ASSERT_EQ(run_sweep(spec, opt, out).ok, 6u);
+  const pid_t gone = fork();  // a process id that no longer exists once reaped
+  if (gone == 0) _exit(0);
+  waitpid(gone, nullptr, 0);
+  const double now = static_cast<double>(std::time(nullptr));
+  {
+    ResultsDb rdb(db);
+    struct Held {
+      std::string host;
+      std::int64_t pid;
+      double lease_until;
+    };
+    const Held held[] = {{host_name(), getpid(), now + 600},  // live: left to it
+                         {host_name(), gone, now + 600},      // its process is gone
+                         {"elsewhere", getpid(), now - 1}};   // its lease lapsed
+    std::vector<std::pair<std::string, std::string>> keys;
+    {
+      SqlStatement q(rdb.sql(), "SELECT config_hash, trace_hash FROM runs ORDER BY id LIMIT 3");
+      while (q.step()) keys.emplace_back(q.text(0), q.text(1));
+    }
+    ASSERT_EQ(keys.size(), 3u);
+    for (std::size_t k = 0; k < 3; ++k) {
+      SqlStatement del(rdb.sql(), "DELETE FROM runs WHERE config_hash = ? AND trace_hash = ?");
+      del.bind(1, keys[k].first).bind(2, keys[k].second);
+      del.run();
+      SqlStatement claim(rdb.sql(), "INSERT INTO sweep_claims VALUES(?, ?, 0, ?, ?, ?, ?)");
+      claim.bind(1, keys[k].first).bind(2, keys[k].second).bind(3, "other-sweep-" + std::to_string(k));
+      claim.bind(4, held[k].host).bind(5, held[k].pid).bind(6, held[k].lease_until);
+      claim.run();
+    }
+  }
+  const SweepSummary s = run_sweep(spec, opt, out);
+  EXPECT_EQ(s.ok, 2u) << out.str();
+  EXPECT_EQ(s.elsewhere, 1u) << out.str();
+  EXPECT_EQ(s.skipped, 3u) << out.str();
+  EXPECT_NE(out.str().find("1 being run by another sweep"), std::string::npos) << out.str();
+  EXPECT_EQ(run_counts(db).all, 5);
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM sweep_claims"), 1);  // the live one's, untouched
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM sweep_claims WHERE owner = 'other-sweep-0'"), 1);
 }
 
 TEST_F(SweepRun, FailedPointIsRecordedAndOthersRun) {

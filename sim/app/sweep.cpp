@@ -1,8 +1,10 @@
 #include "app/sweep.hpp"
 
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cstring>
 #include <iomanip>
@@ -163,6 +165,120 @@ class DoneCheck {
   const std::vector<SweepPoint>& points_;
 };
 
+/// How long a point's claim holds without renewal. A sweep renews its claims every
+/// kClaimRenewSeconds, so a claim lapses only when its sweep stopped renewing (died, or hung for
+/// minutes); 120 s leaves room for a renewal that waits out SQLite's 60 s busy timeout.
+constexpr double kClaimLeaseSeconds = 120;
+/// How often a sweep renews its claims: a sixth of the lease, so several renewals may fail or wait.
+constexpr double kClaimRenewSeconds = 20;
+
+/// Wall-clock time in Unix seconds (claims are compared across processes).
+double unix_seconds() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+/// The claims this sweep holds on points in the database (table sweep_claims), so that sweeps
+/// sharing a database run each point once. A point is claimed in the same write transaction that
+/// finds it neither done nor claimed by a live sweep; the claim is released when its run ends. A
+/// claim is dead, and taken over, when its lease has lapsed or when its process no longer exists
+/// on this host (a killed sweep's points are taken over at once by a sweep on the same host).
+class PointClaims {
+ public:
+  /// What claim() found.
+  enum class Result { Ours, Done, Elsewhere };
+
+  PointClaims(const ResultsDb& db, const PointInputs& inputs, const std::vector<SweepPoint>& points)
+      : db_(db),
+        inputs_(inputs),
+        points_(points),
+        host_(host_name()),
+        pid_(getpid()),
+        owner_(host_ + "/" + std::to_string(pid_) + "/" + std::to_string(unix_seconds())),
+        last_renewal_(unix_seconds()) {}
+  ~PointClaims() {
+    try {
+      SqlStatement s(db_.sql(), "DELETE FROM sweep_claims WHERE owner = ?");
+      s.bind(1, owner_);
+      retry_while_busy([&] { s.run(); });
+    } catch (const SqlError&) {  // leaving anyway: the leases lapse
+    }
+  }
+  PointClaims(const PointClaims&) = delete;
+  PointClaims& operator=(const PointClaims&) = delete;
+
+  /// Claims point i unless it is done or a live sweep holds it.
+  Result claim(std::size_t i) {
+    Result result = Result::Ours;
+    retry_while_busy([&] {
+      SqlTransaction tx(db_.sql());
+      result = claim_in_transaction(i);
+      tx.commit();
+    });
+    return result;
+  }
+
+  /// Releases point i (its run ended).
+  void release(std::size_t i) {
+    SqlStatement s(db_.sql(),
+                   "DELETE FROM sweep_claims WHERE config_hash = ? AND trace_hash = ? AND repetition = ? AND owner = ?");
+    s.bind(1, inputs_.config[i]->hash).bind(2, inputs_.trace[i]->hash).bind(3, static_cast<std::int64_t>(points_[i].repetition)).bind(4, owner_);
+    retry_while_busy([&] { s.run(); });
+  }
+
+  /// Extends the lease of every claim held, when kClaimRenewSeconds have passed since the last time.
+  void renew_if_due() {
+    const double now = unix_seconds();
+    if (now - last_renewal_ < kClaimRenewSeconds) return;
+    SqlStatement s(db_.sql(), "UPDATE sweep_claims SET lease_until = ? WHERE owner = ?");
+    s.bind(1, now + kClaimLeaseSeconds).bind(2, owner_);
+    retry_while_busy([&] { s.run(); });
+    last_renewal_ = now;
+  }
+
+ private:
+  Result claim_in_transaction(std::size_t i) {
+    const std::string& config = inputs_.config[i]->hash;
+    const std::string& trace = inputs_.trace[i]->hash;
+    const auto rep = static_cast<std::int64_t>(points_[i].repetition);
+    {
+      SqlStatement done(db_.sql(), "SELECT count(*) FROM runs WHERE config_hash = ? AND trace_hash = ? AND status = 'ok'");
+      done.bind(1, config).bind(2, trace);
+      if (done.step() && done.int64(0) > rep) return Result::Done;
+    }
+    const double now = unix_seconds();
+    {
+      SqlStatement held(db_.sql(),
+                        "SELECT owner, host, pid, lease_until FROM sweep_claims "
+                        "WHERE config_hash = ? AND trace_hash = ? AND repetition = ?");
+      held.bind(1, config).bind(2, trace).bind(3, rep);
+      if (held.step() && held.text(0) != owner_ && held.real(3) > now &&
+          (held.text(1) != host_ || process_exists(held.int64(2)))) {
+        return Result::Elsewhere;
+      }
+    }
+    SqlStatement take(db_.sql(),
+                      "INSERT OR REPLACE INTO sweep_claims(config_hash, trace_hash, repetition, owner, host, pid, "
+                      "lease_until) VALUES(?,?,?,?,?,?,?)");
+    take.bind(1, config).bind(2, trace).bind(3, rep).bind(4, owner_).bind(5, host_);
+    take.bind(6, static_cast<std::int64_t>(pid_)).bind(7, now + kClaimLeaseSeconds);
+    take.run();
+    return Result::Ours;
+  }
+
+  /// True when a process with this id exists on this host (signal 0 tests without sending).
+  static bool process_exists(std::int64_t pid) {
+    return pid > 0 && (kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM);
+  }
+
+  const ResultsDb& db_;
+  const PointInputs& inputs_;
+  const std::vector<SweepPoint>& points_;
+  std::string host_;
+  pid_t pid_;
+  std::string owner_;
+  double last_renewal_;
+};
+
 /// The sweep's first line: its points, configurations, traces, what is done and what will run.
 void print_plan(const SweepSpec& spec, const SweepOptions& opt, std::size_t points, std::size_t all,
                 const PointInputs& inputs, std::size_t skipped, std::size_t to_run, std::ostream& out) {
@@ -179,6 +295,7 @@ void print_summary(const SweepSpec& spec, const SweepSummary& summary, std::ostr
   const std::size_t ran = summary.ok + summary.failed;
   out << "sweep " << spec.name << ": " << summary.ok << " ok, " << summary.failed << " failed, " << summary.skipped
       << " already done";
+  if (summary.elsewhere) out << ", " << summary.elsewhere << " being run by another sweep";
   if (summary.not_run) out << ", " << summary.not_run << " not run";
   out << " in " << std::fixed << std::setprecision(1) << summary.seconds << " s";
   if (ran) out << " (" << std::setprecision(2) << static_cast<double>(ran) / summary.seconds << " points/s)";
@@ -227,11 +344,13 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
   std::vector<Launch> launches(points.size());
   std::size_t next = 0;
   WorkerPoolHooks hooks;
+  PointClaims claims(db, inputs, points);
   hooks.next = [&]() -> std::optional<WorkerJob> {
     while (next < todo.size()) {
       const std::size_t i = todo[next++];
-      if (already_done(i)) {  // another sweep on the same database finished it meanwhile
-        ++summary.skipped;
+      const PointClaims::Result claim = claims.claim(i);
+      if (claim != PointClaims::Result::Ours) {  // another sweep on the same database finished it or runs it
+        ++(claim == PointClaims::Result::Done ? summary.skipped : summary.elsewhere);
         progress.skipped();
         continue;
       }
@@ -244,11 +363,12 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
     return std::nullopt;
   };
   hooks.ended = [&](const WorkerEnd& end) {
+    const std::size_t i = end.id;
     if (end.killed) {
+      claims.release(i);
       ++summary.not_run;
       return;
     }
-    const std::size_t i = end.id;
     std::string error;
     if (end.ok()) {
       ++summary.ok;
@@ -257,10 +377,14 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
       db.write_run(failed_run(points[i], *inputs.config[i], *inputs.trace[i], launches[i], error));
       ++summary.failed;
     }
+    claims.release(i);
     progress.finished(points[i], end.ok(), end.seconds, error);
   };
   hooks.running = [&](std::size_t n) { progress.set_running(n); };
-  hooks.tick = [&] { progress.draw(false); };
+  hooks.tick = [&] {
+    claims.renew_if_due();
+    progress.draw(false);
+  };
   hooks.stopping = [&](bool kill, std::size_t running) {
     progress.message(kill ? "stopping: killing " + std::to_string(running) + " running point(s); finished runs are kept"
                           : "stopping: waiting for " + std::to_string(running) +

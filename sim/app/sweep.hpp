@@ -1,7 +1,8 @@
 #pragma once
 // Running a sweep: its points (app/sweep_spec.hpp) run in parallel worker processes
 // (app/worker_pool.hpp), `tbdrsim run` per point; points already in the database are skipped,
-// failures are recorded as failed runs, and Ctrl-C stops cleanly. Slurm job arrays
+// points that another sweep on the same database is running are left to it (claims in the
+// database, app/sweep.cpp), failures are recorded as failed runs, and Ctrl-C stops cleanly. Slurm job arrays
 // (app/sweep_slurm.hpp) run slices of a sweep into shard databases that app/sweep_merge.hpp joins.
 // Syntax: docs/sweeps.md.
 #include <cstddef>
@@ -27,6 +28,7 @@ struct SweepOptions {
 struct SweepSummary {
   std::size_t points = 0;      ///< in this slice
   std::size_t skipped = 0;     ///< already in the database
+  std::size_t elsewhere = 0;   ///< claimed by another sweep running on the same database
   std::size_t ok = 0;
   std::size_t failed = 0;
   std::size_t not_run = 0;     ///< left when interrupted
