@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <ctime>
+#include <filesystem>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -88,7 +89,33 @@ CREATE TABLE sweep_claims(
 };
 static_assert(sizeof(kMigrations) / sizeof(kMigrations[0]) == ResultsDb::kSchemaVersion);
 
+/// `path` when it is an existing file (what a query-only open needs), else an InputError.
+const std::string& checked_existing(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(path, "no such results database");
+  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path, "not a results database file (a folder or a device)");
+  return path;
+}
+
 }  // namespace
+
+void check_results_db_target(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (path.empty()) throw InputError("--db", "empty results database path");
+  if (fs::exists(path, ec)) {
+    { ResultsDb check(path, ResultsDb::QueryOnly{}); }
+    if (access(path.c_str(), W_OK) != 0) throw InputError(path, "results database is not writable");
+    return;
+  }
+  const fs::path folder = fs::path(path).has_parent_path() ? fs::path(path).parent_path() : fs::path(".");
+  if (!fs::is_directory(folder, ec)) {
+    throw InputError(path, "cannot create the results database: folder '" + folder.string() + "' does not exist");
+  }
+  if (access(folder.c_str(), W_OK | X_OK) != 0) {
+    throw InputError(path, "cannot create the results database: folder '" + folder.string() + "' is not writable");
+  }
+}
 
 ResultsDb::ResultsDb(const std::string& path, int target_version) : conn_(path) {
   if (target_version < 1 || target_version > kSchemaVersion) {
@@ -99,8 +126,22 @@ ResultsDb::ResultsDb(const std::string& path, int target_version) : conn_(path) 
   retry_while_busy([&] { setup(target_version); });
 }
 
+ResultsDb::ResultsDb(const std::string& path, QueryOnly) : conn_(checked_existing(path), SqlOpen::ExistingQueryOnly) {
+  retry_while_busy([&] {
+    check_identity();
+    check_not_newer();
+  });
+}
+
 void ResultsDb::setup(int target_version) {
   conn_.exec("PRAGMA foreign_keys = ON");
+  check_identity();
+  conn_.exec("PRAGMA journal_mode = WAL");
+  migrate(target_version);
+  create_views(conn_);  // the analysis views (analysis/views.sql)
+}
+
+void ResultsDb::check_identity() {
   // Check what the file is before changing anything in it. Both figures come from one statement,
   // so from one read transaction: read apart, another writer could commit the schema and the id
   // (one transaction, migrate()) between the two reads, and a new tbdrsim database would look
@@ -118,9 +159,15 @@ void ResultsDb::setup(int target_version) {
     throw InputError(path(), "not a tbdrsim results database (SQLite application_id " +
                                  std::to_string(app_id) + ", " + std::to_string(object_count) + " schema objects)");
   }
-  conn_.exec("PRAGMA journal_mode = WAL");
-  migrate(target_version);
-  create_views(conn_);  // the analysis views (analysis/views.sql)
+}
+
+void ResultsDb::check_not_newer() {
+  const int current = schema_version();
+  if (current > kSchemaVersion) {
+    throw InputError(path(), "results database schema version " + std::to_string(current) +
+                                 " is newer than this tbdrsim supports (" + std::to_string(kSchemaVersion) +
+                                 "); use a newer tbdrsim");
+  }
 }
 
 int ResultsDb::schema_version() const {
@@ -130,12 +177,8 @@ int ResultsDb::schema_version() const {
 
 void ResultsDb::migrate(int target_version) {
   SqlTransaction tx(conn_);
+  check_not_newer();
   const int current = schema_version();
-  if (current > kSchemaVersion) {
-    throw InputError(path(), "results database schema version " + std::to_string(current) +
-                                 " is newer than this tbdrsim supports (" + std::to_string(kSchemaVersion) +
-                                 "); use a newer tbdrsim");
-  }
   for (int v = current; v < target_version; ++v) conn_.exec(kMigrations[v]);
   if (current < target_version) {
     // A PRAGMA takes no bound parameters: its values are written here, and both are integers.

@@ -49,6 +49,11 @@ class ResultsDb {
 
   /// Opens (creating if absent) and migrates up to `target_version` (tests use older versions).
   explicit ResultsDb(const std::string& path, int target_version = kSchemaVersion);
+  /// Selects the constructor that opens a database only to read it.
+  struct QueryOnly {};
+  /// Opens an existing database to read it, changing nothing in it or beside it (no migration, no
+  /// views, every write refused): InputError when it is absent, not a tbdrsim database, or newer.
+  ResultsDb(const std::string& path, QueryOnly);
   ResultsDb(const ResultsDb&) = delete;
   ResultsDb& operator=(const ResultsDb&) = delete;
 
@@ -62,10 +67,19 @@ class ResultsDb {
   std::int64_t write_run(const RunRecord& run);
 
  private:
+  /// InputError unless the file is empty or a tbdrsim database (its application id).
+  void check_identity();
+  /// InputError when the schema is newer than this tbdrsim's.
+  void check_not_newer();
   void setup(int target_version);
   void migrate(int target_version);
   SqlConnection conn_;
 };
+
+/// Checks, before any work, that `path` can take runs, without creating or changing anything: an
+/// existing file must be a writable tbdrsim results database this version can open; for a new one,
+/// its folder must exist and be writable. InputError naming the file otherwise.
+void check_results_db_target(const std::string& path);
 
 /// Current UTC time as ISO 8601 ("2026-11-22T10:00:00Z").
 std::string utc_now_iso8601();

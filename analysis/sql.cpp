@@ -24,14 +24,23 @@ bool SqlError::busy() const { return code_ == SQLITE_BUSY || code_ == SQLITE_LOC
 // ---------------------------------------------------------------------------------------------
 // SqlConnection
 
-SqlConnection::SqlConnection(const std::string& path) : path_(path) {
-  if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) != SQLITE_OK) {
+SqlConnection::SqlConnection(const std::string& path, SqlOpen mode) : path_(path) {
+  const int flags = SQLITE_OPEN_READWRITE | (mode == SqlOpen::CreateReadWrite ? SQLITE_OPEN_CREATE : 0);
+  if (sqlite3_open_v2(path.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
     db_ = nullptr;
     throw InputError(path, "cannot open results database: " + msg);
   }
   sqlite3_busy_timeout(db_, 60000);
+  if (mode == SqlOpen::ExistingQueryOnly) {
+    try {
+      exec("PRAGMA query_only = ON");
+    } catch (...) {
+      sqlite3_close(db_);
+      throw;
+    }
+  }
 }
 
 SqlConnection::~SqlConnection() { sqlite3_close(db_); }

@@ -27,11 +27,19 @@ class SqlError : public InputError {
   int code_;
 };
 
-/// An open database file (read-write, created when absent, 60 s busy timeout) that closes itself.
+/// How a connection opens its file.
+enum class SqlOpen {
+  CreateReadWrite,    ///< read-write, the file created when absent
+  ExistingQueryOnly,  ///< an existing file only, every write refused (PRAGMA query_only); the
+                      ///< connection still opens read-write so that, when it closes, SQLite removes
+                      ///< the -wal and -shm files it made, leaving the folder as it was
+};
+
+/// An open database file (60 s busy timeout) that closes itself.
 class SqlConnection {
  public:
   /// Opens `path`; InputError "cannot open results database" naming it when SQLite cannot.
-  explicit SqlConnection(const std::string& path);
+  explicit SqlConnection(const std::string& path, SqlOpen mode = SqlOpen::CreateReadWrite);
   ~SqlConnection();
   SqlConnection(const SqlConnection&) = delete;
   SqlConnection& operator=(const SqlConnection&) = delete;

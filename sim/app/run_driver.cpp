@@ -140,6 +140,7 @@ RunOutcome run_one(const RunRequest& req) {
   RunOutcome outcome;
   const auto t_load = std::chrono::steady_clock::now();
   const std::string started = utc_now_iso8601();
+  check_results_db_target(req.db_path);  // a bad --db is reported now, not after the simulation
   if (!req.images_dir.empty()) {
     std::error_code ec;
     fs::create_directories(req.images_dir, ec);

@@ -38,8 +38,8 @@ struct RunOutcome {
   std::vector<std::string> images_written;
 };
 
-/// Runs one simulation end to end. InputError on bad input; nothing is written to the database
-/// unless the whole run succeeded.
+/// Runs one simulation end to end. InputError on bad input (the database is checked first, before
+/// the trace is read); nothing is written to the database unless the whole run succeeded.
 RunOutcome run_one(const RunRequest& request);
 
 /// Prints the figures a user looks at first.

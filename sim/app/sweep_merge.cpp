@@ -114,13 +114,19 @@ MergeShardResult copy_shard_runs(const SqlConnection& db, const std::string& sha
 
 std::vector<MergeShardResult> merge_databases(const std::string& out_path, const std::vector<std::string>& shards) {
   if (shards.empty()) throw InputError("merge", "no shard databases given");
+  // Every input is checked before anything is written: a missing, foreign or too new shard, or an
+  // output that cannot take runs, stops the merge with the output untouched (or not created).
+  check_results_db_target(out_path);
+  for (const auto& shard : shards) {
+    std::error_code ec;
+    if (!fs::is_regular_file(shard, ec)) throw InputError(shard, "no such shard database");
+    if (fs::equivalent(shard, out_path, ec)) throw InputError(shard, "is the output database itself");
+    { ResultsDb check(shard, ResultsDb::QueryOnly{}); }  // a tbdrsim database this version reads
+  }
   std::vector<MergeShardResult> results;
   ResultsDb out(out_path);
   for (const auto& shard : shards) {
-    if (!fs::is_regular_file(shard)) throw InputError(shard, "no such shard database");
-    std::error_code ec;
-    if (fs::equivalent(shard, out_path, ec)) throw InputError(shard, "is the output database itself");
-    { ResultsDb check(shard); }  // a tbdrsim database (migrated to this version), or an InputError
+    { ResultsDb migrate(shard); }  // an older shard is migrated to this version's schema
     AttachedShard attached(out.sql(), shard);
     {
       SqlTransaction tx(out.sql());

@@ -18,6 +18,8 @@ struct MergeShardResult {
 /// run ids. A finished run whose (config_hash, trace_hash) is already finished in the output is a
 /// duplicate (repetitions are kept: a shard's k-th finished run of a point is copied when the
 /// output holds fewer than k); failed runs are copied unless an identical row is already there.
+/// Every shard and the output are checked first: InputError, with nothing written, when one is
+/// missing, not a tbdrsim database, newer than this tbdrsim, or the output cannot take runs.
 std::vector<MergeShardResult> merge_databases(const std::string& out_path, const std::vector<std::string>& shards);
 
 }  // namespace tbdr
