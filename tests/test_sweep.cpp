@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -454,6 +455,37 @@ TEST_F(SweepRun, DeadOrLapsedClaimsAreTakenOverLiveOnesAreLeft) {
   EXPECT_EQ(run_counts(db).all, 5);
   EXPECT_EQ(scalar(db, "SELECT count(*) FROM sweep_claims"), 1);  // the live one's, untouched
   EXPECT_EQ(scalar(db, "SELECT count(*) FROM sweep_claims WHERE owner = 'other-sweep-0'"), 1);
+}
+
+/// The names in a folder with their sizes, sorted (what a command left behind).
+std::vector<std::pair<std::string, std::uintmax_t>> listing(const fs::path& dir) {
+  std::vector<std::pair<std::string, std::uintmax_t>> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    files.emplace_back(e.path().filename().string(), e.is_regular_file() ? e.file_size() : 0);
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// A dry run writes nothing: without a database it creates none (6 points, all to run); with one
+// (4 of the 6 points run by a sliced sweep first) it reads it, listing 4 done, and leaves the
+// folder as it was (no file created, none changed in size).
+TEST_F(SweepRun, DryRunWritesNothing) {
+  const fs::path dir = scratch("dry");
+  const std::string file = sweep_file(dir, "isp.tag_buffers = 1, 2\n");
+  const std::string db = (dir / "r.db").string();
+  std::string out;
+  auto before = listing(dir);
+  ASSERT_EQ(run_tool({"sweep", file, "--db", db, "--dry-run"}, &out), 0) << out;
+  EXPECT_NE(out.find("0 already in " + db + ", 6 to run"), std::string::npos) << out;
+  EXPECT_EQ(listing(dir), before) << "the dry run created the database";
+
+  ASSERT_EQ(run_tool({"sweep", file, "--db", db, "--slice", "0/3", "-j", "2"}, &out), 0) << out;
+  ASSERT_EQ(run_tool({"sweep", file, "--db", db, "--slice", "1/3", "-j", "2"}, &out), 0) << out;
+  before = listing(dir);
+  ASSERT_EQ(run_tool({"sweep", file, "--db", db, "--dry-run"}, &out), 0) << out;
+  EXPECT_NE(out.find("4 already in " + db + ", 2 to run"), std::string::npos) << out;
+  EXPECT_EQ(listing(dir), before);
 }
 
 TEST_F(SweepRun, FailedPointIsRecordedAndOthersRun) {

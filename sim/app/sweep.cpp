@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <filesystem>
 #include <iomanip>
 #include <map>
 #include <optional>
@@ -318,27 +319,37 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
   }
   const PointInputs inputs = resolve_inputs(spec, points);
 
+  if (opt.dry_run) {
+    // A dry run writes nothing: it reads the database when there is one, and creates none.
+    std::optional<ResultsDb> existing;
+    if (std::filesystem::exists(opt.db_path)) existing.emplace(opt.db_path, ResultsDb::QueryOnly{});
+    std::optional<DoneCheck> done;
+    if (existing) done.emplace(*existing, inputs, points);
+    std::vector<bool> done_before(points.size(), false);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      done_before[i] = done && (*done)(i);
+      if (done_before[i]) ++summary.skipped;
+    }
+    print_plan(spec, opt, points.size(), all.size(), inputs, summary.skipped, points.size() - summary.skipped, out);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      out << "  " << std::setw(5) << points[i].index << "  " << (done_before[i] ? "done  " : "to run") << "  "
+          << points[i].label << "  (config " << inputs.config[i]->hash << ", trace " << inputs.trace[i]->hash << ")\n";
+    }
+    summary.not_run = points.size() - summary.skipped;
+    return summary;
+  }
+
   ResultsDb db(opt.db_path);
   DoneCheck already_done(db, inputs, points);
   std::vector<std::size_t> todo;
-  std::vector<bool> done_before(points.size(), false);
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (already_done(i)) {
       ++summary.skipped;
-      done_before[i] = true;
     } else {
       todo.push_back(i);
     }
   }
   print_plan(spec, opt, points.size(), all.size(), inputs, summary.skipped, todo.size(), out);
-  if (opt.dry_run) {
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      out << "  " << std::setw(5) << points[i].index << "  " << (done_before[i] ? "done  " : "to run") << "  "
-          << points[i].label << "  (config " << inputs.config[i]->hash << ", trace " << inputs.trace[i]->hash << ")\n";
-    }
-    summary.not_run = todo.size();
-    return summary;
-  }
 
   SweepProgressDisplay progress(opt.progress, out, points.size(), summary.skipped);
   std::vector<Launch> launches(points.size());
