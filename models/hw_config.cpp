@@ -10,6 +10,25 @@ namespace {
 constexpr double kKiB = 1024.0;
 constexpr double kMiB = 1024.0 * 1024.0;
 
+/// Declares section cache.<name>: the four parameters of one set-associative cache (`Which` in
+/// HwConfig::cache), with their defaults `def`. Only the capacity's upper range and source differ
+/// between the caches; the line size is the SLC line of Mesa's device info (`mesa`).
+template <CacheParams CachesParams::*Which>
+void add_cache(ParamRegistry<HwConfig>& r, const std::string& name, const std::string& doc, const CacheParams& def,
+               double max_size_bytes, const std::string& size_source, const std::string& mesa) {
+  const std::string key = "cache." + name;
+  r.section(key, doc);
+  r.add(key + ".size_bytes", [](HwConfig& c) -> auto& { return (c.cache.*Which).size_bytes; }, def.size_bytes)
+      .unit("bytes").range(1024, max_size_bytes).doc("Capacity").source(size_source);
+  r.add(key + ".ways", [](HwConfig& c) -> auto& { return (c.cache.*Which).ways; }, def.ways)
+      .unit("ways").range(1, 64).doc("Associativity").source("no public figure");
+  r.add(key + ".line_bytes", [](HwConfig& c) -> auto& { return (c.cache.*Which).line_bytes; }, def.line_bytes)
+      .unit("bytes").range(16, 1024).doc("Line size").source(mesa + ": slc_cache_line_size_bits = 512");
+  r.add(key + ".hit_latency_cycles", [](HwConfig& c) -> auto& { return (c.cache.*Which).hit_latency_cycles; },
+        def.hit_latency_cycles)
+      .unit("cycles").range(1, 1000).doc("Hit latency").source("no public figure");
+}
+
 ParamRegistry<HwConfig> make_registry() {
   ParamRegistry<HwConfig> r;
   // The defaults describe one complete GPU: a PowerVR Series6XT-class part (GX6450-like: 4 USCs,
@@ -201,30 +220,18 @@ ParamRegistry<HwConfig> make_registry() {
               "needs to cover 1 us of latency");
 
   r.section("cache", "Caches of the memory hierarchy");
-  r.section("cache.texture", "Texture cache (per GPU, shared by the texture units)");
-  r.add(TBDR_PARAM(cache.texture.size_bytes), static_cast<std::int64_t>(16 * kKiB)).unit("bytes").range(1024, 64 * kMiB)
-      .doc("Capacity").source("no public figure");
-  r.add(TBDR_PARAM(cache.texture.ways), 4).unit("ways").range(1, 64).doc("Associativity").source("no public figure");
-  r.add(TBDR_PARAM(cache.texture.line_bytes), 64).unit("bytes").range(16, 1024)
-      .doc("Line size").source(mesa + ": slc_cache_line_size_bits = 512");
-  r.add(TBDR_PARAM(cache.texture.hit_latency_cycles), 4).unit("cycles").range(1, 1000)
-      .doc("Hit latency").source("no public figure");
-  r.section("cache.vertex", "Vertex and parameter buffer cache (geometry fetch, ISP primitive fetch)");
-  r.add(TBDR_PARAM(cache.vertex.size_bytes), static_cast<std::int64_t>(16 * kKiB)).unit("bytes").range(1024, 64 * kMiB)
-      .doc("Capacity").source("no public figure");
-  r.add(TBDR_PARAM(cache.vertex.ways), 4).unit("ways").range(1, 64).doc("Associativity").source("no public figure");
-  r.add(TBDR_PARAM(cache.vertex.line_bytes), 64).unit("bytes").range(16, 1024)
-      .doc("Line size").source(mesa + ": slc_cache_line_size_bits = 512");
-  r.add(TBDR_PARAM(cache.vertex.hit_latency_cycles), 4).unit("cycles").range(1, 1000)
-      .doc("Hit latency").source("no public figure");
-  r.section("cache.slc", "System level cache in front of DRAM");
-  r.add(TBDR_PARAM(cache.slc.size_bytes), static_cast<std::int64_t>(128 * kKiB)).unit("bytes").range(1024, 256 * kMiB)
-      .doc("Capacity").source("no public figure for Series6XT");
-  r.add(TBDR_PARAM(cache.slc.ways), 8).unit("ways").range(1, 64).doc("Associativity").source("no public figure");
-  r.add(TBDR_PARAM(cache.slc.line_bytes), 64).unit("bytes").range(16, 1024)
-      .doc("Line size").source(mesa + ": slc_cache_line_size_bits = 512");
-  r.add(TBDR_PARAM(cache.slc.hit_latency_cycles), 20).unit("cycles").range(1, 1000)
-      .doc("Hit latency").source("no public figure");
+  add_cache<&CachesParams::texture>(r, "texture", "Texture cache (per GPU, shared by the texture units)",
+                                    {.size_bytes = static_cast<std::int64_t>(16 * kKiB), .ways = 4, .line_bytes = 64,
+                                     .hit_latency_cycles = 4},
+                                    64 * kMiB, "no public figure", mesa);
+  add_cache<&CachesParams::vertex>(r, "vertex", "Vertex and parameter buffer cache (geometry fetch, ISP primitive fetch)",
+                                   {.size_bytes = static_cast<std::int64_t>(16 * kKiB), .ways = 4, .line_bytes = 64,
+                                    .hit_latency_cycles = 4},
+                                   64 * kMiB, "no public figure", mesa);
+  add_cache<&CachesParams::slc>(r, "slc", "System level cache in front of DRAM",
+                                {.size_bytes = static_cast<std::int64_t>(128 * kKiB), .ways = 8, .line_bytes = 64,
+                                 .hit_latency_cycles = 20},
+                                256 * kMiB, "no public figure for Series6XT", mesa);
 
   r.section("dram", "External memory: channels, banks, row buffers, timing, queues");
   r.add(TBDR_PARAM(dram.name), std::string("LPDDR3-1600 2x32")).doc("Label").source("preset label");
