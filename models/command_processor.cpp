@@ -277,13 +277,8 @@ class FrameSimulator {
     camera_ = CameraXform::from(trace_.camera, static_cast<float>(f.width) / static_cast<float>(f.height));
     frustum_ = ViewFrustum::from(trace_.camera, f.width, f.height);
     light_bins_ = LightScreenBins::build(trace_.lights, camera_, viewport_);
-    inputs_.hw = &hw_;
-    inputs_.scene = &scene_;
-    inputs_.lights = &trace_.lights;
-    inputs_.camera = camera_;
-    inputs_.viewport = viewport_;
-    inputs_.frustum = &frustum_;
-    inputs_.light_bins = &light_bins_;
+    inputs_ = FrameInputs{.hw = &hw_, .scene = &scene_, .lights = &trace_.lights, .camera = camera_,
+                          .viewport = viewport_, .frustum = &frustum_, .light_bins = &light_bins_};
     result_.images.width = f.width;
     result_.images.height = f.height;
     result_.images.counters.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height));
@@ -491,19 +486,15 @@ class FrameSimulator {
     cw.read_bytes[static_cast<std::size_t>(DramClass::Textures)] = 0;
     cw.texture_lines = std::move(texture_lines);
     cw.texture_line_accesses = stats.compute_texture_line_accesses.value();
-    result_.work.commands.push_back(std::move(cw));
     if (!image.empty()) {
       result_.final_color = image;
       result_.images.attachments.erase(image);  // a later pass that loads it starts from what the dispatch wrote
     }
     collect_stats(stats, prefix + "/compute", result_.stats);
     result_.totals.compute += stats;
-    collect_dram(prefix, dram, result_.stats);
     PassSummary summary;
     summary.name = prefix;
-    summary.dram = dram;
-    result_.passes.push_back(summary);
-    result_.dram += dram;
+    finish_command(std::move(cw), std::move(summary), dram);
   }
 
   void run_pass(const PassDesc& pass, int index) {
@@ -543,17 +534,23 @@ class FrameSimulator {
       img.defined = a.store == StoreOp::Store && !a.transient;
       if (img.defined && a.usage == AttachmentUsage::Color) result_.final_color = a.name;
     }
-    result_.work.commands.push_back(std::move(cw));
     ps->collect(prefix, result_.stats);
     result_.totals.render += *ps;
-    collect_dram(prefix, dram, result_.stats);
     PassSummary summary;
     summary.name = pass.name;
     summary.primitives = ps->geometry.primitives_out.value();
     summary.shaded_samples = ps->tsp.shaded_samples.value();
     summary.partial_renders = ps->tiler.partial_renders.value();
+    finish_command(std::move(cw), std::move(summary), dram);
+  }
+
+  /// What every pass and dispatch ends with, after its unit statistics: its work for the timing
+  /// model, its DRAM rows (under its work's name), its summary with its traffic, the frame's traffic.
+  void finish_command(CommandWork cw, PassSummary summary, const DramTraffic& dram) {
+    collect_dram(cw.name, dram, result_.stats);
+    result_.work.commands.push_back(std::move(cw));
     summary.dram = dram;
-    result_.passes.push_back(summary);
+    result_.passes.push_back(std::move(summary));
     result_.dram += dram;
   }
 

@@ -10,6 +10,25 @@ namespace {
 constexpr double kKiB = 1024.0;
 constexpr double kMiB = 1024.0 * 1024.0;
 
+/// Declares section cache.<name>: the four parameters of one set-associative cache (`Which` in
+/// HwConfig::cache), with their defaults `def`. Only the capacity's upper range and source differ
+/// between the caches; the line size is the SLC line of Mesa's device info (`mesa`).
+template <CacheParams CachesParams::*Which>
+void add_cache(ParamRegistry<HwConfig>& r, const std::string& name, const std::string& doc, const CacheParams& def,
+               double max_size_bytes, const std::string& size_source, const std::string& mesa) {
+  const std::string key = "cache." + name;
+  r.section(key, doc);
+  r.add(key + ".size_bytes", [](HwConfig& c) -> auto& { return (c.cache.*Which).size_bytes; }, def.size_bytes)
+      .unit("bytes").range(1024, max_size_bytes).doc("Capacity").source(size_source);
+  r.add(key + ".ways", [](HwConfig& c) -> auto& { return (c.cache.*Which).ways; }, def.ways)
+      .unit("ways").range(1, 64).doc("Associativity").source("no public figure");
+  r.add(key + ".line_bytes", [](HwConfig& c) -> auto& { return (c.cache.*Which).line_bytes; }, def.line_bytes)
+      .unit("bytes").range(16, 1024).doc("Line size").source(mesa + ": slc_cache_line_size_bits = 512");
+  r.add(key + ".hit_latency_cycles", [](HwConfig& c) -> auto& { return (c.cache.*Which).hit_latency_cycles; },
+        def.hit_latency_cycles)
+      .unit("cycles").range(1, 1000).doc("Hit latency").source("no public figure");
+}
+
 ParamRegistry<HwConfig> make_registry() {
   ParamRegistry<HwConfig> r;
   // The defaults describe one complete GPU: a PowerVR Series6XT-class part (GX6450-like: 4 USCs,
@@ -201,31 +220,24 @@ ParamRegistry<HwConfig> make_registry() {
               "needs to cover 1 us of latency");
 
   r.section("cache", "Caches of the memory hierarchy");
-  r.section("cache.texture", "Texture cache (per GPU, shared by the texture units)");
-  r.add(TBDR_PARAM(cache.texture.size_bytes), static_cast<std::int64_t>(16 * kKiB)).unit("bytes").range(1024, 64 * kMiB)
-      .doc("Capacity").source("no public figure");
-  r.add(TBDR_PARAM(cache.texture.ways), 4).unit("ways").range(1, 64).doc("Associativity").source("no public figure");
-  r.add(TBDR_PARAM(cache.texture.line_bytes), 64).unit("bytes").range(16, 1024)
-      .doc("Line size").source(mesa + ": slc_cache_line_size_bits = 512");
-  r.add(TBDR_PARAM(cache.texture.hit_latency_cycles), 4).unit("cycles").range(1, 1000)
-      .doc("Hit latency").source("no public figure");
-  r.section("cache.vertex", "Vertex and parameter buffer cache (geometry fetch, ISP primitive fetch)");
-  r.add(TBDR_PARAM(cache.vertex.size_bytes), static_cast<std::int64_t>(16 * kKiB)).unit("bytes").range(1024, 64 * kMiB)
-      .doc("Capacity").source("no public figure");
-  r.add(TBDR_PARAM(cache.vertex.ways), 4).unit("ways").range(1, 64).doc("Associativity").source("no public figure");
-  r.add(TBDR_PARAM(cache.vertex.line_bytes), 64).unit("bytes").range(16, 1024)
-      .doc("Line size").source(mesa + ": slc_cache_line_size_bits = 512");
-  r.add(TBDR_PARAM(cache.vertex.hit_latency_cycles), 4).unit("cycles").range(1, 1000)
-      .doc("Hit latency").source("no public figure");
-  r.section("cache.slc", "System level cache in front of DRAM");
-  r.add(TBDR_PARAM(cache.slc.size_bytes), static_cast<std::int64_t>(128 * kKiB)).unit("bytes").range(1024, 256 * kMiB)
-      .doc("Capacity").source("no public figure for Series6XT");
-  r.add(TBDR_PARAM(cache.slc.ways), 8).unit("ways").range(1, 64).doc("Associativity").source("no public figure");
-  r.add(TBDR_PARAM(cache.slc.line_bytes), 64).unit("bytes").range(16, 1024)
-      .doc("Line size").source(mesa + ": slc_cache_line_size_bits = 512");
-  r.add(TBDR_PARAM(cache.slc.hit_latency_cycles), 20).unit("cycles").range(1, 1000)
-      .doc("Hit latency").source("no public figure");
+  add_cache<&CachesParams::texture>(r, "texture", "Texture cache (per GPU, shared by the texture units)",
+                                    {.size_bytes = static_cast<std::int64_t>(16 * kKiB), .ways = 4, .line_bytes = 64,
+                                     .hit_latency_cycles = 4},
+                                    64 * kMiB, "no public figure", mesa);
+  add_cache<&CachesParams::vertex>(r, "vertex", "Vertex and parameter buffer cache (geometry fetch, ISP primitive fetch)",
+                                   {.size_bytes = static_cast<std::int64_t>(16 * kKiB), .ways = 4, .line_bytes = 64,
+                                    .hit_latency_cycles = 4},
+                                   64 * kMiB, "no public figure", mesa);
+  add_cache<&CachesParams::slc>(r, "slc", "System level cache in front of DRAM",
+                                {.size_bytes = static_cast<std::int64_t>(128 * kKiB), .ways = 8, .line_bytes = 64,
+                                 .hit_latency_cycles = 20},
+                                256 * kMiB, "no public figure for Series6XT", mesa);
 
+  const std::string ramulator_queue =
+      "no public figure for a GPU's controller; Ramulator's controller queues hold 32 (src/Controller.h)";
+  const std::string ramulator_drain =
+      "Ramulator src/Controller.h and Ramulator 2.0 GenericDRAMController drain from 0.8 to 0.2 of the queue; "
+      "0.75 / 0.25 here";
   r.section("dram", "External memory: channels, banks, row buffers, timing, queues");
   r.add(TBDR_PARAM(dram.name), std::string("LPDDR3-1600 2x32")).doc("Label").source("preset label");
   r.add(TBDR_PARAM(dram.channels), 2).unit("channels").range(1, 32)
@@ -255,20 +267,18 @@ ParamRegistry<HwConfig> make_registry() {
       .doc("Memory controller and interconnect latency each way").source("no public figure");
   r.add(TBDR_PARAM(dram.read_queue_entries), 32).unit("requests").range(1, 4096)
       .doc("Read queue per channel, in line requests (a burst chain takes one entry per line)")
-      .source("no public figure for a GPU's controller; Ramulator's controller queues hold 32 (src/Controller.h)");
+      .source(ramulator_queue);
   r.add(TBDR_PARAM(dram.write_queue_entries), 32).unit("requests").range(1, 4096)
       .doc("Write queue per channel, in line requests (a burst chain takes one entry per line)")
-      .source("no public figure for a GPU's controller; Ramulator's controller queues hold 32 (src/Controller.h)");
+      .source(ramulator_queue);
   r.add(TBDR_PARAM(dram.write_high_watermark), 0.75).range(0, 1)
       .doc("Write queue occupancy, as a fraction of write_queue_entries, at which the controller starts serving "
            "writes before reads (a write drain)")
-      .source("Ramulator src/Controller.h and Ramulator 2.0 GenericDRAMController drain from 0.8 to 0.2 of the "
-              "queue; 0.75 / 0.25 here");
+      .source(ramulator_drain);
   r.add(TBDR_PARAM(dram.write_low_watermark), 0.25).range(0, 1)
       .doc("Write queue occupancy, as a fraction of write_queue_entries, at which a write drain ends (writes are "
            "also served whenever no read waits)")
-      .source("Ramulator src/Controller.h and Ramulator 2.0 GenericDRAMController drain from 0.8 to 0.2 of the "
-              "queue; 0.75 / 0.25 here");
+      .source(ramulator_drain);
   r.add(TBDR_PARAM(dram.max_chain_bytes), 1024).unit("bytes").range(0, 65536)
       .doc("Longest run of consecutive lines of one row that one memory request misses in the SLC and "
            "the controller queues as one entry and serves as back-to-back bursts (0: one line per entry)")
@@ -276,6 +286,8 @@ ParamRegistry<HwConfig> make_registry() {
   r.add(TBDR_PARAM(dram.address_mapping), DramMapping::RowBankChannelColumn, kDramMappingNames)
       .doc("Physical address bit order, most significant first").source("design choice");
 
+  const std::string sram_8k = "Horowitz ISSCC 2014: 8 KB SRAM 1.25 pJ/B";
+  const std::string sram_32k = "Horowitz ISSCC 2014: 32 KB SRAM 2.5 pJ/B";
   r.section("energy", "Energy per access and static power");
   r.add(TBDR_PARAM(energy.dram_read_pj_per_bit), 5.1).unit("pJ/bit").range(0, 1000)
       .doc("DRAM read energy per bit (core)").source(lpddr3_memspec);
@@ -288,13 +300,13 @@ ParamRegistry<HwConfig> make_registry() {
   r.add(TBDR_PARAM(energy.dram_activate_precharge_nj), 4.3).unit("nJ").range(0, 1000)
       .doc("Energy of one activate + precharge pair").source(lpddr3_memspec);
   r.add(TBDR_PARAM(energy.tile_buffer_pj_per_byte), 1.25).unit("pJ/byte").range(0, 1000)
-      .doc("On-chip tile buffer access").source("Horowitz ISSCC 2014: 8 KB SRAM 1.25 pJ/B");
+      .doc("On-chip tile buffer access").source(sram_8k);
   r.add(TBDR_PARAM(energy.tag_buffer_pj_per_byte), 1.25).unit("pJ/byte").range(0, 1000)
-      .doc("Tag buffer and on-chip depth access").source("Horowitz ISSCC 2014: 8 KB SRAM 1.25 pJ/B");
+      .doc("Tag buffer and on-chip depth access").source(sram_8k);
   r.add(TBDR_PARAM(energy.texture_cache_pj_per_byte), 2.5).unit("pJ/byte").range(0, 1000)
-      .doc("Texture cache access").source("Horowitz ISSCC 2014: 32 KB SRAM 2.5 pJ/B");
+      .doc("Texture cache access").source(sram_32k);
   r.add(TBDR_PARAM(energy.vertex_cache_pj_per_byte), 2.5).unit("pJ/byte").range(0, 1000)
-      .doc("Vertex / parameter buffer cache access").source("Horowitz ISSCC 2014: 32 KB SRAM 2.5 pJ/B");
+      .doc("Vertex / parameter buffer cache access").source(sram_32k);
   r.add(TBDR_PARAM(energy.slc_pj_per_byte), 12.5).unit("pJ/byte").range(0, 1000)
       .doc("System level cache access").source("Horowitz ISSCC 2014: 1 MB SRAM 12.5 pJ/B");
   r.add(TBDR_PARAM(energy.alu_op_pj), 2.0).unit("pJ/op").range(0, 1000)

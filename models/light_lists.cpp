@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <numeric>
 
 namespace tbdr {
 
@@ -71,23 +73,21 @@ DepthBounds DepthBounds::compute(const ViewFrustum& f, const AttachmentImage& de
   return b;
 }
 
-std::uint64_t TileLightGrid::total_entries() const {
-  std::uint64_t n = 0;
-  for (const auto& l : lists) n += l.size();
-  return n;
+namespace {
+
+/// Light indices in all the lists of a grid.
+std::uint64_t entries_of(const std::vector<std::vector<std::uint32_t>>& lists) {
+  return std::transform_reduce(lists.begin(), lists.end(), std::uint64_t{0}, std::plus<>(),
+                               [](const auto& l) { return static_cast<std::uint64_t>(l.size()); });
 }
 
-std::uint64_t ClusterGrid::used_count() const {
-  std::uint64_t n = 0;
-  for (auto u : used) n += u;
-  return n;
-}
+}  // namespace
 
-std::uint64_t ClusterGrid::total_entries() const {
-  std::uint64_t n = 0;
-  for (const auto& l : lists) n += l.size();
-  return n;
-}
+std::uint64_t TileLightGrid::total_entries() const { return entries_of(lists); }
+
+std::uint64_t ClusterGrid::used_count() const { return std::accumulate(used.begin(), used.end(), std::uint64_t{0}); }
+
+std::uint64_t ClusterGrid::total_entries() const { return entries_of(lists); }
 
 void ClusterGrid::configure(const ViewFrustum& f, int tile_px_, int slices_, Slicing s, float min_depth_) {
   tile_px = tile_px_;

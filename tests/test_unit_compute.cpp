@@ -41,6 +41,23 @@ ComputeSpec four_lights() {
   return s;
 }
 
+/// four_lights() and one shader `name` of 20 ALU ops + 7 per light, its lights from `source`,
+/// no color output, `tex_fetches` texture fetches.
+ComputeSpec four_lights_and_shader(const std::string& name, LightSource source, std::uint32_t tex_fetches) {
+  ComputeSpec s = four_lights();
+  ShaderDesc sh = make_shader(20, 7, source, 0, tex_fetches);
+  sh.name = name;
+  s.shaders = {sh};
+  return s;
+}
+
+/// A G-buffer's valid flags with 100 surfaces: every 7th pixel from pixel 0 (pixels 0..693).
+std::vector<std::uint8_t> hundred_surfaces() {
+  std::vector<std::uint8_t> valid(kPixels, 0);
+  for (std::size_t p = 0; p < 100; ++p) valid[p * 7] = 1;
+  return valid;
+}
+
 TEST(UnitCompute, TileLightCullingListsTheLightsCoveringEachTile) {
   // 32 px tiles: 4 tiles. Lists: tile 0 {0, 1}, tile 1 {1}, tile 2 {1}, tile 3 {1, 2}: 6 entries.
   // Every tile tests every light: 4 x 4 = 16 tests of 24 ops = 384 ops. Writes: the grid
@@ -133,14 +150,8 @@ TEST(UnitCompute, DeferredShadingChargesEveryLightPerStoredSurface) {
   // 100 pixels hold a surface; a shader of 20 ops + 7 per light, 2 texture fetches, evaluating
   // all 4 lights: 100 shaded pixels, 400 light evaluations, 100 x (20 + 28) = 4800 ops, 200
   // fetches. Reads the G-buffer (4096 x 4 B), writes the rgba8 image (4096 x 4 B).
-  ComputeSpec s = four_lights();
-  ShaderDesc sh = make_shader(20, 7, LightSource::All, 0, 2);
-  sh.name = "resolve";
-  s.shaders = {sh};
-  ComputeRig rig(s);
-  std::vector<std::uint8_t> valid(kPixels, 0);
-  for (std::size_t p = 0; p < 100; ++p) valid[p * 7] = 1;
-  rig.add_gbuffer("gbuf", valid);
+  ComputeRig rig(four_lights_and_shader("resolve", LightSource::All, 2));
+  rig.add_gbuffer("gbuf", hundred_surfaces());
   rig.dispatch(make_dispatch("deferred_shade", {"gbuf"}, {"lit"}, {{"shader", "resolve"}}));
   EXPECT_EQ(rig.stats.compute_shaded_pixels.value(), 100u);
   EXPECT_EQ(rig.stats.compute_light_evaluations.value(), 400u);
@@ -155,11 +166,7 @@ TEST(UnitCompute, TiledShadingEvaluatesOnlyTheTilesLists) {
   // After culling with 32 px tiles (lists of 2, 1, 1, 2 lights), a tile-list shader on 10
   // surfaces in tile 0 (row 0, x 0..9) and 10 in tile 1 (row 0, x 40..49) evaluates
   // 10 x 2 + 10 x 1 = 30 lights: ALU 20 x 20 + 7 x 30 = 610.
-  ComputeSpec s = four_lights();
-  ShaderDesc sh = make_shader(20, 7, LightSource::TileList, 0);
-  sh.name = "tiled";
-  s.shaders = {sh};
-  ComputeRig rig(s);
+  ComputeRig rig(four_lights_and_shader("tiled", LightSource::TileList, 0));
   rig.dispatch(make_dispatch("tile_light_cull", {}, {"grid", "indices"}, {{"tile_px", "32"}, {"bounds", "none"}}));
   const std::uint64_t cull_ops = rig.stats.compute_alu_ops.value();
   std::vector<std::uint8_t> valid(kPixels, 0);
@@ -181,30 +188,12 @@ TEST(UnitCompute, ShadingKernelsMaterialFetchesAreTheFetchesBeyondTheImagesRead)
   // 16 px hold them, each reads line 0 of copies 0 and 1: 8 footprint lines, 512 B booked as
   // texture reads; 100 (quad, triangle) pairs x 1 line x 2 fetches = 200 line accesses.
   for (const auto& [fetches, lines] : {std::pair{1u, 0u}, std::pair{3u, 8u}}) {
-    ComputeSpec s = four_lights();
-    ShaderDesc sh = make_shader(20, 7, LightSource::All, 0, fetches);
-    sh.name = "resolve";
-    s.shaders = {sh};
-    ComputeRig rig(s);
-    std::vector<std::uint8_t> valid(kPixels, 0);
-    for (std::size_t p = 0; p < 100; ++p) valid[p * 7] = 1;
-    rig.add_gbuffer("gbuf", valid);
+    ComputeRig rig(four_lights_and_shader("resolve", LightSource::All, fetches));
+    rig.add_gbuffer("gbuf", hundred_surfaces());
     for (auto& surface : rig.images.attachments.at("gbuf").surface) surface.material = 0;
     const TextureLayout layout(&rig.scene, rig.hw, 3);
-    const LightScreenBins bins = every_light_everywhere(rig.trace.lights.size(), 64, 64);
     std::vector<std::uint64_t> texture_lines;
-    ComputeContext cc;
-    cc.hw = &rig.hw;
-    cc.scene = &rig.scene;
-    cc.lights = &rig.trace.lights;
-    cc.camera = rig.camera;
-    cc.viewport = rig.viewport;
-    cc.frustum = &rig.frustum;
-    cc.light_bins = &bins;
-    cc.trace = &rig.trace;
-    const std::string path = "unit.trace";
-    cc.trace_path = &path;
-    cc.images = &rig.images;
+    ComputeContext cc = rig.context();
     cc.textures = &layout;
     cc.texture_lines = &texture_lines;
     run_dispatch(cc, make_dispatch("deferred_shade", {"gbuf"}, {"lit"}, {{"shader", "resolve"}}), rig.stats, rig.dram,

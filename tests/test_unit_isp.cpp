@@ -42,9 +42,7 @@ ScreenTri at(ScreenTri t, float z, std::uint32_t draw = 0, HsrClass hsr = HsrCla
 
 TEST(UnitIsp, RightTriangleRasterisesHalfATileUnderTheTopLeftRule) {
   RenderRig rig;
-  rig.add_draw(make_shader(1));
-  rig.add_triangle(kUpperLeft);
-  rig.render_tile(RenderRig::tile_rect(0, 0));
+  rig.render_one_draw({kUpperLeft});
   EXPECT_EQ(rig.isp_stats.tiles_rendered.value(), 1u);
   EXPECT_EQ(rig.isp_stats.primitives_fetched.value(), 1u);
   EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), kUpperLeftSamples);  // 496 (x + y <= 30)
@@ -67,16 +65,11 @@ TEST(UnitIsp, RightTriangleRasterisesHalfATileUnderTheTopLeftRule) {
 TEST(UnitIsp, TheTwoHalvesOfATileCoverEverySampleOnce) {
   {
     RenderRig rig;
-    rig.add_draw(make_shader(1));
-    rig.add_triangle(kLowerRight);
-    rig.render_tile(RenderRig::tile_rect(0, 0));
+    rig.render_one_draw({kLowerRight});
     EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), kLowerRightSamples);  // 528 = 1024 - 496
   }
   RenderRig rig;
-  rig.add_draw(make_shader(1));
-  rig.add_triangle(at(kUpperLeft, 0.5f));
-  rig.add_triangle(at(kLowerRight, 0.5f));
-  rig.render_tile(RenderRig::tile_rect(0, 0));
+  rig.render_one_draw({at(kUpperLeft, 0.5f), at(kLowerRight, 0.5f)});
   // No crack, no double hit along the shared edge: 496 + 528 = 1024 samples, none hidden.
   EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), kTileSamples);
   EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), 0u);
@@ -96,9 +89,7 @@ TEST(UnitIsp, FourSamplesPerPixelSplitTheDiagonalPixels) {
   spec.attachments = default_attachments(4);
   RenderRig rig(spec);
   ASSERT_EQ(rig.samples_per_pixel(), 4);
-  rig.add_draw(make_shader(1));
-  rig.add_triangle(kUpperLeft);
-  rig.render_tile(RenderRig::tile_rect(0, 0));
+  rig.render_one_draw({kUpperLeft});
   EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), 2048u);
   EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), 2048u * kDepthBytes);
   EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 528u);
@@ -109,10 +100,7 @@ TEST(UnitIsp, TriangleBehindTheFirstFailsTheDepthTest) {
   // Front (z 0.25) then back (z 0.75), both covering the tile: the back one's 1024 samples fail
   // the Less test against 0.25; only the front one is tagged and shaded.
   RenderRig rig;
-  rig.add_draw(make_shader(1));
-  rig.add_triangle(at(kFull, 0.25f));
-  rig.add_triangle(at(kFull, 0.75f));
-  rig.render_tile(RenderRig::tile_rect(0, 0));
+  rig.render_one_draw({at(kFull, 0.25f), at(kFull, 0.75f)});
   EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), 2 * kTileSamples);
   EXPECT_EQ(rig.isp_stats.depth_test_failed_samples.value(), kTileSamples);
   EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), 0u);
@@ -128,10 +116,8 @@ TEST(UnitIsp, OpaqueOverOpaqueRemovesTheHiddenSamplesBeforeShading) {
   // Back (z 0.75) then front (z 0.25): every back sample passes the depth test and is tagged,
   // then the front one overwrites all 1024 tags: the back triangle is never shaded.
   RenderRig rig;
-  rig.add_draw(make_shader(1));
-  const std::uint32_t back = rig.add_triangle(at(kFull, 0.75f));
-  const std::uint32_t front = rig.add_triangle(at(kFull, 0.25f));
-  rig.render_tile(RenderRig::tile_rect(0, 0));
+  const std::vector<std::uint32_t> ids = rig.render_one_draw({at(kFull, 0.75f), at(kFull, 0.25f)});
+  const std::uint32_t back = ids[0], front = ids[1];
   EXPECT_EQ(rig.isp_stats.depth_test_failed_samples.value(), 0u);
   EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), kTileSamples);
   EXPECT_EQ(rig.isp_stats.depth_buffer_write_bytes.value(), 2048u * kDepthBytes);
@@ -147,10 +133,7 @@ TEST(UnitIsp, PartlyHiddenTriangleIsShadedOnlyWhereVisible) {
   // Back FULL (z 0.75) then front UL (z 0.25): HSR removes the 496 back samples under UL; the
   // back triangle is shaded on LR's 528 samples and the front one on 496: 1024 invocations.
   RenderRig rig;
-  rig.add_draw(make_shader(1));
-  rig.add_triangle(at(kFull, 0.75f));
-  rig.add_triangle(at(kUpperLeft, 0.25f));
-  rig.render_tile(RenderRig::tile_rect(0, 0));
+  rig.render_one_draw({at(kFull, 0.75f), at(kUpperLeft, 0.25f)});
   EXPECT_EQ(rig.isp_stats.samples_rasterised.value(), 1024u + 496u);
   EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), 496u);
   EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 1024u);
@@ -159,10 +142,7 @@ TEST(UnitIsp, PartlyHiddenTriangleIsShadedOnlyWhereVisible) {
 TEST(UnitIsp, WithoutTagBufferEverySampleThatPassesEarlyDepthIsShaded) {
   // gpu.mode = tbr: back then front are both shaded at early-Z, 2 x 1024 invocations; no tags.
   RenderRig rig(RenderSpec{.sets = {"gpu.mode=tbr"}});
-  rig.add_draw(make_shader(1));
-  rig.add_triangle(at(kFull, 0.75f));
-  rig.add_triangle(at(kFull, 0.25f));
-  rig.render_tile(RenderRig::tile_rect(0, 0));
+  rig.render_one_draw({at(kFull, 0.75f), at(kFull, 0.25f)});
   EXPECT_EQ(rig.isp_stats.hsr_removed_samples.value(), 0u);
   EXPECT_EQ(rig.isp_stats.tag_buffer_write_bytes.value(), 0u);
   EXPECT_EQ(rig.isp_stats.tag_buffer_read_bytes.value(), 0u);
@@ -202,10 +182,7 @@ TEST(UnitIsp, StencilWrittenByOneDrawMasksTheNext) {
 
 /// Opaque FULL behind a punch-through UL (no material: its alpha test keeps every sample).
 void punch_through_over_opaque(RenderRig& rig) {
-  rig.add_draw(make_shader(1));
-  rig.add_triangle(at(kFull, 0.75f, 0, HsrClass::Opaque));
-  rig.add_triangle(at(kUpperLeft, 0.25f, 0, HsrClass::PunchThrough));
-  rig.render_tile(RenderRig::tile_rect(0, 0));
+  rig.render_one_draw({at(kFull, 0.75f, 0, HsrClass::Opaque), at(kUpperLeft, 0.25f, 0, HsrClass::PunchThrough)});
 }
 
 TEST(UnitIsp, PunchThroughOverAPendingTagFlushesTheTileWithOneTagBuffer) {
@@ -308,17 +285,11 @@ TEST(UnitIsp, DepthTestBehindAnUnresolvedPunchThroughMakesTheIspWaitForItsShader
   // LR's 528: 1024 + 496 + 528 = 2048 invocations, whatever the number of tag buffers (with one,
   // A was flushed when P arrived, without a wait).
   RenderRig ul_only;
-  ul_only.add_draw(make_shader(1));
-  ul_only.add_triangle(at(kUpperLeft, 0.5f));
-  ul_only.render_tile(RenderRig::tile_rect(0, 0));
+  ul_only.render_one_draw({at(kUpperLeft, 0.5f)});
   const std::uint64_t ul_alu = ul_only.tsp_stats.fragment_alu_ops.value();
   for (int buffers : {1, 2, 4}) {
     RenderRig rig(RenderSpec{.sets = {"isp.tag_buffers=" + std::to_string(buffers)}});
-    rig.add_draw(make_shader(1));
-    rig.add_triangle(at(kFull, 0.75f));
-    rig.add_triangle(at(kUpperLeft, 0.5f, 0, HsrClass::PunchThrough));
-    rig.add_triangle(at(kFull, 0.6f));
-    rig.render_tile(RenderRig::tile_rect(0, 0));
+    rig.render_one_draw({at(kFull, 0.75f), at(kUpperLeft, 0.5f, 0, HsrClass::PunchThrough), at(kFull, 0.6f)});
     SCOPED_TRACE("isp.tag_buffers=" + std::to_string(buffers));
     EXPECT_EQ(rig.isp_stats.resolve_flushes.value(), 1u);
     EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 2048u);

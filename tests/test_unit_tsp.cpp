@@ -78,9 +78,7 @@ TEST(UnitTsp, QuadsAndHelperLanesOfATriangleWhoseEdgeCutsQuads) {
   // of (s + 1) = 120 quads, 480 pixels); the 16 quads with qx + qy = 15 hold one covered pixel
   // (x + y = 30) and 3 helpers. 136 quads, 544 lanes, 48 helpers.
   RenderRig rig;
-  rig.add_draw(make_shader(1));
-  rig.add_triangle(kUpperLeft);
-  rig.render_tile(RenderRig::tile_rect(0, 0));
+  rig.render_one_draw({kUpperLeft});
   EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 496u);
   EXPECT_EQ(rig.tsp_stats.shaded_quads.value(), 136u);
   EXPECT_EQ(rig.tsp_stats.helper_lanes.value(), 48u);

@@ -276,6 +276,15 @@ class RenderRig {
     }
     isp_->render_tile(rect, prims, isp_stats, tsp_stats);
   }
+  /// The set-up of most ISP and TSP tests: one draw of a 1-op shader, the triangles `tris` (in
+  /// order), tile (0, 0) rendered. Returns the triangles' primitive indices.
+  std::vector<std::uint32_t> render_one_draw(std::initializer_list<ScreenTri> tris) {
+    add_draw(make_shader(1));
+    std::vector<std::uint32_t> ids;
+    for (const ScreenTri& t : tris) ids.push_back(add_triangle(t));
+    render_tile(tile_rect(0, 0));
+    return ids;
+  }
   /// The TSP shades `pixels` of primitive `prim` (one batch, sorted by row then column).
   void shade(std::uint32_t prim, const std::vector<ShadePixel>& pixels, std::vector<std::uint32_t>* alive = nullptr) {
     tsp_->shade(prim, pixels, alive, tsp_stats);
@@ -511,21 +520,19 @@ class ComputeRig {
     images.attachments[name] = std::move(img);
   }
 
-  /// Runs one dispatch (throws InputError as the unit does).
-  void dispatch(const DispatchCmd& cmd) {
+  /// The context the rig's dispatches run in: its frame, trace and images; no texture address
+  /// space (material fetches book no lines) unless the caller sets one.
+  ComputeContext context() {
     ComputeContext cc;
-    cc.hw = &hw;
-    cc.scene = &scene;
-    cc.lights = &trace.lights;
-    cc.camera = camera;
-    cc.viewport = viewport;
-    cc.frustum = &frustum;
-    cc.light_bins = &light_bins_;
+    static_cast<FrameInputs&>(cc) = FrameInputs{.hw = &hw, .scene = &scene, .lights = &trace.lights, .camera = camera,
+                                                .viewport = viewport, .frustum = &frustum, .light_bins = &light_bins_};
     cc.trace = &trace;
     cc.trace_path = &path_;
     cc.images = &images;
-    run_dispatch(cc, cmd, stats, dram, image_written);
+    return cc;
   }
+  /// Runs one dispatch (throws InputError as the unit does).
+  void dispatch(const DispatchCmd& cmd) { run_dispatch(context(), cmd, stats, dram, image_written); }
   /// The tile grid a culling dispatch wrote into buffer `name` (nullptr if none).
   const TileLightGrid* tile_grid(const std::string& name) const {
     auto it = images.tile_grids.find(name);

@@ -1,5 +1,7 @@
 #include "trace/traffic.hpp"
 
+#include <numeric>
+
 namespace tbdr {
 
 const char* to_string(DramClass c) {
@@ -23,15 +25,11 @@ const char* to_string(DramClass c) {
 }
 
 std::uint64_t DramTraffic::total_read() const {
-  std::uint64_t t = 0;
-  for (auto b : read_bytes) t += b;
-  return t;
+  return std::accumulate(read_bytes.begin(), read_bytes.end(), std::uint64_t{0});
 }
 
 std::uint64_t DramTraffic::total_written() const {
-  std::uint64_t t = 0;
-  for (auto b : write_bytes) t += b;
-  return t;
+  return std::accumulate(write_bytes.begin(), write_bytes.end(), std::uint64_t{0});
 }
 
 DramTraffic& DramTraffic::operator+=(const DramTraffic& o) {
