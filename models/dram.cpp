@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <type_traits>
 
@@ -29,7 +30,13 @@ double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint
 }
 
 Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::string scope)
-    : name_(scope), eq_(eq), energy_(e), clock_(ClockDomain::from_mhz("dram", p.clock_mhz)) {
+    : name_(scope),
+      eq_(eq),
+      energy_(e),
+      active_standby_mw_(p.active_standby_mw),
+      precharge_standby_mw_(p.precharge_standby_mw),
+      refresh_nj_(p.refresh_nj),
+      clock_(ClockDomain::from_mhz("dram", p.clock_mhz)) {
   const auto bad = [&](const std::string& why) { throw std::invalid_argument("dram '" + scope + "': " + why); };
   if (p.channels < 1 || p.channels > 1024) bad("channels must be in [1, 1024]");
   if (p.banks < 1 || p.banks > kMaxBanks) bad("banks must be in [1, " + std::to_string(kMaxBanks) + "]");
@@ -54,6 +61,15 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
   timing_.t_cl_cycles = ns_to_cycles(p.t_cl_ns);
   timing_.t_ras_cycles = ns_to_cycles(p.t_ras_ns);
   timing_.t_wr_cycles = ns_to_cycles(p.t_wr_ns);
+  timing_.t_rrd_cycles = ns_to_cycles(p.t_rrd_ns);
+  timing_.t_faw_cycles = ns_to_cycles(p.t_faw_ns);
+  timing_.t_wtr_cycles = ns_to_cycles(p.t_wtr_ns);
+  timing_.t_rtw = Tick{std::llround(p.t_rtw_ns * 1000.0)};
+  if (p.t_refi_ns > 0 && p.t_rfc_ns > 0) {
+    if (p.t_rfc_ns >= p.t_refi_ns) bad("t_rfc_ns must be shorter than t_refi_ns");
+    timing_.t_refi_cycles = ns_to_cycles(p.t_refi_ns);
+    timing_.t_rfc_cycles = ns_to_cycles(p.t_rfc_ns);
+  }
   timing_.controller = Tick{std::llround(p.controller_latency_ns * 1000.0)};
   // bytes / (GB/s) = ns; one channel carries bandwidth_gbps / channels.
   timing_.burst_ps = static_cast<double>(burst_bytes_) * 1000.0 / (p.bandwidth_gbps / static_cast<double>(p.channels));
@@ -71,6 +87,10 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
     ch.readq.reserve(read_cap_);
     ch.writeq.reserve(write_cap_);
     ch.banks.resize(banks_);
+    ch.act_history.fill(std::numeric_limits<std::int64_t>::min() / 2);
+    // Channels refresh staggered over the interval (channel c first at (c + 1) / channels of it),
+    // as controllers do to keep the refreshes of different channels apart.
+    ch.next_refresh = timing_.t_refi_cycles * static_cast<std::int64_t>(c + 1) / static_cast<std::int64_t>(channels_.size());
   }
   first_need_.assign(banks_, -1);
 }
@@ -168,6 +188,7 @@ RowOutcome Dram::access_functional(std::uint64_t addr, std::uint32_t bytes, bool
   const RowOutcome o = outcome(b, d.row);
   if (o != RowOutcome::Hit) {
     b.open_row = static_cast<std::int64_t>(d.row);
+    ch.closed_since = -1;  // no time on this path: the background counts it as active standby
     account_activate(ch, o, cls);
   }
   account_request(ch, o, is_write, cls, transfer_bytes(bytes), std::max<std::uint32_t>(1, lines));
@@ -242,6 +263,34 @@ void Dram::note_occupancy(Channel& ch, Tick now) {
   ch.occupancy_since = now;
 }
 
+void Dram::refresh_until(Channel& ch, std::int64_t n) {
+  if (!refresh_enabled()) return;
+  while (ch.next_refresh <= n) {
+    // All-bank refresh: every open bank is precharged first (when it allows, then tRP), a closed
+    // bank must have finished its precharge (act_ready); the banks stay closed for tRFC.
+    std::int64_t start = ch.next_refresh;
+    for (const Bank& b : ch.banks) start = std::max(start, b.open_row >= 0 ? b.pre_ready + timing_.t_rp_cycles : b.act_ready);
+    const std::int64_t end = start + timing_.t_rfc_cycles;
+    for (Bank& b : ch.banks) {
+      b.open_row = -1;
+      b.act_ready = end;
+      b.col_ready = end;
+      b.pre_ready = end;
+    }
+    if (ch.closed_since < 0) ch.closed_since = end;
+    ++stats_.refreshes;
+    ++ch.stats.refreshes;
+    ch.next_refresh += timing_.t_refi_cycles;
+  }
+}
+
+void Dram::note_row_open(Channel& ch, std::int64_t a) {
+  if (ch.closed_since < 0) return;
+  const Tick from = clock_.tick_of(Cycles{ch.closed_since}), to = clock_.tick_of(Cycles{a});
+  if (to > from) ch.precharged_ps += static_cast<std::uint64_t>((to - from).ps());
+  ch.closed_since = -1;
+}
+
 void Dram::kick(std::uint32_t c, Tick at) {
   Channel& ch = channels_[c];
   const Tick edge = clock_.next_edge(std::max(at, eq_.now()));
@@ -258,8 +307,15 @@ void Dram::open_row(Channel& ch, Entry& e, std::int64_t n) {
   const RowOutcome o = b.open_row < 0 ? RowOutcome::Empty : RowOutcome::Conflict;
   // Precharge when the bank allows it (tRAS after its activate, the last data out, tWR after the
   // last write), activate tRP later; the column command may follow tRCD after the activate.
-  const std::int64_t t_act =
+  const std::int64_t t_bank =
       o == RowOutcome::Empty ? std::max(n, b.act_ready) : std::max(n, b.pre_ready) + timing_.t_rp_cycles;
+  // tRRD after the channel's previous activate, tFAW after the fourth-last one.
+  const std::int64_t t_act = std::max({t_bank, ch.act_history[(ch.act_issued + 3) % 4] + timing_.t_rrd_cycles,
+                                       ch.act_history[ch.act_issued % 4] + timing_.t_faw_cycles});
+  if (t_act > t_bank) ++stats_.activates_delayed_rrd_faw;
+  ch.act_history[ch.act_issued % 4] = t_act;
+  ++ch.act_issued;
+  note_row_open(ch, t_act);
   b.open_row = static_cast<std::int64_t>(e.row);
   b.act_ready = t_act;
   b.col_ready = t_act + timing_.t_rcd_cycles;
@@ -269,7 +325,8 @@ void Dram::open_row(Channel& ch, Entry& e, std::int64_t n) {
 }
 
 std::int64_t Dram::next_column_cycle(const Channel& ch, const std::vector<Entry>& q, std::int64_t n, Tick now) const {
-  const std::int64_t bus_ready = bus_ready_cycle(ch, n, now);
+  if (q.empty()) return kNever;
+  const std::int64_t bus_ready = bus_ready_cycle(ch, n, now, q.front().is_write);
   std::int64_t next = kNever;
   for (const Entry& e : q) {
     if (e.arrival > now) break;
@@ -290,7 +347,11 @@ void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::in
   Bank& b = ch.banks[e.bank];
   b.col_ready = n + 1;
   const Tick data_natural = clock_.tick_of(Cycles{n + timing_.t_cl_cycles});
-  const Tick start = std::max(data_natural, ch.bus_free);
+  const bool r_to_w = ch.bus_dir == 0 && e.is_write;
+  const Tick start = std::max(data_natural, r_to_w ? ch.bus_free + timing_.t_rtw : ch.bus_free);
+  if (r_to_w) ++stats_.read_to_write_turnarounds;
+  if (ch.bus_dir == 1 && !e.is_write) ++stats_.write_to_read_turnarounds;
+  ch.bus_dir = e.is_write ? 1 : 0;
   const Tick duration = timing_.transfer(e.bytes / burst_bytes_);
   const Tick end = start + duration;
   ch.bus_free = end;
@@ -346,6 +407,7 @@ void Dram::wakeup(std::uint32_t c) {
   Channel& ch = channels_[c];
   const Tick now = eq_.now();
   const std::int64_t n = clock_.cycles_at(now).count();
+  refresh_until(ch, n);
   const bool was_draining = ch.draining;
   std::vector<Entry>* q = active_queue(ch, now, ch.draining);
   if (ch.draining && !was_draining) ++ch.stats.write_drains;
@@ -357,7 +419,7 @@ void Dram::wakeup(std::uint32_t c) {
     // first), the oldest request needing a row per bank, and the oldest row hit whose column
     // command can issue now (its bank allows it and its data would not start more than one cycle
     // before the data bus frees).
-    const std::int64_t bus_ready = bus_ready_cycle(ch, n, now);
+    const std::int64_t bus_ready = bus_ready_cycle(ch, n, now, q->front().is_write);
     std::uint64_t wanted = 0;
     std::fill(first_need_.begin(), first_need_.end(), -1);
     int issue = -1;
@@ -423,8 +485,27 @@ DramTraffic Dram::traffic() const {
 }
 
 double Dram::energy_pj() const {
-  return dram_energy_pj(energy_, stats_.read_bytes.value(), stats_.write_bytes.value(), stats_.activates.value());
+  return dram_energy_pj(energy_, stats_.read_bytes.value(), stats_.write_bytes.value(), stats_.activates.value()) +
+         background_energy_pj(eq_.now()) + refresh_energy_pj();
 }
+
+double Dram::background_energy_pj(Tick now) const {
+  // mW x ps = 1e-3 W x 1e-12 s = 1e-15 J = 1e-3 pJ.
+  double pj = 0;
+  for (const Channel& ch : channels_) {
+    std::uint64_t pre = ch.precharged_ps;
+    if (ch.closed_since >= 0) {
+      const Tick from = clock_.tick_of(Cycles{ch.closed_since});
+      if (now > from) pre += static_cast<std::uint64_t>((now - from).ps());
+    }
+    const auto elapsed = static_cast<std::uint64_t>(std::max<std::int64_t>(0, now.ps()));
+    pre = std::min(pre, elapsed);
+    pj += (active_standby_mw_ * static_cast<double>(elapsed - pre) + precharge_standby_mw_ * static_cast<double>(pre)) * 1e-3;
+  }
+  return pj;
+}
+
+double Dram::refresh_energy_pj() const { return static_cast<double>(stats_.refreshes.value()) * (refresh_nj_ * 1000.0); }
 
 double Dram::energy_pj(DramClass c) const {
   const DramClassStats& cs = class_stats_[static_cast<std::size_t>(c)];
@@ -435,7 +516,13 @@ void Dram::update_derived_stats() {
   const Tick now = eq_.now();
   const double elapsed_ps = static_cast<double>(now.ps());
   for (Channel& ch : channels_) {
+    refresh_until(ch, clock_.cycles_at(now).count());  // the refreshes an idle channel did meanwhile
     note_occupancy(ch, now);
+    std::uint64_t pre = ch.precharged_ps;
+    if (ch.closed_since >= 0 && now > clock_.tick_of(Cycles{ch.closed_since})) {
+      pre += static_cast<std::uint64_t>((now - clock_.tick_of(Cycles{ch.closed_since})).ps());
+    }
+    ch.stats.precharged_ps.set(pre);
     DramChannelStats& s = ch.stats;
     s.read_queue_occupancy_avg.set(elapsed_ps > 0 ? static_cast<double>(ch.read_occupancy_ps) / elapsed_ps : 0.0);
     s.write_queue_occupancy_avg.set(elapsed_ps > 0 ? static_cast<double>(ch.write_occupancy_ps) / elapsed_ps : 0.0);
@@ -453,7 +540,12 @@ void Dram::update_derived_stats() {
   stats_.energy_write_pj.set(write_bits * energy_.dram_write_pj_per_bit);
   stats_.energy_io_pj.set((read_bits + write_bits) * energy_.dram_io_pj_per_bit);
   stats_.energy_activate_pj.set(static_cast<double>(stats_.activates.value()) * (energy_.dram_activate_precharge_nj * 1000.0));
+  stats_.energy_background_pj.set(background_energy_pj(now));
+  stats_.energy_refresh_pj.set(refresh_energy_pj());
+  stats_.energy_dynamic_pj.set(
+      dram_energy_pj(energy_, stats_.read_bytes.value(), stats_.write_bytes.value(), stats_.activates.value()));
   stats_.energy_pj.set(energy_pj());
+  stats_.energy_per_bit_pj.set(read_bits + write_bits > 0 ? energy_pj() / (read_bits + write_bits) : 0.0);
   for (std::size_t c = 0; c < kDramClassCount; ++c) class_stats_[c].energy_pj.set(energy_pj(static_cast<DramClass>(c)));
 }
 

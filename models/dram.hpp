@@ -2,9 +2,11 @@
 // The external DRAM: channels x banks, one row buffer per bank under an open-page policy, read and
 // write queues per channel with an FR-FCFS scheduler (rows are opened ahead for the oldest
 // requests, column commands go to the oldest row hit the data bus can take; writes drained in
-// bursts between watermarks), JEDEC-style timing (tRCD, tRP, RL, tRAS, tWR, data-bus time from
-// the channel bandwidth, controller latency) and energy per bit and per activate (DRAMPower-style
-// figures from [energy]). See docs/memory-model.md for the equations.
+// bursts between watermarks), JEDEC-style timing (tRCD, tRP, RL, tRAS, tWR, tRRD, tFAW, tWTR,
+// read-to-write turnaround, all-bank refresh every tREFI for tRFC, data-bus time from the channel
+// bandwidth, controller latency) and energy per bit and per activate (DRAMPower-style figures from
+// [energy]) plus background power (active / precharge standby) and refresh energy from [dram].
+// See docs/memory-model.md for the equations.
 //
 // Two ways in:
 //  - timed: enqueue() a line-sized request; the controller schedules it on the event queue and
@@ -73,6 +75,12 @@ struct DramTiming {
   std::int64_t t_cl_cycles = 0;   ///< column command -> first data (reads and writes)
   std::int64_t t_ras_cycles = 0;  ///< activate -> precharge
   std::int64_t t_wr_cycles = 0;   ///< end of write data -> precharge
+  std::int64_t t_rrd_cycles = 0;  ///< activate -> activate (any two banks of a channel)
+  std::int64_t t_faw_cycles = 0;  ///< activate -> the fourth activate after it
+  std::int64_t t_wtr_cycles = 0;  ///< end of write data -> read command
+  Tick t_rtw{0};                  ///< end of read data -> start of write data
+  std::int64_t t_refi_cycles = 0; ///< refresh interval per channel (0: no refresh)
+  std::int64_t t_rfc_cycles = 0;  ///< refresh cycle time
   Tick controller{0};             ///< controller + interconnect latency, each way
   double burst_ps = 0;            ///< data-bus time of one burst on one channel
   Tick transfer(std::uint32_t bursts) const;
@@ -107,6 +115,10 @@ double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint
   X(Counter, queue_full_rejections, "requests", Sum, "Requests refused because their queue was full") \
   X(Counter, completed, "requests", Sum, "Timed requests completed") \
   X(Counter, read_latency_total_ps, "ps", Sum, "Sum over timed read lines of enqueue to the line's data back") \
+  X(Counter, refreshes, "commands", Sum, "All-bank refreshes (each channel every dram.t_refi_ns, timed path)") \
+  X(Counter, read_to_write_turnarounds, "switches", Sum, "Data bus switches from read to write data (pay dram.t_rtw_ns)") \
+  X(Counter, write_to_read_turnarounds, "switches", Sum, "Data bus switches from write to read data (pay dram.t_wtr_ns + RL)") \
+  X(Counter, activates_delayed_rrd_faw, "commands", Sum, "Activates that tRRD or tFAW pushed later than their bank allowed") \
   X(Accumulator, row_hit_rate, "ratio", Derived, "Row hits / requests") \
   X(Accumulator, avg_read_latency_ns, "ns", Derived, "Mean timed read latency per line, enqueue to data back") \
   X(Accumulator, achieved_bandwidth_gbps, "GB/s", Derived, "Timed bytes / (last completion - first enqueue)") \
@@ -114,7 +126,11 @@ double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint
   X(Accumulator, energy_write_pj, "pJ", Sum, "Write core energy: write bits x dram_write_pj_per_bit") \
   X(Accumulator, energy_io_pj, "pJ", Sum, "I/O energy: (read + write bits) x dram_io_pj_per_bit") \
   X(Accumulator, energy_activate_pj, "pJ", Sum, "Activates x dram_activate_precharge_nj x 1000") \
-  X(Accumulator, energy_pj, "pJ", Sum, "Total DRAM energy (read + write + I/O + activate/precharge)")
+  X(Accumulator, energy_background_pj, "pJ", Sum, "Standby: per channel active_standby_mw x time with a row open + precharge_standby_mw x time all precharged") \
+  X(Accumulator, energy_refresh_pj, "pJ", Sum, "Refreshes x dram.refresh_nj x 1000") \
+  X(Accumulator, energy_dynamic_pj, "pJ", Sum, "Read + write + I/O + activate/precharge (what the traffic classes share)") \
+  X(Accumulator, energy_pj, "pJ", Sum, "Total DRAM energy (dynamic + background + refresh)") \
+  X(Accumulator, energy_per_bit_pj, "pJ/bit", Derived, "Total DRAM energy / bits transferred")
 /// Whole-DRAM statistics.
 struct DramStats {
   TBDR_STATS(TBDR_DRAM_STATS)
@@ -133,6 +149,8 @@ struct DramStats {
   X(Counter, read_queue_full, "requests", Sum, "Reads refused: read queue full") \
   X(Counter, write_queue_full, "requests", Sum, "Writes refused: write queue full") \
   X(Counter, write_drains, "drains", Sum, "Times the write queue reached the high watermark") \
+  X(Counter, refreshes, "commands", Sum, "All-bank refreshes") \
+  X(Counter, precharged_ps, "ps", Sum, "Time every bank was precharged (precharge standby), up to the last statistics update") \
   X(Accumulator, read_queue_occupancy_avg, "requests", Derived, "Time-averaged read queue occupancy (from tick 0)") \
   X(Accumulator, write_queue_occupancy_avg, "requests", Derived, "Time-averaged write queue occupancy (from tick 0)") \
   X(Accumulator, utilization, "ratio", Derived, "busy_ps / elapsed ps (from tick 0)")
@@ -216,9 +234,17 @@ class Dram final : public Unit {
   const DramClassStats& class_stats(DramClass c) const { return class_stats_[static_cast<std::size_t>(c)]; }
   /// Bytes per class so far, in the shape the rest of the simulator uses.
   DramTraffic traffic() const;
-  /// Energy so far (same formula and operation order as the statistics).
+  /// Energy so far: dynamic (the dram_energy_pj formula) + background + refresh up to now().
   double energy_pj() const;
+  /// Dynamic energy of one class (its bytes and its activates; background is not split by class).
   double energy_pj(DramClass c) const;
+  /// Standby energy up to `now`: per channel active_standby_mw over the time a row was open plus
+  /// precharge_standby_mw over the time all banks were precharged.
+  double background_energy_pj(Tick now) const;
+  /// Refreshes so far x refresh_nj.
+  double refresh_energy_pj() const;
+  /// Whether the channels refresh (t_refi_ns and t_rfc_ns both positive).
+  bool refresh_enabled() const { return timing_.t_refi_cycles > 0 && timing_.t_rfc_cycles > 0; }
   /// Sets the derived statistics (energy, rates, averages up to now()).
   void update_derived_stats();
   /// Derived statistics, then the groups (whole DRAM, channels, classes) appended to `out`.
@@ -267,6 +293,14 @@ class Dram final : public Unit {
     Tick occupancy_since{0};
     std::uint64_t read_occupancy_ps = 0;   // integral of read queue size over time
     std::uint64_t write_occupancy_ps = 0;  // integral of write queue size over time
+    // tRRD / tFAW: the cycles of the last four activates (a ring; activates are issued in the
+    // order the scheduler decides them).
+    std::array<std::int64_t, 4> act_history{};
+    std::uint64_t act_issued = 0;
+    std::int8_t bus_dir = -1;          // direction of the last data on the bus: -1 none, 0 read, 1 write
+    std::int64_t next_refresh = 0;     // cycle the next refresh falls due
+    std::int64_t closed_since = 0;     // cycle since which every bank is precharged; -1: a row is open
+    std::uint64_t precharged_ps = 0;   // precharge standby time before closed_since
     DramChannelStats stats;
   };
 
@@ -281,6 +315,11 @@ class Dram final : public Unit {
   void account_request(Channel& ch, RowOutcome o, bool is_write, DramClass cls, std::uint32_t bytes,
                        std::uint32_t lines);
   void note_occupancy(Channel& ch, Tick now);
+  // Performs every refresh of `ch` due at or before cycle n: it starts when due, or once every open
+  // bank can be precharged (tRP after pre_ready), closes every bank and blocks activates for tRFC.
+  void refresh_until(Channel& ch, std::int64_t n);
+  // Notes that a row opens at cycle a: ends the channel's precharge standby period.
+  void note_row_open(Channel& ch, std::int64_t a);
   void kick(std::uint32_t c, Tick at);
   void wakeup(std::uint32_t c);
   // The queue the scheduler serves at `now`: writes from the high watermark down to the low one
@@ -292,7 +331,11 @@ class Dram final : public Unit {
   std::int64_t next_column_cycle(const Channel& ch, const std::vector<Entry>& q, std::int64_t n, Tick now) const;
   // First cycle at which the data of a column command issued then would start no more than one
   // DRAM cycle before the channel's data bus frees.
-  std::int64_t bus_ready_cycle(const Channel& ch, std::int64_t n, Tick now) const {
+  // With a direction switch: a read command waits tWTR after the last write data; write data
+  // starts tRTW after the last read data.
+  std::int64_t bus_ready_cycle(const Channel& ch, std::int64_t n, Tick now, bool is_write) const {
+    if (ch.bus_dir == 1 && !is_write) return cycle_ceil(ch.bus_free) + timing_.t_wtr_cycles;
+    if (ch.bus_dir == 0 && is_write) return cycle_ceil(ch.bus_free + timing_.t_rtw) - timing_.t_cl_cycles;
     return (ch.bus_free > now ? clock_.cycles_at(ch.bus_free).count() : n) - timing_.t_cl_cycles;
   }
   void commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::int64_t n);
@@ -303,6 +346,9 @@ class Dram final : public Unit {
   std::string name_;
   EventQueue& eq_;
   EnergyParams energy_;
+  double active_standby_mw_ = 0;
+  double precharge_standby_mw_ = 0;
+  double refresh_nj_ = 0;
   ClockDomain clock_;
   DramTiming timing_;
   DramMapping mapping_;

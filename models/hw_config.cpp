@@ -263,6 +263,37 @@ ParamRegistry<HwConfig> make_registry() {
       .doc("Activate to precharge, minimum row active time").source("LPDDR3 tRAS 42 ns (JESD209-3); LPDDR4 42 ns");
   r.add(TBDR_PARAM(dram.t_wr_ns), 15.0).unit("ns").range(0, 1000)
       .doc("Write recovery: end of write data to precharge").source("LPDDR3 tWR 15 ns (JESD209-3); LPDDR4 18 ns");
+  // Activate limits, turnaround and refresh: DRAMPower memspec MICRON_4Gb_LPDDR3-1600_32bit_A gives
+  // them in cycles of its 800 MHz clock (1.25 ns).
+  r.add(TBDR_PARAM(dram.t_rrd_ns), 10.0).unit("ns").range(0, 1000)
+      .doc("Activate to activate in different banks of one channel (tRRD)")
+      .source(lpddr3_memspec + ": RRD 8 cycles at 800 MHz");
+  r.add(TBDR_PARAM(dram.t_faw_ns), 50.0).unit("ns").range(0, 1000)
+      .doc("Four-activate window: at most four activates per channel in any window this long (tFAW)")
+      .source(lpddr3_memspec + ": FAW 40 cycles at 800 MHz");
+  r.add(TBDR_PARAM(dram.t_wtr_ns), 10.0).unit("ns").range(0, 1000)
+      .doc("Write-to-read turnaround: end of write data to the next read command of the channel (tWTR)")
+      .source(lpddr3_memspec + ": WTR 8 cycles at 800 MHz");
+  r.add(TBDR_PARAM(dram.t_rtw_ns), 3.75).unit("ns").range(0, 1000)
+      .doc("Read-to-write turnaround: idle data bus between the end of read data and the start of write data")
+      .source("JESD209-3 read to write: WL command no earlier than RL + RU(tDQSCKmax/tCK) + BL/2 + 1 - WL after the "
+              "read, so the data bus idles RU(tDQSCKmax/tCK) + 1 cycles; " + lpddr3_memspec +
+              ": DQSCK 2 cycles, 3 x 1.25 ns");
+  r.add(TBDR_PARAM(dram.t_refi_ns), 3900.0).unit("ns").range(0, 1e6)
+      .doc("All-bank refresh interval per channel (tREFI; 0 or t_rfc_ns = 0: no refresh)")
+      .source(lpddr3_memspec + ": REFI 3120 cycles at 800 MHz");
+  r.add(TBDR_PARAM(dram.t_rfc_ns), 130.0).unit("ns").range(0, 10000)
+      .doc("All-bank refresh cycle time: every bank of the channel is closed and unusable (tRFCab)")
+      .source(lpddr3_memspec + ": RFC 104 cycles at 800 MHz (4 Gb die)");
+  r.add(TBDR_PARAM(dram.active_standby_mw), 57.6).unit("mW").range(0, 100000)
+      .doc("Background power of one channel's devices while a row is open (active standby, IDD3N x VDD per rail)")
+      .source(lpddr3_memspec + ": idd3n 2.0 mA x vdd 1.8 V + idd3n2 45 mA x vdd2 1.2 V, one x32 die per channel");
+  r.add(TBDR_PARAM(dram.precharge_standby_mw), 49.2).unit("mW").range(0, 100000)
+      .doc("Background power of one channel's devices with every bank precharged (precharge standby, IDD2N x VDD)")
+      .source(lpddr3_memspec + ": idd2n 2.0 mA x 1.8 V + idd2n2 38 mA x 1.2 V");
+  r.add(TBDR_PARAM(dram.refresh_nj), 26.8).unit("nJ").range(0, 100000)
+      .doc("Energy of one all-bank refresh of a channel above active standby ((IDD5 - IDD3N) x VDD x tRFC per rail)")
+      .source(lpddr3_memspec + ": ((40 - 2) mA x 1.8 V + (160 - 45) mA x 1.2 V) x 130 ns = 206.4 mW x 130 ns");
   r.add(TBDR_PARAM(dram.controller_latency_ns), 30.0).unit("ns").range(0, 10000)
       .doc("Memory controller and interconnect latency each way").source("no public figure");
   r.add(TBDR_PARAM(dram.read_queue_entries), 32).unit("requests").range(1, 4096)
@@ -293,10 +324,12 @@ ParamRegistry<HwConfig> make_registry() {
       .doc("DRAM read energy per bit (core)").source(lpddr3_memspec);
   r.add(TBDR_PARAM(energy.dram_write_pj_per_bit), 5.9).unit("pJ/bit").range(0, 1000)
       .doc("DRAM write energy per bit (core)").source(lpddr3_memspec);
-  r.add(TBDR_PARAM(energy.dram_io_pj_per_bit), 0.0).unit("pJ/bit").range(0, 1000)
-      .doc("DRAM I/O energy per bit transferred")
-      .source("not in the LPDDR3 core figure; LPDDR4 about 3.2 (DRAMPower memspec MICRON_6Gb_LPDDR4-3200_32bit_A, "
-              "I/O from Micron's power calculator)");
+  r.add(TBDR_PARAM(energy.dram_io_pj_per_bit), 3.8).unit("pJ/bit").range(0, 1000)
+      .doc("DRAM I/O energy per bit transferred (drivers, strobes, line charging; both ends)")
+      .source("estimate, the memspec gives core energy only (ioPower 0): LPDDR3's HSUL_12 I/O is unterminated, so a "
+              "bit costs C x VDDQ^2 per 0->1 edge: 1/4 edge per random data bit + 1/8 for the DQS pair per 8 DQ, "
+              "C = 7 pF (2 pF DRAM pin + 2 pF SoC pin + 3 pF PoP line), VDDQ 1.2 V (JESD209-3): "
+              "0.375 x 7 pF x 1.44 V^2 = 3.8 pJ");
   r.add(TBDR_PARAM(energy.dram_activate_precharge_nj), 4.3).unit("nJ").range(0, 1000)
       .doc("Energy of one activate + precharge pair").source(lpddr3_memspec);
   r.add(TBDR_PARAM(energy.tile_buffer_pj_per_byte), 1.25).unit("pJ/byte").range(0, 1000)

@@ -177,6 +177,15 @@ struct DramParams {
   double t_cl_ns = 0;
   double t_ras_ns = 0;
   double t_wr_ns = 0;
+  double t_rrd_ns = 0;   ///< activate to activate, different banks of a channel
+  double t_faw_ns = 0;   ///< window holding at most four activates per channel
+  double t_wtr_ns = 0;   ///< end of write data to a read command (write-to-read turnaround)
+  double t_rtw_ns = 0;   ///< end of read data to the start of write data (read-to-write turnaround)
+  double t_refi_ns = 0;  ///< all-bank refresh interval per channel (0: no refresh)
+  double t_rfc_ns = 0;   ///< all-bank refresh cycle time: the channel's banks are unusable (0: no refresh)
+  double active_standby_mw = 0;     ///< background power per channel while a row is open (IDD3N x VDD)
+  double precharge_standby_mw = 0;  ///< background power per channel with every bank precharged (IDD2N x VDD)
+  double refresh_nj = 0;            ///< energy of one all-bank refresh of a channel above active standby
   double controller_latency_ns = 0;
   std::int64_t read_queue_entries = 0;
   std::int64_t write_queue_entries = 0;

@@ -525,6 +525,7 @@ double MemorySystem::energy_pj() const {
 }
 
 void MemorySystem::collect(std::vector<StatRecord>& out) {
+  dram_.update_derived_stats();  // first: the refreshes an idle channel did up to now count in its energy
   const double caches = texture_->energy_pj() + vertex_->energy_pj() + slc_->energy_pj();
   stats_.cache_energy_pj.set(caches);
   stats_.dram_energy_pj.set(dram_.energy_pj());

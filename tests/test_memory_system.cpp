@@ -34,14 +34,18 @@ namespace {
 // Helpers
 
 /// The declared defaults with DRAM timing in whole nanoseconds at a 1 GHz DRAM clock and a 1 GHz
-/// core: tRCD 18, tRP 18, RL 15, tRAS 42, tWR 15 cycles; controller 30 ns each way; 2 channels
-/// of 6.4 GB/s, so a 64 B line occupies a channel's data bus for exactly 10 ns.
+/// core: tRCD 18, tRP 18, RL 15, tRAS 42, tWR 15, tRRD 10, tFAW 50, tWTR 10 cycles, tRTW 4 ns;
+/// controller 30 ns each way; 2 channels of 6.4 GB/s, so a 64 B line occupies a channel's data bus
+/// for exactly 10 ns. Refresh is off (t_refi_ns=0) so that latencies are exact; the refresh tests
+/// turn it on with tREFI 3900 and tRFC 130 ns (the LPDDR3 defaults).
 /// `sets` (section.key=value, as --set) apply on top.
 HwConfig test_config(const std::vector<std::string>& sets = {}) {
   std::vector<std::string> all = {"gpu.core_clock_mhz=1000", "dram.clock_mhz=1000", "dram.channels=2", "dram.banks=8",
                                   "dram.row_bytes=4096", "dram.burst_bytes=32", "dram.bandwidth_gbps=12.8",
                                   "dram.t_rcd_ns=18", "dram.t_rp_ns=18", "dram.t_cl_ns=15", "dram.t_ras_ns=42",
-                                  "dram.t_wr_ns=15", "dram.controller_latency_ns=30", "dram.read_queue_entries=32",
+                                  "dram.t_wr_ns=15", "dram.t_rrd_ns=10", "dram.t_faw_ns=50", "dram.t_wtr_ns=10",
+                                  "dram.t_rtw_ns=4", "dram.t_refi_ns=0", "dram.t_rfc_ns=130",
+                                  "dram.controller_latency_ns=30", "dram.read_queue_entries=32",
                                   "dram.write_queue_entries=32", "dram.address_mapping=row_bank_channel_column"};
   all.insert(all.end(), sets.begin(), sets.end());  // the test's own settings win
   return resolve_config({}, all).hw;
@@ -471,6 +475,188 @@ TEST(DramTest, BandwidthBoundStreamWithinFivePercent) {
   EXPECT_NEAR(d->channel_stats(1).utilization.value(), bound_ps / took_ps, 0.01);
 }
 
+/// Refresh on: the LPDDR3 defaults, tREFI 3900 ns and tRFC 130 ns (whole cycles at 1 GHz).
+const std::vector<std::string> kRefreshOn = {"dram.t_refi_ns=3900", "dram.t_rfc_ns=130"};
+
+TEST(DramTest, StreamingWithRefreshReachesWhatTrfcOverTrefiLeaves) {
+  // The same 1 MiB per-channel read stream as above, refresh off and on. A refresh closes every
+  // bank and blocks them for tRFC; the stream loses, per refresh, the bus time from its last data
+  // to the first data after the refresh: the open row's precharge tRP + tRFC + the next row's
+  // tRCD + RL = 18 + 130 + 18 + 15 = 181 ns (its last data still flows while the refresh waits, so
+  // nothing else is lost). Each channel refreshes once per 3900 ns whatever the traffic, so:
+  //   efficiency with refresh = 1 - 181 / 3900 = 95.36 %   (tRFC alone: 1 - 130 / 3900 = 96.67 %)
+  //   time with refresh / time without = 1 / 0.9536 = 1.0487.
+  constexpr std::uint64_t kLines = 16384;
+  const double bound_ps = static_cast<double>(kLines * 64) / 12.8 * 1000.0;
+  const auto [off_ps, r0] = sequential_stream_ps(test_config(), kLines, true);
+  EventQueue eq;
+  Dram* raw = nullptr;
+  const auto [on_ps, r1] = sequential_stream_ps(test_config(kRefreshOn), kLines, true, &raw, &eq);
+  std::unique_ptr<Dram> d(raw);
+  const double lost_per_refresh_ns = 18 + 130 + 18 + 15;
+  const double predicted = 1.0 - lost_per_refresh_ns / 3900.0;
+  std::cout << "[ figures  ] stream with refresh: " << 100.0 * bound_ps / on_ps << " % of peak (predicted "
+            << 100.0 * predicted << " %), without: " << 100.0 * bound_ps / off_ps << " %; " << d->stats().refreshes.value()
+            << " refreshes\n";
+  EXPECT_GT(on_ps, off_ps);
+  EXPECT_NEAR(on_ps / off_ps, 1.0 / predicted, 0.01) << "refresh costs (tRP + tRFC + tRCD + RL) / tREFI";
+  EXPECT_GT(on_ps / off_ps, 1.0 / (1.0 - 130.0 / 3900.0)) << "at least tRFC / tREFI";
+  EXPECT_NEAR(bound_ps / on_ps, predicted, 0.01);
+  // Refreshes: one per channel per 3900 ns of the run (channel c first at (c + 1) / 2 of it).
+  const auto per_channel = static_cast<std::uint64_t>(on_ps / 3900e3);
+  EXPECT_GE(d->stats().refreshes.value(), 2 * per_channel - 1);
+  EXPECT_LE(d->stats().refreshes.value(), 2 * per_channel + 2);
+}
+
+TEST(DramTest, IdleChannelsRefreshOnTimeAndTheirStandbyIsCharged) {
+  // One read at t = 0 on channel 0, then nothing until 39 us. Channel 0 refreshes at 1950 + k x
+  // 3900 ns (10 by 39 us), channel 1 at 3900 + k x 3900 (10, the last at 39 us). Refresh energy =
+  // 20 x refresh_nj. Channel 1 never opens a row: 39 us of precharge standby. Channel 0 has a row
+  // open from its activate (controller 30 ns: ACT at 30 ns) until the first refresh ends
+  // (1950 + tRFC 130 = 2080 ns): 2050 ns of active standby, the rest precharged.
+  const HwConfig hw = test_config(kRefreshOn);
+  EventQueue eq;
+  Dram d(hw.dram, hw.energy, eq);
+  ASSERT_TRUE(d.enqueue(DramRequest{0, 64, false, DramClass::Color, {}}));
+  eq.schedule(Tick{39000 * kNs}, [] {});
+  eq.run();
+  d.update_derived_stats();
+  EXPECT_EQ(d.stats().refreshes.value(), 20u);
+  EXPECT_EQ(d.channel_stats(0).refreshes.value(), 10u);
+  EXPECT_EQ(d.channel_stats(1).precharged_ps.value(), static_cast<std::uint64_t>(39000 * kNs));
+  EXPECT_EQ(d.channel_stats(0).precharged_ps.value(), static_cast<std::uint64_t>((39000 - 2050) * kNs));
+  EXPECT_DOUBLE_EQ(d.stats().energy_refresh_pj.value(), 20 * hw.dram.refresh_nj * 1000.0);
+  const double background = (hw.dram.precharge_standby_mw * (39000 + 39000 - 2050) + hw.dram.active_standby_mw * 2050) * kNs * 1e-3;
+  EXPECT_NEAR(d.stats().energy_background_pj.value(), background, 1e-6 * background);
+  // A read after that finds its row closed by the refresh: an activate from an empty bank.
+  ASSERT_TRUE(d.enqueue(DramRequest{64, 64, false, DramClass::Color, {}}));
+  eq.run();
+  EXPECT_EQ(d.stats().row_misses_empty.value(), 2u);
+}
+
+/// Time from t = 0 until the last of `n` reads on channel 0 completes, every read opening a new
+/// row in the next bank (bank i mod 8, row i / 8 + 1: each one a row conflict once the banks are
+/// open), all queued at once.
+double row_miss_stream_ps(const HwConfig& hw, int n, std::uint64_t* activates = nullptr) {
+  EventQueue eq;
+  Dram d(hw.dram, hw.energy, eq);
+  DramFeeder f(d, eq);
+  for (int i = 0; i < n; ++i) {
+    const std::uint64_t bank = static_cast<std::uint64_t>(i % 8), row = static_cast<std::uint64_t>(i / 8 + 1);
+    f.add(((row * 8 + bank) * 2 + 0) * 4096, 64, false, DramClass::Textures);  // row | bank | channel 0 | column
+  }
+  f.pump();
+  eq.run();
+  EXPECT_TRUE(f.all_done());
+  EXPECT_EQ(d.stats().row_hits.value(), 0u);
+  if (activates) *activates = d.stats().activates.value();
+  return static_cast<double>(f.last_done().ps());
+}
+
+TEST(DramTest, RowMissStreamIsBoundByTfawTrrdOrTrc) {
+  // Every read needs its own activate, so the channel serves one read per
+  //   max(tRRD, tFAW / 4, tRC / banks, burst) = max(10, 50 / 4, (42 + 18) / 8, 10) = 12.5 ns (tFAW)
+  // tRRD 15 ns instead: 15 ns per read; tRRD and tFAW 0: the data bus, 10 ns (tRC / 8 = 7.5).
+  // 800 reads: 800 x the bound, plus the pipeline fill (controller + tRCD + RL + burst + controller
+  // = 103 ns): within 3 %.
+  constexpr int kN = 800;
+  struct Case {
+    std::vector<std::string> sets;
+    double per_read_ns;
+  };
+  const std::vector<Case> cases = {{{}, 12.5}, {{"dram.t_rrd_ns=15"}, 15.0}, {{"dram.t_rrd_ns=0", "dram.t_faw_ns=0"}, 10.0}};
+  for (const Case& c : cases) {
+    std::uint64_t acts = 0;
+    const double took = row_miss_stream_ps(test_config(c.sets), kN, &acts);
+    const double predicted = (kN * c.per_read_ns + 103) * kNs;
+    std::cout << "[ figures  ] row-miss stream, " << c.per_read_ns << " ns per read predicted: " << took / kN / kNs
+              << " ns per read\n";
+    EXPECT_NEAR(took / predicted, 1.0, 0.03) << c.per_read_ns;
+    EXPECT_EQ(acts, static_cast<std::uint64_t>(kN));
+  }
+}
+
+TEST(DramTest, ReadAfterWriteWaitsTwtrWriteAfterReadWaitsTrtw) {
+  // A write to an empty bank enqueued at 0: arrives at 30 ns, ACT 30, column command at 48 (tRCD
+  // 18), data 63..73 (RL 15, 10 ns). A read of the same row enqueued at 19 ns arrives at 49, after
+  // the write's column command: it may not issue its read command before the write data ended +
+  // tWTR: 73 + 10 = 83, data 98..108 (RL), back at 138 ns (controller 30). With tWTR = 0: 128 ns.
+  // The data bus idles tWTR + RL = 25 ns between the two transfers.
+  for (const double t_wtr : {10.0, 0.0}) {
+    const HwConfig hw = test_config({"dram.t_wtr_ns=" + std::to_string(t_wtr)});
+    EventQueue eq;
+    Dram d(hw.dram, hw.energy, eq);
+    Tick read_done{-1};
+    ASSERT_TRUE(d.enqueue(DramRequest{0, 64, true, DramClass::Color, {}}));
+    eq.schedule(Tick{19 * kNs}, [&] {
+      ASSERT_TRUE(d.enqueue(DramRequest{64, 64, false, DramClass::Color, [&] { read_done = eq.now(); }}));
+    });
+    eq.run();
+    EXPECT_EQ(read_done.ps(), static_cast<std::int64_t>((128 + t_wtr) * kNs)) << t_wtr;
+    EXPECT_EQ(d.stats().write_to_read_turnarounds.value(), 1u);
+  }
+  // Mirror: a read (data 63..73) then a write of the same row arriving after the read's column
+  // command: the write data starts tRTW = 4 ns after the read data ends: 77..87, acknowledged at
+  // 117 ns; with tRTW = 0 at 113 ns.
+  for (const double t_rtw : {4.0, 0.0}) {
+    const HwConfig hw = test_config({"dram.t_rtw_ns=" + std::to_string(t_rtw)});
+    EventQueue eq;
+    Dram d(hw.dram, hw.energy, eq);
+    Tick write_done{-1};
+    ASSERT_TRUE(d.enqueue(DramRequest{0, 64, false, DramClass::Color, {}}));
+    eq.schedule(Tick{19 * kNs}, [&] {
+      ASSERT_TRUE(d.enqueue(DramRequest{64, 64, true, DramClass::Color, [&] { write_done = eq.now(); }}));
+    });
+    eq.run();
+    EXPECT_EQ(write_done.ps(), static_cast<std::int64_t>((113 + t_rtw) * kNs)) << t_rtw;
+    EXPECT_EQ(d.stats().read_to_write_turnarounds.value(), 1u);
+  }
+}
+
+TEST(DramTest, PresetEnergyPerBitIsTheMemspecArithmetic) {
+  // Each shipped DRAM preset streams 4 MiB of sequential reads (one in-order stream per channel),
+  // refresh on. Its energy per bit read must be, within 1 %, the memspec arithmetic:
+  //   read_pj + io_pj                                   the bits themselves
+  // + act_nj x 1000 / (row_bytes x 8)                   one activate per row (and per refresh: < 0.02)
+  // + channels x active_standby_mw x T x 1e-3 / bits    rows stay open: active standby for the run T
+  // + (channels x T / tREFI) x refresh_nj x 1000 / bits one refresh per channel per tREFI
+  // (the difference: the moments after a refresh when a channel has every bank precharged).
+  // LPDDR3-1600 at 95 % of 12.8 GB/s: 5.1 + 3.8 + 0.13 + 1.18 + 0.14 = about 10.4 pJ/bit.
+  const std::string dir = std::string(TBDRSIM_SOURCE_DIR) + "/configs/";
+  const std::vector<std::vector<std::string>> presets = {
+      {dir + "series6xt_gx6450.ini"}, {dir + "mobile_16x16_lpddr4x.ini"},
+      {dir + "mobile_16x16_lpddr4x.ini", dir + "dram_lpddr5_6400.ini"}};
+  for (const auto& files : presets) {
+    const HwConfig hw = resolve_config(files, {}).hw;
+    constexpr std::uint64_t kLines = 65536;  // 4 MiB
+    EventQueue eq;
+    Dram* raw = nullptr;
+    const auto [took_ps, refused] = sequential_stream_ps(hw, kLines, true, &raw, &eq);
+    std::unique_ptr<Dram> d(raw);
+    d->update_derived_stats();
+    const double bits = static_cast<double>(kLines * 64 * 8);
+    const double T = static_cast<double>(eq.now().ps());
+    const double ch = static_cast<double>(hw.dram.channels);
+    const double rows = static_cast<double>(kLines * 64) / static_cast<double>(hw.dram.row_bytes);
+    const double predicted = hw.energy.dram_read_pj_per_bit + hw.energy.dram_io_pj_per_bit +
+                             rows * hw.energy.dram_activate_precharge_nj * 1000.0 / bits +
+                             ch * hw.dram.active_standby_mw * T * 1e-3 / bits +
+                             ch * (T / (hw.dram.t_refi_ns * 1000.0)) * hw.dram.refresh_nj * 1000.0 / bits;
+    const double simulated = d->stats().energy_per_bit_pj.value();
+    std::cout << "[ figures  ] " << hw.dram.name << ": streaming read " << simulated << " pJ/bit (memspec arithmetic "
+              << predicted << "; core read " << hw.energy.dram_read_pj_per_bit << " + I/O " << hw.energy.dram_io_pj_per_bit
+              << "), " << 100.0 * static_cast<double>(kLines * 64) / hw.dram.bandwidth_gbps * 1000.0 / took_ps
+              << " % of peak\n";
+    EXPECT_NEAR(simulated / predicted, 1.0, 0.01) << hw.dram.name;
+    // A refresh closes the rows being streamed: each costs up to two activates more (the row in
+    // use and the one opened ahead).
+    EXPECT_GE(d->stats().activates.value(), static_cast<std::uint64_t>(rows)) << hw.dram.name;
+    EXPECT_LE(d->stats().activates.value(), static_cast<std::uint64_t>(rows) + 2 * d->stats().refreshes.value());
+    EXPECT_GT(d->stats().energy_background_pj.value(), 0.0);
+    EXPECT_GT(d->stats().energy_refresh_pj.value(), 0.0);
+  }
+}
+
 TEST(DramTest, InOrderSourceIsLimitedByQueueDepthVersusChannelInterleave) {
   // A single in-order source blocks on the first full channel queue. With 32-entry queues (2 KiB
   // of lines) and channels interleaved every 4 KiB row, each channel runs dry while the source
@@ -624,9 +810,15 @@ TEST(DramTest, EnergyConservation) {
   const double rb = 8.0 * static_cast<double>(s.read_bytes.value());
   const double wb = 8.0 * static_cast<double>(s.write_bytes.value());
   const double expected = rb * 5.3 + wb * 3.9 + (rb + wb) * 3.2 + static_cast<double>(s.activates.value()) * (1.2 * 1000.0);
-  EXPECT_EQ(d.energy_pj(), expected);
+  // The total adds the standby energy up to now and the refreshes (none: refresh is off here).
+  const double background = d.background_energy_pj(eq.now());
+  EXPECT_GT(background, 0);
+  EXPECT_EQ(d.energy_pj(), expected + background);
   d.update_derived_stats();
-  EXPECT_EQ(s.energy_pj.value(), expected);
+  EXPECT_EQ(s.energy_pj.value(), expected + background);
+  EXPECT_EQ(s.energy_dynamic_pj.value(), expected);
+  EXPECT_EQ(s.energy_background_pj.value(), background);
+  EXPECT_EQ(s.energy_refresh_pj.value(), 0.0);
   EXPECT_EQ(s.energy_read_pj.value() + s.energy_write_pj.value() + s.energy_io_pj.value() + s.energy_activate_pj.value(),
             expected);
   // Classes partition the counters, so their energies add up to the total (to rounding).
@@ -1000,8 +1192,12 @@ TEST(MemorySystemTest, BackpressurePropagatesAndNothingIsLost) {
 TEST(MemorySystemTest, StreamingReachesDramBandwidth) {
   // 4 MiB of tile loads, then of tile stores, in 1 KiB requests from one in-order source with up
   // to 64 requests outstanding (as the pixel back end issues them), on both shipped DRAM presets.
-  // Bound: 4 MiB / dram.bandwidth_gbps; the overflow queue in front of each DRAM channel lets the
-  // source run ahead of a full channel, so the stream must come within 5 % of it.
+  // Bound: 4 MiB / (dram.bandwidth_gbps x refresh efficiency), where each refresh idles the bus
+  // for [tWR after the last write +] tRP + tRFC + tRCD + RL per tREFI (LPDDR3 loads: 1 - 182.5 /
+  // 3900 = 95.3 %; LPDDR4X loads: 1 - 333.5 / 3904 = 91.5 %). The overflow queue in front of each
+  // DRAM channel lets the source run ahead of a full channel, so the stream must come within 5 %
+  // of it. (LPDDR4X lands about 3 % below: its 280 ns refresh outlasts the 4 KiB the other
+  // channel has queued, and the in-order source waits on the refreshing one.)
   const std::string dir = std::string(TBDRSIM_SOURCE_DIR) + "/configs/";
   for (const std::string preset : {"series6xt_gx6450.ini", "mobile_16x16_lpddr4x.ini"}) {
     const HwConfig hw = resolve_config({dir + preset}, {}).hw;
@@ -1030,10 +1226,13 @@ TEST(MemorySystemTest, StreamingReachesDramBandwidth) {
       pump();
       eq.run();
       ASSERT_EQ(next, kTotal);
-      const double bound_ps = static_cast<double>(kTotal) / hw.dram.bandwidth_gbps * 1000.0;
+      const auto& p = hw.dram;
+      const double lost_ns = (write ? p.t_wr_ns : 0.0) + p.t_rp_ns + p.t_rfc_ns + p.t_rcd_ns + p.t_cl_ns;
+      const double bound_ps = static_cast<double>(kTotal) / hw.dram.bandwidth_gbps * 1000.0 / (1.0 - lost_ns / p.t_refi_ns);
       const double took_ps = static_cast<double>(eq.now().ps());
       std::cout << "[ figures  ] " << preset << (write ? " stores" : " loads") << ": " << 100.0 * bound_ps / took_ps
-                << " % of " << hw.dram.bandwidth_gbps << " GB/s\n";
+                << " % of " << hw.dram.bandwidth_gbps << " GB/s less refresh ("
+                << 100.0 * (1.0 - lost_ns / p.t_refi_ns) << " % of it)\n";
       EXPECT_LE(took_ps, 1.05 * bound_ps) << preset << " write=" << write;
       EXPECT_EQ(write ? m.traffic().writes(DramClass::Color) : m.traffic().reads(DramClass::Color), kTotal);
     }
