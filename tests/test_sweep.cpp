@@ -79,6 +79,14 @@ int wait_tool(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
+/// Runs two sweeps (files `a` and `b`, -j 2 each) on one database at the same time; both must exit 0.
+void run_two_sweeps_together(const std::string& a, const std::string& b, const std::string& db, const fs::path& dir) {
+  const pid_t pa = start_tool({"sweep", a, "--db", db, "-j", "2"}, dir / "a.log");
+  const pid_t pb = start_tool({"sweep", b, "--db", db, "-j", "2"}, dir / "b.log");
+  EXPECT_EQ(wait_tool(pa), 0);
+  EXPECT_EQ(wait_tool(pb), 0);
+}
+
 std::int64_t scalar(const std::string& db_path, const std::string& sql) {
   return std::llround(testing_support::query_number(db_path, sql));
 }
@@ -375,10 +383,7 @@ TEST_F(SweepRun, TwoSweepsOnOneDatabaseLoseNoRows) {
   const std::string fb = sweep_file(b, "gpu.core_clock_mhz = 400, 500, 700, 800\n");
   const std::string db = (dir / "shared.db").string();
   { ResultsDb create(db); }  // the schema exists; what is tested is concurrent writing of runs
-  const pid_t pa = start_tool({"sweep", fa, "--db", db, "-j", "2"}, dir / "a.log");
-  const pid_t pb = start_tool({"sweep", fb, "--db", db, "-j", "2"}, dir / "b.log");
-  EXPECT_EQ(wait_tool(pa), 0);
-  EXPECT_EQ(wait_tool(pb), 0);
+  run_two_sweeps_together(fa, fb, db, dir);
   const auto c = run_counts(db);
   EXPECT_EQ(c.all, 24);
   EXPECT_EQ(c.distinct_ok, 24);
@@ -393,10 +398,7 @@ TEST_F(SweepRun, TwoIdenticalSweepsOnOneDatabaseRunEachPointOnce) {
   const fs::path dir = scratch("same");
   const std::string file = sweep_file(dir, "isp.tag_buffers = 1..4\n");
   const std::string db = (dir / "shared.db").string();
-  const pid_t pa = start_tool({"sweep", file, "--db", db, "-j", "2"}, dir / "a.log");
-  const pid_t pb = start_tool({"sweep", file, "--db", db, "-j", "2"}, dir / "b.log");
-  EXPECT_EQ(wait_tool(pa), 0);
-  EXPECT_EQ(wait_tool(pb), 0);
+  run_two_sweeps_together(file, file, db, dir);
   const auto c = run_counts(db);
   EXPECT_EQ(c.all, 12);
   EXPECT_EQ(c.distinct_ok, 12);
