@@ -65,9 +65,8 @@ void Isp::write_punch_depth(const PendingSample* begin, const PendingSample* end
   for (const PendingSample* s = begin; s != end; ++s) {
     while (i < batch_.size() && (batch_[i].x != s->x || batch_[i].y != s->y)) ++i;
     if (i >= batch_.size() || !(alive_[i] & s->bit)) continue;
-    int k = 0;
-    while (!(s->bit & (1u << k))) ++k;
-    const std::size_t gi = (static_cast<std::size_t>(s->y) * W + static_cast<std::size_t>(s->x)) * S + static_cast<std::size_t>(k);
+    const std::size_t gi = (static_cast<std::size_t>(s->y) * W + static_cast<std::size_t>(s->x)) * S +
+                           static_cast<std::size_t>(std::countr_zero(s->bit));
     // A later translucent layer may have written a nearer depth meanwhile: keep the nearer one.
     if (pl.depth_test && !passes<float>(pl.depth_compare, s->z, depth[gi])) continue;
     depth[gi] = s->z;
@@ -156,10 +155,8 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
   const bool has_st = depth_img && has_stencil(depth_img->format);
   auto& overdraw = ctx_.images->counters.rasterised_samples;
   auto global_index = [&](std::int32_t x, std::int32_t y, std::uint32_t bit) {
-    int s = 0;
-    while (!(bit & (1u << s))) ++s;
     return (static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x)) * static_cast<std::size_t>(S) +
-           static_cast<std::size_t>(s);
+           static_cast<std::size_t>(std::countr_zero(bit));
   };
 
   for (const std::uint32_t prim_index : prims) {
