@@ -1,6 +1,7 @@
 #include "models/command_processor.hpp"
 
 #include <algorithm>
+#include <numeric>
 #include <map>
 #include <memory>
 #include <set>
@@ -78,6 +79,10 @@ class PassRenderer {
   /// Geometry, binning and rendering of every draw; a partial render whenever the parameter
   /// buffer is full.
   void run() {
+    if (ctx_.rop) {
+      run_immediate();
+      return;
+    }
     std::vector<Primitive> staged;
     for (std::uint32_t i = 0; i < ctx_.draws.size(); ++i) {
       if (static_cast<int>(i) == tile_memory_.split_draw()) {
@@ -99,7 +104,39 @@ class PassRenderer {
       }
     }
     render(false);
-    if (ctx_.framebuffer_in_dram) book_imr_framebuffer();
+  }
+
+  /// imr: no binning. The draws' primitives go down the pipeline in submission order, in batches
+  /// of imr.primitives_per_batch, each rasterised, depth tested and shaded over the whole frame as
+  /// it arrives, its depth and colour through the ROP caches: one render whose "tiles" are the
+  /// batches (FrameWork::immediate), each carrying its own geometry work.
+  void run_immediate() {
+    const PixelRect frame{0, 0, ctx_.viewport.width_px, ctx_.viewport.height_px};
+    const auto batch = static_cast<std::size_t>(hw_.imr.primitives_per_batch);
+    RenderWork rw;
+    std::vector<Primitive> staged;
+    std::vector<std::uint32_t> indices;
+    bool first = true;
+    auto emit = [&](bool last) {
+      indices.resize(ctx_.prims.size());
+      std::iota(indices.begin(), indices.end(), 0u);
+      TileWork tw = render_tile(0, frame, indices, false, first, last);
+      tw.geometry = binning_since_last_render();
+      rw.tiles.push_back(std::move(tw));
+      first = false;
+      ctx_.frame_prim_base += static_cast<std::uint32_t>(ctx_.prims.size());
+      ctx_.prims.clear();
+    };
+    for (std::uint32_t i = 0; i < ctx_.draws.size(); ++i) {
+      staged.clear();
+      geometry_.run_draw(ctx_.draws[i], i, staged, ctx_.object_lights, stats_.geometry, dram_);
+      for (const Primitive& p : staged) {
+        ctx_.prims.push_back(p);
+        if (ctx_.prims.size() >= batch) emit(false);
+      }
+    }
+    emit(true);  // the last batch (also when empty: the pass's clears, resolves and the ROP flush)
+    cw_.renders.push_back(std::move(rw));
   }
 
  private:
@@ -162,12 +199,15 @@ class PassRenderer {
   }
 
   /// One tile (or strip of a tile): loads, ISP and TSP, stores; what it cost.
-  TileWork render_tile(int t, const PixelRect& r, const std::vector<std::uint32_t>& prims, bool partial) {
+  /// imr renders a pass as batches over the whole frame: the tile memory's begin (clears) only
+  /// with the first (`begin`), its end (resolves) and the ROP flush only with the last (`end`).
+  TileWork render_tile(int t, const PixelRect& r, const std::vector<std::uint32_t>& prims, bool partial,
+                       bool begin = true, bool end = true) {
     const DramTraffic before = dram_;
     const IspStats isp0 = stats_.isp;
     const TspStats tsp0 = stats_.tsp;
     tile_texture_lines_.clear();
-    tile_memory_.begin_tile(r, resumed_[static_cast<std::size_t>(t)] != 0, dram_);
+    if (begin) tile_memory_.begin_tile(r, resumed_[static_cast<std::size_t>(t)] != 0, dram_);
     const DramTraffic loaded = dram_;
     isp_.render_tile(r, prims, stats_.isp, stats_.tsp);
     const DramTraffic shaded = dram_;  // what the shaders read from stored images (reads=)
@@ -175,7 +215,7 @@ class PassRenderer {
     const TspStats tile_tsp = stats_.tsp - tsp0;
     DramTraffic spill;
     tile_memory_.spill(tile_tsp.tile_buffer_read_bytes.value(), tile_tsp.tile_buffer_write_bytes.value(), spill);
-    tile_memory_.end_tile(r, partial, dram_);
+    if (end) tile_memory_.end_tile(r, partial, dram_);
     TileWork tw;
     tw.tile_x = t % tiler_.tiles_x();
     tw.tile_y = t / tiler_.tiles_x();
@@ -212,31 +252,28 @@ class PassRenderer {
     dram_ += spill;  // booked after the tile's loads and stores were taken from `dram_`
     tw.tag_bytes = tile_isp.tag_buffer_read_bytes.value() + tile_isp.tag_buffer_write_bytes.value();
     tw.depth_bytes = tile_isp.depth_buffer_read_bytes.value() + tile_isp.depth_buffer_write_bytes.value();
-    if (!ctx_.framebuffer_in_dram) {
+    if (ctx_.rop) {
+      if (end) ctx_.rop->flush();  // the pass's images must be in memory for what follows
+      tw.rop_depth = ctx_.rop->take_depth_accesses();
+      tw.rop_color = ctx_.rop->take_color_accesses();
+      // Booked after the tile's loads and stores were taken from `dram_`: the timing model streams
+      // these through the SLC as they are, not as stores.
+      for (const auto* v : {&tw.rop_depth, &tw.rop_color}) {
+        for (const FramebufferAccess& a : *v) {
+          if (a.write) {
+            dram_.write(a.cls, a.bytes);
+          } else {
+            dram_.read(a.cls, a.bytes);
+          }
+        }
+      }
+    } else {
       const std::uint64_t pb_read = prims.empty() ? 0 : tiler_.tile_read_bytes(t);
       stats_.tiler.pb_bytes_read += pb_read;
       dram_.read(DramClass::ParameterBuffer, pb_read);
       if (!prims.empty()) tw.pb_reads = tiler_.tile_read_ranges(t);
     }
     return tw;
-  }
-
-  /// imr: the depth and color accesses go to DRAM during shading (caches come with the timing
-  /// model); booked on the pass and on its one "tile".
-  void book_imr_framebuffer() {
-    const std::uint64_t depth_read = stats_.isp.depth_buffer_read_bytes.value();
-    const std::uint64_t depth_write = stats_.isp.depth_buffer_write_bytes.value();
-    const std::uint64_t color_read = stats_.tsp.tile_buffer_read_bytes.value();
-    const std::uint64_t color_write = stats_.tsp.tile_buffer_write_bytes.value();
-    dram_.read(DramClass::DepthStencil, depth_read);
-    dram_.write(DramClass::DepthStencil, depth_write);
-    dram_.read(DramClass::Color, color_read);
-    dram_.write(DramClass::Color, color_write);
-    auto& tw = cw_.renders.back().tiles.back();
-    tw.load_bytes[static_cast<std::size_t>(DramClass::DepthStencil)] += depth_read;
-    tw.store_bytes[static_cast<std::size_t>(DramClass::DepthStencil)] += depth_write;
-    tw.load_bytes[static_cast<std::size_t>(DramClass::Color)] += color_read;
-    tw.store_bytes[static_cast<std::size_t>(DramClass::Color)] += color_write;
   }
 
   HwConfig hw_;  ///< the frame's hardware, with one frame-sized tile in imr mode
@@ -293,6 +330,8 @@ class FrameSimulator {
     for (const auto& sh : trace_.shaders) slots = std::max(slots, sh.tex_fetches);
     textures_ = std::make_unique<TextureLayout>(&scene_, hw_, slots);
     result_.work.texture_bytes = textures_->total_bytes();
+    result_.work.immediate = hw_.gpu.mode == GpuMode::Imr;
+    if (result_.work.immediate) rop_ = std::make_unique<RenderOutputUnit>(hw_, f.width, f.height);
     int pass_index = 0;
     std::uint64_t dispatches = 0;
     for (const auto& cmd : trace_.commands) {
@@ -303,6 +342,7 @@ class FrameSimulator {
       }
       // Barriers order work; in the functional model every command completes before the next.
     }
+    if (rop_) result_.work.framebuffer_bytes = rop_->framebuffer_bytes();
     // Frame totals: every unit's statistics summed over the passes (gauges: the largest level).
     if (pass_index > 0) result_.totals.render.collect("frame", result_.stats);
     if (dispatches > 0) collect_stats(result_.totals.compute, "frame/compute", result_.stats);
@@ -515,6 +555,10 @@ class FrameSimulator {
                                          "(gpu.mode=imr) does not have: run it with gpu.mode=tbdr or tbr, or use a technique "
                                          "without PLS");
     }
+    if (rop_) {
+      ctx.rop = rop_.get();
+      rop_->bind_pass(pass, ps->rop);
+    }
     prepare_attachments(pass, ctx);
     resolve_draws(pass, ctx);
     count_geometry_passes(pass);
@@ -605,6 +649,7 @@ class FrameSimulator {
   std::uint32_t prim_base_ = 0;
   int geometry_passes_ = 0;
   std::unique_ptr<TextureLayout> textures_;  ///< the frame's texture address space
+  std::unique_ptr<RenderOutputUnit> rop_;    ///< gpu.mode=imr: the ROP caches, kept across the frame's passes
   FrameResult result_;
 };
 

@@ -13,6 +13,7 @@
 #include "models/isp.hpp"
 #include "models/render_state.hpp"
 #include "models/tile_memory.hpp"
+#include "models/rop.hpp"
 #include "models/tiler.hpp"
 #include "models/tsp.hpp"
 #include "trace/traffic.hpp"
@@ -29,6 +30,7 @@ struct PassStats {
   IspStats isp;
   TspStats tsp;
   TileMemoryStats tile_memory;
+  RopStats rop;  ///< gpu.mode=imr: the ROP caches (zero otherwise)
   /// Adds another pass: counts sum, gauges take the larger level.
   PassStats& operator+=(const PassStats& o) {
     geometry += o.geometry;
@@ -36,6 +38,7 @@ struct PassStats {
     isp += o.isp;
     tsp += o.tsp;
     tile_memory += o.tile_memory;
+    rop += o.rop;
     return *this;
   }
   /// Rows "<prefix>/<unit>" for the results database.
@@ -45,6 +48,7 @@ struct PassStats {
     collect_stats(isp, prefix + "/isp", out);
     collect_stats(tsp, prefix + "/tsp", out);
     collect_stats(tile_memory, prefix + "/tile_memory", out);
+    collect_stats(rop, prefix + "/rop", out);
   }
 };
 

@@ -18,14 +18,21 @@ EnergyBreakdown compute_energy(const HwConfig& hw, const FrameStats& frame, cons
   // bytes by cache): charged here as one unit each so the sum stays exact.
   term("dram", "pJ (memory system)", memory.dram_energy_pj.value(), 1.0);
   term("caches", "pJ (memory system)", memory.cache_energy_pj.value(), 1.0);
+  // imr has no tile buffer and no on-chip depth buffer: the shaders' colour and the ISP's depth
+  // accesses are the ROP caches' (their fills and write-backs are SRAM accesses too).
+  const bool imr = hw.gpu.mode == GpuMode::Imr;
+  const RopStats& rop = frame.render.rop;
   term("tile_buffer", "bytes",
-       d(tsp.tile_buffer_read_bytes) + d(tsp.tile_buffer_write_bytes) + d(tm.tile_load_bytes) + d(tm.tile_store_bytes) +
-           d(tm.tile_clear_bytes) + d(tsp.pls_bytes_accessed),
+       imr ? 0.0
+           : d(tsp.tile_buffer_read_bytes) + d(tsp.tile_buffer_write_bytes) + d(tm.tile_load_bytes) + d(tm.tile_store_bytes) +
+                 d(tm.tile_clear_bytes) + d(tsp.pls_bytes_accessed),
        e.tile_buffer_pj_per_byte);
   term("tag_and_depth_buffer", "bytes",
-       d(isp.tag_buffer_read_bytes) + d(isp.tag_buffer_write_bytes) + d(isp.depth_buffer_read_bytes) +
-           d(isp.depth_buffer_write_bytes),
+       imr ? 0.0
+           : d(isp.tag_buffer_read_bytes) + d(isp.tag_buffer_write_bytes) + d(isp.depth_buffer_read_bytes) +
+                 d(isp.depth_buffer_write_bytes),
        e.tag_buffer_pj_per_byte);
+  term("rop_caches", "bytes", d(rop.accessed_bytes) + d(rop.fill_bytes) + d(rop.writeback_bytes), e.rop_cache_pj_per_byte);
   term("alu", "ops",
        d(tsp.fragment_alu_ops) + d(frame.render.geometry.vertex_alu_ops) + d(frame.compute.compute_alu_ops),
        e.alu_op_pj);

@@ -30,6 +30,7 @@ FrameAddressMap::FrameAddressMap(const FrameWork& work, AddressSpace& space) {
       std::uint64_t extent = r.binning.pb_write_bytes;
       for (const auto& t : r.tiles) {
         for (const auto& br : t.pb_reads) extent = std::max(extent, br.offset + br.bytes);
+        vertex_bytes += t.geometry.vertex_fetch_bytes + t.geometry.index_fetch_bytes;  // imr: per batch
         stride = std::max({stride, sum(t.load_bytes) + sum(t.image_read_bytes), sum(t.store_bytes)});
         spill_stride = std::max({spill_stride, t.spill_read_bytes, t.spill_write_bytes});
         max_tile = std::max<std::uint64_t>(max_tile, static_cast<std::uint64_t>(t.tile_y * work.tiles_x + t.tile_x + 1));
@@ -83,6 +84,7 @@ FrameAddressMap::FrameAddressMap(const FrameWork& work, AddressSpace& space) {
     }
   }
   if (work.texture_bytes > 0) texture_base_ = space.allocate("textures", work.texture_bytes, DramClass::Textures);
+  if (work.framebuffer_bytes > 0) rop_framebuffer_base_ = space.allocate("framebuffer.imr", work.framebuffer_bytes, DramClass::Color);
   pb_base_[0] = space.allocate("parameter_buffer.0", pb_bytes, DramClass::ParameterBuffer);
   pb_base_[1] = space.allocate("parameter_buffer.1", pb_bytes, DramClass::ParameterBuffer);
   vertex_base_ = space.allocate("vertex_and_index_buffers", vertex_bytes, DramClass::Vertices);

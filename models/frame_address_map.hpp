@@ -25,6 +25,8 @@ class FrameAddressMap {
   std::uint64_t vertices() const { return vertex_base_; }
   /// Base of the texture address space (FrameWork::texture_bytes; TileWork::texture_lines are offsets in it).
   std::uint64_t textures() const { return texture_base_; }
+  /// Base of gpu.mode=imr's framebuffer (FramebufferAccess::offset is relative to it).
+  std::uint64_t rop_framebuffer() const { return rop_framebuffer_base_; }
   /// Base of a command's buffer area (a dispatch's reads and writes, a pass's once-read buffers).
   std::uint64_t buffers(std::size_t command) const { return cmd_base_[command]; }
   /// Base of one tile's framebuffer slot of a pass (loads and stores of all its classes follow each other).
@@ -45,6 +47,7 @@ class FrameAddressMap {
 
  private:
   std::uint64_t pb_base_[2] = {0, 0};
+  std::uint64_t rop_framebuffer_base_ = 0;
   std::uint64_t vertex_base_ = 0;
   std::uint64_t texture_base_ = 0;
   std::vector<std::uint64_t> fb_base_, fb_stride_, cmd_base_, spill_base_, spill_stride_;

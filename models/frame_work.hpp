@@ -20,7 +20,30 @@ struct ByteRange {
   std::uint64_t bytes = 0;
 };
 
-/// One tile render (a strip, when the pass is split to fit tile memory).
+/// One line request of an immediate-mode GPU's ROP caches to memory (models/rop.hpp): a miss's
+/// fetch or a dirty line's write-back, at its offset in the framebuffer address space.
+struct FramebufferAccess {
+  std::uint64_t offset = 0;
+  std::uint32_t bytes = 0;
+  bool write = false;
+  DramClass cls = DramClass::Color;
+};
+
+/// Binning work of one render: geometry processing and the parameter buffer writes.
+struct BinningWork {
+  std::uint64_t vertices_shaded = 0;
+  std::uint64_t vertex_alu_ops = 0;
+  std::uint64_t vertex_fetch_bytes = 0;
+  std::uint64_t index_fetch_bytes = 0;
+  std::uint64_t primitives_in = 0;
+  std::uint64_t primitives_binned = 0;
+  std::uint64_t tile_references = 0;
+  std::uint64_t pb_write_bytes = 0;
+};
+
+/// One tile render (a strip, when the pass is split to fit tile memory). On an immediate-mode GPU
+/// (FrameWork::immediate) one batch of a pass's primitives over the whole frame instead: its
+/// geometry, rasterisation and shading, and its ROP caches' traffic.
 struct TileWork {
   int tile_x = 0;
   int tile_y = 0;
@@ -52,18 +75,10 @@ struct TileWork {
   std::uint64_t spill_write_bytes = 0;
   std::uint64_t tag_bytes = 0;            ///< tag buffer bytes read + written
   std::uint64_t depth_bytes = 0;          ///< on-chip depth/stencil bytes read + written
-};
-
-/// Binning work of one render: geometry processing and the parameter buffer writes.
-struct BinningWork {
-  std::uint64_t vertices_shaded = 0;
-  std::uint64_t vertex_alu_ops = 0;
-  std::uint64_t vertex_fetch_bytes = 0;
-  std::uint64_t index_fetch_bytes = 0;
-  std::uint64_t primitives_in = 0;
-  std::uint64_t primitives_binned = 0;
-  std::uint64_t tile_references = 0;
-  std::uint64_t pb_write_bytes = 0;
+  // Immediate mode only:
+  BinningWork geometry;  ///< the batch's geometry, processed as the batch goes down the pipeline
+  std::vector<FramebufferAccess> rop_depth;  ///< ROP depth cache misses and write-backs, while the ISP tests
+  std::vector<FramebufferAccess> rop_color;  ///< ROP colour cache misses and write-backs (and the pass's flush)
 };
 
 /// One render: binning, then its tiles in dispatch order.
@@ -100,6 +115,8 @@ struct FrameWork {
   int tile_height = 0;
   int tiles_x = 0;
   std::uint64_t texture_bytes = 0;  ///< size of the texture address space TileWork::texture_lines index
+  bool immediate = false;           ///< gpu.mode=imr: tiles are primitive batches over the whole frame
+  std::uint64_t framebuffer_bytes = 0;  ///< size of the address space FramebufferAccess::offset indexes
   std::vector<CommandWork> commands;
 };
 

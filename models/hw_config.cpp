@@ -47,8 +47,10 @@ ParamRegistry<HwConfig> make_registry() {
       .doc("Core clock of geometry, tiler, ISP, USC, texture and writeback units")
       .source(series6xt + ": 450-850 MHz");
   r.add(TBDR_PARAM(gpu.mode), GpuMode::Tbdr, kGpuModeNames)
-      .doc("tbdr: binning + tag-buffer HSR; tbr: binning, early-Z only (Mali-like); imr: no binning, "
-           "framebuffer in DRAM (a pass with pixel local storage is refused: no tile memory to keep it in)")
+      .doc("tbdr: binning + tag-buffer HSR; tbr: binning, early-Z only (Mali-like); imr: no binning, primitives "
+           "rasterised and shaded in submission order with early-Z, depth and colour through the ROP caches "
+           "(cache.rop_depth, cache.rop_color) to the framebuffer in memory (a pass with pixel local storage is "
+           "refused: no tile memory to keep it in)")
       .source("Imagination, PowerVR Architecture Guide (tile-based deferred rendering); tbr and imr are the "
               "comparison modes");
 
@@ -232,6 +234,32 @@ ParamRegistry<HwConfig> make_registry() {
                                 {.size_bytes = static_cast<std::int64_t>(128 * kKiB), .ways = 8, .line_bytes = 64,
                                  .hit_latency_cycles = 20},
                                 256 * kMiB, "no public figure for Series6XT", mesa);
+  // An immediate-mode GPU's render output unit: vendors publish no ROP cache sizes; 16 KiB holds a
+  // 64x64-pixel square of 32-bit depth (or colour), the working set of a few small triangles'
+  // neighbourhoods, as the texture and vertex caches here.
+  add_cache<&CachesParams::rop_depth>(r, "rop_depth", "gpu.mode=imr: ROP depth/stencil cache between the ISP's tests and the depth buffer in memory",
+                                      {.size_bytes = static_cast<std::int64_t>(16 * kKiB), .ways = 4, .line_bytes = 64,
+                                       .hit_latency_cycles = 4},
+                                      64 * kMiB, "no public figure", mesa);
+  add_cache<&CachesParams::rop_color>(r, "rop_color", "gpu.mode=imr: ROP colour cache between the shaders' outputs (and blending) and the colour buffers in memory",
+                                      {.size_bytes = static_cast<std::int64_t>(16 * kKiB), .ways = 4, .line_bytes = 64,
+                                       .hit_latency_cycles = 4},
+                                      64 * kMiB, "no public figure", mesa);
+
+  r.section("imr", "gpu.mode=imr: the immediate-mode pipeline (no binning, framebuffer behind the ROP caches)");
+  r.add(TBDR_PARAM(imr.primitives_per_batch), 256).unit("primitives").range(1, 1 << 20)
+      .doc("Primitives the timing model moves down the pipeline as one unit (geometry, then rasterisation and "
+           "early depth, then shading, then the ROP); up to isp.tiles_in_flight batches between geometry and "
+           "the end of rasterisation, so geometry, rasterisation, shading and the ROP overlap")
+      .source("a modelling granularity, not a hardware figure: the primitive FIFOs between an IMR's geometry "
+              "and raster stages are not published; 256 keeps the pipeline full while a frame's batches stay "
+              "in the thousands");
+  r.add(TBDR_PARAM(imr.clear), ImrClear::Fast, kImrClearNames)
+      .doc("fast: a clear marks the attachment's lines cleared in on-chip metadata; the first access to a "
+           "cleared line fetches nothing, and at the end of the pass the lines never touched are written only "
+           "if the attachment is stored (a fast-clear eliminate); write: the clear writes the whole attachment")
+      .source("ATI Radeon HyperZ (2000): Fast Z Clear; AMD, GCN3 ISA / RadeonSI: fast clear with a fast-clear "
+              "eliminate pass before the surface is read as a texture");
 
   const std::string ramulator_queue =
       "no public figure for a GPU's controller; Ramulator's controller queues hold 32 (src/Controller.h)";
@@ -342,6 +370,8 @@ ParamRegistry<HwConfig> make_registry() {
       .doc("Vertex / parameter buffer cache access").source(sram_32k);
   r.add(TBDR_PARAM(energy.slc_pj_per_byte), 12.5).unit("pJ/byte").range(0, 1000)
       .doc("System level cache access").source("Horowitz ISSCC 2014: 1 MB SRAM 12.5 pJ/B");
+  r.add(TBDR_PARAM(energy.rop_cache_pj_per_byte), 2.5).unit("pJ/byte").range(0, 1000)
+      .doc("gpu.mode=imr: ROP depth and colour cache access (16 KiB SRAMs)").source(sram_32k);
   r.add(TBDR_PARAM(energy.alu_op_pj), 2.0).unit("pJ/op").range(0, 1000)
       .doc("One FP32 ALU op including operand delivery")
       .source("Horowitz ISSCC 2014 (45 nm): FP32 add 0.9 pJ, mult 3.7 pJ");

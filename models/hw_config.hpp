@@ -47,6 +47,13 @@ inline constexpr std::array<ChoiceName<PlsOverBudget>, 3> kPlsOverBudgetNames{
     {{PlsOverBudget::SplitRender, "split_render"}, {PlsOverBudget::Spill, "spill"},
      {PlsOverBudget::SmallerTiles, "smaller_tiles"}}};
 
+/// How gpu.mode=imr clears a depth or colour attachment (imr.clear).
+enum class ImrClear : std::uint8_t {
+  Fast,   ///< blocks marked cleared in on-chip metadata: nothing written, nothing fetched on first touch
+  Write,  ///< the clear value written to the whole attachment in memory
+};
+inline constexpr std::array<ChoiceName<ImrClear>, 2> kImrClearNames{{{ImrClear::Fast, "fast"}, {ImrClear::Write, "write"}}};
+
 /// Physical address bit order of dram.address_mapping, most significant field first.
 enum class DramMapping : std::uint8_t {
   RowBankChannelColumn,  ///< consecutive rows' worth of bytes alternate channels, then banks
@@ -62,6 +69,7 @@ inline const char* to_string(BinningTest v) { return choice_name<BinningTest>(kB
 inline const char* to_string(TileOrder v) { return choice_name<TileOrder>(kTileOrderNames, v); }
 inline const char* to_string(PlsOverBudget v) { return choice_name<PlsOverBudget>(kPlsOverBudgetNames, v); }
 inline const char* to_string(DramMapping v) { return choice_name<DramMapping>(kDramMappingNames, v); }
+inline const char* to_string(ImrClear v) { return choice_name<ImrClear>(kImrClearNames, v); }
 
 /// [gpu] whole-GPU identity, clock and rendering mode.
 struct GpuParams {
@@ -161,6 +169,15 @@ struct CachesParams {
   CacheParams texture;
   CacheParams vertex;
   CacheParams slc;
+  CacheParams rop_depth;  ///< gpu.mode=imr: the render output unit's depth/stencil cache
+  CacheParams rop_color;  ///< gpu.mode=imr: the render output unit's colour cache
+};
+
+/// [imr] the immediate-mode pipeline of gpu.mode=imr (no binning: primitives flow from geometry
+/// through rasterisation and shading to the ROP caches as they are submitted).
+struct ImrParams {
+  std::int64_t primitives_per_batch = 0;  ///< primitives scheduled as one unit down the pipeline
+  ImrClear clear = ImrClear::Fast;
 };
 
 /// [dram] the external memory: channels, banks, row buffers, timing and queues.
@@ -206,6 +223,7 @@ struct EnergyParams {
   double texture_cache_pj_per_byte = 0;
   double vertex_cache_pj_per_byte = 0;
   double slc_pj_per_byte = 0;
+  double rop_cache_pj_per_byte = 0;  ///< gpu.mode=imr: ROP depth and colour caches
   double alu_op_pj = 0;
   double texel_pj = 0;  ///< per filtered texel
   double static_power_mw = 0;
@@ -223,6 +241,7 @@ struct HwConfig {
   WritebackParams writeback;
   MemoryParams memory;
   CachesParams cache;
+  ImrParams imr;
   DramParams dram;
   EnergyParams energy;
 };

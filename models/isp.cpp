@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <bit>
 
+#include "models/rop.hpp"
+
 namespace tbdr {
 
 namespace {
@@ -71,6 +73,19 @@ void Isp::write_punch_depth(const PendingSample* begin, const PendingSample* end
     if (pl.depth_test && !passes<float>(pl.depth_compare, s->z, depth[gi])) continue;
     depth[gi] = s->z;
     isp.depth_buffer_write_bytes += ds_bytes;
+    if (ctx_.rop) ctx_.rop->depth(s->x, s->y, std::countr_zero(s->bit), true);
+  }
+}
+
+void Isp::rop_color_outputs(std::uint32_t prim_index, bool punch) {
+  const DrawContext& d = ctx_.draws[ctx_.prims[prim_index].draw];
+  const std::size_t outputs = std::min<std::size_t>(d.shader->color_outputs, ctx_.color_targets.size());
+  // Blending and framebuffer fetch read the target before writing it.
+  const bool read = d.pipeline->blend != BlendMode::Off || d.fetch_bytes > 0;
+  for (std::size_t i = 0; i < batch_.size(); ++i) {
+    const std::uint32_t mask = punch ? alive_[i] : batch_[i].mask;
+    if (mask == 0) continue;
+    for (std::size_t o = 0; o < outputs; ++o) ctx_.rop->color(o, batch_[i].x, batch_[i].y, mask, read);
   }
 }
 
@@ -159,10 +174,12 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
            static_cast<std::size_t>(std::countr_zero(bit));
   };
 
+  RenderOutputUnit* const rop = ctx_.rop;  // imr: depth and colour go through the ROP caches
   for (const std::uint32_t prim_index : prims) {
     const Primitive& p = ctx_.prims[prim_index];
     const PipelineState& pl = *ctx_.draws[p.draw].pipeline;
     ++isp.primitives_fetched;
+    if (rop) rop->next_primitive();
     const bool depth_on = depth && pl.depth_test;
     const bool write_on = depth && pl.depth_write;
     const bool stencil_on = has_st && pl.stencil_test;
@@ -179,10 +196,12 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
         ++overdraw[pixel];
         ++isp.samples_rasterised;
         const std::size_t gi = pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(s);
+        if (rop && (depth_on || stencil_on)) rop->depth(x, y, s, false);
         if (stencil_on) {
           if (!passes<std::uint8_t>(pl.stencil_compare, ref, stencil[gi])) {
             ++isp.stencil_test_failed_samples;
             stencil[gi] = apply_stencil(pl.stencil_fail_op, stencil[gi], ref);
+            if (rop && pl.stencil_fail_op != StencilOp::Keep) rop->depth(x, y, s, true);
             continue;
           }
         }
@@ -202,6 +221,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
           if (!passes<float>(pl.depth_compare, z[s], depth[gi])) {
             ++isp.depth_test_failed_samples;
             if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
+            if (rop && stencil_on && pl.stencil_depth_fail_op != StencilOp::Keep) rop->depth(x, y, s, true);
             continue;
           }
         }
@@ -211,6 +231,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
           depth[gi] = z[s];
           isp.depth_buffer_write_bytes += ds_bytes;
         }
+        if (rop && (early_write || (stencil_on && pl.stencil_pass_op != StencilOp::Keep))) rop->depth(x, y, s, true);
       }
     });
 
@@ -306,11 +327,13 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     while (!queue_.empty()) shade_queued(rect, isp, tsp);
     build_batch(pending_.data(), pending_.data() + pending_.size(), batch_);
     tsp_.shade(prim_index, batch_, punch ? &alive_ : nullptr, tsp);
+    if (rop) rop_color_outputs(prim_index, punch);
     if (punch) write_punch_depth(pending_.data(), pending_.data() + pending_.size(), isp);
     if (p.hsr == HsrClass::Translucent && write_on) {
       for (const PendingSample& ps : pending_) {
         depth[global_index(ps.x, ps.y, ps.bit)] = ps.z;
         isp.depth_buffer_write_bytes += ds_bytes;
+        if (rop) rop->depth(ps.x, ps.y, std::countr_zero(ps.bit), true);
       }
     }
   }

@@ -98,6 +98,9 @@ class Isp {
   void flush(const PixelRect& rect, bool mid_tile, IspStats& isp, TspStats& tsp);
   /// Writes a punch-through primitive's depth where its alpha test kept the sample.
   void write_punch_depth(const PendingSample* begin, const PendingSample* end, IspStats& isp);
+  /// imr: the colour outputs of the batch just shaded (batch_; alive_ for a punch-through
+  /// primitive) through the ROP's colour cache.
+  void rop_color_outputs(std::uint32_t prim_index, bool punch);
   /// tbr forward pixel kill: a primitive's early-Z survivors waiting to be shaded.
   struct Queued {
     std::uint32_t seq;   ///< arrival order in the tile

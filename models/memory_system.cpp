@@ -30,6 +30,7 @@ const char* to_string(Client c) {
     case Client::Texture: return "texture";
     case Client::PixelBackEnd: return "pixel_back_end";
     case Client::Compute: return "compute";
+    case Client::Rop: return "rop";
     case Client::Count: break;
   }
   return "?";

@@ -13,6 +13,7 @@
 //   Texture       texel fetch              texture cache -> SLC -> DRAM
 //   PixelBackEnd  tile loads/stores        SLC, streaming (misses bypass to DRAM) -> DRAM
 //   Compute       buffers                  SLC -> DRAM
+//   Rop           gpu.mode=imr: the ROP caches' misses and write-backs   SLC -> DRAM
 // See docs/memory-model.md.
 #include <array>
 #include <cstdint>
@@ -43,6 +44,7 @@ enum class Client : std::uint8_t {
   Texture,       ///< texture fetch, through the texture cache
   PixelBackEnd,  ///< tile loads and stores: streaming through the SLC (no allocation on a miss)
   Compute,       ///< compute buffers: no L1, through the SLC
+  Rop,           ///< gpu.mode=imr: the ROP caches' misses and write-backs (models/rop.hpp), through the SLC
   Count
 };
 inline constexpr std::size_t kClientCount = static_cast<std::size_t>(Client::Count);

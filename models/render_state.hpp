@@ -27,6 +27,7 @@ struct DepthBounds;
 struct ViewFrustum;
 struct AttachmentImage;
 class TextureLayout;
+class RenderOutputUnit;
 
 /// The camera as the units use it: matrices and the eye position.
 struct CameraXform {
@@ -191,6 +192,7 @@ struct RenderContext : FrameInputs {
   FrameImages* images = nullptr;
   bool defer_shading = true;                  ///< tbdr: tag buffer HSR; tbr/imr: shade at early-Z
   bool framebuffer_in_dram = false;           ///< imr: attachments live in DRAM, no tile memory
+  RenderOutputUnit* rop = nullptr;            ///< imr: the depth and colour caches the ISP and TSP go through
   std::vector<DrawContext> draws;             ///< the pass's draws, resolved
   std::vector<std::vector<std::uint32_t>> object_lights;  ///< per object: lights touching it
   std::vector<Primitive> prims;               ///< the render's primitives (parameter buffer contents)

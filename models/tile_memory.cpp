@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "models/rop.hpp"
 #include "models/shading.hpp"
 #include "kernel/errors.hpp"
 
@@ -42,6 +43,8 @@ TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats)
   check_pls_layout(ctx.hw->pls, pass);
   need_ = onchip_bytes_per_pixel();
   budget_ = static_cast<std::uint32_t>(ctx.hw->pls.tile_buffer_bits_per_pixel / 8);
+  // imr: the attachments live in memory behind the ROP caches; there is no tile memory to fit.
+  if (ctx.framebuffer_in_dram) need_ = 0;
   if (need_ > budget_ && ctx.hw->pls.over_budget == PlsOverBudget::SplitRender) find_split();
   // Within one render (before a split, after it, or without one) what does not fit spills, as the
   // driver then places it in memory tile buffers; unless the policy renders smaller tiles.
@@ -173,8 +176,10 @@ void TileMemory::begin_tile(const PixelRect& r, bool resumed, DramTraffic& dram)
     AttachmentImage& img = ctx_.images->attachments.at(a.name);
     const std::uint64_t bytes = attachment_bytes(a, r);
     if (ctx_.framebuffer_in_dram) {
-      // imr: the attachment lives in DRAM; a clear writes it there, a load has nothing to do.
-      if (a.load == LoadOp::Clear && !a.transient) dram.write(traffic_class_of(a.usage), bytes);
+      // imr: the attachment lives in memory behind the ROP caches, which clear it (imr.clear); a
+      // load has nothing to do. A transient attachment is lowered to an ordinary one (an
+      // immediate-mode GPU has no lazily allocated memory): it is cleared and written back alike.
+      if (a.load == LoadOp::Clear && ctx_.rop) ctx_.rop->clear(a);
       if (a.load == LoadOp::Load) continue;
     } else if (resumed) {
       const auto b = static_cast<std::uint64_t>(std::ceil(static_cast<double>(bytes) * ratio));

@@ -183,15 +183,9 @@ class TimingSim final : public Unit {
     binning_busy_ = true;
     ++next_bin_;
     const BinningWork& b = rw.binning;
-    // Fixed-function geometry and tiling on the binning engine; the vertex shaders run on the
-    // unified shading clusters, competing with the fragment and compute work queued there.
-    const double cycles = std::max({static_cast<double>(b.primitives_in) / hw_.geometry.primitives_per_clock,
-                                    static_cast<double>(b.primitives_binned) / hw_.tiling.primitives_per_clock,
-                                    static_cast<double>(b.vertex_fetch_bytes + b.index_fetch_bytes) / hw_.geometry.vertex_fetch_bytes_per_clock});
     const Tick start = eq_.now();
     if (result_.commands[j.command].start_cycle < 0) result_.commands[j.command].start_cycle = cycles_of(start);
-    const Tick compute_end = std::max(reserve(binner_, start, cycles),
-                                      reserve(usc_, start, static_cast<double>(b.vertex_alu_ops) / alu_rate_));
+    const Tick compute_end = reserve_geometry(b, start);
     auto pending = std::make_shared<int>(1);
     auto finish = [this, k, compute_end, pending]() {
       if (--*pending > 0) return;
@@ -206,19 +200,7 @@ class TimingSim final : public Unit {
         try_start_fragment();
       });
     };
-    const std::uint64_t fetch = b.vertex_fetch_bytes + b.index_fetch_bytes;
-    if (fetch > 0) {
-      DmaStream* s = new_stream(Client::Geometry, false, DramClass::Vertices);
-      // Vertices and indices: one sequential stream per render (classes booked separately).
-      if (b.vertex_fetch_bytes) s->add(map_.vertices() + vertex_cursor_, b.vertex_fetch_bytes);
-      vertex_cursor_ += b.vertex_fetch_bytes;
-      DmaStream* si = new_stream(Client::Geometry, false, DramClass::Indices);
-      if (b.index_fetch_bytes) si->add(map_.vertices() + vertex_cursor_, b.index_fetch_bytes);
-      vertex_cursor_ += b.index_fetch_bytes;
-      *pending += 2;
-      s->start(finish);
-      si->start(finish);
-    }
+    *pending += stream_geometry(b, finish);
     if (b.pb_write_bytes > 0) {
       DmaStream* s = new_stream(Client::Tiler, true, DramClass::ParameterBuffer);
       s->add(map_.parameter_buffer(k), b.pb_write_bytes);
@@ -226,6 +208,45 @@ class TimingSim final : public Unit {
       s->start(finish);
     }
     finish();
+  }
+
+  /// Fixed-function geometry (and tiling) on the binning engine from `start`; the vertex shaders
+  /// run on the unified shading clusters, competing with the fragment and compute work queued
+  /// there. Returns when both are done.
+  Tick reserve_geometry(const BinningWork& b, Tick start) {
+    const double cycles = std::max({static_cast<double>(b.primitives_in) / hw_.geometry.primitives_per_clock,
+                                    static_cast<double>(b.primitives_binned) / hw_.tiling.primitives_per_clock,
+                                    static_cast<double>(b.vertex_fetch_bytes + b.index_fetch_bytes) / hw_.geometry.vertex_fetch_bytes_per_clock});
+    return std::max(reserve(binner_, start, cycles), reserve(usc_, start, static_cast<double>(b.vertex_alu_ops) / alu_rate_));
+  }
+
+  /// Starts the vertex and index fetch of `b` (one sequential stream each, following the previous
+  /// geometry's); each calls `done` when finished. Returns how many streams were started.
+  int stream_geometry(const BinningWork& b, const std::function<void()>& done) {
+    if (b.vertex_fetch_bytes + b.index_fetch_bytes == 0) return 0;
+    DmaStream* s = new_stream(Client::Geometry, false, DramClass::Vertices);
+    if (b.vertex_fetch_bytes) s->add(map_.vertices() + vertex_cursor_, b.vertex_fetch_bytes);
+    vertex_cursor_ += b.vertex_fetch_bytes;
+    DmaStream* si = new_stream(Client::Geometry, false, DramClass::Indices);
+    if (b.index_fetch_bytes) si->add(map_.vertices() + vertex_cursor_, b.index_fetch_bytes);
+    vertex_cursor_ += b.index_fetch_bytes;
+    s->start(done);
+    si->start(done);
+    return 2;
+  }
+
+  /// gpu.mode=imr: streams a batch's ROP cache misses and write-backs through the SLC, one stream
+  /// per direction and class (in their order within each); each calls `done` when finished.
+  /// Returns how many streams were started.
+  int stream_rop(const std::vector<FramebufferAccess>& accesses, const std::function<void()>& done) {
+    std::map<std::pair<bool, DramClass>, DmaStream*> streams;
+    for (const FramebufferAccess& a : accesses) {
+      DmaStream*& s = streams[{a.write, a.cls}];
+      if (!s) s = new_stream(Client::Rop, a.write, a.cls);
+      s->add(map_.rop_framebuffer() + a.offset, a.bytes);
+    }
+    for (auto& [key, s] : streams) s->start(done);
+    return static_cast<int>(streams.size());
   }
 
   bool frag_done_of_bin(std::size_t bin_index) const {
@@ -353,6 +374,13 @@ class TimingSim final : public Unit {
         fetch_busy_cycles_ += cycles_of(eq_.now()) - cycles_of(tiles_[i].fetch_start);
         advance_isp();
       };
+      if (work_.immediate) {
+        // imr: the batch's geometry is processed as it goes down the pipeline: the next batches'
+        // geometry overlaps this one's rasterisation and shading (up to isp.tiles_in_flight).
+        const Tick geometry_end = reserve_geometry(t.geometry, eq_.now());
+        ts.pending_streams += 1 + stream_geometry(t.geometry, on_stream);
+        eq_.schedule(geometry_end, [on_stream] { on_stream(); });
+      }
       if (!t.pb_reads.empty()) {
         DmaStream* s = new_stream(Client::Isp, false, DramClass::ParameterBuffer);
         for (const auto& br : t.pb_reads) s->add(render_pb_base_ + br.offset, br.bytes);
@@ -390,7 +418,22 @@ class TimingSim final : public Unit {
     const double isp_cycles = std::max(static_cast<double>(t.primitives), static_cast<double>(t.samples) / raster_rate_) +
                               std::max(static_cast<double>(t.isp_wait_alu_ops) / alu_rate_, static_cast<double>(t.isp_wait_texels) / tex_rate_);
     isp_busy_ = true;
-    eq_.schedule(reserve(isp_, eq_.now(), isp_cycles), [this, i] { request_slots(i); });
+    const Tick raster_end = reserve(isp_, eq_.now(), isp_cycles);
+    if (t.rop_depth.empty()) {
+      eq_.schedule(raster_end, [this, i] { request_slots(i); });
+      return;
+    }
+    // imr: the depth tests' cache misses are fetched (and evicted lines written back) while the
+    // ISP works; it passes the batch on when both are done.
+    auto pending = std::make_shared<int>(1);
+    auto finish = [this, i, raster_end, pending]() {
+      if (--*pending > 0) return;
+      const Tick end = std::max(eq_.now(), raster_end);
+      if (end > raster_end) isp_.stalled_cycles += cycles_of(end) - cycles_of(raster_end);
+      eq_.schedule(end, [this, i] { request_slots(i); });
+    };
+    *pending += stream_rop(t.rop_depth, finish);
+    finish();
   }
 
   /// Tasks of a tile's fragment shading: its shaded quads' lanes in tasks of usc.threads_per_task.
@@ -544,6 +587,7 @@ class TimingSim final : public Unit {
       ++*pending;
       s->start(finish);
     }
+    *pending += stream_rop(t.rop_color, finish);  // imr: the colour writes' misses and write-backs
     finish();
   }
 
