@@ -1,69 +1,70 @@
 #!/usr/bin/python3
-"""Scaling with the light count: a metric against the number of lights, one line per technique.
+"""Scaling with the light count: a figure (--metric, default frame_time_ms) against the number of
+lights, one line per technique (and variant), a panel per configuration in the selection.
 
-Reads a tbdrsim results database through its views (v_metric for the figure, v_param's
-trace.lights for the light count): finished runs only, repetitions and every other run at the same
-light count averaged. Narrow the selection with --where (SQL on v_run_summary's columns) or
---config.
+Reads a tbdrsim results database through its views (v_run_summary, v_metric): finished runs only.
+Different scenes or frame sizes are refused (pick one with --scene / --where); runs of one
+technique from different traces at one light count (technique options, seeds) are separate
+lines; only repetitions are averaged. Log-log axes with plain tick labels when the range is wide.
 
-Run with Debian's interpreter, which has pandas and matplotlib (scripts/install_deps.sh):
-    /usr/bin/python3 analysis/plot_scaling.py --db out/lights.db --metric frame_time_ms --out scaling.png
-    /usr/bin/python3 analysis/plot_scaling.py --db out/lights.db --metric dram_total_mb --where "config_name = 'x'"
+    tbdrsim plot scaling --db study/study.db --metric frame_time_ms --out scaling.png
+    /usr/bin/python3 analysis/plot_scaling.py --db out/lights.db --metric dram_total_mb --config series6xt_gx6450
 """
-import argparse
-import sys
+import plot_common as pc  # first: it selects matplotlib's file-only backend and checks the modules
 
-import plot_common  # first: it selects matplotlib's file-only backend before pyplot loads
+plt = pc.plt
 
-import matplotlib.pyplot as plt  # noqa: E402
-import pandas as pd  # noqa: E402
+#: Light counts spanning this factor or more get a log2 x axis (doubling steps read evenly).
+LOG_LIGHTS_RANGE = 4.0
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    plot_common.add_common_args(ap, "scaling.png", "frame_time_ms",
-                                "a v_metric name (default frame_time_ms; lights_per_pixel, dram_total_mb, "
-                                "energy_total_mj, tsp.light_evaluations, ...)")
-    plot_common.add_selection_args(ap)
+    ap = pc.parser(__doc__, "scaling.png")
+    ap.add_argument("--metric", default="frame_time_ms",
+                    help="a v_metric name (default frame_time_ms; lights_per_pixel, dram_total_mb, "
+                         "energy_total_mj, tsp.light_evaluations, ...)")
     ap.add_argument("--linear", action="store_true", help="linear axes (default: log-log when the range is wide)")
     args = ap.parse_args()
 
-    db = plot_common.connect(args.db)
-    where, caption = plot_common.selection(args, "s")
-    d = pd.read_sql_query(
-        "SELECT s.run_id, s.technique, p.value_num AS lights, m.value, m.unit "
-        "FROM v_run_summary s JOIN v_param p ON p.run_id = s.run_id AND p.key = 'trace.lights' "
-        "JOIN v_metric m ON m.run_id = s.run_id AND m.metric = ? WHERE " + where,
-        db, params=(args.metric,))
-    d = d.dropna(subset=["value", "lights"])
-    if d.empty:
-        sys.exit("plot_scaling: no finished run has the figure '%s'%s" %
-                 (args.metric, " with " + ", ".join(caption) if caption else ""))
-    unit = d.unit.iloc[0]
-    g = d.groupby(["technique", "lights"]).value.mean().reset_index()
-    fig, ax = plt.subplots(figsize=(8, 5.5))
-    last = g.sort_values("lights").groupby("technique").value.last().sort_values(ascending=False)
-    for i, tech in enumerate(last.index):
-        t = g[g.technique == tech].sort_values("lights")
-        ax.plot(t.lights, t.value, label=tech, **plot_common.technique_style(i))
-    wide = g.lights.max() >= 4 * max(1.0, g.lights.min())
-    if wide and not args.linear:
-        ax.set_xscale("log", base=2)
-        if (g.value > 0).all():
-            ax.set_yscale("log")
-    ax.set_xticks(sorted(g.lights.unique()))
-    ax.set_xticklabels([str(int(v)) for v in sorted(g.lights.unique())])
-    ax.set_xlabel("lights in the scene (count)")
-    ax.set_ylabel("%s (%s)" % (args.metric, unit) if unit else args.metric)
-    ax.set_title("%s against the light count%s\n(mean over repetitions and other runs at each count)"
-                 % (args.metric, "\n" + ", ".join(caption) if caption else ""), fontsize=10)
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))
-    fig.tight_layout()
-    fig.savefig(args.out, dpi=120)
-    print("wrote %s (%d runs, %d techniques, %d light counts)" %
-          (args.out, d.run_id.nunique(), g.technique.nunique(), g.lights.nunique()))
+    db = pc.connect(args.db)
+    runs = pc.load_runs(db, args)
+    panels, fixed = pc.facets(runs, shown=("lights",), facet=("config",), max_panels=6)
+    vals = pc.metric_values(db, runs, args.metric)
+    unit = vals.unit.iloc[0]
+    g = pc.average(runs, vals, ["config", "technique", "variant", "series", "lights"])
+    n = len(panels)
+    fig, axes = plt.subplots(1, n, figsize=(7.0 * n + 2.8, 5.5), squeeze=False)
+    handles = {}
+    for ax, (ptitle, pr) in zip(axes[0], panels):
+        p = g[g.config.isin(pr.config.unique())]
+        for tech in pc.ordered(p.technique.unique(), pc.TECHNIQUES):
+            t = p[p.technique == tech]
+            for vi, var in enumerate(sorted(t.variant.unique())):
+                s = t[t.variant == var].sort_values("lights")
+                (line,) = ax.plot(s.lights.astype(float), s.value, label=s.series.iloc[0],
+                                  **pc.technique_style(tech, vi))
+                handles.setdefault(s.series.iloc[0], line)
+        lights = sorted(p.lights.astype(float).unique())
+        if not args.linear and len(lights) > 1 and lights[-1] >= LOG_LIGHTS_RANGE * max(1.0, lights[0]):
+            pc.log_axis(ax, "x", lights, base=2)
+            if pc.wide_range(p.value, pc.LOG_RANGE):
+                pc.log_axis(ax, "y", p.value)
+        else:
+            ax.set_xticks(lights)
+            ax.set_xticklabels(["%d" % v for v in lights])
+        ax.set_xlabel("lights in the scene (count)")
+        ax.set_ylabel("%s (%s)" % (args.metric, unit) if unit else args.metric)
+        ax.grid(alpha=0.3, which="both")
+        if ptitle:
+            ax.set_title(ptitle, fontsize=9)
+    note = pc.repetition_note(runs)
+    fig.suptitle("%s against the light count\n%s%s" % (args.metric, pc.title_line(fixed),
+                                                         "\n(" + note + ")" if note else ""), fontsize=10)
+    fig.legend(list(handles.values()), list(handles.keys()), fontsize=8, loc="center right")
+    fig.tight_layout(rect=(0, 0, 1 - 2.8 / fig.get_figwidth(), 1))
+    pc.save(fig, args.out, "%d runs, %d series, %d light counts, %d panel(s)"
+            % (len(runs), runs.series.nunique(), runs.lights.nunique(), n))
 
 
 if __name__ == "__main__":
-    main()
+    pc.run(main)

@@ -1,94 +1,124 @@
 #!/usr/bin/python3
-"""Sensitivity: a metric against hardware parameters, one panel per parameter, one line per
-technique. By default the tile size (tiling.tile_width) and the on-chip tile memory budget
-(pls.tile_buffer_bits_per_pixel); any parameter key of `tbdrsim params` works (--param, repeatable).
+"""Sensitivity: a figure (--metric) against hardware parameters, a column of panels per parameter,
+one line per technique (and variant). By default the tile size (tiling.tile_width) and the on-chip
+tile memory budget (pls.tile_buffer_bits_per_pixel), those of them the selection varies; any
+parameter key of `tbdrsim params` works (--param, repeatable).
 
-Reads a tbdrsim results database through v_sensitivity (finished runs; a parameter's value and a
-figure per row). At each parameter value, runs that differ in other parameters or repetitions
-are averaged; fix the others with --where (SQL on v_run_summary's columns, or
-"run_id IN (SELECT run_id FROM v_param WHERE key = '...' AND value = '...')").
+Reads a tbdrsim results database through v_run_summary, v_param and v_metric (finished runs).
+Nothing else is averaged away: every other parameter the selection varies, and the light count,
+give a row of panels per value (fix one with --fix KEY=VALUE, or --lights); different scenes or
+frame sizes are refused; runs of one technique from different traces are separate lines; only
+repetitions are averaged.
 
-Run with Debian's interpreter, which has pandas and matplotlib (scripts/install_deps.sh):
-    /usr/bin/python3 analysis/plot_sensitivity.py --db out/tile_size.db --metric frame_time_ms
-    /usr/bin/python3 analysis/plot_sensitivity.py --db out/tile_size.db --param isp.tag_buffers --metric cycles
+    tbdrsim plot sensitivity --db out/tile_size.db --metric frame_time_ms --out sensitivity.png
+    /usr/bin/python3 analysis/plot_sensitivity.py --db out/tile_size.db --param tiling.tile_width \\
+        --fix pls.tile_buffer_bits_per_pixel=128
 """
-import argparse
-import sys
+import plot_common as pc  # first: it selects matplotlib's file-only backend and checks the modules
 
-import plot_common  # first: it selects matplotlib's file-only backend before pyplot loads
+plt = pc.plt
+pd = pc.pd
 
-import matplotlib.pyplot as plt  # noqa: E402
-import pandas as pd  # noqa: E402
-
-# Units of the parameters users sweep most (the full list: `tbdrsim params`).
-PARAM_UNITS = {
-    "tiling.tile_width": "pixels", "tiling.tile_height": "pixels",
-    "pls.tile_buffer_bits_per_pixel": "bits/pixel", "pls.max_pls_bytes_per_pixel": "bytes/pixel",
-    "isp.tag_buffers": "buffers", "isp.tiles_in_flight": "tiles", "isp.samples_per_clock": "samples/clock",
-    "usc.count": "USCs", "gpu.core_clock_mhz": "MHz", "dram.bandwidth_gbps": "GB/s", "trace.lights": "lights",
-    "tiling.pb_capacity_bytes": "bytes", "cache.slc.size_bytes": "bytes", "writeback.compression_ratio": "ratio",
-}
+DEFAULT_PARAMS = ["tiling.tile_width", "pls.tile_buffer_bits_per_pixel"]
+#: Parameters that vary with another one by construction (a square tile's height with its width):
+#: shown in the panel title, not as rows.
+TIED = {"tiling.tile_width": ["tiling.tile_height"], "tiling.tile_height": ["tiling.tile_width"]}
+#: At most this many rows of panels per parameter; more means the selection varies too much.
+MAX_ROWS = 6
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    plot_common.add_common_args(ap, "sensitivity.png", "frame_time_ms",
-                                "a v_metric name (default frame_time_ms; dram_total_mb, energy_total_mj, dram_spill_mb, ...)")
+    ap = pc.parser(__doc__, "sensitivity.png")
+    ap.add_argument("--metric", default="frame_time_ms",
+                    help="a v_metric name (default frame_time_ms; dram_total_mb, energy_total_mj, dram_spill_mb, ...)")
     ap.add_argument("--param", action="append",
-                    help="parameter key for the x axis; repeatable "
-                         "(default: tiling.tile_width and pls.tile_buffer_bits_per_pixel)")
+                    help="parameter key for the x axis; repeatable (default: %s)" % " and ".join(DEFAULT_PARAMS))
+    ap.add_argument("--fix", action="append", default=[], metavar="KEY=VALUE",
+                    help="only runs with this parameter value; repeatable")
     ap.add_argument("--linear", action="store_true", help="linear y axis (default: log when values span > 20x)")
     args = ap.parse_args()
-    params = args.param or ["tiling.tile_width", "pls.tile_buffer_bits_per_pixel"]
 
-    db = plot_common.connect(args.db)
-    cond = ""
-    if args.where:
-        cond = " AND run_id IN (SELECT run_id FROM v_run_summary WHERE " + args.where + ")"
-    fig, axes = plt.subplots(1, len(params), figsize=(6.5 * len(params), 5.2), squeeze=False)
+    db = pc.connect(args.db)
+    runs = pc.load_runs(db, args)
+    wide, num = pc.hardware_params(db, runs)
+    runs = pc.apply_fix(runs, wide, num, args.fix)
+    wide, num = wide.loc[runs.run_id], num.loc[runs.run_id]
+    varying = [k for k in wide.columns if wide[k].nunique() > 1]
+    if args.param:
+        for k in args.param:
+            if k not in wide.columns:
+                pc.fail("--param %s: not a parameter of the selected runs (tbdrsim params lists them)" % k)
+        params = args.param
+    else:
+        params = [k for k in DEFAULT_PARAMS if k in varying]
+        if not params:
+            pc.fail("neither %s varies in the selection; name the swept parameter with --param (varying: %s)"
+                    % (" nor ".join(DEFAULT_PARAMS), ", ".join(varying) or "none"))
+    _, fixed = pc.facets(runs, shown=("config", "lights"))  # refuses mixed scenes and frame sizes
+    vals = pc.metric_values(db, runs, args.metric)
+    unit = vals.unit.iloc[0]
+    data = vals.merge(runs, on="run_id").set_index("run_id")
+
+    layout = []  # per parameter: [(row title, runs of the row)]
+    for key in params:
+        others = [k for k in varying if k != key and k not in TIED.get(key, [])]
+        if runs.lights.nunique() > 1:
+            others.append("lights")
+        if runs.config_name.nunique() > 1:
+            others.append("config_name")
+        frame = wide.assign(lights=runs.set_index("run_id").lights.astype(str),
+                            config_name=runs.set_index("run_id").config_name)
+        rows = [("", frame.index)] if not others else \
+            [(", ".join("%s=%s" % (k, v) for k, v in zip(others, combo if isinstance(combo, tuple) else (combo,))), g.index)
+             for combo, g in frame.groupby(others if len(others) > 1 else others[0])]
+        if len(rows) > MAX_ROWS:
+            pc.fail("%s varies with %s: %d rows of panels; fix some with --fix KEY=VALUE or --lights"
+                    % (key, ", ".join(others), len(rows)))
+        layout.append(rows)
+    nrows = max(len(r) for r in layout)
+    fig, axes = plt.subplots(nrows, len(params), figsize=(6.2 * len(params) + 2.8, 4.2 * nrows), squeeze=False)
     handles = {}
-    plotted = 0
-    techniques = sorted(r[0] for r in db.execute(
-        "SELECT DISTINCT technique FROM runs WHERE status = 'ok'" + cond.replace(" AND run_id IN", " AND id IN")))
-    unit = ""
-    for ax, key in zip(axes[0], params):
-        d = pd.read_sql_query("SELECT run_id, technique, value_num, metric_value, metric_unit FROM v_sensitivity "
-                              "WHERE key = ? AND metric = ?" + cond, db, params=(key, args.metric))
-        d = d.dropna(subset=["value_num", "metric_value"])
-        ax.set_xlabel("%s (%s)" % (key, PARAM_UNITS[key]) if key in PARAM_UNITS else key)
-        if d.empty:
-            ax.text(0.5, 0.5, "no finished run with %s\nand %s" % (key, args.metric), ha="center", va="center",
-                    transform=ax.transAxes)
-            continue
-        unit = d.metric_unit.iloc[0]
-        ax.set_ylabel("%s (%s)" % (args.metric, unit) if unit else args.metric)
-        g = d.groupby(["technique", "value_num"]).metric_value.mean().reset_index()
-        values = sorted(g.value_num.unique())
-        for tech in sorted(g.technique.unique()):
-            t = g[g.technique == tech].sort_values("value_num")
-            i = techniques.index(tech)  # the same colour and marker in every panel
-            (line,) = ax.plot(t.value_num, t.metric_value, label=tech, **plot_common.technique_style(i))
-            handles.setdefault(tech, line)
-        positive = g.metric_value[g.metric_value > 0]
-        if not args.linear and len(positive) == len(g) and positive.max() > 20 * positive.min():
-            ax.set_yscale("log")
-        if len(values) > 1 and values[0] > 0 and values[-1] / values[0] >= 4:
-            ax.set_xscale("log", base=2)
-        ax.set_xticks(values)
-        ax.set_xticklabels(["%g" % v for v in values])
-        ax.minorticks_off()
-        ax.grid(alpha=0.3)
-        ax.set_title("%s vs %s (%d values)" % (args.metric, key, len(values)), fontsize=10)
-        plotted += 1
-    if not plotted:
-        sys.exit("plot_sensitivity: no finished run has '%s' against %s" % (args.metric, ", ".join(params)))
-    fig.suptitle("Sensitivity of %s%s (other parameters and repetitions averaged)" %
-                 (args.metric, "; " + args.where if args.where else ""), fontsize=11)
-    fig.legend(handles.values(), handles.keys(), fontsize=8, loc="center right")
-    fig.tight_layout(rect=(0, 0, 0.83, 1))
-    fig.savefig(args.out, dpi=120)
-    print("wrote %s (%d panel(s), %d techniques)" % (args.out, plotted, len(handles)))
+    for col, (key, rows) in enumerate(zip(params, layout)):
+        numeric = num[key].notna().all()
+        xs = sorted(num[key].unique()) if numeric else sorted(wide[key].unique())
+        for row in range(nrows):
+            ax = axes[row, col]
+            if row >= len(rows):
+                ax.set_visible(False)
+                continue
+            rtitle, rids = rows[row]
+            d = data.loc[data.index.intersection(rids)].copy()
+            d["x"] = num.loc[d.index, key] if numeric else wide.loc[d.index, key].map(xs.index)
+            g = d.groupby(["technique", "variant", "series", "x"]).value.mean().reset_index()
+            for tech in pc.ordered(g.technique.unique(), pc.TECHNIQUES):
+                t = g[g.technique == tech]
+                for vi, var in enumerate(sorted(t.variant.unique())):
+                    s = t[t.variant == var].sort_values("x")
+                    (line,) = ax.plot(s.x, s.value, label=s.series.iloc[0], **pc.technique_style(tech, vi))
+                    handles.setdefault(s.series.iloc[0], line)
+            if numeric and len(xs) > 1 and xs[0] > 0 and xs[-1] / xs[0] >= 4:
+                pc.log_axis(ax, "x", xs, base=2)
+            else:
+                ax.set_xticks(xs if numeric else range(len(xs)))
+                ax.set_xticklabels(["%g" % v for v in xs] if numeric else xs)
+            if not args.linear and pc.wide_range(g.value, pc.LOG_RANGE):
+                pc.log_axis(ax, "y", g.value)
+            tied = [k for k in TIED.get(key, []) if k in varying]
+            ax.set_xlabel(key + (" (and " + ", ".join(tied) + ")" if tied else ""))
+            ax.set_ylabel("%s (%s)" % (args.metric, unit) if unit else args.metric)
+            ax.grid(alpha=0.3, which="both")
+            ax.set_title(rtitle or ("%s vs %s" % (args.metric, key)), fontsize=9)
+    note = pc.repetition_note(runs)
+    shared = pc.title_line([f for f in fixed if f[0] in ("scene", "frame")] +
+                           ([("config", runs.config_name.iloc[0])] if runs.config_name.nunique() == 1 else []) +
+                           ([("lights", runs.lights.iloc[0])] if runs.lights.nunique() == 1 else []),
+                           ["fixed: " + ", ".join(args.fix)] if args.fix else [])
+    fig.suptitle("Sensitivity of %s\n%s%s" % (args.metric, shared, "\n(" + note + ")" if note else ""), fontsize=10)
+    fig.legend(list(handles.values()), list(handles.keys()), fontsize=8, loc="center right")
+    fig.tight_layout(rect=(0, 0, 1 - 2.8 / fig.get_figwidth(), 1))
+    pc.save(fig, args.out, "%d runs, %d series, %d parameter(s), %d row(s)"
+            % (len(runs), runs.series.nunique(), len(params), nrows))
 
 
 if __name__ == "__main__":
-    main()
+    pc.run(main)

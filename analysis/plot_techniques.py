@@ -1,89 +1,66 @@
 #!/usr/bin/python3
-"""Technique comparison: one bar per technique, DRAM MB stacked by traffic class (default), or one
-metric per technique (--metric frame_time_ms, energy_total_mj, ...).
+"""Technique comparison: one bar per technique (and variant) for a figure (--metric, default
+frame_time_ms), a panel per configuration and light count in the selection; or, with
+--metric dram_classes, DRAM MB stacked by traffic class (the `dram` plot, plot_dram.py).
 
-Reads a tbdrsim results database through its views (v_dram_class, v_metric, v_run_summary):
-finished runs only, repetitions and every other run in the selection averaged per technique.
-Narrow the selection with --where (SQL on v_run_summary's columns), --config or --lights.
+Reads a tbdrsim results database through its views (v_run_summary, v_metric): finished runs only.
+Runs of different configurations or light counts get their own panels; different scenes or frame
+sizes are refused (pick one with --scene / --where); runs of one technique from different traces
+are separate bars; only repetitions are averaged (whiskers span their min..max).
 
-Run with Debian's interpreter, which has pandas and matplotlib (scripts/install_deps.sh):
-    /usr/bin/python3 analysis/plot_techniques.py --db out/techniques.db --out techniques.png
-    /usr/bin/python3 analysis/plot_techniques.py --db out/techniques.db --metric frame_time_ms --lights 1024
+    tbdrsim plot techniques --db study/study.db --metric frame_time_ms --out techniques.png
+    /usr/bin/python3 analysis/plot_techniques.py --db out/techniques.db --metric energy_total_mj --lights 1024
 """
-import argparse
-import sys
+import plot_common as pc  # first: it selects matplotlib's file-only backend and checks the modules
 
-import plot_common  # first: it selects matplotlib's file-only backend before pyplot loads
-
-import matplotlib.pyplot as plt  # noqa: E402
-import pandas as pd  # noqa: E402
-
-# The simulator's traffic classes, in its order (sim: models/traffic.hpp); others follow.
-CLASS_ORDER = ["parameter_buffer", "vertices", "indices", "textures", "color", "depth_stencil", "gbuffer",
-               "visibility", "light_data", "light_lists", "work_lists", "spill", "other"]
+plt = pc.plt
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    plot_common.add_common_args(ap, "techniques.png", "dram_classes",
-                                "dram_classes (stacked DRAM MB per class, default) or a v_metric name "
-                                "(frame_time_ms, cycles, energy_total_mj, overshading, ...)",
-                                "SQL condition on v_run_summary's columns, e.g. \"lights = 256\"")
-    plot_common.add_selection_args(ap, lights=True)
+    ap = pc.parser(__doc__, "techniques.png")
+    ap.add_argument("--metric", default="frame_time_ms",
+                    help="a v_metric name (default frame_time_ms; cycles, dram_total_mb, energy_total_mj, "
+                         "overshading, ...) or dram_classes (DRAM MB stacked by class: plot_dram.py)")
+    ap.add_argument("--log", action="store_true", help="log y axis (default: linear; bars start at zero)")
     args = ap.parse_args()
-
-    db = plot_common.connect(args.db)
-    where, captions = plot_common.selection(args)
-    caption = ", ".join(captions)
-    runs = pd.read_sql_query("SELECT run_id, technique, config_hash, lights, scene FROM v_run_summary WHERE " + where,
-                             db)
-    if runs.empty:
-        sys.exit("plot_techniques: no finished run matches (%s)" % (caption or "all runs"))
-    ids = ",".join(str(i) for i in runs.run_id)
-    mixed = runs.groupby("technique")[["config_hash", "lights", "scene"]].nunique().max().max() > 1
-    note = "mean over " + ("several configurations, light counts or scenes; narrow with --where" if mixed
-                           else "repetitions")
-
-    fig, ax = plt.subplots(figsize=(max(6.0, 0.75 * runs.technique.nunique() + 3), 5.5))
     if args.metric == "dram_classes":
-        d = pd.read_sql_query("SELECT run_id, technique, class, total_mb FROM v_dram_class "
-                              "WHERE run_id IN (%s)" % ids, db)
-        table = d.groupby(["technique", "class"]).total_mb.mean().unstack(fill_value=0.0)
-        table = table.loc[:, table.sum() > 0]
-        cols = [c for c in CLASS_ORDER if c in table.columns] + sorted(c for c in table.columns if c not in CLASS_ORDER)
-        table = table[cols]
-        table = table.loc[table.sum(axis=1).sort_values().index]
-        table.plot.bar(stacked=True, ax=ax, width=0.75, colormap="tab20")
-        ax.set_ylabel("DRAM traffic (MB, read + written)")
-        ax.legend(title="traffic class", fontsize=8, title_fontsize=9, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-        title = "DRAM traffic per technique by class"
-        for i, total in enumerate(table.sum(axis=1)):
-            ax.annotate("%.1f" % total, (i, total), ha="center", va="bottom", fontsize=7)
-    else:
-        d = pd.read_sql_query("SELECT run_id, metric, value, unit FROM v_metric WHERE metric = ? AND run_id IN (%s)"
-                              % ids, db, params=(args.metric,))
-        d = d.dropna(subset=["value"])
-        if d.empty:
-            sys.exit("plot_techniques: no selected run has the figure '%s' (SELECT DISTINCT metric FROM v_metric)"
-                     % args.metric)
-        unit = d.unit.iloc[0]
-        d = d.merge(runs[["run_id", "technique"]], on="run_id")
-        g = d.groupby("technique").value.agg(["mean", "min", "max"]).sort_values("mean")
-        ax.bar(range(len(g)), g["mean"], yerr=[g["mean"] - g["min"], g["max"] - g["mean"]], capsize=3,
-               color="tab:blue", width=0.7)
-        ax.set_xticks(range(len(g)))
-        ax.set_xticklabels(g.index)
+        import plot_dram
+        return plot_dram.draw(args)
+
+    db = pc.connect(args.db)
+    runs = pc.load_runs(db, args)
+    panels, fixed = pc.facets(runs, facet=("config", "lights"))
+    vals = pc.metric_values(db, runs, args.metric)
+    unit = vals.unit.iloc[0]
+    n = len(panels)
+    cols = min(n, 2)
+    rows = (n + cols - 1) // cols
+    width = max(6.0, 0.55 * runs.series.nunique() + 3)
+    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, 5.0 * rows), squeeze=False)
+    for ax, (ptitle, pr) in zip(axes.flat, panels):
+        d = vals.merge(pr, on="run_id")
+        g = d.groupby(["technique", "series"]).value.agg(["mean", "min", "max"]).reset_index().sort_values("mean")
+        x = range(len(g))
+        ax.bar(x, g["mean"], yerr=[g["mean"] - g["min"], g["max"] - g["mean"]], capsize=3, width=0.7,
+               color=[pc.color(pc.TECHNIQUE_COLORS, t) for t in g.technique])
+        for i, v in zip(x, g["mean"]):
+            ax.annotate("%.3g" % v, (i, v), ha="center", va="bottom", fontsize=7)
+        ax.set_xticks(list(x))
+        ax.set_xticklabels(g.series, rotation=35, ha="right", fontsize=8)
         ax.set_ylabel("%s (%s)" % (args.metric, unit) if unit else args.metric)
-        title = "%s per technique" % args.metric
-        note += "; bars span min..max"
-    ax.set_xlabel("technique")
-    ax.set_title(title + ("\n" + caption if caption else "") + "\n(" + note + ")", fontsize=10)
-    plt.setp(ax.get_xticklabels(), rotation=35, ha="right")
-    ax.grid(axis="y", alpha=0.3)
+        if args.log:
+            pc.log_axis(ax, "y", g["mean"])
+        ax.grid(axis="y", alpha=0.3)
+        if ptitle:
+            ax.set_title(ptitle, fontsize=9)
+    for ax in list(axes.flat)[n:]:
+        ax.set_visible(False)
+    note = pc.repetition_note(runs)
+    fig.suptitle("%s per technique\n%s%s" % (args.metric, pc.title_line(fixed), "\n(" + note + ")" if note else ""),
+                 fontsize=10)
     fig.tight_layout()
-    fig.savefig(args.out, dpi=120)
-    print("wrote %s (%d runs, %d techniques)" % (args.out, len(runs), runs.technique.nunique()))
+    pc.save(fig, args.out, "%d runs, %d series, %d panel(s)" % (len(runs), runs.series.nunique(), n))
 
 
 if __name__ == "__main__":
-    main()
+    pc.run(main)

@@ -1,0 +1,62 @@
+#!/usr/bin/python3
+"""DRAM traffic by class for one configuration: one bar per technique (and variant), MB read +
+written stacked by traffic class as the units requested it at the chip boundary, and a black tick
+at what reached the DRAM devices after the system level cache. A panel per light count.
+
+Reads a tbdrsim results database through v_run_summary and v_dram_class (finished runs). The
+selection must hold one configuration (pick it with --config) and one scene and frame size; runs
+of one technique from different traces are separate bars; only repetitions are averaged.
+
+    tbdrsim plot dram --db study/study.db --out dram.png
+    /usr/bin/python3 analysis/plot_dram.py --db out/sweep.db --config series6xt_gx6450 --lights 1024
+"""
+import plot_common as pc  # first: it selects matplotlib's file-only backend and checks the modules
+
+plt = pc.plt
+
+#: Inches kept free at the right for the legend of traffic classes (their longest name).
+LEGEND_WIDTH = 2.3
+
+
+def draw(args):
+    """The plot, for plot_dram.py and plot_techniques.py --metric dram_classes."""
+    db = pc.connect(args.db)
+    runs = pc.load_runs(db, args)
+    panels, fixed = pc.facets(runs, facet=("lights",))
+    ids = ",".join(str(i) for i in runs.run_id)
+    d = pc.query(db, "SELECT run_id, class, total_mb, device_total_mb FROM v_dram_class WHERE run_id IN (%s)" % ids)
+    if d.empty:
+        pc.fail("--db %s: the selected runs recorded no DRAM traffic per class" % args.db)
+    d = d.merge(runs, on="run_id")
+    per_run = d.groupby("run_id")[["total_mb", "device_total_mb"]].sum(min_count=1).reset_index()
+    classes = pc.ordered(d[d.total_mb > 0]["class"].unique(), pc.DRAM_CLASSES)
+    n = len(panels)
+    width = max(6.0, 0.55 * runs.series.nunique() + 3.5)
+    fig, axes = plt.subplots(n, 1, figsize=(width + LEGEND_WIDTH, 4.8 * n), squeeze=False)
+    for ax, (ptitle, pr) in zip(axes[:, 0], panels):
+        p = d[d.run_id.isin(pr.run_id)]
+        table = p.groupby(["series", "class"]).total_mb.mean().unstack(fill_value=0.0)
+        table = table.reindex(columns=classes, fill_value=0.0)
+        table = table.loc[table.sum(axis=1).sort_values().index]
+        x = list(range(len(table)))
+        pc.stacked_bars(ax, table, pc.CLASS_COLORS)
+        dev = per_run.merge(pr, on="run_id").groupby("series").device_total_mb.mean().reindex(table.index)
+        if dev.notna().any():
+            ax.scatter(x, dev, marker="_", s=300, color="black", zorder=3, label="after the SLC (device)")
+        ax.set_ylabel("DRAM traffic (MB, read + written)")
+        if ptitle:
+            ax.set_title(ptitle, fontsize=9)
+    note = pc.repetition_note(runs)
+    fig.suptitle("DRAM traffic by class, requested at the chip boundary\n%s%s"
+                 % (pc.title_line(fixed), "\n(" + note + ")" if note else ""), fontsize=10)
+    pc.side_legend(fig, axes[0, 0], "traffic class", LEGEND_WIDTH)
+    pc.save(fig, args.out, "%d runs, %d series, %d panel(s)" % (len(runs), runs.series.nunique(), n))
+
+
+def main():
+    ap = pc.parser(__doc__, "dram.png")
+    draw(ap.parse_args())
+
+
+if __name__ == "__main__":
+    pc.run(main)
