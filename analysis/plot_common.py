@@ -238,8 +238,6 @@ def load_runs(db, args):
     conds = ["status = 'ok'"]
     if args.where:
         conds.append("(" + args.where + ")")
-    if getattr(args, "config", None):
-        conds.append("(config_name IN (%s) OR %s IN (%s))" % (_sql_list(args.config), label, _sql_list(args.config)))
     if getattr(args, "lights", None):
         conds.append("lights IN (%s)" % ",".join(str(int(n)) for n in args.lights))
     if getattr(args, "technique", None):
@@ -263,6 +261,12 @@ def load_runs(db, args):
     runs["frame"] = ["%dx%d%s" % (w, h, " %dx MSAA" % s if s and s > 1 else "")
                      for w, h, s in zip(runs.width, runs.height, runs.samples_per_pixel)]
     runs["config"] = _config_labels(db, runs, label)
+    if getattr(args, "config", None):
+        chosen = runs[runs.config_name.isin(args.config) | runs.config.isin(args.config)]
+        if chosen.empty:
+            fail("--config %s: no selected run has this configuration; they have: %s"
+                 % (", ".join(args.config), "; ".join(sorted(runs.config.unique()))))
+        runs = chosen.reset_index(drop=True)
     runs["variant"] = _variants(db, runs)
     runs["series"] = [t + (" " + v if v else "") for t, v in zip(runs.technique, runs.variant)]
     return runs
@@ -398,22 +402,31 @@ def average(runs, values, keys):
 # ---------------------------------------------------------------------------------------------
 # Axes.
 
+#: Plain-number tick labels: 1024 not 1.02e+03 or 2^10, 0.05 not 5x10^-2.
+PLAIN = mticker.FuncFormatter(lambda v, _: "%d" % round(v) if v >= 1 and abs(v - round(v)) < 1e-9
+                              else "%g" % float("%.3g" % v))
+
+
+def log_ticks(target, lo, hi, fixed=None):
+    """Readable ticks on a log-scaled matplotlib Axis `target`: at `fixed` values when given, else
+    at 1, 2, 5 x 10^k (1 x 10^k beyond three decades), with plain-number labels."""
+    if fixed is not None:
+        target.set_major_locator(mticker.FixedLocator(fixed))
+    else:
+        decades = math.log10(hi / lo) if lo > 0 else 99
+        target.set_major_locator(mticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0) if decades < 3 else (1.0,)))
+    target.set_major_formatter(PLAIN)
+    target.set_minor_formatter(mticker.NullFormatter())
+
+
 def log_axis(ax, axis, values, base=10):
-    """A log scale on `axis` ('x' or 'y') with plain-number tick labels (0.5, 1, 2, 5, 10 ... or
-    the values themselves when there are few), not 10^k exponents."""
+    """A log scale on `axis` ('x' or 'y') with readable ticks (log_ticks): on the values themselves
+    for a base-2 axis or a few x values, else at 1, 2, 5 x 10^k."""
     vals = sorted(v for v in values if v > 0 and math.isfinite(v))
     (ax.set_xscale if axis == "x" else ax.set_yscale)("log", base=base)
     target = ax.xaxis if axis == "x" else ax.yaxis
-    fmt = mticker.FuncFormatter(lambda v, _: "%g" % float("%.3g" % v))
-    if base == 2 or (vals and len(set(vals)) <= 8 and axis == "x"):
-        target.set_major_locator(mticker.FixedLocator(sorted(set(vals))))
-    else:
-        lo, hi = vals[0], vals[-1]
-        decades = math.log10(hi / lo) if lo > 0 else 99
-        subs = (1.0, 2.0, 5.0) if decades < 3 else (1.0,)
-        target.set_major_locator(mticker.LogLocator(base=10, subs=subs))
-    target.set_major_formatter(fmt)
-    target.set_minor_formatter(mticker.NullFormatter())
+    few = base == 2 or (len(set(vals)) <= 8 and axis == "x")
+    log_ticks(target, vals[0], vals[-1], sorted(set(vals)) if few else None)
 
 
 def wide_range(values, factor):
@@ -428,7 +441,8 @@ LOG_RANGE = 20.0
 
 
 def save(fig, out, summary):
-    """Writes the figure to `out` (PlotError naming --out when it cannot) and prints `summary`."""
+    """Writes the figure to `out` (PlotError naming --out when it cannot) and prints `summary` and
+    the figure's title on one line."""
     folder = os.path.dirname(os.path.abspath(out))
     if not os.path.isdir(folder):
         fail("--out %s: no such folder %s" % (out, folder))
@@ -436,8 +450,9 @@ def save(fig, out, summary):
         fig.savefig(out, dpi=120)
     except (OSError, ValueError) as e:
         fail("--out %s: %s" % (out, e))
+    title = fig._suptitle.get_text().replace("\n", " | ") if fig._suptitle else ""
     plt.close(fig)
-    print("wrote %s (%s)" % (out, summary))
+    print("wrote %s (%s): %s" % (out, summary, title))
 
 
 def stacked_bars(ax, table, palette):

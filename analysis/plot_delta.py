@@ -147,6 +147,8 @@ def main():
         ax.set_xticklabels(labels, rotation=35, ha="right", fontsize=7)
         ax.set_ylabel(("%s / baseline" if args.ratio else "change in %s vs baseline (%%)") % args.metric)
         ax.grid(axis="y", alpha=0.3)
+        if key == "technique" and not sel.empty:
+            ptitle = (ptitle + ": " if ptitle else "") + "%s = %.4g %s" % (base_label, sel.base.iloc[0], unit)
         if ptitle:
             ax.set_title(ptitle, fontsize=9)
     note = "%d point(s) without a baseline partner left out" % unpaired if unpaired else ""

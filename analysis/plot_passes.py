@@ -27,6 +27,8 @@ ROW_HEIGHT = 0.62
 
 def main():
     ap = pc.parser(__doc__, "passes.png")
+    ap.add_argument("--ms", action="store_true",
+                    help="timeline in ms on one axis (default: each frame as 100 %%, its time written beside it)")
     args = ap.parse_args()
     db = pc.connect(args.db)
     runs = pc.load_runs(db, args)
@@ -51,10 +53,14 @@ def main():
     unit_names = pc.ordered(units.unit.unique(), pc.UNITS)
 
     n = len(first)
-    longest = max(cycles[i] * ms_per_cycle[i] for i in first.run_id)
-    fig, (tl, ub) = plt.subplots(1, 2, figsize=(15, ROW_HEIGHT * n * 1.6 + 2.6), gridspec_kw={"width_ratios": [1.6, 1]})
+    longest = max(cycles[i] * ms_per_cycle[i] for i in first.run_id) if args.ms else 100.0
+    fig, (tl, ub) = plt.subplots(1, 2, figsize=(15, ROW_HEIGHT * n * 1.6 + 2.4), gridspec_kw={"width_ratios": [1.6, 1]})
+    widest = 0.0
     for row, r in first.iterrows():
-        k = ms_per_cycle[r.run_id]
+        # x per cycle: ms, or percent of this run's frame
+        k = ms_per_cycle[r.run_id] if args.ms else 100.0 / cycles[r.run_id]
+        if not args.ms:
+            tl.annotate("%.3g ms" % (cycles[r.run_id] * ms_per_cycle[r.run_id]), (101.0, row), va="center", fontsize=7)
         c = cmds[cmds.run_id == r.run_id].sort_values(["start_cycle", "index"])
         for _, cmd in c.iterrows():
             name = cmd.command.split(".", 1)[-1]
@@ -80,6 +86,7 @@ def main():
             stalled = 100.0 * u.at[un, "stalled_cycles"] / cycles[r.run_id]
             col = pc.color(pc.UNIT_COLORS, un)
             ub.barh(y, busy, height=h, color=col, label=un if row == n - 1 else None)
+            widest = max(widest, busy + stalled)
             ub.barh(y, stalled, left=busy, height=h, color=col, alpha=0.35, hatch="///", edgecolor="white",
                     linewidth=0)
     for ax in (tl, ub):
@@ -88,18 +95,23 @@ def main():
         ax.grid(axis="x", alpha=0.3)
     tl.set_yticklabels(first.series, fontsize=8)
     ub.set_yticklabels([])
-    tl.set_xlabel("time in the frame (ms)")
+    tl.set_xlabel("time in the frame (ms)" if args.ms else "time in the frame (% of each frame's time, written at its right)")
+    if not args.ms:
+        tl.set_xlim(-1.0, 112.0)
+    ub.set_xlim(0.0, widest * 1.04)
     tl.set_title("timeline of each pass: binning (upper lane), tile work or compute (lower lane)", fontsize=9)
     ub.set_xlabel("share of the frame's cycles (%): busy (solid), stalled (hatched)")
     ub.set_title("units", fontsize=9)
     handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in pc.PHASE_COLORS.values()]
-    tl.legend(handles, ["binning (geometry)", "tile work (first to last tile)", "compute dispatch"], fontsize=7,
-              loc="upper center", bbox_to_anchor=(0.5, -0.5 / (n + 1) - 0.12), ncol=3)
-    ub.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.5 / (n + 1) - 0.12), ncol=4)
+    fig.legend(handles, ["binning (geometry)", "tile work (first to last tile)", "compute dispatch"], fontsize=7,
+               loc="lower left", bbox_to_anchor=(0.08, 0.0), ncol=3)
+    uh, ul = ub.get_legend_handles_labels()
+    fig.legend(uh, ul, fontsize=7, loc="lower right", ncol=4)
     ids_text = ", ".join("%s: run %d" % (s, i) for s, i in zip(first.series[::-1], first.run_id[::-1]))
     fig.suptitle("Time by pass and unit\n%s" % pc.title_line(fixed), fontsize=10)
-    fig.text(0.01, 0.005, ids_text if len(ids_text) < 180 else "first run of each technique", fontsize=6)
-    fig.tight_layout(rect=(0, 0.02, 1, 1))
+    fig.text(0.01, 1.0 - 0.25 / fig.get_figheight(), ids_text if len(ids_text) < 120 else "first run of each technique",
+             fontsize=6, va="top")
+    fig.tight_layout(rect=(0, 0.45 / fig.get_figheight(), 1, 1))
     pc.save(fig, args.out, "%d runs drawn" % n)
 
 

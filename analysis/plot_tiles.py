@@ -67,8 +67,10 @@ def main():
         ax.set_yticks([])
     for ax in list(axes.flat)[n:]:
         ax.set_visible(False)
-    fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8, label=VALUES[args.value] +
-                 ("" if args.pass_index is None else ", pass %d" % args.pass_index))
+    bar = fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8, label=VALUES[args.value] +
+                       ("" if args.pass_index is None else ", pass %d" % args.pass_index))
+    if args.log:
+        pc.log_ticks(bar.ax.yaxis, vmin, vmax)
     fig.suptitle("Per-tile %s, %dx%d-pixel tiles%s\n%s" % (
         args.value, tw, th, "" if args.pass_index is None else ", pass %d" % args.pass_index,
         pc.title_line(fixed)), fontsize=10)

@@ -26,6 +26,8 @@ const std::vector<CliCommand>& cli_commands() {
       {"merge", "Merge shard databases (Slurm array tasks) into one without duplicates", cmd_merge},
       {"report", "Compare techniques or configurations in a results database: tables of time, DRAM, energy",
        cmd_report},
+      {"plot", "Draw a results database as a PNG: techniques, dram, energy, passes, scaling, sensitivity, delta, "
+               "tiles (python3 + matplotlib)", cmd_plot},
       {"validate", "Check the simulator against published figures (Bjørge, Burns & Hunt, Imagination's HSR and "
                    "on-chip memory figures, rooflines, Olsson et al., DRAM energy): published vs simulated",
        cmd_validate},
