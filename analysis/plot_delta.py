@@ -68,13 +68,16 @@ def main():
         group, facet = "series", ("lights",)
         # Parameters that vary with the key (a zipped tile height) are part of what changes; any
         # other that varies would be averaged over: refuse.
+        varying = []
         for k in wide.columns:
             if k == key or wide[k].nunique() <= 1:
                 continue
             if wide.groupby(wide[key])[k].nunique().max() <= 1:
                 continue
-            pc.fail("%s also varies in the selection (%s); fix it with --fix %s=VALUE or --where"
-                    % (k, ", ".join(sorted(wide[k].unique())), k))
+            varying.append("%s (%s)" % (k, ", ".join(sorted(wide[k].unique()))))
+        if varying:
+            pc.fail("other parameters vary in the selection and would be averaged: %s; fix them with --fix KEY=VALUE "
+                    "or --where" % "; ".join(varying))
         if runs.config_name.nunique() > 1:
             pc.fail("the selection holds several configuration presets (%s); pick one with --config"
                     % ", ".join(sorted(runs.config_name.unique())))

@@ -66,10 +66,16 @@ def main():
             others.append("lights")
         if runs.config_name.nunique() > 1:
             others.append("config_name")
-        frame = wide.assign(lights=runs.set_index("run_id").lights.astype(str),
-                            config_name=runs.set_index("run_id").config_name)
+        # Numbers as numbers, so that rows come in numeric order (64 before 128).
+        frame = wide.copy()
+        for k in frame.columns:
+            if num[k].notna().all():
+                frame[k] = num[k]
+        frame = frame.assign(lights=runs.set_index("run_id").lights.astype(int),
+                             config_name=runs.set_index("run_id").config_name)
         rows = [("", frame.index)] if not others else \
-            [(", ".join("%s=%s" % (k, v) for k, v in zip(others, combo if isinstance(combo, tuple) else (combo,))), g.index)
+            [(", ".join("%s=%g" % (k, v) if isinstance(v, float) else "%s=%s" % (k, v)
+                        for k, v in zip(others, combo if isinstance(combo, tuple) else (combo,))), g.index)
              for combo, g in frame.groupby(others if len(others) > 1 else others[0])]
         if len(rows) > MAX_ROWS:
             pc.fail("%s varies with %s: %d rows of panels; fix some with --fix KEY=VALUE or --lights"

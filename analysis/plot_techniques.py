@@ -1,7 +1,7 @@
 #!/usr/bin/python3
-"""Technique comparison: one bar per technique (and variant) for a figure (--metric, default
-frame_time_ms), a panel per configuration and light count in the selection; or, with
---metric dram_classes, DRAM MB stacked by traffic class (the `dram` plot, plot_dram.py).
+"""Technique comparison: one bar per technique (and variant) for a figure (--metric, e.g.
+frame_time_ms), a panel per configuration and light count in the selection; or, by default
+(--metric dram_classes), DRAM MB stacked by traffic class (the `dram` plot, plot_dram.py).
 
 Reads a tbdrsim results database through its views (v_run_summary, v_metric): finished runs only.
 Runs of different configurations or light counts get their own panels; different scenes or frame
@@ -18,9 +18,9 @@ plt = pc.plt
 
 def main():
     ap = pc.parser(__doc__, "techniques.png")
-    ap.add_argument("--metric", default="frame_time_ms",
-                    help="a v_metric name (default frame_time_ms; cycles, dram_total_mb, energy_total_mj, "
-                         "overshading, ...) or dram_classes (DRAM MB stacked by class: plot_dram.py)")
+    ap.add_argument("--metric", default="dram_classes",
+                    help="a v_metric name (frame_time_ms, cycles, dram_total_mb, energy_total_mj, overshading, ...) "
+                         "or dram_classes (default: DRAM MB stacked by class, plot_dram.py)")
     ap.add_argument("--log", action="store_true", help="log y axis (default: linear; bars start at zero)")
     args = ap.parse_args()
     if args.metric == "dram_classes":
