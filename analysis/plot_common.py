@@ -14,6 +14,7 @@
 import argparse
 import math
 import os
+import re
 import sqlite3
 import sys
 import urllib.parse
@@ -315,6 +316,12 @@ def _variants(db, runs):
     return variant
 
 
+def natural(value):
+    """Sort key that orders numbers inside text numerically ('bits=64' before 'bits=128')."""
+    parts = value if isinstance(value, tuple) else (value,)
+    return [[int(t) if t.isdigit() else t for t in re.split(r"(\d+)", str(p))] for p in parts]
+
+
 def describe_selection(args):
     """The selection options given, as text."""
     parts = []
@@ -352,8 +359,16 @@ def facets(runs, shown=(), facet=(), max_panels=8):
                  "or --where" % (len(values), plural, ", ".join(str(v) for v in values), option))
     if not split:
         return [("", runs)], fixed
-    panels = [(", ".join(_dim_value_text(d, v) for d, v in zip(split, key if isinstance(key, tuple) else (key,))), g)
-              for key, g in runs.groupby(split if len(split) > 1 else split[0], sort=True)]
+    short = {}
+    if "config" in split:
+        # Panels name what differs between the configurations; what they share goes to the title.
+        labels = list(runs.config.dropna().unique())
+        common = [t for t in labels[0].split(" ") if all(t in lb.split(" ") for lb in labels)]
+        short = {lb: " ".join(t for t in lb.split(" ") if t not in common) or lb for lb in labels}
+        fixed.append(("config", " ".join(common) + " (+ per panel)"))
+    panels = [(", ".join(short.get(v, v) if d == "config" else _dim_value_text(d, v)
+                         for d, v in zip(split, key if isinstance(key, tuple) else (key,))), g)
+              for key, g in sorted(runs.groupby(split if len(split) > 1 else split[0]), key=lambda kg: natural(kg[0]))]
     if len(panels) > max_panels:
         fail("the selection has %d combinations of %s (at most %d panels); narrow it with --config, --lights "
              "or --where" % (len(panels), " and ".join(split), max_panels))
@@ -446,6 +461,12 @@ def save(fig, out, summary):
     folder = os.path.dirname(os.path.abspath(out))
     if not os.path.isdir(folder):
         fail("--out %s: no such folder %s" % (out, folder))
+    if fig._suptitle:
+        # Room for the title above the panels (tight_layout leaves it out): about 0.2 inch a line.
+        lines = fig._suptitle.get_text().count("\n") + 1
+        top = 1.0 - (0.2 * lines + 0.15) / fig.get_figheight()
+        if fig.subplotpars.top > top:
+            fig.subplots_adjust(top=top)
     try:
         fig.savefig(out, dpi=120)
     except (OSError, ValueError) as e:
