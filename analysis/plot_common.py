@@ -235,6 +235,9 @@ def _sql_list(values):
 def load_runs(db, args):
     """The finished runs of the selection, one row each: run_id, technique, variant, series, scene,
     config (label), config_hash, trace_hash, trace_path, frame, lights. PlotError when none."""
+    folder = os.path.dirname(os.path.abspath(args.out))
+    if not os.path.isdir(folder):  # before any work
+        fail("--out %s: no such folder %s" % (args.out, folder))
     label = "config_label" if has_column(db, "v_run_summary", "config_label") else "config_name"
     conds = ["status = 'ok'"]
     if args.where:

@@ -124,7 +124,9 @@ int Plots::counter_ = 0;
 /// The configuration with 32x32 tiles, by its label (the preset and what was set on top of it).
 const std::string kTile32 = "default tiling.tile_height=32 tiling.tile_width=32";
 
-TEST_F(Plots, EveryKindDrawsAndTitlesNameWhatTheRunsShare) {
+// The draws are split over several tests so that ctest runs them in parallel, each well inside
+// its timeout (a script takes seconds to start pandas and matplotlib on a loaded machine).
+TEST_F(Plots, TechniquesDramAndEnergyDrawAndTitlesNameWhatTheRunsShare) {
   // Four panels (two configurations x two light counts): the title names only what all share.
   const std::string t = draws("techniques", {"--metric", "frame_time_ms"});
   EXPECT_NE(t.find("4 panel(s)"), std::string::npos) << t;
@@ -136,26 +138,35 @@ TEST_F(Plots, EveryKindDrawsAndTitlesNameWhatTheRunsShare) {
   EXPECT_NE(d.find("2 panel(s)"), std::string::npos) << d;
   draws("energy", {"--lights", "16"});
   draws("energy", {"--share"});
+}
+
+TEST_F(Plots, PassesAndTilesDrawOneRunPerTechnique) {
   // One configuration, one light count: 2 techniques on one timeline, 16 lights in the title.
   const std::string p = draws("passes", {"--config", kTile32, "--lights", "16"});
   EXPECT_NE(p.find("2 runs drawn"), std::string::npos) << p;
   EXPECT_NE(p.find("16 lights"), std::string::npos) << p;
+  // 160x90 in 32x32 tiles: 5 x 3 tiles.
+  const std::string h = draws("tiles", {"--config", kTile32, "--lights", "16"});
+  EXPECT_NE(h.find("2 heat maps, 5x3 tiles"), std::string::npos) << h;
+  EXPECT_NE(h.find("config " + kTile32), std::string::npos) << h;
+}
+
+TEST_F(Plots, ScalingAndSensitivityDrawLinesPerTechnique) {
   // plain_forward has 16 and 32 lights: one line per configuration panel.
   const std::string s = draws("scaling", {"--technique", "plain_forward"});
   EXPECT_NE(s.find("2 light counts, 2 panel(s)"), std::string::npos) << s;
   // The tile width on x; the two light counts are rows of panels, not averaged.
   const std::string v = draws("sensitivity", {"--param", "tiling.tile_width"});
   EXPECT_NE(v.find("2 row(s)"), std::string::npos) << v;
+}
+
+TEST_F(Plots, DeltasAgainstAParameterOrATechnique) {
   // 16x16 against 32x32 for the 3 traces: 3 comparisons, one panel per light count.
   const std::string x = draws("delta", {"--baseline", "tiling.tile_width=32"});
   EXPECT_NE(x.find("3 comparisons, 2 panel(s)"), std::string::npos) << x;
   // deferred against plain_forward at 16 lights, per configuration: 2 comparisons in 2 panels.
   const std::string y = draws("delta", {"--baseline", "technique=plain_forward", "--lights", "16", "--ratio"});
   EXPECT_NE(y.find("2 comparisons, 2 panel(s)"), std::string::npos) << y;
-  // 160x90 in 32x32 tiles: 5 x 3 tiles.
-  const std::string h = draws("tiles", {"--config", kTile32, "--lights", "16"});
-  EXPECT_NE(h.find("2 heat maps, 5x3 tiles"), std::string::npos) << h;
-  EXPECT_NE(h.find("config " + kTile32), std::string::npos) << h;
 }
 
 TEST_F(Plots, MixedDimensionsAreRefusedNotAveraged) {
@@ -169,7 +180,7 @@ TEST_F(Plots, MixedDimensionsAreRefusedNotAveraged) {
   refuses("delta", {"--baseline", "tiling.tile_width=64"}, "they have 16, 32");
 }
 
-TEST_F(Plots, BadInputIsOneLineAndExitTwo) {
+TEST_F(Plots, BadDatabaseOrOutputIsOneLineAndExitTwo) {
   refuses("techniques", {}, "no such results database", (*dir_ / "absent.db").string());
   EXPECT_FALSE(fs::exists(*dir_ / "absent.db"));
   const fs::path text = *dir_ / "notes.txt";
@@ -178,6 +189,11 @@ TEST_F(Plots, BadInputIsOneLineAndExitTwo) {
   const fs::path empty = *dir_ / "empty.db";
   { ResultsDb created(empty.string()); }
   refuses("energy", {}, "holds no runs", empty.string());
+  // --out into a folder that does not exist: refused before any work.
+  refuses("energy", {"--out", (*dir_ / "no" / "such" / "x.png").string()}, "--out");
+}
+
+TEST_F(Plots, BadOptionsAreOneLineAndExitTwo) {
   refuses("techniques", {"--metric", "frame_time_msx"}, "did you mean frame_time_ms");
   refuses("techniques", {"--bogus"}, "unrecognized arguments: --bogus");
   refuses("techniques", {"--where", "no_such_column = 1"}, "--where \"no_such_column = 1\": no such column");
@@ -185,11 +201,9 @@ TEST_F(Plots, BadInputIsOneLineAndExitTwo) {
   refuses("sensitivity", {"--param", "tiling.tile_widht"}, "--param tiling.tile_widht");
   refuses("delta", {"--baseline", "tiling.tile_width"}, "--baseline tiling.tile_width: expected KEY=VALUE");
   refuses("tiles", {"--value", "watts"}, "invalid choice: 'watts'");
-  // --out into a folder that does not exist.
-  const PlotCall c = plot({"energy", "--db", *db_, "--out", (*dir_ / "no" / "such" / "x.png").string()});
-  EXPECT_EQ(c.code, 2);
-  EXPECT_NE(c.err.find("--out"), std::string::npos) << c.err;
-  // The command's own checks.
+}
+
+TEST_F(Plots, CommandRefusesUnknownKindsAndShowsHelp) {
   const PlotCall k = plot({"histogram", "--db", *db_});
   EXPECT_EQ(k.code, 2);
   EXPECT_NE(k.err.find("unknown plot kind 'histogram'"), std::string::npos) << k.err;

@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include <boost/program_options/positional_options.hpp>  // commands.hpp names it without including it
+
 #include "app/commands.hpp"
 #include "app/worker_pool.hpp"
 #include "kernel/errors.hpp"
