@@ -20,7 +20,8 @@ import sys
 import urllib.parse
 import zlib
 
-PROG = os.path.splitext(os.path.basename(sys.argv[0] or "plot"))[0]
+#: The name messages start with: the script's, or `tbdrsim plot KIND` when that command runs it.
+PROG = os.environ.get("TBDRSIM_PLOT_PROG") or os.path.splitext(os.path.basename(sys.argv[0] or "plot"))[0]
 
 try:
     import matplotlib
@@ -479,15 +480,16 @@ def save(fig, out, summary):
     print("wrote %s (%s): %s" % (out, summary, title))
 
 
-def stacked_bars(ax, table, palette):
+def stacked_bars(ax, table, palette, totals=True):
     """One bar per row of `table` (index: series, columns: parts in order), the parts stacked in
-    their `palette` colours, each bar's total written above it; returns the totals."""
+    their `palette` colours, each bar's total written above it (unless not `totals`); returns the
+    totals."""
     x = list(range(len(table)))
     bottom = [0.0] * len(table)
     for part in table.columns:
         ax.bar(x, table[part], bottom=bottom, width=0.7, color=color(palette, part), label=part)
         bottom = [b + v for b, v in zip(bottom, table[part])]
-    for i, total in zip(x, bottom):
+    for i, total in zip(x, bottom if totals else []):
         ax.annotate("%.3g" % total, (i, total), ha="center", va="bottom", fontsize=7)
     ax.set_xticks(x)
     ax.set_xticklabels(table.index, rotation=35, ha="right", fontsize=8)

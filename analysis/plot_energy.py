@@ -20,7 +20,8 @@ LEGEND_WIDTH = 2.4
 
 def main():
     ap = pc.parser(__doc__, "energy.png")
-    ap.add_argument("--share", action="store_true", help="each bar as percentages of its total")
+    ap.add_argument("--share", action="store_true",
+                    help="each bar as percentages of its total (bars stay in the order of their mJ)")
     args = ap.parse_args()
     db = pc.connect(args.db)
     runs = pc.load_runs(db, args)
@@ -43,7 +44,7 @@ def main():
         table = table.loc[table.sum(axis=1).sort_values().index]
         if args.share:
             table = table.div(table.sum(axis=1), axis=0) * 100.0
-        pc.stacked_bars(ax, table, pc.ENERGY_COLORS)
+        pc.stacked_bars(ax, table, pc.ENERGY_COLORS, totals=not args.share)
         ax.set_ylabel("share of the frame's energy (%)" if args.share else "energy per frame (mJ)")
         if ptitle:
             ax.set_title(ptitle, fontsize=9)

@@ -88,9 +88,10 @@ std::string usage() {
   return os.str();
 }
 
-/// Runs `argv` (argv[0] a path) with its stdout and stderr copied to `out` and `err` as they come;
-/// returns the waitpid status.
-int run_captured(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
+/// Runs `argv` (argv[0] a path) with its stdout and stderr copied to `out` and `err` as they come,
+/// TBDRSIM_PLOT_PROG = `prog` in its environment (the name its messages start with); returns the
+/// waitpid status.
+int run_captured(const std::vector<std::string>& argv, const std::string& prog, std::ostream& out, std::ostream& err) {
   int pipes[2][2];
   if (pipe2(pipes[0], O_CLOEXEC) != 0 || pipe2(pipes[1], O_CLOEXEC) != 0) {
     throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
@@ -105,6 +106,7 @@ int run_captured(const std::vector<std::string>& argv, std::ostream& out, std::o
   if (pid == 0) {
     dup2(pipes[0][1], STDOUT_FILENO);
     dup2(pipes[1][1], STDERR_FILENO);
+    setenv("TBDRSIM_PLOT_PROG", prog.c_str(), 1);
     execv(cargv[0], cargv.data());
     const std::string msg = "tbdrsim plot: cannot execute " + argv[0] + ": " + std::strerror(errno) + "\n";
     (void)!write(STDERR_FILENO, msg.data(), msg.size());
@@ -177,7 +179,7 @@ int cmd_plot(const std::vector<std::string>& args, std::ostream& out, std::ostre
 
   std::vector<std::string> argv = {python, script->string()};
   argv.insert(argv.end(), args.begin() + 1, args.end());
-  const int status = run_captured(argv, out, err);
+  const int status = run_captured(argv, std::string("tbdrsim plot ") + chosen->name, out, err);
   if (WIFEXITED(status)) return WEXITSTATUS(status);
   err << "tbdrsim plot: " << chosen->script << " ended by signal " << WTERMSIG(status) << "\n";
   return 1;
