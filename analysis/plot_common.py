@@ -125,6 +125,8 @@ def parser(doc, out):
     ap.add_argument("--lights", type=int, action="append", help="only runs with this light count; repeatable")
     ap.add_argument("--technique", action="append", help="only this technique; repeatable")
     ap.add_argument("--scene", help="only runs of this scene (v_run_summary.scene)")
+    ap.add_argument("--fix", action="append", default=[], metavar="KEY=VALUE",
+                    help="only runs with this hardware parameter value (`tbdrsim params` keys); repeatable")
     return ap
 
 
@@ -234,7 +236,8 @@ def _sql_list(values):
 
 
 def load_runs(db, args):
-    """The finished runs of the selection, one row each: run_id, technique, variant, series, scene,
+    """The finished runs of the selection (--where, --config, --lights, --technique, --scene,
+    --fix), one row each: run_id, technique, variant, series, scene,
     config (label), config_hash, trace_hash, trace_path, frame, lights. PlotError when none."""
     folder = os.path.dirname(os.path.abspath(args.out))
     if not os.path.isdir(folder):  # before any work
@@ -272,6 +275,9 @@ def load_runs(db, args):
             fail("--config %s: no selected run has this configuration; they have: %s"
                  % (", ".join(args.config), "; ".join(sorted(runs.config.unique()))))
         runs = chosen.reset_index(drop=True)
+    if getattr(args, "fix", None):
+        wide, num = hardware_params(db, runs)
+        runs = apply_fix(runs, wide, num, args.fix).reset_index(drop=True)
     runs["variant"] = _variants(db, runs)
     runs["series"] = [t + (" " + v if v else "") for t, v in zip(runs.technique, runs.variant)]
     return runs
@@ -329,7 +335,7 @@ def natural(value):
 def describe_selection(args):
     """The selection options given, as text."""
     parts = []
-    for opt in ("config", "lights", "technique"):
+    for opt in ("config", "lights", "technique", "fix"):
         v = getattr(args, opt, None)
         if v:
             parts.append("--%s %s" % (opt, ",".join(str(x) for x in v)))

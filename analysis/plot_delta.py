@@ -26,8 +26,6 @@ def main():
                     help="the baseline: a parameter key, technique.<option>, config=NAME or technique=NAME")
     ap.add_argument("--metric", default="frame_time_ms", help="a v_metric name (default frame_time_ms)")
     ap.add_argument("--ratio", action="store_true", help="bars as value / baseline instead of percent change")
-    ap.add_argument("--fix", action="append", default=[], metavar="KEY=VALUE",
-                    help="only runs with this parameter value; repeatable")
     args = ap.parse_args()
     key, sep, base = args.baseline.partition("=")
     if not sep or not key or not base:
@@ -37,7 +35,6 @@ def main():
     db = pc.connect(args.db)
     runs = pc.load_runs(db, args)
     wide, num = pc.hardware_params(db, runs)
-    runs = pc.apply_fix(runs, wide, num, args.fix)
     wide, num = wide.loc[runs.run_id], num.loc[runs.run_id]
     runs = runs.set_index("run_id", drop=False)
 
@@ -156,7 +153,7 @@ def main():
             ax.set_title(ptitle, fontsize=9)
     note = "%d point(s) without a baseline partner left out" % unpaired if unpaired else ""
     fig.suptitle("%s against the baseline %s = %s (baseline %s in %s)\n%s%s"
-                 % (args.metric, key, base_label, args.metric, unit, pc.title_line(fixed),
+                 % (args.metric, key, base_label, args.metric, unit, pc.title_line(fixed, ["fixed: " + ", ".join(args.fix)] if args.fix else []),
                     "\n(" + note + ")" if note else ""), fontsize=10)
     fig.tight_layout()
     pc.save(fig, args.out, "%d comparisons, %d panel(s)" % (sum(len(p) for _, p, _ in per_panel), n))

@@ -33,15 +33,12 @@ def main():
                     help="a v_metric name (default frame_time_ms; dram_total_mb, energy_total_mj, dram_spill_mb, ...)")
     ap.add_argument("--param", action="append",
                     help="parameter key for the x axis; repeatable (default: %s)" % " and ".join(DEFAULT_PARAMS))
-    ap.add_argument("--fix", action="append", default=[], metavar="KEY=VALUE",
-                    help="only runs with this parameter value; repeatable")
     ap.add_argument("--linear", action="store_true", help="linear y axis (default: log when values span > 20x)")
     args = ap.parse_args()
 
     db = pc.connect(args.db)
     runs = pc.load_runs(db, args)
     wide, num = pc.hardware_params(db, runs)
-    runs = pc.apply_fix(runs, wide, num, args.fix)
     wide, num = wide.loc[runs.run_id], num.loc[runs.run_id]
     varying = [k for k in wide.columns if wide[k].nunique() > 1]
     if args.param:
