@@ -57,8 +57,9 @@ DRAM_CLASSES = ["parameter_buffer", "vertices", "indices", "textures", "color", 
 CLASS_COLORS = dict(zip(DRAM_CLASSES, [_TAB[i] for i in (0, 1, 15, 4, 6, 2, 8, 9, 10, 11, 16, 3, 14)]))
 
 #: Energy components (models/energy.cpp), in its order.
-ENERGY_COMPONENTS = ["dram", "caches", "tile_buffer", "tag_and_depth_buffer", "alu", "texture", "static"]
-ENERGY_COLORS = dict(zip(ENERGY_COMPONENTS, [_TAB[i] for i in (6, 2, 4, 8, 0, 10, 15)]))
+ENERGY_COMPONENTS = ["dram", "caches", "tile_buffer", "tag_and_depth_buffer", "rop_caches", "alu", "texture",
+                     "static"]
+ENERGY_COLORS = dict(zip(ENERGY_COMPONENTS, [_TAB[i] for i in (6, 2, 4, 8, 12, 0, 10, 15)]))
 
 #: Timed units (models/timing_model.cpp), in pipeline order.
 UNITS = ["binning", "tile_fetch", "isp", "usc", "texture", "tile_buffer", "pixel_back_end"]
