@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Energy by component: one bar per technique (and variant), the frame's energy in mJ stacked by
-component (DRAM, caches, tile buffer, tag and depth buffer, ALU, texture, static), a panel per
+component (DRAM, caches, tile buffer, tag and depth buffer, ROP caches, ALU, texture, static), a panel per
 configuration and light count in the selection.
 
 Reads a tbdrsim results database through v_run_summary and v_energy_component (finished runs).
