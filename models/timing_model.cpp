@@ -367,11 +367,13 @@ class TimingSim final : public Unit {
       const TileWork& t = render_->tiles[i];
       TileState& ts = tiles_[i];
       ts.fetch_start = eq_.now();
+      if (fetches_in_flight_++ == 0) fetch_busy_since_ = eq_.now();
       ts.pending_streams = 1;
       auto on_stream = [this, i]() {
         if (--tiles_[i].pending_streams > 0) return;
         tiles_[i].fetched = true;
-        fetch_busy_cycles_ += cycles_of(eq_.now()) - cycles_of(tiles_[i].fetch_start);
+        // Busy while at least one tile is being fetched (several overlap: their union, not their sum).
+        if (--fetches_in_flight_ == 0) fetch_busy_cycles_ += cycles_of(eq_.now()) - cycles_of(fetch_busy_since_);
         advance_isp();
       };
       if (work_.immediate) {
@@ -614,6 +616,8 @@ class TimingSim final : public Unit {
   bool isp_busy_ = false;  ///< the ISP is resolving a tile or holds one waiting for task slots
   double alu_rate_ = 1, tex_rate_ = 1, raster_rate_ = 1, tile_buffer_rate_ = 1;
   double fetch_busy_cycles_ = 0;
+  std::size_t fetches_in_flight_ = 0;  ///< tiles between dispatch and fetched
+  Tick fetch_busy_since_{0};           ///< when the current run of overlapping fetches began
   std::vector<std::unique_ptr<DmaStream>> streams_;
   std::vector<Job> bin_jobs_, frag_jobs_;
   std::vector<bool> bin_done_, frag_done_;
