@@ -330,7 +330,7 @@ TEST(ResultsDb, CommandsLeaveNoWalFilesBehind) {
   alone(dir / "study" / "study.db");
   {
     std::ofstream f(dir / "s.ini");
-    f << "[sweep]\ntrace = " << trace << "\n[vary]\ntiling.tile_width = 16, 32\n";
+    f << "[sweep]\ntrace = " << trace << "\n[vary]\ntiling.tile_width = 16, 64\n";  // not the run's 32
   }
   ASSERT_EQ(cli_main({"sweep", (dir / "s.ini").string(), "--db", (dir / "sweep.db").string(), "-j", "1", "--progress",
                       "none", "--tbdrsim", TBDRSIM_BINARY},

@@ -353,9 +353,12 @@ void print_mode_table(const StudyPlan& plan, const std::vector<StudyPoint>& poin
       for (std::size_t m = 0; m < opt.metrics.size(); ++m) {
         for (const auto& mode : plan.modes) {
           const auto it = cells[tech].find(mode);
-          const std::optional<double> v =
-              it == cells[tech].end() || m >= it->second->values.size() ? std::nullopt : it->second->values[m];
-          out << std::setw(m == 0 ? 16 : 14) << (it == cells[tech].end() ? std::string("failed") : fig(v, decimals[m]));
+          std::string text = "failed";
+          if (it != cells[tech].end()) {
+            const auto& values = it->second->values;
+            text = m < values.size() && values[m].has_value() ? fmt(values[m].value(), decimals[m]) : std::string("-");
+          }
+          out << std::setw(m == 0 ? 16 : 14) << text;
         }
       }
       out << "\n";
