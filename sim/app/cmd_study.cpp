@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -56,6 +57,8 @@ struct StudyPlan {
   /// One configuration per mode (the given one with gpu.mode set), or the given one.
   std::vector<ResolvedConfig> configs;
   std::string config_label;  ///< the configuration's label (preset and what is set on top of it)
+  /// Technique options given with --option TECHNIQUE:KEY=VALUE: technique -> "KEY=VALUE" list.
+  std::map<std::string, std::vector<std::string>> options;
 };
 
 /// One point of the study: a technique at a light count, on one of the configurations (modes).
@@ -135,6 +138,21 @@ StudyPlan plan_from_options(const po::variables_map& vm) {
   plan.config_label = plan.configs.front().params.config_name + (plan.config_label.empty() ? "" : " " + plan.config_label);
   plan.scene = vm["scene"].as<std::string>();
   plan.resolution = vm["resolution"].as<std::string>();
+  if (vm.count("option")) {
+    for (const auto& o : vm["option"].as<std::vector<std::string>>()) {
+      const auto colon = o.find(':');
+      const auto eq = o.find('=', colon == std::string::npos ? 0 : colon);
+      if (colon == std::string::npos || colon == 0 || eq == std::string::npos || eq == colon + 1) {
+        throw InputError("--option " + o, "expected TECHNIQUE:KEY=VALUE, e.g. forward_light_stack:pls_bytes=32");
+      }
+      const std::string technique = o.substr(0, colon);
+      find_technique(technique);  // InputError for an unknown name
+      if (std::find(plan.techniques.begin(), plan.techniques.end(), technique) == plan.techniques.end()) {
+        throw InputError("--option " + o, "technique '" + technique + "' is not in this study (--technique)");
+      }
+      plan.options[technique].push_back(o.substr(colon + 1));
+    }
+  }
   plan.max_lights = *std::max_element(plan.light_counts.begin(), plan.light_counts.end());
   plan.db_path = (fs::path(plan.dir) / "study.db").string();
   return plan;
@@ -156,7 +174,20 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
       StudyPoint p;
       p.technique = t;
       p.lights = n;
-      p.trace_path = (fs::path(plan.dir) / "traces" / (t + "_" + std::to_string(n) + ".trace")).string();
+      // The trace's name carries its options, so that studies with other options into the same
+      // folder keep each trace (and the runs that name it) apart.
+      std::string stem = t + "_" + std::to_string(n);
+      const auto given = plan.options.find(t);
+      if (given != plan.options.end()) {
+        for (const auto& kv : given->second) {
+          std::string part = kv;
+          for (char& c : part) {
+            if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '.') c = '-';
+          }
+          stem += "_" + part;
+        }
+      }
+      p.trace_path = (fs::path(plan.dir) / "traces" / (stem + ".trace")).string();
       if (plan.image_mode == "all" || (plan.image_mode == "largest" && n == plan.max_lights)) {
         p.images_dir = (fs::path(plan.dir) / "images" / (t + "_" + std::to_string(n))).string();
       }
@@ -165,6 +196,9 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
       // One additive pass per light would replay the scene 1024 times: the study batches lights
       // (the issue allows "one additive pass per light or per light batch").
       if (t == "forward_multipass") a.insert(a.end(), {"--option", "lights_per_pass=" + std::to_string(kMultipassBatch)});
+      if (given != plan.options.end()) {
+        for (const auto& kv : given->second) a.insert(a.end(), {"--option", kv});  // the last one given wins
+      }
       std::ostringstream sink, errs;
       if (cli_main(a, sink, errs) != 0) throw InputError("study", "generating " + t + ": " + errs.str());
       for (std::size_t c = 0; c < plan.configs.size(); ++c) {
@@ -280,8 +314,18 @@ std::string fig(const std::optional<double>& v, int decimals) { return v ? fmt(*
 void print_comparison(const StudyPlan& plan, const std::vector<StudyPoint>& points, StudyResults& results,
                       std::ostream& out) {
   const bool modes = plan.configs.size() > 1;
+  // The technique options the study set (the study's batch of forward_multipass, then --option).
+  std::string options;
+  for (const auto& t : plan.techniques) {
+    std::vector<std::string> kv;
+    if (t == "forward_multipass") kv.push_back("lights_per_pass=" + std::to_string(kMultipassBatch));
+    if (const auto it = plan.options.find(t); it != plan.options.end()) kv.insert(kv.end(), it->second.begin(), it->second.end());
+    if (kv.empty()) continue;
+    options += (options.empty() ? "" : "; ") + t;
+    for (const auto& o : kv) options += " " + o;
+  }
   out << "\nComparison (" << plan.config_label << "): frame time, DRAM traffic requested by the units, energy"
-      << " (forward_multipass: " << kMultipassBatch << " lights per pass)\n";
+      << " (technique options: " << options << ")\n";
   out << std::left << std::setw(30) << "technique" << std::right << std::setw(7) << "lights";
   if (modes) out << std::setw(6) << "mode";
   out << std::setw(11) << "frame ms" << std::setw(11) << "DRAM MB" << std::setw(11) << "energy mJ" << std::setw(10)
@@ -440,6 +484,9 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
       "lights", po::value<std::vector<int>>()->multitoken(), "light counts (default 256 1024)")(
       "technique", po::value<std::vector<std::string>>()->multitoken(), "techniques (default: all)")(
       "images", po::value<std::string>()->default_value("largest"), "write images for: none | largest (light count) | all")(
+      "option", po::value<std::vector<std::string>>()->composing(),
+      "TECHNIQUE:KEY=VALUE: a technique option for that technique's traces, e.g. forward_light_stack:pls_bytes=32 "
+      "(repeatable; `tbdrsim trace --list` lists the options)")(
       "modes", po::value<std::vector<std::string>>()->multitoken(),
       "GPU modes to compare (gpu.mode values: tbdr tbr imr); each trace replays on each; default: the configuration's");
   po::variables_map vm;
