@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -576,6 +577,48 @@ TEST(ReportRealOptions, TechniqueOptionIsADimension) {
                    "frame.geometry_passes_ratio");
   EXPECT_EQ(bl[1], "forward_multipass,4,1,5,2,1.666666667") << b.str();  // 5 - 3 passes, 5 / 3
   EXPECT_EQ(bl[2], "forward_multipass,8,1,3,0,1") << b.str();
+}
+
+// The study compares GPU modes on the same trace and passes technique options to its traces:
+// the technique x mode table holds the report's figures, and the option is a stored dimension.
+TEST(ReportRealOptions, StudyComparesModesAndPassesTechniqueOptions) {
+  const fs::path dir = scratch("study_modes");
+  std::ostringstream out, err;
+  ASSERT_EQ(cli_main({"study", "--out", (dir / "s").string(), "--technique", "plain_forward", "--lights", "4",
+                      "--resolution", "64x36", "--scene", "atrium:1", "--images", "none", "--jobs", "1", "--modes", "tbdr",
+                      "tbr", "--option", "plain_forward:alu_ops=40"},
+                     out, err),
+            0)
+      << err.str();
+  const std::string text = out.str();
+  EXPECT_NE(text.find("Technique x GPU mode at 4 lights"), std::string::npos) << text;
+  EXPECT_NE(text.find("frame ms tbdr"), std::string::npos) << text;
+  EXPECT_NE(text.find("frame ms tbr"), std::string::npos) << text;
+  EXPECT_NE(text.find("technique options: plain_forward alu_ops=40"), std::string::npos) << text;
+  EXPECT_TRUE(fs::exists(dir / "s" / "traces" / "plain_forward_4_alu_ops-40.trace"));
+  ResultsDb db((dir / "s" / "study.db").string());
+  testing_support::expect_numbers(
+      db, {{"SELECT count(*) FROM v_param WHERE key = 'gpu.mode' AND value IN ('tbdr', 'tbr')", 2},
+           {"SELECT count(DISTINCT trace_hash) FROM runs", 1},  // the same trace on both modes
+           {"SELECT min(value_num) FROM v_param WHERE key = 'technique.alu_ops'", 40}});
+  // The table's TBR frame time is the report's, to the table's two decimals.
+  ReportOptions opt;
+  opt.by = {"gpu.mode"};
+  opt.metrics = {"frame_time_ms"};
+  const ReportTable t = build_report(db, opt);
+  ASSERT_EQ(t.rows.size(), 2u);
+  char tbr[32];
+  std::snprintf(tbr, sizeof tbr, "%.2f", *t.rows[1].values[0]);  // rows sorted: tbdr, tbr
+  const auto row = text.find("\nplain_forward", text.find("Technique x GPU mode"));
+  ASSERT_NE(row, std::string::npos) << text;
+  const std::string line = text.substr(row + 1, text.find('\n', row + 1) - row - 1);
+  EXPECT_NE(line.find(tbr), std::string::npos) << line << " vs " << tbr;
+  std::ostringstream bad_out, bad_err;
+  EXPECT_EQ(cli_main({"study", "--out", (dir / "bad").string(), "--technique", "plain_forward", "--option",
+                      "deferred:gbuffer=x"},
+                     bad_out, bad_err),
+            2);
+  EXPECT_NE(bad_err.str().find("not in this study"), std::string::npos) << bad_err.str();
 }
 
 }  // namespace
