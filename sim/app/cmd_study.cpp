@@ -384,10 +384,11 @@ void print_mode_table(const StudyPlan& plan, const std::vector<StudyPoint>& poin
         << "; the same trace on each mode; `tbdrsim report --db " << plan.db_path
         << " --by technique --by gpu.mode --baseline gpu.mode=" << plan.modes.front() << "` prints ratios)\n";
     const char* titles[] = {"frame ms", "DRAM MB", "energy mJ", "frags/px"};
+    constexpr int kModeColumn = 16;  // the longest title ("energy mJ tbdr") and two spaces
     const int decimals[] = {2, 1, 2, 2};
     out << std::left << std::setw(30) << "technique" << std::right;
     for (std::size_t m = 0; m < opt.metrics.size(); ++m) {
-      for (const auto& mode : plan.modes) out << std::setw(m == 0 ? 16 : 14) << (std::string(titles[m]) + " " + mode);
+      for (const auto& mode : plan.modes) out << std::setw(kModeColumn) << (std::string(titles[m]) + " " + mode);
     }
     out << "\n";
     std::map<std::string, std::map<std::string, const ReportTable::Row*>> cells;
@@ -402,7 +403,7 @@ void print_mode_table(const StudyPlan& plan, const std::vector<StudyPoint>& poin
             const auto& values = it->second->values;
             text = m < values.size() && values[m].has_value() ? fmt(values[m].value(), decimals[m]) : std::string("-");
           }
-          out << std::setw(m == 0 ? 16 : 14) << text;
+          out << std::setw(kModeColumn) << text;
         }
       }
       out << "\n";
