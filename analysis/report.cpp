@@ -306,10 +306,14 @@ std::map<std::int64_t, std::vector<std::string>> group_keys_of(const SqlConnecti
     SqlStatement exists(db, "SELECT 1 FROM v_param WHERE key = ? LIMIT 1");
     exists.bind(1, keys[k]);
     if (!exists.step()) {
-      throw InputError("--by " + typed[k],
-                       "no run has this key; use technique, scene, config, lights, camera, resolution, trace, "
-                       "trace.width, trace.height, trace.samples, technique.<option> (the trace's technique "
-                       "options) or a parameter key (`tbdrsim params` lists them)");
+      std::string why = "no run has this key; use technique, scene, config, lights, camera, resolution, trace, "
+                        "trace.width, trace.height, trace.samples, technique.<option> (the trace's technique "
+                        "options) or a parameter key (`tbdrsim params` lists them)";
+      if (keys[k].rfind("technique.", 0) == 0) {
+        why += "; runs stored before tbdrsim recorded technique options (results database schema 3 and older) "
+               "have none: `tbdrsim trace --list` shows each technique's options";
+      }
+      throw InputError("--by " + typed[k], why);
     }
     SqlStatement q(db, "SELECT run_id, value FROM v_param WHERE key = ?");
     q.bind(1, keys[k]);
