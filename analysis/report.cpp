@@ -2,6 +2,7 @@
 #include "analysis/report.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +20,20 @@ namespace tbdr {
 // ---------------------------------------------------------------------------------------------
 // Report
 
+std::string canonical_group_key(const std::string& key) {
+  if (key == "technique") return "trace.technique";
+  if (key == "scene") return "trace.scene";
+  if (key == "config" || key == "config_label") return "config.label";
+  if (key == "config_name") return "config.name";
+  if (key == "lights") return "trace.lights";
+  if (key == "camera") return "trace.camera";
+  if (key == "resolution") return "trace.resolution";
+  if (key == "trace" || key == "trace_path") return "trace.path";
+  if (key == "trace_hash") return "trace.hash";
+  if (key == "mode") return "gpu.mode";
+  return key;
+}
+
 ReportFormat parse_report_format(const std::string& text) {
   if (text == "table") return ReportFormat::Table;
   if (text == "csv") return ReportFormat::Csv;
@@ -32,15 +47,6 @@ namespace {
 const char* const kDramClassOrder[] = {"parameter_buffer", "vertices", "indices",    "textures", "color",
                                        "depth_stencil",    "gbuffer",  "visibility", "light_data",
                                        "light_lists",      "work_lists", "spill",    "other"};
-
-/// Shorthands for the group keys a user types most.
-std::string canonical_group_key(const std::string& key) {
-  if (key == "technique") return "trace.technique";
-  if (key == "scene") return "trace.scene";
-  if (key == "config" || key == "config_name") return "config.name";
-  if (key == "lights") return "trace.lights";
-  return key;
-}
 
 bool parse_number(const std::string& s, double& v) {
   if (s.empty()) return false;
@@ -170,6 +176,7 @@ std::vector<std::string> default_report_metrics(const SqlConnection& db) {
                    "AND name GLOB '*_pj' AND name <> 'total_pj' ORDER BY rowid");
     while (q.step()) m.push_back("energy_" + q.text(0) + "_mj");
   }
+  m.push_back("shaded_fragments_per_pixel");
   m.push_back("overshading");
   m.push_back("lights_per_pixel");
   return m;
@@ -182,13 +189,98 @@ struct SelectedRuns {
   std::int64_t failed = 0;                   ///< failed runs passing the filter
 };
 
+/// The keys of v_param: every stored parameter key and the pseudo-keys of the view.
+std::vector<std::string> param_keys(const SqlConnection& db) {
+  std::vector<std::string> keys = {"trace.technique", "trace.scene", "trace.lights",    "trace.width",
+                                   "trace.height",    "trace.samples", "trace.resolution", "trace.path",
+                                   "trace.hash",      "config.name",  "config.label"};
+  SqlStatement q(db, "SELECT DISTINCT key FROM run_params");
+  while (q.step()) keys.push_back(q.text(0));
+  return keys;
+}
+
+bool ident_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
+
+/// Quotes, in an SQL condition, every dotted v_param key written as a bare word outside string
+/// literals (gpu.mode -> "gpu.mode", which SQL would read as table.column) and returns the keys the
+/// condition names, quoted or not, so that they can be made columns.
+std::string quote_param_keys(const std::string& where, const std::vector<std::string>& keys,
+                             std::vector<std::string>& used) {
+  std::vector<std::string> dotted;
+  for (const auto& k : keys) {
+    if (k.find('.') != std::string::npos) dotted.push_back(k);
+  }
+  // Longest first, so that a key never matches inside a longer one.
+  std::sort(dotted.begin(), dotted.end(), [](const std::string& a, const std::string& b) { return a.size() > b.size(); });
+  std::string out;
+  std::set<std::string> seen;
+  char quote = 0;  // inside '...' or "..."
+  for (std::size_t i = 0; i < where.size();) {
+    const char c = where[i];
+    if (quote) {
+      out += c;
+      if (c == quote) quote = 0;
+      ++i;
+      continue;
+    }
+    if (c == '\'' || c == '"') {
+      if (c == '"') {  // an identifier already quoted: note it when it is a key
+        const auto end = where.find('"', i + 1);
+        if (end != std::string::npos) {
+          const std::string id = where.substr(i + 1, end - i - 1);
+          if (std::find(dotted.begin(), dotted.end(), id) != dotted.end()) seen.insert(id);
+        }
+      }
+      quote = c;
+      out += c;
+      ++i;
+      continue;
+    }
+    bool matched = false;
+    if (i == 0 || !(ident_char(where[i - 1]) || where[i - 1] == '.')) {
+      for (const auto& k : dotted) {
+        if (where.compare(i, k.size(), k) == 0 && (i + k.size() == where.size() || !ident_char(where[i + k.size()]))) {
+          out += "\"" + k + "\"";
+          seen.insert(k);
+          i += k.size();
+          matched = true;
+          break;
+        }
+      }
+    }
+    if (!matched) {
+      out += c;
+      ++i;
+    }
+  }
+  used.assign(seen.begin(), seen.end());
+  return out;
+}
+
 SelectedRuns select_runs(const SqlConnection& db, const std::string& where) {
   SelectedRuns r;
   try {
     // --where is an SQL condition by design, the only text spliced into a statement here; the
-    // statement holds one statement only (SqlStatement refuses "1; DROP TABLE runs").
-    SqlStatement q(db, "SELECT run_id, status, config_hash, trace_hash FROM v_run_summary WHERE (" +
-                           (where.empty() ? std::string("1") : where) + ") ORDER BY run_id");
+    // statement holds one statement only (SqlStatement refuses "1; DROP TABLE runs"). Keys of
+    // v_param it names become columns of a per-run pivot (their names bound as values).
+    std::vector<std::string> used;
+    const std::string cond = where.empty() ? std::string("1") : quote_param_keys(where, param_keys(db), used);
+    std::string pivot;
+    if (!used.empty()) {
+      std::string cols, in;
+      for (std::size_t i = 0; i < used.size(); ++i) {
+        cols += ", max(CASE WHEN key = ? THEN coalesce(value_num, value) END) AS \"" + used[i] + "\"";
+        in += i ? ",?" : "?";
+      }
+      pivot = "WITH p AS (SELECT run_id AS p_run_id" + cols + " FROM v_param WHERE key IN (" + in +
+              ") GROUP BY run_id) ";
+    }
+    SqlStatement q(db, pivot + "SELECT run_id, status, config_hash, trace_hash FROM v_run_summary" +
+                           (used.empty() ? "" : " LEFT JOIN p ON p.p_run_id = run_id") + " WHERE (" + cond +
+                           ") ORDER BY run_id");
+    int b = 1;
+    for (const auto& k : used) q.bind(b++, k);
+    for (const auto& k : used) q.bind(b++, k);
     while (q.step()) {
       if (q.text(1) == "ok") {
         r.ok.push_back(q.int64(0));
@@ -198,7 +290,8 @@ SelectedRuns select_runs(const SqlConnection& db, const std::string& where) {
       }
     }
   } catch (const InputError& e) {
-    throw InputError("--where " + where, std::string(e.what()) + " (the condition is on v_run_summary's columns)");
+    throw InputError("--where " + where, std::string(e.what()) +
+                                             " (the condition is on v_run_summary's columns and v_param keys)");
   }
   return r;
 }
@@ -213,9 +306,14 @@ std::map<std::int64_t, std::vector<std::string>> group_keys_of(const SqlConnecti
     SqlStatement exists(db, "SELECT 1 FROM v_param WHERE key = ? LIMIT 1");
     exists.bind(1, keys[k]);
     if (!exists.step()) {
-      throw InputError("--by " + typed[k],
-                       "no run has this key; use technique, scene, config, lights, trace.width, trace.height, "
-                       "trace.samples or a parameter key (`tbdrsim params` lists them)");
+      std::string why = "no run has this key; use technique, scene, config, lights, camera, resolution, trace, "
+                        "trace.width, trace.height, trace.samples, technique.<option> (the trace's technique "
+                        "options) or a parameter key (`tbdrsim params` lists them)";
+      if (keys[k].rfind("technique.", 0) == 0) {
+        why += "; runs stored before tbdrsim recorded technique options (results database schema 3 and older) "
+               "have none: `tbdrsim trace --list` shows each technique's options";
+      }
+      throw InputError("--by " + typed[k], why);
     }
     SqlStatement q(db, "SELECT run_id, value FROM v_param WHERE key = ?");
     q.bind(1, keys[k]);
@@ -276,6 +374,44 @@ MetricsSeen sum_metrics(const SqlConnection& db, const std::vector<std::string>&
   return s;
 }
 
+/// Two key values name the same thing: equal text, or equal numbers ("128" and "128.0").
+bool key_equal(const std::string& a, const std::string& b) {
+  double x = 0, y = 0;
+  return a == b || (parse_number(a, x) && parse_number(b, y) && x == y);
+}
+
+/// Finds, for every row, the row that differs from it only in the baseline key, where that key
+/// has the baseline value, and keeps that row's values beside it.
+void apply_baseline(ReportTable& t, const std::string& typed_key, const std::string& typed) {
+  const std::size_t kb = *t.baseline_key;
+  std::set<std::string, decltype(&key_less)> present(&key_less);
+  std::optional<std::string> stored;  // the baseline value as the database spells it
+  for (const auto& r : t.rows) {
+    present.insert(r.keys[kb]);
+    if (key_equal(r.keys[kb], t.baseline_value)) stored = r.keys[kb];
+  }
+  if (!stored) {
+    std::string values;
+    for (const auto& v : present) values += (values.empty() ? "" : ", ") + v;
+    throw InputError("--baseline " + typed, "no selected run has " + typed_key + " = " + t.baseline_value +
+                                                (values.empty() ? std::string(" (no runs selected)") : "; its values: " + values));
+  }
+  t.baseline_value = *stored;
+  std::map<std::vector<std::string>, std::size_t> index;
+  for (std::size_t i = 0; i < t.rows.size(); ++i) index[t.rows[i].keys] = i;
+  for (const auto& r : t.rows) {
+    std::vector<std::string> k = r.keys;
+    k[kb] = *stored;
+    const auto it = index.find(k);
+    if (it == index.end()) {
+      t.baseline_values.emplace_back(r.values.size());
+      ++t.rows_without_baseline;
+    } else {
+      t.baseline_values.push_back(t.rows[it->second].values);
+    }
+  }
+}
+
 }  // namespace
 
 ReportTable build_report(const ResultsDb& db, const ReportOptions& opt) {
@@ -285,6 +421,24 @@ ReportTable build_report(const ResultsDb& db, const ReportOptions& opt) {
   for (const auto& k : opt.by.empty() ? std::vector<std::string>{"technique"} : opt.by) {
     keys.push_back(canonical_group_key(k));
     t.group_keys.push_back(k);
+  }
+  std::string baseline_key_typed;
+  if (!opt.baseline.empty()) {
+    const auto eq = opt.baseline.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == opt.baseline.size()) {
+      throw InputError("--baseline " + opt.baseline, "expected KEY=VALUE, e.g. pls.tile_buffer_bits_per_pixel=128 or technique=deferred");
+    }
+    baseline_key_typed = opt.baseline.substr(0, eq);
+    t.baseline_value = opt.baseline.substr(eq + 1);
+    const std::string key = canonical_group_key(baseline_key_typed);
+    const auto it = std::find(keys.begin(), keys.end(), key);
+    if (it == keys.end()) {
+      keys.push_back(key);
+      t.group_keys.push_back(baseline_key_typed);
+      t.baseline_key = keys.size() - 1;
+    } else {
+      t.baseline_key = static_cast<std::size_t>(it - keys.begin());
+    }
   }
   const SelectedRuns runs = select_runs(sql, opt.where);
   t.runs_failed = runs.failed;
@@ -358,6 +512,7 @@ ReportTable build_report(const ResultsDb& db, const ReportOptions& opt) {
     }
     return false;
   });
+  if (t.baseline_key) apply_baseline(t, baseline_key_typed, opt.baseline);
   return t;
 }
 
@@ -416,6 +571,29 @@ void print_report(const ReportTable& t, ReportFormat format, bool transpose, std
     if (!v) return csv ? std::string() : std::string("-");
     return csv ? format_csv_value(*v) : format_value(*v);
   };
+  const bool compare = t.baseline_key.has_value();
+  // One printed column per metric, or three with a baseline: the value, its difference from the
+  // baseline group's and their ratio.
+  struct Column {
+    std::string header;
+    std::size_t metric = 0;
+    int kind = 0;  ///< 0 value, 1 difference, 2 ratio
+  };
+  auto cell = [&](const Column& c, std::size_t row) -> std::string {
+    const std::optional<double>& v = t.rows[row].values[c.metric];
+    if (c.kind == 0) return value_text(v);
+    const std::optional<double>& b = t.baseline_values[row][c.metric];
+    if (!v || !b) return csv ? std::string() : std::string("-");
+    char buf[64];
+    if (c.kind == 1) {
+      if (csv) return format_csv_value(*v - *b);
+      const std::string d = format_value(*v - *b);
+      return (*v - *b > 0 ? "+" : "") + d;
+    }
+    if (*b == 0) return csv ? std::string() : std::string("-");
+    std::snprintf(buf, sizeof buf, csv ? "%.10g" : "%.3f", *v / *b);
+    return buf;
+  };
   // CSV: one flat table with the full metric names.
   std::vector<ReportTable::Section> sections = t.sections;
   if (csv || sections.empty()) {
@@ -432,6 +610,14 @@ void print_report(const ReportTable& t, ReportFormat format, bool transpose, std
     out << ", grouped by ";
     for (std::size_t k = 0; k < t.group_keys.size(); ++k) out << (k ? " x " : "") << t.group_keys[k];
     out << "; the runs of a group averaged\n";
+    if (compare) {
+      out << "baseline: " << t.group_keys[*t.baseline_key] << " = " << t.baseline_value
+          << " (each group against the one that differs only in " << t.group_keys[*t.baseline_key]
+          << "; -base: difference, /base: ratio)\n";
+      if (t.rows_without_baseline) {
+        out << "note: " << t.rows_without_baseline << " group(s) have no baseline group to compare with (shown as -)\n";
+      }
+    }
     if (t.mixed_groups) {
       out << "note: " << t.mixed_groups
           << " group(s) average runs of different configurations or traces; separate them with more --by keys "
@@ -444,17 +630,25 @@ void print_report(const ReportTable& t, ReportFormat format, bool transpose, std
   }
   for (std::size_t s = 0; s < sections.size(); ++s) {
     const auto& sec = sections[s];
+    std::vector<Column> cols;
+    for (std::size_t i = 0; i < sec.metrics.size(); ++i) {
+      cols.push_back({sec.headers[i], sec.metrics[i], 0});
+      if (compare) {
+        cols.push_back({sec.headers[i] + (csv ? "_delta" : " -base"), sec.metrics[i], 1});
+        cols.push_back({sec.headers[i] + (csv ? "_ratio" : " /base"), sec.metrics[i], 2});
+      }
+    }
     std::vector<std::vector<std::string>> grid;
     std::size_t label_cols = 0;
     if (!transpose) {
       std::vector<std::string> head = t.group_keys;
       head.push_back("runs");
-      head.insert(head.end(), sec.headers.begin(), sec.headers.end());
+      for (const auto& c : cols) head.push_back(c.header);
       grid.push_back(head);
-      for (const auto& r : t.rows) {
-        std::vector<std::string> line = r.keys;
-        line.push_back(std::to_string(r.runs));
-        for (const auto m : sec.metrics) line.push_back(value_text(r.values[m]));
+      for (std::size_t r = 0; r < t.rows.size(); ++r) {
+        std::vector<std::string> line = t.rows[r].keys;
+        line.push_back(std::to_string(t.rows[r].runs));
+        for (const auto& c : cols) line.push_back(cell(c, r));
         grid.push_back(line);
       }
       label_cols = t.group_keys.size();
@@ -471,9 +665,9 @@ void print_report(const ReportTable& t, ReportFormat format, bool transpose, std
       std::vector<std::string> runs = {"runs"};
       for (const auto& r : t.rows) runs.push_back(std::to_string(r.runs));
       grid.push_back(runs);
-      for (std::size_t i = 0; i < sec.metrics.size(); ++i) {
-        std::vector<std::string> line = {sec.headers[i]};
-        for (const auto& r : t.rows) line.push_back(value_text(r.values[sec.metrics[i]]));
+      for (const auto& c : cols) {
+        std::vector<std::string> line = {c.header};
+        for (std::size_t r = 0; r < t.rows.size(); ++r) line.push_back(cell(c, r));
         grid.push_back(line);
       }
       label_cols = 1;
@@ -493,6 +687,31 @@ void print_report(const ReportTable& t, ReportFormat format, bool transpose, std
     }
     print_grid(grid, label_cols, format, out);
   }
+}
+
+DerivedFigures read_derived_figures(const ResultsDb& db, std::int64_t run_id) {
+  SqlStatement q(db.sql(),
+                 "SELECT frame_time_ms, cycles, dram_total_mb, dram_device_total_mb, energy_total_mj, "
+                 "shaded_fragments_per_pixel, overshading, lights_per_pixel, lights_per_fragment, config_label "
+                 "FROM v_run_summary WHERE run_id = ?");
+  q.bind(1, run_id);
+  if (!q.step()) throw InputError(db.path(), "no run " + std::to_string(run_id));
+  auto get = [&](int c) -> std::optional<double> {
+    if (q.is_null(c)) return std::nullopt;
+    return q.real(c);
+  };
+  DerivedFigures d;
+  d.frame_time_ms = get(0);
+  d.cycles = get(1);
+  d.dram_total_mb = get(2);
+  d.dram_device_total_mb = get(3);
+  d.energy_total_mj = get(4);
+  d.shaded_fragments_per_pixel = get(5);
+  d.overshading = get(6);
+  d.lights_per_pixel = get(7);
+  d.lights_per_fragment = get(8);
+  d.config_label = q.text(9);
+  return d;
 }
 
 }  // namespace tbdr

@@ -29,13 +29,18 @@ ReportFormat parse_report_format(const std::string& text);
 
 /// What to compare: group keys, metrics, a row filter.
 struct ReportOptions {
-  /// Group keys, in order: "technique", "scene", "config" or any v_param key
-  /// ("tiling.tile_width", "trace.lights", ...). Empty: technique.
+  /// Group keys, in order: "technique", "scene", "config" (its label), "lights", "camera",
+  /// "resolution", "trace" or any v_param key ("tiling.tile_width", "technique.pls_bytes", ...).
+  /// Empty: technique.
   std::vector<std::string> by;
   /// v_metric names; empty: the default set, keeping only figures some run recorded.
   std::vector<std::string> metrics;
-  /// SQL condition on v_run_summary's columns ("lights = 256 AND config_name = 'x'").
+  /// SQL condition on v_run_summary's columns and on any v_param key written as a column
+  /// ("lights = 256 AND technique.pls_bytes = 16 AND gpu.mode = 'tbdr'").
   std::string where;
+  /// "KEY=VALUE": each group is compared with the group that differs from it only in KEY, where
+  /// KEY has VALUE (KEY is added to the group keys when absent). Empty: no comparison.
+  std::string baseline;
   bool transpose = false;  ///< metrics as rows, groups as columns
 };
 
@@ -51,6 +56,12 @@ struct ReportTable {
     std::int64_t runs = 0;
   };
   std::vector<Row> rows;
+  /// With a baseline: which group key it varies, its value, and per row the baseline group's
+  /// values (nullopt where that group has no value or does not exist).
+  std::optional<std::size_t> baseline_key;
+  std::string baseline_value;
+  std::vector<std::vector<std::optional<double>>> baseline_values;
+  std::int64_t rows_without_baseline = 0;  ///< rows whose baseline group is absent
   /// How the table/markdown formats split the metrics into titled tables with short headers (the
   /// default report: frame figures, DRAM per class, energy per component); CSV prints them flat.
   struct Section {
@@ -65,7 +76,22 @@ struct ReportTable {
   std::int64_t mixed_groups = 0;
 };
 
-/// Builds the comparison. InputError for an unknown group key or metric, or bad SQL in `where`.
+/// The v_param key a group key shorthand stands for ("technique" -> "trace.technique", "config"
+/// -> "config.label", "lights" -> "trace.lights", ...); other keys are returned unchanged.
+std::string canonical_group_key(const std::string& key);
+
+/// The derived figures of one run, read from v_run_summary (their one definition: views.sql);
+/// nullopt where the run did not record what a figure needs.
+struct DerivedFigures {
+  std::optional<double> frame_time_ms, cycles, dram_total_mb, dram_device_total_mb, energy_total_mj;
+  std::optional<double> shaded_fragments_per_pixel, overshading, lights_per_pixel, lights_per_fragment;
+  std::string config_label;
+};
+/// Reads them; InputError when the database has no such run.
+DerivedFigures read_derived_figures(const ResultsDb& db, std::int64_t run_id);
+
+/// Builds the comparison. InputError for an unknown group key or metric, bad SQL in `where`, or a
+/// malformed or absent baseline.
 ReportTable build_report(const ResultsDb& db, const ReportOptions& options);
 /// Prints it: aligned columns (table), CSV, or a Markdown table.
 void print_report(const ReportTable& table, ReportFormat format, bool transpose, std::ostream& out);

@@ -86,6 +86,12 @@ CREATE TABLE sweep_claims(
   PRIMARY KEY(config_hash, trace_hash, repetition)
 );
 )sql",
+    // v4: the trace's technique options and viewpoint are stored as run parameters
+    // (technique.<option>, trace.camera; app/run_driver.cpp) and grouped on by key: an index by key
+    // so that `report --by KEY` and v_param lookups by key do not scan every run's parameters.
+    R"sql(
+CREATE INDEX run_params_by_key ON run_params(key, run_id);
+)sql",
 };
 static_assert(sizeof(kMigrations) / sizeof(kMigrations[0]) == ResultsDb::kSchemaVersion);
 
@@ -239,6 +245,15 @@ std::int64_t ResultsDb::write_run(const RunRecord& run) {
   }
   tx->commit();
   return id;
+}
+
+void close_results_db_cleanly(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return;
+  SqlConnection c(path, SqlOpen::ExistingQueryOnly);
+  // query_only refuses writes but not a checkpoint; the connection's close then removes the WAL
+  // files when it is the last one (SQLite's default: it checkpoints and deletes the log).
+  retry_while_busy([&] { c.exec("PRAGMA wal_checkpoint(TRUNCATE)"); });
 }
 
 std::string utc_now_iso8601() {

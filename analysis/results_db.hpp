@@ -44,7 +44,7 @@ struct RunRecord {
 /// with an InputError naming the file.
 class ResultsDb {
  public:
-  static constexpr int kSchemaVersion = 3;
+  static constexpr int kSchemaVersion = 4;
   static constexpr int kApplicationId = 0x54424452;  ///< "TBDR"
 
   /// Opens (creating if absent) and migrates up to `target_version` (tests use older versions).
@@ -80,6 +80,12 @@ class ResultsDb {
 /// existing file must be a writable tbdrsim results database this version can open; for a new one,
 /// its folder must exist and be writable. InputError naming the file otherwise.
 void check_results_db_target(const std::string& path);
+
+/// Checkpoints the database's write-ahead log into it and closes it, so that, when no other
+/// connection has it open, SQLite removes the -wal and -shm files beside it (a user who copies the
+/// .db file alone then copies every run). Commands call it after a reader that may not do this
+/// (a read-only connection, such as the plot scripts', leaves them). Nothing when the file is absent.
+void close_results_db_cleanly(const std::string& path);
 
 /// Current UTC time as ISO 8601 ("2026-11-22T10:00:00Z").
 std::string utc_now_iso8601();

@@ -12,7 +12,34 @@
 -- dram_*_mb is the traffic the units requested at the chip boundary (frame/dram*, before the
 -- system level cache); dram_device_*_mb is what reached the DRAM devices (mem/dram*).
 -- light_evaluations counts fragment shading (tsp) and compute shading (deferred dispatches).
+-- The derived figures are defined HERE and nowhere else (the study, `report`, `run` and the stats
+-- files read them from v_run_summary; docs/queries.md states each):
+--   shaded_fragments_per_pixel = tsp.shader_invocations / (width x height): fragment shader
+--     invocations of every pass (scene geometry, light proxies, full-screen passes) per screen pixel;
+--   overshading = (tsp.lit_surface_invocations + compute.compute_shaded_pixels) / covered_pixels:
+--     lighting computed on scene surfaces or by kernels per visible pixel; above 1, lighting was
+--     computed for surfaces that ended up hidden; below 1, the lighting runs on proxies (light
+--     volumes, counted by lights_per_pixel instead);
+--   lights_per_pixel = (tsp.light_evaluations + compute.compute_light_evaluations) / (width x height);
+--   lights_per_fragment = the same evaluations / tsp.shader_invocations;
+--   a unit's utilization = busy cycles / frame cycles (stored as frame/unit.<unit> utilization by
+--     the run driver, app/run_driver.cpp time_frame, its one definition; v_unit reads it).
 -- Docs and ready-to-paste questions: docs/queries.md.
+
+-- The label of each run's configuration: the preset's name (config_name: the stem of the last
+-- config file, or 'default') followed by the parameters set on top of it (origin neither 'default'
+-- nor the preset's own file: --set, sweep axes, another config file), sorted by key:
+-- 'series6xt_gx6450 pls.tile_buffer_bits_per_pixel=256'. Labels, not hashes, name configurations.
+DROP VIEW IF EXISTS v_config_label;
+CREATE VIEW v_config_label AS
+SELECT r.id AS run_id,
+  r.config_name || coalesce(' ' || (
+    SELECT group_concat(key || '=' || value, ' ') FROM (
+      SELECT p.key, p.value FROM run_params p
+      WHERE p.run_id = r.id AND p.origin <> 'default' AND instr(p.origin, r.config_name || '.ini:') = 0
+        AND p.key NOT GLOB 'technique.*' AND p.key NOT GLOB 'trace.*'
+      ORDER BY p.key)), '') AS config_label
+FROM runs r;
 
 -- One row per run: identity, status, frame size, the headline figures.
 DROP VIEW IF EXISTS v_run_summary;
@@ -31,6 +58,9 @@ WITH f AS (
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'shaded_samples') AS shaded_samples,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'shader_invocations') AS shader_invocations,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'light_evaluations') AS tsp_light_evaluations,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'lit_surface_invocations') AS lit_surface_invocations,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/compute' AND name = 'compute_shaded_pixels') AS compute_shaded_pixels,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'covered_pixels') AS covered_pixels,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/compute' AND name = 'compute_light_evaluations') AS compute_light_evaluations,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/isp' AND name = 'samples_rasterised') AS samples_rasterised,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tiler' AND name = 'partial_renders') AS partial_renders,
@@ -90,11 +120,14 @@ g AS (
   FROM f
 )
 SELECT d.*,  -- run_id, then dram_<class>_read_mb and dram_<class>_write_mb for every traffic class
-  r.technique, r.scene, r.config_name, r.status, r.error,
+  r.technique, r.scene, r.config_name, l.config_label, r.status, r.error,
   r.config_hash, r.trace_hash, r.trace_path, r.started_at, r.host,
   f.width, f.height, f.samples_per_pixel, f.lights, f.passes, f.geometry_passes, f.dispatches,
   f.shaded_samples, f.shader_invocations, f.light_evaluations, f.samples_rasterised, f.partial_renders,
-  f.shaded_samples / nullif(f.width * f.height * coalesce(f.samples_per_pixel, 1), 0) AS overshading,
+  f.covered_pixels,
+  f.shader_invocations / nullif(f.width * f.height, 0) AS shaded_fragments_per_pixel,
+  -- A unit with no work in a frame records no row (frame/compute without a compute pass): zero.
+  (coalesce(f.lit_surface_invocations, 0) + coalesce(f.compute_shaded_pixels, 0)) / nullif(f.covered_pixels, 0) AS overshading,
   f.light_evaluations / nullif(f.width * f.height, 0) AS lights_per_pixel,
   f.light_evaluations / nullif(f.shader_invocations, 0) AS lights_per_fragment,
   f.dram_read_bytes / 1e6 AS dram_read_mb,
@@ -113,11 +146,13 @@ SELECT d.*,  -- run_id, then dram_<class>_read_mb and dram_<class>_write_mb for 
   f.e_texture_pj * 1e-9 AS energy_texture_mj,
   f.e_static_pj * 1e-9 AS energy_static_mj,
   f.sim_wall_seconds
-FROM runs r JOIN g AS f ON f.run_id = r.id JOIN dram d ON d.run_id = r.id;
+FROM runs r JOIN g AS f ON f.run_id = r.id JOIN dram d ON d.run_id = r.id JOIN v_config_label l ON l.run_id = r.id;
 
 -- Every parameter of every run, one row each, for pivoting and grouping: the resolved hardware
--- parameters (run_params) plus what the trace and the run fixed, under pseudo-keys:
--- trace.technique, trace.scene, trace.lights, trace.width, trace.height, trace.samples, config.name.
+-- parameters and what the run driver stored from the trace's header (run_params: the technique's
+-- options as technique.<option>, the viewpoint as trace.camera), plus pseudo-keys: trace.technique,
+-- trace.scene, trace.lights, trace.width, trace.height, trace.samples, trace.resolution,
+-- trace.path, trace.hash, config.name, config.label (v_config_label).
 -- value_num is the value as a number (booleans 1/0) or NULL for text.
 DROP VIEW IF EXISTS v_param;
 CREATE VIEW v_param AS
@@ -133,6 +168,18 @@ UNION ALL
 SELECT id, 'trace.scene', scene, NULL, 'trace' FROM runs
 UNION ALL
 SELECT id, 'config.name', config_name, NULL, 'config file' FROM runs
+UNION ALL
+SELECT run_id, 'config.label', config_label, NULL, 'config' FROM v_config_label
+UNION ALL
+SELECT id, 'trace.path', trace_path, NULL, 'trace' FROM runs
+UNION ALL
+SELECT id, 'trace.hash', trace_hash, NULL, 'trace' FROM runs
+UNION ALL
+SELECT r.id, 'trace.resolution', CAST(CAST(w.value AS INTEGER) AS TEXT) || 'x' || CAST(CAST(h.value AS INTEGER) AS TEXT),
+  NULL, 'trace'
+FROM runs r
+JOIN stats w ON w.run_id = r.id AND w.scope = 'frame/frame' AND w.name = 'width'
+JOIN stats h ON h.run_id = r.id AND h.scope = 'frame/frame' AND h.name = 'height'
 UNION ALL
 SELECT r.id,
   CASE s.name WHEN 'lights' THEN 'trace.lights' WHEN 'width' THEN 'trace.width' WHEN 'height' THEN 'trace.height'
@@ -169,9 +216,47 @@ SELECT r.id AS run_id, r.technique, r.config_name, r.status,
 FROM runs r JOIN stats s ON s.run_id = r.id AND s.scope = 'frame/energy'
 WHERE s.name GLOB '*_pj' AND s.name <> 'total_pj';
 
+-- Busy, stalled and idle cycles and utilization per run and timed unit (binning, tile fetch, ISP,
+-- USC, pixel back end: every frame/unit.<unit> scope the run driver wrote).
+DROP VIEW IF EXISTS v_unit;
+CREATE VIEW v_unit AS
+SELECT r.id AS run_id, r.technique, r.config_name, r.status, substr(s.scope, 12) AS unit,
+  max(CASE WHEN s.name = 'busy_cycles' THEN s.value END) AS busy_cycles,
+  max(CASE WHEN s.name = 'stalled_cycles' THEN s.value END) AS stalled_cycles,
+  max(CASE WHEN s.name = 'idle_cycles' THEN s.value END) AS idle_cycles,
+  max(CASE WHEN s.name = 'utilization' THEN s.value END) AS utilization
+FROM runs r JOIN stats s ON s.run_id = r.id AND s.scope > 'frame/unit.' AND s.scope < 'frame/unit/'  -- 'frame/unit.*'
+GROUP BY r.id, s.scope;
+
+-- The derived figures of v_metric: name, unit and meaning (stats files and docs/queries.md use it).
+DROP VIEW IF EXISTS v_metric_def;
+CREATE VIEW v_metric_def AS
+SELECT column1 AS metric, column2 AS unit, column3 AS description FROM (VALUES
+  ('frame_time_ms', 'ms', 'Frame time (timing model)'),
+  ('cycles', 'cycles', 'Frame time in core clock cycles'),
+  ('energy_total_mj', 'mJ', 'Energy of the frame, every component'),
+  ('dram_total_mb', 'MB', 'DRAM bytes read and written as the units requested them (before the caches), 1e6 bytes'),
+  ('dram_read_mb', 'MB', 'DRAM bytes read as requested by the units'),
+  ('dram_write_mb', 'MB', 'DRAM bytes written as requested by the units'),
+  ('dram_device_total_mb', 'MB', 'Bytes that reached the DRAM devices (after the system level cache)'),
+  ('dram_device_read_mb', 'MB', 'Bytes read from the DRAM devices'),
+  ('dram_device_write_mb', 'MB', 'Bytes written to the DRAM devices'),
+  ('overshading', 'lit fragments/covered pixel',
+   '(tsp.lit_surface_invocations + compute.compute_shaded_pixels) / covered_pixels: lighting computed on surfaces or by kernels per visible pixel; above 1, hidden surfaces were lit'),
+  ('shaded_fragments_per_pixel', 'fragments/pixel',
+   'tsp.shader_invocations / (width x height): fragment shader invocations of every pass per screen pixel'),
+  ('covered_pixels', 'pixels', 'Pixels shaded at least once (the visible surface)'),
+  ('lights_per_pixel', 'lights/pixel',
+   '(tsp.light_evaluations + compute.compute_light_evaluations) / (width x height)'),
+  ('lights_per_fragment', 'lights/fragment', 'The same light evaluations / tsp.shader_invocations'),
+  ('shaded_samples', 'samples', 'Samples whose color a shader wrote'),
+  ('samples_rasterised', 'samples', 'Samples the ISP rasterised'),
+  ('partial_renders', 'renders', 'Partial renders (parameter buffer full)'),
+  ('sim_wall_seconds', 's', 'Host wall time of the functional simulation'));
+
 -- Every figure of every run, one row each (metric, value, unit): the derived figures of
 -- v_run_summary under their column names (frame_time_ms, cycles, dram_total_mb, energy_total_mj,
--- overshading, lights_per_pixel, ...), DRAM MB read+written per class ('dram_<class>_mb'), energy
+-- overshading, shaded_fragments_per_pixel, lights_per_pixel, ...), DRAM MB read+written per class ('dram_<class>_mb'), energy
 -- per component ('energy_<component>_mj'), DRAM MB after the caches per class
 -- ('dram_device_<class>_mb'), and every raw frame statistic as '<unit>.<name>' (the scope without
 -- 'frame/': 'tsp.shaded_samples', 'dram.color.write_bytes', 'unit.usc.utilization').
@@ -189,6 +274,8 @@ SELECT s.run_id, m.metric,
     WHEN 'dram_device_read_mb' THEN s.dram_device_read_mb
     WHEN 'dram_device_write_mb' THEN s.dram_device_write_mb
     WHEN 'overshading' THEN s.overshading
+    WHEN 'shaded_fragments_per_pixel' THEN s.shaded_fragments_per_pixel
+    WHEN 'covered_pixels' THEN s.covered_pixels
     WHEN 'lights_per_pixel' THEN s.lights_per_pixel
     WHEN 'lights_per_fragment' THEN s.lights_per_fragment
     WHEN 'shaded_samples' THEN s.shaded_samples
@@ -198,14 +285,7 @@ SELECT s.run_id, m.metric,
   END AS value,
   m.unit
 FROM v_run_summary s
-CROSS JOIN (SELECT column1 AS metric, column2 AS unit FROM (VALUES
-    ('frame_time_ms', 'ms'), ('cycles', 'cycles'),
-    ('energy_total_mj', 'mJ'),
-    ('dram_total_mb', 'MB'), ('dram_read_mb', 'MB'), ('dram_write_mb', 'MB'),
-    ('dram_device_total_mb', 'MB'), ('dram_device_read_mb', 'MB'), ('dram_device_write_mb', 'MB'),
-    ('overshading', 'shaded samples/sample'), ('lights_per_pixel', 'lights/pixel'),
-    ('lights_per_fragment', 'lights/fragment'), ('shaded_samples', 'samples'),
-    ('samples_rasterised', 'samples'), ('partial_renders', 'renders'), ('sim_wall_seconds', 's'))) m
+CROSS JOIN v_metric_def m
 UNION ALL
 SELECT run_id, 'dram_' || class || '_mb', total_mb, 'MB' FROM v_dram_class WHERE total_mb IS NOT NULL
 UNION ALL
@@ -215,6 +295,48 @@ UNION ALL
 SELECT run_id, 'energy_' || component || '_mj', energy_mj, 'mJ' FROM v_energy_component
 UNION ALL
 SELECT run_id, substr(scope, 7) || '.' || name, value, unit FROM stats WHERE scope GLOB 'frame/*';
+
+-- Vendor counter names for figures that have a well-known one, and their values per run. Only
+-- names that exist in the vendors' tools, each with its source; value = metric x scale + offset.
+--   PowerVR: the Imagination PowerVR counters of Android GPU Inspector
+--     (https://developer.android.com/agi/refdocs/counters-imagination), as PVRTune names them;
+--   Mali: Arm's counter definitions for Streamline as Mesa carries them
+--     (src/panfrost/perf/G52.xml: name="...", counter="...").
+-- approximate = 1 where tbdrsim's figure is close to, not the same as, the vendor's (note says how).
+DROP VIEW IF EXISTS v_counter_alias;
+CREATE VIEW v_counter_alias AS
+SELECT column1 AS vendor, column2 AS counter, column3 AS unit, column4 AS metric, column5 AS scale,
+  column6 AS offset, column7 AS approximate, column8 AS note, column9 AS source FROM (VALUES
+  ('PowerVR', 'Triangles In', 'triangles', 'geometry.primitives_in', 1, 0, 0,
+   'triangles submitted to the tiling hardware', 'Android GPU Inspector, Imagination PowerVR counters'),
+  ('PowerVR', 'Triangles Out', 'triangles', 'geometry.primitives_out', 1, 0, 0,
+   'triangles left after back-face, off-screen and sub-pixel culling', 'Android GPU Inspector, Imagination PowerVR counters'),
+  ('PowerVR', 'Geometry Load', '%', 'unit.binning.utilization', 100, 0, 0,
+   'share of the time the tile binning hardware spent processing primitives', 'Android GPU Inspector, Imagination PowerVR counters'),
+  ('PowerVR', 'ISP Pixel Load', '%', 'unit.isp.utilization', 100, 0, 1,
+   'share of the time the rasterisation hardware was busy; tbdrsim''s ISP busy time includes primitive setup',
+   'Android GPU Inspector, Imagination PowerVR counters'),
+  ('PowerVR', 'Overdraw', '%', 'shaded_fragments_per_pixel', 100, -100, 0,
+   'on-screen pixels drawn more than once: 0 % = every pixel shaded once, 100 % = twice',
+   'Android GPU Inspector, Imagination PowerVR counters'),
+  ('Mali', 'GPU active', 'cycles', 'cycles', 1, 0, 1,
+   'cycles the GPU had work queued: the frame''s cycles (one frame, no idle gaps)', 'Mesa src/panfrost/perf/G52.xml GPU_ACTIVE'),
+  ('Mali', 'Tiler active', 'cycles', 'unit.binning.busy_cycles', 1, 0, 1,
+   'cycles the tiler had work queued; tbdrsim counts the binning engine''s busy cycles (stalls excluded)',
+   'Mesa src/panfrost/perf/G52.xml TILER_ACTIVE'),
+  ('Mali', 'Triangle primitives', 'primitives', 'geometry.primitives_in', 1, 0, 0,
+   'input triangle primitives', 'Mesa src/panfrost/perf/G52.xml TRIANGLES'),
+  ('Mali', 'Visible primitives', 'primitives', 'geometry.primitives_out', 1, 0, 0,
+   'primitives visible after culling', 'Mesa src/panfrost/perf/G52.xml PRIM_VISIBLE'),
+  ('Mali', 'Tiles', 'tiles', 'isp.tiles_rendered', 1, 0, 1,
+   'tiles processed by the shader cores; tbdrsim''s tiles are tiling.tile_width x tile_height pixels',
+   'Mesa src/panfrost/perf/G52.xml FRAG_PTILES'));
+
+DROP VIEW IF EXISTS v_vendor_counter;
+CREATE VIEW v_vendor_counter AS
+SELECT m.run_id, a.vendor, a.counter, m.value * a.scale + a.offset AS value, a.unit, a.metric, a.approximate
+FROM v_counter_alias a JOIN v_metric m ON m.metric = a.metric
+WHERE m.value IS NOT NULL;
 
 -- Any figure against any parameter, finished runs only: filter on key and metric, e.g.
 --   SELECT value_num, avg(metric_value) FROM v_sensitivity
@@ -232,8 +354,8 @@ JOIN v_metric m ON m.run_id = p.run_id;
 -- (1 = fastest / least DRAM traffic / least energy).
 DROP VIEW IF EXISTS v_technique_comparison;
 CREATE VIEW v_technique_comparison AS
-SELECT config_name, config_hash, scene, width, height, samples_per_pixel, lights, technique,
-  count(*) AS runs,
+SELECT config_name, min(config_label) AS config_label, config_hash, scene, width, height, samples_per_pixel, lights,
+  technique, count(*) AS runs,
   avg(frame_time_ms) AS frame_time_ms, avg(cycles) AS cycles,
   avg(dram_total_mb) AS dram_total_mb, avg(dram_read_mb) AS dram_read_mb, avg(dram_write_mb) AS dram_write_mb,
   avg(dram_device_total_mb) AS dram_device_total_mb,
@@ -251,7 +373,8 @@ SELECT config_name, config_hash, scene, width, height, samples_per_pixel, lights
   avg(dram_spill_read_mb + dram_spill_write_mb) AS dram_spill_mb,
   avg(dram_other_read_mb + dram_other_write_mb) AS dram_other_mb,
   avg(energy_total_mj) AS energy_total_mj,
-  avg(overshading) AS overshading, avg(lights_per_pixel) AS lights_per_pixel,
+  avg(overshading) AS overshading, avg(shaded_fragments_per_pixel) AS shaded_fragments_per_pixel,
+  avg(lights_per_pixel) AS lights_per_pixel,
   rank() OVER (PARTITION BY config_hash, scene, width, height, samples_per_pixel, lights
                ORDER BY avg(frame_time_ms) IS NULL, avg(frame_time_ms)) AS rank_frame_time,
   rank() OVER (PARTITION BY config_hash, scene, width, height, samples_per_pixel, lights

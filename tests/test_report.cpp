@@ -6,9 +6,11 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 
 #include "analysis/report.hpp"
 #include "analysis/results_db.hpp"
@@ -43,6 +45,7 @@ RunRecord synthetic_run(const std::string& technique, int tile_width, double sha
   r.technique = technique;
   r.params = {{"tiling.tile_width", std::to_string(tile_width), "--set tiling.tile_width=" + std::to_string(tile_width)},
               {"gpu.mode", "tbdr", "default"},
+              {"usc.count", "4", "configs/cfg.ini:7"},  // the preset's own file: not in the label
               {"writeback.compression_ratio", "0.5", "default"}};
   auto st = [&](const std::string& scope, const std::string& name, double v, const std::string& unit) {
     r.stats.push_back({scope, name, v, unit, "test"});
@@ -54,6 +57,8 @@ RunRecord synthetic_run(const std::string& technique, int tile_width, double sha
   st("frame/tsp", "shaded_samples", shaded_samples, "samples");
   st("frame/tsp", "shader_invocations", shaded_samples, "fragments");
   st("frame/tsp", "light_evaluations", shaded_samples * 4, "evaluations");
+  st("frame/tsp", "lit_surface_invocations", shaded_samples / 2, "fragments");
+  st("frame/frame", "covered_pixels", 4000, "pixels");
   st("frame/dram", "read_bytes", 3e6, "bytes");
   st("frame/dram", "write_bytes", 1e6, "bytes");
   st("frame/dram.color", "read_bytes", 0, "bytes");
@@ -75,6 +80,11 @@ RunRecord synthetic_run(const std::string& technique, int tile_width, double sha
 }
 
 double real_of(const ResultsDb& db, const std::string& sql) { return testing_support::query_number(db, sql); }
+
+std::string text_of_query(const ResultsDb& db, const std::string& sql) {
+  SqlStatement q(db.sql(), sql);
+  return q.step() ? q.text(0) : std::string("(no row)");
+}
 
 bool is_null(const ResultsDb& db, const std::string& sql) {
   SqlStatement q(db.sql(), sql);
@@ -154,8 +164,13 @@ TEST(ReportViews, SummaryFiguresAreNullWhenARunDidNotRecordThem) {
   const auto timed = db.write_run(synthetic_run("deferred", 32, 5000, 64, true, 12.5));
   const std::string u = " FROM v_run_summary WHERE run_id = " + std::to_string(untimed);
   const std::string t = " FROM v_run_summary WHERE run_id = " + std::to_string(timed);
-  EXPECT_DOUBLE_EQ(real_of(db, "SELECT overshading" + u), 1.5);  // 7500 / (100 x 50 x 1)
-  EXPECT_DOUBLE_EQ(real_of(db, "SELECT lights_per_pixel" + u), 6.0);
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT shaded_fragments_per_pixel" + u), 1.5);  // 7500 / (100 x 50)
+  // (3750 lit surface fragments + 0 compute-shaded pixels: frame/compute absent) / 4000 covered
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT overshading" + u), 0.9375);
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT lights_per_pixel" + u), 6.0);  // 30000 evaluations / 5000 pixels
+  EXPECT_DOUBLE_EQ(real_of(db, "SELECT value FROM v_metric WHERE metric = 'overshading' AND run_id = " +
+                                   std::to_string(untimed)),
+                   0.9375);
   EXPECT_DOUBLE_EQ(real_of(db, "SELECT dram_total_mb" + u), 4.0);
   EXPECT_DOUBLE_EQ(real_of(db, "SELECT dram_color_write_mb" + u), 1.0);
   EXPECT_DOUBLE_EQ(real_of(db, "SELECT dram_parameter_buffer_read_mb" + u), 3.0);
@@ -204,8 +219,11 @@ TEST(ReportViews, ParametersPivotAndSensitivity) {
            {"SELECT count(*) FROM v_param WHERE key = 'trace.technique'", 3},
            {"SELECT count(*) FROM v_sensitivity WHERE key = 'tiling.tile_width' AND metric = 'overshading'", 2},
            {"SELECT metric_value FROM v_sensitivity WHERE key = 'tiling.tile_width' AND value = '32' "
+            "AND metric = 'shaded_fragments_per_pixel'",
+            1.2},  // 6000 / (100 x 50)
+           {"SELECT metric_value FROM v_sensitivity WHERE key = 'tiling.tile_width' AND value = '32' "
             "AND metric = 'overshading'",
-            1.2},
+            0.75},  // 3000 lit fragments / 4000 covered pixels
            {"SELECT count(*) FROM v_run_summary WHERE status = 'failed' AND error = 'boom'", 1},
            {"SELECT count(*) FROM v_sensitivity WHERE run_id = 3", 0}});
 }
@@ -233,7 +251,8 @@ TEST(Report, GroupsByTechniqueAveragingRepetitions) {
   // Default metrics: only what some run has (no gbuffer traffic, no texture class at all).
   auto has = [&](const std::string& m) { return std::find(t.metrics.begin(), t.metrics.end(), m) != t.metrics.end(); };
   for (const char* m : {"cycles", "dram_total_mb", "dram_color_mb", "dram_parameter_buffer_mb", "energy_total_mj",
-                        "energy_dram_mj", "energy_alu_mj", "overshading", "lights_per_pixel"}) {
+                        "energy_dram_mj", "energy_alu_mj", "overshading", "shaded_fragments_per_pixel",
+                        "lights_per_pixel"}) {
     EXPECT_TRUE(has(m)) << m;
   }
   EXPECT_FALSE(has("dram_gbuffer_mb"));
@@ -334,6 +353,96 @@ TEST(Report, GroupsByParameterKeysWithFilterAndFormats) {
   EXPECT_THROW(parse_report_format("xml"), InputError);
 }
 
+TEST(Report, BaselineGivesDifferencesAndRatiosPerGroup) {
+  const std::string path = (scratch("baseline") / "b.db").string();
+  ResultsDb db(path);
+  // technique, tile width, frame time
+  const std::vector<std::tuple<std::string, int, double>> runs = {
+      {"a", 16, 10}, {"a", 32, 15}, {"b", 16, 4}, {"b", 32, 2}, {"b", 64, 3}};
+  for (const auto& [tech, w, ms] : runs) db.write_run(synthetic_run(tech, w, 5000, 64, true, ms));
+  ReportOptions opt;
+  opt.metrics = {"frame_time_ms"};
+  opt.baseline = "tiling.tile_width=16";  // not a --by key: added as the last group key
+  const ReportTable t = build_report(db, opt);
+  EXPECT_EQ(t.group_keys, (std::vector<std::string>{"technique", "tiling.tile_width"}));
+  ASSERT_EQ(t.rows.size(), 5u);
+  const std::string csv = report_text(db, opt, ReportFormat::Csv);
+  const auto lines = lines_of(csv);
+  ASSERT_EQ(lines.size(), 6u) << csv;
+  EXPECT_EQ(lines[0], "technique,tiling.tile_width,runs,frame_time_ms,frame_time_ms_delta,frame_time_ms_ratio");
+  EXPECT_EQ(lines[1], "a,16,1,10,0,1");      // the baseline itself
+  EXPECT_EQ(lines[2], "a,32,1,15,5,1.5");    // 15 - 10, 15 / 10
+  EXPECT_EQ(lines[3], "b,16,1,4,0,1");
+  EXPECT_EQ(lines[4], "b,32,1,2,-2,0.5");    // 2 - 4, 2 / 4: halving the time is a ratio of 0.5
+  EXPECT_EQ(lines[5], "b,64,1,3,-1,0.75");   // 3 - 4, 3 / 4
+  const std::string text = report_text(db, opt);
+  EXPECT_NE(text.find("baseline: tiling.tile_width = 16"), std::string::npos) << text;
+  EXPECT_NE(text.find("frame_time_ms /base"), std::string::npos) << text;
+  EXPECT_NE(text.find("1.500"), std::string::npos) << text;
+  EXPECT_NE(text.find("+5"), std::string::npos) << text;
+
+  // A technique as the baseline, written as a number the database spells differently.
+  ReportOptions by_tech;
+  by_tech.by = {"tiling.tile_width", "technique"};
+  by_tech.metrics = {"frame_time_ms"};
+  by_tech.baseline = "technique=b";
+  const auto tl = lines_of(report_text(db, by_tech, ReportFormat::Csv));
+  ASSERT_EQ(tl.size(), 6u);
+  EXPECT_EQ(tl[1], "16,a,1,10,6,2.5");  // a against b at 16: 10 - 4, 10 / 4
+  EXPECT_EQ(tl[3], "32,a,1,15,13,7.5");  // 15 - 2, 15 / 2
+  ReportOptions spelled = opt;
+  spelled.baseline = "tiling.tile_width=16.0";
+  EXPECT_EQ(report_text(db, spelled, ReportFormat::Csv), csv);
+
+  // No group without its baseline is compared with something else: a group whose baseline is
+  // absent (a at 64 would be) shows nothing.
+  db.write_run(synthetic_run("c", 32, 5000, 64, true, 7));
+  const auto cl = lines_of(report_text(db, opt, ReportFormat::Csv));
+  ASSERT_EQ(cl.size(), 7u);
+  EXPECT_EQ(cl[6], "c,32,1,7,,");
+  EXPECT_NE(report_text(db, opt).find("1 group(s) have no baseline group"), std::string::npos);
+
+  ReportOptions bad = opt;
+  bad.baseline = "tiling.tile_width=48";
+  try {
+    build_report(db, bad);
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--baseline tiling.tile_width=48"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("16, 32, 64"), std::string::npos) << e.what();
+  }
+  bad.baseline = "tiling.tile_width";
+  EXPECT_THROW(build_report(db, bad), InputError);
+}
+
+TEST(Report, WhereAndByNameParameterKeysAndConfigLabels) {
+  const std::string path = (scratch("where") / "w.db").string();
+  ResultsDb db(path);
+  for (int w : {16, 32}) {
+    db.write_run(synthetic_run("a", w, 5000, 64, true, 1));
+    db.write_run(synthetic_run("b", w, 5000, 256, true, 2));
+  }
+  ReportOptions opt;
+  opt.metrics = {"frame_time_ms"};
+  opt.where = "tiling.tile_width = 32 AND gpu.mode = 'tbdr'";  // dotted keys as columns
+  EXPECT_EQ(build_report(db, opt).runs_used, 2);
+  opt.where = "\"tiling.tile_width\" >= 32 AND lights = 256";  // already quoted, with a summary column
+  EXPECT_EQ(build_report(db, opt).runs_used, 1);
+  opt.where = "technique <> 'tiling.tile_width'";  // text in a string literal stays text
+  EXPECT_EQ(build_report(db, opt).runs_used, 4);
+  // The configuration is labelled by what was set on top of its preset ('cfg'): the --set tile
+  // width, not the defaults and not the preset file's own usc.count.
+  EXPECT_EQ(text_of_query(db, "SELECT config_label FROM v_run_summary WHERE run_id = 1"), "cfg tiling.tile_width=16");
+  ReportOptions by_config;
+  by_config.by = {"config"};
+  by_config.metrics = {"frame_time_ms"};
+  const ReportTable t = build_report(db, by_config);
+  ASSERT_EQ(t.rows.size(), 2u);
+  EXPECT_EQ(t.rows[0].keys[0], "cfg tiling.tile_width=16");
+  EXPECT_EQ(t.rows[1].keys[0], "cfg tiling.tile_width=32");
+  EXPECT_EQ(t.mixed_groups, 2);  // techniques a and b share each configuration
+}
+
 /// A real database: one tiny trace replayed on two configurations through the command line.
 class ReportReal : public ::testing::Test {
  protected:
@@ -411,6 +520,105 @@ TEST_F(ReportReal, EveryQueryInDocsRuns) {
     }
   }
   EXPECT_GE(with_rows, static_cast<int>(queries.size()) / 2) << "most documented queries should answer on a real run";
+}
+
+// The trace's technique options are dimensions: forward_multipass with 4 and with 8 lights per
+// additive pass, 16 lights: grouped by the option, filtered on it, and its effect on passes.
+TEST(ReportRealOptions, TechniqueOptionIsADimension) {
+  const fs::path dir = scratch("options");
+  const std::string db_path = (dir / "o.db").string();
+  for (const char* per_pass : {"4", "8"}) {
+    const std::string trace = (dir / (std::string("fm") + per_pass + ".trace")).string();
+    std::ostringstream out, err;
+    ASSERT_EQ(cli_main({"trace", "--technique", "forward_multipass", "--resolution", "64x36", "--scene", "atrium:1",
+                        "--lights", "16", "--option", std::string("lights_per_pass=") + per_pass, "--out", trace},
+                       out, err),
+              0)
+        << err.str();
+    ASSERT_EQ(cli_main({"run", "--trace", trace, "--db", db_path, "--quiet"}, out, err), 0) << err.str();
+  }
+  ResultsDb db(db_path);
+  testing_support::expect_numbers(
+      db, {{"SELECT count(*) FROM v_param WHERE key = 'technique.lights_per_pass'", 2},
+           {"SELECT sum(value_num) FROM v_param WHERE key = 'technique.lights_per_pass'", 12},  // 4 + 8
+           {"SELECT count(*) FROM run_params WHERE key = 'technique.lights_per_pass' AND origin GLOB 'trace *.trace:2'", 2},
+           {"SELECT count(*) FROM v_param WHERE key = 'trace.camera' AND value = 'entrance'", 2}});
+  ReportOptions opt;
+  opt.by = {"technique.lights_per_pass"};
+  opt.metrics = {"frame.geometry_passes", "frame_time_ms"};
+  const ReportTable t = build_report(db, opt);
+  ASSERT_EQ(t.rows.size(), 2u);
+  EXPECT_EQ(t.rows[0].keys[0], "4");
+  EXPECT_EQ(t.rows[1].keys[0], "8");
+  EXPECT_EQ(t.mixed_groups, 0);
+  // 16 lights in additive geometry passes of 4 and of 8 (one render pass, the scene submitted
+  // once per batch after the base pass): 16/4 - 16/8 = 2 geometry passes more with 4 per pass.
+  EXPECT_DOUBLE_EQ(*t.rows[0].values[0] - *t.rows[1].values[0], 2.0);
+  EXPECT_GT(*t.rows[0].values[1], *t.rows[1].values[1]);  // more passes, more time
+  std::ostringstream out, err;
+  ASSERT_EQ(cli_main({"report", "--db", db_path, "--where", "technique.lights_per_pass = 8", "--metric", "frame.geometry_passes",
+                      "--format", "csv"},
+                     out, err),
+            0)
+      << err.str();
+  const auto lines = lines_of(out.str());
+  ASSERT_EQ(lines.size(), 2u) << out.str();
+  EXPECT_EQ(lines[1].rfind("forward_multipass,1,", 0), 0u) << out.str();
+  // The same as a baseline: 4 per pass against 8 per pass.
+  std::ostringstream b;
+  ASSERT_EQ(cli_main({"report", "--db", db_path, "--baseline", "technique.lights_per_pass=8", "--metric", "frame.geometry_passes",
+                      "--format", "csv"},
+                     b, err),
+            0)
+      << err.str();
+  const auto bl = lines_of(b.str());
+  ASSERT_EQ(bl.size(), 3u) << b.str();
+  EXPECT_EQ(bl[0], "technique,technique.lights_per_pass,runs,frame.geometry_passes,frame.geometry_passes_delta,"
+                   "frame.geometry_passes_ratio");
+  EXPECT_EQ(bl[1], "forward_multipass,4,1,5,2,1.666666667") << b.str();  // 5 - 3 passes, 5 / 3
+  EXPECT_EQ(bl[2], "forward_multipass,8,1,3,0,1") << b.str();
+}
+
+// The study compares GPU modes on the same trace and passes technique options to its traces:
+// the technique x mode table holds the report's figures, and the option is a stored dimension.
+TEST(ReportRealOptions, StudyComparesModesAndPassesTechniqueOptions) {
+  const fs::path dir = scratch("study_modes");
+  std::ostringstream out, err;
+  ASSERT_EQ(cli_main({"study", "--out", (dir / "s").string(), "--technique", "plain_forward", "--lights", "4",
+                      "--resolution", "64x36", "--scene", "atrium:1", "--images", "none", "--jobs", "1", "--modes", "tbdr",
+                      "tbr", "--option", "plain_forward:alu_ops=40"},
+                     out, err),
+            0)
+      << err.str();
+  const std::string text = out.str();
+  EXPECT_NE(text.find("Technique x GPU mode at 4 lights"), std::string::npos) << text;
+  EXPECT_NE(text.find("frame ms tbdr"), std::string::npos) << text;
+  EXPECT_NE(text.find("frame ms tbr"), std::string::npos) << text;
+  EXPECT_NE(text.find("technique options: plain_forward alu_ops=40"), std::string::npos) << text;
+  EXPECT_TRUE(fs::exists(dir / "s" / "traces" / "plain_forward_4_alu_ops-40.trace"));
+  ResultsDb db((dir / "s" / "study.db").string());
+  testing_support::expect_numbers(
+      db, {{"SELECT count(*) FROM v_param WHERE key = 'gpu.mode' AND value IN ('tbdr', 'tbr')", 2},
+           {"SELECT count(DISTINCT trace_hash) FROM runs", 1},  // the same trace on both modes
+           {"SELECT min(value_num) FROM v_param WHERE key = 'technique.alu_ops'", 40}});
+  // The table's TBR frame time is the report's, to the table's two decimals.
+  ReportOptions opt;
+  opt.by = {"gpu.mode"};
+  opt.metrics = {"frame_time_ms"};
+  const ReportTable t = build_report(db, opt);
+  ASSERT_EQ(t.rows.size(), 2u);
+  char tbr[32];
+  std::snprintf(tbr, sizeof tbr, "%.2f", *t.rows[1].values[0]);  // rows sorted: tbdr, tbr
+  const auto row = text.find("\nplain_forward", text.find("Technique x GPU mode"));
+  ASSERT_NE(row, std::string::npos) << text;
+  const std::string line = text.substr(row + 1, text.find('\n', row + 1) - row - 1);
+  EXPECT_NE(line.find(tbr), std::string::npos) << line << " vs " << tbr;
+  std::ostringstream bad_out, bad_err;
+  EXPECT_EQ(cli_main({"study", "--out", (dir / "bad").string(), "--technique", "plain_forward", "--option",
+                      "deferred:gbuffer=x"},
+                     bad_out, bad_err),
+            2);
+  EXPECT_NE(bad_err.str().find("not in this study"), std::string::npos) << bad_err.str();
 }
 
 }  // namespace

@@ -9,10 +9,12 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <sstream>
 #include <thread>
 
 #include "analysis/results_db.hpp"
 #include "analysis/sql.hpp"
+#include "app/cli.hpp"
 #include "kernel/errors.hpp"
 #include "scratch_dir.hpp"
 
@@ -154,9 +156,16 @@ TEST(ResultsDb, MigratesAnOlderSchemaKeepingRuns) {
     v1.write_run(r);
     EXPECT_EQ(count(path, "SELECT count(*) FROM sqlite_master WHERE name = 'tile_stats'"), 0);
   }
+  {  // A version-3 database (before the index of parameters by key) reads as it is, unchanged.
+    ResultsDb v3(path, 3);
+    ResultsDb ro(path, ResultsDb::QueryOnly{});
+    EXPECT_EQ(ro.schema_version(), 3);
+    EXPECT_EQ(count(path, "SELECT count(*) FROM v_param WHERE key = 'sec.key7'"), 1);
+  }
   ResultsDb now(path);
   EXPECT_EQ(now.schema_version(), ResultsDb::kSchemaVersion);
   EXPECT_EQ(count(path, "SELECT count(*) FROM sqlite_master WHERE name = 'tile_stats'"), 1);
+  EXPECT_EQ(count(path, "SELECT count(*) FROM sqlite_master WHERE name = 'run_params_by_key'"), 1);
   ASSERT_EQ(run_ids(now).size(), 1u);
   EXPECT_EQ(read_run(now, run_ids(now)[0])->config_hash, "hash-old");
   now.write_run(make_run("new"));
@@ -294,6 +303,48 @@ TEST(ResultsDb, TwoConcurrentWritersLoseNothing) {
   EXPECT_EQ(count(path, "SELECT count(*) FROM runs"), 2 * kRunsEach);
   EXPECT_EQ(count(path, "SELECT count(DISTINCT config_hash) FROM runs"), 2 * kRunsEach);
   EXPECT_EQ(count(path, "SELECT count(*) FROM stats"), 2 * kRunsEach * 50);
+}
+
+// Every command that writes a database leaves it alone on disk: the write-ahead log checkpointed
+// into it and no -wal or -shm file beside it (a user who copies the .db file copies every run).
+// The study also runs the plot scripts, whose read-only connections would leave both files.
+TEST(ResultsDb, CommandsLeaveNoWalFilesBehind) {
+  namespace fs = std::filesystem;
+  const fs::path dir = testing_scratch::scratch_dir("db", "clean_close");
+  auto alone = [](const fs::path& db) {
+    EXPECT_TRUE(fs::exists(db)) << db;
+    EXPECT_FALSE(fs::exists(db.string() + "-wal")) << db;
+    EXPECT_FALSE(fs::exists(db.string() + "-shm")) << db;
+  };
+  std::ostringstream out, err;
+  const std::string trace = (dir / "t.trace").string();
+  ASSERT_EQ(cli_main({"trace", "--resolution", "64x36", "--scene", "atrium:1", "--lights", "4", "--out", trace}, out, err), 0)
+      << err.str();
+  ASSERT_EQ(cli_main({"run", "--trace", trace, "--db", (dir / "run.db").string(), "--quiet"}, out, err), 0) << err.str();
+  alone(dir / "run.db");
+  ASSERT_EQ(cli_main({"study", "--out", (dir / "study").string(), "--technique", "plain_forward", "--lights", "4",
+                      "--resolution", "64x36", "--scene", "atrium:1", "--images", "none", "--jobs", "1"},
+                     out, err),
+            0)
+      << err.str();
+  alone(dir / "study" / "study.db");
+  {
+    std::ofstream f(dir / "s.ini");
+    f << "[sweep]\ntrace = " << trace << "\n[vary]\ntiling.tile_width = 16, 64\n";  // not the run's 32
+  }
+  ASSERT_EQ(cli_main({"sweep", (dir / "s.ini").string(), "--db", (dir / "sweep.db").string(), "-j", "1", "--progress",
+                      "none", "--tbdrsim", TBDRSIM_BINARY},
+                     out, err),
+            0)
+      << err.str();
+  alone(dir / "sweep.db");
+  ASSERT_EQ(cli_main({"merge", (dir / "merged.db").string(), (dir / "run.db").string(), (dir / "sweep.db").string()}, out, err),
+            0)
+      << err.str();
+  alone(dir / "merged.db");
+  alone(dir / "run.db");
+  alone(dir / "sweep.db");
+  EXPECT_EQ(count((dir / "merged.db").string(), "SELECT count(*) FROM runs"), 3);  // 1 run + 2 sweep points
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include "app/image_output.hpp"
 #include "analysis/results_db.hpp"
 #include "app/run_driver.hpp"
+#include "app/stats_export.hpp"
 #include "tbdrsim_version.hpp"
 #include "scene/camera.hpp"
 #include "scene/lights.hpp"
@@ -140,6 +141,8 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   desc.add_options()("trace,t", po::value<std::string>()->required(), "command trace to replay")(
       "db,d", po::value<std::string>()->required(), "results database (created if absent)")(
       "images,i", po::value<std::string>(), "write the frame's images and heat maps into this folder")(
+      "stats", po::value<std::string>(), "write the run's statistics to FILE (gem5 stats.txt text; JSON with units and descriptions when FILE ends .json)")(
+      "timeline", po::value<std::string>(), "write the run's timeline to FILE (Chrome/Perfetto trace-event JSON)")(
       "quiet,q", "print nothing but errors");
   po::variables_map vm;
   if (!parse_command_options("run", args, desc, nullptr, vm, out)) return 0;
@@ -149,7 +152,15 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   req.db_path = vm["db"].as<std::string>();
   if (vm.count("images")) req.images_dir = vm["images"].as<std::string>();
   req.command_line = invocation_command_line();
+  for (const char* file : {"stats", "timeline"}) {
+    if (vm.count(file)) check_output_file(std::string("--") + file, vm[file].as<std::string>());  // before the run
+  }
   const RunOutcome outcome = run_one(req);
+  if (vm.count("stats") || vm.count("timeline")) {
+    const ResultsDb db(req.db_path, ResultsDb::QueryOnly{});
+    if (vm.count("stats")) write_stats_file(db, outcome.run_id, vm["stats"].as<std::string>());
+    if (vm.count("timeline")) write_timeline_file(db, outcome.run_id, vm["timeline"].as<std::string>());
+  }
   if (!vm.count("quiet")) print_run_summary(outcome, out);
   return 0;
 }

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -12,11 +13,13 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <sstream>
 
 #include <boost/program_options.hpp>
 
+#include "analysis/report.hpp"
 #include "analysis/results_db.hpp"
 #include "analysis/sql.hpp"
 #include "app/cli.hpp"
@@ -49,13 +52,21 @@ struct StudyPlan {
   std::vector<int> light_counts;
   std::vector<std::string> techniques;
   int max_lights = 0;
-  ResolvedConfig config;
+  /// The GPU modes compared (--modes), empty: the configuration's own mode only.
+  std::vector<std::string> modes;
+  /// One configuration per mode (the given one with gpu.mode set), or the given one.
+  std::vector<ResolvedConfig> configs;
+  std::string config_label;  ///< the configuration's label (preset and what is set on top of it)
+  /// Technique options given with --option TECHNIQUE:KEY=VALUE: technique -> "KEY=VALUE" list.
+  std::map<std::string, std::vector<std::string>> options;
 };
 
-/// One point of the study: a technique at a light count.
+/// One point of the study: a technique at a light count, on one of the configurations (modes).
 struct StudyPoint {
   std::string technique;
   int lights = 0;
+  std::size_t config = 0;  ///< index into StudyPlan::configs
+  std::string mode;        ///< gpu.mode of that configuration
   std::string trace_path;
   std::string images_dir;
 };
@@ -84,10 +95,6 @@ double differing_pixels(const std::string& a, const std::string& b) {
   }
 }
 
-/// Lit surface invocations (scene geometry evaluating lights, or pixels lit by a kernel) per
-/// visible pixel: above 1, lighting was computed for samples that ended up hidden.
-double overshading_of(double lit, double compute, double covered) { return (lit + compute) / std::max(1.0, covered); }
-
 void draw_progress(std::ostream& out, std::size_t done, std::size_t total, double seconds, bool tty) {
   const double rate = seconds > 0 ? static_cast<double>(done) / seconds : 0;
   const double eta = rate > 0 ? static_cast<double>(total - done) / rate : 0;
@@ -114,15 +121,51 @@ StudyPlan plan_from_options(const po::variables_map& vm) {
   if (plan.image_mode != "none" && plan.image_mode != "largest" && plan.image_mode != "all") {
     throw InputError("--images " + plan.image_mode, "expected none, largest or all");
   }
-  plan.config = config_from_options(vm);
+  std::vector<std::string> files, sets;
+  if (vm.count("config")) files = vm["config"].as<std::vector<std::string>>();
+  if (vm.count("set")) sets = vm["set"].as<std::vector<std::string>>();
+  if (vm.count("modes")) plan.modes = vm["modes"].as<std::vector<std::string>>();
+  if (plan.modes.empty()) {
+    plan.configs.push_back(resolve_config(files, sets));
+  } else {
+    for (const auto& m : plan.modes) {
+      std::vector<std::string> with_mode = sets;
+      with_mode.push_back("gpu.mode=" + m);  // InputError naming it when it is not a mode
+      plan.configs.push_back(resolve_config(files, with_mode));
+    }
+  }
+  for (const auto& s : sets) plan.config_label += (plan.config_label.empty() ? "" : " ") + s;
+  plan.config_label = plan.configs.front().params.config_name + (plan.config_label.empty() ? "" : " " + plan.config_label);
   plan.scene = vm["scene"].as<std::string>();
   plan.resolution = vm["resolution"].as<std::string>();
+  if (vm.count("option")) {
+    for (const auto& o : vm["option"].as<std::vector<std::string>>()) {
+      const auto colon = o.find(':');
+      const auto eq = o.find('=', colon == std::string::npos ? 0 : colon);
+      if (colon == std::string::npos || colon == 0 || eq == std::string::npos || eq == colon + 1) {
+        throw InputError("--option " + o, "expected TECHNIQUE:KEY=VALUE, e.g. forward_light_stack:pls_bytes=32");
+      }
+      const std::string technique = o.substr(0, colon);
+      find_technique(technique);  // InputError for an unknown name
+      if (std::find(plan.techniques.begin(), plan.techniques.end(), technique) == plan.techniques.end()) {
+        throw InputError("--option " + o, "technique '" + technique + "' is not in this study (--technique)");
+      }
+      plan.options[technique].push_back(o.substr(colon + 1));
+    }
+  }
   plan.max_lights = *std::max_element(plan.light_counts.begin(), plan.light_counts.end());
   plan.db_path = (fs::path(plan.dir) / "study.db").string();
   return plan;
 }
 
-/// Generates every point's trace (cheap, here; the workers replay them).
+/// The gpu.mode value of a configuration.
+std::string mode_of(const ResolvedConfig& c) {
+  const auto& table = hw_params().table();
+  return format_param_value(c.params.values[static_cast<std::size_t>(table.find("gpu.mode"))]);
+}
+
+/// Generates every point's trace (cheap, here; the workers replay them), one point per
+/// configuration (mode) replaying it.
 std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
   std::vector<StudyPoint> points;
   const std::vector<std::string> trace_args = {"--scene", plan.scene, "--resolution", plan.resolution};
@@ -131,7 +174,20 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
       StudyPoint p;
       p.technique = t;
       p.lights = n;
-      p.trace_path = (fs::path(plan.dir) / "traces" / (t + "_" + std::to_string(n) + ".trace")).string();
+      // The trace's name carries its options, so that studies with other options into the same
+      // folder keep each trace (and the runs that name it) apart.
+      std::string stem = t + "_" + std::to_string(n);
+      const auto given = plan.options.find(t);
+      if (given != plan.options.end()) {
+        for (const auto& kv : given->second) {
+          std::string part = kv;
+          for (char& c : part) {
+            if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '.') c = '-';
+          }
+          stem += "_" + part;
+        }
+      }
+      p.trace_path = (fs::path(plan.dir) / "traces" / (stem + ".trace")).string();
       if (plan.image_mode == "all" || (plan.image_mode == "largest" && n == plan.max_lights)) {
         p.images_dir = (fs::path(plan.dir) / "images" / (t + "_" + std::to_string(n))).string();
       }
@@ -140,9 +196,18 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
       // One additive pass per light would replay the scene 1024 times: the study batches lights
       // (the issue allows "one additive pass per light or per light batch").
       if (t == "forward_multipass") a.insert(a.end(), {"--option", "lights_per_pass=" + std::to_string(kMultipassBatch)});
+      if (given != plan.options.end()) {
+        for (const auto& kv : given->second) a.insert(a.end(), {"--option", kv});  // the last one given wins
+      }
       std::ostringstream sink, errs;
       if (cli_main(a, sink, errs) != 0) throw InputError("study", "generating " + t + ": " + errs.str());
-      points.push_back(p);
+      for (std::size_t c = 0; c < plan.configs.size(); ++c) {
+        StudyPoint q = p;
+        q.config = c;
+        q.mode = mode_of(plan.configs[c]);
+        if (c > 0) q.images_dir.clear();  // images of the first configuration only
+        points.push_back(q);
+      }
     }
   }
   return points;
@@ -169,7 +234,7 @@ int run_points(const StudyPlan& plan, const std::vector<StudyPoint>& points, std
     job.function = [&plan, &points, i] {
       try {
         RunRequest req;
-        req.config = plan.config;
+        req.config = plan.configs[points[i].config];
         req.trace_path = points[i].trace_path;
         req.db_path = plan.db_path;
         req.images_dir = points[i].images_dir;
@@ -177,7 +242,8 @@ int run_points(const StudyPlan& plan, const std::vector<StudyPoint>& points, std
         run_one(req);
         return 0;
       } catch (const std::exception& e) {
-        std::cerr << "study: " << points[i].technique << " with " << points[i].lights << " lights failed: " << e.what() << "\n";
+        std::cerr << "study: " << points[i].technique << " with " << points[i].lights << " lights on " << points[i].mode
+                  << " failed: " << e.what() << "\n";
         return 1;
       }
     };
@@ -200,16 +266,19 @@ int run_points(const StudyPlan& plan, const std::vector<StudyPoint>& points, std
   return failures;
 }
 
-/// The figures of the study's runs, read back from its database with bound queries.
+/// The figures of the study's runs, read back from its database: the derived figures from
+/// v_run_summary (their one definition, analysis/views.sql), raw statistics with bound queries.
 class StudyResults {
  public:
-  explicit StudyResults(const ResultsDb& db)
-      : run_(db.sql(), "SELECT max(id) FROM runs WHERE status = 'ok' AND trace_path = ?"),
+  StudyResults(const ResultsDb& db, const StudyPlan& plan)
+      : db_(db),
+        plan_(plan),
+        run_(db.sql(), "SELECT max(id) FROM runs WHERE status = 'ok' AND trace_path = ? AND config_hash = ?"),
         stat_(db.sql(), "SELECT value FROM stats WHERE run_id = ? AND scope = ? AND name = ?") {}
 
   /// The latest finished run of a point, if any.
   std::optional<std::int64_t> run_of(const StudyPoint& p) {
-    run_.bind(1, p.trace_path);
+    run_.bind(1, p.trace_path).bind(2, plan_.configs[p.config].hash);
     std::optional<std::int64_t> id;
     if (run_.step() && !run_.is_null(0)) id = run_.int64(0);
     run_.reset();
@@ -230,63 +299,127 @@ class StudyResults {
     return stat(run, scope, "read_bytes") + stat(run, scope, "write_bytes");
   }
 
-  /// Lit surface invocations per visible pixel.
-  double overshading(std::int64_t run) {
-    return overshading_of(stat(run, "frame/tsp", "lit_surface_invocations"),
-                          stat(run, "frame/compute", "compute_shaded_pixels"), covered_pixels(run));
-  }
-
-  /// Pixels covered by scene geometry (at least 1).
-  double covered_pixels(std::int64_t run) { return std::max(1.0, stat(run, "frame/frame", "covered_pixels")); }
+  /// The derived figures of a run (views.sql).
+  DerivedFigures derived(std::int64_t run) { return read_derived_figures(db_, run); }
 
  private:
+  const ResultsDb& db_;
+  const StudyPlan& plan_;
   SqlStatement run_, stat_;
 };
+
+std::string fig(const std::optional<double>& v, int decimals) { return v ? fmt(*v, decimals) : std::string("-"); }
 
 /// The comparison table: the latest run of each point.
 void print_comparison(const StudyPlan& plan, const std::vector<StudyPoint>& points, StudyResults& results,
                       std::ostream& out) {
-  out << "\nComparison (" << plan.config.params.config_name << "): frame time, DRAM traffic requested by the units, energy"
-      << " (forward_multipass: " << kMultipassBatch << " lights per pass)\n";
-  out << std::left << std::setw(30) << "technique" << std::right << std::setw(7) << "lights" << std::setw(11) << "frame ms"
-      << std::setw(11) << "DRAM MB" << std::setw(11) << "energy mJ" << std::setw(12) << "overshading" << std::setw(12)
-      << "lights/px" << std::setw(13) << "stack ovf %" << "\n";
+  const bool modes = plan.configs.size() > 1;
+  // The technique options the study set (the study's batch of forward_multipass, then --option).
+  std::string options;
+  for (const auto& t : plan.techniques) {
+    std::vector<std::string> kv;
+    if (t == "forward_multipass") kv.push_back("lights_per_pass=" + std::to_string(kMultipassBatch));
+    if (const auto it = plan.options.find(t); it != plan.options.end()) kv.insert(kv.end(), it->second.begin(), it->second.end());
+    if (kv.empty()) continue;
+    options += (options.empty() ? "" : "; ") + t;
+    for (const auto& o : kv) options += " " + o;
+  }
+  out << "\nComparison (" << plan.config_label << "): frame time, DRAM traffic requested by the units, energy"
+      << " (technique options: " << options << ")\n";
+  out << std::left << std::setw(30) << "technique" << std::right << std::setw(7) << "lights";
+  if (modes) out << std::setw(6) << "mode";
+  out << std::setw(11) << "frame ms" << std::setw(11) << "DRAM MB" << std::setw(11) << "energy mJ" << std::setw(10)
+      << "frags/px" << std::setw(12) << "overshading" << std::setw(11) << "lights/px" << std::setw(13) << "stack ovf %"
+      << "\n";
   std::vector<std::string> overflowed;
   for (const auto& p : points) {
     const std::optional<std::int64_t> run = results.run_of(p);
+    out << std::left << std::setw(30) << p.technique << std::right << std::setw(7) << p.lights;
+    if (modes) out << std::setw(6) << p.mode;
     if (!run) {
-      out << std::left << std::setw(30) << p.technique << std::right << std::setw(7) << p.lights << "   (failed)\n";
+      out << "   (failed)\n";
       continue;
     }
-    const double covered = results.covered_pixels(*run);
-    const double evals =
-        results.stat(*run, "frame/tsp", "light_evaluations") + results.stat(*run, "frame/compute", "compute_light_evaluations");
+    const DerivedFigures d = results.derived(*run);
     // A PLS light stack that overflows falls back to every light: its frame time is then the
     // overflow's cost, not the technique's; the share of lit fragments that overflowed says so.
     const double lit = std::max(1.0, results.stat(*run, "frame/tsp", "lit_surface_invocations"));
     const double overflow = 100.0 * results.stat(*run, "frame/tsp", "light_stack_overflow_fragments") / lit;
-    if (overflow > 0) overflowed.push_back(p.technique + " at " + std::to_string(p.lights) + " lights: " + fmt(overflow, 1) + " %");
-    out << std::left << std::setw(30) << p.technique << std::right << std::setw(7) << p.lights << std::setw(11)
-        << fmt(results.stat(*run, "frame/timing", "frame_time_ms"), 2) << std::setw(11)
-        << fmt(results.dram_bytes(*run, "frame/dram") / 1e6, 1) << std::setw(11)
-        << fmt(results.stat(*run, "frame/energy", "total_mj"), 2) << std::setw(12) << fmt(results.overshading(*run), 2)
-        << std::setw(12) << fmt(evals / covered, 1) << std::setw(13) << fmt(overflow, 1) << "\n";
+    if (overflow > 0) {
+      overflowed.push_back(p.technique + " at " + std::to_string(p.lights) + " lights" + (modes ? " on " + p.mode : "") +
+                           ": " + fmt(overflow, 1) + " %");
+    }
+    out << std::setw(11) << fig(d.frame_time_ms, 2) << std::setw(11) << fig(d.dram_total_mb, 1) << std::setw(11)
+        << fig(d.energy_total_mj, 2) << std::setw(10) << fig(d.shaded_fragments_per_pixel, 2) << std::setw(12)
+        << fig(d.overshading, 2) << std::setw(11) << fig(d.lights_per_pixel, 1) << std::setw(13) << fmt(overflow, 1)
+        << "\n";
   }
+  out << "  (frags/px: fragment shader invocations per pixel, every pass; overshading: lighting computed on surfaces or\n"
+      << "   by kernels per visible pixel, above 1 = hidden surfaces lit; lights/px: light evaluations per pixel;\n"
+      << "   definitions: docs/queries.md)\n";
   for (const auto& o : overflowed) {
     out << "  note: " << o << " of the lit fragments overflowed the PLS light stack and evaluated every light: that "
         << "frame time measures the overflow (raise -o pls_bytes with pls.max_pls_bytes_per_pixel), not the technique\n";
   }
 }
 
-/// The measured method table (Billeter's columns) at the largest light count.
+/// With several modes: technique x mode at each light count, through the report (the same
+/// grouping as `tbdrsim report --by technique --by gpu.mode`), one column per mode and figure.
+void print_mode_table(const StudyPlan& plan, const std::vector<StudyPoint>& points, StudyResults& results,
+                      const ResultsDb& db, std::ostream& out) {
+  if (plan.configs.size() < 2) return;
+  for (int lights : plan.light_counts) {
+    std::string ids;
+    for (const auto& p : points) {
+      if (p.lights != lights) continue;
+      if (const auto run = results.run_of(p)) ids += (ids.empty() ? "" : ",") + std::to_string(*run);
+    }
+    if (ids.empty()) continue;
+    ReportOptions opt;
+    opt.by = {"technique", "gpu.mode"};
+    opt.metrics = {"frame_time_ms", "dram_total_mb", "energy_total_mj", "shaded_fragments_per_pixel"};
+    opt.where = "run_id IN (" + ids + ")";  // the study's own runs: integers only
+    const ReportTable t = build_report(db, opt);
+    out << "\nTechnique x GPU mode at " << lights << " lights (" << plan.config_label
+        << "; the same trace on each mode; `tbdrsim report --db " << plan.db_path
+        << " --by technique --by gpu.mode --baseline gpu.mode=" << plan.modes.front() << "` prints ratios)\n";
+    const char* titles[] = {"frame ms", "DRAM MB", "energy mJ", "frags/px"};
+    constexpr int kModeColumn = 16;  // the longest title ("energy mJ tbdr") and two spaces
+    const int decimals[] = {2, 1, 2, 2};
+    out << std::left << std::setw(30) << "technique" << std::right;
+    for (std::size_t m = 0; m < opt.metrics.size(); ++m) {
+      for (const auto& mode : plan.modes) out << std::setw(kModeColumn) << (std::string(titles[m]) + " " + mode);
+    }
+    out << "\n";
+    std::map<std::string, std::map<std::string, const ReportTable::Row*>> cells;
+    for (const auto& r : t.rows) cells[r.keys[0]][r.keys[1]] = &r;
+    for (const auto& tech : plan.techniques) {
+      out << std::left << std::setw(30) << tech << std::right;
+      for (std::size_t m = 0; m < opt.metrics.size(); ++m) {
+        for (const auto& mode : plan.modes) {
+          const auto it = cells[tech].find(mode);
+          std::string text = "failed";
+          if (it != cells[tech].end()) {
+            const auto& values = it->second->values;
+            text = m < values.size() && values[m].has_value() ? fmt(values[m].value(), decimals[m]) : std::string("-");
+          }
+          out << std::setw(kModeColumn) << text;
+        }
+      }
+      out << "\n";
+    }
+  }
+}
+
+/// The measured method table (Billeter's columns) at the largest light count, first configuration.
 void print_method_table(const StudyPlan& plan, const std::vector<StudyPoint>& points, StudyResults& results,
                         std::ostream& out) {
-  out << "\nMethod table, measured at " << plan.max_lights << " lights (off-chip: classes with DRAM traffic besides the "
-      << "parameter buffer, vertices, indices, textures and light data)\n";
+  out << "\nMethod table, measured at " << plan.max_lights << " lights" << (plan.configs.size() > 1 ? " on " + points.front().mode : "")
+      << " (off-chip: classes with DRAM traffic besides the parameter buffer, vertices, indices, textures and light data)\n";
   out << std::left << std::setw(30) << "technique" << std::setw(56) << "off-chip buffers" << std::right << std::setw(9) << "geo pass"
       << std::setw(14) << "overshading" << std::setw(6) << "MSAA" << std::setw(10) << "blending" << "\n";
-  out << "  (overshading: lit surface invocations per visible pixel, yes above 1.10 (translucent layers add about 5 %); blending: the image with the translucent glass\n"
-      << "   equals plain forward's; MSAA: the generator produces a 4x trace)\n";
+  out << "  (overshading: lighting computed on surfaces or by kernels per visible pixel (views.sql), yes above 1.10 (translucent layers add about 5 %);\n"
+      << "   blending: the image with the translucent glass equals plain forward's; MSAA: the generator produces a 4x trace)\n";
   std::string reference_color;
   for (const auto& p : points) {
     if (p.lights == plan.max_lights && p.technique == "plain_forward" && !p.images_dir.empty()) {
@@ -294,14 +427,14 @@ void print_method_table(const StudyPlan& plan, const std::vector<StudyPoint>& po
     }
   }
   for (const auto& p : points) {
-    if (p.lights != plan.max_lights) continue;
+    if (p.lights != plan.max_lights || p.config != 0) continue;
     const std::optional<std::int64_t> run = results.run_of(p);
     if (!run) continue;
     std::string offchip;
     for (const char* cls : {"color", "depth_stencil", "gbuffer", "visibility", "light_lists", "work_lists", "spill"}) {
       if (results.dram_bytes(*run, std::string("frame/dram.") + cls) > 0) offchip += (offchip.empty() ? "" : ",") + std::string(cls);
     }
-    const double overshading = results.overshading(*run);
+    const std::optional<double> overshading = results.derived(*run).overshading;
     // MSAA: does the technique's generator produce a 4x trace?
     bool msaa = true;
     {
@@ -318,8 +451,8 @@ void print_method_table(const StudyPlan& plan, const std::vector<StudyPoint>& po
       blending = differing_pixels(reference_color, (fs::path(p.images_dir) / "color.png").string()) <= 0.001 ? "yes" : "no";
     }
     out << std::left << std::setw(30) << p.technique << std::setw(56) << offchip << std::right << std::setw(9)
-        << fmt(results.stat(*run, "frame/frame", "geometry_passes"), 0) << std::setw(12)
-        << std::setw(14) << (fmt(overshading, 2) + (overshading > 1.10 ? " yes" : " no")) << std::setw(6)
+        << fmt(results.stat(*run, "frame/frame", "geometry_passes"), 0) << std::setw(14)
+        << (fig(overshading, 2) + (overshading && *overshading > 1.10 ? " yes" : " no")) << std::setw(6)
         << (msaa ? "yes" : "no") << std::setw(10) << blending << "\n";
   }
 }
@@ -351,7 +484,12 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
       "resolution", po::value<std::string>()->default_value("1920x1080"), "WIDTHxHEIGHT")(
       "lights", po::value<std::vector<int>>()->multitoken(), "light counts (default 256 1024)")(
       "technique", po::value<std::vector<std::string>>()->multitoken(), "techniques (default: all)")(
-      "images", po::value<std::string>()->default_value("largest"), "write images for: none | largest (light count) | all");
+      "images", po::value<std::string>()->default_value("largest"), "write images for: none | largest (light count) | all")(
+      "option", po::value<std::vector<std::string>>()->composing(),
+      "TECHNIQUE:KEY=VALUE: a technique option for that technique's traces, e.g. forward_light_stack:pls_bytes=32 "
+      "(repeatable; `tbdrsim trace --list` lists the options)")(
+      "modes", po::value<std::vector<std::string>>()->multitoken(),
+      "GPU modes to compare (gpu.mode values: tbdr tbr imr); each trace replays on each; default: the configuration's");
   po::variables_map vm;
   if (!parse_command_options("study", args, desc, nullptr, vm, out)) return 0;
   const StudyPlan plan = plan_from_options(vm);
@@ -362,19 +500,25 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
   { ResultsDb db(plan.db_path); }  // create or migrate before the workers start
 
   out << "study: " << plan.techniques.size() << " techniques x " << plan.light_counts.size() << " light counts on "
-      << plan.scene << " at " << plan.resolution << ", configuration '" << plan.config.params.config_name << "', "
-      << plan.jobs << " workers" << std::endl;
+      << plan.scene << " at " << plan.resolution << ", configuration '" << plan.config_label << "'";
+  if (!plan.modes.empty()) {
+    out << ", modes";
+    for (const auto& m : plan.modes) out << " " << m;
+  }
+  out << ", " << plan.jobs << " workers" << std::endl;
   const std::vector<StudyPoint> points = generate_traces(plan);
   const int failures = run_points(plan, points, out, err);
   if (failures > 0) err << "study: " << failures << " worker(s) reported failed runs (see above)\n";
   {
     const ResultsDb db(plan.db_path);
-    StudyResults results(db);
+    StudyResults results(db, plan);
     print_comparison(plan, points, results, out);
+    print_mode_table(plan, points, results, db, out);
     print_method_table(plan, points, results, out);
   }
   const fs::path plots = fs::path(plan.dir) / "plots";
   const int plotted = write_plots(plan.db_path, plots);
+  close_results_db_cleanly(plan.db_path);  // the plot scripts read it: leave no -wal/-shm beside it
   out << "\nresults: " << plan.db_path << " (" << points.size() << " runs), traces in " << (fs::path(plan.dir) / "traces").string()
       << ", images and heat maps in " << (fs::path(plan.dir) / "images").string() << ", " << plotted << " plots in " << plots.string()
       << "\n";

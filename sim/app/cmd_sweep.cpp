@@ -112,7 +112,10 @@ int cmd_report(const std::vector<std::string>& args, std::ostream& out, std::ost
        "overshading, tsp.shaded_samples, ...); repeatable; default: the headline figures present")
       ("format,f", po::value<std::string>()->default_value("table"), "table | csv | markdown")
       ("where,w", po::value<std::string>(), "SQL condition on v_run_summary's columns, e.g. \"lights = 256\"")
-      ("transpose,t", "one row per metric, one column per group");
+      ("transpose,t", "one row per metric, one column per group")
+      ("baseline", po::value<std::string>(),
+       "KEY=VALUE: compare each group with the group differing only in KEY, where KEY = VALUE (difference and ratio "
+       "per metric), e.g. pls.tile_buffer_bits_per_pixel=128 or technique=deferred");
   po::variables_map vm;
   if (!parse_command_options("report", args, desc, nullptr, vm, out)) return 0;
   const std::string path = vm["db"].as<std::string>();
@@ -123,6 +126,7 @@ int cmd_report(const std::vector<std::string>& args, std::ostream& out, std::ost
   if (vm.count("metric")) opt.metrics = vm["metric"].as<std::vector<std::string>>();
   if (vm.count("where")) opt.where = vm["where"].as<std::string>();
   opt.transpose = vm.count("transpose") > 0;
+  if (vm.count("baseline")) opt.baseline = vm["baseline"].as<std::string>();
   const ReportFormat format = parse_report_format(vm["format"].as<std::string>());
   print_report(build_report(db, opt), format, opt.transpose, out);
   return 0;

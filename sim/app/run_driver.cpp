@@ -48,6 +48,17 @@ std::string stat_text(double v) {
 
 }  // namespace
 
+std::vector<RunParam> trace_run_params(const Trace& trace, const std::string& trace_path) {
+  std::vector<RunParam> params;
+  for (const auto& [k, v] : trace.options) {
+    params.push_back({"technique." + k, v, "trace " + trace_path + ":" + std::to_string(trace.technique_line)});
+  }
+  if (!trace.camera_name.empty()) {
+    params.push_back({"trace.camera", trace.camera_name, "trace " + trace_path + ":" + std::to_string(trace.camera_line)});
+  }
+  return params;
+}
+
 std::vector<std::string> write_frame_images(const FrameResult& frame, const std::string& dir) {
   namespace fs = std::filesystem;
   std::vector<std::string> written;
@@ -185,6 +196,7 @@ RunOutcome run_one(const RunRequest& req) {
   for (std::size_t i = 0; i < table.decls().size(); ++i) {
     rec.params.push_back({table.decls()[i].key, format_param_value(req.config.params.values[i]), req.config.params.origins[i].text});
   }
+  for (auto& p : trace_run_params(trace, req.trace_path)) rec.params.push_back(std::move(p));
   rec.stats = outcome.frame.stats;
   rec.stats.push_back({"frame/host", "simulation_wall_seconds", outcome.wall_seconds, "s", "Host wall time of the functional simulation"});
   rec.stats.push_back({"frame/host", "timing_wall_seconds", outcome.timing_seconds, "s", "Host wall time of the timing and energy models"});
@@ -193,12 +205,12 @@ RunOutcome run_one(const RunRequest& req) {
   rec.tiles = outcome.timing.tiles;
   ResultsDb db(req.db_path);
   outcome.run_id = db.write_run(rec);
+  outcome.derived = read_derived_figures(db, outcome.run_id);
   return outcome;
 }
 
 void print_run_summary(const RunOutcome& o, std::ostream& out) {
   const FrameResult& f = o.frame;
-  const double pixels = static_cast<double>(f.images.width) * f.images.height;
   const GeometryStats& geometry = f.totals.render.geometry;
   const IspStats& isp = f.totals.render.isp;
   const TspStats& tsp = f.totals.render.tsp;
@@ -210,9 +222,11 @@ void print_run_summary(const RunOutcome& o, std::ostream& out) {
       << f.totals.render.tiler.partial_renders.value() << ")\n";
   out << "  samples rasterised: " << isp.samples_rasterised.value() << "  removed by HSR " << isp.hsr_removed_samples.value()
       << "  depth-test failed " << isp.depth_test_failed_samples.value() << "  tag flushes " << isp.tag_flushes.value() << "\n";
-  out << "  shaded: " << shaded << " invocations (" << stat_text(static_cast<double>(shaded) / pixels) << " per pixel), "
-      << tsp.shaded_quads.value() << " quads, " << tsp.helper_lanes.value() << " helper lanes, "
-      << tsp.light_evaluations.value() << " light evaluations\n";
+  auto figure = [](const std::optional<double>& v) { return v ? stat_text(*v) : std::string("-"); };
+  out << "  shaded: " << shaded << " invocations (" << figure(o.derived.shaded_fragments_per_pixel)
+      << " fragments per pixel, overshading " << figure(o.derived.overshading) << "), " << tsp.shaded_quads.value()
+      << " quads, " << tsp.helper_lanes.value() << " helper lanes, " << tsp.light_evaluations.value()
+      << " light evaluations (" << figure(o.derived.lights_per_pixel) << " per pixel)\n";
   out << "  frame: " << stat_text(o.timing.frame_cycles) << " cycles, " << stat_text(o.timing.frame_time_ps * 1e-9)
       << " ms, energy " << stat_text(o.energy.total_pj * 1e-9)
       << " mJ (timing model " << stat_text(o.timing_seconds) << " s)\n";

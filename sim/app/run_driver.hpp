@@ -10,6 +10,9 @@
 #include "models/energy.hpp"
 #include "models/timing_model.hpp"
 #include "models/command_processor.hpp"
+#include "analysis/report.hpp"
+#include "analysis/results_db.hpp"
+#include "trace/trace.hpp"
 
 namespace tbdr {
 
@@ -36,7 +39,13 @@ struct RunOutcome {
   TimingResult timing;
   EnergyBreakdown energy;
   std::vector<std::string> images_written;
+  DerivedFigures derived;        ///< read back from the database (views.sql defines them)
 };
+
+/// The trace's identity and technique options as run parameters (origin: the trace file and the
+/// line of its header): technique.<option> for each option of the `technique` line, and
+/// trace.camera for a named viewpoint. Dimensions of `report --by`/`--where` and of v_param.
+std::vector<RunParam> trace_run_params(const Trace& trace, const std::string& trace_path);
 
 /// Runs one simulation end to end. InputError on bad input (the database is checked first, before
 /// the trace is read); nothing is written to the database unless the whole run succeeded.
