@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cassert>
 #include <cerrno>
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
 
 #include "kernel/errors.hpp"
@@ -71,10 +73,21 @@ void ImageRGB8::fill_rect(int x0, int y0, int x1, int y1, Rgb8 c) {
 // ---------------------------------------------------------------------------------------------
 // PNG files
 
+namespace {
+/// stb_image_write's fastest zlib level (stb_image_write.h: stbi_zlib_compress raises any quality
+/// below 5 to 5).
+constexpr int kPngCompressionLevel = 5;
+}  // namespace
+
 void write_png(const std::string& path, const ImageRGB8& image) {
   if (image.width <= 0 || image.height <= 0 ||
       image.rgb.size() != static_cast<std::size_t>(image.width) * image.height * 3)
     throw std::invalid_argument("write_png: image for " + path + " has an inconsistent size");
+  // stb's zlib at its fastest level (it treats levels below 5 as 5; its default is 8): the images
+  // are for looking at, and the default level's extra search is a fifth of a 1080p run's profile
+  // with images (issue 15). Set once: the level is a global of libstb.
+  static std::once_flag level_set;
+  std::call_once(level_set, [] { stbi_write_png_compression_level = kPngCompressionLevel; });
   errno = 0;
   const int ok = stbi_write_png(path.c_str(), image.width, image.height, 3, image.rgb.data(),
                                 image.width * 3);
@@ -119,14 +132,51 @@ void check_size(std::size_t n, int w, int h, const char* what) {
                                 std::to_string(h) + " values, got " + std::to_string(n));
 }
 
+/// linear_to_srgb8 for single-precision inputs by table, exactly: the formula is monotone in its
+/// input, so the code of x is the number of thresholds at or below x, where threshold k (1..255)
+/// is the smallest float whose code is k or more (found once by bisection over the floats' bit
+/// patterns, which order non-negative floats as their values). No pow per pixel.
+class SrgbTable {
+ public:
+  SrgbTable() {
+    for (int k = 1; k <= 255; ++k) {
+      // Bisection over [0, 1]'s bit patterns for the first float whose code reaches k.
+      std::uint32_t lo = 0, hi = std::bit_cast<std::uint32_t>(1.0f);  // code(hi) = 255 >= k
+      while (lo < hi) {
+        const std::uint32_t mid = lo + (hi - lo) / 2;
+        if (linear_to_srgb8(static_cast<double>(std::bit_cast<float>(mid))) >= k) {
+          hi = mid;
+        } else {
+          lo = mid + 1;
+        }
+      }
+      thresholds_[static_cast<std::size_t>(k - 1)] = std::bit_cast<float>(lo);
+    }
+  }
+  /// linear_to_srgb8(x) for a float x.
+  std::uint8_t operator()(float x) const {
+    if (!(x > 0.0f)) return 0;  // also NaN
+    // Branch-free binary search: the count of thresholds <= x (8 halvings of 256 slots).
+    std::size_t i = 0;
+    for (std::size_t step = 128; step > 0; step /= 2) {
+      if (i + step <= thresholds_.size() && thresholds_[i + step - 1] <= x) i += step;
+    }
+    return static_cast<std::uint8_t>(i);
+  }
+
+ private:
+  std::array<float, 255> thresholds_{};
+};
+
 template <typename Vec>
 ImageRGB8 color_image(const std::vector<Vec>& linear, int w, int h) {
   check_size(linear.size(), w, h, "color_to_image");
+  static const SrgbTable srgb;  // built once (thread-safe static initialisation)
   ImageRGB8 image(w, h);
   for (std::size_t i = 0; i < linear.size(); ++i) {
-    image.rgb[3 * i] = linear_to_srgb8(linear[i].x);
-    image.rgb[3 * i + 1] = linear_to_srgb8(linear[i].y);
-    image.rgb[3 * i + 2] = linear_to_srgb8(linear[i].z);
+    image.rgb[3 * i] = srgb(linear[i].x);
+    image.rgb[3 * i + 1] = srgb(linear[i].y);
+    image.rgb[3 * i + 2] = srgb(linear[i].z);
   }
   return image;
 }
