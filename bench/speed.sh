@@ -92,11 +92,11 @@ for t in "${TECH_LIST[@]}"; do
   done
   cpu=$(median 1 "$TMP/new.times")
   wall=$(median 2 "$TMP/new.times")
-  rate=$(awk -v w="$W" -v h="$H" -v l="$LIGHTS" -v c="$cpu" 'BEGIN { printf "%.3g", c > 0 ? w * h * l / c : 0 }')
+  rate=$(awk -v w="$W" -v h="$H" -v l="$LIGHTS" -v c="$cpu" 'BEGIN { printf "%.3g", (c > 0 ? w * h * l / c : 0) }')
   if [ -n "$AGAINST" ]; then
     bcpu=$(median 1 "$TMP/old.times")
     bwall=$(median 2 "$TMP/old.times")
-    ratio=$(awk -v a="$cpu" -v b="$bcpu" 'BEGIN { printf "%.2f", b > 0 ? a / b : 0 }')
+    ratio=$(awk -v a="$cpu" -v b="$bcpu" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
     printf '%-28s %9s %9s %9s %9s %8s %12s\n' "$t" "$cpu" "$wall" "$bcpu" "$bwall" "$ratio" "$rate"
     echo "$MODE $t $bcpu $bwall" >> "$TMP/record.txt"
   else

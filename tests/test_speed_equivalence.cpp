@@ -43,7 +43,7 @@ double colour_sum(const FrameResult& f) {
   if (auto it = f.images.attachments.find(f.final_color); it != f.images.attachments.end()) img = &it->second.color;
   if (auto ib = f.images.image_buffers.find(f.final_color); ib != f.images.image_buffers.end()) img = &ib->second.color;
   if (img == nullptr) return -1;
-  for (const glm::vec4& c : *img) sum += static_cast<double>(c.r + c.g + c.b);
+  for (const glm::vec4& c : *img) sum += static_cast<double>(c.x + c.y + c.z);
   return sum;
 }
 

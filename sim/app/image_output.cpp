@@ -1,4 +1,4 @@
-// Image output: PNG writing (stb_image_write, implementation compiled into Debian's libstb), sRGB
+// Image output: PNG writing (zlib; reading through stb_image, compiled into Debian's libstb), sRGB
 // conversion, depth / id images, and heat maps with a legend drawn with stb_easy_font glyphs.
 #include "app/image_output.hpp"
 
@@ -12,14 +12,13 @@
 #include <cstring>
 #include <functional>
 #include <limits>
-#include <mutex>
 #include <stdexcept>
 
 #include "kernel/errors.hpp"
 
-// stb_image / stb_image_write: declarations only, the implementations live in libstb.
+// stb_image: declarations only, the implementation lives in libstb. PNGs are written with zlib.
 #include <stb/stb_image.h>
-#include <stb/stb_image_write.h>
+#include <zlib.h>
 
 // stb_easy_font is header-only with static functions (no implementation define); not every one of
 // them is used here.
@@ -74,25 +73,97 @@ void ImageRGB8::fill_rect(int x0, int y0, int x1, int y1, Rgb8 c) {
 // PNG files
 
 namespace {
-/// stb_image_write's fastest zlib level (stb_image_write.h: stbi_zlib_compress raises any quality
-/// below 5 to 5).
-constexpr int kPngCompressionLevel = 5;
+
+/// zlib's fastest level (zlib.h: Z_BEST_SPEED): the images are for looking at, and stb_image_write's
+/// own deflate (default level 8, 5 at its fastest) was a fifth of a 1080p run's profile with
+/// images (issue 15); zlib at level 1 compresses the same rows several times faster.
+constexpr int kPngCompressionLevel = Z_BEST_SPEED;
+
+/// Appends a big-endian 32-bit value.
+void put_u32(std::vector<std::uint8_t>& out, std::uint32_t v) {
+  for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<std::uint8_t>(v >> shift));
+}
+
+/// Appends one PNG chunk (length, type, data, CRC-32 of type and data; PNG spec 5.3).
+void put_chunk(std::vector<std::uint8_t>& out, const char type[4], const std::uint8_t* data, std::size_t size) {
+  put_u32(out, static_cast<std::uint32_t>(size));
+  const std::size_t start = out.size();
+  out.insert(out.end(), type, type + 4);
+  if (size > 0) out.insert(out.end(), data, data + size);
+  uLong crc = crc32(0L, Z_NULL, 0);
+  crc = crc32(crc, out.data() + start, static_cast<uInt>(out.size() - start));
+  put_u32(out, static_cast<std::uint32_t>(crc));
+}
+
+/// The PNG filters of one row (PNG spec 9.2: none, sub, up, average, Paeth) into `dst` (type
+/// byte first), choosing per row the filter with the smallest sum of absolute signed residuals
+/// (the heuristic of the PNG spec 12.8 that libpng and stb_image_write use).
+void filter_row(const std::uint8_t* row, const std::uint8_t* above, std::size_t n, std::uint8_t* dst,
+                std::array<std::vector<std::uint8_t>, 5>& scratch) {
+  constexpr std::size_t bpp = 3;
+  auto paeth = [](int a, int b, int c) {
+    const int p = a + b - c, pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
+    return pa <= pb && pa <= pc ? a : (pb <= pc ? b : c);
+  };
+  // One loop per filter (predictor known at compile time); the residual cost in the same loop.
+  auto run = [&](std::vector<std::uint8_t>& r, auto predict) {
+    r.resize(n);
+    long cost = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const int a = i >= bpp ? row[i - bpp] : 0;
+      const int b = above ? above[i] : 0;
+      const int c = (above && i >= bpp) ? above[i - bpp] : 0;
+      const auto v = static_cast<std::uint8_t>(row[i] - predict(a, b, c));
+      r[i] = v;
+      cost += std::abs(static_cast<int>(static_cast<std::int8_t>(v)));
+    }
+    return cost;
+  };
+  const std::array<long, 5> cost = {
+      run(scratch[0], [](int, int, int) { return 0; }), run(scratch[1], [](int a, int, int) { return a; }),
+      run(scratch[2], [](int, int b, int) { return b; }), run(scratch[3], [](int a, int b, int) { return (a + b) / 2; }),
+      run(scratch[4], paeth)};
+  const int best = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+  dst[0] = static_cast<std::uint8_t>(best);
+  std::memcpy(dst + 1, scratch[static_cast<std::size_t>(best)].data(), n);
+}
+
 }  // namespace
 
 void write_png(const std::string& path, const ImageRGB8& image) {
   if (image.width <= 0 || image.height <= 0 ||
       image.rgb.size() != static_cast<std::size_t>(image.width) * image.height * 3)
     throw std::invalid_argument("write_png: image for " + path + " has an inconsistent size");
-  // stb's zlib at its fastest level (it treats levels below 5 as 5; its default is 8): the images
-  // are for looking at, and the default level's extra search is a fifth of a 1080p run's profile
-  // with images (issue 15). Set once: the level is a global of libstb.
-  static std::once_flag level_set;
-  std::call_once(level_set, [] { stbi_write_png_compression_level = kPngCompressionLevel; });
+  const std::size_t n = static_cast<std::size_t>(image.width) * 3;
+  const auto h = static_cast<std::size_t>(image.height);
+  std::vector<std::uint8_t> filtered((n + 1) * h);
+  std::array<std::vector<std::uint8_t>, 5> scratch;
+  for (std::size_t y = 0; y < h; ++y) {
+    filter_row(image.rgb.data() + y * n, y > 0 ? image.rgb.data() + (y - 1) * n : nullptr, n, filtered.data() + y * (n + 1),
+               scratch);
+  }
+  uLongf zsize = compressBound(static_cast<uLong>(filtered.size()));
+  std::vector<std::uint8_t> z(zsize);
+  if (compress2(z.data(), &zsize, filtered.data(), static_cast<uLong>(filtered.size()), kPngCompressionLevel) != Z_OK) {
+    throw InputError(path, "cannot compress PNG image");
+  }
+  std::vector<std::uint8_t> png = {137, 80, 78, 71, 13, 10, 26, 10};  // PNG signature
+  std::vector<std::uint8_t> ihdr;
+  put_u32(ihdr, static_cast<std::uint32_t>(image.width));
+  put_u32(ihdr, static_cast<std::uint32_t>(image.height));
+  ihdr.insert(ihdr.end(), {8, 2, 0, 0, 0});  // 8 bits, truecolour RGB, deflate, adaptive filters, no interlace
+  png.reserve(zsize + 64);
+  put_chunk(png, "IHDR", ihdr.data(), ihdr.size());
+  put_chunk(png, "IDAT", z.data(), zsize);
+  put_chunk(png, "IEND", nullptr, 0);
   errno = 0;
-  const int ok = stbi_write_png(path.c_str(), image.width, image.height, 3, image.rgb.data(),
-                                image.width * 3);
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  const bool ok = f != nullptr && std::fwrite(png.data(), 1, png.size(), f) == png.size();
+  const int err = errno;
+  if (f != nullptr && std::fclose(f) != 0 && ok) {
+    throw InputError(path, std::string("cannot write PNG image (") + std::strerror(errno) + ")");
+  }
   if (!ok) {
-    const int err = errno;
     std::string message = "cannot write PNG image";
     if (err != 0) message += std::string(" (") + std::strerror(err) + ")";
     throw InputError(path, message);
