@@ -100,9 +100,10 @@ INSTANTIATE_TEST_SUITE_P(Techniques, SpeedEquivalence,
                                            "light_prepass", "tiled_deferred", "clustered_deferred",
                                            "visibility_buffer"));
 
-// MSAA 4x: per-sample coverage of the alpha-tested cloth and resolves, with and without colours.
+// MSAA 4x (the techniques that support it; G-buffer and PLS ones refuse it): per-sample coverage
+// of the alpha-tested cloth, blending and resolves, with and without colours.
 TEST_F(SpeedEquivalence, MultisampledRunsCountTheSameWithoutColours) {
-  for (const char* technique : {"plain_forward", "deferred_tile_store", "visibility_buffer"}) {
+  for (const char* technique : {"plain_forward", "forward_multipass", "visibility_buffer", "clustered_forward"}) {
     TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 160, 96);
     setup.samples = 4;
     const Trace t = generate_trace(technique, setup);

@@ -741,9 +741,17 @@ ImageRGB8 heatmap_to_image(const std::vector<double>& values, int w, int h, cons
   check_size(values.size(), w, h, "heatmap_to_image");
   const HeatmapRange range = heatmap_range(values, spec);
   ImageRGB8 image(w, h);
+  // Neighbouring pixels mostly hold the same count: the colour of the previous value is reused
+  // (the same colour the mapping gives, without the colormap's interpolation per pixel).
+  double last_v = std::numeric_limits<double>::quiet_NaN();
+  Rgb8 last_c = kNoDataColor;
   for (std::size_t i = 0; i < values.size(); ++i) {
     const double v = values[i];
-    const Rgb8 c = std::isfinite(v) ? colormap_color(heatmap_position(v, range, spec.log_scale)) : kNoDataColor;
+    if (!(v == last_v)) {
+      last_c = std::isfinite(v) ? colormap_color(heatmap_position(v, range, spec.log_scale)) : kNoDataColor;
+      last_v = v;
+    }
+    const Rgb8 c = last_c;
     image.rgb[3 * i] = c.r;
     image.rgb[3 * i + 1] = c.g;
     image.rgb[3 * i + 2] = c.b;
@@ -779,10 +787,16 @@ ImageRGB8 heatmap_tiles_to_image(const std::vector<double>& values_per_tile, int
   const HeatmapRange range = heatmap_range(values_per_tile, spec);
   ImageRGB8 image(w, h);
   const bool borders = tile_w >= 4 && tile_h >= 4;
+  double last_v = std::numeric_limits<double>::quiet_NaN();  // a tile's value repeats along its row
+  Rgb8 last_c = kNoDataColor;
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const double v = pixels[static_cast<std::size_t>(y) * w + x];
-      Rgb8 c = std::isfinite(v) ? colormap_color(heatmap_position(v, range, spec.log_scale)) : kNoDataColor;
+      if (!(v == last_v)) {
+        last_c = std::isfinite(v) ? colormap_color(heatmap_position(v, range, spec.log_scale)) : kNoDataColor;
+        last_v = v;
+      }
+      Rgb8 c = last_c;
       if (borders && (x % tile_w == 0 || y % tile_h == 0)) c = lerp(c, Rgb8{0, 0, 0}, 0.45);
       image.set(x, y, c);
     }
