@@ -112,6 +112,20 @@ TEST_F(SpeedEquivalence, MultisampledRunsCountTheSameWithoutColours) {
   }
 }
 
+// The other GPU modes (tile-based without deferred shading; immediate mode through the ROP
+// caches) count the same without colours as well.
+TEST_F(SpeedEquivalence, TbrAndImrModesCountTheSameWithoutColours) {
+  for (const char* mode : {"gpu.mode=tbr", "gpu.mode=imr"}) {
+    for (const char* technique : {"plain_forward", "forward_multipass", "tiled_deferred"}) {
+      TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 160, 96);
+      if (std::string(technique) == "forward_multipass") setup.options["lights_per_pass"] = "8";
+      const Trace t = generate_trace(technique, setup);
+      const HwConfig hw = resolve_config({}, {mode}).hw;
+      expect_same_rows(run(t, *scene_, hw, true), run(t, *scene_, hw, false), std::string(technique) + " " + mode);
+    }
+  }
+}
+
 // The punch-through alpha test runs for real without colours: it kills samples (the count is not
 // zero), and the same ones either way (compared above). An alpha test that were skipped without
 // colours would keep every sample and change the coverage.
