@@ -295,8 +295,8 @@ class PassRenderer {
 
 class FrameSimulator {
  public:
-  FrameSimulator(const Trace& trace, const std::string& path, const Scene& scene, const HwConfig& hw)
-      : trace_(trace), path_(path), scene_(scene), hw_(hw) {}
+  FrameSimulator(const Trace& trace, const std::string& path, const Scene& scene, const HwConfig& hw, const FrameOptions& options)
+      : trace_(trace), path_(path), scene_(scene), hw_(hw), options_(options) {}
 
   FrameResult run() {
     const auto& f = trace_.frame;
@@ -315,7 +315,7 @@ class FrameSimulator {
     frustum_ = ViewFrustum::from(trace_.camera, f.width, f.height);
     light_bins_ = LightScreenBins::build(trace_.lights, camera_, viewport_);
     inputs_ = FrameInputs{.hw = &hw_, .scene = &scene_, .lights = &trace_.lights, .camera = camera_,
-                          .viewport = viewport_, .frustum = &frustum_, .light_bins = &light_bins_};
+                          .viewport = viewport_, .frustum = &frustum_, .light_bins = &light_bins_, .colour = options_.colour};
     result_.images.width = f.width;
     result_.images.height = f.height;
     result_.images.counters.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height));
@@ -641,6 +641,7 @@ class FrameSimulator {
   const std::string& path_;
   const Scene& scene_;
   const HwConfig& hw_;
+  FrameOptions options_;
   Viewport viewport_;
   CameraXform camera_;
   ViewFrustum frustum_;
@@ -655,8 +656,9 @@ class FrameSimulator {
 
 }  // namespace
 
-FrameResult simulate_frame(const Trace& trace, const std::string& trace_path, const Scene& scene, const HwConfig& hw) {
-  FrameSimulator sim(trace, trace_path, scene, hw);
+FrameResult simulate_frame(const Trace& trace, const std::string& trace_path, const Scene& scene, const HwConfig& hw,
+                           const FrameOptions& options) {
+  FrameSimulator sim(trace, trace_path, scene, hw, options);
   return sim.run();
 }
 

@@ -78,9 +78,15 @@ struct FrameResult {
   FrameStats totals;               ///< typed frame totals (the same figures as the "frame/<unit>" rows)
 };
 
+/// How a frame is simulated (host choices: none changes a statistic).
+struct FrameOptions {
+  bool colour = true;  ///< compute the colour images (FrameInputs::colour); false when no image is read
+};
+
 /// Replays `trace` on `scene` with the hardware `hw`. Input problems (an unsupported kernel or
 /// light source, a load of an attachment nothing stored, inconsistent sample counts, a scene
 /// that does not match the trace's hash) throw InputError naming trace_path:line.
-FrameResult simulate_frame(const Trace& trace, const std::string& trace_path, const Scene& scene, const HwConfig& hw);
+FrameResult simulate_frame(const Trace& trace, const std::string& trace_path, const Scene& scene, const HwConfig& hw,
+                           const FrameOptions& options = {});
 
 }  // namespace tbdr

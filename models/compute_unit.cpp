@@ -298,7 +298,7 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
           if (cgrid) list = &cgrid->lists[cgrid->cluster_of(x, y, ctx.frustum->distance_of(s.position))];
           if (list) count = list->size();
           shaded_triangles[k] = s.triangle;
-          shaded_colors[k] = shade_surface(ctx, s, x, y, list);
+          shaded_colors[k] = ctx.colour ? shade_surface(ctx, s, x, y, list) : glm::vec3(0.0f);  // FrameInputs::colour
           ++n_shaded;
           ++stats.compute_shaded_pixels;
           stats.compute_light_evaluations += count;

@@ -182,6 +182,10 @@ struct FrameInputs {
   Viewport viewport;
   const ViewFrustum* frustum = nullptr;          ///< for cluster lookups
   const LightScreenBins* light_bins = nullptr;   ///< candidate lights per screen bin
+  /// Compute the fragments' colours (images, image-equivalence checks). false: the units count
+  /// the same work (lights, texture footprints, alpha tests, surfaces) and skip the colour
+  /// arithmetic nothing reads; every statistic is the same either way.
+  bool colour = true;
 };
 
 /// Everything the fragment units (ISP, TSP, tile memory) read while rendering one pass's tiles:

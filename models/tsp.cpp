@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <limits>
 #include <optional>
 
 #if defined(__SSE2__)
@@ -115,7 +116,98 @@ class QuadUv {
 #endif
 };
 
+/// World position of a scene triangle's surface at pixel (x, y)'s centre: the one expression the
+/// shading loop and the batch's bounds both use.
+inline glm::vec3 triangle_position(const Primitive& p, std::int32_t x, std::int32_t y, glm::vec3* bary = nullptr) {
+  const int bits = p.setup.subpixel_bits;
+  const std::int64_t half = std::int64_t{1} << (bits - 1);
+  const glm::vec3 b = perspective_barycentrics(p.setup, (std::int64_t{x} << bits) + half, (std::int64_t{y} << bits) + half);
+  if (bary) *bary = b;
+  return p.world[0] * b.x + p.world[1] * b.y + p.world[2] * b.z;
+}
+
+/// Relative widening of a light's radius^2 in the colour loop's pre-tests (the box test and the
+/// vectorised per-fragment test): they may keep a light the exact test then rejects, never drop
+/// one it accepts, whatever the rounding of their float arithmetic (errors of a few ulp, 1e-7
+/// relative, against this 1e-4). The exact test is ShadingModel::lit_contribution's own.
+constexpr float kReachMargin = 1.0001f;
+
 }  // namespace
+
+bool Tsp::surface_bounds(const Primitive& p, const DrawContext& d, std::span<const ShadePixel> pixels, glm::vec3& lo,
+                         glm::vec3& hi) const {
+  const int W = ctx_.viewport.width_px;
+  lo = glm::vec3(std::numeric_limits<float>::infinity());
+  hi = -lo;
+  bool any = false;
+  auto add = [&](glm::vec3 q) {
+    lo = glm::min(lo, q);
+    hi = glm::max(hi, q);
+    any = true;
+  };
+  const bool from_triangle = p.material != kNoMaterial && ctx_.scene != nullptr;
+  const ShaderDesc& sh = *d.shader;
+  const bool pls_reads = ctx_.pls && (sh.pls == PlsAccess::Read || sh.pls == PlsAccess::ReadWrite);
+  for (const ShadePixel& px : pixels) {
+    const std::size_t pixel = static_cast<std::size_t>(px.y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(px.x);
+    if (from_triangle) {
+      add(triangle_position(p, px.x, px.y));
+    } else if (d.surface_source) {
+      const std::size_t k = pixel * d.surface_source->samples;
+      if (d.surface_source->surface_valid[k]) add(d.surface_source->surface[k].position);
+    } else if (pls_reads && ctx_.pls->valid[pixel]) {
+      add(ctx_.pls->surface[pixel].position);
+    }
+  }
+  return any;
+}
+
+void Tsp::gather_near_lights(const std::vector<std::uint32_t>& bin, const DrawContext& d, glm::vec3 lo, glm::vec3 hi) {
+  const auto& lights = *ctx_.lights;
+  near_.bin = &bin;
+  near_.index.clear();
+  near_.x.clear();
+  near_.y.clear();
+  near_.z.clear();
+  near_.reach2.clear();
+  for (std::uint32_t l : bin) {
+    if (!d.light_selected[l]) continue;
+    const Light& light = lights[l];
+    // Squared distance from the light to the box (0 inside): beyond its radius, the light reaches
+    // none of the batch's surfaces.
+    const glm::vec3 e = glm::max(glm::max(lo - light.position, light.position - hi), glm::vec3(0.0f));
+    const float r2 = light.radius * light.radius * kReachMargin;
+    if (!(glm::dot(e, e) < r2)) continue;
+    near_.index.push_back(l);
+    near_.x.push_back(light.position.x);
+    near_.y.push_back(light.position.y);
+    near_.z.push_back(light.position.z);
+    near_.reach2.push_back(r2);
+  }
+  near_.hit.resize(near_.index.size());
+}
+
+glm::vec3 Tsp::near_lighting(const SurfacePoint& s, glm::vec3 eye) {
+  const std::size_t n = near_.index.size();
+  const float sx = s.position.x, sy = s.position.y, sz = s.position.z;
+  const float* __restrict lx = near_.x.data();
+  const float* __restrict ly = near_.y.data();
+  const float* __restrict lz = near_.z.data();
+  const float* __restrict r2 = near_.reach2.data();
+  std::uint8_t* __restrict hit = near_.hit.data();
+  // The radius pre-test over every near light (no branches: the compiler vectorises it).
+  for (std::size_t j = 0; j < n; ++j) {
+    const float dx = lx[j] - sx, dy = ly[j] - sy, dz = lz[j] - sz;
+    hit[j] = static_cast<std::uint8_t>(dx * dx + dy * dy + dz * dz < r2[j]);
+  }
+  // The exact contribution of the lights that may reach (in order: the same sum as every light's).
+  const auto& lights = *ctx_.lights;
+  glm::vec3 c(0.0f);
+  for (std::size_t j = 0; j < n; ++j) {
+    if (hit[j]) c += ShadingModel::lit_contribution(s, eye, lights[near_.index[j]]);
+  }
+  return c;
+}
 
 void Tsp::texture_addresses(const Primitive& p, std::uint32_t tex_fetches, std::size_t quads, TspStats& stats) {
   // The uvs at the 4 pixel centres of every launched quad (helper lanes extrapolate the
@@ -187,6 +279,9 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   const int S = ctx_.pattern.count;
   const auto& lights = *ctx_.lights;
   const glm::vec3 eye = ctx_.camera.eye;
+  // Colours only when someone reads them (FrameInputs::colour): without, the same work is counted
+  // and the same surfaces, coverage and light stacks are kept, but no light is summed.
+  const bool colour = ctx_.colour;
 
   // Quads: 2x2 pixel blocks aligned to even coordinates; every lane of a launched quad runs.
   quad_seen_.clear();
@@ -260,6 +355,8 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     quad_uv.emplace(*uv_plane, p.setup.a[1] * step, p.setup.b[1] * step, p.setup.a[2] * step, p.setup.b[2] * step);
   }
   std::uint64_t light_sum = 0;
+  std::optional<std::pair<glm::vec3, glm::vec3>> bounds;  // the batch's surface box, when the colour loop needs it
+  near_.bin = nullptr;  // gathered for another batch
 
   for (std::size_t i = 0; i < pixels.size(); ++i) {
     const ShadePixel& px = pixels[i];
@@ -270,8 +367,8 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     SurfacePoint s;
     bool have_surface = false;
     if (from_triangle) {
-      const glm::vec3 b = perspective_barycentrics(p.setup, (std::int64_t{px.x} << bits) + half, (std::int64_t{px.y} << bits) + half);
-      s.position = p.world[0] * b.x + p.world[1] * b.y + p.world[2] * b.z;
+      glm::vec3 b;
+      s.position = triangle_position(p, px.x, px.y, &b);
       glm::vec3 n = p.normal[0] * b.x + p.normal[1] * b.y + p.normal[2] * b.z;
       const float len = glm::length(n);
       n = len > 0.0f ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
@@ -280,7 +377,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       const glm::vec2 uv = p.uv[0] * b.x + p.uv[1] * b.y + p.uv[2] * b.z;
       s.albedo = glm::vec3(mat->base_color);
       // The base colour texture the fetches are charged for, sampled at the pixel (glTF: factor x texel).
-      if (mat->base_color_texels >= 0)
+      if (colour && mat->base_color_texels >= 0)
         s.albedo *= ctx_.scene->base_color_texels[static_cast<std::size_t>(mat->base_color_texels)].sample_linear_rgb(uv);
       s.alpha = mat->base_color.w;
       s.material = p.material;
@@ -370,9 +467,15 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       glm::vec3 c(0.0f);
       if (!have_surface) return c;
       if (fl.all_selected) {
-        for (std::uint32_t l : ctx_.light_bins->at(px.x, px.y)) {
-          if (d.light_selected[l]) c += ShadingModel::light_contribution(s, eye, lights[l]);
+        // The pixel's screen-bin candidates, cut once per batch and bin to those reaching the
+        // batch's surfaces (lights beyond their radius add exactly 0: the sum is unchanged).
+        if (!bounds) {
+          bounds.emplace();
+          if (!surface_bounds(p, d, pixels, bounds->first, bounds->second)) bounds->first = bounds->second = s.position;
         }
+        const std::vector<std::uint32_t>& bin = ctx_.light_bins->at(px.x, px.y);
+        if (near_.bin != &bin) gather_near_lights(bin, d, bounds->first, bounds->second);
+        c = near_lighting(s, eye);
       } else if (fl.list) {
         for (std::uint32_t l : *fl.list) c += ShadingModel::light_contribution(s, eye, lights[l]);
       } else if (fl.single >= 0) {
@@ -395,7 +498,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         ctx_.pls->stack_count[pixel] = 0;
         ctx_.pls->overflow[pixel] = 0;
       } else if (sh.light_source == LightSource::Proxy) {
-        if (have_surface) {
+        if (have_surface && colour) {
           glm::vec3& acc = ctx_.pls->accum[pixel];
           acc += lighting();
           if (pls_accum_format) acc = glm::vec3(FormatPrecision::color(*pls_accum_format, glm::vec4(acc, 1.0f)));
@@ -414,7 +517,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
 
     // Color outputs.
     glm::vec3 lit(0.0f);
-    if (have_surface) {
+    if (have_surface && colour) {
       lit = lighting();
       if (blend != BlendMode::Add) lit += ShadingModel::ambient(s);
       if (pls_reads && ctx_.pls->valid[pixel]) lit += ctx_.pls->accum[pixel];
@@ -431,6 +534,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     for (std::uint32_t o = 0; o < outputs; ++o) {
       AttachmentImage* target = ctx_.color_targets[o];
       if (target->usage == AttachmentUsage::Color) {
+        if (!colour) continue;
         glm::vec4* dst = target->color.data() + pixel * static_cast<std::size_t>(S);
         const Format format = target->format;
         for (int smp = 0; smp < S; ++smp) {

@@ -13,6 +13,8 @@
 #include <utility>
 #include <vector>
 
+#include <glm/glm.hpp>
+
 #include "models/render_state.hpp"
 #include "models/texture_unit.hpp"
 #include "kernel/stats.hpp"
@@ -71,8 +73,26 @@ class Tsp {
   [[gnu::noinline]] void texture_addresses(const Primitive& p, std::uint32_t tex_fetches, std::size_t quads,
                                            TspStats& stats);
 
+  /// The world-space box of the surfaces `pixels` shade (false: none has a surface).
+  bool surface_bounds(const Primitive& p, const DrawContext& d, std::span<const ShadePixel> pixels, glm::vec3& lo,
+                      glm::vec3& hi) const;
+  /// Rebuilds near_ from screen bin `bin`: the selected lights of draw `d` whose sphere reaches the box.
+  void gather_near_lights(const std::vector<std::uint32_t>& bin, const DrawContext& d, glm::vec3 lo, glm::vec3 hi);
+  /// Sum of the contributions of near_'s lights at `s`, in near_'s (ascending) order.
+  glm::vec3 near_lighting(const SurfacePoint& s, glm::vec3 eye);
+
   RenderContext& ctx_;
   std::vector<std::uint64_t> quad_seen_;  ///< scratch: quads launched in this batch
+  /// The colour loop's candidate lights for the current batch and screen bin, structure of arrays
+  /// (the radius test runs over contiguous floats, several lights per instruction).
+  struct NearLights {
+    std::vector<std::uint32_t> index;  ///< light indices, ascending
+    std::vector<float> x, y, z;        ///< light positions
+    std::vector<float> reach2;         ///< radius^2 widened by kReachMargin (a superset of the exact test)
+    std::vector<std::uint8_t> hit;     ///< scratch: 1 where the light may reach the current surface
+    const std::vector<std::uint32_t>* bin = nullptr;  ///< the screen bin they were gathered from
+  };
+  NearLights near_;
   /// The current pass's colour targets and PLS variables (name, format), for FormatPrecision.
   const PassDesc* formats_pass_ = nullptr;
   std::vector<std::pair<const std::string*, Format>> target_formats_;

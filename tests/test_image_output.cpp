@@ -3,7 +3,9 @@
 
 #include <stb/stb_image.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <set>
@@ -58,6 +60,38 @@ TEST(ImageOutputColor, SrgbTransferFunctionExactValues) {
     EXPECT_GE(v, prev);
     prev = v;
   }
+}
+
+// color_to_image converts by table (no pow per pixel); it must give linear_to_srgb8's code for
+// every float. Checked at each of the 255 code boundaries (the last float below it and the first
+// at it, found by bisection over the float bit patterns) and on 2^22 floats spread evenly over the
+// bit patterns of [0, 1], plus the special values.
+TEST(ImageOutputColor, TableConversionEqualsTheFormulaForEveryFloat) {
+  const auto code = [](float x) { return linear_to_srgb8(static_cast<double>(x)); };
+  std::vector<float> xs = {0.0f, -0.0f, -1.0f, 1.0f, 1.5f, std::numeric_limits<float>::infinity(),
+                           -std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN(),
+                           std::numeric_limits<float>::denorm_min(), 0.0031308f};
+  const std::uint32_t one = std::bit_cast<std::uint32_t>(1.0f);
+  for (int k = 1; k <= 255; ++k) {
+    std::uint32_t lo = 0, hi = one;
+    while (lo < hi) {
+      const std::uint32_t mid = lo + (hi - lo) / 2;
+      if (code(std::bit_cast<float>(mid)) >= k) hi = mid; else lo = mid + 1;
+    }
+    xs.push_back(std::bit_cast<float>(lo));
+    xs.push_back(std::bit_cast<float>(lo - 1));
+    EXPECT_EQ(code(std::bit_cast<float>(lo - 1)), k - 1) << "the formula is monotone: one code per boundary";
+  }
+  for (std::uint32_t b = 0; b <= one; b += one >> 22) xs.push_back(std::bit_cast<float>(b));
+  while (xs.size() % 3 != 0) xs.push_back(0.5f);
+  std::vector<glm::vec3> pixels(xs.size() / 3);
+  for (std::size_t i = 0; i < pixels.size(); ++i) pixels[i] = {xs[3 * i], xs[3 * i + 1], xs[3 * i + 2]};
+  const ImageRGB8 img = color_to_image(pixels, static_cast<int>(pixels.size()), 1);
+  std::size_t wrong = 0;
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    if (img.rgb[i] != code(xs[i]) && ++wrong <= 5) ADD_FAILURE() << "x = " << xs[i] << ": table " << int{img.rgb[i]} << ", formula " << int{code(xs[i])};
+  }
+  EXPECT_EQ(wrong, 0u);
 }
 
 TEST(ImageOutputColor, PngRoundTripHasExactSrgbValues) {

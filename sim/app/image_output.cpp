@@ -1,9 +1,10 @@
-// Image output: PNG writing (stb_image_write, implementation compiled into Debian's libstb), sRGB
+// Image output: PNG writing (zlib; reading through stb_image, compiled into Debian's libstb), sRGB
 // conversion, depth / id images, and heat maps with a legend drawn with stb_easy_font glyphs.
 #include "app/image_output.hpp"
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cassert>
 #include <cerrno>
 #include <cmath>
@@ -15,9 +16,9 @@
 
 #include "kernel/errors.hpp"
 
-// stb_image / stb_image_write: declarations only, the implementations live in libstb.
+// stb_image: declarations only, the implementation lives in libstb. PNGs are written with zlib.
 #include <stb/stb_image.h>
-#include <stb/stb_image_write.h>
+#include <zlib.h>
 
 // stb_easy_font is header-only with static functions (no implementation define); not every one of
 // them is used here.
@@ -71,15 +72,98 @@ void ImageRGB8::fill_rect(int x0, int y0, int x1, int y1, Rgb8 c) {
 // ---------------------------------------------------------------------------------------------
 // PNG files
 
+namespace {
+
+/// zlib's fastest level (zlib.h: Z_BEST_SPEED): the images are for looking at, and stb_image_write's
+/// own deflate (default level 8, 5 at its fastest) was a fifth of a 1080p run's profile with
+/// images (issue 15); zlib at level 1 compresses the same rows several times faster.
+constexpr int kPngCompressionLevel = Z_BEST_SPEED;
+
+/// Appends a big-endian 32-bit value.
+void put_u32(std::vector<std::uint8_t>& out, std::uint32_t v) {
+  for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<std::uint8_t>(v >> shift));
+}
+
+/// Appends one PNG chunk (length, type, data, CRC-32 of type and data; PNG spec 5.3).
+void put_chunk(std::vector<std::uint8_t>& out, const char type[4], const std::uint8_t* data, std::size_t size) {
+  put_u32(out, static_cast<std::uint32_t>(size));
+  const std::size_t start = out.size();
+  out.insert(out.end(), type, type + 4);
+  if (size > 0) out.insert(out.end(), data, data + size);
+  uLong crc = crc32(0L, Z_NULL, 0);
+  crc = crc32(crc, out.data() + start, static_cast<uInt>(out.size() - start));
+  put_u32(out, static_cast<std::uint32_t>(crc));
+}
+
+/// The PNG filters of one row (PNG spec 9.2: none, sub, up, average, Paeth) into `dst` (type
+/// byte first), choosing per row the filter with the smallest sum of absolute signed residuals
+/// (the heuristic of the PNG spec 12.8 that libpng and stb_image_write use).
+void filter_row(const std::uint8_t* row, const std::uint8_t* above, std::size_t n, std::uint8_t* dst,
+                std::array<std::vector<std::uint8_t>, 5>& scratch) {
+  constexpr std::size_t bpp = 3;
+  auto paeth = [](int a, int b, int c) {
+    const int p = a + b - c, pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
+    return pa <= pb && pa <= pc ? a : (pb <= pc ? b : c);
+  };
+  // One loop per filter (predictor known at compile time); the residual cost in the same loop.
+  auto run = [&](std::vector<std::uint8_t>& r, auto predict) {
+    r.resize(n);
+    long cost = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const int a = i >= bpp ? row[i - bpp] : 0;
+      const int b = above ? above[i] : 0;
+      const int c = (above && i >= bpp) ? above[i - bpp] : 0;
+      const auto v = static_cast<std::uint8_t>(row[i] - predict(a, b, c));
+      r[i] = v;
+      cost += std::abs(static_cast<int>(static_cast<std::int8_t>(v)));
+    }
+    return cost;
+  };
+  const std::array<long, 5> cost = {
+      run(scratch[0], [](int, int, int) { return 0; }), run(scratch[1], [](int a, int, int) { return a; }),
+      run(scratch[2], [](int, int b, int) { return b; }), run(scratch[3], [](int a, int b, int) { return (a + b) / 2; }),
+      run(scratch[4], paeth)};
+  const int best = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+  dst[0] = static_cast<std::uint8_t>(best);
+  std::memcpy(dst + 1, scratch[static_cast<std::size_t>(best)].data(), n);
+}
+
+}  // namespace
+
 void write_png(const std::string& path, const ImageRGB8& image) {
   if (image.width <= 0 || image.height <= 0 ||
       image.rgb.size() != static_cast<std::size_t>(image.width) * image.height * 3)
     throw std::invalid_argument("write_png: image for " + path + " has an inconsistent size");
+  const std::size_t n = static_cast<std::size_t>(image.width) * 3;
+  const auto h = static_cast<std::size_t>(image.height);
+  std::vector<std::uint8_t> filtered((n + 1) * h);
+  std::array<std::vector<std::uint8_t>, 5> scratch;
+  for (std::size_t y = 0; y < h; ++y) {
+    filter_row(image.rgb.data() + y * n, y > 0 ? image.rgb.data() + (y - 1) * n : nullptr, n, filtered.data() + y * (n + 1),
+               scratch);
+  }
+  uLongf zsize = compressBound(static_cast<uLong>(filtered.size()));
+  std::vector<std::uint8_t> z(zsize);
+  if (compress2(z.data(), &zsize, filtered.data(), static_cast<uLong>(filtered.size()), kPngCompressionLevel) != Z_OK) {
+    throw InputError(path, "cannot compress PNG image");
+  }
+  std::vector<std::uint8_t> png = {137, 80, 78, 71, 13, 10, 26, 10};  // PNG signature
+  std::vector<std::uint8_t> ihdr;
+  put_u32(ihdr, static_cast<std::uint32_t>(image.width));
+  put_u32(ihdr, static_cast<std::uint32_t>(image.height));
+  ihdr.insert(ihdr.end(), {8, 2, 0, 0, 0});  // 8 bits, truecolour RGB, deflate, adaptive filters, no interlace
+  png.reserve(zsize + 64);
+  put_chunk(png, "IHDR", ihdr.data(), ihdr.size());
+  put_chunk(png, "IDAT", z.data(), zsize);
+  put_chunk(png, "IEND", nullptr, 0);
   errno = 0;
-  const int ok = stbi_write_png(path.c_str(), image.width, image.height, 3, image.rgb.data(),
-                                image.width * 3);
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  const bool ok = f != nullptr && std::fwrite(png.data(), 1, png.size(), f) == png.size();
+  const int err = errno;
+  if (f != nullptr && std::fclose(f) != 0 && ok) {
+    throw InputError(path, std::string("cannot write PNG image (") + std::strerror(errno) + ")");
+  }
   if (!ok) {
-    const int err = errno;
     std::string message = "cannot write PNG image";
     if (err != 0) message += std::string(" (") + std::strerror(err) + ")";
     throw InputError(path, message);
@@ -119,14 +203,51 @@ void check_size(std::size_t n, int w, int h, const char* what) {
                                 std::to_string(h) + " values, got " + std::to_string(n));
 }
 
+/// linear_to_srgb8 for single-precision inputs by table, exactly: the formula is monotone in its
+/// input, so the code of x is the number of thresholds at or below x, where threshold k (1..255)
+/// is the smallest float whose code is k or more (found once by bisection over the floats' bit
+/// patterns, which order non-negative floats as their values). No pow per pixel.
+class SrgbTable {
+ public:
+  SrgbTable() {
+    for (int k = 1; k <= 255; ++k) {
+      // Bisection over [0, 1]'s bit patterns for the first float whose code reaches k.
+      std::uint32_t lo = 0, hi = std::bit_cast<std::uint32_t>(1.0f);  // code(hi) = 255 >= k
+      while (lo < hi) {
+        const std::uint32_t mid = lo + (hi - lo) / 2;
+        if (linear_to_srgb8(static_cast<double>(std::bit_cast<float>(mid))) >= k) {
+          hi = mid;
+        } else {
+          lo = mid + 1;
+        }
+      }
+      thresholds_[static_cast<std::size_t>(k - 1)] = std::bit_cast<float>(lo);
+    }
+  }
+  /// linear_to_srgb8(x) for a float x.
+  std::uint8_t operator()(float x) const {
+    if (!(x > 0.0f)) return 0;  // also NaN
+    // Branch-free binary search: the count of thresholds <= x (8 halvings of 256 slots).
+    std::size_t i = 0;
+    for (std::size_t step = 128; step > 0; step /= 2) {
+      if (i + step <= thresholds_.size() && thresholds_[i + step - 1] <= x) i += step;
+    }
+    return static_cast<std::uint8_t>(i);
+  }
+
+ private:
+  std::array<float, 255> thresholds_{};
+};
+
 template <typename Vec>
 ImageRGB8 color_image(const std::vector<Vec>& linear, int w, int h) {
   check_size(linear.size(), w, h, "color_to_image");
+  static const SrgbTable srgb;  // built once (thread-safe static initialisation)
   ImageRGB8 image(w, h);
   for (std::size_t i = 0; i < linear.size(); ++i) {
-    image.rgb[3 * i] = linear_to_srgb8(linear[i].x);
-    image.rgb[3 * i + 1] = linear_to_srgb8(linear[i].y);
-    image.rgb[3 * i + 2] = linear_to_srgb8(linear[i].z);
+    image.rgb[3 * i] = srgb(linear[i].x);
+    image.rgb[3 * i + 1] = srgb(linear[i].y);
+    image.rgb[3 * i + 2] = srgb(linear[i].z);
   }
   return image;
 }
@@ -620,9 +741,17 @@ ImageRGB8 heatmap_to_image(const std::vector<double>& values, int w, int h, cons
   check_size(values.size(), w, h, "heatmap_to_image");
   const HeatmapRange range = heatmap_range(values, spec);
   ImageRGB8 image(w, h);
+  // Neighbouring pixels mostly hold the same count: the colour of the previous value is reused
+  // (the same colour the mapping gives, without the colormap's interpolation per pixel).
+  double last_v = std::numeric_limits<double>::quiet_NaN();
+  Rgb8 last_c = kNoDataColor;
   for (std::size_t i = 0; i < values.size(); ++i) {
     const double v = values[i];
-    const Rgb8 c = std::isfinite(v) ? colormap_color(heatmap_position(v, range, spec.log_scale)) : kNoDataColor;
+    if (!(v == last_v)) {
+      last_c = std::isfinite(v) ? colormap_color(heatmap_position(v, range, spec.log_scale)) : kNoDataColor;
+      last_v = v;
+    }
+    const Rgb8 c = last_c;
     image.rgb[3 * i] = c.r;
     image.rgb[3 * i + 1] = c.g;
     image.rgb[3 * i + 2] = c.b;
@@ -658,10 +787,16 @@ ImageRGB8 heatmap_tiles_to_image(const std::vector<double>& values_per_tile, int
   const HeatmapRange range = heatmap_range(values_per_tile, spec);
   ImageRGB8 image(w, h);
   const bool borders = tile_w >= 4 && tile_h >= 4;
+  double last_v = std::numeric_limits<double>::quiet_NaN();  // a tile's value repeats along its row
+  Rgb8 last_c = kNoDataColor;
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const double v = pixels[static_cast<std::size_t>(y) * w + x];
-      Rgb8 c = std::isfinite(v) ? colormap_color(heatmap_position(v, range, spec.log_scale)) : kNoDataColor;
+      if (!(v == last_v)) {
+        last_c = std::isfinite(v) ? colormap_color(heatmap_position(v, range, spec.log_scale)) : kNoDataColor;
+        last_v = v;
+      }
+      Rgb8 c = last_c;
       if (borders && (x % tile_w == 0 || y % tile_h == 0)) c = lerp(c, Rgb8{0, 0, 0}, 0.45);
       image.set(x, y, c);
     }

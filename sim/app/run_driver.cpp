@@ -79,7 +79,16 @@ std::vector<std::string> write_frame_images(const FrameResult& frame, const std:
     }
   }
   if (auto it = frame.images.attachments.find(frame.final_color); it != frame.images.attachments.end()) {
-    save("color.png", color_to_image(it->second.color, w, h));
+    const std::string encoded = out("attachment_" + frame.final_color + ".png");
+    if (!it->second.color.empty() && it->second.samples == 1) {
+      // The same image as its attachment file, written above: copied, not encoded twice.
+      std::error_code ec;
+      fs::copy_file(encoded, out("color.png"), fs::copy_options::overwrite_existing, ec);
+      if (ec) throw InputError(out("color.png"), "cannot write PNG image (" + ec.message() + ")");
+      written.push_back(out("color.png"));
+    } else {
+      save("color.png", color_to_image(it->second.color, w, h));
+    }
   } else if (auto ib = frame.images.image_buffers.find(frame.final_color); ib != frame.images.image_buffers.end()) {
     save("color.png", color_to_image(ib->second.color, w, h));
   }
@@ -163,7 +172,8 @@ RunOutcome run_one(const RunRequest& req) {
 
   const auto t_sim = std::chrono::steady_clock::now();
   const double c_sim = cpu_seconds();
-  outcome.frame = simulate_frame(trace, req.trace_path, scene, req.config.hw);
+  // Colours are computed only for the images that read them (statistics are the same either way).
+  outcome.frame = simulate_frame(trace, req.trace_path, scene, req.config.hw, FrameOptions{.colour = !req.images_dir.empty()});
   outcome.wall_seconds = seconds_since(t_sim);
   outcome.cpu_seconds = cpu_seconds() - c_sim;
   const auto t_timing = std::chrono::steady_clock::now();

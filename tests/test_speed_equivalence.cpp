@@ -1,0 +1,140 @@
+// A run that writes no image skips the colour arithmetic (FrameOptions::colour = false, what
+// `tbdrsim run` does without --images) and must count exactly the same work: every statistic row
+// and every tile row of the run (what the results database stores) is compared, value for value,
+// with the run that computes the colours, for techniques that shade forward, store G-buffers,
+// keep pixel local storage (light accumulation and light stacks), blend (forward_multipass's
+// additive passes, the atrium's translucent glass), shade in compute kernels, and draw the
+// atrium's punch-through cloth and foliage (whose alpha test decides coverage and must run for real).
+#include <gtest/gtest.h>
+
+#include <cstddef>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "app/run_driver.hpp"
+#include "models/command_processor.hpp"
+#include "models/hw_config.hpp"
+#include "scene/scene_library.hpp"
+#include "techniques/technique.hpp"
+#include "atrium_trace_setup.hpp"
+
+namespace tbdr {
+namespace {
+
+/// A frame simulated and timed as `tbdrsim run` does, with or without colours.
+struct ColourRun {
+  FrameResult frame;
+  TimingResult timing;
+};
+
+ColourRun run(const Trace& t, const Scene& s, const HwConfig& hw, bool colour) {
+  ColourRun r;
+  r.frame = simulate_frame(t, "t.trace", s, hw, FrameOptions{.colour = colour});
+  EnergyBreakdown energy;
+  time_frame(hw, r.frame, r.timing, energy);
+  return r;
+}
+
+/// Sum of the final colour image's channels: > 0 when colours were computed.
+double colour_sum(const FrameResult& f) {
+  double sum = 0;
+  const std::vector<glm::vec4>* img = nullptr;
+  if (auto it = f.images.attachments.find(f.final_color); it != f.images.attachments.end()) img = &it->second.color;
+  if (auto ib = f.images.image_buffers.find(f.final_color); ib != f.images.image_buffers.end()) img = &ib->second.color;
+  if (img == nullptr) return -1;
+  for (const glm::vec4& c : *img) sum += static_cast<double>(c.x + c.y + c.z);
+  return sum;
+}
+
+/// Expects the two runs' statistic rows (scope, name, value) and tile rows to be identical.
+void expect_same_rows(const ColourRun& with, const ColourRun& without, const std::string& what) {
+  ASSERT_EQ(with.frame.stats.size(), without.frame.stats.size()) << what;
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < with.frame.stats.size(); ++i) {
+    const StatRecord& a = with.frame.stats[i];
+    const StatRecord& b = without.frame.stats[i];
+    EXPECT_EQ(a.scope, b.scope) << what << " row " << i;
+    EXPECT_EQ(a.name, b.name) << what << " row " << i;
+    if (a.value != b.value) {
+      ++differing;
+      ADD_FAILURE() << what << ": " << a.scope << "/" << a.name << " is " << a.value << " with colours, " << b.value
+                    << " without";
+    }
+  }
+  EXPECT_EQ(differing, 0u) << what;
+  EXPECT_TRUE(with.timing.tiles == without.timing.tiles) << what << ": tile rows differ";
+  EXPECT_EQ(with.timing.frame_cycles, without.timing.frame_cycles) << what;
+}
+
+class SpeedEquivalence : public ::testing::TestWithParam<const char*> {
+ protected:
+  static void SetUpTestSuite() { scene_ = new Scene(load_scene("atrium:1")); }
+  static void TearDownTestSuite() {
+    delete scene_;
+    scene_ = nullptr;
+  }
+  static Scene* scene_;
+};
+Scene* SpeedEquivalence::scene_ = nullptr;
+
+TEST_P(SpeedEquivalence, EveryStatisticAndTileRowIsTheSameWithoutColours) {
+  const std::string technique = GetParam();
+  // 200x120 pixels, 48 lights: every kind of pass of the technique, a few seconds in all.
+  TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 48, 200, 120);
+  if (technique == "forward_multipass") setup.options["lights_per_pass"] = "8";  // 6 additive passes
+  const Trace t = generate_trace(technique, setup);
+  const HwConfig hw = resolve_config({}, {}).hw;
+  const ColourRun with = run(t, *scene_, hw, true);
+  const ColourRun without = run(t, *scene_, hw, false);
+  expect_same_rows(with, without, technique);
+  // The flag did something: the image has colour with it and none without (the cleared black).
+  EXPECT_GT(colour_sum(with.frame), 0.0) << technique;
+  EXPECT_EQ(colour_sum(without.frame), 0.0) << technique;
+}
+
+INSTANTIATE_TEST_SUITE_P(Techniques, SpeedEquivalence,
+                         ::testing::Values("plain_forward", "forward_multipass", "forward_plus", "forward_light_stack",
+                                           "clustered_forward", "practical_clustered_forward",
+                                           "cascaded_clustered_forward", "deferred", "deferred_tile_store",
+                                           "light_prepass", "tiled_deferred", "clustered_deferred",
+                                           "visibility_buffer"));
+
+// MSAA 4x (the techniques that support it; G-buffer and PLS ones refuse it): per-sample coverage
+// of the alpha-tested cloth, blending and resolves, with and without colours.
+TEST_F(SpeedEquivalence, MultisampledRunsCountTheSameWithoutColours) {
+  for (const char* technique : {"plain_forward", "forward_multipass", "visibility_buffer", "clustered_forward"}) {
+    TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 160, 96);
+    setup.samples = 4;
+    const Trace t = generate_trace(technique, setup);
+    const HwConfig hw = resolve_config({}, {}).hw;
+    expect_same_rows(run(t, *scene_, hw, true), run(t, *scene_, hw, false), std::string(technique) + " 4x");
+  }
+}
+
+// The other GPU modes (tile-based without deferred shading; immediate mode through the ROP
+// caches) count the same without colours as well.
+TEST_F(SpeedEquivalence, TbrAndImrModesCountTheSameWithoutColours) {
+  for (const char* mode : {"gpu.mode=tbr", "gpu.mode=imr"}) {
+    for (const char* technique : {"plain_forward", "forward_multipass", "tiled_deferred"}) {
+      TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 160, 96);
+      if (std::string(technique) == "forward_multipass") setup.options["lights_per_pass"] = "8";
+      const Trace t = generate_trace(technique, setup);
+      const HwConfig hw = resolve_config({}, {mode}).hw;
+      expect_same_rows(run(t, *scene_, hw, true), run(t, *scene_, hw, false), std::string(technique) + " " + mode);
+    }
+  }
+}
+
+// The punch-through alpha test runs for real without colours: it kills samples (the count is not
+// zero), and the same ones either way (compared above). An alpha test that were skipped without
+// colours would keep every sample and change the coverage.
+TEST_F(SpeedEquivalence, AlphaTestStillKillsSamplesWithoutColours) {
+  TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 16, 200, 120);
+  const Trace t = generate_trace("plain_forward", setup);
+  const FrameResult f = simulate_frame(t, "t.trace", *scene_, resolve_config({}, {}).hw, FrameOptions{.colour = false});
+  EXPECT_GT(f.totals.render.tsp.alpha_test_killed_samples.value(), 0u);
+}
+
+}  // namespace
+}  // namespace tbdr
