@@ -105,19 +105,23 @@ std::vector<std::string> data_folder_names(DataFolder folder) {
   return names;
 }
 
-/// Case-insensitive Levenshtein distance.
+/// Case-insensitive edit distance counting a swap of two neighbouring letters as one edit
+/// (optimal string alignment: "gx6540" is 1 from "gx6450", 2 from "gx6250").
 std::size_t edit_distance(const std::string& a, const std::string& b) {
   auto lower = [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); };
-  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
   for (std::size_t i = 1; i <= a.size(); ++i) {
-    cur[0] = i;
     for (std::size_t j = 1; j <= b.size(); ++j) {
-      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (lower(a[i - 1]) == lower(b[j - 1]) ? 0 : 1)});
+      const std::size_t cost = lower(a[i - 1]) == lower(b[j - 1]) ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && lower(a[i - 1]) == lower(b[j - 2]) && lower(a[i - 2]) == lower(b[j - 1])) {
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+      }
     }
-    std::swap(prev, cur);
   }
-  return prev[b.size()];
+  return d[a.size()][b.size()];
 }
 
 }  // namespace
@@ -146,8 +150,8 @@ std::string find_data_file(const std::string& arg, DataFolder folder) {
   const std::string guess = did_you_mean(given.stem().string(), names);
   if (!guess.empty()) msg += "; " + guess;
   if (!names.empty()) {
-    msg += "; the names tbdrsim knows:";
-    for (const auto& n : names) msg += " " + n;
+    msg += std::string(guess.empty() ? ";" : "") + " Names in " + data_folder_path(folder).string() + ":";
+    for (std::size_t i = 0; i < names.size(); ++i) msg += (i ? ", " : " ") + names[i];
   }
   throw InputError(arg, msg);
 }

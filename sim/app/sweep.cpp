@@ -71,8 +71,8 @@ void warn_slow_traces(const std::map<std::string, TraceInfo>& traces, const std:
     if (lightest > 0 && lightest < info.scene_draws) {
       out << ", " << lightest << " in this sweep's lightest trace";
     }
-    out << ": replay time grows with each draw, so expect these points to take the longest (minutes at "
-           "1920x1080); leave the trace out with --trace or a narrower glob\n";
+    out << ": replay time grows with each draw, so these points take the longest; leave the trace out with "
+           "--trace or a narrower glob\n";
   }
   out << std::flush;
 }
