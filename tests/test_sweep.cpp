@@ -601,6 +601,11 @@ TEST_F(SweepRun, SlurmResourcesCleanPathsAndTraceOverride) {
                                    "--slices", "2", "-j", "1", "--time", "1:30:00", "--partition", "short",
                                    "--mem", "2G"};
   args.insert(args.end(), traces.begin(), traces.end());
+  std::vector<std::string> dry = args;
+  dry.push_back("--dry-run");
+  ASSERT_EQ(run_tool(dry, &out), 0) << out;
+  EXPECT_NE(out.find("wrote nothing"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "job")) << "a dry run wrote the Slurm job";
   ASSERT_EQ(run_tool(args, &out), 0) << out;
   std::ifstream in(dir / "job/opts.sbatch");
   std::stringstream text;

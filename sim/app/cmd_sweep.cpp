@@ -95,6 +95,11 @@ int cmd_sweep(const std::vector<std::string>& args, std::ostream& out, std::ostr
     if (vm.count("partition")) job.partition = vm["partition"].as<std::string>();
     if (vm.count("mem")) job.mem = vm["mem"].as<std::string>();
     print_slow_points(spec, out);
+    if (vm.count("dry-run")) {
+      out << "dry run: would write a Slurm job of " << job.slices << " array tasks over " << groups
+          << " point groups into " << vm["emit-slurm"].as<std::string>() << "; wrote nothing\n";
+      return 0;
+    }
     const std::string script = write_slurm_job(spec, vm["emit-slurm"].as<std::string>(), job);
     out << "wrote " << script << " (" << job.slices << " array tasks over " << groups
         << " point groups); submit it with sbatch, then merge the shards (see README.md beside it)\n";
