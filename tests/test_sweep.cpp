@@ -23,6 +23,7 @@
 #include "analysis/sql.hpp"
 #include "app/cli.hpp"
 #include "app/sweep.hpp"
+#include "app/worker_pool.hpp"
 #include "kernel/errors.hpp"
 #include "db_query.hpp"
 #include "scratch_dir.hpp"
@@ -615,7 +616,7 @@ TEST_F(SweepRun, SlurmResourcesCleanPathsAndTraceOverride) {
     EXPECT_NE(script.find(line), std::string::npos) << line << script;
   }
   EXPECT_EQ(script.find("//"), std::string::npos) << script;
-  EXPECT_NE(script.find("--trace '" + (*dir_ / "t1.trace").string() + "'"), std::string::npos) << script;
+  EXPECT_NE(script.find("--trace " + shell_quote((*dir_ / "t1.trace").string())), std::string::npos) << script;
   std::ifstream readme_in(dir / "job/README.md");
   std::stringstream readme;
   readme << readme_in.rdbuf();
@@ -662,7 +663,7 @@ TEST_F(SweepRun, SlowPointsAreAnnouncedBeforeRunning) {
             0)
       << out;
   const fs::path file = dir / "s.ini";
-  write_file(file, "[sweep]\nname = slow\ntrace = multi.trace\ntrace = " + (*dir_ / "t1.trace").string() +
+  write_file(file, "[sweep]\nname = costs\ntrace = multi.trace\ntrace = " + (*dir_ / "t1.trace").string() +
                        "\n[vary]\nisp.tag_buffers = 1, 2\n");
   ASSERT_EQ(run_tool({"sweep", file.string(), "--db", (dir / "x.db").string(), "--dry-run"}, &out), 0) << out;
   // forward_multipass at 64 lights draws the scene well over 8 times (per light); the plain_forward
