@@ -307,6 +307,9 @@ TEST(Cli, ConfigNamesAreFoundFromAnyFolder) {
   });
   const auto help = run_cli({"--help"});
   EXPECT_NE(help.out.find("a bare name in the checkout's configs/"), std::string::npos) << help.out;
+  const auto where = run_cli({"--checkout"});
+  EXPECT_EQ(where.code, 0);
+  EXPECT_EQ(where.out, checkout + "\n");
 }
 
 }  // namespace
