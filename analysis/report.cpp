@@ -41,6 +41,20 @@ ReportFormat parse_report_format(const std::string& text) {
   throw InputError("--format " + text, "expected table, csv or markdown");
 }
 
+std::vector<std::string> report_group_key_names(const ResultsDb& db) {
+  std::vector<std::string> names = {"technique", "scene", "config", "lights"};
+  SqlStatement q(db.sql(), "SELECT DISTINCT key FROM v_param ORDER BY key");
+  while (q.step()) names.push_back(q.text(0));
+  return names;
+}
+
+std::vector<std::string> report_metric_names(const ResultsDb& db) {
+  std::vector<std::string> names;
+  SqlStatement q(db.sql(), "SELECT DISTINCT metric FROM v_metric ORDER BY metric");
+  while (q.step()) names.push_back(q.text(0));
+  return names;
+}
+
 namespace {
 
 /// The traffic classes in the order the simulator declares them (others follow, sorted).

@@ -27,6 +27,11 @@ enum class ReportFormat { Table, Csv, Markdown };
 /// Parses "table" | "csv" | "markdown" (InputError otherwise).
 ReportFormat parse_report_format(const std::string& text);
 
+/// The names `--by` accepts in this database (shorthands and every v_param key), for suggestions.
+std::vector<std::string> report_group_key_names(const ResultsDb& db);
+/// The metric names some run in this database has (v_metric), for suggestions.
+std::vector<std::string> report_metric_names(const ResultsDb& db);
+
 /// What to compare: group keys, metrics, a row filter.
 struct ReportOptions {
   /// Group keys, in order: "technique", "scene", "config" (its label), "lights", "camera",

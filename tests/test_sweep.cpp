@@ -23,6 +23,7 @@
 #include "analysis/sql.hpp"
 #include "app/cli.hpp"
 #include "app/sweep.hpp"
+#include "app/worker_pool.hpp"
 #include "kernel/errors.hpp"
 #include "db_query.hpp"
 #include "scratch_dir.hpp"
@@ -582,6 +583,101 @@ TEST_F(SweepRun, SlurmScriptAndMergedShardsMatchOneDatabase) {
   // Bad shards are refused by name.
   EXPECT_EQ(run_tool({"merge", merged, (dir / "absent.db").string()}, &out), 2);
   EXPECT_NE(out.find("absent.db"), std::string::npos);
+}
+
+// --emit-slurm passes --time, --partition and --mem into #SBATCH lines (checked against Slurm's
+// syntax first), writes paths without doubled separators whatever the folder's spelling, and hands
+// the tasks the --trace patterns that replaced the sweep file's trace lines.
+TEST_F(SweepRun, SlurmResourcesCleanPathsAndTraceOverride) {
+  const fs::path dir = scratch("slurm_options");
+  const fs::path file = dir / "s.ini";
+  write_file(file, "[sweep]\nname = opts\ntrace = not_here/*.trace\n[vary]\nisp.tag_buffers = 1, 2\n");
+  const std::vector<std::string> traces = {"--trace", (*dir_ / "t1.trace").string(), "--trace",
+                                           (*dir_ / "t2.trace").string()};
+  std::string out;
+  // Without --trace the file's own line is read, and its glob matches nothing.
+  EXPECT_EQ(run_tool({"sweep", file.string(), "--db", (dir / "x.db").string(), "--dry-run"}, &out), 2);
+  EXPECT_NE(out.find("not_here"), std::string::npos) << out;
+  std::vector<std::string> args = {"sweep", file.string(), "--emit-slurm", (dir / "job").string() + "/",
+                                   "--slices", "2", "-j", "1", "--time", "1:30:00", "--partition", "short",
+                                   "--mem", "2G"};
+  args.insert(args.end(), traces.begin(), traces.end());
+  std::vector<std::string> dry = args;
+  dry.push_back("--dry-run");
+  ASSERT_EQ(run_tool(dry, &out), 0) << out;
+  EXPECT_NE(out.find("wrote nothing"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "job")) << "a dry run wrote the Slurm job";
+  ASSERT_EQ(run_tool(args, &out), 0) << out;
+  std::ifstream in(dir / "job/opts.sbatch");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string script = text.str();
+  for (const char* line : {"#SBATCH --time=1:30:00\n", "#SBATCH --partition=short\n", "#SBATCH --mem=2G\n"}) {
+    EXPECT_NE(script.find(line), std::string::npos) << line << script;
+  }
+  EXPECT_EQ(script.find("//"), std::string::npos) << script;
+  EXPECT_NE(script.find("--trace " + shell_quote((*dir_ / "t1.trace").string())), std::string::npos) << script;
+  std::ifstream readme_in(dir / "job/README.md");
+  std::stringstream readme;
+  readme << readme_in.rdbuf();
+  EXPECT_EQ(readme.str().find("//"), std::string::npos) << readme.str();
+  // The two tasks run as Slurm would start them: 2 traces x 2 tag-buffer counts = 4 runs.
+  for (int i = 0; i < 2; ++i) {
+    const std::string cmd = "SLURM_ARRAY_TASK_ID=" + std::to_string(i) + " TBDRSIM=" + std::string(TBDRSIM_BINARY) +
+                            " bash '" + (dir / "job/opts.sbatch").string() + "' > '" + (dir / "task.log").string() +
+                            "' 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  }
+  EXPECT_EQ(run_counts((dir / "job/shard_0.db").string()).ok + run_counts((dir / "job/shard_1.db").string()).ok, 4);
+
+  // Bad requests are refused before anything is written, naming the option.
+  const std::vector<std::pair<std::vector<std::string>, std::string>> bad = {
+      {{"--time", "90 minutes"}, "--time 90 minutes"},
+      {{"--mem", "2GB"}, "--mem 2GB"},
+      {{"--partition", "a b"}, "--partition a b"},
+  };
+  for (const auto& [opt, named] : bad) {
+    std::vector<std::string> a = {"sweep", file.string(), "--emit-slurm", (dir / "bad").string()};
+    a.insert(a.end(), opt.begin(), opt.end());
+    a.insert(a.end(), traces.begin(), traces.end());
+    EXPECT_EQ(run_tool(a, &out), 2) << out;
+    EXPECT_NE(out.find(named), std::string::npos) << out;
+  }
+  std::vector<std::string> no_slurm = {"sweep", file.string(), "--db", (dir / "y.db").string(), "--time", "1:00:00"};
+  no_slurm.insert(no_slurm.end(), traces.begin(), traces.end());
+  EXPECT_EQ(run_tool(no_slurm, &out), 2);
+  EXPECT_NE(out.find("--time goes with --emit-slurm"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+  EXPECT_FALSE(fs::exists(dir / "y.db"));
+}
+
+// A trace that draws the scene many times (forward_multipass: a pass per light batch) is announced
+// before the sweep runs, with its point count; the single-pass traces are not.
+TEST_F(SweepRun, SlowPointsAreAnnouncedBeforeRunning) {
+  const fs::path dir = scratch("slow");
+  std::string out;
+  const std::string multi = (dir / "multi.trace").string();
+  ASSERT_EQ(run_tool({"trace", "--technique", "forward_multipass", "--resolution", "160x90", "--scene", "atrium:1",
+                      "--lights", "64", "--out", multi},
+                     &out),
+            0)
+      << out;
+  const fs::path file = dir / "s.ini";
+  write_file(file, "[sweep]\nname = costs\ntrace = multi.trace\ntrace = " + (*dir_ / "t1.trace").string() +
+                       "\n[vary]\nisp.tag_buffers = 1, 2\n");
+  ASSERT_EQ(run_tool({"sweep", file.string(), "--db", (dir / "x.db").string(), "--dry-run"}, &out), 0) << out;
+  // forward_multipass at 64 lights draws the scene well over 8 times (per light); the plain_forward
+  // trace draws it 3 times (opaque, masked, blended).
+  EXPECT_NE(out.find("slow: 2 point(s) replay " + multi + " (forward_multipass), which draws the scene "),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find(", 3 in this sweep's lightest trace"), std::string::npos) << out;
+  EXPECT_EQ(out.find("slow:", out.find("slow:") + 1), std::string::npos) << "only one trace is slow: " << out;
+  EXPECT_LT(out.find("slow:"), out.find("to run  ")) << "announced before the point list: " << out;
+  EXPECT_FALSE(fs::exists(dir / "x.db")) << "a dry run writes nothing";
+  const std::string plain = sweep_file(dir, "isp.tag_buffers = 1, 2\n");
+  ASSERT_EQ(run_tool({"sweep", plain, "--db", (dir / "x.db").string(), "--dry-run"}, &out), 0) << out;
+  EXPECT_EQ(out.find("slow:"), std::string::npos) << out;
 }
 
 }  // namespace

@@ -1,6 +1,9 @@
 #include "app/cli.hpp"
 
+#include <algorithm>
+#include <filesystem>
 #include <iostream>
+#include <sstream>
 
 #include <boost/program_options.hpp>
 
@@ -46,11 +49,19 @@ void print_usage(std::ostream& os) {
   os << "tbdrsim " << kToolVersion
      << ": cycle-approximate simulator of a tile-based deferred rendering GPU\n\n"
      << "usage: tbdrsim <command> [options]\n"
-     << "       tbdrsim <command> --help\n\ncommands:\n";
+     << "       tbdrsim <command> --help\n"
+     << "       tbdrsim --checkout   (prints the checkout: its configs/, configs/sweeps/ and analysis/ scripts)\n\ncommands:\n";
   for (const auto& c : cli_commands()) {
     os << "  " << c.name << std::string(c.name && std::string(c.name).size() < 10 ? 10 - std::string(c.name).size() : 1, ' ')
        << c.summary << "\n";
   }
+  os << "\npaths: file arguments are taken from the working folder. A config (--config) or sweep file that is\n"
+     << "not there is looked up in the tbdrsim checkout " << TBDRSIM_SOURCE_DIR << ", in this order:\n"
+     << "  1. the path as given, from the working folder    configs/series6xt_gx6450.ini, ./mine.ini\n"
+     << "  2. the same relative path inside the checkout     configs/series6xt_gx6450.ini\n"
+     << "  3. a bare name in the checkout's configs/ (configs/sweeps/ for sweep files), .ini optional:\n"
+     << "                                                    series6xt_gx6450, tile_size\n"
+     << "Traces, scenes, databases and output folders are not looked up: they are relative to the working folder.\n";
 }
 
 }  // namespace
@@ -58,7 +69,9 @@ void print_usage(std::ostream& os) {
 void add_config_options(po::options_description& desc) {
   desc.add_options()
       ("config,c", po::value<std::vector<std::string>>()->composing(),
-       "hardware config file (INI); repeatable, later files win")
+       "hardware config: a file (INI) or a preset name (series6xt_gx6450, mobile_16x16_lpddr4x, ...); "
+       "repeatable, later files win. Found as given (from the working folder), else in the tbdrsim "
+       "checkout (configs/NAME or configs/NAME.ini; see `tbdrsim --help`)")
       ("set,s", po::value<std::vector<std::string>>()->composing(),
        "override one parameter, section.key=value; repeatable, wins over files");
 }
@@ -66,9 +79,105 @@ void add_config_options(po::options_description& desc) {
 ResolvedConfig config_from_options(const po::variables_map& vm) {
   std::vector<std::string> files;
   std::vector<std::string> sets;
-  if (vm.count("config")) files = vm["config"].as<std::vector<std::string>>();
+  if (vm.count("config")) {
+    for (const auto& f : vm["config"].as<std::vector<std::string>>()) files.push_back(find_data_file(f, DataFolder::Configs));
+  }
   if (vm.count("set")) sets = vm["set"].as<std::vector<std::string>>();
   return resolve_config(files, sets);
+}
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Where a data folder lives in the checkout the tool was built from.
+fs::path data_folder_path(DataFolder folder) {
+  const fs::path root(TBDRSIM_SOURCE_DIR);
+  return folder == DataFolder::Configs ? root / "configs" : root / "configs" / "sweeps";
+}
+
+/// The .ini files of a data folder, by stem (for "did you mean" and the error's list).
+std::vector<std::string> data_folder_names(DataFolder folder) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(data_folder_path(folder), ec)) {
+    if (e.is_regular_file() && e.path().extension() == ".ini") names.push_back(e.path().stem().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+/// Case-insensitive edit distance counting a swap of two neighbouring letters as one edit
+/// (optimal string alignment: "gx6540" is 1 from "gx6450", 2 from "gx6250").
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  auto lower = [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); };
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t cost = lower(a[i - 1]) == lower(b[j - 1]) ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && lower(a[i - 1]) == lower(b[j - 2]) && lower(a[i - 2]) == lower(b[j - 1])) {
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+      }
+    }
+  }
+  return d[a.size()][b.size()];
+}
+
+}  // namespace
+
+std::string find_data_file(const std::string& arg, DataFolder folder) {
+  const char* what = folder == DataFolder::Configs ? "config" : "sweep file";
+  if (arg.empty()) throw InputError(std::string("empty ") + what + " name", "expected a file or a name");
+  std::error_code ec;
+  const fs::path given(arg);
+  std::vector<fs::path> tried = {given};
+  if (given.is_relative()) {
+    tried.push_back(fs::path(TBDRSIM_SOURCE_DIR) / given);
+    if (!given.has_parent_path()) {
+      const fs::path dir = data_folder_path(folder);
+      tried.push_back(dir / given);
+      if (given.extension() != ".ini") tried.push_back(dir / (arg + ".ini"));
+    }
+  }
+  for (const auto& p : tried) {
+    if (fs::is_regular_file(p, ec)) return p == given ? arg : p.lexically_normal().string();
+  }
+  std::string msg = std::string("no such ") + what + " (looked for";
+  for (std::size_t i = 0; i < tried.size(); ++i) msg += (i ? ", " : " ") + tried[i].lexically_normal().string();
+  msg += ")";
+  const std::vector<std::string> names = data_folder_names(folder);
+  const std::string guess = did_you_mean(given.stem().string(), names);
+  if (!guess.empty()) msg += "; " + guess;
+  if (!names.empty()) {
+    msg += std::string(guess.empty() ? ";" : "") + " Names in " + data_folder_path(folder).string() + ":";
+    for (std::size_t i = 0; i < names.size(); ++i) msg += (i ? ", " : " ") + names[i];
+  }
+  throw InputError(arg, msg);
+}
+
+std::string did_you_mean(const std::string& token, const std::vector<std::string>& candidates) {
+  // Close spellings (at most a third of the token's letters wrong, at least one allowed), or a
+  // candidate whose last dotted part is the token ("tile_width" -> "tiling.tile_width").
+  const std::size_t limit = std::max<std::size_t>(1, token.size() / 3);
+  std::vector<std::pair<std::size_t, std::string>> close;
+  for (const auto& c : candidates) {
+    if (c == token) continue;
+    const auto dot = c.rfind('.');
+    const bool tail = dot != std::string::npos && c.compare(dot + 1, std::string::npos, token) == 0;
+    const std::size_t d = tail ? 0 : edit_distance(token, c);
+    if (d <= limit) close.emplace_back(d, c);
+  }
+  if (close.empty()) return "";
+  std::stable_sort(close.begin(), close.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::string text = "did you mean ";
+  const std::size_t shown = std::min<std::size_t>(close.size(), 3);
+  for (std::size_t i = 0; i < shown; ++i) {
+    text += (i == 0 ? "" : i + 1 == shown ? " or " : ", ") + std::string("'") + close[i].second + "'";
+  }
+  return text + "?";
 }
 
 bool parse_command_options(const std::string& command, const std::vector<std::string>& args,
@@ -78,6 +187,24 @@ bool parse_command_options(const std::string& command, const std::vector<std::st
   po::options_description all(desc);
   all.add_options()("help,h", "show this help");
   try {
+    // Arguments that are not options: refused by name beyond what the command takes (Boost would
+    // drop them silently when the command takes none, or say only "too many positional options").
+    {
+      po::command_line_parser probe(args);
+      probe.options(all);
+      const unsigned allowed = positional ? positional->max_total_count() : 0;
+      unsigned seen = 0;
+      for (const auto& o : probe.run().options) {
+        if (o.position_key < 0 || o.original_tokens.empty()) continue;
+        if (++seen > allowed) {
+          const std::string& token = o.original_tokens.front();
+          throw UsageError("tbdrsim " + command + ": unexpected argument '" + token + "' (" +
+                           (allowed == 0 ? std::string("this command takes only options")
+                                         : "this command takes " + std::to_string(allowed) + " argument(s) besides its options") +
+                           "; `tbdrsim " + command + " --help` lists them)");
+        }
+      }
+    }
     po::command_line_parser parser(args);
     parser.options(all);
     if (positional) parser.positional(*positional);
@@ -105,6 +232,10 @@ int cli_main(const std::vector<std::string>& args, std::ostream& out, std::ostre
     const std::string& name = args.front();
     if (name == "--help" || name == "-h" || name == "help") {
       print_usage(out);
+      return 0;
+    }
+    if (name == "--checkout") {  // where the configs, sweeps and analysis scripts are
+      out << TBDRSIM_SOURCE_DIR << "\n";
       return 0;
     }
     if (name == "--version") {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <boost/program_options/options_description.hpp>
+#include <boost/program_options/positional_options.hpp>
 #include <boost/program_options/variables_map.hpp>
 
 #include "models/hw_config.hpp"
@@ -26,6 +27,16 @@ int cmd_plot(const std::vector<std::string>& args, std::ostream& out, std::ostre
 void add_config_options(boost::program_options::options_description& desc);
 /// Resolves the configuration from those options (InputError on any bad input).
 ResolvedConfig config_from_options(const boost::program_options::variables_map& vm);
+/// The data folders of the checkout that config and sweep file names are looked up in.
+enum class DataFolder { Configs, Sweeps };
+/// Finds a config or sweep file named on the command line: the path as given (from the working
+/// folder), else the same relative path in the tbdrsim checkout, else a bare name (".ini" optional)
+/// in the checkout's configs/ (configs/sweeps/ for sweeps). InputError naming every path tried,
+/// with a suggestion, when none exists.
+std::string find_data_file(const std::string& arg, DataFolder folder);
+/// "did you mean 'a' or 'b'?" for the candidates spelled close to `token` (edit distance at most a
+/// third of its length, or a dotted candidate ending in it); empty when none is close.
+std::string did_you_mean(const std::string& token, const std::vector<std::string>& candidates);
 /// Parses `args` against `desc` (unknown options and stray positionals are UsageErrors); returns
 /// false when --help was given (help already printed to `out`).
 bool parse_command_options(const std::string& command, const std::vector<std::string>& args,

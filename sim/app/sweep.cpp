@@ -30,7 +30,52 @@ struct TraceInfo {
   std::string hash;
   std::string technique;
   std::string scene;
+  std::size_t scene_draws = 0;  ///< `draw scene` commands: what a point's replay time grows with
 };
+
+/// A trace that draws the scene at least this many times is announced as slow before the sweep
+/// runs. The single-pass and deferred techniques draw it 1 to 3 times (depth pre-pass, G-buffer or
+/// shading pass, blended geometry); replaying a frame walks the scene's triangles through geometry,
+/// tiling and hidden-surface removal once per draw, so 8 draws is several times the usual point.
+constexpr std::size_t kSlowSceneDraws = 8;
+
+/// Reads a trace for its hash, technique, scene and scene draws.
+TraceInfo read_trace_info(const std::string& path) {
+  const Trace trace = read_trace(path);
+  TraceInfo info;
+  info.hash = trace_hash(trace);
+  info.technique = trace.technique.empty() ? "custom" : trace.technique;
+  info.scene = trace.scene.kind == SceneKind::Atrium ? "atrium:" + std::to_string(trace.scene.detail) : trace.scene.path;
+  for (const auto& c : trace.commands) {
+    if (const auto* pass = std::get_if<PassDesc>(&c)) {
+      for (const auto& d : pass->draws) info.scene_draws += d.geometry == GeometryKind::Scene ? 1 : 0;
+    }
+  }
+  return info;
+}
+
+/// Announces the traces that draw the scene kSlowSceneDraws times or more, with their points and
+/// how many times the scene they draw compared with the sweep's lightest trace.
+void warn_slow_traces(const std::map<std::string, TraceInfo>& traces, const std::vector<SweepPoint>& points,
+                      std::ostream& out) {
+  std::size_t lightest = 0;
+  for (const auto& [path, info] : traces) {
+    if (info.scene_draws > 0 && (lightest == 0 || info.scene_draws < lightest)) lightest = info.scene_draws;
+  }
+  for (const auto& [path, info] : traces) {
+    if (info.scene_draws < kSlowSceneDraws) continue;
+    std::size_t n = 0;
+    for (const auto& p : points) n += p.trace == path ? 1 : 0;
+    out << "slow: " << n << " point(s) replay " << path << " (" << info.technique << "), which draws the scene "
+        << info.scene_draws << " times";
+    if (lightest > 0 && lightest < info.scene_draws) {
+      out << ", " << lightest << " in this sweep's lightest trace";
+    }
+    out << ": replay time grows with each draw, so these points take the longest; leave the trace out with "
+           "--trace or a narrower glob\n";
+  }
+  out << std::flush;
+}
 
 /// Every point's resolved configuration and trace, read once before anything runs (points of one
 /// configuration or one trace share them).
@@ -69,14 +114,7 @@ PointInputs resolve_inputs(const SweepSpec& spec, const std::vector<SweepPoint>&
     }
     in.config[i] = &it->second;
     auto tt = in.traces.find(p.trace);
-    if (tt == in.traces.end()) {
-      const Trace trace = read_trace(p.trace);
-      TraceInfo info;
-      info.hash = trace_hash(trace);
-      info.technique = trace.technique.empty() ? "custom" : trace.technique;
-      info.scene = trace.scene.kind == SceneKind::Atrium ? "atrium:" + std::to_string(trace.scene.detail) : trace.scene.path;
-      tt = in.traces.emplace(p.trace, std::move(info)).first;
-    }
+    if (tt == in.traces.end()) tt = in.traces.emplace(p.trace, read_trace_info(p.trace)).first;
     in.trace[i] = &tt->second;
   }
   return in;
@@ -306,6 +344,14 @@ void print_summary(const SweepSpec& spec, const SweepSummary& summary, std::ostr
 
 }  // namespace
 
+void print_slow_points(const SweepSpec& spec, std::ostream& out) {
+  std::map<std::string, TraceInfo> traces;
+  for (const auto& t : spec.traces) {
+    if (!traces.count(t)) traces.emplace(t, read_trace_info(t));
+  }
+  warn_slow_traces(traces, expand_sweep(spec), out);
+}
+
 SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostream& out) {
   const auto t0 = std::chrono::steady_clock::now();
   SweepSummary summary;
@@ -331,6 +377,7 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
       if (done_before[i]) ++summary.skipped;
     }
     print_plan(spec, opt, points.size(), all.size(), inputs, summary.skipped, points.size() - summary.skipped, out);
+    warn_slow_traces(inputs.traces, points, out);
     for (std::size_t i = 0; i < points.size(); ++i) {
       out << "  " << std::setw(5) << points[i].index << "  " << (done_before[i] ? "done  " : "to run") << "  "
           << points[i].label << "  (config " << inputs.config[i]->hash << ", trace " << inputs.trace[i]->hash << ")\n";
@@ -350,6 +397,9 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
     }
   }
   print_plan(spec, opt, points.size(), all.size(), inputs, summary.skipped, todo.size(), out);
+  std::vector<SweepPoint> to_run;
+  for (const auto i : todo) to_run.push_back(points[i]);
+  warn_slow_traces(inputs.traces, to_run, out);
 
   SweepProgressDisplay progress(opt.progress, out, points.size(), summary.skipped);
   std::vector<Launch> launches(points.size());

@@ -36,6 +36,11 @@ struct SweepSummary {
   double seconds = 0;
 };
 
+/// Prints a "slow:" line for each trace of the sweep that draws the scene many times (such as
+/// forward_multipass, one pass per light batch), with its points and its cost relative to the
+/// sweep's lightest trace. run_sweep prints it too, before anything runs.
+void print_slow_points(const SweepSpec& spec, std::ostream& out);
+
 /// Runs a sweep (see the file comment). Installs SIGINT/SIGTERM handlers while it runs: the first
 /// SIGINT stops launching points and waits for the running ones, a second SIGINT or a SIGTERM
 /// kills them (a killed run leaves no rows). InputError for bad inputs, before anything runs.

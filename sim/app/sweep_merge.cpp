@@ -1,5 +1,7 @@
 #include "app/sweep_merge.hpp"
 
+#include <unistd.h>
+
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -110,6 +112,23 @@ MergeShardResult copy_shard_runs(const SqlConnection& db, const std::string& sha
   return res;
 }
 
+/// Removes a half-written database (and its -wal, -shm, -journal files) unless released.
+class PartialFileGuard {
+ public:
+  explicit PartialFileGuard(std::string path) : path_(std::move(path)) {}
+  ~PartialFileGuard() {
+    if (path_.empty()) return;
+    std::error_code ec;
+    for (const char* suffix : {"", "-wal", "-shm", "-journal"}) fs::remove(path_ + suffix, ec);
+  }
+  PartialFileGuard(const PartialFileGuard&) = delete;
+  PartialFileGuard& operator=(const PartialFileGuard&) = delete;
+  void release() { path_.clear(); }
+
+ private:
+  std::string path_;
+};
+
 }  // namespace
 
 std::vector<MergeShardResult> merge_databases(const std::string& out_path, const std::vector<std::string>& shards) {
@@ -123,17 +142,33 @@ std::vector<MergeShardResult> merge_databases(const std::string& out_path, const
     if (fs::equivalent(shard, out_path, ec)) throw InputError(shard, "is the output database itself");
     { ResultsDb check(shard, ResultsDb::QueryOnly{}); }  // a tbdrsim database this version reads
   }
+  // A new output is built beside its final name and renamed into place at the end, so a merge that
+  // fails half-way (a shard unreadable after all, a full disk) leaves no output file at all. An
+  // existing output takes each shard in one transaction (a shard is in it whole, or not at all;
+  // merging again skips what is there).
+  const bool fresh = !fs::exists(out_path);
+  const std::string work_path = fresh ? out_path + ".merging-" + std::to_string(getpid()) : out_path;
+  PartialFileGuard guard(fresh ? work_path : std::string());
   std::vector<MergeShardResult> results;
-  ResultsDb out(out_path);
-  for (const auto& shard : shards) {
-    { ResultsDb migrate(shard); }  // an older shard is migrated to this version's schema
-    AttachedShard attached(out.sql(), shard);
-    {
-      SqlTransaction tx(out.sql());
-      results.push_back(copy_shard_runs(out.sql(), shard));
-      tx.commit();
+  {
+    ResultsDb out(work_path);
+    for (const auto& shard : shards) {
+      { ResultsDb migrate(shard); }  // an older shard is migrated to this version's schema
+      AttachedShard attached(out.sql(), shard);
+      {
+        SqlTransaction tx(out.sql());
+        results.push_back(copy_shard_runs(out.sql(), shard));
+        tx.commit();
+      }
+      attached.detach();
     }
-    attached.detach();
+    // Into one file before the rename: the write-ahead log is folded in and removed.
+    if (fresh) out.sql().exec("PRAGMA journal_mode = DELETE");
+  }
+  if (fresh) {
+    if (fs::exists(out_path)) throw InputError(out_path, "appeared while merging; the merge is left in " + work_path);
+    fs::rename(work_path, out_path);
+    guard.release();
   }
   return results;
 }

@@ -19,7 +19,9 @@ struct MergeShardResult {
 /// duplicate (repetitions are kept: a shard's k-th finished run of a point is copied when the
 /// output holds fewer than k); failed runs are copied unless an identical row is already there.
 /// Every shard and the output are checked first: InputError, with nothing written, when one is
-/// missing, not a tbdrsim database, newer than this tbdrsim, or the output cannot take runs.
+/// missing, not a tbdrsim database, newer than this tbdrsim, or the output cannot take runs. A new
+/// output is written under a temporary name and renamed into place when every shard is in, so a
+/// merge that fails leaves no output file.
 std::vector<MergeShardResult> merge_databases(const std::string& out_path, const std::vector<std::string>& shards);
 
 }  // namespace tbdr

@@ -66,7 +66,7 @@ void SweepProgressDisplay::skipped() {
 void SweepProgressDisplay::message(const std::string& text) {
   if (mode_ == SweepProgress::None) return;
   clear_bar();
-  out_ << text << "\n";
+  out_ << text << "\n" << std::flush;  // "stopping: ..." must show while the workers finish
   draw(true);
 }
 

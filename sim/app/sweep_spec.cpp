@@ -252,7 +252,7 @@ void add_zip_key(SweepSpec& spec, std::map<std::string, std::size_t>& zip_axis, 
 
 }  // namespace
 
-SweepSpec parse_sweep_file(const std::string& path) {
+SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::string>& traces) {
   IniRules rules;
   rules.what = "sweep file";
   rules.known_section = [](const std::string& section) {
@@ -276,6 +276,7 @@ SweepSpec parse_sweep_file(const std::string& path) {
     const std::string where = path + ":" + std::to_string(l.line);
     const std::string value = trim(l.value);
     if (l.section == "sweep") {
+      if (l.name == "trace" && !traces.empty()) continue;  // replaced by the command line's
       apply_sweep_key(spec, l, value, where, base_dir);
       continue;
     }
@@ -297,6 +298,10 @@ SweepSpec parse_sweep_file(const std::string& path) {
     } else {
       add_zip_key(spec, zip_axis, l, axis_values(l, value, where, base_dir), where);
     }
+  }
+  for (const auto& t : traces) {
+    const auto found = expand_traces(t, fs::path(), "--trace " + t);
+    spec.traces.insert(spec.traces.end(), found.begin(), found.end());
   }
   if (!section_lines.count("sweep")) throw InputError(path, "no [sweep] section (it names the traces)");
   if (spec.traces.empty()) {

@@ -46,7 +46,9 @@ struct SweepSlice {
 
 /// Parses a sweep file. InputError naming file:line for anything malformed or unknown (sections,
 /// keys, values out of range, bad ranges, zip lists of unequal length, globs matching nothing).
-SweepSpec parse_sweep_file(const std::string& path);
+/// Non-empty `traces` (files or globs from the working folder, `sweep --trace`) replace the file's
+/// [sweep] trace lines, which are then not read.
+SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::string>& traces = {});
 
 /// Expands one value list: "1, 2, 4", "16..64 step 16", "1..8 x 2" (also "*2"), "0.5..1 step 0.25".
 /// InputError naming `where` when malformed.
