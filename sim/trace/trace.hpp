@@ -57,7 +57,7 @@ inline constexpr std::uint64_t kMaxTraceLights = 1'000'000;
 inline constexpr std::uint32_t kMaxFrameSide = 16384;
 /// The most samples a frame may hold (width x height x samples): 2^28, a 16384 x 16384 frame at
 /// one sample or 8K UHD (7680 x 4320) at 8. The simulator keeps per-sample state of every
-/// attachment, so this bounds its memory (docs/limits.md gives the measured bytes per sample).
+/// attachment, so this bounds its memory.
 inline constexpr std::uint64_t kMaxFrameSamples = 1ull << 28;
 /// The largest buffer (bytes): 16 GiB, above any light list a technique sizes for 1,000,000
 /// lights at 1080p (cells x max lights x index bytes), far below what would exhaust the host when

@@ -965,7 +965,7 @@ void Converter::convert_primitive(int mesh, int prim_index, std::vector<std::uin
     }
     const std::vector<float> v = read_accessor<float>(it->second, desc);
     for (std::size_t i = 0; i < vertex_count; ++i) sm.uvs[i] = glm::vec2(v[2 * i], v[2 * i + 1]);
-  } else if (scene_.materials[material_index].base_color_texture >= 0) {
+  } else if (scene_.materials[material_index].base_color_texels >= 0) {  // a texture that is sampled
     // glTF 2.0 (section 3.9.2, textureInfo.texCoord): the primitive must provide the set the
     // material samples; with zero uvs every fragment would read one texel.
     fail(where + ": its material '" + scene_.materials[material_index].name + "' samples its base colour texture with " +
