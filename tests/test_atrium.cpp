@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <chrono>
 #include <set>
 #include <sstream>
 
@@ -29,9 +28,7 @@ TEST(Atrium, TriangleCountsPerDetailLevel) {
   const std::uint64_t hi[5] = {16'000, 65'000, 220'000, 850'000, 3'500'000};
   std::uint64_t prev = 0;
   for (int d = 1; d <= 5; ++d) {
-    const auto t0 = std::chrono::steady_clock::now();
     const Scene s = make_atrium(d);
-    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const std::uint64_t n = s.triangle_count();
     EXPECT_GE(n, lo[d - 1]) << "detail " << d;
     EXPECT_LE(n, hi[d - 1]) << "detail " << d;
@@ -39,7 +36,6 @@ TEST(Atrium, TriangleCountsPerDetailLevel) {
       EXPECT_GT(static_cast<double>(n) / static_cast<double>(prev), 3.0) << "detail " << d;
     }
     prev = n;
-    EXPECT_LT(secs, 10.0) << "detail " << d << " took " << secs << " s";  // ~0.1 s in Release
     EXPECT_EQ(s.name, "atrium");
     EXPECT_EQ(s.source, "atrium:" + std::to_string(d));
   }

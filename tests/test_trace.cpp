@@ -220,14 +220,19 @@ TEST(TraceRoundTrip, FloatsRoundTripExactly) {
   Trace t = parse(base() + "end\n");
   for (float v : values) {  // one light per value, the value in several fields
     Light l;
-    l.position = glm::vec3(v, -v, v * 0.5f);
+    // Positions are bounded (kMaxWorldCoordinate); color and intensity take the whole float range.
+    if (std::abs(v) <= kMaxWorldCoordinate) l.position = glm::vec3(v, -v, v * 0.5f);
+    l.color = glm::vec3(std::abs(v), std::abs(v) * 0.5f, 0.0f);
     l.intensity = std::abs(v);
     t.lights.push_back(l);
   }
+  for (auto& b : t.buffers)  // the light buffer grows with the lights (the reader checks 48 bytes each)
+    if (b.content == BufferContent::Lights) b.bytes = kLightBufferBytesPerLight * t.lights.size();
   const Trace back = parse(write(t));
   ASSERT_EQ(back.lights.size(), t.lights.size());
   for (std::size_t i = 0; i < t.lights.size(); ++i) {
     EXPECT_EQ(back.lights[i].position, t.lights[i].position);
+    EXPECT_EQ(back.lights[i].color, t.lights[i].color);
     EXPECT_EQ(back.lights[i].intensity, t.lights[i].intensity);
   }
   EXPECT_EQ(write(back), write(t));

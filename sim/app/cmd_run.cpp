@@ -100,13 +100,13 @@ TraceSetup trace_setup_from_options(const po::variables_map& vm, Scene& scene_st
 void add_trace_setup_options(po::options_description& desc) {
   desc.add_options()
       ("scene", po::value<std::string>()->default_value("atrium:" + std::to_string(default_atrium_detail)),
-       "atrium[:detail] or a .gltf/.glb file")
+       "atrium[:detail] (detail 1..5, default 3) or a .gltf/.glb file")
       ("lights", po::value<int>()->default_value(256), "number of generated lights")
       ("light-seed", po::value<std::uint64_t>()->default_value(1), "seed of the light placement")
       ("light-file", po::value<std::string>(), "read the lights from this file instead of generating them")
       ("camera", po::value<std::string>()->default_value(""), "atrium viewpoint (entrance, gallery, top, ...); glTF: framing")
       ("resolution", po::value<std::string>()->default_value("1920x1080"), "WIDTHxHEIGHT in pixels")
-      ("samples", po::value<int>()->default_value(1), "MSAA samples per pixel: 1, 2 or 4")
+      ("samples", po::value<int>()->default_value(1), "MSAA samples per pixel: 1, 2, 4 or 8")
       ("option,o", po::value<std::vector<std::string>>()->composing(), "technique option key=value (repeatable)");
 }
 

@@ -168,6 +168,7 @@ RunOutcome run_one(const RunRequest& req) {
   }
   const Trace trace = read_trace(req.trace_path);
   const Scene scene = load_trace_scene(trace, req.trace_path);
+  check_scene_references(trace, scene, req.trace_path);  // sub-mesh and material names, before any work
   outcome.load_seconds = seconds_since(t_load);
 
   const auto t_sim = std::chrono::steady_clock::now();

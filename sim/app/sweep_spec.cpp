@@ -45,6 +45,17 @@ std::string relative_to(const fs::path& base_dir, const std::string& p) {
   return (base_dir / path).lexically_normal().string();
 }
 
+/// `p` (a path the sweep file names at `where`) checked against the file system's length limits,
+/// so a test for its existence cannot throw a filesystem_error; InputError naming `where` if not.
+const std::string& checked_length(const std::string& p, const std::string& what, const std::string& where) {
+  try {
+    check_path_length(p, what);
+  } catch (const InputError& e) {
+    throw InputError(where, bare_message(e));
+  }
+  return p;
+}
+
 bool has_glob_chars(const std::string& s) { return s.find_first_of("*?[") != std::string::npos; }
 
 // ---------------------------------------------------------------------------------------------
@@ -123,8 +134,10 @@ std::vector<std::string> expand_range(const std::string& text, const std::string
 // ---------------------------------------------------------------------------------------------
 // The sweep file
 
-/// Checks that `key` is a hardware parameter and `value` a valid value for it.
-void check_param_value(const std::string& key, const std::string& value, const std::string& where) {
+/// Checks that `key` is a hardware parameter and `value` a valid value for it; returns the value's
+/// canonical text (format_param_value: "1.0" and "1" of a real are both "1"), so two spellings of
+/// one value are seen as one.
+std::string check_param_value(const std::string& key, const std::string& value, const std::string& where) {
   const ParamTable& table = hw_params().table();
   ResolvedParams p = table.defaults();
   try {
@@ -132,10 +145,11 @@ void check_param_value(const std::string& key, const std::string& value, const s
   } catch (const InputError& e) {
     throw InputError(where, bare_message(e));
   }
+  return format_param_value(p.values[static_cast<std::size_t>(table.find(key))]);
 }
 
 std::vector<std::string> expand_traces(const std::string& pattern, const fs::path& base_dir, const std::string& where) {
-  const std::string p = relative_to(base_dir, pattern);
+  const std::string p = checked_length(relative_to(base_dir, pattern), "trace", where);
   if (!has_glob_chars(pattern)) {
     if (!fs::is_regular_file(p)) throw InputError(where, "trace file '" + p + "' not found");
     return {p};
@@ -185,7 +199,7 @@ void apply_sweep_key(SweepSpec& spec, const IniLine& l, const std::string& value
   } else if (l.name == "config") {
     for (const auto& item : split_commas(value)) {
       if (item.empty()) throw InputError(where, "empty config file name");
-      const std::string p = relative_to(base_dir, item);
+      const std::string p = checked_length(relative_to(base_dir, item), "config file", where);
       if (!fs::is_regular_file(p)) throw InputError(where, "config file '" + p + "' not found");
       spec.base_configs.push_back(p);
     }
@@ -213,7 +227,14 @@ std::vector<std::string> axis_values(const IniLine& l, const std::string& value,
                                      const fs::path& base_dir) {
   if (l.name != "config") {
     std::vector<std::string> values = expand_value_list(value, where);
-    for (const auto& v : values) check_param_value(l.name, v, where);
+    std::map<std::string, std::string> canonical;  // canonical text -> the spelling met first
+    for (const auto& v : values) {
+      const auto [it, fresh] = canonical.emplace(check_param_value(l.name, v, where), v);
+      if (!fresh) {
+        throw InputError(where, "'" + v + "' and '" + it->second + "' are the same value of " + l.name + " (" +
+                                    it->first + "); each point would run twice");
+      }
+    }
     return values;
   }
   std::vector<std::string> values = split_commas(value);
@@ -223,7 +244,7 @@ std::vector<std::string> axis_values(const IniLine& l, const std::string& value,
     if (!seen.insert(v).second) throw InputError(where, "config file '" + v + "' listed twice");
   }
   for (auto& v : values) {
-    v = relative_to(base_dir, v);
+    v = checked_length(relative_to(base_dir, v), "config file", where);
     if (!fs::is_regular_file(v)) throw InputError(where, "config file '" + v + "' not found");
   }
   return values;
@@ -310,10 +331,28 @@ SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::strin
   for (const auto& [sec, line] : section_lines) {
     if (sec.rfind("zip.", 0) == 0 && !zip_axis.count(sec)) throw InputError(path, line, "[" + sec + "] is empty");
   }
+  check_sweep_size(spec);
   return spec;
 }
 
+void check_sweep_size(const SweepSpec& spec) {
+  // Multiplied with a check at each step, so 10^9 points (or an overflow) are refused, never allocated.
+  std::uint64_t points = static_cast<std::uint64_t>(std::max(spec.repetitions, 1));
+  std::string product = std::to_string(points) + " repetitions";
+  auto times = [&](std::uint64_t n, const std::string& what) {
+    product += " x " + std::to_string(n) + " " + what;
+    points = n != 0 && points > kMaxSweepPoints / n ? kMaxSweepPoints + 1 : points * n;
+  };
+  times(spec.traces.size(), "traces");
+  for (const auto& a : spec.axes) times(a.values.size(), a.keys.front() + (a.keys.size() > 1 ? " (zip)" : ""));
+  if (points > kMaxSweepPoints) {
+    throw InputError(spec.path, "the sweep has more than " + std::to_string(kMaxSweepPoints) + " points (" + product +
+                                    "); split it into several sweeps (docs/limits.md)");
+  }
+}
+
 std::vector<SweepPoint> expand_sweep(const SweepSpec& spec) {
+  check_sweep_size(spec);
   std::size_t combos = 1;
   for (const auto& a : spec.axes) combos *= a.values.size();
   std::vector<SweepPoint> points;

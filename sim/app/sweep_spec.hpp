@@ -3,6 +3,7 @@
 // groups, traces and repetitions; it expands into a deterministic list of points (the cartesian
 // product), and slices of that list feed Slurm job arrays. Syntax: docs/sweeps.md.
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,16 @@ struct SweepSlice {
   int index = 0;
   int count = 1;
 };
+
+/// The most points one sweep may expand to. Each point is a simulation of at least a fraction of a
+/// second and a row set in the database, so a million points is days of machine time; more is a
+/// typing error (a range with a tiny step) that would otherwise allocate the list and fail with
+/// std::bad_alloc. docs/limits.md lists it.
+inline constexpr std::uint64_t kMaxSweepPoints = 1'000'000;
+
+/// Refuses a sweep of more than kMaxSweepPoints points (InputError naming the file and the
+/// product of its axes), computed without overflow and before any point is made.
+void check_sweep_size(const SweepSpec& spec);
 
 /// Parses a sweep file. InputError naming file:line for anything malformed or unknown (sections,
 /// keys, values out of range, bad ranges, zip lists of unequal length, globs matching nothing).

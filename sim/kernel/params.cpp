@@ -9,6 +9,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <climits>
+#include <unistd.h>
+
 #include <boost/program_options/options_description.hpp>
 #include <boost/program_options/parsers.hpp>
 
@@ -252,6 +255,58 @@ void ParamTable::apply_config_file(ResolvedParams& p, const std::string& path) c
   p.config_name = std::filesystem::path(path).stem().string();
 }
 
+void check_path_length(const std::string& path, const std::string& what) {
+  namespace fs = std::filesystem;
+  // The nearest folder that exists answers pathconf for the file system the path lands on.
+  fs::path dir = fs::path(path).parent_path();
+  std::error_code ec;
+  while (!dir.empty() && dir.native().size() < PATH_MAX && !fs::is_directory(dir, ec)) dir = dir.parent_path();
+  const std::string probe = dir.empty() ? "." : dir.string();
+  auto conf = [&](int name, long fallback) {
+    const long v = probe.size() < PATH_MAX ? ::pathconf(probe.c_str(), name) : -1;
+    return v > 0 ? v : fallback;
+  };
+  const long path_max = conf(_PC_PATH_MAX, PATH_MAX);
+  const long name_max = conf(_PC_NAME_MAX, NAME_MAX);
+  auto head = [&] { return path.size() > 60 ? path.substr(0, 60) + "..." : path; };
+  if (path.size() >= static_cast<std::size_t>(path_max)) {
+    throw InputError(head(), what + " path is " + std::to_string(path.size()) + " bytes long; the file system allows " +
+                                 std::to_string(path_max - 1) + " (pathconf _PC_PATH_MAX)");
+  }
+  for (const auto& part : fs::path(path)) {
+    if (part.native().size() > static_cast<std::size_t>(name_max)) {
+      throw InputError(head(), what + " path has a component of " + std::to_string(part.native().size()) +
+                                   " bytes; the file system allows " + std::to_string(name_max) +
+                                   " (pathconf _PC_NAME_MAX)");
+    }
+  }
+}
+
+std::string_view strip_utf8_bom(std::string_view text) {
+  if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
+  return text;
+}
+
+std::string read_text_input(const std::string& path, const std::string& what, std::uint64_t max_bytes) {
+  check_path_length(path, what);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "cannot open " + what);
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0) throw InputError(path, "cannot read " + what + " (not a regular file?)");
+  if (static_cast<std::uint64_t>(size) > max_bytes) {
+    throw InputError(path, what + " is " + std::to_string(size) + " bytes; the largest accepted is " +
+                               std::to_string(max_bytes) + " (docs/limits.md)");
+  }
+  in.seekg(0);
+  std::string text(static_cast<std::size_t>(size), '\0');
+  in.read(text.data(), size);
+  if (in.gcount() != size) throw InputError(path, "read error in " + what);
+  const std::size_t bom = text.size() - strip_utf8_bom(text).size();
+  text.erase(0, bom);
+  return text;
+}
+
 namespace {
 
 /// The line scan of read_ini_file: every `key = value` line with its section and line number
@@ -304,11 +359,11 @@ std::vector<IniLine> scan_ini_lines(const std::string& path, std::istream& in, c
 std::vector<IniLine> read_ini_file(const std::string& path, const IniRules& rules, std::map<std::string, long>* section_lines) {
   namespace po = boost::program_options;
   std::map<std::string, long> own_section_lines;
-  std::ifstream scan(path);
-  if (!scan) throw InputError(path, std::string("cannot open ") + rules.what);
+  const std::string text = read_text_input(path, rules.what, kMaxIniFileBytes);
+  std::istringstream scan(text);
   std::vector<IniLine> lines = scan_ini_lines(path, scan, rules, section_lines ? *section_lines : own_section_lines);
 
-  std::ifstream in(path);
+  std::istringstream in(text);
   po::options_description none;
   po::parsed_options parsed(&none);
   try {

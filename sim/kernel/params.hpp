@@ -11,6 +11,7 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <variant>
 #include <vector>
@@ -19,6 +20,24 @@ namespace tbdr {
 
 /// `s` without its leading and trailing blanks (space, tab, CR, LF).
 std::string trim(const std::string& s);
+
+/// The largest config or sweep file read (bytes): such files are a few kilobytes; a bound keeps a
+/// wrong path (a trace, a log) from being read whole. docs/limits.md lists it with the others.
+inline constexpr std::uint64_t kMaxIniFileBytes = 1u << 20;
+
+/// Refuses a path longer than the operating system allows, as it reports it: the whole path
+/// against pathconf(_PC_PATH_MAX) and each component against pathconf(_PC_NAME_MAX) of the
+/// nearest existing folder (PATH_MAX and NAME_MAX when pathconf has no answer). InputError names
+/// the path's start, its length and the limit, so a caller never meets ENAMETOOLONG later.
+void check_path_length(const std::string& path, const std::string& what);
+
+/// `text` without a leading UTF-8 byte-order mark (EF BB BF), which editors on Windows write.
+std::string_view strip_utf8_bom(std::string_view text);
+
+/// Reads a whole text input (`what`: "config file", "sweep file"): its path checked
+/// (check_path_length), refused above `max_bytes` before it is read, a UTF-8 byte-order mark
+/// dropped. InputError naming the file when it cannot be opened or is too large.
+std::string read_text_input(const std::string& path, const std::string& what, std::uint64_t max_bytes);
 
 /// One `key = value` line of an INI file (a config file, a sweep file), with its line number.
 struct IniLine {
@@ -41,7 +60,8 @@ struct IniRules {
 
 /// Reads an INI file: a line scan that keeps line numbers and is strict (the rules; '#' starts a
 /// comment anywhere, [section] headers, key = value; a key set twice), then Boost.Program_options
-/// (allow_unregistered) for the values, checked to find the same keys in the same order. Every
+/// (allow_unregistered) for the values, checked to find the same keys in the same order. The file is
+/// read by read_text_input (path length, kMaxIniFileBytes, a UTF-8 byte-order mark). Every
 /// error is an InputError naming file:line. `section_lines`, when given, receives the first line
 /// of each [section].
 std::vector<IniLine> read_ini_file(const std::string& path, const IniRules& rules,

@@ -4,6 +4,7 @@
 #include <array>
 #include <sstream>
 
+#include "kernel/errors.hpp"
 #include "kernel/hash.hpp"
 
 namespace tbdr {
@@ -164,5 +165,41 @@ std::string trace_text(const Trace& trace) {
 }
 
 std::string trace_hash(const Trace& trace) { return fnv1a_hex(trace_text(trace)); }
+
+namespace {
+
+/// "'a', 'b', 'c' (and 12 more)": the first few names of a list, for an error message.
+std::string some_names(const std::vector<std::string>& names) {
+  constexpr std::size_t kShown = 8;  // enough to spot a typo, short enough for one line
+  std::string out;
+  for (std::size_t i = 0; i < names.size() && i < kShown; ++i) out += (i ? ", '" : "'") + names[i] + "'";
+  if (names.size() > kShown) out += " (and " + std::to_string(names.size() - kShown) + " more)";
+  return names.empty() ? "none" : out;
+}
+
+}  // namespace
+
+void check_scene_references(const Trace& trace, const Scene& scene, const std::string& path) {
+  std::vector<std::string> submeshes, materials;
+  for (const auto& sm : scene.submeshes) submeshes.push_back(sm.name);
+  for (const auto& m : scene.materials) materials.push_back(m.name);
+  auto has = [](const std::vector<std::string>& v, const std::string& n) {
+    return std::find(v.begin(), v.end(), n) != v.end();
+  };
+  for (const auto& cmd : trace.commands) {
+    const auto* pass = std::get_if<PassDesc>(&cmd);
+    if (!pass) continue;
+    for (const auto& d : pass->draws) {
+      if (!d.submesh.empty() && !has(submeshes, d.submesh)) {
+        throw InputError(path, d.line, "draw names submesh='" + d.submesh + "', which scene '" + scene.source +
+                                           "' does not have (its sub-meshes: " + some_names(submeshes) + ")");
+      }
+      if (!d.material.empty() && !has(materials, d.material)) {
+        throw InputError(path, d.line, "draw names material='" + d.material + "', which scene '" + scene.source +
+                                           "' does not have (its materials: " + some_names(materials) + ")");
+      }
+    }
+  }
+}
 
 }  // namespace tbdr

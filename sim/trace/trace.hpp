@@ -20,6 +20,7 @@
 #include "scene/camera.hpp"
 #include "trace/traffic.hpp"
 #include "scene/lights.hpp"
+#include "scene/scene.hpp"
 
 namespace tbdr {
 
@@ -28,6 +29,63 @@ inline constexpr int kTraceVersion = 2;
 /// The version that lets an attachment name a `content=image` buffer (a pass loading the frame a
 /// dispatch wrote); version 1 readers refuse the name as a duplicate.
 inline constexpr int kImageAttachmentVersion = 2;
+
+/// Bytes one light occupies in a GPU light buffer: 3 x vec4 (position+radius, color+intensity,
+/// direction+cos_inner+cos_outer packed with std140 padding). A `content=lights` buffer holds at
+/// least this times the trace's lights (the reader checks it).
+inline constexpr std::uint64_t kLightBufferBytesPerLight = 48;
+
+// ---------------------------------------------------------------------------------------------
+// Declared limits (docs/limits.md). The reader refuses a trace beyond any of them with file:line,
+// before any work, so memory and time follow what a trace asks the GPU to do, never a number it
+// merely states. Each has its reason beside it.
+// ---------------------------------------------------------------------------------------------
+
+/// The largest trace file (bytes): 1,000,000 lights (the generator's --lights bound) take ~110 MB
+/// of `light` lines; twice that leaves room for the rest. Checked before the file is read.
+inline constexpr std::uint64_t kMaxTraceBytes = 256ull << 20;
+/// The most passes, dispatches and barriers: every technique writes fewer than 20; 65,536 keeps a
+/// file of nothing but `barrier` lines (200 MB of them held 2.76 GB before) to a few megabytes.
+inline constexpr std::uint64_t kMaxTraceCommands = 65536;
+/// The most draws in one trace: forward_multipass at lights_per_pass=1 with 1,000,000 lights
+/// draws twice per light (opaque, masked) plus the translucent draw: 2,000,001 < 2^21.
+inline constexpr std::uint64_t kMaxTraceDraws = 1ull << 21;
+/// The most lights: the generator's bound (`tbdrsim trace --lights`, 0..1,000,000).
+inline constexpr std::uint64_t kMaxTraceLights = 1'000'000;
+/// The widest and tallest frame in pixels: 16384, the largest render target Vulkan drivers of
+/// tile-based GPUs report (maxFramebufferWidth/Height; the Vulkan spec's required minimum is 4096).
+inline constexpr std::uint32_t kMaxFrameSide = 16384;
+/// The most samples a frame may hold (width x height x samples): 2^28, a 16384 x 16384 frame at
+/// one sample or 8K UHD (7680 x 4320) at 8. The simulator keeps per-sample state of every
+/// attachment, so this bounds its memory.
+inline constexpr std::uint64_t kMaxFrameSamples = 1ull << 28;
+/// The largest buffer (bytes): 16 GiB, above any light list a technique sizes for 1,000,000
+/// lights at 1080p (cells x max lights x index bytes), far below what would exhaust the host when
+/// a pass reads a CPU-filled buffer whole.
+inline constexpr std::uint64_t kMaxBufferBytes = 16ull << 30;
+/// The largest CPU-filled (`upload=yes`) buffer: a pass reads it whole at its start (one DRAM
+/// request per line), so its size is work; 256 MiB holds 1,000,000 lights (48 MB) five times over.
+inline constexpr std::uint64_t kMaxUploadBufferBytes = 256ull << 20;
+/// Compute dispatch bounds, the Vulkan 1.3 required limits (spec table "Required Limits"):
+/// maxComputeWorkGroupCount 65535 per dimension; maxComputeWorkGroupInvocations is at least 128
+/// and 1024 on most drivers, the bound used here for group_size's product.
+inline constexpr std::uint32_t kMaxDispatchGroups = 65535;
+inline constexpr std::uint32_t kMaxWorkGroupInvocations = 1024;
+/// Camera bounds that keep the projection finite in float32: a vertical field of view in
+/// [0.01, 179] degrees (1/tan of half of it stays below 1.2e4 and above 8.7e-3); clip distances
+/// in [1e-6, 1e9] world units (their product and squares stay inside float range) with far/near
+/// at most 2^24, the resolution of a 24-bit depth buffer (beyond it the far half of the scene
+/// falls on a handful of depth codes); and up at least 0.06 degrees from the view direction
+/// (sine 1e-3), below which the camera basis is a float32 rounding error.
+inline constexpr float kMinFovYDeg = 0.01f;
+inline constexpr float kMaxFovYDeg = 179.0f;
+inline constexpr float kMinClipDistance = 1e-6f;
+inline constexpr float kMaxClipDistance = 1e9f;
+inline constexpr float kMaxFarNearRatio = 16777216.0f;
+inline constexpr float kMinUpViewSine = 1e-3f;
+/// The largest world coordinate (eye, target, light position and radius), 1e9 world units: the
+/// same bound as the far plane, so squared distances stay inside float range.
+inline constexpr float kMaxWorldCoordinate = 1e9f;
 
 // ---------------------------------------------------------------------------------------------
 // Enums. Each has to_string() giving the trace spelling and parse_<enum>() returning nullopt for
@@ -339,8 +397,13 @@ struct Trace {
 
 /// Reads and validates a trace file; every error is an InputError naming path:line and the token.
 Trace read_trace(const std::string& path);
-/// Same, from a stream; `name` is used in error messages in place of the file name.
+/// Same, from a stream; `name` is used in error messages in place of the file name. A stream
+/// longer than kMaxTraceBytes is refused when the reader gets there.
 Trace parse_trace(std::istream& in, const std::string& name);
+/// Checks what a trace names in its scene, once the scene is loaded and before any work: every
+/// draw's `submesh=` and `material=` must name a sub-mesh or material the scene has. InputError
+/// naming path:line of the draw, the name and some of the names the scene has.
+void check_scene_references(const Trace& trace, const Scene& scene, const std::string& path);
 /// Writes the canonical text of a trace (parse_trace of it gives a trace that writes identically).
 void write_trace(const Trace& trace, std::ostream& out);
 /// The canonical text as a string.

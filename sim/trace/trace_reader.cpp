@@ -4,13 +4,18 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <istream>
 #include <set>
 #include <unordered_map>
 
+#include <glm/glm.hpp>
+
 #include "kernel/errors.hpp"
+#include "kernel/params.hpp"
+#include "scene/atrium.hpp"
 #include "trace/trace.hpp"
 
 namespace tbdr {
@@ -118,6 +123,10 @@ class Reader {
   void on_barrier(const Line& l);
   void finish_layout();
   void finish(int last_line);
+  /// Counts one more pass, dispatch or barrier against kMaxTraceCommands.
+  void count_command(const Line& l);
+  /// Refuses a vector with a component beyond kMaxWorldCoordinate.
+  void check_world(const Line& l, std::string_view key, const glm::vec3& v) const;
 
   // --- resources --------------------------------------------------------------------------
   /// An image: the contents of an attachment name across passes.
@@ -152,6 +161,7 @@ class Reader {
   std::unordered_map<std::string, Image> images_;
   std::set<std::string> written_buffers_;
   std::unordered_map<std::string, PendingWrite> pending_;
+  std::uint64_t commands_ = 0, draws_ = 0;
 };
 
 // ------------------------------------------------------------------------------------------------
@@ -464,10 +474,18 @@ void Reader::on_scene(const Line& l) {
   s.line = l.number;
   if (s.kind == SceneKind::Atrium) {
     check_keys(l, {"detail", "hash"});
-    s.detail = static_cast<int>(get_u32(l, "detail", 16));
+    s.detail = static_cast<int>(get_u32(l, "detail", kAtriumMaxDetail));
+    if (s.detail < kAtriumMinDetail)
+      fail(l.number, "detail " + q(require(l, "detail")) + " is out of range (" + std::to_string(kAtriumMinDetail) + ".." +
+                         std::to_string(kAtriumMaxDetail) + ", the atrium's detail levels)");
   } else {
     check_keys(l, {"path", "hash"});
     s.path = require(l, "path");
+    try {
+      check_path_length(s.path, "scene");
+    } catch (const InputError& e) {
+      fail(l.number, "path " + q(s.path.substr(0, 60)) + "...: " + e.what());
+    }
     require(l, "hash");
   }
   if (const auto* h = find(l, "hash")) {
@@ -487,12 +505,18 @@ void Reader::on_frame(const Line& l) {
   no_positional(l);
   check_keys(l, {"width", "height", "samples"});
   TraceFrame f;
-  f.width = static_cast<int>(get_u32(l, "width", 16384));
-  f.height = static_cast<int>(get_u32(l, "height", 16384));
+  f.width = static_cast<int>(get_u32(l, "width", kMaxFrameSide));
+  f.height = static_cast<int>(get_u32(l, "height", kMaxFrameSide));
   if (f.width == 0 || f.height == 0) fail(l.number, "frame width and height must be at least 1");
   f.samples = static_cast<int>(get_u32(l, "samples", 8));
   if (f.samples != 1 && f.samples != 2 && f.samples != 4 && f.samples != 8)
     fail(l.number, "samples " + q(require(l, "samples")) + " must be 1, 2, 4 or 8");
+  const std::uint64_t frame_samples = std::uint64_t{static_cast<std::uint32_t>(f.width)} *
+                                      static_cast<std::uint32_t>(f.height) * static_cast<std::uint32_t>(f.samples);
+  if (frame_samples > kMaxFrameSamples)
+    fail(l.number, "frame " + std::to_string(f.width) + "x" + std::to_string(f.height) + " at " +
+                       std::to_string(f.samples) + " samples holds " + std::to_string(frame_samples) +
+                       " samples; the largest accepted is " + std::to_string(kMaxFrameSamples) + " (docs/limits.md)");
   f.line = l.number;
   trace_.frame = f;
   have_frame_ = true;
@@ -510,12 +534,29 @@ void Reader::on_camera(const Line& l) {
   c.fov_y_deg = get_float(l, "fov_y_deg");
   c.near_plane = get_float(l, "near");
   c.far_plane = get_float(l, "far");
+  check_world(l, "eye", c.eye);
+  check_world(l, "target", c.target);
   if (c.eye == c.target) fail(l.number, "camera eye and target are the same point");
   if (c.up == glm::vec3(0.0f)) fail(l.number, "camera up vector is zero");
-  if (!(c.fov_y_deg > 0.0f && c.fov_y_deg < 180.0f))
-    fail(l.number, "fov_y_deg " + q(require(l, "fov_y_deg")) + " must be in (0, 180)");
-  if (!(c.near_plane > 0.0f)) fail(l.number, "near " + q(require(l, "near")) + " must be positive");
-  if (!(c.far_plane > c.near_plane)) fail(l.number, "far " + q(require(l, "far")) + " must be greater than near");
+  {
+    // In double: the float32 products of the bounds below must not round the test away.
+    const glm::dvec3 view = glm::normalize(glm::dvec3(c.target) - glm::dvec3(c.eye));
+    const glm::dvec3 up = glm::normalize(glm::dvec3(c.up));
+    const double sine = glm::length(glm::cross(view, up));
+    if (!(sine >= kMinUpViewSine))
+      fail(l.number, "up " + q(require(l, "up")) + " is parallel to the view direction (target - eye): the sine of "
+                         "their angle is " + std::to_string(sine) + ", at least " + std::to_string(kMinUpViewSine) +
+                         " is needed for a camera basis");
+  }
+  if (!(c.fov_y_deg >= kMinFovYDeg && c.fov_y_deg <= kMaxFovYDeg))
+    fail(l.number, "fov_y_deg " + q(require(l, "fov_y_deg")) + " is out of range [0.01, 179] (degrees)");
+  if (!(c.near_plane >= kMinClipDistance && c.near_plane <= kMaxClipDistance))
+    fail(l.number, "near " + q(require(l, "near")) + " is out of range [1e-06, 1e+09] (world units)");
+  if (!(c.far_plane > c.near_plane && c.far_plane <= kMaxClipDistance))
+    fail(l.number, "far " + q(require(l, "far")) + " must be greater than near and at most 1e+09 (world units)");
+  if (c.far_plane / c.near_plane > kMaxFarNearRatio)
+    fail(l.number, "far/near = " + q(require(l, "far")) + "/" + q(require(l, "near")) + " is above 2^24 = 16777216, " +
+                       "the resolution of a 24-bit depth buffer (docs/limits.md)");
   if (const auto* n = find(l, "name")) trace_.camera_name = *n;
   trace_.camera = c;
   trace_.camera_line = l.number;
@@ -524,6 +565,8 @@ void Reader::on_camera(const Line& l) {
 
 void Reader::on_light(const Line& l) {
   declaration_allowed(l, true);
+  if (trace_.lights.size() >= kMaxTraceLights)
+    fail(l.number, "more than " + std::to_string(kMaxTraceLights) + " lights, the most accepted (docs/limits.md)");
   if (!l.has_positional) fail(l.number, "'light' needs a type after it: point or spot");
   Light light;
   if (l.positional == "point") {
@@ -536,8 +579,10 @@ void Reader::on_light(const Line& l) {
     fail(l.number, "unknown light type " + q(l.positional) + " (expected point or spot)");
   }
   light.position = get_vec3(l, "position");
+  check_world(l, "position", light.position);
   light.radius = get_float(l, "radius");
-  if (!(light.radius > 0.0f)) fail(l.number, "radius " + q(require(l, "radius")) + " must be positive");
+  if (!(light.radius > 0.0f && light.radius <= kMaxWorldCoordinate))
+    fail(l.number, "radius " + q(require(l, "radius")) + " must be positive and at most 1e+09 (world units)");
   light.color = get_vec3(l, "color");
   if (light.color.x < 0 || light.color.y < 0 || light.color.z < 0)
     fail(l.number, "color " + q(require(l, "color")) + " must not be negative");
@@ -588,11 +633,14 @@ void Reader::on_buffer(const Line& l) {
   BufferDesc b;
   b.name = positional_ident(l, "buffer name");
   check_new_resource_name(l, b.name);
-  b.bytes = to_u64(l, "bytes", require(l, "bytes"), ~std::uint64_t{0});
+  b.bytes = to_u64(l, "bytes", require(l, "bytes"), kMaxBufferBytes);
   if (b.bytes == 0) fail(l.number, "buffer " + q(b.name) + " has bytes=0");
   b.traffic = get_enum(l, "traffic", parse_buffer_traffic);
   b.content = get_enum(l, "content", parse_buffer_content);
   b.upload = get_bool(l, "upload", false);
+  if (b.upload && b.bytes > kMaxUploadBufferBytes)
+    fail(l.number, "upload=yes buffer " + q(b.name) + " has bytes=" + std::to_string(b.bytes) + "; a CPU-filled buffer "
+                   "is read whole, and the largest accepted is " + std::to_string(kMaxUploadBufferBytes) + " (docs/limits.md)");
   b.line = l.number;
   buffer_lines_[b.name] = l.number;
   if (b.upload) written_buffers_.insert(b.name);
@@ -661,6 +709,7 @@ void Reader::on_pass(const Line& l) {
   p.name = positional_ident(l, "pass name");
   if (auto it = pass_lines_.find(p.name); it != pass_lines_.end())
     fail(l.number, "duplicate pass name " + q(p.name) + " (first at line " + std::to_string(it->second) + ")");
+  count_command(l);
   p.line = l.number;
   pass_lines_[p.name] = l.number;
   if (!first_command_line_) first_command_line_ = l.number;
@@ -807,6 +856,8 @@ void Reader::on_draw(const Line& l) {
     case GeometryKind::LightSpheres: check_keys(l, {"pipeline", "subdivisions", "lights", "reads", "fetch"}); break;
     default: check_keys(l, {"pipeline", "lights", "reads", "fetch"}); break;
   }
+  if (++draws_ > kMaxTraceDraws)
+    fail(l.number, "more than " + std::to_string(kMaxTraceDraws) + " draws, the most accepted (docs/limits.md)");
   d.pipeline = get_ident(l, "pipeline");
   const PipelineState* ps = trace_.find_pipeline(d.pipeline);
   if (!ps) fail(l.number, "undeclared pipeline " + q(d.pipeline));
@@ -868,6 +919,7 @@ void Reader::on_dispatch(const Line& l) {
   if (current_pass_)
     fail(l.number, "'dispatch' inside pass " + q(pass().name) + " (close the pass with 'end' first)");
   if (!first_command_line_) first_command_line_ = l.number;
+  count_command(l);
   DispatchCmd d;
   const std::string kernel = positional_ident(l, "kernel name");
   const std::optional<ComputeKernel> parsed = parse_compute_kernel(kernel);
@@ -876,6 +928,15 @@ void Reader::on_dispatch(const Line& l) {
   d.line = l.number;
   get_u32x3(l, "groups", d.groups);
   get_u32x3(l, "group_size", d.group_size);
+  for (const std::uint32_t g : d.groups)
+    if (g > kMaxDispatchGroups)
+      fail(l.number, "groups=" + require(l, "groups") + " has a component above " + std::to_string(kMaxDispatchGroups) +
+                         " (Vulkan maxComputeWorkGroupCount)");
+  const std::uint64_t invocations = std::uint64_t{d.group_size[0]} * d.group_size[1] * d.group_size[2];
+  if (invocations > kMaxWorkGroupInvocations)
+    fail(l.number, "group_size=" + require(l, "group_size") + " is " + std::to_string(invocations) +
+                       " invocations per group; at most " + std::to_string(kMaxWorkGroupInvocations) +
+                       " (maxComputeWorkGroupInvocations)");
   d.reads = get_ident_list(l, "reads");
   d.writes = get_ident_list(l, "writes");
   for (const auto& kv : l.kvs)
@@ -901,6 +962,7 @@ void Reader::on_barrier(const Line& l) {
   no_positional(l);
   check_keys(l, {"resources"});
   if (!first_command_line_) first_command_line_ = l.number;
+  count_command(l);
   BarrierCmd b;
   b.line = l.number;
   if (require(l, "resources") == "all") {
@@ -924,6 +986,25 @@ void Reader::finish(int last_line) {
   if (!have_scene_) fail(at, "missing required 'scene' line");
   if (!have_frame_) fail(at, "missing required 'frame' line");
   if (!have_camera_) fail(at, "missing required 'camera' line");
+  const std::uint64_t light_bytes = kLightBufferBytesPerLight * trace_.lights.size();
+  for (const auto& b : trace_.buffers) {
+    if (b.content == BufferContent::Lights && b.bytes < light_bytes)
+      fail(b.line, "buffer " + q(b.name) + " holds the lights (content=lights) but has bytes=" + std::to_string(b.bytes) +
+                       "; the trace's " + std::to_string(trace_.lights.size()) + " lights need " +
+                       std::to_string(light_bytes) + " (" + std::to_string(kLightBufferBytesPerLight) + " bytes each)");
+  }
+}
+
+void Reader::count_command(const Line& l) {
+  if (++commands_ > kMaxTraceCommands)
+    fail(l.number, "more than " + std::to_string(kMaxTraceCommands) +
+                       " passes, dispatches and barriers, the most accepted (docs/limits.md)");
+}
+
+void Reader::check_world(const Line& l, std::string_view key, const glm::vec3& v) const {
+  for (int c = 0; c < 3; ++c)
+    if (!(std::fabs(v[c]) <= kMaxWorldCoordinate))
+      fail(l.number, std::string(key) + "=" + require(l, key) + " has a component beyond +-1e+09 world units (docs/limits.md)");
 }
 
 Trace Reader::run(std::istream& in) {
@@ -931,10 +1012,15 @@ Trace Reader::run(std::istream& in) {
   int number = 0;
   bool have_header = false;
   Line l;
+  std::uint64_t bytes = 0;
   while (std::getline(in, text)) {
     ++number;
+    bytes += text.size() + 1;
+    if (bytes > kMaxTraceBytes + 1)
+      fail(number, "the trace is longer than " + std::to_string(kMaxTraceBytes) + " bytes, the largest accepted (docs/limits.md)");
     if (!text.empty() && text.back() == '\r') text.pop_back();
     if (!have_header) {
+      text = std::string(strip_utf8_bom(text));
       header(text);
       have_header = true;
       continue;
@@ -953,8 +1039,15 @@ Trace Reader::run(std::istream& in) {
 Trace parse_trace(std::istream& in, const std::string& name) { return Reader(name).run(in); }
 
 Trace read_trace(const std::string& path) {
+  check_path_length(path, "trace");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open the trace file");
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec && size > kMaxTraceBytes) {
+    throw InputError(path, "the trace is " + std::to_string(size) + " bytes; the largest accepted is " +
+                               std::to_string(kMaxTraceBytes) + " (docs/limits.md)");
+  }
   return parse_trace(in, path);
 }
 

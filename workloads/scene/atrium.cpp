@@ -452,8 +452,9 @@ void build_pot(Builder& b, int t) {
 }  // namespace
 
 Scene make_atrium(int detail) {
-  if (detail < 1 || detail > 5) {
-    throw InputError("atrium:" + std::to_string(detail), "atrium detail must be 1..5");
+  if (detail < kAtriumMinDetail || detail > kAtriumMaxDetail) {
+    throw InputError("atrium:" + std::to_string(detail), "atrium detail must be " + std::to_string(kAtriumMinDetail) +
+                                                             ".." + std::to_string(kAtriumMaxDetail));
   }
   Atrium A;
   A.t = 1 << (detail - 1);

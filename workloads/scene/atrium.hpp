@@ -16,6 +16,11 @@ namespace tbdr {
 /// Bump when the generator's output changes: it is part of the atrium's content hash.
 inline constexpr int atrium_generator_version = 3;  // 3: base colour texels
 
+/// The detail levels the generator builds (about 4x triangles per level, from ~13 k at level 1 to
+/// ~2.4 M at level 5: docs/scenes.md).
+inline constexpr int kAtriumMinDetail = 1;
+inline constexpr int kAtriumMaxDetail = 5;
+
 /// The atrium's main dimensions in meters (what cameras need to place themselves).
 struct AtriumLayout {
   float court_half_x = 15.0f;    ///< courtyard half length along x, to the column centers
@@ -32,7 +37,7 @@ struct AtriumLayout {
 /// The layout every atrium uses (independent of the detail level).
 inline AtriumLayout atrium_layout() { return AtriumLayout{}; }
 
-/// Builds the atrium at a detail level in 1..5; throws InputError("atrium:N") otherwise.
+/// Builds the atrium at a detail level in kAtriumMinDetail..kAtriumMaxDetail (1..5); throws InputError("atrium:N") otherwise.
 /// Deterministic: the same detail gives the same scene on every machine and run.
 Scene make_atrium(int detail);
 

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <iterator>
 #include <map>
 #include <sstream>
@@ -261,6 +262,218 @@ std::optional<nlohmann::json> extract_json(const std::vector<std::uint8_t>& byte
     return std::nullopt;  // tinygltf reports the syntax error with its own message
   }
 }
+
+
+// ---------------------------------------------------------------------------------------------
+// JSON types (before tinygltf loads anything): tinygltf reads a field of the wrong JSON type as
+// if it were absent ("scene": "hello" loads as no default scene), so every field the loader or
+// tinygltf reads is checked against its type in the glTF 2.0 JSON schema (Khronos glTF 2.0
+// specification, section 5 "Properties Reference"), with the required ones, naming the field by
+// its JSON path.
+
+/// The JSON type a glTF field has in the schema.
+enum class JType : std::uint8_t {
+  Uint,         ///< glTFid and counts: an integer >= 0
+  Number,       ///< any number
+  Bool,
+  String,
+  Object,       ///< an object checked no further here (extensions, extras, attributes' values aside)
+  UintArray,    ///< array of integers >= 0
+  NumberArray,  ///< array of numbers
+  UintMap,      ///< object whose values are integers >= 0 (primitive attributes)
+};
+
+/// One field of a glTF object: its name, type and whether the schema requires it.
+struct JField {
+  const char* name;
+  JType type;
+  bool required = false;
+};
+
+const char* jtype_text(JType t) {
+  switch (t) {
+    case JType::Uint: return "a non-negative integer";
+    case JType::Number: return "a number";
+    case JType::Bool: return "a boolean";
+    case JType::String: return "a string";
+    case JType::Object: return "an object";
+    case JType::UintArray: return "an array of non-negative integers";
+    case JType::NumberArray: return "an array of numbers";
+    case JType::UintMap: return "an object of non-negative integers";
+  }
+  return "?";
+}
+
+std::string json_kind(const nlohmann::json& v) {
+  if (v.is_number_integer() && v.get<long long>() < 0) return "the negative integer " + v.dump();
+  if (v.is_number()) return "the number " + v.dump();
+  if (v.is_string()) return "a string";
+  if (v.is_boolean()) return "a boolean";
+  if (v.is_null()) return "null";
+  if (v.is_array()) return "an array";
+  return "an object";
+}
+
+/// True for an integer >= 0 (glTF ids and counts; 3.0 written as a float is refused as tinygltf does).
+bool json_uint(const nlohmann::json& v) { return v.is_number_unsigned() || (v.is_number_integer() && v.get<long long>() >= 0); }
+
+class JsonTypeCheck {
+ public:
+  explicit JsonTypeCheck(std::string file) : file_(std::move(file)) {}
+
+  [[noreturn]] void fail(const std::string& path, const std::string& msg) const {
+    throw InputError(file_, "field '" + path + "': " + msg);
+  }
+
+  void value(const nlohmann::json& v, JType t, const std::string& path) const {
+    bool ok = false;
+    switch (t) {
+      case JType::Uint: ok = json_uint(v); break;
+      case JType::Number: ok = v.is_number(); break;
+      case JType::Bool: ok = v.is_boolean(); break;
+      case JType::String: ok = v.is_string(); break;
+      case JType::Object: ok = v.is_object(); break;
+      case JType::UintArray:
+      case JType::NumberArray:
+        if (!v.is_array()) break;
+        for (std::size_t i = 0; i < v.size(); ++i) {
+          const bool item = t == JType::UintArray ? json_uint(v[i]) : v[i].is_number();
+          if (!item)
+            fail(path + "[" + std::to_string(i) + "]", std::string("expected ") + (t == JType::UintArray ? "a non-negative integer" : "a number") +
+                                                       ", found " + json_kind(v[i]));
+        }
+        ok = true;
+        break;
+      case JType::UintMap:
+        if (!v.is_object()) break;
+        for (const auto& [k, item] : v.items())
+          if (!json_uint(item)) fail(path + "." + k, "expected a non-negative integer, found " + json_kind(item));
+        ok = true;
+        break;
+    }
+    if (!ok) fail(path, std::string("expected ") + jtype_text(t) + ", found " + json_kind(v));
+  }
+
+  /// Checks `obj` (which must be an object) against `fields`; `name`, `extensions` and `extras`
+  /// are allowed on every object (name a string, extensions an object).
+  /// `path` is "" for the root object (its fields are named bare: "scene", "asset").
+  void object(const nlohmann::json& obj, const std::string& path, std::initializer_list<JField> fields) const {
+    if (!obj.is_object()) fail(path.empty() ? "(root)" : path, "expected an object, found " + json_kind(obj));
+    const std::string prefix = path.empty() ? "" : path + ".";
+    for (const JField& f : fields) {
+      const auto it = obj.find(f.name);
+      if (it == obj.end()) {
+        if (f.required) fail(prefix + f.name, "required by the glTF 2.0 schema but missing");
+        continue;
+      }
+      value(*it, f.type, prefix + f.name);
+    }
+    if (auto it = obj.find("name"); it != obj.end() && !path.empty()) value(*it, JType::String, prefix + "name");
+    if (auto it = obj.find("extensions"); it != obj.end()) {
+      value(*it, JType::Object, prefix + "extensions");
+      for (const auto& [k, ext] : it->items()) value(ext, JType::Object, prefix + "extensions." + k);  // each an object
+    }
+  }
+
+  /// Each element of the top-level array `key` (if present) through `each(element, path)`.
+  template <class F>
+  void array(const nlohmann::json& root, const char* key, F each) const {
+    const auto it = root.find(key);
+    if (it == root.end()) return;
+    if (!it->is_array()) fail(key, "expected an array, found " + json_kind(*it));
+    for (std::size_t i = 0; i < it->size(); ++i) each((*it)[i], std::string(key) + "[" + std::to_string(i) + "]");
+  }
+
+  /// A textureInfo (baseColorTexture, normalTexture, ...) if present.
+  void texture_info(const nlohmann::json& parent, const char* key, const std::string& path) const {
+    const auto it = parent.find(key);
+    if (it == parent.end()) return;
+    object(*it, path + "." + key, {{"index", JType::Uint, true}, {"texCoord", JType::Uint}, {"scale", JType::Number},
+                                   {"strength", JType::Number}});
+  }
+
+  void run(const nlohmann::json& j) const {
+    object(j, "", {{"asset", JType::Object, true}, {"scene", JType::Uint}});
+    object(j["asset"], "asset", {{"version", JType::String, true}, {"minVersion", JType::String},
+                                 {"generator", JType::String}, {"copyright", JType::String}});
+    for (const char* list : {"extensionsUsed", "extensionsRequired"}) {
+      if (auto it = j.find(list); it != j.end()) {
+        if (!it->is_array()) fail(list, "expected an array of strings, found " + json_kind(*it));
+        for (std::size_t i = 0; i < it->size(); ++i) value((*it)[i], JType::String, std::string(list) + "[" + std::to_string(i) + "]");
+      }
+    }
+    array(j, "scenes", [&](const nlohmann::json& o, const std::string& p) { object(o, p, {{"nodes", JType::UintArray}}); });
+    array(j, "nodes", [&](const nlohmann::json& o, const std::string& p) {
+      object(o, p, {{"camera", JType::Uint}, {"children", JType::UintArray}, {"skin", JType::Uint},
+                    {"matrix", JType::NumberArray}, {"mesh", JType::Uint}, {"rotation", JType::NumberArray},
+                    {"scale", JType::NumberArray}, {"translation", JType::NumberArray}, {"weights", JType::NumberArray}});
+    });
+    array(j, "meshes", [&](const nlohmann::json& o, const std::string& p) {
+      object(o, p, {{"weights", JType::NumberArray}});
+      const auto prims = o.find("primitives");
+      if (prims == o.end()) fail(p + ".primitives", "required by the glTF 2.0 schema but missing");
+      if (!prims->is_array()) fail(p + ".primitives", "expected an array, found " + json_kind(*prims));
+      for (std::size_t i = 0; i < prims->size(); ++i) {
+        const std::string pp = p + ".primitives[" + std::to_string(i) + "]";
+        object((*prims)[i], pp, {{"attributes", JType::UintMap, true}, {"indices", JType::Uint},
+                                 {"material", JType::Uint}, {"mode", JType::Uint}});
+        if (auto t = (*prims)[i].find("targets"); t != (*prims)[i].end()) {
+          if (!t->is_array()) fail(pp + ".targets", "expected an array, found " + json_kind(*t));
+          for (std::size_t k = 0; k < t->size(); ++k) value((*t)[k], JType::UintMap, pp + ".targets[" + std::to_string(k) + "]");
+        }
+      }
+    });
+    array(j, "accessors", [&](const nlohmann::json& o, const std::string& p) {
+      object(o, p, {{"bufferView", JType::Uint}, {"byteOffset", JType::Uint}, {"componentType", JType::Uint, true},
+                    {"normalized", JType::Bool}, {"count", JType::Uint, true}, {"type", JType::String, true},
+                    {"max", JType::NumberArray}, {"min", JType::NumberArray}, {"sparse", JType::Object}});
+      if (auto sp = o.find("sparse"); sp != o.end()) {
+        object(*sp, p + ".sparse", {{"count", JType::Uint, true}, {"indices", JType::Object, true}, {"values", JType::Object, true}});
+        object((*sp)["indices"], p + ".sparse.indices",
+               {{"bufferView", JType::Uint, true}, {"byteOffset", JType::Uint}, {"componentType", JType::Uint, true}});
+        object((*sp)["values"], p + ".sparse.values", {{"bufferView", JType::Uint, true}, {"byteOffset", JType::Uint}});
+      }
+    });
+    array(j, "bufferViews", [&](const nlohmann::json& o, const std::string& p) {
+      object(o, p, {{"buffer", JType::Uint, true}, {"byteOffset", JType::Uint}, {"byteLength", JType::Uint, true},
+                    {"byteStride", JType::Uint}, {"target", JType::Uint}});
+    });
+    array(j, "buffers", [&](const nlohmann::json& o, const std::string& p) {
+      object(o, p, {{"uri", JType::String}, {"byteLength", JType::Uint, true}});
+    });
+    array(j, "materials", [&](const nlohmann::json& o, const std::string& p) {
+      object(o, p, {{"pbrMetallicRoughness", JType::Object}, {"emissiveFactor", JType::NumberArray},
+                    {"alphaMode", JType::String}, {"alphaCutoff", JType::Number}, {"doubleSided", JType::Bool}});
+      for (const char* t : {"normalTexture", "occlusionTexture", "emissiveTexture"}) texture_info(o, t, p);
+      if (auto pbr = o.find("pbrMetallicRoughness"); pbr != o.end()) {
+        const std::string pp = p + ".pbrMetallicRoughness";
+        object(*pbr, pp, {{"baseColorFactor", JType::NumberArray}, {"metallicFactor", JType::Number},
+                          {"roughnessFactor", JType::Number}});
+        texture_info(*pbr, "baseColorTexture", pp);
+        texture_info(*pbr, "metallicRoughnessTexture", pp);
+      }
+    });
+    array(j, "textures", [&](const nlohmann::json& o, const std::string& p) {
+      object(o, p, {{"sampler", JType::Uint}, {"source", JType::Uint}});
+    });
+    array(j, "images", [&](const nlohmann::json& o, const std::string& p) {
+      object(o, p, {{"uri", JType::String}, {"mimeType", JType::String}, {"bufferView", JType::Uint}});
+    });
+    array(j, "samplers", [&](const nlohmann::json& o, const std::string& p) {
+      object(o, p, {{"magFilter", JType::Uint}, {"minFilter", JType::Uint}, {"wrapS", JType::Uint}, {"wrapT", JType::Uint}});
+    });
+    array(j, "cameras", [&](const nlohmann::json& o, const std::string& p) {
+      object(o, p, {{"type", JType::String, true}, {"perspective", JType::Object}, {"orthographic", JType::Object}});
+    });
+    array(j, "skins", [&](const nlohmann::json& o, const std::string& p) {
+      object(o, p, {{"inverseBindMatrices", JType::Uint}, {"skeleton", JType::Uint}, {"joints", JType::UintArray, true}});
+    });
+    array(j, "animations", [&](const nlohmann::json& o, const std::string& p) { object(o, p, {}); });
+  }
+
+ private:
+  std::string file_;
+};
 
 void precheck_json(const std::string& file, const nlohmann::json& j) {
   const fs::path dir = fs::path(file).parent_path();
@@ -752,8 +965,11 @@ void Converter::convert_primitive(int mesh, int prim_index, std::vector<std::uin
     }
     const std::vector<float> v = read_accessor<float>(it->second, desc);
     for (std::size_t i = 0; i < vertex_count; ++i) sm.uvs[i] = glm::vec2(v[2 * i], v[2 * i + 1]);
-  } else if (texcoord_set != 0 && scene_.materials[material_index].base_color_texture >= 0) {
-    scene_.warnings.push_back(where + ": material uses " + uv_attr + " which the primitive lacks; uvs are zero");
+  } else if (scene_.materials[material_index].base_color_texels >= 0) {  // a texture that is sampled
+    // glTF 2.0 (section 3.9.2, textureInfo.texCoord): the primitive must provide the set the
+    // material samples; with zero uvs every fragment would read one texel.
+    fail(where + ": its material '" + scene_.materials[material_index].name + "' samples its base colour texture with " +
+         uv_attr + " (baseColorTexture.texCoord = " + std::to_string(texcoord_set) + "), which the primitive lacks");
   }
   // Remaining attributes: validated (byte ranges), not kept.
   for (const auto& [attr, acc_index] : prim.attributes) {
@@ -1031,7 +1247,10 @@ Scene load_gltf(const std::string& path) {
   if (!fs::is_regular_file(path, ec)) throw InputError(path, "scene file not found");
   const std::vector<std::uint8_t> bytes = read_all(path);
   const bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
-  if (auto j = extract_json(bytes, binary)) precheck_json(path, *j);
+  if (auto j = extract_json(bytes, binary)) {
+    JsonTypeCheck(path).run(*j);
+    precheck_json(path, *j);
+  }
 
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(&keep_encoded_image, nullptr);

@@ -87,10 +87,6 @@ Trace generate_trace(const std::string& technique, const TraceSetup& setup);
 
 // ---- starting a trace -----------------------------------------------------------------------------
 
-/// Bytes one light occupies in a GPU light buffer: 3 x vec4 (position+radius, color+intensity,
-/// direction+cos_inner+cos_outer packed with std140 padding).
-inline constexpr std::uint64_t kLightBufferBytesPerLight = 48;
-
 /// What a technique cannot do, checked by begin_trace() before anything is written.
 struct TechniqueLimits {
   std::string no_msaa = {};   ///< why the technique cannot use MSAA ("" when it can)
