@@ -131,6 +131,7 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
 std::string find_data_file(const std::string& arg, DataFolder folder) {
   const char* what = folder == DataFolder::Configs ? "config" : "sweep file";
   if (arg.empty()) throw InputError(std::string("empty ") + what + " name", "expected a file or a name");
+  check_path_length(arg, what);  // longer than the OS allows: say so, not "no such file"
   std::error_code ec;
   const fs::path given(arg);
   std::vector<fs::path> tried = {given};

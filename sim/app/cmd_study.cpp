@@ -122,7 +122,10 @@ StudyPlan plan_from_options(const po::variables_map& vm) {
     throw InputError("--images " + plan.image_mode, "expected none, largest or all");
   }
   std::vector<std::string> files, sets;
-  if (vm.count("config")) files = vm["config"].as<std::vector<std::string>>();
+  if (vm.count("config")) {
+    // Names and paths found as every command finds them (cli.hpp: find_data_file).
+    for (const auto& f : vm["config"].as<std::vector<std::string>>()) files.push_back(find_data_file(f, DataFolder::Configs));
+  }
   if (vm.count("set")) sets = vm["set"].as<std::vector<std::string>>();
   if (vm.count("modes")) plan.modes = vm["modes"].as<std::vector<std::string>>();
   if (plan.modes.empty()) {
