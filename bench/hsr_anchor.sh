@@ -4,12 +4,13 @@
 # (https://docs.imgtec.com/starter-guides/powervr-architecture/html/topics/hidden-surface-removal-efficiency.html):
 # in a captured frame of MadFinger Games' Shadowgun, 4.7 fragments are coloured per screen pixel
 # ignoring early-Z or HSR, and 1.2 on PowerVR after HSR (75 % fewer; blended UI keeps it above 1).
-# Here: plain_forward on the atrium, rasterised fragments per pixel (what a GPU without early-Z
-# or HSR colours), shaded fragments per pixel with gpu.mode=tbr (per-tile early-Z, draws in the
+# Here: plain_forward on the atrium, rasterised fragments per pixel, fragments shaded per pixel by
+# a GPU without early-Z (gpu.mode=tbr isp.early_z=0: every rasterised fragment; the figure to set
+# beside Shadowgun's 4.7), shaded fragments per pixel with gpu.mode=tbr (per-tile early-Z, draws in the
 # trace's order: opaque in scene order, then masked, then blended back to front) and with
 # gpu.mode=tbdr (tag-buffer HSR), and the ratios. The street view (outside the south facade; the
 # interior behind it is submitted) at detail 4 (denser foliage) has the game-like depth
-# complexity (about 3.9 per pixel); the other views are for contrast. raster/TBDR is the figure to
+# complexity (about 3.9 per pixel); the other views are for contrast. late/TBDR is the figure to
 # set beside Shadowgun's 4.7 / 1.2; TBR/TBDR shows how much per-tile early-Z already removes when
 # draws come in the trace's order (opaque in scene order first, so much hidden geometry arrives
 # after what hides it).
@@ -29,22 +30,26 @@ H=${RES#*x}
 stat() {  # db scope name
   sqlite3 "$1" "SELECT value FROM stats WHERE run_id = (SELECT max(id) FROM runs) AND scope = '$2' AND name = '$3'"
 }
-printf "%-10s %12s %12s %12s %12s %12s %10s %10s\n" "view" "raster/px" "TBR shad/px" "TBDR shad/px" "TBR/TBDR" "raster/TBDR" "TBR ms" "TBDR ms"
+printf "%-10s %10s %12s %12s %12s %10s %10s %10s %10s %10s\n" "view" "raster/px" "late-Z sh/px" "TBR sh/px" "TBDR sh/px" "TBR/TBDR" "late/TBDR" "late ms" "TBR ms" "TBDR ms"
 for view in street entrance aisle gallery; do
   "$BUILD/tbdrsim" trace --technique plain_forward --scene "$SCENE" --camera "$view" --lights 64 --resolution "$RES" \
     --out "$TMP/$view.trace" > /dev/null
   for mode in tbr tbdr; do
     "$BUILD/tbdrsim" run --trace "$TMP/$view.trace" --db "$TMP/$mode.db" --set gpu.mode=$mode --quiet
   done
+  # A GPU without early-Z (isp.early_z=0: tests after the shader) shades every rasterised fragment.
+  "$BUILD/tbdrsim" run --trace "$TMP/$view.trace" --db "$TMP/late.db" --set gpu.mode=tbr --set isp.early_z=0 --quiet
   awk -v px=$((W * H)) -v view="$view" \
     -v rast="$(stat "$TMP/tbdr.db" frame/isp samples_rasterised)" \
+    -v late="$(stat "$TMP/late.db" frame/tsp shader_invocations)" \
     -v tbr="$(stat "$TMP/tbr.db" frame/tsp shader_invocations)" \
     -v tbdr="$(stat "$TMP/tbdr.db" frame/tsp shader_invocations)" \
+    -v late_ms="$(stat "$TMP/late.db" frame/timing frame_time_ms)" \
     -v tbr_ms="$(stat "$TMP/tbr.db" frame/timing frame_time_ms)" \
     -v tbdr_ms="$(stat "$TMP/tbdr.db" frame/timing frame_time_ms)" \
-    'BEGIN { printf "%-10s %12.2f %12.2f %12.2f %12.2f %12.2f %10.2f %10.2f\n", view, rast / px, tbr / px, tbdr / px, tbr / tbdr, rast / tbdr, tbr_ms, tbdr_ms }'
+    'BEGIN { printf "%-10s %10.2f %12.2f %12.2f %12.2f %10.2f %10.2f %10.2f %10.2f %10.2f\n", view, rast / px, late / px, tbr / px, tbdr / px, tbr / tbdr, late / tbdr, late_ms, tbr_ms, tbdr_ms }'
 done
-printf "%-10s %12.2f %12s %12.2f %12s %12.2f\n" "Shadowgun" 4.7 "-" 1.2 "-" "$(awk 'BEGIN { print 4.7 / 1.2 }')"
+printf "%-10s %10s %12.2f %12s %12.2f %10s %10.2f\n" "Shadowgun" "-" 4.7 "-" 1.2 "-" "$(awk 'BEGIN { print 4.7 / 1.2 }')"
 echo "(Shadowgun: Imagination's figures, no early-Z/HSR -> PowerVR HSR; its TBR/early-Z figure is not published)"
 echo
 echo "TBR's per-tile early-Z depends on the submission order (street view; plain_forward draw_order):"

@@ -135,6 +135,13 @@ ParamRegistry<HwConfig> make_registry() {
       .source("Arm, \"Killing Pixels - A New Optimization for Shading on ARM Mali GPUs\" (Arm community blog, "
               "2013): fragments still queued for shading are killed when a later opaque fragment covers them; "
               "the queue depth has no public figure");
+  r.add(TBDR_PARAM(isp.early_z), 1).unit("flag").range(0, 1)
+      .doc("gpu.mode=tbr|imr: 1 = depth and stencil tests before the fragment shader (early-Z), 0 = after "
+           "it (late-Z: every rasterised fragment is shaded, the tests then decide which colours are "
+           "written); tbdr's deferred HSR always tests first")
+      .source("Khronos, Vulkan 1.3 specification, \"Early Fragment Tests\" (tests may run before shading "
+              "when the result is the same); Imagination, PowerVR Architecture Guide, \"Hidden Surface "
+              "Removal Efficiency\": 4.7 fragments coloured per pixel without early-Z or HSR, 1.2 with HSR");
   r.add(TBDR_PARAM(isp.tag_bits), 32).unit("bits").range(8, 64)
       .doc("Bits per tag (triangle id) per sample").source("no public figure");
   r.add(TBDR_PARAM(isp.depth_stencil_bytes_per_sample), 4).unit("bytes").range(2, 8)

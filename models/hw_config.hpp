@@ -117,6 +117,7 @@ struct IspParams {
   std::int64_t tag_bits = 0;
   std::int64_t depth_stencil_bytes_per_sample = 0;
   std::int64_t forward_pixel_kill_window = 0;
+  std::int64_t early_z = 1;
 };
 
 /// [usc] unified shading clusters (the TSP's shader cores).

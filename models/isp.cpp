@@ -83,7 +83,7 @@ void Isp::rop_color_outputs(std::uint32_t prim_index, bool punch) {
   // Blending and framebuffer fetch read the target before writing it.
   const bool read = d.pipeline->blend != BlendMode::Off || d.fetch_bytes > 0;
   for (std::size_t i = 0; i < batch_.size(); ++i) {
-    const std::uint32_t mask = punch ? alive_[i] : batch_[i].mask;
+    const std::uint32_t mask = punch ? alive_[i] : batch_[i].mask & batch_[i].write;
     if (mask == 0) continue;
     for (std::size_t o = 0; o < outputs; ++o) ctx_.rop->color(o, batch_[i].x, batch_[i].y, mask, read);
   }
@@ -152,8 +152,11 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     depth_of_.assign(tile_samples, 0);
     layers_.resize(tile_samples * static_cast<std::size_t>(L));
   }
-  // tbr: forward pixel kill queues this many primitives between early-Z and shading.
-  const std::size_t fpk_window = (!ctx_.defer_shading && !ctx_.framebuffer_in_dram)
+  // tbr / imr with isp.early_z=0: every rasterised sample is shaded, the tests decide the writes.
+  const bool late_z = !ctx_.defer_shading && ctx_.hw->isp.early_z == 0;
+  // tbr: forward pixel kill queues this many primitives between early-Z and shading (it kills
+  // early-Z survivors: nothing to kill when the tests come after the shader).
+  const std::size_t fpk_window = (!ctx_.defer_shading && !ctx_.framebuffer_in_dram && !late_z)
                                      ? static_cast<std::size_t>(std::max<std::int64_t>(0, ctx_.hw->isp.forward_pixel_kill_window))
                                      : 0;
   std::uint32_t arrivals = 0;
@@ -187,6 +190,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     const bool early_write = !ctx_.defer_shading && p.hsr == HsrClass::Opaque && write_on;
     candidates_.clear();
     pending_.clear();
+    rasterised_.clear();
 
     rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) {
       const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
@@ -195,6 +199,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
         if (!(mask & (1u << s))) continue;
         ++overdraw[pixel];
         ++isp.samples_rasterised;
+        if (late_z) rasterised_.push_back({prim_index, x, y, 1u << s, z[s], false});
         const std::size_t gi = pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(s);
         if (rop && (depth_on || stencil_on)) rop->depth(x, y, s, false);
         if (stencil_on) {
@@ -301,7 +306,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     }
 
     // tbr / imr: shade in submission order.
-    if (pending_.empty()) continue;
+    if (late_z ? rasterised_.empty() : pending_.empty()) continue;
     if (p.hsr == HsrClass::PunchThrough) isp.punch_through_samples += pending_.size();
     if (p.hsr == HsrClass::Translucent) isp.translucent_samples += pending_.size();
     const bool punch = p.hsr == HsrClass::PunchThrough;
@@ -325,7 +330,19 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     }
     // A punch-through primitive's depth waits for its alpha test: what is queued is shaded first.
     while (!queue_.empty()) shade_queued(rect, isp, tsp);
-    build_batch(pending_.data(), pending_.data() + pending_.size(), batch_);
+    if (late_z) {
+      // Late-Z: the shader runs on every rasterised sample; only those that passed the tests
+      // (pending_, a subsequence of rasterised_ in the same raster order) write their colour.
+      build_batch(rasterised_.data(), rasterised_.data() + rasterised_.size(), batch_);
+      std::size_t i = 0;
+      for (ShadePixel& px : batch_) px.write = 0;
+      for (const PendingSample& ps : pending_) {
+        while (batch_[i].x != ps.x || batch_[i].y != ps.y) ++i;
+        batch_[i].write |= ps.bit;
+      }
+    } else {
+      build_batch(pending_.data(), pending_.data() + pending_.size(), batch_);
+    }
     tsp_.shade(prim_index, batch_, punch ? &alive_ : nullptr, tsp);
     if (rop) rop_color_outputs(prim_index, punch);
     if (punch) write_punch_depth(pending_.data(), pending_.data() + pending_.size(), isp);

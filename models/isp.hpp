@@ -26,7 +26,8 @@
 // opaque primitive in front removes them unshaded. In tbr/imr modes there is no tag buffer: every
 // fragment that passes early depth testing is shaded in submission order, at once, or in tbr with
 // forward pixel kill (Arm Mali) after the next isp.forward_pixel_kill_window primitives, unless
-// one of them wrote an opaque sample over it meanwhile.
+// one of them wrote an opaque sample over it meanwhile. With isp.early_z=0 (tbr/imr) the tests
+// come after the shader: every rasterised sample is shaded and only those passing write colour.
 #include <cstdint>
 #include <deque>
 #include <vector>
@@ -122,6 +123,7 @@ class Isp {
   std::vector<std::uint8_t> depth_of_;  ///< per tile sample: layers in use
   std::vector<Candidate> candidates_;
   std::vector<PendingSample> pending_;
+  std::vector<PendingSample> rasterised_;  ///< isp.early_z=0: every sample the primitive covers
   std::vector<PendingSample> flush_samples_;
   std::vector<ShadePixel> batch_;
   std::vector<std::uint32_t> alive_;

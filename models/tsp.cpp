@@ -361,7 +361,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   for (std::size_t i = 0; i < pixels.size(); ++i) {
     const ShadePixel& px = pixels[i];
     const std::size_t pixel = static_cast<std::size_t>(px.y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(px.x);
-    std::uint32_t write_mask = px.mask;
+    std::uint32_t write_mask = px.mask & px.write;
 
     // The surface this fragment shades.
     SurfacePoint s;

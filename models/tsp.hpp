@@ -46,11 +46,14 @@ struct TspStats {
   TBDR_STATS(TBDR_TSP_STATS)
 };
 
-/// One pixel of a shading batch: absolute coordinates and the samples to write.
+/// One pixel of a shading batch: absolute coordinates, the samples shaded and, of those, the
+/// samples whose colour is written (all of them, unless late depth/stencil tests after the shader
+/// discard some: isp.early_z=0).
 struct ShadePixel {
   std::int32_t x = 0;
   std::int32_t y = 0;
   std::uint32_t mask = 0;
+  std::uint32_t write = ~0u;
 };
 
 /// The PLS variable a light accumulation is kept in (deferred_tile_store's layout): what is added

@@ -89,6 +89,48 @@ TEST(HsrAnchor, TbrEarlyZShadesLessWhenNearGeometryComesFirstTbdrDoesNotCare) {
   EXPECT_LT(tbdr[0], tbr[0]);
 }
 
+TEST(HsrAnchor, LateZShadesEveryRasterisedFragmentAndWritesWhatEarlyZWrites) {
+  // isp.early_z=0 (tbr and imr): the depth and stencil tests come after the fragment shader, as
+  // on a GPU without early-Z: the figure Imagination sets against HSR (Shadowgun: 4.7 coloured
+  // per pixel without early-Z or HSR, 1.2 with HSR). Every rasterised sample is shaded (one
+  // sample per pixel here, so invocations = rasterised samples exactly), the tests then decide
+  // the same colour writes as early-Z (same image, same shaded samples), and the frame, which is
+  // bound by fragment ALU work on plain_forward, grows with the ALU ops.
+  // Measured (atrium:2 street, 320x180): TBDR 1.00, TBR early-Z 2.18, late-Z 3.29 per pixel.
+  const Scene scene = load_scene("atrium:2");
+  const int w = 320, h = 180;
+  const Trace t = generate_trace("plain_forward", setup_for(scene, "atrium:2", "street", w, h));
+  const FrameResult tbdr = simulate_frame(t, "late.trace", scene, resolve_config({}, {"gpu.mode=tbdr"}).hw);
+  for (const std::string mode : {"tbr", "imr"}) {
+    const HwConfig early_hw = resolve_config({}, {"gpu.mode=" + mode}).hw;
+    const HwConfig late_hw = resolve_config({}, {"gpu.mode=" + mode, "isp.early_z=0"}).hw;
+    const FrameResult early = simulate_frame(t, "late.trace", scene, early_hw);
+    const FrameResult late = simulate_frame(t, "late.trace", scene, late_hw);
+    const double early_ms = run_timing(early_hw, early.work).frame_time_ps * 1e-9;
+    const double late_ms = run_timing(late_hw, late.work).frame_time_ps * 1e-9;
+    const auto& lt = late.totals.render;
+    const auto& et = early.totals.render;
+    EXPECT_EQ(lt.tsp.shader_invocations.value(), lt.isp.samples_rasterised.value()) << mode;
+    EXPECT_EQ(lt.isp.samples_rasterised.value(), et.isp.samples_rasterised.value()) << mode;
+    EXPECT_EQ(lt.tsp.shaded_samples.value(), et.tsp.shaded_samples.value()) << mode;
+    EXPECT_EQ(late.images.attachments.at("color").color, early.images.attachments.at("color").color) << mode;
+    // Late-Z shades more than early-Z, which shades more than TBDR: 3.29 > 2.18 > 1.00 per pixel.
+    const double late_px = static_cast<double>(lt.tsp.shader_invocations.value()) / (w * h);
+    const double early_px = static_cast<double>(et.tsp.shader_invocations.value()) / (w * h);
+    const double tbdr_px = static_cast<double>(tbdr.totals.render.tsp.shader_invocations.value()) / (w * h);
+    std::printf("[ late-z   ] %s shaded per pixel: late %.2f, early %.2f, TBDR %.2f; frame %.4f vs %.4f ms\n", mode.c_str(),
+                late_px, early_px, tbdr_px, late_ms, early_ms);
+    EXPECT_GT(late_px, 1.3 * early_px) << mode;
+    EXPECT_GT(late_px / tbdr_px, 3.0) << mode;  // beside Shadowgun's 4.7 / 1.2 = 3.9
+    // ALU-bound: the frame grows with the fragment ALU ops, by at least half their ratio.
+    const double alu_ratio = static_cast<double>(lt.tsp.fragment_alu_ops.value()) / et.tsp.fragment_alu_ops.value();
+    const double time_ratio = late_ms / early_ms;
+    EXPECT_GT(alu_ratio, 1.3) << mode;
+    EXPECT_GT(time_ratio, 1.0 + 0.5 * (alu_ratio - 1.0)) << mode;
+    EXPECT_LE(time_ratio, alu_ratio * 1.02) << mode;
+  }
+}
+
 TEST(HsrAnchor, ForwardPixelKillShadesLessAsItsWindowGrowsAndNeverChangesTheImage) {
   // gpu.mode=tbr with forward pixel kill (Arm Mali): fragments queued behind early-Z are killed
   // when a later opaque fragment covers them before they are shaded. A longer queue can only

@@ -239,17 +239,23 @@ void hsr(Validator& v, std::vector<AnchorRow>& rows) {
                                               "--lights", "16", "--resolution", "480x270"});
   const RunOutcome tbdr = v.run(t, {"gpu.mode=tbdr"});
   const RunOutcome tbr = v.run(t, {"gpu.mode=tbr"});
+  // An immediate-mode GPU without early-Z (isp.early_z=0): every rasterised fragment is shaded.
+  const RunOutcome imr_late = v.run(t, {"gpu.mode=imr", "isp.early_z=0"});
   const double px = 480.0 * 270.0;
   const double raster = stat(tbdr, "frame/isp", "samples_rasterised") / px;
+  const double shaded_imr = stat(imr_late, "frame/tsp", "shader_invocations") / px;
   const double shaded_tbdr = stat(tbdr, "frame/tsp", "shader_invocations") / px;
   const double shaded_tbr = stat(tbr, "frame/tsp", "shader_invocations") / px;
   rows.push_back({"Imagination, PowerVR Architecture Guide: fragments coloured per pixel without early-Z/HSR -> with "
                   "PowerVR HSR (Shadowgun frame)",
                   "4.7 -> 1.2 (3.9x)",
-                  fixed(raster, 2) + " -> " + fixed(shaded_tbdr, 2) + " (" + fixed(raster / shaded_tbdr, 2) + "x); TBR early-Z " +
-                      fixed(shaded_tbr, 2),
-                  "plain_forward, atrium:4 street view, 480x270: rasterised, TBDR-shaded and TBR-shaded samples per pixel",
-                  "shape", raster / shaded_tbdr >= 3.0 && shaded_tbdr <= 1.3 && shaded_tbr > shaded_tbdr});
+                  fixed(shaded_imr, 2) + " -> " + fixed(shaded_tbdr, 2) + " (" + fixed(shaded_imr / shaded_tbdr, 2) +
+                      "x); TBR early-Z " + fixed(shaded_tbr, 2),
+                  "plain_forward, atrium:4 street view, 480x270: shaded samples per pixel on an IMR without early-Z "
+                  "(isp.early_z=0), on TBDR and on TBR with early-Z in the trace's order",
+                  "shape",
+                  shaded_imr / shaded_tbdr >= 3.0 && shaded_tbdr <= 1.3 && shaded_tbr > shaded_tbdr &&
+                      shaded_imr > shaded_tbr && std::abs(shaded_imr - raster) < 1e-9});
 }
 
 void onchip_cliff(Validator& v, std::vector<AnchorRow>& rows) {
@@ -305,6 +311,99 @@ void rooflines(Validator& v, std::vector<AnchorRow>& rows, const HwConfig& hw) {
                     fixed(cycles, 0) + " cycles (" + fixed(100.0 * (cycles / bound - 1.0), 1) + " %)",
                     "plain_forward tex_fetches=64, atrium:1 480x270, texture.units=1", "exact",
                     cycles >= bound && cycles <= 1.05 * bound});
+  }
+}
+
+/// `layers` fullscreen triangles at one depth over a cleared rgba8 target with a depth test: the
+/// first is shaded (one ALU op), the others fail the depth test (Less) and are only rasterised.
+Trace fill_frame(const Trace& base, int layers) {
+  Trace t = base;
+  t.technique.clear();
+  t.options.clear();
+  t.lights.clear();
+  t.light_lines.clear();
+  t.buffers.clear();
+  ShaderDesc sh;
+  sh.name = "flat";
+  sh.alu_ops = 1;
+  sh.color_outputs = 1;
+  PipelineState pl;
+  pl.name = "flat";
+  pl.shader = "flat";
+  pl.cull = CullMode::None;
+  t.shaders = {sh};
+  t.pipelines = {pl};
+  PassDesc pass;
+  pass.name = "fill";
+  pass.attachments = {attachment("color", Format::Rgba8, AttachmentUsage::Color, StoreOp::Store),
+                      attachment("depth", Format::D24s8, AttachmentUsage::Depth, StoreOp::DontCare, true)};
+  for (int i = 0; i < layers; ++i) pass.draws.push_back(fullscreen("flat"));
+  t.commands = {pass};
+  return t;
+}
+
+/// `passes` passes that each clear and store one rgba8 target with one flat fullscreen triangle:
+/// the stores move 4 B per pixel and pass, everything else is small.
+Trace store_frame(const Trace& base, int passes) {
+  Trace t = fill_frame(base, 1);
+  t.pipelines[0].depth_test = false;
+  t.pipelines[0].depth_write = false;
+  PassDesc pass;
+  pass.attachments = {attachment("color", Format::Rgba8, AttachmentUsage::Color, StoreOp::Store)};
+  pass.draws = {fullscreen("flat")};
+  t.commands.clear();
+  for (int i = 0; i < passes; ++i) {
+    pass.name = "store_" + std::to_string(i);
+    t.commands.push_back(pass);
+  }
+  return t;
+}
+
+void fill_and_bandwidth_rooflines(Validator& v, std::vector<AnchorRow>& rows, const HwConfig& hw) {
+  const Trace base = read_trace(v.generate("roofline_base", {"--technique", "plain_forward", "--scene", "atrium:1",
+                                                             "--lights", "0", "--resolution", "480x270"}));
+  // Fill-bound: 64 layers of 480 x 270 samples through the ISP's depth test at
+  // isp.samples_per_clock x isp.raster_pipes samples per clock.
+  {
+    constexpr int kLayers = 64;
+    const std::string path = v.trace_path("fill_bound");
+    write_trace_file(fill_frame(base, kLayers), path);
+    const RunOutcome r = v.run(path);
+    const double rate = static_cast<double>(hw.isp.samples_per_clock * hw.isp.raster_pipes);
+    const double bound = stat(r, "frame/isp", "samples_rasterised") / rate;
+    const double cycles = stat(r, "frame/timing", "frame_cycles");
+    rows.push_back({"Roofline: a fill-bound frame", fixed(bound, 0) + " cycles (rasterised samples / (samples per clock x raster pipes))",
+                    fixed(cycles, 0) + " cycles (" + fixed(100.0 * (cycles / bound - 1.0), 1) + " %)",
+                    "64 fullscreen layers at one depth (63 hidden), 480x270", "exact",
+                    cycles >= bound && cycles <= 1.05 * bound});
+  }
+  // DRAM-bound: 32 passes each storing a 480 x 270 rgba8 image. Each tile's store (4 KB) fills
+  // one DRAM row, and the bus stops while a row is switched: the write queue
+  // (dram.write_queue_entries) holds the current tile's writes, so the next tile's bank is not
+  // prepared while they stream. Per channel, the stored bytes at the peak rate, plus per row
+  // opened (counted: dram row_misses) write recovery, precharge and activate (tWR + tRP + tRCD),
+  // plus per refresh tRFC.
+  {
+    constexpr int kPasses = 32;
+    const std::string path = v.trace_path("dram_bound");
+    write_trace_file(store_frame(base, kPasses), path);
+    const RunOutcome r = v.run(path);
+    const double bytes = stat(r, "mem/dram", "write_bytes") + stat(r, "mem/dram", "read_bytes");
+    const auto& d = hw.dram;
+    const double cycles_per_ns = hw.gpu.core_clock_mhz * 1e-3;
+    const double peak_bytes_per_cycle = d.bandwidth_gbps / cycles_per_ns;
+    const double opened = stat(r, "mem/dram", "row_misses"), refreshes = stat(r, "mem/dram", "refreshes");
+    const double bound = bytes / peak_bytes_per_cycle +
+                         (opened * (d.t_wr_ns + d.t_rp_ns + d.t_rcd_ns) + refreshes * d.t_rfc_ns) * cycles_per_ns /
+                             static_cast<double>(d.channels);
+    const double cycles = stat(r, "frame/timing", "frame_cycles");
+    rows.push_back({"Roofline: a DRAM-bound frame",
+                    fixed(bound, 0) + " cycles (DRAM bytes / dram.bandwidth_gbps + (rows opened x (tWR + tRP + tRCD) + "
+                    "refreshes x tRFC) / channels)",
+                    fixed(cycles, 0) + " cycles (" + fixed(100.0 * (cycles / bound - 1.0), 1) + " %)",
+                    "32 passes each storing a 480x270 rgba8 image: " + fixed(bytes / kMiB, 1) + " MiB, " + fixed(opened, 0) +
+                        " rows opened (one per tile store and after refreshes), " + fixed(refreshes, 0) + " refreshes",
+                    "exact", cycles >= bound && cycles <= 1.05 * bound});
   }
 }
 
@@ -369,6 +468,7 @@ int cmd_validate(const std::vector<std::string>& args, std::ostream& out, std::o
   hsr(v, rows);
   onchip_cliff(v, rows);
   rooflines(v, rows, config.hw);
+  fill_and_bandwidth_rooflines(v, rows, config.hw);
   olsson(v, rows);
   dram_energy(v, rows);
   const std::string md = markdown(rows, config.params.config_name);
