@@ -11,6 +11,7 @@
 #include <ostream>
 #include <sstream>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <boost/program_options.hpp>
@@ -359,6 +360,19 @@ Trace store_frame(const Trace& base, int passes) {
   return t;
 }
 
+/// An rgba8 image stored by a flat fullscreen pass, then read at every pixel by a second pass's
+/// fullscreen draw (`reads=`): the second pass's shading waits for those reads.
+Trace read_back_frame(const Trace& base) {
+  Trace t = store_frame(base, 1);
+  std::get<PassDesc>(t.commands[0]).name = "produce";  // writes `color`
+  PassDesc consume;
+  consume.name = "consume";
+  consume.attachments = {attachment("result", Format::Rgba8, AttachmentUsage::Color, StoreOp::Store)};
+  consume.draws = {fullscreen("flat", {"color"})};
+  t.commands.push_back(consume);
+  return t;
+}
+
 void fill_and_bandwidth_rooflines(Validator& v, std::vector<AnchorRow>& rows, const HwConfig& hw) {
   const Trace base = read_trace(v.generate("roofline_base", {"--technique", "plain_forward", "--scene", "atrium:1",
                                                              "--lights", "0", "--resolution", "480x270"}));
@@ -404,6 +418,29 @@ void fill_and_bandwidth_rooflines(Validator& v, std::vector<AnchorRow>& rows, co
                     "32 passes each storing a 480x270 rgba8 image: " + fixed(bytes / kMiB, 1) + " MiB, " + fixed(opened, 0) +
                         " rows opened (one per tile store and after refreshes), " + fixed(refreshes, 0) + " refreshes",
                     "exact", cycles >= bound && cycles <= 1.05 * bound});
+  }
+  // Latency-bound: one USC with one task slot (usc.count=1, usc.tasks_in_flight=1), so one line
+  // of the read-back image is in flight at a time (timing model: a tile's image reads keep one
+  // line per resident task in flight). By Little's law the reading pass takes its lines x their
+  // mean latency (measured: the texture client's issue-to-data time through the texture cache,
+  // SLC and DRAM), whatever the bandwidth.
+  {
+    const std::string path = v.trace_path("latency_bound");
+    write_trace_file(read_back_frame(base), path);
+    const RunOutcome r = v.run(path, {"usc.count=1", "usc.tasks_in_flight=1"});
+    const double lines = stat(r, "mem/client.texture", "completed");
+    const double latency_ns = stat(r, "mem/client.texture", "avg_latency_ns");
+    const double bound = lines * latency_ns * hw.gpu.core_clock_mhz * 1e-3;
+    // The reading pass's fragment work starts when it is binned and the producing pass is done
+    // (its start_cycle is its binning's, which overlaps the producer).
+    const double cycles = stat(r, "pass1.consume/timing", "end_cycle") -
+                          std::max(stat(r, "pass1.consume/timing", "binning_end_cycle"), stat(r, "pass0.produce/timing", "end_cycle"));
+    rows.push_back({"Roofline: a latency-bound pass (Little's law)",
+                    fixed(bound, 0) + " cycles (lines read / 1 in flight x mean latency " + fixed(latency_ns, 1) + " ns)",
+                    fixed(cycles, 0) + " cycles (" + fixed(100.0 * (cycles / bound - 1.0), 1) + " %)",
+                    "a fullscreen pass reading a stored 480x270 rgba8 image at every pixel, usc.count=1, "
+                    "usc.tasks_in_flight=1: " + fixed(lines, 0) + " lines",
+                    "exact", cycles >= 0.99 * bound && cycles <= 1.05 * bound});
   }
 }
 
