@@ -232,6 +232,11 @@ DIMENSIONS = [("config", "configurations", "--config NAME"), ("scene", "scenes",
               ("frame", "frame sizes", "--where \"width = W\""), ("lights", "light counts", "--lights N")]
 
 
+def int_list(values):
+    """'3,4,7': whole numbers (run ids, light counts) for an SQL `IN (...)`."""
+    return ",".join(str(int(i)) for i in values)
+
+
 def _sql_list(values):
     return ",".join("'" + str(v).replace("'", "''") + "'" for v in values)
 
@@ -248,7 +253,7 @@ def load_runs(db, args):
     if args.where:
         conds.append("(" + args.where + ")")
     if getattr(args, "lights", None):
-        conds.append("lights IN (%s)" % ",".join(str(int(n)) for n in args.lights))
+        conds.append("lights IN (%s)" % int_list(args.lights))
     if getattr(args, "technique", None):
         conds.append("technique IN (%s)" % _sql_list(args.technique))
     if getattr(args, "scene", None):
@@ -284,6 +289,41 @@ def load_runs(db, args):
     return runs
 
 
+def option(*names, **kwargs):
+    """One option a script adds to the common ones, for open_selection(): argparse's
+    add_argument(*names, **kwargs)."""
+    return names, kwargs
+
+
+def flag(name, help):
+    """An on/off option (store_true), for open_selection()."""
+    return option(name, action="store_true", help=help)
+
+
+def metric_option(default, examples):
+    """--metric: the v_metric figure a script draws, `examples` naming a few others."""
+    return option("--metric", default=default, help="a v_metric name (default %s; %s)" % (default, examples))
+
+
+def open_selection(doc, out, *options):
+    """Parses the command line (parser()'s options and the script's `options`), opens --db and
+    loads the selected runs: (args, db, runs)."""
+    ap = parser(doc, out)
+    for names, kwargs in options:
+        ap.add_argument(*names, **kwargs)
+    args = ap.parse_args()
+    db = connect(args.db)
+    return args, db, load_runs(db, args)
+
+
+def first_per_series(runs, descending=False):
+    """The first run of each series (a run's timeline or tile map is not an average), in the
+    techniques' order (descending: the reverse, for a chart drawn bottom-up), then by series."""
+    first = runs.sort_values("run_id").drop_duplicates("series")
+    first = first.assign(order=[ordered(first.technique, TECHNIQUES).index(t) for t in first.technique])
+    return first.sort_values(["order", "series"], ascending=not descending).reset_index(drop=True)
+
+
 def _config_labels(db, runs, label):
     """Each run's configuration label: the views' config_label when the database has it; else the
     config name followed by the parameters whose values differ between the selected configurations."""
@@ -291,7 +331,7 @@ def _config_labels(db, runs, label):
         return runs.config_label
     one = runs.drop_duplicates("config_hash")
     p = query(db, "SELECT run_id, key, value FROM run_params WHERE run_id IN (%s)"
-              % ",".join(str(i) for i in one.run_id))
+              % int_list(one.run_id))
     wide = p.pivot(index="run_id", columns="key", values="value")
     differ = [k for k in wide.columns if wide[k].nunique(dropna=False) > 1]
     by_hash = {}
@@ -306,7 +346,7 @@ def _variants(db, runs):
     count: the technique options that differ (technique.<option> parameters, when the database
     stores them), else the trace file's name; '' when the runs share their trace."""
     opts = query(db, "SELECT run_id, key, value FROM v_param WHERE key GLOB 'technique.*' AND run_id IN (%s)"
-                 % ",".join(str(i) for i in runs.run_id))
+                 % int_list(runs.run_id))
     variant = pd.Series([""] * len(runs), index=runs.index)
     if not opts.empty:
         wide = opts.pivot(index="run_id", columns="key", values="value")
@@ -407,7 +447,7 @@ def repetition_note(runs):
 def metric_values(db, runs, metric, where=None):
     """The figure `metric` (a v_metric name) of the runs: DataFrame run_id, value, unit; PlotError
     naming the metric (with close names) when no selected run has it."""
-    ids = ",".join(str(i) for i in runs.run_id)
+    ids = int_list(runs.run_id)
     d = query(db, "SELECT run_id, value, unit FROM v_metric WHERE metric = ? AND run_id IN (%s)" % ids,
               params=(metric,)).dropna(subset=["value"])
     if d.empty:
@@ -504,6 +544,20 @@ def stacked_bars(ax, table, palette, totals=True):
     return bottom
 
 
+#: Bar panels per row of a figure of bar panels (two keep each bar's label readable).
+BAR_PANEL_COLUMNS = 2
+
+
+def bar_panels(panels, runs, panel_height, legend_width=0.0):
+    """A figure of one bar panel per entry of `panels`, BAR_PANEL_COLUMNS a row, each wide enough
+    for one bar per series of `runs` (0.55 in a bar, 3 in of axes), with `legend_width` inches free
+    at the right: (fig, axes as a 2-D array)."""
+    cols = min(len(panels), BAR_PANEL_COLUMNS)
+    rows = (len(panels) + cols - 1) // cols
+    width = max(6.0, 0.55 * runs.series.nunique() + 3)
+    return plt.subplots(rows, cols, figsize=(width * cols + legend_width, panel_height * rows), squeeze=False)
+
+
 def side_legend(fig, ax, title, legend_width):
     """The legend of `ax`'s labelled artists at the figure's right, outside the panels, which
     tight_layout keeps `legend_width` inches free for."""
@@ -517,7 +571,7 @@ def hardware_params(db, runs):
     a column per key (v_param without the trace.*, config.* and technique.* pseudo-keys)."""
     p = query(db, "SELECT run_id, key, value, value_num FROM v_param WHERE run_id IN (%s) AND key NOT GLOB "
                   "'trace.*' AND key NOT GLOB 'config.*' AND key NOT GLOB 'technique.*'"
-              % ",".join(str(i) for i in runs.run_id))
+              % int_list(runs.run_id))
     return (p.pivot(index="run_id", columns="key", values="value").reindex(runs.run_id),
             p.pivot(index="run_id", columns="key", values="value_num").reindex(runs.run_id))
 

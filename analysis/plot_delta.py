@@ -24,7 +24,8 @@ def main():
     ap = pc.parser(__doc__, "delta.png")
     ap.add_argument("--baseline", required=True, metavar="KEY=VALUE",
                     help="the baseline: a parameter key, technique.<option>, config=NAME or technique=NAME")
-    ap.add_argument("--metric", default="frame_time_ms", help="a v_metric name (default frame_time_ms)")
+    names, kwargs = pc.metric_option("frame_time_ms", "dram_total_mb, energy_total_mj, ...")
+    ap.add_argument(*names, **kwargs)
     ap.add_argument("--ratio", action="store_true", help="bars as value / baseline instead of percent change")
     args = ap.parse_args()
     key, sep, base = args.baseline.partition("=")
@@ -35,7 +36,6 @@ def main():
     db = pc.connect(args.db)
     runs = pc.load_runs(db, args)
     wide, num = pc.hardware_params(db, runs)
-    wide, num = wide.loc[runs.run_id], num.loc[runs.run_id]
     runs = runs.set_index("run_id", drop=False)
 
     if key == "technique":
@@ -48,7 +48,7 @@ def main():
         group, facet = "series", ("lights",)
     elif key.startswith("technique."):
         opts = pc.query(db, "SELECT run_id, value FROM v_param WHERE key = ? AND run_id IN (%s)"
-                        % ",".join(str(i) for i in runs.run_id), params=(key,)).set_index("run_id").value
+                        % pc.int_list(runs.run_id), params=(key,)).set_index("run_id").value
         if opts.empty:
             pc.fail("--baseline %s: no selected run stores the technique option %s" % (args.baseline, key))
         runs = runs[runs.run_id.isin(opts.index)]

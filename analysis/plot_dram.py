@@ -18,12 +18,11 @@ plt = pc.plt
 LEGEND_WIDTH = 2.3
 
 
-def draw(args):
-    """The plot, for plot_dram.py and plot_techniques.py --metric dram_classes."""
-    db = pc.connect(args.db)
-    runs = pc.load_runs(db, args)
+def draw(args, db, runs):
+    """The plot of the selected `runs` of `db`, for plot_dram.py and plot_techniques.py --metric
+    dram_classes."""
     panels, fixed = pc.facets(runs, facet=("lights",))
-    ids = ",".join(str(i) for i in runs.run_id)
+    ids = pc.int_list(runs.run_id)
     d = pc.query(db, "SELECT run_id, class, total_mb, device_total_mb FROM v_dram_class WHERE run_id IN (%s)" % ids)
     if d.empty:
         pc.fail("--db %s: the selected runs recorded no DRAM traffic per class" % args.db)
@@ -54,8 +53,7 @@ def draw(args):
 
 
 def main():
-    ap = pc.parser(__doc__, "dram.png")
-    draw(ap.parse_args())
+    draw(*pc.open_selection(__doc__, "dram.png"))
 
 
 if __name__ == "__main__":

@@ -19,24 +19,17 @@ LEGEND_WIDTH = 2.4
 
 
 def main():
-    ap = pc.parser(__doc__, "energy.png")
-    ap.add_argument("--share", action="store_true",
-                    help="each bar as percentages of its total (bars stay in the order of their mJ)")
-    args = ap.parse_args()
-    db = pc.connect(args.db)
-    runs = pc.load_runs(db, args)
+    args, db, runs = pc.open_selection(__doc__, "energy.png", pc.flag(
+        "--share", "each bar as percentages of its total (bars stay in the order of their mJ)"))
     panels, fixed = pc.facets(runs, facet=("config", "lights"))
-    ids = ",".join(str(i) for i in runs.run_id)
+    ids = pc.int_list(runs.run_id)
     d = pc.query(db, "SELECT run_id, component, energy_mj FROM v_energy_component WHERE run_id IN (%s)" % ids)
     if d.empty:
         pc.fail("--db %s: the selected runs recorded no energy (runs written before the energy model)" % args.db)
     d = d.merge(runs, on="run_id")
     components = pc.ordered(d.component.unique(), pc.ENERGY_COMPONENTS)
     n = len(panels)
-    cols = min(n, 2)
-    rows = (n + cols - 1) // cols
-    width = max(6.0, 0.55 * runs.series.nunique() + 3)
-    fig, axes = plt.subplots(rows, cols, figsize=(width * cols + LEGEND_WIDTH, 4.8 * rows), squeeze=False)
+    fig, axes = pc.bar_panels(panels, runs, 4.8, LEGEND_WIDTH)
     for ax, (ptitle, pr) in zip(axes.flat, panels):
         p = d[d.run_id.isin(pr.run_id)]
         table = p.groupby(["series", "component"]).energy_mj.mean().unstack(fill_value=0.0)

@@ -26,17 +26,11 @@ ROW_HEIGHT = 0.62
 
 
 def main():
-    ap = pc.parser(__doc__, "passes.png")
-    ap.add_argument("--ms", action="store_true",
-                    help="timeline in ms on one axis (default: each frame as 100 %%, its time written beside it)")
-    args = ap.parse_args()
-    db = pc.connect(args.db)
-    runs = pc.load_runs(db, args)
+    args, db, runs = pc.open_selection(__doc__, "passes.png", pc.flag(
+        "--ms", "timeline in ms on one axis (default: each frame as 100 %%, its time written beside it)"))
     _, fixed = pc.facets(runs)  # one configuration, scene, frame and light count
-    first = runs.sort_values("run_id").drop_duplicates("series")
-    first = first.assign(order=[pc.ordered(first.technique, pc.TECHNIQUES).index(t) for t in first.technique])
-    first = first.sort_values(["order", "series"], ascending=False).reset_index(drop=True)
-    ids = ",".join(str(i) for i in first.run_id)
+    first = pc.first_per_series(runs, descending=True)
+    ids = pc.int_list(first.run_id)
     cmds = pc.query(db, "SELECT run_id, scope, name, value FROM stats WHERE run_id IN (%s) AND scope GLOB '*/timing' "
                         "AND scope <> 'frame/timing' AND name IN ('start_cycle', 'binning_end_cycle', 'end_cycle')" % ids)
     frame = pc.query(db, "SELECT run_id, cycles, frame_time_ms FROM v_run_summary WHERE run_id IN (%s)" % ids)

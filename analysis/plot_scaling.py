@@ -19,15 +19,10 @@ LOG_LIGHTS_RANGE = 4.0
 
 
 def main():
-    ap = pc.parser(__doc__, "scaling.png")
-    ap.add_argument("--metric", default="frame_time_ms",
-                    help="a v_metric name (default frame_time_ms; lights_per_pixel, dram_total_mb, "
-                         "energy_total_mj, tsp.light_evaluations, ...)")
-    ap.add_argument("--linear", action="store_true", help="linear axes (default: log-log when the range is wide)")
-    args = ap.parse_args()
-
-    db = pc.connect(args.db)
-    runs = pc.load_runs(db, args)
+    args, db, runs = pc.open_selection(
+        __doc__, "scaling.png",
+        pc.metric_option("frame_time_ms", "lights_per_pixel, dram_total_mb, energy_total_mj, tsp.light_evaluations, ..."),
+        pc.flag("--linear", "linear axes (default: log-log when the range is wide)"))
     panels, fixed = pc.facets(runs, shown=("lights",), facet=("config",), max_panels=6)
     vals = pc.metric_values(db, runs, args.metric)
     unit = vals.unit.iloc[0]

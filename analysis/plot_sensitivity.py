@@ -28,18 +28,13 @@ MAX_ROWS = 6
 
 
 def main():
-    ap = pc.parser(__doc__, "sensitivity.png")
-    ap.add_argument("--metric", default="frame_time_ms",
-                    help="a v_metric name (default frame_time_ms; dram_total_mb, energy_total_mj, dram_spill_mb, ...)")
-    ap.add_argument("--param", action="append",
-                    help="parameter key for the x axis; repeatable (default: %s)" % " and ".join(DEFAULT_PARAMS))
-    ap.add_argument("--linear", action="store_true", help="linear y axis (default: log when values span > 20x)")
-    args = ap.parse_args()
-
-    db = pc.connect(args.db)
-    runs = pc.load_runs(db, args)
+    args, db, runs = pc.open_selection(
+        __doc__, "sensitivity.png",
+        pc.metric_option("frame_time_ms", "dram_total_mb, energy_total_mj, dram_spill_mb, ..."),
+        pc.option("--param", action="append",
+                  help="parameter key for the x axis; repeatable (default: %s)" % " and ".join(DEFAULT_PARAMS)),
+        pc.flag("--linear", "linear y axis (default: log when values span > 20x)"))
     wide, num = pc.hardware_params(db, runs)
-    wide, num = wide.loc[runs.run_id], num.loc[runs.run_id]
     varying = [k for k in wide.columns if wide[k].nunique() > 1]
     if args.param:
         for k in args.param:

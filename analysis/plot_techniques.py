@@ -17,26 +17,20 @@ plt = pc.plt
 
 
 def main():
-    ap = pc.parser(__doc__, "techniques.png")
-    ap.add_argument("--metric", default="dram_classes",
-                    help="a v_metric name (frame_time_ms, cycles, dram_total_mb, energy_total_mj, overshading, ...) "
-                         "or dram_classes (default: DRAM MB stacked by class, plot_dram.py)")
-    ap.add_argument("--log", action="store_true", help="log y axis (default: linear; bars start at zero)")
-    args = ap.parse_args()
+    args, db, runs = pc.open_selection(
+        __doc__, "techniques.png",
+        pc.option("--metric", default="dram_classes",
+                  help="a v_metric name (frame_time_ms, cycles, dram_total_mb, energy_total_mj, overshading, ...) "
+                       "or dram_classes (default: DRAM MB stacked by class, plot_dram.py)"),
+        pc.flag("--log", "log y axis (default: linear; bars start at zero)"))
     if args.metric == "dram_classes":
         import plot_dram
-        return plot_dram.draw(args)
-
-    db = pc.connect(args.db)
-    runs = pc.load_runs(db, args)
+        return plot_dram.draw(args, db, runs)
     panels, fixed = pc.facets(runs, facet=("config", "lights"))
     vals = pc.metric_values(db, runs, args.metric)
     unit = vals.unit.iloc[0]
     n = len(panels)
-    cols = min(n, 2)
-    rows = (n + cols - 1) // cols
-    width = max(6.0, 0.55 * runs.series.nunique() + 3)
-    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, 5.0 * rows), squeeze=False)
+    fig, axes = pc.bar_panels(panels, runs, 5.0)
     for ax, (ptitle, pr) in zip(axes.flat, panels):
         d = vals.merge(pr, on="run_id")
         g = d.groupby(["technique", "series"]).value.agg(["mean", "min", "max"]).reset_index().sort_values("mean")

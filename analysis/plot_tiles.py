@@ -25,18 +25,14 @@ COLUMNS = 4
 
 
 def main():
-    ap = pc.parser(__doc__, "tiles.png")
-    ap.add_argument("--value", default="cycles", choices=sorted(VALUES), help="what each tile shows (default cycles)")
-    ap.add_argument("--pass", dest="pass_index", type=int, help="only this render pass (index; default: all summed)")
-    ap.add_argument("--log", action="store_true", help="log colour scale")
-    args = ap.parse_args()
-    db = pc.connect(args.db)
-    runs = pc.load_runs(db, args)
+    args, db, runs = pc.open_selection(
+        __doc__, "tiles.png",
+        pc.option("--value", default="cycles", choices=sorted(VALUES), help="what each tile shows (default cycles)"),
+        pc.option("--pass", dest="pass_index", type=int, help="only this render pass (index; default: all summed)"),
+        pc.flag("--log", "log colour scale"))
     _, fixed = pc.facets(runs)
-    first = runs.sort_values("run_id").drop_duplicates("series")
-    first = first.assign(order=[pc.ordered(first.technique, pc.TECHNIQUES).index(t) for t in first.technique])
-    first = first.sort_values(["order", "series"]).reset_index(drop=True)
-    ids = ",".join(str(i) for i in first.run_id)
+    first = pc.first_per_series(runs)
+    ids = pc.int_list(first.run_id)
     cond = "" if args.pass_index is None else " AND pass = %d" % args.pass_index
     t = pc.query(db, "SELECT run_id, tile_x, tile_y, sum(%s) AS v FROM tile_stats WHERE run_id IN (%s)%s "
                      "GROUP BY run_id, tile_x, tile_y" % (args.value, ids, cond))

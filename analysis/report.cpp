@@ -707,8 +707,7 @@ DerivedFigures read_derived_figures(const ResultsDb& db, std::int64_t run_id) {
   SqlStatement q(db.sql(),
                  "SELECT frame_time_ms, cycles, dram_total_mb, dram_device_total_mb, energy_total_mj, "
                  "shaded_fragments_per_pixel, overshading, lights_per_pixel, lights_per_fragment, config_label "
-                 "FROM v_run_summary WHERE run_id = ?");
-  q.bind(1, run_id);
+                 "FROM v_run_summary WHERE run_id = ?", run_id);
   if (!q.step()) throw InputError(db.path(), "no run " + std::to_string(run_id));
   auto get = [&](int c) -> std::optional<double> {
     if (q.is_null(c)) return std::nullopt;

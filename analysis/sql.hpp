@@ -67,6 +67,13 @@ class SqlStatement {
  public:
   /// Prepares `sql` on `db`; SqlError naming its first words when SQLite refuses it.
   SqlStatement(const SqlConnection& db, const std::string& sql);
+  /// Prepares `sql` and binds `params` to its parameters 1, 2, ... in order.
+  template <class... Params>
+    requires(sizeof...(Params) > 0)
+  SqlStatement(const SqlConnection& db, const std::string& sql, const Params&... params) : SqlStatement(db, sql) {
+    int i = 0;
+    (bind(++i, params), ...);
+  }
   ~SqlStatement();
   SqlStatement(const SqlStatement&) = delete;
   SqlStatement& operator=(const SqlStatement&) = delete;

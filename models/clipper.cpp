@@ -111,16 +111,6 @@ const char* to_string(FarPlaneMode m) {
   return "?";
 }
 
-ClipStats& ClipStats::operator+=(const ClipStats& o) {
-  in += o.in;
-  culled_frustum += o.culled_frustum;
-  culled_backface += o.culled_backface;
-  culled_zero_area += o.culled_zero_area;
-  clipped += o.clipped;
-  out += o.out;
-  return *this;
-}
-
 bool frustum_reject(const ClipTriangle& clip) {
   if (!finite(clip[0]) || !finite(clip[1]) || !finite(clip[2])) return true;
   return (outcode(glm::dvec4(clip[0])) & outcode(glm::dvec4(clip[1])) & outcode(glm::dvec4(clip[2]))) != 0;

@@ -74,7 +74,6 @@ struct ClipStats {
   std::uint64_t out = 0;
   std::uint64_t culled() const { return culled_frustum + culled_backface + culled_zero_area; }
   std::uint64_t accepted() const { return in - culled(); }
-  ClipStats& operator+=(const ClipStats& o);
   friend bool operator==(const ClipStats&, const ClipStats&) = default;
 };
 

@@ -11,6 +11,7 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <string_view>
 #include <vector>
 
 #include "analysis/results_db.hpp"
@@ -84,8 +85,7 @@ RunIdentity run_identity(const ResultsDb& db, std::int64_t run_id) {
   SqlStatement q(db.sql(),
                  "SELECT r.technique, r.scene, r.config_name, l.config_label, r.config_hash, r.trace_path, "
                  "r.trace_hash, r.tool_version, r.started_at, r.host, r.status FROM runs r "
-                 "JOIN v_config_label l ON l.run_id = r.id WHERE r.id = ?");
-  q.bind(1, run_id);
+                 "JOIN v_config_label l ON l.run_id = r.id WHERE r.id = ?", run_id);
   if (!q.step()) throw InputError(db.path(), "no run " + std::to_string(run_id) + " in the results database");
   RunIdentity id;
   const char* names[] = {"technique", "scene",        "config_name", "config_label", "config_hash", "trace_path",
@@ -110,8 +110,7 @@ std::vector<Figure> run_figures(const ResultsDb& db, std::int64_t run_id) {
   {
     SqlStatement q(db.sql(),
                    "SELECT s.scope, s.name, s.value, s.unit, coalesce(d.description, '') FROM stats s "
-                   "LEFT JOIN stat_defs d ON d.name = s.name WHERE s.run_id = ? ORDER BY s.rowid");
-    q.bind(1, run_id);
+                   "LEFT JOIN stat_defs d ON d.name = s.name WHERE s.run_id = ? ORDER BY s.rowid", run_id);
     while (q.step()) figures.push_back({q.text(0), q.text(1), q.real(2), q.text(3), q.text(4)});
   }
   {
@@ -119,8 +118,7 @@ std::vector<Figure> run_figures(const ResultsDb& db, std::int64_t run_id) {
     SqlStatement q(db.sql(),
                    "SELECT m.metric, m.value, m.unit, coalesce(d.description, '') FROM v_metric m "
                    "LEFT JOIN v_metric_def d ON d.metric = m.metric "
-                   "WHERE m.run_id = ? AND m.metric NOT GLOB '*.*' AND m.value IS NOT NULL");
-    q.bind(1, run_id);
+                   "WHERE m.run_id = ? AND m.metric NOT GLOB '*.*' AND m.value IS NOT NULL", run_id);
     while (q.step()) {
       std::string description = q.text(3);
       const std::string metric = q.text(0);
@@ -140,8 +138,7 @@ std::vector<Figure> run_figures(const ResultsDb& db, std::int64_t run_id) {
 /// The run's parameters (hardware, technique options, trace identity): key -> value, origin.
 std::vector<std::array<std::string, 3>> run_parameters(const ResultsDb& db, std::int64_t run_id) {
   std::vector<std::array<std::string, 3>> params;
-  SqlStatement q(db.sql(), "SELECT key, value, origin FROM run_params WHERE run_id = ? ORDER BY rowid");
-  q.bind(1, run_id);
+  SqlStatement q(db.sql(), "SELECT key, value, origin FROM run_params WHERE run_id = ? ORDER BY rowid", run_id);
   while (q.step()) params.push_back({q.text(0), q.text(1), q.text(2)});
   return params;
 }
@@ -210,6 +207,49 @@ std::string stats_json(const RunIdentity& id, const std::vector<Figure>& figures
   return o.str();
 }
 
+/// One pass or dispatch of a run on the timeline: its name and its first, binning-end and last cycle.
+struct CommandSpan {
+  std::string name;
+  double start = 0, binning_end = 0, end = 0;
+};
+
+/// The run's passes and dispatches (the stats scopes "<command>/timing"), in the order it stored them.
+std::vector<CommandSpan> command_spans(const ResultsDb& db, std::int64_t run_id) {
+  constexpr std::string_view kTimingSuffix = "/timing";
+  std::vector<CommandSpan> commands;
+  std::map<std::string, std::size_t> index;
+  SqlStatement q(db.sql(),
+                 "SELECT scope, name, value FROM stats WHERE run_id = ? AND scope GLOB '*/timing' "
+                 "AND scope <> 'frame/timing' ORDER BY rowid", run_id);
+  while (q.step()) {
+    const std::string scope = q.text(0);
+    const std::string command = scope.substr(0, scope.size() - kTimingSuffix.size());
+    auto [it, fresh] = index.try_emplace(command, commands.size());
+    if (fresh) commands.push_back({command});
+    CommandSpan& c = commands[it->second];
+    const std::string name = q.text(1);
+    if (name == "start_cycle") c.start = q.real(2);
+    if (name == "binning_end_cycle") c.binning_end = q.real(2);
+    if (name == "end_cycle") c.end = q.real(2);
+  }
+  return commands;
+}
+
+/// One timed unit's busy, stalled and idle cycles over the frame (v_unit).
+struct UnitCycles {
+  std::string name;
+  double busy = 0, stalled = 0, idle = 0;
+};
+
+std::vector<UnitCycles> unit_cycles(const ResultsDb& db, std::int64_t run_id) {
+  std::vector<UnitCycles> units;
+  SqlStatement q(db.sql(),
+                 "SELECT unit, coalesce(busy_cycles, 0), coalesce(stalled_cycles, 0), coalesce(idle_cycles, 0) "
+                 "FROM v_unit WHERE run_id = ? ORDER BY unit", run_id);
+  while (q.step()) units.push_back({q.text(0), q.real(1), q.real(2), q.real(3)});
+  return units;
+}
+
 }  // namespace
 
 void check_output_file(const std::string& option, const std::string& path) {
@@ -237,8 +277,7 @@ void write_timeline_file(const ResultsDb& db, std::int64_t run_id, const std::st
   const RunIdentity id = run_identity(db, run_id);
   double frame_cycles = 0, frame_ms = 0;
   {
-    SqlStatement q(db.sql(), "SELECT cycles, frame_time_ms FROM v_run_summary WHERE run_id = ?");
-    q.bind(1, run_id);
+    SqlStatement q(db.sql(), "SELECT cycles, frame_time_ms FROM v_run_summary WHERE run_id = ?", run_id);
     if (!q.step() || q.is_null(0) || q.is_null(1) || q.real(0) <= 0) {
       throw InputError(db.path(), "run " + std::to_string(run_id) + " has no timing figures for a timeline");
     }
@@ -247,42 +286,8 @@ void write_timeline_file(const ResultsDb& db, std::int64_t run_id, const std::st
   }
   // Simulated microseconds per core clock cycle, from the frame's own figures.
   const double us_per_cycle = frame_ms * 1e3 / frame_cycles;
-  struct Command {
-    std::string name;
-    double start = 0, binning_end = 0, end = 0;
-  };
-  std::vector<Command> commands;
-  {
-    // Per pass or dispatch (scope "<command>/timing"), in the order the run stored them.
-    SqlStatement q(db.sql(),
-                   "SELECT scope, name, value FROM stats WHERE run_id = ? AND scope GLOB '*/timing' "
-                   "AND scope <> 'frame/timing' ORDER BY rowid");
-    q.bind(1, run_id);
-    std::map<std::string, std::size_t> index;
-    while (q.step()) {
-      const std::string scope = q.text(0);
-      const std::string command = scope.substr(0, scope.size() - 7);
-      auto [it, fresh] = index.try_emplace(command, commands.size());
-      if (fresh) commands.push_back({command});
-      Command& c = commands[it->second];
-      const std::string name = q.text(1);
-      if (name == "start_cycle") c.start = q.real(2);
-      if (name == "binning_end_cycle") c.binning_end = q.real(2);
-      if (name == "end_cycle") c.end = q.real(2);
-    }
-  }
-  struct Unit {
-    std::string name;
-    double busy = 0, stalled = 0, idle = 0;
-  };
-  std::vector<Unit> units;
-  {
-    SqlStatement q(db.sql(),
-                   "SELECT unit, coalesce(busy_cycles, 0), coalesce(stalled_cycles, 0), coalesce(idle_cycles, 0) "
-                   "FROM v_unit WHERE run_id = ? ORDER BY unit");
-    q.bind(1, run_id);
-    while (q.step()) units.push_back({q.text(0), q.real(1), q.real(2), q.real(3)});
-  }
+  const std::vector<CommandSpan> commands = command_spans(db, run_id);
+  const std::vector<UnitCycles> units = unit_cycles(db, run_id);
 
   std::ostringstream o;
   std::vector<std::string> events;
@@ -310,7 +315,7 @@ void write_timeline_file(const ResultsDb& db, std::int64_t run_id, const std::st
   sort_index(1, 1, 0);
   slice(1, 1, "frame", 0, frame_cycles, cycles_args(0, frame_cycles));
   for (std::size_t i = 0; i < commands.size(); ++i) {
-    const Command& c = commands[i];
+    const CommandSpan& c = commands[i];
     const int tid = static_cast<int>(i) + 2;
     meta("thread_name", 1, tid, c.name);
     sort_index(1, tid, tid);
@@ -328,7 +333,7 @@ void write_timeline_file(const ResultsDb& db, std::int64_t run_id, const std::st
   // them, and a counter track shows the unit's busy and stalled percentages.
   meta("process_name", 2, 0, "units: busy / stalled / idle over the frame (totals, not intervals)");
   for (std::size_t i = 0; i < units.size(); ++i) {
-    const Unit& u = units[i];
+    const UnitCycles& u = units[i];
     const int tid = static_cast<int>(i) + 1;
     meta("thread_name", 2, tid, u.name);
     sort_index(2, tid, tid);
