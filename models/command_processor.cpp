@@ -9,6 +9,7 @@
 
 #include "models/compute_unit.hpp"
 #include "models/geometry_unit.hpp"
+#include "models/hardware_checks.hpp"
 #include "models/light_lists.hpp"
 #include "models/isp.hpp"
 #include "models/texture_unit.hpp"
@@ -299,6 +300,7 @@ class FrameSimulator {
       : trace_(trace), path_(path), scene_(scene), hw_(hw), options_(options) {}
 
   FrameResult run() {
+    check_trace_on_hardware(trace_, hw_, path_);  // what this GPU cannot run is refused before any command runs
     const auto& f = trace_.frame;
     viewport_ = Viewport{f.width, f.height, static_cast<int>(hw_.geometry.subpixel_bits)};
     try {
@@ -547,14 +549,6 @@ class FrameSimulator {
     ctx.images = &result_.images;
     ctx.defer_shading = hw_.gpu.mode == GpuMode::Tbdr;
     ctx.framebuffer_in_dram = hw_.gpu.mode == GpuMode::Imr;
-    check_pls_layout(hw_.pls, pass, path_);  // before any work, naming the trace file
-    if (hw_.gpu.mode == GpuMode::Imr && !pass.pls.empty()) {
-      // EXT_shader_pixel_local_storage keeps per-pixel data in tile memory for the life of a
-      // pass: an immediate-mode GPU has none to offer, so the extension is not there.
-      throw InputError(path_, pass.line, "pass '" + pass.name + "' declares pixel local storage, which an immediate-mode GPU "
-                                         "(gpu.mode=imr) does not have: run it with gpu.mode=tbdr or tbr, or use a technique "
-                                         "without PLS");
-    }
     if (rop_) {
       ctx.rop = rop_.get();
       rop_->bind_pass(pass, ps->rop);

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages tbdrsim needs to build, test and plot.
+# Installs the Debian 12 packages tbdrsim needs to build, test (with fuzzers and sanitizers) and plot.
 # Idempotent: when every package is already installed it does nothing (no apt-get update).
 set -euo pipefail
 packages=(
@@ -7,6 +7,7 @@ packages=(
   libboost-program-options-dev libglm-dev libtinygltf-dev libsqlite3-dev
   libgtest-dev libstb-dev zlib1g-dev nlohmann-json3-dev sqlite3
   python3 python3-pandas python3-matplotlib
+  clang-14 libclang-rt-14-dev  # scripts/fuzz.sh and scripts/sanitize.sh (CI runs both): clang, libFuzzer, ASan, UBSan
 )
 missing=()
 for p in "${packages[@]}"; do
