@@ -126,11 +126,11 @@ TEST(InputValidation, PathsLongerThanTheFileSystemAllowsExitTwoNamingTheLimit) {
   EXPECT_NE(c.err.find("_PC_PATH_MAX"), std::string::npos) << c.err;
 }
 
-TEST(InputValidation, AssimpBrokenGltfCorpusExitsTwoFromSceneInfo) {
+TEST(InputValidation, AssimpBrokenGltfCorpusExitsTwoFromSceneInfoNamingTheField) {
   if (!fs::is_directory(kAssimpGltf2 / "wrongTypes")) GTEST_SKIP() << "assimp-testmodels not installed (apt install assimp-testmodels)";
   for (const auto& [file, field] : kAssimpBrokenGltf) {
     const std::string p = (kAssimpGltf2 / file).string();
-    const auto r = run_cli({"scene-info", p});
+    const auto r = run_cli({"scene", "info", p});
     EXPECT_EQ(r.code, 2) << p << ": " << r.err;
     EXPECT_NE(r.err.find(field), std::string::npos) << "'" << field << "' not in " << r.err;
   }
