@@ -135,12 +135,9 @@ Attachment attachment(const std::string& name, Format f, AttachmentUsage usage, 
   return a;
 }
 
-/// Bjørge's two 1080p deferred frames (GPU Pro 5, "Bandwidth efficient graphics with ARM Mali
-/// GPUs"): framebuffer traffic only, 32-bit colour targets and D24S8. `pls`: the G-buffer, light
-/// accumulation and resolve in one pass whose G-buffer lives in pixel local storage. The fill draws
-/// the scene; the stores move whole surfaces and the fullscreen passes read every pixel, so the
-/// bytes do not depend on what the scene covers.
-Trace bjorge_frame(const Trace& base, bool pls) {
+/// `base`'s scene, frame and camera with nothing else: no generator, lights, buffers or commands
+/// (the hand-written frames below add their own).
+Trace hand_written(const Trace& base) {
   Trace t = base;
   t.technique.clear();
   t.options.clear();
@@ -148,6 +145,16 @@ Trace bjorge_frame(const Trace& base, bool pls) {
   t.light_lines.clear();
   t.buffers.clear();
   t.commands.clear();
+  return t;
+}
+
+/// Bjørge's two 1080p deferred frames (GPU Pro 5, "Bandwidth efficient graphics with ARM Mali
+/// GPUs"): framebuffer traffic only, 32-bit colour targets and D24S8. `pls`: the G-buffer, light
+/// accumulation and resolve in one pass whose G-buffer lives in pixel local storage. The fill draws
+/// the scene; the stores move whole surfaces and the fullscreen passes read every pixel, so the
+/// bytes do not depend on what the scene covers.
+Trace bjorge_frame(const Trace& base, bool pls) {
+  Trace t = hand_written(base);
   auto shader = [](const std::string& name, std::uint32_t outputs, PlsAccess access) {
     ShaderDesc s;
     s.name = name;
@@ -284,6 +291,14 @@ void onchip_cliff(Validator& v, std::vector<AnchorRow>& rows) {
                   "shape", mean > 0 && last >= 3.0 * mean});
 }
 
+/// A roofline anchor: `cycles` simulated against the `bound` its arithmetic (`formula`) gives;
+/// it holds from `low` x bound (1: never faster than the bound) up to 5 % over.
+AnchorRow roofline(const std::string& name, double bound, const std::string& formula, double cycles, const std::string& setup,
+                   double low) {
+  return {name, formula, fixed(cycles, 0) + " cycles (" + fixed(100.0 * (cycles / bound - 1.0), 1) + " %)", setup, "exact",
+          cycles >= low * bound && cycles <= 1.05 * bound};
+}
+
 void rooflines(Validator& v, std::vector<AnchorRow>& rows, const HwConfig& hw) {
   // ALU-bound: 4000 ALU ops per fragment; the frame's ALU ops over the USCs' rate.
   {
@@ -293,9 +308,7 @@ void rooflines(Validator& v, std::vector<AnchorRow>& rows, const HwConfig& hw) {
     const double rate = static_cast<double>(hw.usc.count * hw.usc.lanes) * hw.usc.alu_ops_per_lane_per_clock;
     const double bound = (stat(r, "frame/tsp", "fragment_alu_ops") + stat(r, "frame/geometry", "vertex_alu_ops")) / rate;
     const double cycles = stat(r, "frame/timing", "frame_cycles");
-    rows.push_back({"Roofline: an ALU-bound frame", fixed(bound, 0) + " cycles (ALU ops / (usc.count x lanes x ops per lane))",
-                    fixed(cycles, 0) + " cycles (" + fixed(100.0 * (cycles / bound - 1.0), 1) + " %)",
-                    "plain_forward alu_ops=4000, atrium:1 480x270", "exact", cycles >= bound && cycles <= 1.05 * bound});
+    rows.push_back(roofline("Roofline: an ALU-bound frame", bound, fixed(bound, 0) + " cycles (ALU ops / (usc.count x lanes x ops per lane))", cycles, "plain_forward alu_ops=4000, atrium:1 480x270", 1.0));
   }
   // Texture-bound: 64 bilinear fetches per fragment; filtered texels over the texture units' rate.
   // One texture unit, so that the frame's texture lines use about a third of the DRAM's bandwidth
@@ -308,22 +321,14 @@ void rooflines(Validator& v, std::vector<AnchorRow>& rows, const HwConfig& hw) {
     const double rate = 1.0 * hw.texture.texels_per_clock;
     const double bound = stat(r, "frame/tsp", "texels_filtered") / rate;
     const double cycles = stat(r, "frame/timing", "frame_cycles");
-    rows.push_back({"Roofline: a texture-bound frame", fixed(bound, 0) + " cycles (filtered texels / (units x texels per clock))",
-                    fixed(cycles, 0) + " cycles (" + fixed(100.0 * (cycles / bound - 1.0), 1) + " %)",
-                    "plain_forward tex_fetches=64, atrium:1 480x270, texture.units=1", "exact",
-                    cycles >= bound && cycles <= 1.05 * bound});
+    rows.push_back(roofline("Roofline: a texture-bound frame", bound, fixed(bound, 0) + " cycles (filtered texels / (units x texels per clock))", cycles, "plain_forward tex_fetches=64, atrium:1 480x270, texture.units=1", 1.0));
   }
 }
 
 /// `layers` fullscreen triangles at one depth over a cleared rgba8 target with a depth test: the
 /// first is shaded (one ALU op), the others fail the depth test (Less) and are only rasterised.
 Trace fill_frame(const Trace& base, int layers) {
-  Trace t = base;
-  t.technique.clear();
-  t.options.clear();
-  t.lights.clear();
-  t.light_lines.clear();
-  t.buffers.clear();
+  Trace t = hand_written(base);
   ShaderDesc sh;
   sh.name = "flat";
   sh.alu_ops = 1;
@@ -386,10 +391,7 @@ void fill_and_bandwidth_rooflines(Validator& v, std::vector<AnchorRow>& rows, co
     const double rate = static_cast<double>(hw.isp.samples_per_clock * hw.isp.raster_pipes);
     const double bound = stat(r, "frame/isp", "samples_rasterised") / rate;
     const double cycles = stat(r, "frame/timing", "frame_cycles");
-    rows.push_back({"Roofline: a fill-bound frame", fixed(bound, 0) + " cycles (rasterised samples / (samples per clock x raster pipes))",
-                    fixed(cycles, 0) + " cycles (" + fixed(100.0 * (cycles / bound - 1.0), 1) + " %)",
-                    "64 fullscreen layers at one depth (63 hidden), 480x270", "exact",
-                    cycles >= bound && cycles <= 1.05 * bound});
+    rows.push_back(roofline("Roofline: a fill-bound frame", bound, fixed(bound, 0) + " cycles (rasterised samples / (samples per clock x raster pipes))", cycles, "64 fullscreen layers at one depth (63 hidden), 480x270", 1.0));
   }
   // DRAM-bound: 32 passes each storing a 480 x 270 rgba8 image. Each tile's store (4 KB) fills
   // one DRAM row, and the bus stops while a row is switched: the write queue
@@ -411,13 +413,9 @@ void fill_and_bandwidth_rooflines(Validator& v, std::vector<AnchorRow>& rows, co
                          (opened * (d.t_wr_ns + d.t_rp_ns + d.t_rcd_ns) + refreshes * d.t_rfc_ns) * cycles_per_ns /
                              static_cast<double>(d.channels);
     const double cycles = stat(r, "frame/timing", "frame_cycles");
-    rows.push_back({"Roofline: a DRAM-bound frame",
-                    fixed(bound, 0) + " cycles (DRAM bytes / dram.bandwidth_gbps + (rows opened x (tWR + tRP + tRCD) + "
-                    "refreshes x tRFC) / channels)",
-                    fixed(cycles, 0) + " cycles (" + fixed(100.0 * (cycles / bound - 1.0), 1) + " %)",
-                    "32 passes each storing a 480x270 rgba8 image: " + fixed(bytes / kMiB, 1) + " MiB, " + fixed(opened, 0) +
-                        " rows opened (one per tile store and after refreshes), " + fixed(refreshes, 0) + " refreshes",
-                    "exact", cycles >= bound && cycles <= 1.05 * bound});
+    rows.push_back(roofline("Roofline: a DRAM-bound frame", bound, fixed(bound, 0) + " cycles (DRAM bytes / dram.bandwidth_gbps + (rows opened x (tWR + tRP + tRCD) + "
+                    "refreshes x tRFC) / channels)", cycles, "32 passes each storing a 480x270 rgba8 image: " + fixed(bytes / kMiB, 1) + " MiB, " + fixed(opened, 0) +
+                        " rows opened (one per tile store and after refreshes), " + fixed(refreshes, 0) + " refreshes", 1.0));
   }
   // Latency-bound: one USC with one task slot (usc.count=1, usc.tasks_in_flight=1), so one line
   // of the read-back image is in flight at a time (timing model: a tile's image reads keep one
@@ -435,12 +433,8 @@ void fill_and_bandwidth_rooflines(Validator& v, std::vector<AnchorRow>& rows, co
     // (its start_cycle is its binning's, which overlaps the producer).
     const double cycles = stat(r, "pass1.consume/timing", "end_cycle") -
                           std::max(stat(r, "pass1.consume/timing", "binning_end_cycle"), stat(r, "pass0.produce/timing", "end_cycle"));
-    rows.push_back({"Roofline: a latency-bound pass (Little's law)",
-                    fixed(bound, 0) + " cycles (lines read / 1 in flight x mean latency " + fixed(latency_ns, 1) + " ns)",
-                    fixed(cycles, 0) + " cycles (" + fixed(100.0 * (cycles / bound - 1.0), 1) + " %)",
-                    "a fullscreen pass reading a stored 480x270 rgba8 image at every pixel, usc.count=1, "
-                    "usc.tasks_in_flight=1: " + fixed(lines, 0) + " lines",
-                    "exact", cycles >= 0.99 * bound && cycles <= 1.05 * bound});
+    rows.push_back(roofline("Roofline: a latency-bound pass (Little's law)", bound, fixed(bound, 0) + " cycles (lines read / 1 in flight x mean latency " + fixed(latency_ns, 1) + " ns)", cycles, "a fullscreen pass reading a stored 480x270 rgba8 image at every pixel, usc.count=1, "
+                    "usc.tasks_in_flight=1: " + fixed(lines, 0) + " lines", 0.99));
   }
 }
 
