@@ -65,6 +65,10 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
   timing_.t_faw_cycles = ns_to_cycles(p.t_faw_ns);
   timing_.t_wtr_cycles = ns_to_cycles(p.t_wtr_ns);
   timing_.t_rtw = Tick{std::llround(p.t_rtw_ns * 1000.0)};
+  if (p.bank_groups < 1 || p.banks % p.bank_groups != 0) bad("bank_groups must divide banks");
+  timing_.bank_groups = static_cast<std::uint32_t>(p.bank_groups);
+  timing_.t_ccd_l = Tick{std::llround(p.t_ccd_l_ns * 1000.0)};
+  timing_.t_ccd_s = Tick{std::llround(p.t_ccd_s_ns * 1000.0)};
   if (p.t_refi_ns > 0 && p.t_rfc_ns > 0) {
     if (p.t_rfc_ns >= p.t_refi_ns) bad("t_rfc_ns must be shorter than t_refi_ns");
     timing_.t_refi_cycles = ns_to_cycles(p.t_refi_ns);
@@ -87,6 +91,7 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
     ch.readq.reserve(read_cap_);
     ch.writeq.reserve(write_cap_);
     ch.banks.resize(banks_);
+    ch.group_burst_start.assign(timing_.bank_groups, Tick{INT64_MIN / 2});
     ch.act_history.fill(std::numeric_limits<std::int64_t>::min() / 2);
     // Channels refresh staggered over the interval (channel c first at (c + 1) / channels of it),
     // as controllers do to keep the refreshes of different channels apart.
@@ -331,7 +336,9 @@ std::int64_t Dram::next_column_cycle(const Channel& ch, const std::vector<Entry>
   for (const Entry& e : q) {
     if (e.arrival > now) break;
     const Bank& b = ch.banks[e.bank];
-    if (b.open_row == static_cast<std::int64_t>(e.row)) next = std::min(next, std::max(b.col_ready, bus_ready));
+    if (b.open_row == static_cast<std::int64_t>(e.row)) {
+      next = std::min(next, std::max({b.col_ready, bus_ready, ccd_ready_cycle(ch, e.bank)}));
+    }
   }
   return next == kNever ? kNever : std::max(next, n + 1);
 }
@@ -348,18 +355,33 @@ void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::in
   b.col_ready = n + 1;
   const Tick data_natural = clock_.tick_of(Cycles{n + timing_.t_cl_cycles});
   const bool r_to_w = ch.bus_dir == 0 && e.is_write;
-  const Tick start = std::max(data_natural, r_to_w ? ch.bus_free + timing_.t_rtw : ch.bus_free);
+  const Tick bus_start = std::max(data_natural, r_to_w ? ch.bus_free + timing_.t_rtw : ch.bus_free);
   if (r_to_w) ++stats_.read_to_write_turnarounds;
   if (ch.bus_dir == 1 && !e.is_write) ++stats_.write_to_read_turnarounds;
   ch.bus_dir = e.is_write ? 1 : 0;
-  const Tick duration = timing_.transfer(e.bytes / burst_bytes_);
+  const std::uint32_t bursts = e.bytes / burst_bytes_;
+  const Tick busy = timing_.transfer(bursts);
+  Tick start = bus_start, duration = busy;
+  if (timing_.t_ccd_l.ps() > 0 || timing_.t_ccd_s.ps() > 0) {
+    // Bank-group timing: the first burst waits for tCCD_L after its group's last burst and tCCD_S
+    // after the channel's; the entry's own bursts (one bank, so one group) follow each other
+    // max(burst, tCCD_L, tCCD_S) apart.
+    start = std::max(bus_start, ccd_ready(ch, e.bank));
+    if (start > bus_start) ++stats_.bursts_delayed_ccd;
+    const std::int64_t spacing =
+        std::max({timing_.transfer(1).ps(), timing_.t_ccd_l.ps(), timing_.t_ccd_s.ps()});
+    const Tick last_burst = start + Tick{spacing * static_cast<std::int64_t>(bursts - 1)};
+    duration = (last_burst - start) + timing_.transfer(1);
+    ch.group_burst_start[e.bank % timing_.bank_groups] = last_burst;
+    ch.last_burst_start = last_burst;
+  }
   const Tick end = start + duration;
   ch.bus_free = end;
   const std::int64_t end_c = cycle_ceil(end);
   b.pre_ready = std::max(b.pre_ready, e.is_write ? end_c + timing_.t_wr_cycles : end_c);
 
   account_request(ch, e.outcome, e.is_write, e.cls, e.bytes, e.lines);
-  ch.stats.busy_ps += static_cast<std::uint64_t>(duration.ps());
+  ch.stats.busy_ps += static_cast<std::uint64_t>(busy.ps());
   timed_bytes_ += e.bytes;
   const Tick done = end + timing_.controller;
   if (!e.is_write) {
@@ -429,7 +451,7 @@ void Dram::wakeup(std::uint32_t c) {
       const Bank& b = ch.banks[e.bank];
       if (b.open_row == static_cast<std::int64_t>(e.row)) {
         wanted |= std::uint64_t{1} << e.bank;
-        if (issue < 0 && std::max(b.col_ready, bus_ready) <= n) issue = static_cast<int>(i);
+        if (issue < 0 && std::max({b.col_ready, bus_ready, ccd_ready_cycle(ch, e.bank)}) <= n) issue = static_cast<int>(i);
       } else if (first_need_[e.bank] < 0) {
         first_need_[e.bank] = static_cast<int>(i);
       }

@@ -3,8 +3,8 @@
 // write queues per channel with an FR-FCFS scheduler (rows are opened ahead for the oldest
 // requests, column commands go to the oldest row hit the data bus can take; writes drained in
 // bursts between watermarks), JEDEC-style timing (tRCD, tRP, RL, tRAS, tWR, tRRD, tFAW, tWTR,
-// read-to-write turnaround, all-bank refresh every tREFI for tRFC, data-bus time from the channel
-// bandwidth, controller latency) and energy per bit and per activate (DRAMPower-style figures from
+// read-to-write turnaround, all-bank refresh every tREFI for tRFC, bank groups with tCCD_L and
+// tCCD_S, data-bus time from the channel bandwidth, controller latency) and energy per bit and per activate (DRAMPower-style figures from
 // [energy]) plus background power (active / precharge standby) and refresh energy from [dram].
 // See docs/memory-model.md for the equations.
 //
@@ -79,6 +79,9 @@ struct DramTiming {
   std::int64_t t_faw_cycles = 0;  ///< activate -> the fourth activate after it
   std::int64_t t_wtr_cycles = 0;  ///< end of write data -> read command
   Tick t_rtw{0};                  ///< end of read data -> start of write data
+  std::uint32_t bank_groups = 1;  ///< bank b is in group b mod bank_groups
+  Tick t_ccd_l{0};                ///< burst start to burst start, same bank group (0: none)
+  Tick t_ccd_s{0};                ///< burst start to burst start, any two groups (0: none)
   std::int64_t t_refi_cycles = 0; ///< refresh interval per channel (0: no refresh)
   std::int64_t t_rfc_cycles = 0;  ///< refresh cycle time
   Tick controller{0};             ///< controller + interconnect latency, each way
@@ -119,6 +122,7 @@ double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint
   X(Counter, read_to_write_turnarounds, "switches", Sum, "Data bus switches from read to write data (pay dram.t_rtw_ns)") \
   X(Counter, write_to_read_turnarounds, "switches", Sum, "Data bus switches from write to read data (pay dram.t_wtr_ns + RL)") \
   X(Counter, activates_delayed_rrd_faw, "commands", Sum, "Activates that tRRD or tFAW pushed later than their bank allowed") \
+  X(Counter, bursts_delayed_ccd, "requests", Sum, "Queue entries whose data tCCD_L (same bank group) or tCCD_S pushed past the data bus") \
   X(Accumulator, row_hit_rate, "ratio", Derived, "Row hits / requests") \
   X(Accumulator, avg_read_latency_ns, "ns", Derived, "Mean timed read latency per line, enqueue to data back") \
   X(Accumulator, achieved_bandwidth_gbps, "GB/s", Derived, "Timed bytes / (last completion - first enqueue)") \
@@ -298,6 +302,8 @@ class Dram final : public Unit {
     std::array<std::int64_t, 4> act_history{};
     std::uint64_t act_issued = 0;
     std::int8_t bus_dir = -1;          // direction of the last data on the bus: -1 none, 0 read, 1 write
+    Tick last_burst_start{INT64_MIN / 2};  // start of the channel's last data burst (tCCD_S)
+    std::vector<Tick> group_burst_start;  // per bank group, start of its last burst (tCCD_L)
     std::int64_t next_refresh = 0;     // cycle the next refresh falls due
     std::int64_t closed_since = 0;     // cycle since which every bank is precharged; -1: a row is open
     std::uint64_t precharged_ps = 0;   // precharge standby time before closed_since
@@ -337,6 +343,19 @@ class Dram final : public Unit {
     if (ch.bus_dir == 1 && !is_write) return cycle_ceil(ch.bus_free) + timing_.t_wtr_cycles;
     if (ch.bus_dir == 0 && is_write) return cycle_ceil(ch.bus_free + timing_.t_rtw) - timing_.t_cl_cycles;
     return (ch.bus_free > now ? clock_.cycles_at(ch.bus_free).count() : n) - timing_.t_cl_cycles;
+  }
+  // Earliest data start of a request to `bank` as tCCD_L (its group's last burst) and tCCD_S (the
+  // channel's last burst) allow; Tick{0} without bank-group timing.
+  Tick ccd_ready(const Channel& ch, std::uint32_t bank) const {
+    Tick t{0};
+    if (timing_.t_ccd_l.ps() > 0) t = std::max(t, ch.group_burst_start[bank % timing_.bank_groups] + timing_.t_ccd_l);
+    if (timing_.t_ccd_s.ps() > 0) t = std::max(t, ch.last_burst_start + timing_.t_ccd_s);
+    return t;
+  }
+  // The command cycle from which a request to `bank` meets ccd_ready() with its data (RL later).
+  std::int64_t ccd_ready_cycle(const Channel& ch, std::uint32_t bank) const {
+    const Tick t = ccd_ready(ch, bank);
+    return t.ps() <= 0 ? INT64_MIN / 2 : cycle_ceil(t) - timing_.t_cl_cycles;
   }
   void commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::int64_t n);
   void complete(std::uint32_t slot);

@@ -314,6 +314,20 @@ ParamRegistry<HwConfig> make_registry() {
       .source("JESD209-3 read to write: WL command no earlier than RL + RU(tDQSCKmax/tCK) + BL/2 + 1 - WL after the "
               "read, so the data bus idles RU(tDQSCKmax/tCK) + 1 cycles; " + lpddr3_memspec +
               ": DQSCK 2 cycles, 3 x 1.25 ns");
+  r.add(TBDR_PARAM(dram.bank_groups), 1).unit("groups").range(1, 16)
+      .doc("Bank groups per channel; bank b belongs to group b mod bank_groups (1: no bank groups)")
+      .source("LPDDR3 and LPDDR4 have none (JESD209-3, JESD209-4); LPDDR5 BG mode: 4 groups of 4 banks "
+              "(gem5 src/python/gem5/components/memory/dram_interfaces/lpddr5.py, LPDDR5_6400_1x16_BG_BL16)");
+  r.add(TBDR_PARAM(dram.t_ccd_l_ns), 0.0).unit("ns").range(0, 1000)
+      .doc("Column to column in the same bank group (tCCD_L): a burst starts at least this long after the previous "
+           "burst of its group started (0: only the data bus spaces them)")
+      .source("no bank groups on LPDDR3 (JESD209-3); LPDDR5 BG mode 4 CK at 800 MHz = 5 ns (gem5 lpddr5.py, "
+              "LPDDR5_6400_1x16_BG_BL16 tCCD_L)");
+  r.add(TBDR_PARAM(dram.t_ccd_s_ns), 0.0).unit("ns").range(0, 1000)
+      .doc("Column to column in different bank groups (tCCD_S): a burst starts at least this long after the previous "
+           "burst of the channel started (0: only the data bus spaces them)")
+      .source("LPDDR5 BG mode: BL/n_min = 2 CK at 800 MHz = 2.5 ns, the BL16 burst itself (gem5 lpddr5.py, "
+              "LPDDR5_6400_1x16_BG_BL16 tBURST_MIN)");
   r.add(TBDR_PARAM(dram.t_refi_ns), 3900.0).unit("ns").range(0, 1e6)
       .doc("All-bank refresh interval per channel (tREFI; 0 or t_rfc_ns = 0: no refresh)")
       .source(lpddr3_memspec + ": REFI 3120 cycles at 800 MHz");

@@ -199,6 +199,9 @@ struct DramParams {
   double t_faw_ns = 0;   ///< window holding at most four activates per channel
   double t_wtr_ns = 0;   ///< end of write data to a read command (write-to-read turnaround)
   double t_rtw_ns = 0;   ///< end of read data to the start of write data (read-to-write turnaround)
+  std::int64_t bank_groups = 1;  ///< bank groups per channel (bank b is in group b mod bank_groups)
+  double t_ccd_l_ns = 0;  ///< column to column, same bank group: burst start to burst start (0: the data bus only)
+  double t_ccd_s_ns = 0;  ///< column to column, different bank groups (0: the data bus only)
   double t_refi_ns = 0;  ///< all-bank refresh interval per channel (0: no refresh)
   double t_rfc_ns = 0;   ///< all-bank refresh cycle time: the channel's banks are unusable (0: no refresh)
   double active_standby_mw = 0;     ///< background power per channel while a row is open (IDD3N x VDD)
