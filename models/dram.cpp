@@ -36,6 +36,10 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
       active_standby_mw_(p.active_standby_mw),
       precharge_standby_mw_(p.precharge_standby_mw),
       refresh_nj_(p.refresh_nj),
+      active_powerdown_mw_(p.active_powerdown_mw),
+      precharge_powerdown_mw_(p.precharge_powerdown_mw),
+      powerdown_after_(Tick{std::llround(p.powerdown_after_ns * 1000.0)}),
+      t_xp_(Tick{std::llround(p.t_xp_ns * 1000.0)}),
       clock_(ClockDomain::from_mhz("dram", p.clock_mhz)) {
   const auto bad = [&](const std::string& why) { throw std::invalid_argument("dram '" + scope + "': " + why); };
   if (p.channels < 1 || p.channels > 1024) bad("channels must be in [1, 1024]");
@@ -233,6 +237,7 @@ bool Dram::enqueue(DramRequest&& req) {
   }
   const Tick now = eq_.now();
   note_occupancy(ch, now);
+  if (ch.idle) wake(ch, now);
   Entry e;
   e.report = req.report_when_scheduled;
   e.tag = req.tag;
@@ -286,6 +291,29 @@ void Dram::refresh_until(Channel& ch, std::int64_t n) {
     ++stats_.refreshes;
     ++ch.stats.refreshes;
     ch.next_refresh += timing_.t_refi_cycles;
+  }
+}
+
+void Dram::powerdown_split(const Channel& ch, Tick from, Tick to, std::uint64_t& active, std::uint64_t& precharged) const {
+  if (to <= from) return;
+  Tick closed = to;  // from here on every bank is precharged
+  if (ch.closed_since >= 0) closed = std::clamp(clock_.tick_of(Cycles{ch.closed_since}), from, to);
+  active += static_cast<std::uint64_t>((closed - from).ps());
+  precharged += static_cast<std::uint64_t>((to - closed).ps());
+}
+
+void Dram::wake(Channel& ch, Tick now) {
+  ch.idle = false;
+  if (powerdown_after_.ps() <= 0 || now <= ch.idle_from + powerdown_after_) return;
+  refresh_until(ch, clock_.cycles_at(now).count());  // the refreshes of the idle period, for the split
+  powerdown_split(ch, ch.idle_from + powerdown_after_, now, ch.pd_active_ps, ch.pd_precharged_ps);
+  ++stats_.powerdown_exits;
+  // Power-down exit: no command before tXP after the request reaches the controller.
+  const std::int64_t ready = cycle_ceil(now + timing_.controller + t_xp_);
+  for (Bank& b : ch.banks) {
+    b.act_ready = std::max(b.act_ready, ready);
+    b.col_ready = std::max(b.col_ready, ready);
+    b.pre_ready = std::max(b.pre_ready, ready);
   }
 }
 
@@ -381,6 +409,10 @@ void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::in
   b.pre_ready = std::max(b.pre_ready, e.is_write ? end_c + timing_.t_wr_cycles : end_c);
 
   account_request(ch, e.outcome, e.is_write, e.cls, e.bytes, e.lines);
+  if (ch.readq.empty() && ch.writeq.empty()) {  // nothing left: idle once this data is through
+    ch.idle = true;
+    ch.idle_from = end;
+  }
   ch.stats.busy_ps += static_cast<std::uint64_t>(busy.ps());
   timed_bytes_ += e.bytes;
   const Tick done = end + timing_.controller;
@@ -523,6 +555,11 @@ double Dram::background_energy_pj(Tick now) const {
     const auto elapsed = static_cast<std::uint64_t>(std::max<std::int64_t>(0, now.ps()));
     pre = std::min(pre, elapsed);
     pj += (active_standby_mw_ * static_cast<double>(elapsed - pre) + precharge_standby_mw_ * static_cast<double>(pre)) * 1e-3;
+    // Power-down replaces standby over its periods (the ended ones and an idle channel's current one).
+    std::uint64_t pd_active = ch.pd_active_ps, pd_pre = ch.pd_precharged_ps;
+    if (ch.idle && powerdown_after_.ps() > 0) powerdown_split(ch, ch.idle_from + powerdown_after_, now, pd_active, pd_pre);
+    pj -= ((active_standby_mw_ - active_powerdown_mw_) * static_cast<double>(pd_active) +
+           (precharge_standby_mw_ - precharge_powerdown_mw_) * static_cast<double>(pd_pre)) * 1e-3;
   }
   return pj;
 }
@@ -545,6 +582,9 @@ void Dram::update_derived_stats() {
       pre += static_cast<std::uint64_t>((now - clock_.tick_of(Cycles{ch.closed_since})).ps());
     }
     ch.stats.precharged_ps.set(pre);
+    std::uint64_t pd_active = ch.pd_active_ps, pd_pre = ch.pd_precharged_ps;
+    if (ch.idle && powerdown_after_.ps() > 0) powerdown_split(ch, ch.idle_from + powerdown_after_, now, pd_active, pd_pre);
+    ch.stats.powerdown_ps.set(pd_active + pd_pre);
     DramChannelStats& s = ch.stats;
     s.read_queue_occupancy_avg.set(elapsed_ps > 0 ? static_cast<double>(ch.read_occupancy_ps) / elapsed_ps : 0.0);
     s.write_queue_occupancy_avg.set(elapsed_ps > 0 ? static_cast<double>(ch.write_occupancy_ps) / elapsed_ps : 0.0);

@@ -122,6 +122,7 @@ double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint
   X(Counter, read_to_write_turnarounds, "switches", Sum, "Data bus switches from read to write data (pay dram.t_rtw_ns)") \
   X(Counter, write_to_read_turnarounds, "switches", Sum, "Data bus switches from write to read data (pay dram.t_wtr_ns + RL)") \
   X(Counter, activates_delayed_rrd_faw, "commands", Sum, "Activates that tRRD or tFAW pushed later than their bank allowed") \
+  X(Counter, powerdown_exits, "exits", Sum, "Requests that found their channel in power-down (dram.powerdown_after_ns) and waited tXP") \
   X(Counter, bursts_delayed_ccd, "requests", Sum, "Queue entries whose data tCCD_L (same bank group) or tCCD_S pushed past the data bus") \
   X(Accumulator, row_hit_rate, "ratio", Derived, "Row hits / requests") \
   X(Accumulator, avg_read_latency_ns, "ns", Derived, "Mean timed read latency per line, enqueue to data back") \
@@ -130,7 +131,7 @@ double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint
   X(Accumulator, energy_write_pj, "pJ", Sum, "Write core energy: write bits x dram_write_pj_per_bit") \
   X(Accumulator, energy_io_pj, "pJ", Sum, "I/O energy: (read + write bits) x dram_io_pj_per_bit") \
   X(Accumulator, energy_activate_pj, "pJ", Sum, "Activates x dram_activate_precharge_nj x 1000") \
-  X(Accumulator, energy_background_pj, "pJ", Sum, "Standby: per channel active_standby_mw x time with a row open + precharge_standby_mw x time all precharged") \
+  X(Accumulator, energy_background_pj, "pJ", Sum, "Standby: per channel active_standby_mw x time with a row open + precharge_standby_mw x time all precharged, power-down time at the power-down figures") \
   X(Accumulator, energy_refresh_pj, "pJ", Sum, "Refreshes x dram.refresh_nj x 1000") \
   X(Accumulator, energy_dynamic_pj, "pJ", Sum, "Read + write + I/O + activate/precharge (what the traffic classes share)") \
   X(Accumulator, energy_pj, "pJ", Sum, "Total DRAM energy (dynamic + background + refresh)") \
@@ -155,6 +156,7 @@ struct DramStats {
   X(Counter, write_drains, "drains", Sum, "Times the write queue reached the high watermark") \
   X(Counter, refreshes, "commands", Sum, "All-bank refreshes") \
   X(Counter, precharged_ps, "ps", Sum, "Time every bank was precharged (precharge standby), up to the last statistics update") \
+  X(Counter, powerdown_ps, "ps", Sum, "Time in power-down (active or precharge), up to the last statistics update") \
   X(Accumulator, read_queue_occupancy_avg, "requests", Derived, "Time-averaged read queue occupancy (from tick 0)") \
   X(Accumulator, write_queue_occupancy_avg, "requests", Derived, "Time-averaged write queue occupancy (from tick 0)") \
   X(Accumulator, utilization, "ratio", Derived, "busy_ps / elapsed ps (from tick 0)")
@@ -307,6 +309,10 @@ class Dram final : public Unit {
     std::int64_t next_refresh = 0;     // cycle the next refresh falls due
     std::int64_t closed_since = 0;     // cycle since which every bank is precharged; -1: a row is open
     std::uint64_t precharged_ps = 0;   // precharge standby time before closed_since
+    bool idle = true;                  // no request queued or in service since idle_from
+    Tick idle_from{0};
+    std::uint64_t pd_active_ps = 0;    // power-down time with a row open (ended periods)
+    std::uint64_t pd_precharged_ps = 0;  // power-down time with every bank precharged (ended periods)
     DramChannelStats stats;
   };
 
@@ -324,6 +330,12 @@ class Dram final : public Unit {
   // Performs every refresh of `ch` due at or before cycle n: it starts when due, or once every open
   // bank can be precharged (tRP after pre_ready), closes every bank and blocks activates for tRFC.
   void refresh_until(Channel& ch, std::int64_t n);
+  // Splits the power-down period [from, to) of an idle channel into time with a row open and time
+  // all precharged (refreshes close the rows: the split is at closed_since).
+  void powerdown_split(const Channel& ch, Tick from, Tick to, std::uint64_t& active, std::uint64_t& precharged) const;
+  // A request reaches an idle channel at `now`: books the power-down period it ends and delays
+  // the channel's first command to tXP after the request's arrival.
+  void wake(Channel& ch, Tick now);
   // Notes that a row opens at cycle a: ends the channel's precharge standby period.
   void note_row_open(Channel& ch, std::int64_t a);
   void kick(std::uint32_t c, Tick at);
@@ -368,6 +380,10 @@ class Dram final : public Unit {
   double active_standby_mw_ = 0;
   double precharge_standby_mw_ = 0;
   double refresh_nj_ = 0;
+  double active_powerdown_mw_ = 0;
+  double precharge_powerdown_mw_ = 0;
+  Tick powerdown_after_{0};  // 0: never
+  Tick t_xp_{0};
   ClockDomain clock_;
   DramTiming timing_;
   DramMapping mapping_;

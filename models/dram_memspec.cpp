@@ -24,6 +24,8 @@ MemspecEnergy memspec_energy(const DramMemspec& m) {
     e.refresh_nj += r.volts * (r.idd5 - r.idd3n) * t_rfc * 1e-3;
     e.active_standby_mw += r.volts * r.idd3n;
     e.precharge_standby_mw += r.volts * r.idd2n;
+    e.active_powerdown_mw += r.volts * r.idd3p;
+    e.precharge_powerdown_mw += r.volts * r.idd2p;
   }
   if (m.has_vddq) {
     const MemspecRail& q = m.vddq;
@@ -31,6 +33,8 @@ MemspecEnergy memspec_energy(const DramMemspec& m) {
     e.io_write_pj_per_bit = q.volts * (q.idd4w - q.idd3n) * burst_ns / burst_bits;
     e.active_standby_mw += q.volts * q.idd3n;
     e.precharge_standby_mw += q.volts * q.idd2n;
+    e.active_powerdown_mw += q.volts * q.idd3p;
+    e.precharge_powerdown_mw += q.volts * q.idd2p;
   }
   return e;
 }
@@ -67,8 +71,8 @@ const DramMemspec& memspec_lpddr3_1600() {
     s.id = "MICRON_4Gb_LPDDR3-1600_32bit_A";
     s.source = "DRAMPower memspec (github.com/tukl-msd/DRAMPower, memspecs/MICRON_4Gb_LPDDR3-1600_32bit_A.xml at "
                "1ddc48a, the last commit before DRAMPower 5 dropped the XML memspecs)";
-    // idd0/idd2n/idd3n/idd4r/idd4w/idd5 on vdd 1.8 V and idd02.. on vdd2 1.2 V.
-    s.core = {{1.8, 15.0, 2.0, 2.0, 5.0, 10.0, 40.0}, {1.2, 80.0, 38.0, 45.0, 260.0, 284.0, 160.0}};
+    // idd0/idd2n/idd3n/idd4r/idd4w/idd5/idd2p0/idd3p0 on vdd 1.8 V and idd02.. on vdd2 1.2 V.
+    s.core = {{1.8, 15.0, 2.0, 2.0, 5.0, 10.0, 40.0, 0.6, 1.2}, {1.2, 80.0, 38.0, 45.0, 260.0, 284.0, 160.0, 0.87, 8.15}};
     s.tck_ns = 1.25;  // clkMhz 800
     s.width_bits = 32;
     s.burst_length = 8;
@@ -87,10 +91,10 @@ const DramMemspec& memspec_lpddr4_3200() {
     s.source = "DRAMSys memspec (github.com/tukl-msd/DRAMSys, configs/memspec/MICRON_6Gb_LPDDR4-3200_32bit_A.json at "
                "2107966; the same die as DRAMPower's memspecs/MICRON_6Gb_LPDDR4-3200_32bit_A.json)";
     // idd01.. on vdd1 1.8 V, idd02.. on vdd2 1.1 V; VDDQ 1.1 V: idd0ql/idd2nQ/idd3nQ 0.75, idd4rq 150,
-    // idd4wq 55, idd5q 0.75 mA.
-    s.core = {{1.8, 3.5, 2.0, 2.25, 2.25, 2.25, 10.0}, {1.1, 45.0, 27.0, 30.0, 275.0, 210.0, 90.0}};
+    // idd4wq 55, idd5q/idd2pQ/idd3pQ 0.75 mA.
+    s.core = {{1.8, 3.5, 2.0, 2.25, 2.25, 2.25, 10.0, 1.2, 1.2}, {1.1, 45.0, 27.0, 30.0, 275.0, 210.0, 90.0, 3.0, 9.0}};
     s.has_vddq = true;
-    s.vddq = {1.1, 0.75, 0.75, 0.75, 150.0, 55.0, 0.75};
+    s.vddq = {1.1, 0.75, 0.75, 0.75, 150.0, 55.0, 0.75, 0.75, 0.75};
     s.tck_ns = 0.625;
     s.width_bits = 16;
     s.burst_length = 16;

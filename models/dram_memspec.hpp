@@ -19,6 +19,8 @@ struct MemspecRail {
   double idd4r = 0;  ///< burst read
   double idd4w = 0;  ///< burst write
   double idd5 = 0;   ///< all-bank refresh
+  double idd2p = 0;  ///< precharge power-down
+  double idd3p = 0;  ///< active power-down
 };
 
 /// One die's memspec: rails (the core rails and, where the memspec gives one, VDDQ) and timings.
@@ -51,6 +53,8 @@ struct MemspecEnergy {
   double refresh_nj = 0;
   double active_standby_mw = 0;     ///< core rails and VDDQ
   double precharge_standby_mw = 0;
+  double active_powerdown_mw = 0;     ///< VDD IDD3P, core rails and VDDQ
+  double precharge_powerdown_mw = 0;  ///< VDD IDD2P
 };
 
 /// The energies per event of `m`.

@@ -343,6 +343,19 @@ ParamRegistry<HwConfig> make_registry() {
   r.add(TBDR_PARAM(dram.refresh_nj), 26.8).unit("nJ").range(0, 100000)
       .doc("Energy of one all-bank refresh of a channel above active standby ((IDD5 - IDD3N) x VDD x tRFC per rail)")
       .source(lpddr3_memspec + ": ((40 - 2) mA x 1.8 V + (160 - 45) mA x 1.2 V) x 130 ns = 206.4 mW x 130 ns");
+  r.add(TBDR_PARAM(dram.powerdown_after_ns), 0.0).unit("ns").range(0, 1e9)
+      .doc("A channel with no request queued or in service for this long enters power-down (active power-down "
+           "with a row open, precharge power-down otherwise) until its next request arrives, which then waits "
+           "t_xp_ns; refreshes go on meanwhile (0: never: an idle channel stands by)")
+      .source("controller policy, no public figure for a GPU's controller: off by default");
+  r.add(TBDR_PARAM(dram.active_powerdown_mw), 11.9).unit("mW").range(0, 100000)
+      .doc("Background power of one channel in active power-down (IDD3P x VDD per rail)")
+      .source(lpddr3_memspec + ": idd3p0 1.2 mA x 1.8 V + idd3p02 8.15 mA x 1.2 V = 11.94 mW");
+  r.add(TBDR_PARAM(dram.precharge_powerdown_mw), 2.1).unit("mW").range(0, 100000)
+      .doc("Background power of one channel in precharge power-down (IDD2P x VDD per rail)")
+      .source(lpddr3_memspec + ": idd2p0 0.6 mA x 1.8 V + idd2p02 0.87 mA x 1.2 V = 2.12 mW");
+  r.add(TBDR_PARAM(dram.t_xp_ns), 7.5).unit("ns").range(0, 1000)
+      .doc("Power-down exit to the first command (tXP)").source(lpddr3_memspec + ": XP 6 cycles at 800 MHz");
   r.add(TBDR_PARAM(dram.controller_latency_ns), 30.0).unit("ns").range(0, 10000)
       .doc("Memory controller and interconnect latency each way").source("no public figure");
   r.add(TBDR_PARAM(dram.read_queue_entries), 32).unit("requests").range(1, 4096)

@@ -207,6 +207,10 @@ struct DramParams {
   double active_standby_mw = 0;     ///< background power per channel while a row is open (IDD3N x VDD)
   double precharge_standby_mw = 0;  ///< background power per channel with every bank precharged (IDD2N x VDD)
   double refresh_nj = 0;            ///< energy of one all-bank refresh of a channel above active standby
+  double powerdown_after_ns = 0;     ///< idle time after which a channel enters power-down (0: never)
+  double active_powerdown_mw = 0;    ///< background power per channel in power-down with a row open (IDD3P x VDD)
+  double precharge_powerdown_mw = 0; ///< background power per channel in power-down, all precharged (IDD2P x VDD)
+  double t_xp_ns = 0;                ///< power-down exit: the first command waits this long after the request arrives
   double controller_latency_ns = 0;
   std::int64_t read_queue_entries = 0;
   std::int64_t write_queue_entries = 0;

@@ -51,6 +51,11 @@ TEST(DramMemspec, Lpddr3DieIsDramPowersArithmetic) {
   EXPECT_NEAR(hw.dram.refresh_nj / e.refresh_nj, 1.0, 0.01);
   EXPECT_NEAR(hw.dram.active_standby_mw / e.active_standby_mw, 1.0, 0.01);
   EXPECT_NEAR(hw.dram.precharge_standby_mw / e.precharge_standby_mw, 1.0, 0.01);
+  // Power-down: active 1.8 x 1.2 + 1.2 x 8.15 = 11.94 mW, precharge 1.8 x 0.6 + 1.2 x 0.87 = 2.124 mW.
+  EXPECT_NEAR(e.active_powerdown_mw, 11.94, 1e-9);
+  EXPECT_NEAR(e.precharge_powerdown_mw, 2.124, 1e-9);
+  EXPECT_NEAR(hw.dram.active_powerdown_mw / e.active_powerdown_mw, 1.0, 0.01);
+  EXPECT_NEAR(hw.dram.precharge_powerdown_mw / e.precharge_powerdown_mw, 1.0, 0.02);
 }
 
 TEST(DramMemspec, Lpddr4DieAndTheLpddr4xPresetBuiltOfTwo) {
@@ -79,6 +84,12 @@ TEST(DramMemspec, Lpddr4DieAndTheLpddr4xPresetBuiltOfTwo) {
   EXPECT_NEAR(hw.energy.dram_activate_precharge_nj / (2 * e.activate_precharge_nj), 1.0, 0.01);
   EXPECT_NEAR(hw.dram.refresh_nj / (2 * e.refresh_nj), 1.0, 0.01);
   EXPECT_NEAR(hw.dram.active_standby_mw, 2 * (e.active_standby_mw - 0.75 * 0.5), 0.01);
+  // Power-down likewise: 2 x (1.8 x 1.2 + 1.1 x 9 + 0.6 x 0.75) = 25.02 mW active,
+  // 2 x (1.8 x 1.2 + 1.1 x 3 + 0.6 x 0.75) = 11.82 mW precharged (the memspec's at 1.1 V: 12.885 and 6.285 per die).
+  EXPECT_NEAR(e.active_powerdown_mw, 12.885, 1e-9);
+  EXPECT_NEAR(e.precharge_powerdown_mw, 6.285, 1e-9);
+  EXPECT_NEAR(hw.dram.active_powerdown_mw, 2 * (e.active_powerdown_mw - 0.75 * 0.5), 0.03);
+  EXPECT_NEAR(hw.dram.precharge_powerdown_mw, 2 * (e.precharge_powerdown_mw - 0.75 * 0.5), 0.03);
 }
 
 TEST(DramPresets, EnergyPerBitAndEfficiencyAgainstTheMemspecAndTheTimings) {
@@ -194,6 +205,58 @@ TEST(DramBankGroups, AGroupCountThatDoesNotDivideTheBanksIsRefused) {
   const HwConfig hw = bank_group_config({"dram.bank_groups=3"});
   EventQueue eq;
   EXPECT_THROW(Dram(hw.dram, hw.energy, eq), std::invalid_argument);
+}
+
+TEST(DramPowerDown, AnIdleChannelPowersDownAndItsNextRequestPaysTxp) {
+  // 1 GHz DRAM, 2 channels of 6.4 GB/s (a 64 B line: 10 ns of bus), controller 30 ns each way,
+  // tRCD 18, RL 15, refresh off; power-down after 100 ns idle, tXP 10 ns.
+  //   t = 0:      a read to channel 0 (empty bank): ACT 30, data 63..73, back at 103 ns.
+  //   t = 10 us:  a read of the same row: a row hit, 30 + 15 + 10 + 30 = 85 ns when awake; channel
+  //               0 powered down at 173 ns, so its first command waits tXP after arrival (10030 +
+  //               10): data 10055..10065, back at 10095 ns (95 ns).
+  //   t = 20 us:  statistics. Channel 0 in active power-down (its row stays open) 173..10000 and
+  //               10165..20000: 9827 + 9835 = 19662 ns; channel 1 never used: precharge power-down
+  //               100..20000 = 19900 ns.
+  //   background = ch0: 12 mW x 19662 + 57.6 mW x (19970 - 19662) active standby + 49.2 mW x 30
+  //                (before the activate) + ch1: 2 mW x 19900 + 49.2 mW x 100   [mW x ns = pJ]
+  const auto cfg = [](double after) {
+    return resolve_config({}, {"dram.clock_mhz=1000", "dram.channels=2", "dram.banks=8", "dram.row_bytes=4096",
+                               "dram.burst_bytes=32", "dram.bandwidth_gbps=12.8", "dram.t_rcd_ns=18", "dram.t_rp_ns=18",
+                               "dram.t_cl_ns=15", "dram.t_refi_ns=0", "dram.controller_latency_ns=30",
+                               "dram.active_standby_mw=57.6", "dram.precharge_standby_mw=49.2",
+                               "dram.active_powerdown_mw=12", "dram.precharge_powerdown_mw=2", "dram.t_xp_ns=10",
+                               "dram.powerdown_after_ns=" + std::to_string(after),
+                               "dram.address_mapping=row_bank_channel_column"})
+        .hw;
+  };
+  for (const double after : {100.0, 0.0}) {
+    const HwConfig hw = cfg(after);
+    EventQueue eq;
+    Dram d(hw.dram, hw.energy, eq);
+    std::int64_t first = -1, second = -1;
+    ASSERT_TRUE(d.enqueue(DramRequest{0, 64, false, DramClass::Other, [&] { first = eq.now().ps(); }}));
+    eq.schedule(Tick{10'000'000}, [&] {
+      ASSERT_TRUE(d.enqueue(DramRequest{64, 64, false, DramClass::Other, [&] { second = eq.now().ps() - 10'000'000; }}));
+    });
+    eq.schedule(Tick{20'000'000}, [] {});
+    eq.run();
+    d.update_derived_stats();
+    EXPECT_EQ(first, 103'000);
+    if (after > 0) {
+      EXPECT_EQ(second, 95'000) << "a row hit after power-down pays tXP";
+      EXPECT_EQ(d.stats().powerdown_exits.value(), 1u);
+      EXPECT_EQ(d.channel_stats(0).powerdown_ps.value(), 19'662'000u);
+      EXPECT_EQ(d.channel_stats(1).powerdown_ps.value(), 19'900'000u);
+      const double expected = 12.0 * 19662 + 57.6 * (19970 - 19662) + 49.2 * 30 + 2.0 * 19900 + 49.2 * 100;
+      EXPECT_NEAR(d.stats().energy_background_pj.value(), expected, 1e-6 * expected);
+    } else {
+      EXPECT_EQ(second, 85'000) << "awake: a plain row hit";
+      EXPECT_EQ(d.stats().powerdown_exits.value(), 0u);
+      // Standby all along: ch0 active 19970 ns, precharged 30; ch1 precharged 20000.
+      const double expected = 57.6 * 19970 + 49.2 * 30 + 49.2 * 20000;
+      EXPECT_NEAR(d.stats().energy_background_pj.value(), expected, 1e-6 * expected);
+    }
+  }
 }
 
 }  // namespace
