@@ -394,8 +394,10 @@ void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::in
     // Bank-group timing: the first burst waits for tCCD_L after its group's last burst and tCCD_S
     // after the channel's; the entry's own bursts (one bank, so one group) follow each other
     // max(burst, tCCD_L, tCCD_S) apart.
-    start = std::max(bus_start, ccd_ready(ch, e.bank));
-    if (start > bus_start) ++stats_.bursts_delayed_ccd;
+    const Tick ccd = ccd_ready(ch, e.bank);
+    start = std::max(bus_start, ccd);
+    // The scheduler waited for tCCD (so the data bus itself was free earlier).
+    if (ccd > (r_to_w ? ch.bus_free + timing_.t_rtw : ch.bus_free)) ++stats_.bursts_delayed_ccd;
     const std::int64_t spacing =
         std::max({timing_.transfer(1).ps(), timing_.t_ccd_l.ps(), timing_.t_ccd_s.ps()});
     const Tick last_burst = start + Tick{spacing * static_cast<std::int64_t>(bursts - 1)};

@@ -364,10 +364,11 @@ class Dram final : public Unit {
     if (timing_.t_ccd_s.ps() > 0) t = std::max(t, ch.last_burst_start + timing_.t_ccd_s);
     return t;
   }
-  // The command cycle from which a request to `bank` meets ccd_ready() with its data (RL later).
+  // The first command cycle whose data (RL later) would start no more than one cycle before
+  // ccd_ready() (as for the data bus: commit() starts the data exactly then).
   std::int64_t ccd_ready_cycle(const Channel& ch, std::uint32_t bank) const {
     const Tick t = ccd_ready(ch, bank);
-    return t.ps() <= 0 ? INT64_MIN / 2 : cycle_ceil(t) - timing_.t_cl_cycles;
+    return t.ps() <= 0 ? INT64_MIN / 2 : clock_.cycles_at(t).count() - timing_.t_cl_cycles;
   }
   void commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::int64_t n);
   void complete(std::uint32_t slot);
