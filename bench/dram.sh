@@ -8,15 +8,16 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${1:-build}
-out=$("$BUILD/tbdrsim_tests" --gtest_filter='DramMemspec.*:DramPresets.*:DramBankGroups.*' 2>&1) || { echo "$out"; exit 1; }
+out=$("$BUILD/tbdrsim_tests" --gtest_filter='DramMemspec.*:DramPresets.*:DramBankGroups.*:DramPowerDown.*' 2>&1) || { echo "$out"; exit 1; }
 echo "Each preset: 4 MiB read as a stream and 16384 random 64 B lines from 1 GiB, one in-order read"
 echo "stream per channel, refresh on. Timing arithmetic of the stream: 1 - (tRP + tRFC + tRCD + RL) / tREFI"
-echo "(x burst / tCCD_L with bank groups: a row stays in one bank group). Memspec figures: read + I/O"
+echo "(with bank groups: x burst / tCCD_L for lines of one group .. x 2 burst / (tCCD_L + burst) for lines"
+echo "alternating between groups, since a 64 B line's two bursts stay tCCD_L apart). Memspec figures: read + I/O"
 echo "+ activate / bits per activate + dies x active standby / bit rate + dies x refresh / tREFI / bit"
 echo "rate, the random bit rate being one line per max(tRRD, tFAW / 4, tRC / banks, burst)."
 echo
 echo "$out" | grep -E "figures" | sed 's/\[ figures  \] /  /'
 echo
-echo "$(echo "$out" | grep -cE '^\[       OK \]') of $(echo "$out" | grep -cE '^\[ RUN      \]') DRAM preset tests passed (memspec arithmetic, bank groups tCCD_L / tCCD_S)."
+echo "$(echo "$out" | grep -cE '^\[       OK \]') of $(echo "$out" | grep -cE '^\[ RUN      \]') DRAM preset tests passed (memspec arithmetic, bank groups tCCD_L / tCCD_S, power-down and tXP)."
 echo
 bash bench/dram_micro.sh "$BUILD"
