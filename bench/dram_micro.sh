@@ -26,6 +26,7 @@ echo
 echo "Turnaround: read after write pays tWTR + RL of idle bus, write after read tRTW (pinned exactly:"
 echo "$(echo "$out" | grep -cE "^\[       OK \] DramTest.ReadAfterWrite") test passed)."
 echo
-echo "Energy per bit, streaming reads at full bandwidth, refresh on. Memspec arithmetic: core read"
+echo "Energy per bit, streaming reads at full bandwidth, refresh on, against the arithmetic of the preset's own"
+echo "[dram]/[energy] figures (bench/dram.sh prices them from the memspec instead): core read"
 echo "+ I/O + activate / row bits + channels x active standby / bit rate + refresh_nj / tREFI / bit rate."
 echo "$out" | grep -E "figures.*pJ/bit" | sed 's/\[ figures  \] /  /'

@@ -36,6 +36,10 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
       active_standby_mw_(p.active_standby_mw),
       precharge_standby_mw_(p.precharge_standby_mw),
       refresh_nj_(p.refresh_nj),
+      active_powerdown_mw_(p.active_powerdown_mw),
+      precharge_powerdown_mw_(p.precharge_powerdown_mw),
+      powerdown_after_(Tick{std::llround(p.powerdown_after_ns * 1000.0)}),
+      t_xp_(Tick{std::llround(p.t_xp_ns * 1000.0)}),
       clock_(ClockDomain::from_mhz("dram", p.clock_mhz)) {
   const auto bad = [&](const std::string& why) { throw std::invalid_argument("dram '" + scope + "': " + why); };
   if (p.channels < 1 || p.channels > 1024) bad("channels must be in [1, 1024]");
@@ -65,6 +69,10 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
   timing_.t_faw_cycles = ns_to_cycles(p.t_faw_ns);
   timing_.t_wtr_cycles = ns_to_cycles(p.t_wtr_ns);
   timing_.t_rtw = Tick{std::llround(p.t_rtw_ns * 1000.0)};
+  if (p.bank_groups < 1 || p.banks % p.bank_groups != 0) bad("bank_groups must divide banks");
+  timing_.bank_groups = static_cast<std::uint32_t>(p.bank_groups);
+  timing_.t_ccd_l = Tick{std::llround(p.t_ccd_l_ns * 1000.0)};
+  timing_.t_ccd_s = Tick{std::llround(p.t_ccd_s_ns * 1000.0)};
   if (p.t_refi_ns > 0 && p.t_rfc_ns > 0) {
     if (p.t_rfc_ns >= p.t_refi_ns) bad("t_rfc_ns must be shorter than t_refi_ns");
     timing_.t_refi_cycles = ns_to_cycles(p.t_refi_ns);
@@ -87,6 +95,7 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
     ch.readq.reserve(read_cap_);
     ch.writeq.reserve(write_cap_);
     ch.banks.resize(banks_);
+    ch.group_burst_start.assign(timing_.bank_groups, Tick{INT64_MIN / 2});
     ch.act_history.fill(std::numeric_limits<std::int64_t>::min() / 2);
     // Channels refresh staggered over the interval (channel c first at (c + 1) / channels of it),
     // as controllers do to keep the refreshes of different channels apart.
@@ -228,6 +237,7 @@ bool Dram::enqueue(DramRequest&& req) {
   }
   const Tick now = eq_.now();
   note_occupancy(ch, now);
+  if (ch.idle) wake(ch, now);
   Entry e;
   e.report = req.report_when_scheduled;
   e.tag = req.tag;
@@ -284,6 +294,29 @@ void Dram::refresh_until(Channel& ch, std::int64_t n) {
   }
 }
 
+void Dram::powerdown_split(const Channel& ch, Tick from, Tick to, std::uint64_t& active, std::uint64_t& precharged) const {
+  if (to <= from) return;
+  Tick closed = to;  // from here on every bank is precharged
+  if (ch.closed_since >= 0) closed = std::clamp(clock_.tick_of(Cycles{ch.closed_since}), from, to);
+  active += static_cast<std::uint64_t>((closed - from).ps());
+  precharged += static_cast<std::uint64_t>((to - closed).ps());
+}
+
+void Dram::wake(Channel& ch, Tick now) {
+  ch.idle = false;
+  if (powerdown_after_.ps() <= 0 || now <= ch.idle_from + powerdown_after_) return;
+  refresh_until(ch, clock_.cycles_at(now).count());  // the refreshes of the idle period, for the split
+  powerdown_split(ch, ch.idle_from + powerdown_after_, now, ch.pd_active_ps, ch.pd_precharged_ps);
+  ++stats_.powerdown_exits;
+  // Power-down exit: no command before tXP after the request reaches the controller.
+  const std::int64_t ready = cycle_ceil(now + timing_.controller + t_xp_);
+  for (Bank& b : ch.banks) {
+    b.act_ready = std::max(b.act_ready, ready);
+    b.col_ready = std::max(b.col_ready, ready);
+    b.pre_ready = std::max(b.pre_ready, ready);
+  }
+}
+
 void Dram::note_row_open(Channel& ch, std::int64_t a) {
   if (ch.closed_since < 0) return;
   const Tick from = clock_.tick_of(Cycles{ch.closed_since}), to = clock_.tick_of(Cycles{a});
@@ -331,7 +364,9 @@ std::int64_t Dram::next_column_cycle(const Channel& ch, const std::vector<Entry>
   for (const Entry& e : q) {
     if (e.arrival > now) break;
     const Bank& b = ch.banks[e.bank];
-    if (b.open_row == static_cast<std::int64_t>(e.row)) next = std::min(next, std::max(b.col_ready, bus_ready));
+    if (b.open_row == static_cast<std::int64_t>(e.row)) {
+      next = std::min(next, std::max({b.col_ready, bus_ready, ccd_ready_cycle(ch, e.bank)}));
+    }
   }
   return next == kNever ? kNever : std::max(next, n + 1);
 }
@@ -348,18 +383,39 @@ void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::in
   b.col_ready = n + 1;
   const Tick data_natural = clock_.tick_of(Cycles{n + timing_.t_cl_cycles});
   const bool r_to_w = ch.bus_dir == 0 && e.is_write;
-  const Tick start = std::max(data_natural, r_to_w ? ch.bus_free + timing_.t_rtw : ch.bus_free);
+  const Tick bus_start = std::max(data_natural, r_to_w ? ch.bus_free + timing_.t_rtw : ch.bus_free);
   if (r_to_w) ++stats_.read_to_write_turnarounds;
   if (ch.bus_dir == 1 && !e.is_write) ++stats_.write_to_read_turnarounds;
   ch.bus_dir = e.is_write ? 1 : 0;
-  const Tick duration = timing_.transfer(e.bytes / burst_bytes_);
+  const std::uint32_t bursts = e.bytes / burst_bytes_;
+  const Tick busy = timing_.transfer(bursts);
+  Tick start = bus_start, duration = busy;
+  if (timing_.t_ccd_l.ps() > 0 || timing_.t_ccd_s.ps() > 0) {
+    // Bank-group timing: the first burst waits for tCCD_L after its group's last burst and tCCD_S
+    // after the channel's; the entry's own bursts (one bank, so one group) follow each other
+    // max(burst, tCCD_L, tCCD_S) apart.
+    const Tick ccd = ccd_ready(ch, e.bank);
+    start = std::max(bus_start, ccd);
+    // The scheduler waited for tCCD (so the data bus itself was free earlier).
+    if (ccd > (r_to_w ? ch.bus_free + timing_.t_rtw : ch.bus_free)) ++stats_.bursts_delayed_ccd;
+    const std::int64_t spacing =
+        std::max({timing_.transfer(1).ps(), timing_.t_ccd_l.ps(), timing_.t_ccd_s.ps()});
+    const Tick last_burst = start + Tick{spacing * static_cast<std::int64_t>(bursts - 1)};
+    duration = (last_burst - start) + timing_.transfer(1);
+    ch.group_burst_start[e.bank % timing_.bank_groups] = last_burst;
+    ch.last_burst_start = last_burst;
+  }
   const Tick end = start + duration;
   ch.bus_free = end;
   const std::int64_t end_c = cycle_ceil(end);
   b.pre_ready = std::max(b.pre_ready, e.is_write ? end_c + timing_.t_wr_cycles : end_c);
 
   account_request(ch, e.outcome, e.is_write, e.cls, e.bytes, e.lines);
-  ch.stats.busy_ps += static_cast<std::uint64_t>(duration.ps());
+  if (ch.readq.empty() && ch.writeq.empty()) {  // nothing left: idle once this data is through
+    ch.idle = true;
+    ch.idle_from = end;
+  }
+  ch.stats.busy_ps += static_cast<std::uint64_t>(busy.ps());
   timed_bytes_ += e.bytes;
   const Tick done = end + timing_.controller;
   if (!e.is_write) {
@@ -429,7 +485,7 @@ void Dram::wakeup(std::uint32_t c) {
       const Bank& b = ch.banks[e.bank];
       if (b.open_row == static_cast<std::int64_t>(e.row)) {
         wanted |= std::uint64_t{1} << e.bank;
-        if (issue < 0 && std::max(b.col_ready, bus_ready) <= n) issue = static_cast<int>(i);
+        if (issue < 0 && std::max({b.col_ready, bus_ready, ccd_ready_cycle(ch, e.bank)}) <= n) issue = static_cast<int>(i);
       } else if (first_need_[e.bank] < 0) {
         first_need_[e.bank] = static_cast<int>(i);
       }
@@ -501,6 +557,11 @@ double Dram::background_energy_pj(Tick now) const {
     const auto elapsed = static_cast<std::uint64_t>(std::max<std::int64_t>(0, now.ps()));
     pre = std::min(pre, elapsed);
     pj += (active_standby_mw_ * static_cast<double>(elapsed - pre) + precharge_standby_mw_ * static_cast<double>(pre)) * 1e-3;
+    // Power-down replaces standby over its periods (the ended ones and an idle channel's current one).
+    std::uint64_t pd_active = ch.pd_active_ps, pd_pre = ch.pd_precharged_ps;
+    if (ch.idle && powerdown_after_.ps() > 0) powerdown_split(ch, ch.idle_from + powerdown_after_, now, pd_active, pd_pre);
+    pj -= ((active_standby_mw_ - active_powerdown_mw_) * static_cast<double>(pd_active) +
+           (precharge_standby_mw_ - precharge_powerdown_mw_) * static_cast<double>(pd_pre)) * 1e-3;
   }
   return pj;
 }
@@ -523,6 +584,9 @@ void Dram::update_derived_stats() {
       pre += static_cast<std::uint64_t>((now - clock_.tick_of(Cycles{ch.closed_since})).ps());
     }
     ch.stats.precharged_ps.set(pre);
+    std::uint64_t pd_active = ch.pd_active_ps, pd_pre = ch.pd_precharged_ps;
+    if (ch.idle && powerdown_after_.ps() > 0) powerdown_split(ch, ch.idle_from + powerdown_after_, now, pd_active, pd_pre);
+    ch.stats.powerdown_ps.set(pd_active + pd_pre);
     DramChannelStats& s = ch.stats;
     s.read_queue_occupancy_avg.set(elapsed_ps > 0 ? static_cast<double>(ch.read_occupancy_ps) / elapsed_ps : 0.0);
     s.write_queue_occupancy_avg.set(elapsed_ps > 0 ? static_cast<double>(ch.write_occupancy_ps) / elapsed_ps : 0.0);

@@ -3,8 +3,8 @@
 // write queues per channel with an FR-FCFS scheduler (rows are opened ahead for the oldest
 // requests, column commands go to the oldest row hit the data bus can take; writes drained in
 // bursts between watermarks), JEDEC-style timing (tRCD, tRP, RL, tRAS, tWR, tRRD, tFAW, tWTR,
-// read-to-write turnaround, all-bank refresh every tREFI for tRFC, data-bus time from the channel
-// bandwidth, controller latency) and energy per bit and per activate (DRAMPower-style figures from
+// read-to-write turnaround, all-bank refresh every tREFI for tRFC, bank groups with tCCD_L and
+// tCCD_S, data-bus time from the channel bandwidth, controller latency) and energy per bit and per activate (DRAMPower-style figures from
 // [energy]) plus background power (active / precharge standby) and refresh energy from [dram].
 // See docs/memory-model.md for the equations.
 //
@@ -79,6 +79,9 @@ struct DramTiming {
   std::int64_t t_faw_cycles = 0;  ///< activate -> the fourth activate after it
   std::int64_t t_wtr_cycles = 0;  ///< end of write data -> read command
   Tick t_rtw{0};                  ///< end of read data -> start of write data
+  std::uint32_t bank_groups = 1;  ///< bank b is in group b mod bank_groups
+  Tick t_ccd_l{0};                ///< burst start to burst start, same bank group (0: none)
+  Tick t_ccd_s{0};                ///< burst start to burst start, any two groups (0: none)
   std::int64_t t_refi_cycles = 0; ///< refresh interval per channel (0: no refresh)
   std::int64_t t_rfc_cycles = 0;  ///< refresh cycle time
   Tick controller{0};             ///< controller + interconnect latency, each way
@@ -119,6 +122,8 @@ double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint
   X(Counter, read_to_write_turnarounds, "switches", Sum, "Data bus switches from read to write data (pay dram.t_rtw_ns)") \
   X(Counter, write_to_read_turnarounds, "switches", Sum, "Data bus switches from write to read data (pay dram.t_wtr_ns + RL)") \
   X(Counter, activates_delayed_rrd_faw, "commands", Sum, "Activates that tRRD or tFAW pushed later than their bank allowed") \
+  X(Counter, powerdown_exits, "exits", Sum, "Requests that found their channel in power-down (dram.powerdown_after_ns) and waited tXP") \
+  X(Counter, bursts_delayed_ccd, "requests", Sum, "Queue entries whose data tCCD_L (same bank group) or tCCD_S pushed past the data bus") \
   X(Accumulator, row_hit_rate, "ratio", Derived, "Row hits / requests") \
   X(Accumulator, avg_read_latency_ns, "ns", Derived, "Mean timed read latency per line, enqueue to data back") \
   X(Accumulator, achieved_bandwidth_gbps, "GB/s", Derived, "Timed bytes / (last completion - first enqueue)") \
@@ -126,7 +131,7 @@ double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint
   X(Accumulator, energy_write_pj, "pJ", Sum, "Write core energy: write bits x dram_write_pj_per_bit") \
   X(Accumulator, energy_io_pj, "pJ", Sum, "I/O energy: (read + write bits) x dram_io_pj_per_bit") \
   X(Accumulator, energy_activate_pj, "pJ", Sum, "Activates x dram_activate_precharge_nj x 1000") \
-  X(Accumulator, energy_background_pj, "pJ", Sum, "Standby: per channel active_standby_mw x time with a row open + precharge_standby_mw x time all precharged") \
+  X(Accumulator, energy_background_pj, "pJ", Sum, "Standby: per channel active_standby_mw x time with a row open + precharge_standby_mw x time all precharged, power-down time at the power-down figures") \
   X(Accumulator, energy_refresh_pj, "pJ", Sum, "Refreshes x dram.refresh_nj x 1000") \
   X(Accumulator, energy_dynamic_pj, "pJ", Sum, "Read + write + I/O + activate/precharge (what the traffic classes share)") \
   X(Accumulator, energy_pj, "pJ", Sum, "Total DRAM energy (dynamic + background + refresh)") \
@@ -151,6 +156,7 @@ struct DramStats {
   X(Counter, write_drains, "drains", Sum, "Times the write queue reached the high watermark") \
   X(Counter, refreshes, "commands", Sum, "All-bank refreshes") \
   X(Counter, precharged_ps, "ps", Sum, "Time every bank was precharged (precharge standby), up to the last statistics update") \
+  X(Counter, powerdown_ps, "ps", Sum, "Time in power-down (active or precharge), up to the last statistics update") \
   X(Accumulator, read_queue_occupancy_avg, "requests", Derived, "Time-averaged read queue occupancy (from tick 0)") \
   X(Accumulator, write_queue_occupancy_avg, "requests", Derived, "Time-averaged write queue occupancy (from tick 0)") \
   X(Accumulator, utilization, "ratio", Derived, "busy_ps / elapsed ps (from tick 0)")
@@ -298,9 +304,15 @@ class Dram final : public Unit {
     std::array<std::int64_t, 4> act_history{};
     std::uint64_t act_issued = 0;
     std::int8_t bus_dir = -1;          // direction of the last data on the bus: -1 none, 0 read, 1 write
+    Tick last_burst_start{INT64_MIN / 2};  // start of the channel's last data burst (tCCD_S)
+    std::vector<Tick> group_burst_start;  // per bank group, start of its last burst (tCCD_L)
     std::int64_t next_refresh = 0;     // cycle the next refresh falls due
     std::int64_t closed_since = 0;     // cycle since which every bank is precharged; -1: a row is open
     std::uint64_t precharged_ps = 0;   // precharge standby time before closed_since
+    bool idle = true;                  // no request queued or in service since idle_from
+    Tick idle_from{0};
+    std::uint64_t pd_active_ps = 0;    // power-down time with a row open (ended periods)
+    std::uint64_t pd_precharged_ps = 0;  // power-down time with every bank precharged (ended periods)
     DramChannelStats stats;
   };
 
@@ -318,6 +330,12 @@ class Dram final : public Unit {
   // Performs every refresh of `ch` due at or before cycle n: it starts when due, or once every open
   // bank can be precharged (tRP after pre_ready), closes every bank and blocks activates for tRFC.
   void refresh_until(Channel& ch, std::int64_t n);
+  // Splits the power-down period [from, to) of an idle channel into time with a row open and time
+  // all precharged (refreshes close the rows: the split is at closed_since).
+  void powerdown_split(const Channel& ch, Tick from, Tick to, std::uint64_t& active, std::uint64_t& precharged) const;
+  // A request reaches an idle channel at `now`: books the power-down period it ends and delays
+  // the channel's first command to tXP after the request's arrival.
+  void wake(Channel& ch, Tick now);
   // Notes that a row opens at cycle a: ends the channel's precharge standby period.
   void note_row_open(Channel& ch, std::int64_t a);
   void kick(std::uint32_t c, Tick at);
@@ -338,6 +356,20 @@ class Dram final : public Unit {
     if (ch.bus_dir == 0 && is_write) return cycle_ceil(ch.bus_free + timing_.t_rtw) - timing_.t_cl_cycles;
     return (ch.bus_free > now ? clock_.cycles_at(ch.bus_free).count() : n) - timing_.t_cl_cycles;
   }
+  // Earliest data start of a request to `bank` as tCCD_L (its group's last burst) and tCCD_S (the
+  // channel's last burst) allow; Tick{0} without bank-group timing.
+  Tick ccd_ready(const Channel& ch, std::uint32_t bank) const {
+    Tick t{0};
+    if (timing_.t_ccd_l.ps() > 0) t = std::max(t, ch.group_burst_start[bank % timing_.bank_groups] + timing_.t_ccd_l);
+    if (timing_.t_ccd_s.ps() > 0) t = std::max(t, ch.last_burst_start + timing_.t_ccd_s);
+    return t;
+  }
+  // The first command cycle whose data (RL later) would start no more than one cycle before
+  // ccd_ready() (as for the data bus: commit() starts the data exactly then).
+  std::int64_t ccd_ready_cycle(const Channel& ch, std::uint32_t bank) const {
+    const Tick t = ccd_ready(ch, bank);
+    return t.ps() <= 0 ? INT64_MIN / 2 : clock_.cycles_at(t).count() - timing_.t_cl_cycles;
+  }
   void commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::int64_t n);
   void complete(std::uint32_t slot);
   std::int64_t ns_to_cycles(double ns) const;
@@ -349,6 +381,10 @@ class Dram final : public Unit {
   double active_standby_mw_ = 0;
   double precharge_standby_mw_ = 0;
   double refresh_nj_ = 0;
+  double active_powerdown_mw_ = 0;
+  double precharge_powerdown_mw_ = 0;
+  Tick powerdown_after_{0};  // 0: never
+  Tick t_xp_{0};
   ClockDomain clock_;
   DramTiming timing_;
   DramMapping mapping_;

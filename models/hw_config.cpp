@@ -314,6 +314,20 @@ ParamRegistry<HwConfig> make_registry() {
       .source("JESD209-3 read to write: WL command no earlier than RL + RU(tDQSCKmax/tCK) + BL/2 + 1 - WL after the "
               "read, so the data bus idles RU(tDQSCKmax/tCK) + 1 cycles; " + lpddr3_memspec +
               ": DQSCK 2 cycles, 3 x 1.25 ns");
+  r.add(TBDR_PARAM(dram.bank_groups), 1).unit("groups").range(1, 16)
+      .doc("Bank groups per channel; bank b belongs to group b mod bank_groups (1: no bank groups)")
+      .source("LPDDR3 and LPDDR4 have none (JESD209-3, JESD209-4); LPDDR5 BG mode: 4 groups of 4 banks "
+              "(gem5 src/python/gem5/components/memory/dram_interfaces/lpddr5.py, LPDDR5_6400_1x16_BG_BL16)");
+  r.add(TBDR_PARAM(dram.t_ccd_l_ns), 0.0).unit("ns").range(0, 1000)
+      .doc("Column to column in the same bank group (tCCD_L): a burst starts at least this long after the previous "
+           "burst of its group started (0: only the data bus spaces them)")
+      .source("no bank groups on LPDDR3 (JESD209-3); LPDDR5 BG mode 4 CK at 800 MHz = 5 ns (gem5 lpddr5.py, "
+              "LPDDR5_6400_1x16_BG_BL16 tCCD_L)");
+  r.add(TBDR_PARAM(dram.t_ccd_s_ns), 0.0).unit("ns").range(0, 1000)
+      .doc("Column to column in different bank groups (tCCD_S): a burst starts at least this long after the previous "
+           "burst of the channel started (0: only the data bus spaces them)")
+      .source("LPDDR5 BG mode: BL/n_min = 2 CK at 800 MHz = 2.5 ns, the BL16 burst itself (gem5 lpddr5.py, "
+              "LPDDR5_6400_1x16_BG_BL16 tBURST_MIN)");
   r.add(TBDR_PARAM(dram.t_refi_ns), 3900.0).unit("ns").range(0, 1e6)
       .doc("All-bank refresh interval per channel (tREFI; 0 or t_rfc_ns = 0: no refresh)")
       .source(lpddr3_memspec + ": REFI 3120 cycles at 800 MHz");
@@ -329,6 +343,19 @@ ParamRegistry<HwConfig> make_registry() {
   r.add(TBDR_PARAM(dram.refresh_nj), 26.8).unit("nJ").range(0, 100000)
       .doc("Energy of one all-bank refresh of a channel above active standby ((IDD5 - IDD3N) x VDD x tRFC per rail)")
       .source(lpddr3_memspec + ": ((40 - 2) mA x 1.8 V + (160 - 45) mA x 1.2 V) x 130 ns = 206.4 mW x 130 ns");
+  r.add(TBDR_PARAM(dram.powerdown_after_ns), 0.0).unit("ns").range(0, 1e9)
+      .doc("A channel with no request queued or in service for this long enters power-down (active power-down "
+           "with a row open, precharge power-down otherwise) until its next request arrives, which then waits "
+           "t_xp_ns; refreshes go on meanwhile (0: never: an idle channel stands by)")
+      .source("controller policy, no public figure for a GPU's controller: off by default");
+  r.add(TBDR_PARAM(dram.active_powerdown_mw), 11.9).unit("mW").range(0, 100000)
+      .doc("Background power of one channel in active power-down (IDD3P x VDD per rail)")
+      .source(lpddr3_memspec + ": idd3p0 1.2 mA x 1.8 V + idd3p02 8.15 mA x 1.2 V = 11.94 mW");
+  r.add(TBDR_PARAM(dram.precharge_powerdown_mw), 2.1).unit("mW").range(0, 100000)
+      .doc("Background power of one channel in precharge power-down (IDD2P x VDD per rail)")
+      .source(lpddr3_memspec + ": idd2p0 0.6 mA x 1.8 V + idd2p02 0.87 mA x 1.2 V = 2.12 mW");
+  r.add(TBDR_PARAM(dram.t_xp_ns), 7.5).unit("ns").range(0, 1000)
+      .doc("Power-down exit to the first command (tXP)").source(lpddr3_memspec + ": XP 6 cycles at 800 MHz");
   r.add(TBDR_PARAM(dram.controller_latency_ns), 30.0).unit("ns").range(0, 10000)
       .doc("Memory controller and interconnect latency each way").source("no public figure");
   r.add(TBDR_PARAM(dram.read_queue_entries), 32).unit("requests").range(1, 4096)

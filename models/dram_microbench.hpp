@@ -1,0 +1,32 @@
+#pragma once
+// DRAM microbenchmarks: a streaming and a random read pattern run straight on the DRAM model (no
+// caches), one in-order stream per channel kept as full as the controller's queues allow. They are
+// the model's side of the DRAM checks (`tbdrsim validate`, tests/test_dram_presets.cpp,
+// bench/dram.sh): bandwidth efficiency and energy per bit, beside the arithmetic of the timing
+// parameters and of the memspec (models/dram_memspec.hpp).
+#include <cstdint>
+
+#include "models/dram.hpp"
+#include "models/hw_config.hpp"
+
+namespace tbdr {
+
+/// The access pattern of a microbenchmark (reads of 64 B lines).
+enum class DramPattern : std::uint8_t {
+  Stream,  ///< consecutive lines from address 0: every row read whole
+  Random,  ///< lines drawn uniformly from 1 GiB (PCG32): almost every line opens a row
+};
+
+/// What a microbenchmark measured.
+struct DramBenchResult {
+  double ns = 0;          ///< first request to last data back
+  double bytes = 0;       ///< bytes read
+  double efficiency = 0;  ///< bytes / (dram.bandwidth_gbps x ns)
+  double pj_per_bit = 0;  ///< all DRAM energy (dynamic, background, refresh) / bits read
+  DramStats stats;        ///< the DRAM's statistics at the end (derived ones set)
+};
+
+/// Runs `lines` 64 B reads of `pattern` on a fresh DRAM of `hw` (seeded: the same figures every run).
+DramBenchResult run_dram_microbench(const HwConfig& hw, DramPattern pattern, std::uint64_t lines, std::uint64_t seed = 1);
+
+}  // namespace tbdr
