@@ -81,6 +81,9 @@ struct FrameResult {
 /// How a frame is simulated (host choices: none changes a statistic).
 struct FrameOptions {
   bool colour = true;  ///< compute the colour images (FrameInputs::colour); false when no image is read
+  /// Threads the tiles of each render run on (models/pass_renderer.hpp); 0: the machine's
+  /// (default_thread_count). Every figure and image is the same at any count.
+  unsigned threads = 1;
 };
 
 /// Replays `trace` on `scene` with the hardware `hw`. Input problems (an unsupported kernel or
