@@ -317,6 +317,7 @@ class FrameSimulator {
 
     PassRenderer renderer(ctx, hw_, *ps, dram, cw, pool_);
     renderer.run();
+    result_.host_tile_seconds += renderer.tile_seconds();
     prim_base_ = ctx.frame_prim_base;
     for (const auto& a : pass.attachments) {
       AttachmentImage& img = result_.images.attachments.at(a.name);

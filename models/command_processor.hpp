@@ -76,6 +76,9 @@ struct FrameResult {
   std::string final_color;         ///< name of the last stored color attachment or image buffer ("" if none)
   FrameWork work;                  ///< what the timing model schedules
   FrameStats totals;               ///< typed frame totals (the same figures as the "frame/<unit>" rows)
+  /// Host wall seconds spent rendering tiles (on FrameOptions::threads threads); the rest of the
+  /// functional simulation (trace replay, geometry, binning, dispatches) is serial.
+  double host_tile_seconds = 0;
 };
 
 /// How a frame is simulated (host choices: none changes a statistic).

@@ -1,6 +1,7 @@
 #include "models/pass_renderer.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <numeric>
 #include <utility>
 
@@ -191,10 +192,12 @@ void PassRenderer::render(bool partial) {
   AttachmentImage* const fresh = allocate_surfaces();
   results_.clear();
   results_.resize(jobs_.size());
+  const auto start = std::chrono::steady_clock::now();
   pool_.for_each(jobs_.size(), [&](std::size_t i, unsigned w) {
     const TileJob& j = jobs_[i];
     results_[i] = render_tile(*workers_[w], j.tile, j.rect, tiler_.tile_primitives(j.tile), partial);
   });
+  tile_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   release_unwritten_surfaces(fresh);
   rw.tiles.reserve(results_.size());
   for (TileResult& r : results_) rw.tiles.push_back(merge(std::move(r)));

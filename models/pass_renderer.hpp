@@ -44,6 +44,8 @@ class PassRenderer {
   /// Geometry, binning and rendering of every draw; a partial render whenever the parameter
   /// buffer is full.
   void run();
+  /// Host wall seconds the renders' tile loops took (the parallel part; bench/speed.sh reads it).
+  double tile_seconds() const { return tile_seconds_; }
 
  private:
   /// What one thread renders tiles with: its own TSP and ISP (their scratch), the current tile's
@@ -106,6 +108,7 @@ class PassRenderer {
   std::vector<TileResult> results_;      ///< their results, by job
   GeometryStats geometry_base_;          ///< the statistics at the start of the current render
   TilerStats tiler_base_;
+  double tile_seconds_ = 0;
 };
 
 }  // namespace tbdr

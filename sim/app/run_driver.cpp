@@ -215,6 +215,8 @@ RunOutcome run_one(const RunRequest& req) {
   rec.stats.push_back({"frame/host", "timing_wall_seconds", outcome.timing_seconds, "s", "Host wall time of the timing and energy models"});
   rec.stats.push_back({"frame/host", "simulation_cpu_seconds", outcome.cpu_seconds, "s", "Host CPU time of the functional simulation"});
   rec.stats.push_back({"frame/host", "timing_cpu_seconds", outcome.timing_cpu_seconds, "s", "Host CPU time of the timing and energy models"});
+  rec.stats.push_back({"frame/host", "tile_render_wall_seconds", outcome.frame.host_tile_seconds, "s",
+                       "Host wall time of the functional simulation's tile rendering (the part on --threads threads)"});
   rec.stats.push_back({"frame/host", "simulation_threads", static_cast<double>(outcome.threads), "threads",
                        "Threads the functional simulation rendered tiles on (--threads; no other figure depends on it)"});
   rec.tiles = outcome.timing.tiles;
