@@ -4,7 +4,8 @@
 # 1920x1080, 1024 lights, no images), pixels x lights simulated per CPU second, and the ratio of the
 # CPU seconds to the figures stored in bench/speed_baseline.txt (below 1: faster than the baseline).
 # With --threads T (T > 1; default: nproc) each repetition also runs the frame at T threads: the
-# table then gives CPU and wall seconds at 1 and T threads, the wall speed-up, and the serial share
+# table then gives CPU and wall seconds at 1 and T threads, the wall speed-up of the run and of its
+# tile rendering alone (tiles_x: the part on threads), and the serial share
 # measured in the 1-thread run (1 - tile_render_wall_seconds / the process's wall seconds: trace
 # and scene loading, geometry, binning, dispatches, the timing model, the database) with the
 # speed-up Amdahl's law then allows at 16 threads. The load average is printed before and after:
@@ -47,7 +48,7 @@ while [ $# -gt 0 ]; do
     --multipass-lpp) LPP=$2; shift 2 ;;
     --record) RECORD=yes; shift ;;
     --threads) THREADS=$2; shift 2 ;;
-    -h|--help) sed -n '2,27p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
     -*) echo "speed.sh: unknown option $1" >&2; exit 2 ;;
     *) BUILD=$1; shift ;;
   esac
@@ -68,9 +69,9 @@ H=${RES#*x}
 
 # thread_args BIN N: "--threads N" when BIN knows the option (an older build runs on one thread).
 thread_args() { "$1" run --help 2>/dev/null | grep -q -- '--threads' && echo "--threads $2" || true; }
-# measure BIN TRACE TAG [N]: one run (N threads, default 1); appends "cpu wall serial_share" to
-# $TMP/TAG.times (serial_share: 1 - tile rendering's wall seconds / the run's wall seconds; - when
-# the build does not record it).
+# measure BIN TRACE TAG [N]: one run (N threads, default 1); appends "cpu wall serial_share
+# tile_wall" to $TMP/TAG.times (serial_share: 1 - tile rendering's wall seconds / the run's wall
+# seconds; tile_wall: those seconds; - when the build does not record them).
 measure() {
   local bin=$1 trace=$2 tag=$3 n=${4:-1} extra=()
   if [ "$IMAGES" = yes ]; then
@@ -84,7 +85,8 @@ measure() {
   local tile
   tile=$(sqlite3 "$TMP/$tag.db" "SELECT value FROM stats WHERE scope = 'frame/host' AND name = 'tile_render_wall_seconds'" 2>/dev/null || true)
   awk -v t="${tile:--1}" '{ w = $3; s = (t >= 0 && w > 0) ? 1 - t / w : -1; if (s < 0 && t >= 0) s = 0
-                           printf "%.3f %.3f %s\n", $1 + $2, w, (t >= 0 ? sprintf("%.3f", s) : "-") }' "$TMP/time.out" >> "$TMP/$tag.times"
+                           printf "%.3f %.3f %s %s\n", $1 + $2, w, (t >= 0 ? sprintf("%.3f", s) : "-"), (t >= 0 ? sprintf("%.3f", t) : "-") }' \
+    "$TMP/time.out" >> "$TMP/$tag.times"
 }
 # median COLUMN FILE
 median() { cut -d' ' -f"$1" "$2" | sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
@@ -94,13 +96,15 @@ baseline_cpu() { [ -f "$BASELINE" ] && awk -v m="$MODE" -v t="$1" '$1 == m && $2
 echo "tbdrsim speed: atrium:3, entrance, $RES, $LIGHTS lights, images $IMAGES, median of $REPS; forward_multipass $LPP lights per pass"
 echo "build: $BUILD${AGAINST:+ (against $AGAINST, interleaved)}; host $(hostname), $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
 if [ "$THREADS" -gt 1 ]; then
-  echo "threads: 1 and $THREADS, interleaved run by run; serial = 1 - tile rendering wall / run wall (1 thread);"
+  echo "threads: 1 and $THREADS, interleaved run by run; tiles_x = tile rendering wall at 1 thread / at $THREADS threads;"
+  echo "serial = 1 - tile rendering wall / run wall (1 thread);"
   echo "amdahl16 = 1 / (serial + (1 - serial) / 16), the speed-up the serial share allows at 16 threads"
 fi
 if [ -n "$AGAINST" ]; then
   printf '%-28s %9s %9s %9s %9s %8s %12s\n' technique cpu_s wall_s base_cpu base_wall ratio px*lights/s
 elif [ "$THREADS" -gt 1 ]; then
-  printf '%-28s %7s %7s %7s %7s %7s %7s %8s %11s %8s %6s\n' technique cpu_1 wall_1 "cpu_$THREADS" "wall_$THREADS" speedup serial amdahl16 px*lights/s base_cpu ratio
+  printf '%-28s %7s %7s %7s %7s %7s %7s %7s %8s %11s %8s %6s\n' technique cpu_1 wall_1 "cpu_$THREADS" "wall_$THREADS" speedup tiles_x \
+    serial amdahl16 px*lights/s base_cpu ratio
 else
   printf '%-28s %9s %9s %12s %9s %8s\n' technique cpu_s wall_s px*lights/s base_cpu ratio
 fi
@@ -136,8 +140,9 @@ for t in "${TECH_LIST[@]}"; do
     serial=$(median 3 "$TMP/new.times")
     speedup=$(awk -v a="$wall" -v b="$pwall" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
     amdahl=$(awk -v s="$serial" 'BEGIN { if (s == "-") print "-"; else printf "%.1f", 1 / (s + (1 - s) / 16) }')
-    printf '%-28s %7s %7s %7s %7s %7s %7s %8s %11s %8s %6s\n' "$t" "$cpu" "$wall" "$pcpu" "$pwall" "$speedup" "$serial" "$amdahl" \
-      "$rate" "${bcpu:--}" "$ratio"
+    tiles=$(awk -v a="$(median 4 "$TMP/new.times")" -v b="$(median 4 "$TMP/par.times")" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
+    printf '%-28s %7s %7s %7s %7s %7s %7s %7s %8s %11s %8s %6s\n' "$t" "$cpu" "$wall" "$pcpu" "$pwall" "$speedup" "$tiles" "$serial" \
+      "$amdahl" "$rate" "${bcpu:--}" "$ratio"
     echo "$MODE $t $cpu $wall" >> "$TMP/record.txt"
   else
     bcpu=$(baseline_cpu "$t")
