@@ -5,7 +5,7 @@
 // surfaces, and the per-pixel counters) and database rows. Compared here at 1, 2 and 7 threads
 // for all 13 techniques at a small size, with MSAA 4x, with partial renders (parameter buffer
 // overflow: a barrier between the tiles of one render and the binning of the next), strips and
-// spills of passes over the tile memory budget, and in the tbr and imr modes; plus the thread
+// spills of passes over the tile memory budget, and in the tbr (early and late Z) and imr modes; plus the thread
 // pool's own contract (items in order, each once, the lowest item's exception).
 #include <gtest/gtest.h>
 
@@ -248,15 +248,17 @@ TEST_F(ThreadEquivalence, OverBudgetPassesAreTheSameAtEveryThreadCount) {
   }
 }
 
-// The other GPU modes: tile-based without deferred shading (forward pixel kill), and immediate
-// mode (one frame-sized "tile" per batch, through the ROP caches, on one thread).
+// The other GPU modes: tile-based without deferred shading (forward pixel kill; and with the
+// depth/stencil tests after the shader, isp.early_z=0), and immediate mode (one frame-sized "tile"
+// per batch, through the ROP caches, on one thread).
 TEST_F(ThreadEquivalence, TbrAndImrModesAreTheSameAtEveryThreadCount) {
-  for (const char* mode : {"gpu.mode=tbr", "gpu.mode=imr"}) {
+  const std::vector<std::vector<std::string>> modes = {{"gpu.mode=tbr"}, {"gpu.mode=tbr", "isp.early_z=0"}, {"gpu.mode=imr"}};
+  for (const auto& mode : modes) {
     for (const char* technique : {"plain_forward", "tiled_deferred"}) {
       const TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 160, 96);
       const Trace t = generate_trace(technique, setup);
-      const HwConfig hw = resolve_config({}, {mode}).hw;
-      expect_same_at_every_thread_count(t, *scene_, hw, std::string(technique) + " " + mode);
+      const HwConfig hw = resolve_config({}, mode).hw;
+      expect_same_at_every_thread_count(t, *scene_, hw, std::string(technique) + " " + mode.back());
     }
   }
 }
