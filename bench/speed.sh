@@ -3,6 +3,13 @@
 # median of N) and wall seconds (median of N) of the atrium frame (atrium:3, entrance camera,
 # 1920x1080, 1024 lights, no images), pixels x lights simulated per CPU second, and the ratio of the
 # CPU seconds to the figures stored in bench/speed_baseline.txt (below 1: faster than the baseline).
+# With --threads T (T > 1; default: nproc) each repetition also runs the frame at T threads: the
+# table then gives CPU and wall seconds at 1 and T threads, the wall speed-up of the run and of its
+# tile rendering alone (tiles_x: the part on threads), and the serial share
+# measured in the 1-thread run (1 - tile_render_wall_seconds / the process's wall seconds: trace
+# and scene loading, geometry, binning, dispatches, the timing model, the database) with the
+# speed-up Amdahl's law then allows at 16 threads. The load average is printed before and after:
+# other processes on the machine stretch wall times.
 #
 # Usage: bash bench/speed.sh [options] [build-dir]
 #   -n N             repetitions per technique (median taken; default 3)
@@ -13,6 +20,7 @@
 #   --techniques L   comma-separated subset (default: all 13)
 #   --multipass-lpp K  forward_multipass lights per pass (default 64, the study's batch: the
 #                    technique's own default of 1 light per pass is 1024 passes, tens of minutes)
+#   --threads T      threads of the second run of each repetition (default: nproc; 1: one run, as before)
 #   --record         rewrite this mode's rows of bench/speed_baseline.txt with the figures measured
 #                    (with --against: DIR's figures, i.e. DIR is the baseline)
 # The machine is shared and noisy: compare builds with --against rather than across days.
@@ -28,6 +36,7 @@ AGAINST=
 RECORD=no
 LPP=64
 TECHS=
+THREADS=$(nproc)
 BUILD=build
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -38,12 +47,15 @@ while [ $# -gt 0 ]; do
     --techniques) TECHS=$2; shift 2 ;;
     --multipass-lpp) LPP=$2; shift 2 ;;
     --record) RECORD=yes; shift ;;
-    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
+    --threads) THREADS=$2; shift 2 ;;
+    -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
     -*) echo "speed.sh: unknown option $1" >&2; exit 2 ;;
     *) BUILD=$1; shift ;;
   esac
 done
 case "$REPS" in ''|*[!0-9]*|0) echo "speed.sh: -n expects a positive integer, got '$REPS'" >&2; exit 2 ;; esac
+case "$THREADS" in ''|*[!0-9]*|0) echo "speed.sh: --threads expects a positive integer, got '$THREADS'" >&2; exit 2 ;; esac
+[ -n "$AGAINST" ] && THREADS=1  # side by side: both builds on one thread
 for b in "$BUILD" $AGAINST; do
   [ -x "$b/tbdrsim" ] || { echo "speed.sh: no tbdrsim in '$b' (build it first)" >&2; exit 2; }
 done
@@ -55,15 +67,26 @@ bench_scratch
 W=${RES%x*}
 H=${RES#*x}
 
-# measure BIN TRACE TAG: one run; appends "cpu wall" to $TMP/TAG.times.
+# thread_args BIN N: "--threads N" when BIN knows the option (an older build runs on one thread).
+thread_args() { "$1" run --help 2>/dev/null | grep -q -- '--threads' && echo "--threads $2" || true; }
+# measure BIN TRACE TAG [N]: one run (N threads, default 1); appends "cpu wall serial_share
+# tile_wall" to $TMP/TAG.times (serial_share: 1 - tile rendering's wall seconds / the run's wall
+# seconds; tile_wall: those seconds; - when the build does not record them).
 measure() {
-  local bin=$1 trace=$2 tag=$3 extra=()
+  local bin=$1 trace=$2 tag=$3 n=${4:-1} extra=()
   if [ "$IMAGES" = yes ]; then
     rm -rf "$TMP/img"
     extra=(--images "$TMP/img")
   fi
-  /usr/bin/time -f '%U %S %e' -o "$TMP/time.out" "$bin" run --trace "$trace" --db "$TMP/$tag.db" --quiet "${extra[@]}" > /dev/null
-  awk '{ printf "%.3f %.3f\n", $1 + $2, $3 }' "$TMP/time.out" >> "$TMP/$tag.times"
+  rm -f "$TMP/$tag.db"
+  # shellcheck disable=SC2046
+  /usr/bin/time -f '%U %S %e' -o "$TMP/time.out" "$bin" run --trace "$trace" --db "$TMP/$tag.db" --quiet \
+    $(thread_args "$bin" "$n") "${extra[@]}" > /dev/null
+  local tile
+  tile=$(sqlite3 "$TMP/$tag.db" "SELECT value FROM stats WHERE scope = 'frame/host' AND name = 'tile_render_wall_seconds'" 2>/dev/null || true)
+  awk -v t="${tile:--1}" '{ w = $3; s = (t >= 0 && w > 0) ? 1 - t / w : -1; if (s < 0 && t >= 0) s = 0
+                           printf "%.3f %.3f %s %s\n", $1 + $2, w, (t >= 0 ? sprintf("%.3f", s) : "-"), (t >= 0 ? sprintf("%.3f", t) : "-") }' \
+    "$TMP/time.out" >> "$TMP/$tag.times"
 }
 # median COLUMN FILE
 median() { cut -d' ' -f"$1" "$2" | sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
@@ -72,8 +95,16 @@ baseline_cpu() { [ -f "$BASELINE" ] && awk -v m="$MODE" -v t="$1" '$1 == m && $2
 
 echo "tbdrsim speed: atrium:3, entrance, $RES, $LIGHTS lights, images $IMAGES, median of $REPS; forward_multipass $LPP lights per pass"
 echo "build: $BUILD${AGAINST:+ (against $AGAINST, interleaved)}; host $(hostname), $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
+if [ "$THREADS" -gt 1 ]; then
+  echo "threads: 1 and $THREADS, interleaved run by run; tiles_x = tile rendering wall at 1 thread / at $THREADS threads;"
+  echo "serial = 1 - tile rendering wall / run wall (1 thread);"
+  echo "amdahl16 = 1 / (serial + (1 - serial) / 16), the speed-up the serial share allows at 16 threads"
+fi
 if [ -n "$AGAINST" ]; then
   printf '%-28s %9s %9s %9s %9s %8s %12s\n' technique cpu_s wall_s base_cpu base_wall ratio px*lights/s
+elif [ "$THREADS" -gt 1 ]; then
+  printf '%-28s %7s %7s %7s %7s %7s %7s %7s %8s %11s %8s %6s\n' technique cpu_1 wall_1 "cpu_$THREADS" "wall_$THREADS" speedup tiles_x \
+    serial amdahl16 px*lights/s base_cpu ratio
 else
   printf '%-28s %9s %9s %12s %9s %8s\n' technique cpu_s wall_s px*lights/s base_cpu ratio
 fi
@@ -86,9 +117,11 @@ for t in "${TECH_LIST[@]}"; do
     "${opt[@]}" --out "$TMP/$t.trace" > /dev/null
   : > "$TMP/new.times"
   : > "$TMP/old.times"
+  : > "$TMP/par.times"
   for _ in $(seq 1 "$REPS"); do
-    measure "$BUILD/tbdrsim" "$TMP/$t.trace" new
-    [ -n "$AGAINST" ] && measure "$AGAINST/tbdrsim" "$TMP/$t.trace" old
+    measure "$BUILD/tbdrsim" "$TMP/$t.trace" new 1
+    [ "$THREADS" -gt 1 ] && [ -z "$AGAINST" ] && measure "$BUILD/tbdrsim" "$TMP/$t.trace" par "$THREADS"
+    [ -n "$AGAINST" ] && measure "$AGAINST/tbdrsim" "$TMP/$t.trace" old 1
   done
   cpu=$(median 1 "$TMP/new.times")
   wall=$(median 2 "$TMP/new.times")
@@ -99,6 +132,18 @@ for t in "${TECH_LIST[@]}"; do
     ratio=$(awk -v a="$cpu" -v b="$bcpu" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
     printf '%-28s %9s %9s %9s %9s %8s %12s\n' "$t" "$cpu" "$wall" "$bcpu" "$bwall" "$ratio" "$rate"
     echo "$MODE $t $bcpu $bwall" >> "$TMP/record.txt"
+  elif [ "$THREADS" -gt 1 ]; then
+    bcpu=$(baseline_cpu "$t")
+    ratio=$(awk -v a="$cpu" -v b="$bcpu" 'BEGIN { if (b > 0) printf "%.2f", a / b; else print "-" }')
+    pcpu=$(median 1 "$TMP/par.times")
+    pwall=$(median 2 "$TMP/par.times")
+    serial=$(median 3 "$TMP/new.times")
+    speedup=$(awk -v a="$wall" -v b="$pwall" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
+    amdahl=$(awk -v s="$serial" 'BEGIN { if (s == "-") print "-"; else printf "%.1f", 1 / (s + (1 - s) / 16) }')
+    tiles=$(awk -v a="$(median 4 "$TMP/new.times")" -v b="$(median 4 "$TMP/par.times")" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
+    printf '%-28s %7s %7s %7s %7s %7s %7s %7s %8s %11s %8s %6s\n' "$t" "$cpu" "$wall" "$pcpu" "$pwall" "$speedup" "$tiles" "$serial" \
+      "$amdahl" "$rate" "${bcpu:--}" "$ratio"
+    echo "$MODE $t $cpu $wall" >> "$TMP/record.txt"
   else
     bcpu=$(baseline_cpu "$t")
     ratio=$(awk -v a="$cpu" -v b="$bcpu" 'BEGIN { if (b > 0) printf "%.2f", a / b; else print "-" }')
@@ -107,7 +152,7 @@ for t in "${TECH_LIST[@]}"; do
   fi
   total=$(awk -v a="$total" -v b="$cpu" 'BEGIN { print a + b }')
 done
-echo "sum of medians: $total CPU s"
+echo "sum of medians: $total CPU s (1 thread); load at the end $(cut -d' ' -f1-3 /proc/loadavg)"
 if [ "$RECORD" = yes ]; then
   {
     if [ -f "$BASELINE" ]; then

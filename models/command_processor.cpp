@@ -16,7 +16,9 @@
 #include "models/tile_memory.hpp"
 #include "models/tiler.hpp"
 #include "models/tsp.hpp"
+#include "models/pass_renderer.hpp"
 #include "kernel/errors.hpp"
+#include "kernel/thread_pool.hpp"
 
 namespace tbdr {
 
@@ -36,268 +38,11 @@ void collect_dram(const std::string& prefix, const DramTraffic& dram, std::vecto
   out.push_back({prefix + "/dram", "write_bytes", static_cast<double>(w), "bytes", "DRAM bytes written, all classes"});
 }
 
-/// Tile indices in the configured dispatch order.
-std::vector<int> tile_order(int tiles_x, int tiles_y, TileOrder order) {
-  // Bits of each tile coordinate interleaved into a Morton key: 16 bits order 65536 tiles per
-  // axis, far more than any frame has, in a 32-bit key.
-  constexpr int kMortonBitsPerAxis = 16;
-  std::vector<int> out;
-  out.reserve(static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y));
-  if (order == TileOrder::Morton) {
-    std::vector<std::pair<std::uint64_t, int>> keyed;
-    for (int ty = 0; ty < tiles_y; ++ty) {
-      for (int tx = 0; tx < tiles_x; ++tx) {
-        std::uint64_t key = 0;
-        for (int b = 0; b < kMortonBitsPerAxis; ++b) {
-          key |= (static_cast<std::uint64_t>((tx >> b) & 1) << (2 * b)) | (static_cast<std::uint64_t>((ty >> b) & 1) << (2 * b + 1));
-        }
-        keyed.push_back({key, ty * tiles_x + tx});
-      }
-    }
-    std::sort(keyed.begin(), keyed.end());
-    for (const auto& k : keyed) out.push_back(k.second);
-  } else {
-    for (int t = 0; t < tiles_x * tiles_y; ++t) out.push_back(t);
-  }
-  return out;
-}
-
-/// Renders one pass through the units: geometry and binning of its draws, a render (every
-/// touched tile through tile memory, ISP and TSP) whenever the parameter buffer fills and at the
-/// end, and the work each render and tile hands to the timing model.
-class PassRenderer {
- public:
-  PassRenderer(RenderContext& ctx, const HwConfig& frame_hw, PassStats& stats, DramTraffic& dram, CommandWork& cw)
-      : hw_(pass_hw(frame_hw, ctx)), ctx_(bind(ctx, hw_, tile_texture_lines_)), stats_(stats), dram_(dram), cw_(cw),
-        geometry_(hw_, ctx.scene, *ctx.lights, ctx.camera, ctx.viewport),
-        tiler_(hw_, ctx.viewport, ctx.pattern),
-        tile_memory_(ctx, stats.tile_memory),
-        tsp_(ctx),
-        isp_(ctx, tsp_),
-        order_(tile_order(tiler_.tiles_x(), tiler_.tiles_y(), hw_.tiling.tile_order)),
-        resumed_(static_cast<std::size_t>(tiler_.tile_count()), 0) {}
-
-  /// Geometry, binning and rendering of every draw; a partial render whenever the parameter
-  /// buffer is full.
-  void run() {
-    if (ctx_.rop) {
-      run_immediate();
-      return;
-    }
-    std::vector<Primitive> staged;
-    for (std::uint32_t i = 0; i < ctx_.draws.size(); ++i) {
-      if (static_cast<int>(i) == tile_memory_.split_draw()) {
-        // pls.over_budget = split_render: the driver ends the render at this subpass boundary.
-        render(true);
-        tile_memory_.begin_split_render(ctx_.draws);
-      }
-      staged.clear();
-      geometry_.run_draw(ctx_.draws[i], i, staged, ctx_.object_lights, stats_.geometry, dram_);
-      for (const Primitive& p : staged) {
-        ctx_.prims.push_back(p);
-        if (!tiler_.bin(static_cast<std::uint32_t>(ctx_.prims.size() - 1), ctx_.prims.back(), stats_.tiler)) {
-          ctx_.prims.pop_back();
-          ++stats_.tiler.partial_renders;
-          render(true);
-          ctx_.prims.push_back(p);
-          tiler_.bin(0, ctx_.prims.back(), stats_.tiler);
-        }
-      }
-    }
-    render(false);
-  }
-
-  /// imr: no binning. The draws' primitives go down the pipeline in submission order, in batches
-  /// of imr.primitives_per_batch, each rasterised, depth tested and shaded over the whole frame as
-  /// it arrives, its depth and colour through the ROP caches: one render whose "tiles" are the
-  /// batches (FrameWork::immediate), each carrying its own geometry work.
-  void run_immediate() {
-    const PixelRect frame{0, 0, ctx_.viewport.width_px, ctx_.viewport.height_px};
-    const auto batch = static_cast<std::size_t>(hw_.imr.primitives_per_batch);
-    RenderWork rw;
-    std::vector<Primitive> staged;
-    std::vector<std::uint32_t> indices;
-    bool first = true;
-    auto emit = [&](bool last) {
-      indices.resize(ctx_.prims.size());
-      std::iota(indices.begin(), indices.end(), 0u);
-      TileWork tw = render_tile(0, frame, indices, false, first, last);
-      tw.geometry = binning_since_last_render();
-      rw.tiles.push_back(std::move(tw));
-      first = false;
-      ctx_.frame_prim_base += static_cast<std::uint32_t>(ctx_.prims.size());
-      ctx_.prims.clear();
-    };
-    for (std::uint32_t i = 0; i < ctx_.draws.size(); ++i) {
-      staged.clear();
-      geometry_.run_draw(ctx_.draws[i], i, staged, ctx_.object_lights, stats_.geometry, dram_);
-      for (const Primitive& p : staged) {
-        ctx_.prims.push_back(p);
-        if (ctx_.prims.size() >= batch) emit(false);
-      }
-    }
-    emit(true);  // the last batch (also when empty: the pass's clears, resolves and the ROP flush)
-    cw_.renders.push_back(std::move(rw));
-  }
-
- private:
-  /// imr has no binning: the whole frame is one "tile" and nothing goes through a parameter buffer.
-  static HwConfig pass_hw(const HwConfig& frame_hw, const RenderContext& ctx) {
-    HwConfig hw = frame_hw;
-    if (ctx.framebuffer_in_dram) {
-      hw.tiling.tile_width = ctx.viewport.width_px;
-      hw.tiling.tile_height = ctx.viewport.height_px;
-      hw.tiling.pb_capacity_bytes = std::int64_t{1} << 62;
-    }
-    return hw;
-  }
-
-  /// Points the context at the pass's hardware and at the current tile's texture line list.
-  static RenderContext& bind(RenderContext& ctx, const HwConfig& hw, std::vector<std::uint64_t>& texture_lines) {
-    ctx.hw = &hw;
-    ctx.texture_lines = &texture_lines;
-    return ctx;
-  }
-
-  /// The binning work since the previous render.
-  BinningWork binning_since_last_render() {
-    const GeometryStats g = stats_.geometry - geometry_base_;
-    const TilerStats b = stats_.tiler - tiler_base_;
-    BinningWork w;
-    w.vertices_shaded = g.vertices_shaded.value();
-    w.vertex_alu_ops = g.vertex_alu_ops.value();
-    w.vertex_fetch_bytes = g.vertex_fetch_bytes.value();
-    w.index_fetch_bytes = g.index_fetch_bytes.value();
-    w.primitives_in = g.primitives_in.value();
-    w.primitives_binned = b.primitives_binned.value();
-    w.tile_references = b.tile_references.value();
-    geometry_base_ = stats_.geometry;
-    tiler_base_ = stats_.tiler;
-    return w;
-  }
-
-  /// Renders every tile the binned primitives touch (all tiles for the last render of the pass).
-  void render(bool partial) {
-    RenderWork rw;
-    rw.partial = partial;
-    rw.binning = binning_since_last_render();
-    DramTraffic pb;
-    tiler_.finish_render(stats_.tiler, pb);
-    if (!ctx_.framebuffer_in_dram) {
-      dram_ += pb;
-      rw.binning.pb_write_bytes = pb.writes(DramClass::ParameterBuffer);
-    }
-    for (int t : order_) {
-      const auto& prims = tiler_.tile_primitives(t);
-      if (partial && prims.empty()) continue;  // untouched: nothing to render yet
-      for (const PixelRect& r : tile_memory_.strips(tiler_.tile_rect(t))) rw.tiles.push_back(render_tile(t, r, prims, partial));
-      if (partial) resumed_[static_cast<std::size_t>(t)] = 1;
-    }
-    cw_.renders.push_back(std::move(rw));
-    tiler_.reset();
-    ctx_.frame_prim_base += static_cast<std::uint32_t>(ctx_.prims.size());
-    ctx_.prims.clear();
-  }
-
-  /// One tile (or strip of a tile): loads, ISP and TSP, stores; what it cost.
-  /// imr renders a pass as batches over the whole frame: the tile memory's begin (clears) only
-  /// with the first (`begin`), its end (resolves) and the ROP flush only with the last (`end`).
-  TileWork render_tile(int t, const PixelRect& r, const std::vector<std::uint32_t>& prims, bool partial,
-                       bool begin = true, bool end = true) {
-    const DramTraffic before = dram_;
-    const IspStats isp0 = stats_.isp;
-    const TspStats tsp0 = stats_.tsp;
-    tile_texture_lines_.clear();
-    if (begin) tile_memory_.begin_tile(r, resumed_[static_cast<std::size_t>(t)] != 0, dram_);
-    const DramTraffic loaded = dram_;
-    isp_.render_tile(r, prims, stats_.isp, stats_.tsp);
-    const DramTraffic shaded = dram_;  // what the shaders read from stored images (reads=)
-    const IspStats tile_isp = stats_.isp - isp0;
-    const TspStats tile_tsp = stats_.tsp - tsp0;
-    DramTraffic spill;
-    tile_memory_.spill(tile_tsp.tile_buffer_read_bytes.value(), tile_tsp.tile_buffer_write_bytes.value(), spill);
-    if (end) tile_memory_.end_tile(r, partial, dram_);
-    TileWork tw;
-    tw.tile_x = t % tiler_.tiles_x();
-    tw.tile_y = t / tiler_.tiles_x();
-    tw.rect = r;
-    for (std::size_t c = 0; c < kDramClassCount; ++c) {
-      tw.image_read_bytes[c] = shaded.read_bytes[c] - loaded.read_bytes[c];
-      tw.load_bytes[c] = dram_.read_bytes[c] - before.read_bytes[c] - tw.image_read_bytes[c];
-      tw.store_bytes[c] = dram_.write_bytes[c] - before.write_bytes[c];
-    }
-    tw.primitives = tile_isp.primitives_fetched.value();
-    tw.samples = tile_isp.samples_rasterised.value();
-    tw.invocations = tile_tsp.shader_invocations.value();
-    tw.quads = tile_tsp.shaded_quads.value();
-    tw.alu_ops = tile_tsp.fragment_alu_ops.value();
-    tw.texels = tile_tsp.texels_filtered.value();
-    tw.isp_wait_alu_ops = tile_isp.resolve_wait_alu_ops.value();
-    tw.isp_wait_texels = tile_isp.resolve_wait_texels.value();
-    tw.texture_line_accesses = tile_tsp.texture_line_accesses.value();
-    std::sort(tile_texture_lines_.begin(), tile_texture_lines_.end());
-    tw.texture_lines.assign(tile_texture_lines_.begin(), std::unique(tile_texture_lines_.begin(), tile_texture_lines_.end()));
-    stats_.tsp.texture_tile_lines += tw.texture_lines.size();
-    // The footprint is what the texture unit requests (before the texture cache), booked like
-    // the parameter buffer reads: after the tile's loads and stores were taken from `dram_`.
-    dram_.read(DramClass::Textures, tw.texture_lines.size() * static_cast<std::uint64_t>(hw_.cache.texture.line_bytes));
-    tw.spill_read_bytes = spill.reads(DramClass::Spill);
-    tw.spill_write_bytes = spill.writes(DramClass::Spill);
-    // The spilled share of the shaders' tile-buffer accesses goes to memory (spill reads = the
-    // spilled share of the reads + the read-back of the spilled writes) on top of passing the USC's
-    // pixel data path: a memory tile buffer is reached by the shader's own loads and stores, whose
-    // data moves between the USC and memory no faster than between the USC and its on-chip tile
-    // buffer, so a pass past the budget is never cheaper than one that fits.
-    tw.tile_buffer_bytes = tile_tsp.tile_buffer_read_bytes.value() + tile_tsp.tile_buffer_write_bytes.value() +
-                           tile_tsp.pls_bytes_accessed.value();
-    dram_ += spill;  // booked after the tile's loads and stores were taken from `dram_`
-    tw.tag_bytes = tile_isp.tag_buffer_read_bytes.value() + tile_isp.tag_buffer_write_bytes.value();
-    tw.depth_bytes = tile_isp.depth_buffer_read_bytes.value() + tile_isp.depth_buffer_write_bytes.value();
-    if (ctx_.rop) {
-      if (end) ctx_.rop->flush();  // the pass's images must be in memory for what follows
-      tw.rop_depth = ctx_.rop->take_depth_accesses();
-      tw.rop_color = ctx_.rop->take_color_accesses();
-      // Booked after the tile's loads and stores were taken from `dram_`: the timing model streams
-      // these through the SLC as they are, not as stores.
-      for (const auto* v : {&tw.rop_depth, &tw.rop_color}) {
-        for (const FramebufferAccess& a : *v) {
-          if (a.write) {
-            dram_.write(a.cls, a.bytes);
-          } else {
-            dram_.read(a.cls, a.bytes);
-          }
-        }
-      }
-    } else {
-      const std::uint64_t pb_read = prims.empty() ? 0 : tiler_.tile_read_bytes(t);
-      stats_.tiler.pb_bytes_read += pb_read;
-      dram_.read(DramClass::ParameterBuffer, pb_read);
-      if (!prims.empty()) tw.pb_reads = tiler_.tile_read_ranges(t);
-    }
-    return tw;
-  }
-
-  HwConfig hw_;  ///< the frame's hardware, with one frame-sized tile in imr mode
-  std::vector<std::uint64_t> tile_texture_lines_;  ///< the current tile's texture lines, as the TSP appends them
-  RenderContext& ctx_;
-  PassStats& stats_;
-  DramTraffic& dram_;
-  CommandWork& cw_;
-  GeometryUnit geometry_;
-  Tiler tiler_;
-  TileMemory tile_memory_;
-  Tsp tsp_;
-  Isp isp_;
-  std::vector<int> order_;               ///< tile indices in dispatch order
-  std::vector<std::uint8_t> resumed_;    ///< per tile: rendered before by a partial render
-  GeometryStats geometry_base_;          ///< the statistics at the start of the current render
-  TilerStats tiler_base_;
-};
-
 class FrameSimulator {
  public:
   FrameSimulator(const Trace& trace, const std::string& path, const Scene& scene, const HwConfig& hw, const FrameOptions& options)
-      : trace_(trace), path_(path), scene_(scene), hw_(hw), options_(options) {}
+      : trace_(trace), path_(path), scene_(scene), hw_(hw), options_(options),
+        pool_(options.threads == 0 ? default_thread_count() : options.threads) {}
 
   FrameResult run() {
     check_trace_on_hardware(trace_, hw_, path_);  // what this GPU cannot run is refused before any command runs
@@ -564,8 +309,9 @@ class FrameSimulator {
     cw.read_bytes = book_buffer_reads(pass, dram).read_bytes;  // buffers read once per pass, at its start
     cw.depends_on_previous = reads_earlier_results(pass);
 
-    PassRenderer renderer(ctx, hw_, *ps, dram, cw);
+    PassRenderer renderer(ctx, hw_, *ps, dram, cw, pool_);
     renderer.run();
+    result_.host_tile_seconds += renderer.tile_seconds();
     prim_base_ = ctx.frame_prim_base;
     for (const auto& a : pass.attachments) {
       AttachmentImage& img = result_.images.attachments.at(a.name);
@@ -645,6 +391,7 @@ class FrameSimulator {
   int geometry_passes_ = 0;
   std::unique_ptr<TextureLayout> textures_;  ///< the frame's texture address space
   std::unique_ptr<RenderOutputUnit> rop_;    ///< gpu.mode=imr: the ROP caches, kept across the frame's passes
+  ThreadPool pool_;                          ///< the threads the passes' tiles render on
   FrameResult result_;
 };
 

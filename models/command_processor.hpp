@@ -76,11 +76,17 @@ struct FrameResult {
   std::string final_color;         ///< name of the last stored color attachment or image buffer ("" if none)
   FrameWork work;                  ///< what the timing model schedules
   FrameStats totals;               ///< typed frame totals (the same figures as the "frame/<unit>" rows)
+  /// Host wall seconds spent rendering tiles (on FrameOptions::threads threads); the rest of the
+  /// functional simulation (trace replay, geometry, binning, dispatches) is serial.
+  double host_tile_seconds = 0;
 };
 
 /// How a frame is simulated (host choices: none changes a statistic).
 struct FrameOptions {
   bool colour = true;  ///< compute the colour images (FrameInputs::colour); false when no image is read
+  /// Threads the tiles of each render run on (models/pass_renderer.hpp); 0: the machine's
+  /// (default_thread_count). Every figure and image is the same at any count.
+  unsigned threads = 1;
 };
 
 /// Replays `trace` on `scene` with the hardware `hw`. Input problems (an unsupported kernel or

@@ -167,7 +167,7 @@ std::uint64_t TileMemory::attachment_bytes(const Attachment& a, const PixelRect&
   return pixels * a.bytes_per_pixel();
 }
 
-void TileMemory::begin_tile(const PixelRect& r, bool resumed, DramTraffic& dram) {
+void TileMemory::begin_tile(const PixelRect& r, bool resumed, DramTraffic& dram, TileMemoryStats& stats) const {
   const double ratio = ctx_.hw->writeback.compression_ratio;
   const int W = ctx_.viewport.width_px;
   for (std::size_t ai = 0; ai < ctx_.pass->attachments.size(); ++ai) {
@@ -184,17 +184,17 @@ void TileMemory::begin_tile(const PixelRect& r, bool resumed, DramTraffic& dram)
     } else if (resumed) {
       const auto b = static_cast<std::uint64_t>(std::ceil(static_cast<double>(bytes) * ratio));
       dram.read(traffic_class_of(a.usage), b);
-      stats_.partial_render_reload_bytes += b;
+      stats.partial_render_reload_bytes += b;
       continue;
     }
     if (a.load == LoadOp::Load && !a.transient) {
-      stats_.tile_load_bytes += bytes;
+      stats.tile_load_bytes += bytes;
       dram.read(traffic_class_of(a.usage), static_cast<std::uint64_t>(std::ceil(static_cast<double>(bytes) * ratio)));
       continue;
     }
     if (a.load == LoadOp::Load && a.transient) continue;  // memoryless: nothing to load
     // clear (and don't care, made deterministic): initialise the tile's samples
-    if (a.load == LoadOp::Clear) stats_.tile_clear_bytes += bytes;
+    if (a.load == LoadOp::Clear) stats.tile_clear_bytes += bytes;
     const std::size_t S = img.samples;
     for (int y = r.y0; y < r.y1; ++y) {
       const std::size_t b = (static_cast<std::size_t>(y) * W + static_cast<std::size_t>(r.x0)) * S;
@@ -209,16 +209,16 @@ void TileMemory::begin_tile(const PixelRect& r, bool resumed, DramTraffic& dram)
   }
 }
 
-void TileMemory::spill(std::uint64_t read_bytes, std::uint64_t write_bytes, DramTraffic& dram) {
+void TileMemory::spill(std::uint64_t read_bytes, std::uint64_t write_bytes, DramTraffic& dram, TileMemoryStats& stats) const {
   if (spill_fraction_ <= 0.0) return;
   const auto w = static_cast<std::uint64_t>(std::llround(spill_fraction_ * static_cast<double>(write_bytes)));
   const auto r = static_cast<std::uint64_t>(std::llround(spill_fraction_ * static_cast<double>(read_bytes))) + w;
   dram.write(DramClass::Spill, w);
   dram.read(DramClass::Spill, r);
-  stats_.spill_bytes += w + r;
+  stats.spill_bytes += w + r;
 }
 
-void TileMemory::end_tile(const PixelRect& r, bool partial, DramTraffic& dram) {
+void TileMemory::end_tile(const PixelRect& r, bool partial, DramTraffic& dram, TileMemoryStats& stats) const {
   const double ratio = ctx_.hw->writeback.compression_ratio;
   const int W = ctx_.viewport.width_px;
   for (std::size_t ai = 0; ai < ctx_.pass->attachments.size(); ++ai) {
@@ -230,7 +230,7 @@ void TileMemory::end_tile(const PixelRect& r, bool partial, DramTraffic& dram) {
     if (partial) {
       // The tile buffer is needed for the next render: everything leaves the chip, transient or not.
       dram.write(traffic_class_of(a.usage), compressed);
-      stats_.partial_render_store_bytes += compressed;
+      stats.partial_render_store_bytes += compressed;
       continue;
     }
     if (!a.resolve.empty()) {
@@ -246,11 +246,11 @@ void TileMemory::end_tile(const PixelRect& r, bool partial, DramTraffic& dram) {
           dst.color[p] = FormatPrecision::color(dst.format, sum / static_cast<float>(S));  // what the target keeps
         }
       }
-      stats_.resolved_samples += static_cast<std::uint64_t>(r.width()) * static_cast<std::uint64_t>(r.height()) * S;
+      stats.resolved_samples += static_cast<std::uint64_t>(r.width()) * static_cast<std::uint64_t>(r.height()) * S;
     }
     if (a.store == StoreOp::Store && !a.transient) {
-      stats_.tile_store_bytes += bytes;
-      stats_.writeback_dram_bytes += compressed;
+      stats.tile_store_bytes += bytes;
+      stats.writeback_dram_bytes += compressed;
       dram.write(traffic_class_of(a.usage), compressed);
     }
   }

@@ -62,7 +62,8 @@ DramClass traffic_class_of(AttachmentUsage u);
 /// Tile memory of one pass.
 class TileMemory {
  public:
-  /// Computes the pass's on-chip needs against the budget and records them in `stats`; refuses a
+  /// Computes the pass's on-chip needs against the budget and records them (and split renders) in
+  /// `stats`; refuses a
   /// pass whose pixel local storage exceeds pls.max_pls_bytes_per_pixel (check_pls_layout).
   /// Holds the pass's pixel local storage (if it declares one) and points `ctx.pls` at it.
   TileMemory(RenderContext& ctx, TileMemoryStats& stats);
@@ -73,13 +74,16 @@ class TileMemory {
   std::uint32_t budget_bytes_per_pixel() const { return budget_; }
   /// The strips a tile is rendered in (one strip when the pass fits).
   std::vector<PixelRect> strips(const PixelRect& tile) const;
+  // The tile operations book their counts in `stats` (the tile's own, when tiles render in
+  // parallel) and write only the tile's pixels: tiles may run on several threads at once.
   /// Start of a tile render: load ops, or the reload of what a partial render stored.
-  void begin_tile(const PixelRect& rect, bool resumed_after_partial, DramTraffic& dram);
+  void begin_tile(const PixelRect& rect, bool resumed_after_partial, DramTraffic& dram, TileMemoryStats& stats) const;
   /// End of a tile render: store ops (partial = a partial render: everything goes to DRAM).
-  void end_tile(const PixelRect& rect, bool partial, DramTraffic& dram);
+  void end_tile(const PixelRect& rect, bool partial, DramTraffic& dram, TileMemoryStats& stats) const;
   /// Books the spill of one tile render: the over-budget share of the shaders' tile buffer
   /// reads and writes goes to DRAM, plus the read-back of the spilled writes.
-  void spill(std::uint64_t tile_buffer_read_bytes, std::uint64_t tile_buffer_write_bytes, DramTraffic& dram);
+  void spill(std::uint64_t tile_buffer_read_bytes, std::uint64_t tile_buffer_write_bytes, DramTraffic& dram,
+             TileMemoryStats& stats) const;
   /// Share of tile buffer accesses that go to memory (0 when the pass fits or tiles are split).
   double spill_fraction() const { return spill_fraction_; }
   /// pls.over_budget = split_render on a pass over budget: the index of the draw before which the

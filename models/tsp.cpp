@@ -16,7 +16,12 @@
 
 namespace tbdr {
 
-Tsp::Tsp(RenderContext& ctx) : ctx_(ctx) {}
+Tsp::Tsp(RenderContext& ctx) : ctx_(ctx), texture_lines_out_(ctx.texture_lines), dram_out_(ctx.dram) {}
+
+void Tsp::bind_outputs(std::vector<std::uint64_t>* texture_lines, DramTraffic* dram) {
+  texture_lines_out_ = texture_lines;
+  dram_out_ = dram;
+}
 
 namespace {
 
@@ -216,7 +221,7 @@ void Tsp::texture_addresses(const Primitive& p, std::uint32_t tex_fetches, std::
   const std::int64_t half = std::int64_t{1} << (bits - 1);
   const TextureLayout& layout = *ctx_.textures;
   const TextureStorage& tex = layout.of_material(p.material);
-  std::vector<std::uint64_t>& lines = *ctx_.texture_lines;
+  std::vector<std::uint64_t>& lines = *texture_lines_out_;
   // The tile's list keeps each line once: a small direct-mapped filter drops most repeats before
   // they are appended (the list is sorted and merged at the end of the tile). A list emptied by
   // the caller starts a new tile.
@@ -342,7 +347,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   };
 
   // Texture addresses of scene triangles (other primitives read attachments or on-chip data).
-  if (from_triangle && sh.tex_fetches > 0 && ctx_.textures && ctx_.texture_lines) {
+  if (from_triangle && sh.tex_fetches > 0 && ctx_.textures && texture_lines_out_) {
     texture_addresses(p, sh.tex_fetches, static_cast<std::size_t>(quads), stats);
   }
   // The quad uvs every surface of a scene triangle carries (SurfacePoint::quad_uv), computed as
@@ -452,7 +457,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     // Framebuffer fetch: the fetched attachments are read from the tile buffer at this pixel.
     stats.tile_buffer_read_bytes += d.fetch_bytes;
     if (from_triangle && sh.light_source != LightSource::None && sh.light_source != LightSource::Proxy) ++stats.lit_surface_invocations;
-    for (const auto& [cls, bytes] : d.per_pixel_reads) ctx_.dram->read(cls, bytes);
+    for (const auto& [cls, bytes] : d.per_pixel_reads) dram_out_->read(cls, bytes);
     stats.fragment_alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * fl.count;
     stats.light_evaluations += fl.count;
     ctx_.images->counters.shaded[pixel] += 1;

@@ -63,7 +63,12 @@ inline constexpr const char* kPlsAccumulatorName = "light_accum";
 /// The fragment shading stage.
 class Tsp {
  public:
+  /// Appends texture lines to ctx.texture_lines and books shader image reads to ctx.dram (as
+  /// they are when it is made) until bind_outputs says otherwise.
   explicit Tsp(RenderContext& ctx);
+  /// Where this TSP appends the tile's texture lines and books the shaders' image reads: one list
+  /// and one traffic account per thread when tiles render in parallel (models/command_processor).
+  void bind_outputs(std::vector<std::uint64_t>* texture_lines, DramTraffic* dram);
   /// Shades `pixels` (one primitive, one tile, sorted by row then column). For punch-through
   /// primitives, `alive` receives per pixel the samples that survived the alpha test.
   void shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, std::vector<std::uint32_t>* alive,
@@ -85,6 +90,8 @@ class Tsp {
   glm::vec3 near_lighting(const SurfacePoint& s, glm::vec3 eye);
 
   RenderContext& ctx_;
+  std::vector<std::uint64_t>* texture_lines_out_;  ///< the current tile's texture lines (see bind_outputs)
+  DramTraffic* dram_out_;                          ///< the shaders' image reads (see bind_outputs)
   std::vector<std::uint64_t> quad_seen_;  ///< scratch: quads launched in this batch
   /// The colour loop's candidate lights for the current batch and screen bin, structure of arrays
   /// (the radius test runs over contiguous floats, several lights per instruction).

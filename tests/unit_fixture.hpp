@@ -294,10 +294,10 @@ class RenderRig {
   std::uint32_t need_bytes_per_pixel() const { return tile_memory_->need_bytes_per_pixel(); }
   std::uint32_t budget_bytes_per_pixel() const { return tile_memory_->budget_bytes_per_pixel(); }
   std::vector<PixelRect> strips(const PixelRect& tile) const { return tile_memory_->strips(tile); }
-  void begin_tile(const PixelRect& rect, bool resumed_after_partial = false) { tile_memory_->begin_tile(rect, resumed_after_partial, dram); }
-  void end_tile(const PixelRect& rect, bool partial = false) { tile_memory_->end_tile(rect, partial, dram); }
+  void begin_tile(const PixelRect& rect, bool resumed_after_partial = false) { tile_memory_->begin_tile(rect, resumed_after_partial, dram, tm_stats); }
+  void end_tile(const PixelRect& rect, bool partial = false) { tile_memory_->end_tile(rect, partial, dram, tm_stats); }
   void spill(std::uint64_t tile_buffer_read_bytes, std::uint64_t tile_buffer_write_bytes) {
-    tile_memory_->spill(tile_buffer_read_bytes, tile_buffer_write_bytes, dram);
+    tile_memory_->spill(tile_buffer_read_bytes, tile_buffer_write_bytes, dram, tm_stats);
   }
   double spill_fraction() const { return tile_memory_->spill_fraction(); }
 

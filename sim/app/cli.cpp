@@ -8,6 +8,7 @@
 #include <boost/program_options.hpp>
 
 #include "app/commands.hpp"
+#include "kernel/thread_pool.hpp"
 #include "kernel/errors.hpp"
 #include "tbdrsim_version.hpp"
 
@@ -74,6 +75,25 @@ void add_config_options(po::options_description& desc) {
        "checkout (configs/NAME or configs/NAME.ini; see `tbdrsim --help`)")
       ("set,s", po::value<std::vector<std::string>>()->composing(),
        "override one parameter, section.key=value; repeatable, wins over files");
+}
+
+void add_threads_option(po::options_description& desc, const std::string& default_help) {
+  desc.add_options()("threads", po::value<int>(),
+                     ("threads inside each run: the tiles of every render are shaded on this many threads, "
+                      "with the same statistics, images and database rows at any count (default: " + default_help + ")").c_str());
+}
+
+unsigned threads_option(const po::variables_map& vm, unsigned fallback) {
+  if (!vm.count("threads")) return fallback;
+  const int n = vm["threads"].as<int>();
+  if (n < 1 || n > kMaxThreadsPerRun) {
+    throw InputError("--threads " + std::to_string(n), "expected 1.." + std::to_string(kMaxThreadsPerRun) + " threads per run");
+  }
+  return static_cast<unsigned>(n);
+}
+
+unsigned threads_per_worker(int workers) {
+  return std::max(1u, default_thread_count() / static_cast<unsigned>(std::max(1, workers)));
 }
 
 ResolvedConfig config_from_options(const po::variables_map& vm) {

@@ -11,6 +11,7 @@
 #include "app/cli.hpp"
 #include "app/commands.hpp"
 #include "kernel/errors.hpp"
+#include "kernel/thread_pool.hpp"
 #include "models/command_processor.hpp"
 #include "app/image_output.hpp"
 #include "analysis/results_db.hpp"
@@ -144,6 +145,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
       "stats", po::value<std::string>(), "write the run's statistics to FILE (gem5 stats.txt text; JSON with units and descriptions when FILE ends .json)")(
       "timeline", po::value<std::string>(), "write the run's timeline to FILE (Chrome/Perfetto trace-event JSON)")(
       "quiet,q", "print nothing but errors");
+  add_threads_option(desc, "the cores this process may use, " + std::to_string(default_thread_count()) + " here");
   po::variables_map vm;
   if (!parse_command_options("run", args, desc, nullptr, vm, out)) return 0;
   RunRequest req;
@@ -152,6 +154,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   req.db_path = vm["db"].as<std::string>();
   if (vm.count("images")) req.images_dir = vm["images"].as<std::string>();
   req.command_line = invocation_command_line();
+  req.threads = threads_option(vm, default_thread_count());
   for (const char* file : {"stats", "timeline"}) {
     if (vm.count(file)) check_output_file(std::string("--") + file, vm[file].as<std::string>());  // before the run
   }

@@ -49,6 +49,7 @@ struct StudyPlan {
   std::string resolution;
   std::string image_mode;  ///< none | largest | all
   int jobs = 2;
+  unsigned threads = 1;  ///< threads inside each run (--threads; default: cores / jobs)
   std::vector<int> light_counts;
   std::vector<std::string> techniques;
   int max_lights = 0;
@@ -114,6 +115,7 @@ StudyPlan plan_from_options(const po::variables_map& vm) {
   plan.dir = vm["out"].as<std::string>();
   plan.jobs = vm["jobs"].as<int>();
   if (plan.jobs < 1 || plan.jobs > 64) throw InputError("--jobs " + std::to_string(plan.jobs), "expected 1..64 worker processes");
+  plan.threads = threads_option(vm, threads_per_worker(plan.jobs));
   plan.light_counts = vm.count("lights") ? vm["lights"].as<std::vector<int>>() : std::vector<int>{256, 1024};
   plan.techniques = vm.count("technique") ? vm["technique"].as<std::vector<std::string>>() : technique_names();
   for (const auto& n : plan.techniques) find_technique(n);  // InputError for an unknown name
@@ -241,6 +243,7 @@ int run_points(const StudyPlan& plan, const std::vector<StudyPoint>& points, std
         req.trace_path = points[i].trace_path;
         req.db_path = plan.db_path;
         req.images_dir = points[i].images_dir;
+        req.threads = plan.threads;
         req.command_line = invocation_command_line() + " [point " + std::to_string(i) + "]";
         run_one(req);
         return 0;
@@ -493,6 +496,8 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
       "(repeatable; `tbdrsim trace --list` lists the options)")(
       "modes", po::value<std::vector<std::string>>()->multitoken(),
       "GPU modes to compare (gpu.mode values: tbdr tbr imr); each trace replays on each; default: the configuration's");
+  add_threads_option(desc, "the cores this process may use divided between the --jobs workers, at least 1, so "
+                           "that jobs x threads <= cores");
   po::variables_map vm;
   if (!parse_command_options("study", args, desc, nullptr, vm, out)) return 0;
   const StudyPlan plan = plan_from_options(vm);
@@ -508,7 +513,7 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
     out << ", modes";
     for (const auto& m : plan.modes) out << " " << m;
   }
-  out << ", " << plan.jobs << " workers" << std::endl;
+  out << ", " << plan.jobs << " workers x " << plan.threads << (plan.threads == 1 ? " thread" : " threads") << std::endl;
   const std::vector<StudyPoint> points = generate_traces(plan);
   const int failures = run_points(plan, points, out, err);
   if (failures > 0) err << "study: " << failures << " worker(s) reported failed runs (see above)\n";

@@ -11,6 +11,7 @@
 #include "analysis/results_db.hpp"
 #include "app/cli.hpp"
 #include "app/commands.hpp"
+#include "kernel/thread_pool.hpp"
 #include "app/sweep.hpp"
 #include "app/sweep_merge.hpp"
 #include "app/sweep_slurm.hpp"
@@ -43,7 +44,7 @@ std::vector<std::string> split_option_list(const std::vector<std::string>& value
 }  // namespace
 
 int cmd_sweep(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int cores = static_cast<int>(default_thread_count());
   po::options_description desc(
       "sweep options: tbdrsim sweep FILE --db DB [-j N] [--slice i/K] [--trace GLOB...]\n"
       "               tbdrsim sweep FILE --emit-slurm DIR [--slices K] [--time T] [--partition P] [--mem M]\n"
@@ -65,6 +66,8 @@ int cmd_sweep(const std::vector<std::string>& args, std::ostream& out, std::ostr
        "auto | bar | lines | none (auto: a bar on a terminal, lines otherwise)")
       ("dry-run,n", "list the points and which are already done; run nothing, write nothing")
       ("tbdrsim", po::value<std::string>(), "tbdrsim executable the workers run (default: this one)");
+  add_threads_option(desc, "the cores this process may use divided between the workers, at least 1, so that "
+                           "jobs x threads <= cores; with the default -j, 1");
   po::positional_options_description pos;
   pos.add("file", 1);
   po::variables_map vm;
@@ -82,6 +85,10 @@ int cmd_sweep(const std::vector<std::string>& args, std::ostream& out, std::ostr
     check_slurm_option(std::string("--") + o, vm[o].as<std::string>());
   }
   if (slurm) {
+    if (vm.count("threads")) {
+      throw UsageError("tbdrsim sweep: --emit-slurm tasks divide their CPUs (--cpus-per-task) between workers and threads "
+                       "themselves; --threads goes with a sweep that runs");
+    }
     if (vm.count("slice")) throw UsageError("tbdrsim sweep: --emit-slurm and --slice do not go together");
     if (vm.count("db")) throw UsageError("tbdrsim sweep: --emit-slurm writes one shard database per task; --db goes with a sweep that runs");
     std::size_t groups = 0;
@@ -111,6 +118,7 @@ int cmd_sweep(const std::vector<std::string>& args, std::ostream& out, std::ostr
   SweepOptions opt;
   opt.db_path = vm["db"].as<std::string>();
   opt.jobs = jobs;
+  opt.threads = static_cast<int>(threads_option(vm, threads_per_worker(jobs)));
   opt.binary = binary;
   opt.dry_run = vm.count("dry-run") > 0;
   if (vm.count("slice")) opt.slice = parse_slice(vm["slice"].as<std::string>());

@@ -27,6 +27,17 @@ int cmd_plot(const std::vector<std::string>& args, std::ostream& out, std::ostre
 void add_config_options(boost::program_options::options_description& desc);
 /// Resolves the configuration from those options (InputError on any bad input).
 ResolvedConfig config_from_options(const boost::program_options::variables_map& vm);
+/// The most threads one run takes (--threads): the bound the sweep puts on its worker processes
+/// (-j 1..1024), there to catch a mistyped count.
+inline constexpr int kMaxThreadsPerRun = 1024;
+/// Adds --threads, the threads inside one run (tiles of a render on a pool of threads; every
+/// figure is the same at any count), with `default_help` saying what it defaults to.
+void add_threads_option(boost::program_options::options_description& desc, const std::string& default_help);
+/// The --threads value, or `fallback` when it was not given (InputError outside 1..kMaxThreadsPerRun).
+unsigned threads_option(const boost::program_options::variables_map& vm, unsigned fallback);
+/// The threads per run when `workers` runs go at once: the cores this process may use divided
+/// between them (at least 1), so that workers x threads <= cores.
+unsigned threads_per_worker(int workers);
 /// The data folders of the checkout that config and sweep file names are looked up in.
 enum class DataFolder { Configs, Sweeps };
 /// Finds a config or sweep file named on the command line: the path as given (from the working

@@ -174,7 +174,9 @@ RunOutcome run_one(const RunRequest& req) {
   const auto t_sim = std::chrono::steady_clock::now();
   const double c_sim = cpu_seconds();
   // Colours are computed only for the images that read them (statistics are the same either way).
-  outcome.frame = simulate_frame(trace, req.trace_path, scene, req.config.hw, FrameOptions{.colour = !req.images_dir.empty()});
+  outcome.threads = req.threads;
+  outcome.frame = simulate_frame(trace, req.trace_path, scene, req.config.hw,
+                                 FrameOptions{.colour = !req.images_dir.empty(), .threads = req.threads});
   outcome.wall_seconds = seconds_since(t_sim);
   outcome.cpu_seconds = cpu_seconds() - c_sim;
   const auto t_timing = std::chrono::steady_clock::now();
@@ -213,6 +215,10 @@ RunOutcome run_one(const RunRequest& req) {
   rec.stats.push_back({"frame/host", "timing_wall_seconds", outcome.timing_seconds, "s", "Host wall time of the timing and energy models"});
   rec.stats.push_back({"frame/host", "simulation_cpu_seconds", outcome.cpu_seconds, "s", "Host CPU time of the functional simulation"});
   rec.stats.push_back({"frame/host", "timing_cpu_seconds", outcome.timing_cpu_seconds, "s", "Host CPU time of the timing and energy models"});
+  rec.stats.push_back({"frame/host", "tile_render_wall_seconds", outcome.frame.host_tile_seconds, "s",
+                       "Host wall time of the functional simulation's tile rendering (the part on --threads threads)"});
+  rec.stats.push_back({"frame/host", "simulation_threads", static_cast<double>(outcome.threads), "threads",
+                       "Threads the functional simulation rendered tiles on (--threads; no other figure depends on it)"});
   rec.tiles = outcome.timing.tiles;
   ResultsDb db(req.db_path);
   outcome.run_id = db.write_run(rec);
@@ -227,7 +233,8 @@ void print_run_summary(const RunOutcome& o, std::ostream& out) {
   const TspStats& tsp = f.totals.render.tsp;
   const std::uint64_t shaded = tsp.shader_invocations.value();
   out << "run " << o.run_id << ": " << o.technique << " on " << o.scene << ", " << f.images.width << "x"
-      << f.images.height << ", " << f.passes.size() << " pass(es), simulated in " << stat_text(o.wall_seconds) << " s\n";
+      << f.images.height << ", " << f.passes.size() << " pass(es), simulated in " << stat_text(o.wall_seconds) << " s on " << o.threads
+      << (o.threads == 1 ? " thread\n" : " threads\n");
   out << "  primitives in/out:  " << geometry.primitives_in.value() << " / " << geometry.primitives_out.value()
       << "  (clipped " << geometry.primitives_clipped.value() << ", partial renders "
       << f.totals.render.tiler.partial_renders.value() << ")\n";

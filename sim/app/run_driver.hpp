@@ -23,6 +23,7 @@ struct RunRequest {
   std::string db_path;
   std::string images_dir;    ///< empty: no images
   std::string command_line;  ///< recorded in the runs table
+  unsigned threads = 1;      ///< threads the frame's tiles render on (FrameOptions::threads); no figure depends on it
 };
 
 /// What a run produced.
@@ -35,6 +36,7 @@ struct RunOutcome {
   double timing_seconds = 0;     ///< host time of the timing model
   double cpu_seconds = 0;        ///< host CPU time of the functional simulation
   double timing_cpu_seconds = 0; ///< host CPU time of the timing and energy models
+  unsigned threads = 1;          ///< threads the simulation ran on
   FrameResult frame;
   TimingResult timing;
   EnergyBreakdown energy;

@@ -120,8 +120,10 @@ PointInputs resolve_inputs(const SweepSpec& spec, const std::vector<SweepPoint>&
   return in;
 }
 
-/// The command line of one point's worker: `tbdrsim run` with its configs, overrides and trace.
-std::vector<std::string> run_args(const std::string& binary, const SweepPoint& p, const std::string& db_path) {
+/// The command line of one point's worker: `tbdrsim run` with its configs, overrides, trace and
+/// threads.
+std::vector<std::string> run_args(const std::string& binary, const SweepPoint& p, const std::string& db_path,
+                                  int threads) {
   std::vector<std::string> args = {binary, "run"};
   for (const auto& c : p.configs) {
     args.push_back("--config");
@@ -131,7 +133,7 @@ std::vector<std::string> run_args(const std::string& binary, const SweepPoint& p
     args.push_back("--set");
     args.push_back(s);
   }
-  args.insert(args.end(), {"--trace", p.trace, "--db", db_path, "--quiet"});
+  args.insert(args.end(), {"--trace", p.trace, "--db", db_path, "--threads", std::to_string(threads), "--quiet"});
   return args;
 }
 
@@ -326,7 +328,7 @@ void print_plan(const SweepSpec& spec, const SweepOptions& opt, std::size_t poin
   out << " (" << inputs.configs.size() << " configuration(s) x " << inputs.traces.size() << " trace(s)";
   if (spec.repetitions > 1) out << " x " << spec.repetitions << " repetitions";
   out << "), " << skipped << " already in " << opt.db_path << ", " << to_run << " to run";
-  if (!opt.dry_run) out << " with " << opt.jobs << " worker(s)";
+  if (!opt.dry_run) out << " with " << opt.jobs << " worker(s) x " << opt.threads << " thread(s)";
   out << "\n" << std::flush;
 }
 
@@ -359,6 +361,7 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
   const std::vector<SweepPoint> points = slice_points(all, opt.slice);
   summary.points = points.size();
   if (opt.jobs < 1 || opt.jobs > 1024) throw InputError("-j " + std::to_string(opt.jobs), "expected 1..1024 worker processes");
+  if (opt.threads < 1 || opt.threads > 1024) throw InputError("--threads " + std::to_string(opt.threads), "expected 1..1024 threads per run");
   const std::string binary = opt.binary.empty() ? self_executable() : opt.binary;
   if (!opt.dry_run && access(binary.c_str(), X_OK) != 0) {
     throw InputError(binary, "the tbdrsim binary for the workers is not executable");
@@ -417,7 +420,7 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
       }
       WorkerJob job;
       job.id = i;
-      job.argv = run_args(binary, points[i], opt.db_path);
+      job.argv = run_args(binary, points[i], opt.db_path, opt.threads);
       launches[i] = {shell_command_line(job.argv), utc_now_iso8601()};
       return job;
     }

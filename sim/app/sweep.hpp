@@ -18,6 +18,7 @@ namespace tbdr {
 struct SweepOptions {
   std::string db_path;
   int jobs = 1;
+  int threads = 1;             ///< threads inside each point's run (`tbdrsim run --threads`)
   SweepSlice slice;
   std::string binary;          ///< the tbdrsim executable the workers run (default: this one)
   SweepProgress progress = SweepProgress::Lines;

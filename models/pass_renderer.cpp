@@ -1,0 +1,301 @@
+#include "models/pass_renderer.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <numeric>
+#include <utility>
+
+#include "kernel/thread_pool.hpp"
+#include "models/rop.hpp"
+
+namespace tbdr {
+
+std::vector<int> tile_order(int tiles_x, int tiles_y, TileOrder order) {
+  // Bits of each tile coordinate interleaved into a Morton key: 16 bits order 65536 tiles per
+  // axis, far more than any frame has, in a 32-bit key.
+  constexpr int kMortonBitsPerAxis = 16;
+  std::vector<int> out;
+  out.reserve(static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y));
+  if (order == TileOrder::Morton) {
+    std::vector<std::pair<std::uint64_t, int>> keyed;
+    for (int ty = 0; ty < tiles_y; ++ty) {
+      for (int tx = 0; tx < tiles_x; ++tx) {
+        std::uint64_t key = 0;
+        for (int b = 0; b < kMortonBitsPerAxis; ++b) {
+          key |= (static_cast<std::uint64_t>((tx >> b) & 1) << (2 * b)) | (static_cast<std::uint64_t>((ty >> b) & 1) << (2 * b + 1));
+        }
+        keyed.push_back({key, ty * tiles_x + tx});
+      }
+    }
+    std::sort(keyed.begin(), keyed.end());
+    for (const auto& k : keyed) out.push_back(k.second);
+  } else {
+    for (int t = 0; t < tiles_x * tiles_y; ++t) out.push_back(t);
+  }
+  return out;
+}
+
+struct PassRenderer::TileWorker {
+  explicit TileWorker(RenderContext& ctx) : tsp(ctx), isp(ctx, tsp) { tsp.bind_outputs(&texture_lines, &dram); }
+  std::vector<std::uint64_t> texture_lines;  ///< the current tile's texture lines, as the TSP appends them
+  DramTraffic dram;                          ///< what the current tile booked
+  Tsp tsp;
+  Isp isp;
+};
+
+PassRenderer::PassRenderer(RenderContext& ctx, const HwConfig& frame_hw, PassStats& stats, DramTraffic& dram,
+                           CommandWork& cw, ThreadPool& pool)
+    : hw_(pass_hw(frame_hw, ctx)), ctx_(bind(ctx, hw_)), stats_(stats), dram_(dram), cw_(cw), pool_(pool),
+      geometry_(hw_, ctx.scene, *ctx.lights, ctx.camera, ctx.viewport),
+      tiler_(hw_, ctx.viewport, ctx.pattern),
+      tile_memory_(ctx, stats.tile_memory),
+      order_(tile_order(tiler_.tiles_x(), tiler_.tiles_y(), hw_.tiling.tile_order)),
+      resumed_(static_cast<std::size_t>(tiler_.tile_count()), 0) {
+  // After tile_memory_: it points ctx.pls at the pass's pixel local storage, which the TSPs read.
+  for (unsigned w = 0; w < pool_.size(); ++w) workers_.push_back(std::make_unique<TileWorker>(ctx_));
+}
+
+PassRenderer::~PassRenderer() = default;
+
+void PassRenderer::run() {
+  if (ctx_.rop) {
+    run_immediate();
+    return;
+  }
+  std::vector<Primitive> staged;
+  for (std::uint32_t i = 0; i < ctx_.draws.size(); ++i) {
+    if (static_cast<int>(i) == tile_memory_.split_draw()) {
+      // pls.over_budget = split_render: the driver ends the render at this subpass boundary.
+      render(true);
+      tile_memory_.begin_split_render(ctx_.draws);
+    }
+    staged.clear();
+    geometry_.run_draw(ctx_.draws[i], i, staged, ctx_.object_lights, stats_.geometry, dram_);
+    for (const Primitive& p : staged) {
+      ctx_.prims.push_back(p);
+      if (!tiler_.bin(static_cast<std::uint32_t>(ctx_.prims.size() - 1), ctx_.prims.back(), stats_.tiler)) {
+        ctx_.prims.pop_back();
+        ++stats_.tiler.partial_renders;
+        render(true);
+        ctx_.prims.push_back(p);
+        tiler_.bin(0, ctx_.prims.back(), stats_.tiler);
+      }
+    }
+  }
+  render(false);
+}
+
+/// imr: no binning. The draws' primitives go down the pipeline in submission order, in batches
+/// of imr.primitives_per_batch, each rasterised, depth tested and shaded over the whole frame as
+/// it arrives, its depth and colour through the ROP caches: one render whose "tiles" are the
+/// batches (FrameWork::immediate), each carrying its own geometry work. The batches share the
+/// ROP caches in order: they render one after another, on the first worker.
+void PassRenderer::run_immediate() {
+  const PixelRect frame{0, 0, ctx_.viewport.width_px, ctx_.viewport.height_px};
+  const auto batch = static_cast<std::size_t>(hw_.imr.primitives_per_batch);
+  RenderWork rw;
+  std::vector<Primitive> staged;
+  std::vector<std::uint32_t> indices;
+  bool first = true;
+  auto emit = [&](bool last) {
+    indices.resize(ctx_.prims.size());
+    std::iota(indices.begin(), indices.end(), 0u);
+    TileWork tw = merge(render_tile(*workers_[0], 0, frame, indices, false, first, last));
+    tw.geometry = binning_since_last_render();
+    rw.tiles.push_back(std::move(tw));
+    first = false;
+    ctx_.frame_prim_base += static_cast<std::uint32_t>(ctx_.prims.size());
+    ctx_.prims.clear();
+  };
+  for (std::uint32_t i = 0; i < ctx_.draws.size(); ++i) {
+    staged.clear();
+    geometry_.run_draw(ctx_.draws[i], i, staged, ctx_.object_lights, stats_.geometry, dram_);
+    for (const Primitive& p : staged) {
+      ctx_.prims.push_back(p);
+      if (ctx_.prims.size() >= batch) emit(false);
+    }
+  }
+  emit(true);  // the last batch (also when empty: the pass's clears, resolves and the ROP flush)
+  cw_.renders.push_back(std::move(rw));
+}
+
+HwConfig PassRenderer::pass_hw(const HwConfig& frame_hw, const RenderContext& ctx) {
+  HwConfig hw = frame_hw;
+  if (ctx.framebuffer_in_dram) {
+    hw.tiling.tile_width = ctx.viewport.width_px;
+    hw.tiling.tile_height = ctx.viewport.height_px;
+    hw.tiling.pb_capacity_bytes = std::int64_t{1} << 62;
+  }
+  return hw;
+}
+
+RenderContext& PassRenderer::bind(RenderContext& ctx, const HwConfig& hw) {
+  ctx.hw = &hw;
+  return ctx;
+}
+
+BinningWork PassRenderer::binning_since_last_render() {
+  const GeometryStats g = stats_.geometry - geometry_base_;
+  const TilerStats b = stats_.tiler - tiler_base_;
+  BinningWork w;
+  w.vertices_shaded = g.vertices_shaded.value();
+  w.vertex_alu_ops = g.vertex_alu_ops.value();
+  w.vertex_fetch_bytes = g.vertex_fetch_bytes.value();
+  w.index_fetch_bytes = g.index_fetch_bytes.value();
+  w.primitives_in = g.primitives_in.value();
+  w.primitives_binned = b.primitives_binned.value();
+  w.tile_references = b.tile_references.value();
+  geometry_base_ = stats_.geometry;
+  tiler_base_ = stats_.tiler;
+  return w;
+}
+
+AttachmentImage* PassRenderer::allocate_surfaces() {
+  std::uint32_t outputs = 0;
+  for (const DrawContext& d : ctx_.draws) outputs = std::max(outputs, d.shader->color_outputs);
+  outputs = std::min<std::uint32_t>(outputs, static_cast<std::uint32_t>(ctx_.color_targets.size()));
+  for (std::uint32_t o = 0; o < outputs; ++o) {
+    AttachmentImage* t = ctx_.color_targets[o];
+    if (t->usage == AttachmentUsage::Color) continue;
+    // The TSP stores a fragment's surface in the first non-colour target among its outputs: with
+    // the targets in one order for every draw, this one.
+    if (!t->surface.empty()) return nullptr;
+    t->surface.assign(t->color.size(), SurfacePoint{});
+    t->surface_valid.assign(t->color.size(), 0);
+    return t;
+  }
+  return nullptr;
+}
+
+void PassRenderer::release_unwritten_surfaces(AttachmentImage* fresh) {
+  if (fresh == nullptr) return;
+  if (std::find(fresh->surface_valid.begin(), fresh->surface_valid.end(), std::uint8_t{1}) != fresh->surface_valid.end()) return;
+  fresh->surface = {};
+  fresh->surface_valid = {};
+}
+
+void PassRenderer::render(bool partial) {
+  RenderWork rw;
+  rw.partial = partial;
+  rw.binning = binning_since_last_render();
+  DramTraffic pb;
+  tiler_.finish_render(stats_.tiler, pb);
+  if (!ctx_.framebuffer_in_dram) {
+    dram_ += pb;
+    rw.binning.pb_write_bytes = pb.writes(DramClass::ParameterBuffer);
+  }
+  jobs_.clear();
+  for (int t : order_) {
+    if (partial && tiler_.tile_primitives(t).empty()) continue;  // untouched: nothing to render yet
+    for (const PixelRect& r : tile_memory_.strips(tiler_.tile_rect(t))) jobs_.push_back({t, r});
+  }
+  AttachmentImage* const fresh = allocate_surfaces();
+  results_.clear();
+  results_.resize(jobs_.size());
+  const auto start = std::chrono::steady_clock::now();
+  pool_.for_each(jobs_.size(), [&](std::size_t i, unsigned w) {
+    const TileJob& j = jobs_[i];
+    results_[i] = render_tile(*workers_[w], j.tile, j.rect, tiler_.tile_primitives(j.tile), partial);
+  });
+  tile_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  release_unwritten_surfaces(fresh);
+  rw.tiles.reserve(results_.size());
+  for (TileResult& r : results_) rw.tiles.push_back(merge(std::move(r)));
+  results_.clear();
+  if (partial) {
+    for (const TileJob& j : jobs_) resumed_[static_cast<std::size_t>(j.tile)] = 1;
+  }
+  cw_.renders.push_back(std::move(rw));
+  tiler_.reset();
+  ctx_.frame_prim_base += static_cast<std::uint32_t>(ctx_.prims.size());
+  ctx_.prims.clear();
+}
+
+TileWork PassRenderer::merge(TileResult&& r) {
+  stats_.isp += r.isp;
+  stats_.tsp += r.tsp;
+  stats_.tile_memory += r.tile_memory;
+  stats_.tiler.pb_bytes_read += r.pb_bytes_read;
+  dram_ += r.dram;
+  return std::move(r.work);
+}
+
+PassRenderer::TileResult PassRenderer::render_tile(TileWorker& w, int t, const PixelRect& r,
+                                                   const std::vector<std::uint32_t>& prims, bool partial, bool begin,
+                                                   bool end) {
+  TileResult out;
+  DramTraffic& dram = w.dram;  // the tile's traffic, from zero (the TSP books image reads here too)
+  dram = DramTraffic{};
+  w.texture_lines.clear();
+  if (begin) tile_memory_.begin_tile(r, resumed_[static_cast<std::size_t>(t)] != 0, dram, out.tile_memory);
+  const DramTraffic loaded = dram;
+  w.isp.render_tile(r, prims, out.isp, out.tsp);
+  const DramTraffic shaded = dram;  // what the shaders read from stored images (reads=)
+  const IspStats& tile_isp = out.isp;
+  const TspStats& tile_tsp = out.tsp;
+  DramTraffic spill;
+  tile_memory_.spill(tile_tsp.tile_buffer_read_bytes.value(), tile_tsp.tile_buffer_write_bytes.value(), spill,
+                     out.tile_memory);
+  if (end) tile_memory_.end_tile(r, partial, dram, out.tile_memory);
+  TileWork& tw = out.work;
+  tw.tile_x = t % tiler_.tiles_x();
+  tw.tile_y = t / tiler_.tiles_x();
+  tw.rect = r;
+  for (std::size_t c = 0; c < kDramClassCount; ++c) {
+    tw.image_read_bytes[c] = shaded.read_bytes[c] - loaded.read_bytes[c];
+    tw.load_bytes[c] = dram.read_bytes[c] - tw.image_read_bytes[c];
+    tw.store_bytes[c] = dram.write_bytes[c];
+  }
+  tw.primitives = tile_isp.primitives_fetched.value();
+  tw.samples = tile_isp.samples_rasterised.value();
+  tw.invocations = tile_tsp.shader_invocations.value();
+  tw.quads = tile_tsp.shaded_quads.value();
+  tw.alu_ops = tile_tsp.fragment_alu_ops.value();
+  tw.texels = tile_tsp.texels_filtered.value();
+  tw.isp_wait_alu_ops = tile_isp.resolve_wait_alu_ops.value();
+  tw.isp_wait_texels = tile_isp.resolve_wait_texels.value();
+  tw.texture_line_accesses = tile_tsp.texture_line_accesses.value();
+  std::sort(w.texture_lines.begin(), w.texture_lines.end());
+  tw.texture_lines.assign(w.texture_lines.begin(), std::unique(w.texture_lines.begin(), w.texture_lines.end()));
+  out.tsp.texture_tile_lines += tw.texture_lines.size();
+  // The footprint is what the texture unit requests (before the texture cache), booked like
+  // the parameter buffer reads: after the tile's loads and stores were taken from `dram`.
+  dram.read(DramClass::Textures, tw.texture_lines.size() * static_cast<std::uint64_t>(hw_.cache.texture.line_bytes));
+  tw.spill_read_bytes = spill.reads(DramClass::Spill);
+  tw.spill_write_bytes = spill.writes(DramClass::Spill);
+  // The spilled share of the shaders' tile-buffer accesses goes to memory (spill reads = the
+  // spilled share of the reads + the read-back of the spilled writes) on top of passing the USC's
+  // pixel data path: a memory tile buffer is reached by the shader's own loads and stores, whose
+  // data moves between the USC and memory no faster than between the USC and its on-chip tile
+  // buffer, so a pass past the budget is never cheaper than one that fits.
+  tw.tile_buffer_bytes = tile_tsp.tile_buffer_read_bytes.value() + tile_tsp.tile_buffer_write_bytes.value() +
+                         tile_tsp.pls_bytes_accessed.value();
+  dram += spill;  // booked after the tile's loads and stores were taken from `dram`
+  tw.tag_bytes = tile_isp.tag_buffer_read_bytes.value() + tile_isp.tag_buffer_write_bytes.value();
+  tw.depth_bytes = tile_isp.depth_buffer_read_bytes.value() + tile_isp.depth_buffer_write_bytes.value();
+  if (ctx_.rop) {
+    if (end) ctx_.rop->flush();  // the pass's images must be in memory for what follows
+    tw.rop_depth = ctx_.rop->take_depth_accesses();
+    tw.rop_color = ctx_.rop->take_color_accesses();
+    // Booked after the tile's loads and stores were taken from `dram`: the timing model streams
+    // these through the SLC as they are, not as stores.
+    for (const auto* v : {&tw.rop_depth, &tw.rop_color}) {
+      for (const FramebufferAccess& a : *v) {
+        if (a.write) {
+          dram.write(a.cls, a.bytes);
+        } else {
+          dram.read(a.cls, a.bytes);
+        }
+      }
+    }
+  } else {
+    const std::uint64_t pb_read = prims.empty() ? 0 : tiler_.tile_read_bytes(t);
+    out.pb_bytes_read = pb_read;
+    dram.read(DramClass::ParameterBuffer, pb_read);
+    if (!prims.empty()) tw.pb_reads = tiler_.tile_read_ranges(t);
+  }
+  out.dram = dram;
+  return out;
+}
+
+}  // namespace tbdr

@@ -1,0 +1,114 @@
+#pragma once
+// The render of one pass through the units: geometry and binning of its draws in draw order
+// (serial: the parameter buffer fills in submission order), then a render of every touched tile
+// (tile memory load, ISP, TSP, tile memory store) whenever the parameter buffer fills and at the
+// end. The tiles of one render run on a pool of threads: tiles own disjoint pixels of every
+// attachment, PLS and per-pixel counter, and read the draws, primitives, light lists and texture
+// layout without changing them. Each thread has its own worker context (ISP and TSP with their
+// scratch, the tile's texture line list and DRAM traffic); each tile returns its TileWork and its
+// statistic and traffic deltas, merged into the pass in tile dispatch order, so statistics,
+// TileWork lists and images are the same at any thread count. A partial render is a barrier: its
+// tiles finish before binning resumes.
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "models/command_processor.hpp"
+#include "models/frame_work.hpp"
+#include "models/geometry_unit.hpp"
+#include "models/hw_config.hpp"
+#include "models/isp.hpp"
+#include "models/render_state.hpp"
+#include "models/tile_memory.hpp"
+#include "models/tiler.hpp"
+#include "models/tsp.hpp"
+#include "trace/traffic.hpp"
+
+namespace tbdr {
+
+class ThreadPool;
+
+/// Tile indices in the configured dispatch order (tiling.tile_order).
+std::vector<int> tile_order(int tiles_x, int tiles_y, TileOrder order);
+
+/// Renders one pass through the units (see the file comment).
+class PassRenderer {
+ public:
+  /// `pool` runs the tiles of each render; its size() worker contexts are made here.
+  PassRenderer(RenderContext& ctx, const HwConfig& frame_hw, PassStats& stats, DramTraffic& dram, CommandWork& cw,
+               ThreadPool& pool);
+  ~PassRenderer();
+  PassRenderer(const PassRenderer&) = delete;
+  PassRenderer& operator=(const PassRenderer&) = delete;
+
+  /// Geometry, binning and rendering of every draw; a partial render whenever the parameter
+  /// buffer is full.
+  void run();
+  /// Host wall seconds the renders' tile loops took (the parallel part; bench/speed.sh reads it).
+  double tile_seconds() const { return tile_seconds_; }
+
+ private:
+  /// What one thread renders tiles with: its own TSP and ISP (their scratch), the current tile's
+  /// texture line list and the DRAM traffic the tile books.
+  struct TileWorker;
+  /// One tile (or strip of a tile) to render: its index and its pixels.
+  struct TileJob {
+    int tile = 0;
+    PixelRect rect;
+  };
+  /// What a tile render returns: its work for the timing model and its statistic and traffic
+  /// deltas, added to the pass's in tile order (merge).
+  struct TileResult {
+    TileWork work;
+    IspStats isp;
+    TspStats tsp;
+    TileMemoryStats tile_memory;
+    std::uint64_t pb_bytes_read = 0;  ///< TilerStats::pb_bytes_read of the tile
+    DramTraffic dram;
+  };
+
+  /// imr: no binning; the draws' primitives go down the pipeline in batches over the whole frame.
+  void run_immediate();
+  /// imr has no binning: the whole frame is one "tile" and nothing goes through a parameter buffer.
+  static HwConfig pass_hw(const HwConfig& frame_hw, const RenderContext& ctx);
+  /// Points the context at the pass's hardware.
+  static RenderContext& bind(RenderContext& ctx, const HwConfig& hw);
+  /// The binning work since the previous render.
+  BinningWork binning_since_last_render();
+  /// Renders every tile the binned primitives touch (all tiles for the last render of the pass).
+  void render(bool partial);
+  /// One tile (or strip of a tile) on worker `w`: loads, ISP and TSP, stores; what it cost.
+  /// imr renders a pass as batches over the whole frame: the tile memory's begin (clears) only
+  /// with the first (`begin`), its end (resolves) and the ROP flush only with the last (`end`).
+  TileResult render_tile(TileWorker& w, int t, const PixelRect& r, const std::vector<std::uint32_t>& prims, bool partial,
+                         bool begin = true, bool end = true);
+  /// Adds a tile's deltas to the pass; returns its work.
+  TileWork merge(TileResult&& r);
+  /// The G-buffer or visibility target the pass's shaders store surfaces in (the first
+  /// non-colour target they write), when it holds none yet: allocated before the tiles run (the
+  /// TSP would allocate it at its first write, from whichever thread). Returns it, or nullptr.
+  AttachmentImage* allocate_surfaces();
+  /// Releases what allocate_surfaces allocated if no tile stored a surface in it, leaving it as
+  /// the TSP would have.
+  static void release_unwritten_surfaces(AttachmentImage* fresh);
+
+  HwConfig hw_;  ///< the frame's hardware, with one frame-sized tile in imr mode
+  RenderContext& ctx_;
+  PassStats& stats_;
+  DramTraffic& dram_;
+  CommandWork& cw_;
+  ThreadPool& pool_;
+  GeometryUnit geometry_;
+  Tiler tiler_;
+  TileMemory tile_memory_;
+  std::vector<std::unique_ptr<TileWorker>> workers_;  ///< one per thread of the pool
+  std::vector<int> order_;               ///< tile indices in dispatch order
+  std::vector<std::uint8_t> resumed_;    ///< per tile: rendered before by a partial render
+  std::vector<TileJob> jobs_;            ///< the current render's tiles, in dispatch order
+  std::vector<TileResult> results_;      ///< their results, by job
+  GeometryStats geometry_base_;          ///< the statistics at the start of the current render
+  TilerStats tiler_base_;
+  double tile_seconds_ = 0;
+};
+
+}  // namespace tbdr

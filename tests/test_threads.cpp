@@ -1,0 +1,406 @@
+// Threads inside one run (FrameOptions::threads, `tbdrsim run --threads`): the tiles of each render
+// are rendered on a pool of threads, each with its own ISP/TSP scratch, and merged in tile order.
+// Whatever the thread count, a run must give the same statistic rows, tile rows (the timing
+// model's), TileWork lists, images (every attachment's colour, depth, stencil and stored
+// surfaces, and the per-pixel counters) and database rows. Compared here at 1, 2 and 7 threads
+// for all 13 techniques at a small size, with MSAA 4x, with partial renders (parameter buffer
+// overflow: a barrier between the tiles of one render and the binning of the next), strips and
+// spills of passes over the tile memory budget, and in the tbr (early and late Z) and imr modes; plus the thread
+// pool's own contract (items in order, each once, the lowest item's exception).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstddef>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "analysis/results_db.hpp"
+#include "analysis/sql.hpp"
+#include "app/cli.hpp"
+#include "app/commands.hpp"
+#include "app/run_driver.hpp"
+#include "kernel/thread_pool.hpp"
+#include "models/command_processor.hpp"
+#include "models/hw_config.hpp"
+#include "scene/scene_library.hpp"
+#include "techniques/technique.hpp"
+#include "trace/trace.hpp"
+#include "atrium_trace_setup.hpp"
+#include "db_query.hpp"
+#include "scratch_dir.hpp"
+
+namespace tbdr {
+namespace {
+
+testing_scratch::ScratchCleanup cleanup{"threads"};
+
+/// The thread counts every comparison runs: serial, the 2-core machine's, and more threads than
+/// cores (and an odd count, so tiles go to threads in no regular pattern).
+constexpr unsigned kThreadCounts[] = {1, 2, 7};
+
+/// A frame simulated and timed at `threads` threads, with colours.
+struct ThreadedRun {
+  FrameResult frame;
+  TimingResult timing;
+};
+
+ThreadedRun run(const Trace& t, const Scene& s, const HwConfig& hw, unsigned threads) {
+  ThreadedRun r;
+  r.frame = simulate_frame(t, "t.trace", s, hw, FrameOptions{.colour = true, .threads = threads});
+  EnergyBreakdown energy;
+  time_frame(hw, r.frame, r.timing, energy);
+  return r;
+}
+
+/// Bitwise equality of two vectors of trivially copyable values (floats compared as bits: -0 and
+/// NaN patterns count).
+template <class T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+/// Expects two TileWork lists (every command's renders) to be the same, field by field.
+void expect_same_work(const FrameWork& a, const FrameWork& b, const std::string& what) {
+  ASSERT_EQ(a.commands.size(), b.commands.size()) << what;
+  for (std::size_t c = 0; c < a.commands.size(); ++c) {
+    const CommandWork& ca = a.commands[c];
+    const CommandWork& cb = b.commands[c];
+    ASSERT_EQ(ca.renders.size(), cb.renders.size()) << what << " " << ca.name;
+    EXPECT_TRUE(same_bits(ca.texture_lines, cb.texture_lines)) << what << " " << ca.name;
+    for (std::size_t r = 0; r < ca.renders.size(); ++r) {
+      const auto& ta = ca.renders[r].tiles;
+      const auto& tb = cb.renders[r].tiles;
+      ASSERT_EQ(ta.size(), tb.size()) << what << " " << ca.name << " render " << r;
+      for (std::size_t i = 0; i < ta.size(); ++i) {
+        const TileWork& x = ta[i];
+        const TileWork& y = tb[i];
+        const std::string where = what + " " + ca.name + " render " + std::to_string(r) + " tile " + std::to_string(i);
+        EXPECT_EQ(x.tile_x, y.tile_x) << where;
+        EXPECT_EQ(x.tile_y, y.tile_y) << where;
+        EXPECT_TRUE(x.rect == y.rect) << where;
+        EXPECT_TRUE(x.load_bytes == y.load_bytes && x.image_read_bytes == y.image_read_bytes && x.store_bytes == y.store_bytes)
+            << where;
+        EXPECT_EQ(x.primitives, y.primitives) << where;
+        EXPECT_EQ(x.samples, y.samples) << where;
+        EXPECT_EQ(x.invocations, y.invocations) << where;
+        EXPECT_EQ(x.quads, y.quads) << where;
+        EXPECT_EQ(x.alu_ops, y.alu_ops) << where;
+        EXPECT_EQ(x.texels, y.texels) << where;
+        EXPECT_EQ(x.isp_wait_alu_ops, y.isp_wait_alu_ops) << where;
+        EXPECT_EQ(x.texture_line_accesses, y.texture_line_accesses) << where;
+        EXPECT_EQ(x.tile_buffer_bytes, y.tile_buffer_bytes) << where;
+        EXPECT_EQ(x.spill_read_bytes + x.spill_write_bytes, y.spill_read_bytes + y.spill_write_bytes) << where;
+        EXPECT_EQ(x.tag_bytes, y.tag_bytes) << where;
+        EXPECT_EQ(x.depth_bytes, y.depth_bytes) << where;
+        EXPECT_TRUE(same_bits(x.texture_lines, y.texture_lines)) << where;
+        EXPECT_TRUE(same_bits(x.pb_reads, y.pb_reads)) << where;
+        EXPECT_EQ(x.rop_depth.size() + x.rop_color.size(), y.rop_depth.size() + y.rop_color.size()) << where;
+      }
+    }
+  }
+}
+
+/// Expects two frames' images to be bit for bit the same: every attachment (colour, depth,
+/// stencil, stored surfaces), image buffer and per-pixel counter.
+void expect_same_images(const FrameImages& a, const FrameImages& b, const std::string& what) {
+  ASSERT_EQ(a.attachments.size(), b.attachments.size()) << what;
+  for (const auto& [name, x] : a.attachments) {
+    const auto it = b.attachments.find(name);
+    ASSERT_NE(it, b.attachments.end()) << what << " " << name;
+    const AttachmentImage& y = it->second;
+    EXPECT_TRUE(same_bits(x.color, y.color)) << what << ": attachment " << name << " colour";
+    EXPECT_TRUE(same_bits(x.depth, y.depth)) << what << ": attachment " << name << " depth";
+    EXPECT_TRUE(same_bits(x.stencil, y.stencil)) << what << ": attachment " << name << " stencil";
+    EXPECT_TRUE(same_bits(x.surface, y.surface)) << what << ": attachment " << name << " surfaces";
+    EXPECT_TRUE(same_bits(x.surface_valid, y.surface_valid)) << what << ": attachment " << name << " surface_valid";
+  }
+  ASSERT_EQ(a.image_buffers.size(), b.image_buffers.size()) << what;
+  for (const auto& [name, x] : a.image_buffers) {
+    EXPECT_TRUE(same_bits(x.color, b.image_buffers.at(name).color)) << what << ": image buffer " << name;
+  }
+  EXPECT_TRUE(same_bits(a.counters.rasterised_samples, b.counters.rasterised_samples)) << what;
+  EXPECT_TRUE(same_bits(a.counters.shaded, b.counters.shaded)) << what;
+  EXPECT_TRUE(same_bits(a.counters.lights_evaluated, b.counters.lights_evaluated)) << what;
+  EXPECT_TRUE(same_bits(a.counters.triangle_id, b.counters.triangle_id)) << what;
+}
+
+/// Expects two runs to give the same statistic rows (scope, name and value, in order), tile rows,
+/// frame cycles, TileWork lists and images.
+void expect_same_run(const ThreadedRun& a, const ThreadedRun& b, const std::string& what) {
+  ASSERT_EQ(a.frame.stats.size(), b.frame.stats.size()) << what;
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < a.frame.stats.size(); ++i) {
+    const StatRecord& x = a.frame.stats[i];
+    const StatRecord& y = b.frame.stats[i];
+    EXPECT_EQ(x.scope, y.scope) << what << " row " << i;
+    EXPECT_EQ(x.name, y.name) << what << " row " << i;
+    if (std::memcmp(&x.value, &y.value, sizeof(double)) != 0) {
+      ++differing;
+      ADD_FAILURE() << what << ": " << x.scope << "/" << x.name << " is " << x.value << " and " << y.value;
+    }
+  }
+  EXPECT_EQ(differing, 0u) << what;
+  EXPECT_TRUE(a.timing.tiles == b.timing.tiles) << what << ": tile rows differ";
+  EXPECT_EQ(a.timing.frame_cycles, b.timing.frame_cycles) << what;
+  expect_same_work(a.frame.work, b.frame.work, what);
+  expect_same_images(a.frame.images, b.frame.images, what);
+}
+
+/// Runs `t` at every count of kThreadCounts and compares each with the serial run. Returns the
+/// serial run.
+ThreadedRun expect_same_at_every_thread_count(const Trace& t, const Scene& s, const HwConfig& hw, const std::string& what) {
+  ThreadedRun serial = run(t, s, hw, kThreadCounts[0]);
+  for (std::size_t k = 1; k < std::size(kThreadCounts); ++k) {
+    const unsigned n = kThreadCounts[k];
+    expect_same_run(serial, run(t, s, hw, n), what + " at " + std::to_string(n) + " threads");
+  }
+  return serial;
+}
+
+/// A statistic's value in a run's rows (NaN and a failure when absent).
+double stat(const FrameResult& f, const std::string& scope, const std::string& name) {
+  for (const StatRecord& r : f.stats) {
+    if (r.scope == scope && r.name == name) return r.value;
+  }
+  ADD_FAILURE() << "no statistic " << scope << "/" << name;
+  return std::nan("");
+}
+
+class ThreadEquivalence : public ::testing::TestWithParam<const char*> {
+ protected:
+  static void SetUpTestSuite() { scene_ = new Scene(load_scene("atrium:1")); }
+  static void TearDownTestSuite() {
+    delete scene_;
+    scene_ = nullptr;
+  }
+  static Scene* scene_;
+};
+Scene* ThreadEquivalence::scene_ = nullptr;
+
+TEST_P(ThreadEquivalence, EveryStatisticTileRowAndImageIsTheSameAtOneTwoAndSevenThreads) {
+  const std::string technique = GetParam();
+  // 200x120 pixels (7 x 4 = 28 tiles of 32x32 per render, for 7 threads), 48 lights.
+  TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 48, 200, 120);
+  if (technique == "forward_multipass") setup.options["lights_per_pass"] = "8";  // 6 additive passes
+  const Trace t = generate_trace(technique, setup);
+  const HwConfig hw = resolve_config({}, {}).hw;
+  const ThreadedRun serial = expect_same_at_every_thread_count(t, *scene_, hw, technique);
+  // The runs did shade something (a frame of nothing would compare equal at any count).
+  EXPECT_GT(serial.frame.totals.render.tsp.shader_invocations.value() + serial.frame.totals.compute.threads.value(), 0u)
+      << technique;
+}
+
+INSTANTIATE_TEST_SUITE_P(Techniques, ThreadEquivalence,
+                         ::testing::Values("plain_forward", "forward_multipass", "forward_plus", "forward_light_stack",
+                                           "clustered_forward", "practical_clustered_forward",
+                                           "cascaded_clustered_forward", "deferred", "deferred_tile_store",
+                                           "light_prepass", "tiled_deferred", "clustered_deferred",
+                                           "visibility_buffer"));
+
+// MSAA 4x (the techniques that support it): per-sample coverage of the alpha-tested cloth,
+// blending and the resolves at the end of each tile.
+TEST_F(ThreadEquivalence, MultisampledRunsAreTheSameAtEveryThreadCount) {
+  for (const char* technique : {"plain_forward", "forward_multipass", "visibility_buffer", "clustered_forward"}) {
+    TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 160, 96);
+    setup.samples = 4;
+    const Trace t = generate_trace(technique, setup);
+    const HwConfig hw = resolve_config({}, {}).hw;
+    const ThreadedRun serial = expect_same_at_every_thread_count(t, *scene_, hw, std::string(technique) + " 4x");
+    // The resolves ran (visibility_buffer resolves in its compute shading kernel instead).
+    if (std::string(technique) != "visibility_buffer") {
+      EXPECT_GT(stat(serial.frame, "frame/tile_memory", "resolved_samples"), 0) << technique;
+    }
+  }
+}
+
+// A parameter buffer of 64 KiB overflows: each pass is several renders, each a barrier (its
+// tiles finish, are merged, and reload what the previous render stored, before binning goes on).
+TEST_F(ThreadEquivalence, PartialRendersAreTheSameAtEveryThreadCount) {
+  for (const char* technique : {"plain_forward", "deferred"}) {
+    const TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 200, 120);
+    const Trace t = generate_trace(technique, setup);
+    const HwConfig hw = resolve_config({}, {"tiling.pb_capacity_bytes=65536"}).hw;
+    const ThreadedRun serial = expect_same_at_every_thread_count(t, *scene_, hw, std::string(technique) + " partial renders");
+    EXPECT_GT(stat(serial.frame, "frame/tiler", "partial_renders"), 0) << technique;
+    EXPECT_GT(stat(serial.frame, "frame/tile_memory", "partial_render_reload_bytes"), 0) << technique;
+  }
+}
+
+// Passes over the tile memory budget: rendered as strips (smaller_tiles), spilled (spill), or
+// split at a subpass boundary (split_render), with deferred's 4 G-buffer targets in 64 bits.
+TEST_F(ThreadEquivalence, OverBudgetPassesAreTheSameAtEveryThreadCount) {
+  const TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 200, 120);
+  const Trace t = generate_trace("deferred", setup);
+  for (const char* policy : {"smaller_tiles", "spill", "split_render"}) {
+    const HwConfig hw =
+        resolve_config({}, {"pls.tile_buffer_bits_per_pixel=64", std::string("pls.over_budget=") + policy}).hw;
+    expect_same_at_every_thread_count(t, *scene_, hw, std::string("deferred over budget, ") + policy);
+  }
+}
+
+// The other GPU modes: tile-based without deferred shading (forward pixel kill; and with the
+// depth/stencil tests after the shader, isp.early_z=0), and immediate mode (one frame-sized "tile"
+// per batch, through the ROP caches, on one thread).
+TEST_F(ThreadEquivalence, TbrAndImrModesAreTheSameAtEveryThreadCount) {
+  const std::vector<std::vector<std::string>> modes = {{"gpu.mode=tbr"}, {"gpu.mode=tbr", "isp.early_z=0"}, {"gpu.mode=imr"}};
+  for (const auto& mode : modes) {
+    for (const char* technique : {"plain_forward", "tiled_deferred"}) {
+      const TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 160, 96);
+      const Trace t = generate_trace(technique, setup);
+      const HwConfig hw = resolve_config({}, mode).hw;
+      expect_same_at_every_thread_count(t, *scene_, hw, std::string(technique) + " " + mode.back());
+    }
+  }
+}
+
+/// Every row of a run in the database but its host figures (frame/host), as text in a fixed
+/// order: statistics, tile rows and parameters.
+std::vector<std::string> database_rows(const std::string& db_path, std::int64_t run_id) {
+  const ResultsDb db(db_path, ResultsDb::QueryOnly{});
+  std::vector<std::string> rows;
+  const std::string id = std::to_string(run_id);
+  for (const std::string& sql :
+       {"SELECT scope || '|' || name || '|' || printf('%.17g', value) || '|' || unit FROM stats WHERE run_id = " + id +
+            " AND scope <> 'frame/host' ORDER BY scope, name",
+        "SELECT pass || '|' || tile_x || '|' || tile_y || '|' || printf('%.17g', cycles) || '|' || printf('%.17g', samples) || "
+        "'|' || printf('%.17g', dram_bytes) FROM tile_stats WHERE run_id = " + id + " ORDER BY pass, tile_x, tile_y",
+        "SELECT key || '=' || value || '|' || origin FROM run_params WHERE run_id = " + id + " ORDER BY key"}) {
+    SqlStatement q(db.sql(), sql);
+    while (q.step()) rows.push_back(q.text(0));
+  }
+  return rows;
+}
+
+// What `tbdrsim run` writes: the same database rows (all but the host timings and the thread
+// count itself) at 1, 2 and 7 threads, and the same PNG images.
+TEST(ThreadEquivalenceDatabase, RunsWriteTheSameRowsAndImagesAtEveryThreadCount) {
+  const auto dir = testing_scratch::scratch_dir("threads", "db");
+  const Scene scene = load_scene("atrium:1");
+  TraceSetup setup = testing_support::atrium_entrance_setup(scene, 32, 160, 96);
+  const std::string trace_path = (dir / "deferred.trace").string();
+  write_trace_file(generate_trace("deferred", setup), trace_path);
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::vector<std::string>> images;
+  for (const unsigned n : kThreadCounts) {
+    RunRequest req;
+    req.config = resolve_config({}, {});
+    req.trace_path = trace_path;
+    req.db_path = (dir / "runs.db").string();
+    req.images_dir = (dir / ("images" + std::to_string(n))).string();
+    req.threads = n;
+    const RunOutcome o = run_one(req);
+    rows.push_back(database_rows(req.db_path, o.run_id));
+    EXPECT_EQ(testing_support::query_number(req.db_path, "SELECT value FROM stats WHERE run_id = " + std::to_string(o.run_id) +
+                                                             " AND scope = 'frame/host' AND name = 'simulation_threads'"),
+              static_cast<double>(n));
+    std::vector<std::string> files;
+    for (const std::string& p : o.images_written) {
+      std::ifstream in(p, std::ios::binary);
+      files.push_back(std::string(std::istreambuf_iterator<char>(in), {}));
+    }
+    images.push_back(std::move(files));
+  }
+  ASSERT_GT(rows[0].size(), 100u);
+  ASSERT_GT(images[0].size(), 3u);
+  for (std::size_t k = 1; k < rows.size(); ++k) {
+    EXPECT_TRUE(rows[k] == rows[0]) << kThreadCounts[k] << " threads: database rows differ";
+    EXPECT_TRUE(images[k] == images[0]) << kThreadCounts[k] << " threads: images differ";
+  }
+}
+
+// A thread count outside 1..1024 is refused before anything runs (exit 2, naming the option),
+// and no database is written.
+TEST(ThreadOption, RefusesABadCountAndWritesNothing) {
+  const auto dir = testing_scratch::scratch_dir("threads", "cli");
+  const Scene scene = load_scene("atrium:1");
+  const std::string trace = (dir / "pf.trace").string();
+  write_trace_file(generate_trace("plain_forward", testing_support::atrium_entrance_setup(scene, 8, 64, 32)), trace);
+  for (const char* bad : {"0", "-3", "1025"}) {
+    const std::string db = (dir / (std::string("bad") + bad + ".db")).string();
+    std::ostringstream out, err;
+    EXPECT_EQ(cli_main({"run", "--trace", trace, "--db", db, "--threads", bad}, out, err), 2) << bad;
+    EXPECT_NE(err.str().find("--threads " + std::string(bad)), std::string::npos) << err.str();
+    EXPECT_NE(err.str().find("expected 1..1024 threads per run"), std::string::npos) << err.str();
+    EXPECT_FALSE(std::filesystem::exists(db)) << bad;
+  }
+  std::ostringstream out, err;
+  EXPECT_EQ(cli_main({"run", "--trace", trace, "--db", (dir / "ok.db").string(), "--threads", "3"}, out, err), 0) << err.str();
+  EXPECT_NE(out.str().find("on 3 threads"), std::string::npos) << out.str();
+}
+
+// Sweeps and studies divide the cores between their worker processes: threads per run = cores /
+// workers, at least 1 (so workers x threads <= cores).
+TEST(ThreadOption, WorkersDivideTheCores) {
+  const unsigned cores = default_thread_count();
+  EXPECT_EQ(threads_per_worker(1), cores);
+  EXPECT_EQ(threads_per_worker(static_cast<int>(cores)), 1u);
+  EXPECT_EQ(threads_per_worker(static_cast<int>(cores) * 4), 1u);  // more workers than cores: still 1
+  for (int workers = 1; workers <= 8; ++workers) {
+    EXPECT_LE(threads_per_worker(workers) * static_cast<unsigned>(workers), std::max(cores, static_cast<unsigned>(workers)));
+    EXPECT_GE(threads_per_worker(workers), 1u);
+  }
+}
+
+// The pool itself: every item runs exactly once, on a worker index below size(); items start in
+// increasing order; the exception rethrown is the lowest item's, whichever thread ran it.
+TEST(ThreadPool, RunsEveryItemOnceAndStartsThemInOrder) {
+  for (const unsigned threads : {1u, 2u, 7u}) {
+    ThreadPool pool(threads);
+    EXPECT_EQ(pool.size(), threads);
+    constexpr std::size_t kItems = 1000;
+    std::vector<std::atomic<int>> runs(kItems);
+    std::mutex m;
+    std::vector<std::size_t> started;
+    std::set<unsigned> workers;
+    pool.for_each(kItems, [&](std::size_t i, unsigned w) {
+      {
+        std::lock_guard<std::mutex> lock(m);
+        started.push_back(i);
+        workers.insert(w);
+      }
+      runs[i].fetch_add(1);
+    });
+    for (std::size_t i = 0; i < kItems; ++i) EXPECT_EQ(runs[i].load(), 1) << "item " << i << " at " << threads << " threads";
+    ASSERT_EQ(started.size(), kItems);
+    // Taken in order: the k-th item to start is at most `threads - 1` places from k.
+    for (std::size_t k = 0; k < kItems; ++k) {
+      EXPECT_LE(started[k], k + threads - 1) << threads << " threads";
+    }
+    for (const unsigned w : workers) EXPECT_LT(w, threads);
+    // The pool is reusable: a second job of one item runs on the caller's thread.
+    unsigned ran_on = 99;
+    pool.for_each(1, [&](std::size_t, unsigned w) { ran_on = w; });
+    EXPECT_EQ(ran_on, 0u);
+  }
+}
+
+TEST(ThreadPool, RethrowsTheLowestFailingItemsException) {
+  for (const unsigned threads : {1u, 2u, 7u}) {
+    ThreadPool pool(threads);
+    try {
+      pool.for_each(200, [](std::size_t i, unsigned) {
+        if (i == 150 || i == 40 || i == 41) throw std::runtime_error("item " + std::to_string(i));
+      });
+      ADD_FAILURE() << "no exception at " << threads << " threads";
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "item 40") << threads << " threads";
+    }
+    // And it still works afterwards.
+    std::atomic<std::size_t> sum{0};
+    pool.for_each(100, [&](std::size_t i, unsigned) { sum += i; });
+    EXPECT_EQ(sum.load(), 4950u);  // 0 + 1 + ... + 99 = 99 x 100 / 2
+  }
+}
+
+}  // namespace
+}  // namespace tbdr
