@@ -128,6 +128,17 @@ def export_replay(rd, c, rdc_path, outdir, history_samples, api):
         if len(subpasses) != 1:
             unsupported.append("event %d: render pass with %d subpasses imported as one pass per subpass is not "
                                "supported; all its draws go to one pass" % (begin_action.eventId, len(subpasses)))
+        # The images behind the attachments: framebuffer -> image views -> images, so that the
+        # same image keeps one name across passes.
+        images = []
+        fb = resources.get(int(child(begin, "framebuffer").AsResourceId()))
+        if fb is not None and fb.initialisationChunks:
+            for view in children(child(child(sf.chunks[fb.initialisationChunks[0]], "CreateInfo"), "pAttachments")):
+                vr = resources.get(int(view.AsResourceId()))
+                img = None
+                if vr is not None and vr.initialisationChunks:
+                    img = int(child(child(sf.chunks[vr.initialisationChunks[0]], "CreateInfo"), "image").AsResourceId())
+                images.append(img)
         atts = []
         for i, ad in enumerate(children(child(info, "pAttachments"))):
             fmt = child(ad, "format").AsString()
@@ -141,6 +152,11 @@ def export_replay(rd, c, rdc_path, outdir, history_samples, api):
                    "load": LOAD_OPS[load], "store": STORE_OPS[store]}
             if i < len(clears):
                 att["clear"] = clears[i]
+            if i < len(images) and images[i] is not None:
+                att["image"] = images[i]
+            else:
+                unsupported.append("event %d: attachment %d's image not found (imageless framebuffer?); named by "
+                                   "its pass" % (begin_action.eventId, i))
             atts.append(att)
         return atts
 
