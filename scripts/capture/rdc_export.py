@@ -280,6 +280,16 @@ def export_draw(rd, c, a, name, textures, saved_textures, outdir, unsupported, s
     if topo not in ("TriangleList", "TriangleStrip", "TriangleFan"):
         fail("%s: topology %s is not imported (triangles only)" % (where, topo))
 
+    # Viewport and scissor: the simulator has one viewport, the frame; the importer maps each draw's
+    # clip positions through its own viewport so every vertex lands on the same pixel and depth.
+    vps = vk.viewportScissor.viewportScissors
+    if not vps:
+        fail("%s: no viewport bound" % where)
+    vp, sc = vps[0].vp, vps[0].scissor
+    draw["viewport"] = [vp.x, vp.y, vp.width, vp.height, vp.minDepth, vp.maxDepth]
+    draw["scissor"] = [sc.x, sc.y, sc.width, sc.height]
+    if len(vps) > 1:
+        unsupported.append("%s: %d viewports; only the first is imported" % (where, len(vps)))
     ds = vk.depthStencil
     draw["depth_test"] = bool(ds.depthTestEnable)
     draw["depth_write"] = bool(ds.depthTestEnable and ds.depthWriteEnable)

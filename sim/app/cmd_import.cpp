@@ -299,6 +299,15 @@ CaptureImport convert_capture(const std::string& frame_json_path, const std::str
                                     "; the simulator clears depth to 1.0 (far)");
         }
       }
+      if (a.usage == AttachmentUsage::Color && aj.contains("clear") && a.load == LoadOp::Clear) {
+        const json& col = r.array(r.get(aj, "clear", awhere), "color", awhere + " clear");
+        bool black = true;
+        for (const auto& c : col) black = black && r.number(c, awhere + " clear colour") == 0.0f;
+        if (!black) {
+          out.unsupported.push_back(awhere + ": clears to colour " + col.dump() +
+                                    "; the simulator's images clear to black (counts and traffic are unaffected)");
+        }
+      }
       if (a.usage == AttachmentUsage::Color) ++color_targets;
       pass.attachments.push_back(a);
     }
@@ -314,15 +323,54 @@ CaptureImport convert_capture(const std::string& frame_json_path, const std::str
       std::string dname = "draw_" + std::to_string(ev);
       const std::string dwhere = "draw at event " + std::to_string(ev) +
                                  (dj.contains("name") && dj["name"].is_string() ? " (" + dj["name"].get<std::string>() + ")" : "");
+      // Viewport: [x, y, width, height, min_depth, max_depth] in framebuffer pixels (y down for
+      // Vulkan). The simulator's viewport is the whole frame, so each vertex is moved in clip space
+      // to where the draw's own viewport puts it: with s = size / frame size and
+      // o = (2 origin + size) / frame size - 1, x_ndc' = s x_ndc + o, i.e. x' = s x + o w (same for
+      // y), and depth' = min + (max - min) depth, i.e. z' = (max - min) z + min w (Vulkan depth).
+      const float fw = static_cast<float>(t.frame.width), fh = static_cast<float>(t.frame.height);
+      float vp_x = 0, vp_y = 0, vp_w = fw, vp_h = fh, vmin = 0, vmax = 1;
+      if (dj.contains("viewport")) {
+        const json& vj = r.array(dj, "viewport", dwhere);
+        if (vj.size() != 6) r.fail(dwhere, "viewport is not [x, y, width, height, min_depth, max_depth]");
+        vp_x = r.number(vj[0], dwhere + " viewport");
+        vp_y = r.number(vj[1], dwhere + " viewport");
+        vp_w = r.number(vj[2], dwhere + " viewport");
+        vp_h = r.number(vj[3], dwhere + " viewport");
+        vmin = r.number(vj[4], dwhere + " viewport");
+        vmax = r.number(vj[5], dwhere + " viewport");
+        if (vp_w <= 0.0f || vp_h == 0.0f) r.fail(dwhere, "viewport of zero or negative width");
+      }
+      const bool full_viewport = vp_x == 0.0f && vp_y == 0.0f && vp_w == fw && vp_h == fh;
+      if (dj.contains("scissor")) {
+        const json& sj = r.array(dj, "scissor", dwhere);
+        if (sj.size() != 4) r.fail(dwhere, "scissor is not [x, y, width, height]");
+        const float sx = r.number(sj[0], dwhere + " scissor"), sy = r.number(sj[1], dwhere + " scissor");
+        const float sw = r.number(sj[2], dwhere + " scissor"), sh = r.number(sj[3], dwhere + " scissor");
+        if (sx > 0.0f || sy > 0.0f || sx + sw < fw || sy + sh < fh) {
+          out.unsupported.push_back(dwhere + ": scissor " + sj.dump() + " smaller than the frame; not applied");
+        }
+      }
+      std::size_t beyond_viewport = 0;
       // Geometry: clip positions (x, y, z, w as the vertex shader wrote them), optional indices.
       const json& cj = r.array(dj, "clip_positions", dwhere);
       if (cj.empty()) r.fail(dwhere, "has no vertices");
       if (cj.size() > kMaxDrawVertices) r.fail(dwhere, std::to_string(cj.size()) + " vertices, more than the import's limit");
       std::vector<glm::vec4> clip(cj.size());
       for (std::size_t v = 0; v < cj.size(); ++v) {
-        const std::string vw = dwhere + " vertex " + std::to_string(v);
-        if (!cj[v].is_array() || cj[v].size() != 4) r.fail(vw, "clip position is not 4 numbers");
-        glm::vec4 c(r.number(cj[v][0], vw), r.number(cj[v][1], vw), r.number(cj[v][2], vw), r.number(cj[v][3], vw));
+        const std::string vtx = dwhere + " vertex " + std::to_string(v);
+        if (!cj[v].is_array() || cj[v].size() != 4) r.fail(vtx, "clip position is not 4 numbers");
+        glm::vec4 c(r.number(cj[v][0], vtx), r.number(cj[v][1], vtx), r.number(cj[v][2], vtx), r.number(cj[v][3], vtx));
+        if (!full_viewport) {
+          if (std::abs(c.x) > c.w || std::abs(c.y) > c.w) ++beyond_viewport;
+          const float sx = vp_w / fw, ox = (2.0f * vp_x + vp_w) / fw - 1.0f;
+          const float sy = vp_h / fh, oy = (2.0f * vp_y + vp_h) / fh - 1.0f;
+          c = glm::vec4(sx * c.x + ox * c.w, sy * c.y + oy * c.w, c.z, c.w);
+        }
+        if (vmin != 0.0f || vmax != 1.0f) {
+          if (convention != "vulkan") r.fail(dwhere, "a depth range other than [0, 1] is imported for Vulkan captures only");
+          c.z = (vmax - vmin) * c.z + vmin * c.w;
+        }
         if (convention == "vulkan") {
           // Vulkan clip space: y points down the framebuffer and depth is z/w in [0, 1]. The
           // simulator's (OpenGL's): y up, depth (z/w + 1)/2. Same pixel and same depth value:
@@ -330,6 +378,10 @@ CaptureImport convert_capture(const std::string& frame_json_path, const std::str
           c = glm::vec4(c.x, -c.y, 2.0f * c.z - c.w, c.w);
         }
         clip[v] = c;
+      }
+      if (beyond_viewport > 0) {
+        out.unsupported.push_back(dwhere + ": " + std::to_string(beyond_viewport) + " vertices outside its viewport " +
+                                  "(not the whole frame); the simulator clips to the frame, so they may draw beyond it");
       }
       std::vector<std::uint32_t> idx;
       const bool indexed = dj.contains("indices");
@@ -366,12 +418,16 @@ CaptureImport convert_capture(const std::string& frame_json_path, const std::str
         out.unsupported.push_back(dwhere + ": no whole triangle; skipped");
         continue;
       }
-      // Winding: the simulator's front faces are counter-clockwise in its (y-up) clip space. The
-      // y flip of a Vulkan capture keeps every vertex on its pixel, and the Vulkan front face is
-      // defined on the framebuffer, so a capture's front face maps as it is; a clockwise front face
-      // is imported by reversing each triangle.
+      // Winding: the simulator's front faces are counter-clockwise in its (y-up, OpenGL) clip space
+      // (clipper.hpp, front_ccw). Vulkan decides facing from the triangle's area in framebuffer
+      // coordinates, whose y runs down, and the y flip above keeps every vertex on its pixel, so a
+      // Vulkan counter-clockwise front face is the simulator's as it is and a clockwise one is
+      // imported by reversing each triangle. Measured on vkcube (cull back, front counter-clockwise):
+      // as is, the visible triangles match RenderDoc's pixel history at 240 of 240 sampled pixels;
+      // reversed, at 84 (the far faces are drawn instead).
       const bool front_cw = r.str(dj, "front_face", dwhere) == "cw";
-      if (front_cw) {
+      const bool reverse = front_cw;
+      if (reverse) {
         for (std::size_t i = 0; i + 2 < tri.size(); i += 3) std::swap(tri[i + 1], tri[i + 2]);
       }
       out.triangles += tri.size() / 3;
@@ -443,7 +499,7 @@ CaptureImport convert_capture(const std::string& frame_json_path, const std::str
       }
       materials.push_back(material);
       json prim = {{"attributes", attrs}, {"material", materials.size() - 1}, {"mode", 4}};
-      const bool need_indices = indexed || topo != "triangles" || front_cw;
+      const bool need_indices = indexed || topo != "triangles" || reverse;
       if (need_indices) {
         std::vector<std::uint8_t> bytes;
         for (auto i : tri) put(bytes, i);
