@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -127,11 +128,11 @@ TEST(Import, FixtureBecomesATraceAndAClipSpaceGlb) {
   EXPECT_EQ(p->depth_compare, CompareOp::LessEqual);
   EXPECT_EQ(p->cull, CullMode::Back);
   EXPECT_EQ(p->blend, BlendMode::Off);
-  // The fragment shader's static SPIR-V count, as the fixture records it (18 ALU, 1 sample, 7
-  // varyings: texcoord 4 + frag_pos 3).
+  // The fragment shader's static SPIR-V count, as the fixture records it (Import.SpirvCost derives
+  // the 20 ALU operations), 1 sample, 7 varyings: texcoord 4 + frag_pos 3.
   const ShaderDesc* s = t.find_shader(p->shader);
   ASSERT_NE(s, nullptr);
-  EXPECT_EQ(s->alu_ops, 18u);
+  EXPECT_EQ(s->alu_ops, 20u);
   EXPECT_EQ(s->tex_fetches, 1u);
   EXPECT_EQ(s->varyings, 7u);
 
@@ -189,6 +190,36 @@ TEST(Import, ClipSpaceGeometryIgnoresCameraAndInstanceTransform) {
   // and lands elsewhere: the control that shows the comparison above can fail.
   scene.submeshes[0].clip_positions.clear();
   EXPECT_NE(simulate(trace_path, scene, "tbdr").images.counters.triangle_id, base);
+}
+
+TEST(Import, SpirvCostCountsVkcubesFragmentShader) {
+  // scripts/capture/spirv_cost.py on vkcube's fragment shader as RenderDoc gave it (fs_182.spv).
+  // spirv-dis lists its arithmetic: OpDPdx v3, OpDPdy v3, Cross v3, Normalize v3, OpDot of two v3,
+  // FMax float, OpVectorTimesScalar v4 -> 3 + 3 + 3 + 3 + 3 + 1 + 4 = 20 ALU operations; one
+  // OpImageSampleImplicitLod; 8 OpLoad, 5 OpStore; no branch, loop or discard.
+  if (!fs::exists("/usr/bin/python3")) GTEST_SKIP() << "no /usr/bin/python3 to run scripts/capture/spirv_cost.py";
+  const fs::path dir = scratch_dir("import", "spirv");
+  const std::string cmd = "/usr/bin/python3 '" + (fs::path(TBDRSIM_SOURCE_DIR) / "scripts" / "capture" / "spirv_cost.py").string() +
+                          "' '" + (kFixture / "fs_182.spv").string() + "' > '" + (dir / "cost.txt").string() + "'";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::ifstream in(dir / "cost.txt");
+  std::string line;
+  std::getline(in, line);
+  const auto j = nlohmann::json::parse(line.substr(line.find('{')));
+  EXPECT_EQ(j["alu_ops"], 20);
+  EXPECT_EQ(j["tex_fetches"], 1);
+  EXPECT_EQ(j["loads"], 8);
+  EXPECT_EQ(j["stores"], 5);
+  EXPECT_EQ(j["branches"], 0);
+  EXPECT_EQ(j["loops"], 0);
+  EXPECT_EQ(j["discard"], false);
+  // Truncated: refused with the word it stopped at.
+  std::ifstream spv(kFixture / "fs_182.spv", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(spv)), {});
+  std::ofstream(dir / "cut.spv", std::ios::binary) << bytes.substr(0, 1000);
+  const std::string cut = "/usr/bin/python3 '" + (fs::path(TBDRSIM_SOURCE_DIR) / "scripts" / "capture" / "spirv_cost.py").string() +
+                          "' '" + (dir / "cut.spv").string() + "' > /dev/null 2>&1";
+  EXPECT_NE(std::system(cut.c_str()), 0);
 }
 
 /// Writes the fixture with one edit into `dir` (textures copied) and returns its frame.json.

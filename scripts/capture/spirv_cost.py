@@ -23,6 +23,7 @@ SPIRV_MAGIC = 0x07230203
 # Types (SPIR-V spec 3.49.6 "Type-Declaration Instructions").
 OP_TYPE_BOOL, OP_TYPE_INT, OP_TYPE_FLOAT, OP_TYPE_VECTOR, OP_TYPE_MATRIX = 20, 21, 22, 23, 24
 OP_EXT_INST = 12
+OP_CONSTANT, OP_CONSTANT_COMPOSITE = 43, 44
 OP_LOAD, OP_STORE = 61, 62
 OP_DOT = 148
 OP_VECTOR_TIMES_MATRIX, OP_MATRIX_TIMES_VECTOR, OP_MATRIX_TIMES_MATRIX = 144, 145, 146
@@ -80,12 +81,12 @@ def shader_cost(data):
             cols[ops[0]] = ops[2]
             continue
         alu = _in(op, ALU_RANGES) or op == OP_EXT_INST
-        if (alu or _in(op, TEX_RANGES) or op == OP_LOAD) and len(ops) >= 2:
+        if (alu or _in(op, TEX_RANGES) or op in (OP_LOAD, OP_CONSTANT, OP_CONSTANT_COMPOSITE)) and len(ops) >= 2:
             value_type[ops[1]] = ops[0]
         if alu and len(ops) >= 2:
             n = comps.get(ops[0], 1)
-            if op == OP_DOT and len(ops) >= 3:
-                n = comps.get(value_type.get(ops[2]), 1)
+            if op == OP_DOT and len(ops) >= 4:
+                n = max(comps.get(value_type.get(ops[2]), 1), comps.get(value_type.get(ops[3]), 1))
             elif op in (OP_MATRIX_TIMES_VECTOR, OP_VECTOR_TIMES_MATRIX, OP_MATRIX_TIMES_MATRIX) and len(ops) >= 3:
                 # Multiply-adds: one per result component per term of the shared dimension.
                 left = value_type.get(ops[2])
@@ -111,5 +112,9 @@ if __name__ == "__main__":
     import json
     import sys
     for path in sys.argv[1:]:
-        with open(path, "rb") as f:
-            print(path, json.dumps(shader_cost(f.read())))
+        try:
+            with open(path, "rb") as f:
+                print(path, json.dumps(shader_cost(f.read())))
+        except (OSError, SpirvError) as e:
+            print("spirv_cost.py: %s: %s" % (path, e), file=sys.stderr)
+            sys.exit(2)
