@@ -312,6 +312,13 @@ CaptureImport convert_capture(const std::string& frame_json_path, const std::str
       pass.attachments.push_back(a);
     }
     if (pass.attachments.empty()) r.fail(pwhere, "has no attachments");
+    for (const Attachment& a : pass.attachments) {
+      if (a.samples != pass.attachments.front().samples) {
+        r.fail(pwhere, "attachments with different sample counts (" + a.name + ": " + std::to_string(a.samples) + ", " +
+                           pass.attachments.front().name + ": " + std::to_string(pass.attachments.front().samples) +
+                           "): MSAA resolve attachments are not imported yet");
+      }
+    }
     if (std::count_if(pass.attachments.begin(), pass.attachments.end(),
                       [](const Attachment& a) { return a.usage == AttachmentUsage::Depth; }) > 1) {
       r.fail(pwhere, "has more than one depth attachment");
