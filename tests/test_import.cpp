@@ -145,7 +145,8 @@ TEST(Import, FixtureBecomesATraceAndAClipSpaceGlb) {
   ASSERT_EQ(sm.clip_positions.size(), 36u);
   // The viewport [40, 0, 240, 240] of the 320x240 frame first: x' = (240/320) x + ((80 + 240)/320 - 1) w
   // = 0.75 x + 0 w; y' = (240/240) y + 0 w = y.
-  const auto& v0 = fixture_json()["passes"][0]["draws"][0]["clip_positions"][0];
+  const nlohmann::json captured = fixture_json();
+  const auto& v0 = captured["passes"][0]["draws"][0]["clip_positions"][0];
   const float x = v0[0], y = v0[1], z = v0[2], w = v0[3];
   EXPECT_FLOAT_EQ(sm.clip_positions[0].x, 0.75f * x);
   EXPECT_FLOAT_EQ(sm.clip_positions[0].y, -y);
