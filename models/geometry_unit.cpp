@@ -311,9 +311,12 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
     world.resize(nv);
     normal.resize(nv);
     glm::vec3 lo(1e30f), hi(-1e30f);
+    // A captured sub-mesh carries the clip positions its application's vertex shader wrote
+    // (SubMesh::clip_positions): they are taken as they are, with no instance or camera transform.
+    const bool captured_clip = sm.clip_positions.size() == nv;
     for (std::size_t v = 0; v < nv; ++v) {
       const glm::vec4 p(sm.positions[v], 1.0f);
-      clip[v] = mvp * p;
+      clip[v] = captured_clip ? sm.clip_positions[v] : mvp * p;
       world[v] = glm::vec3(inst.world * p);
       normal[v] = glm::normalize(nrm * sm.normals[v]);
       lo = glm::min(lo, world[v]);

@@ -23,6 +23,9 @@ const std::vector<CliCommand>& cli_commands() {
        cmd_params},
       {"scene", "Describe a scene: scene info atrium[:detail] | FILE.gltf/.glb", cmd_scene},
       {"trace", "Generate the command trace of a technique for a scene, lights, camera and resolution", cmd_trace},
+      {"import", "Import a captured frame of a real application (RenderDoc .rdc, Vulkan) as a trace and its "
+                 "clip-space geometry (docs/capture-import.md)",
+       cmd_import},
       {"run", "Replay a trace on a hardware configuration and write the run to a results database", cmd_run},
       {"study", "The main job: every technique on the atrium at 1920x1080 with 256 and 1024 lights, compared", cmd_study},
       {"sweep", "Run a sweep file's points in parallel worker processes into a results database, resumably "

@@ -22,6 +22,7 @@ int cmd_merge(const std::vector<std::string>& args, std::ostream& out, std::ostr
 int cmd_report(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_validate(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_plot(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+int cmd_import(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
 /// Adds the hardware configuration options every simulating command takes: --config, --set.
 void add_config_options(boost::program_options::options_description& desc);

@@ -938,6 +938,28 @@ void Converter::convert_primitive(int mesh, int prim_index, std::vector<std::uin
     }
     has_normals = true;
   }
+  // _CLIP_POSITION (tbdrsim's application-specific attribute, docs/capture-import.md): VEC4 FLOAT
+  // clip-space positions a captured vertex shader wrote, all finite (the clipper handles any w).
+  if (auto it = prim.attributes.find(kClipPositionAttribute); it != prim.attributes.end()) {
+    const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(it->second)];
+    const std::string desc = accessor_desc(it->second, std::string(kClipPositionAttribute) + " of " + where);
+    if (acc.type != TINYGLTF_TYPE_VEC4 || acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) {
+      fail(desc + ": " + kClipPositionAttribute + " must be VEC4 FLOAT, found " + type_name(acc.type) + " " +
+           component_name(acc.componentType));
+    }
+    const std::vector<float> v = read_accessor<float>(it->second, desc);
+    sm.clip_positions.resize(vertex_count);
+    for (std::size_t i = 0; i < vertex_count; ++i) {
+      const glm::vec4 c(v[4 * i], v[4 * i + 1], v[4 * i + 2], v[4 * i + 3]);
+      if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z) || !std::isfinite(c.w)) {
+        std::ostringstream os;
+        os << desc << ": vertex " << i << " has a non-finite clip coordinate (" << c.x << ", " << c.y << ", " << c.z
+           << ", " << c.w << ")";
+        fail(os.str());
+      }
+      sm.clip_positions[i] = c;
+    }
+  }
   // TEXCOORD_n (the set the base color texture uses): VEC2 FLOAT or normalized UBYTE/USHORT.
   std::uint32_t material_index = 0;
   int texcoord_set = 0;
@@ -973,7 +995,7 @@ void Converter::convert_primitive(int mesh, int prim_index, std::vector<std::uin
   }
   // Remaining attributes: validated (byte ranges), not kept.
   for (const auto& [attr, acc_index] : prim.attributes) {
-    if (attr == "POSITION" || attr == "NORMAL" || attr == uv_attr) continue;
+    if (attr == "POSITION" || attr == "NORMAL" || attr == uv_attr || attr == kClipPositionAttribute) continue;
     std::size_t elem = 0;
     const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(acc_index)];
     const std::string desc = accessor_desc(acc_index, attr + " of " + where);

@@ -12,6 +12,10 @@
 
 namespace tbdr {
 
+/// The application-specific glTF attribute (glTF 2.0 section 3.7.2.1: names starting with `_`)
+/// holding clip-space positions a captured vertex shader wrote (SubMesh::clip_positions).
+inline constexpr const char* kClipPositionAttribute = "_CLIP_POSITION";
+
 /// What an image file's header says, read without decoding the pixels.
 struct ImageHeader {
   std::string format;   ///< "png", "jpeg", "gif", "bmp", "ktx2"

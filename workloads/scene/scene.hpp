@@ -70,6 +70,11 @@ struct SubMesh {
   std::string name;
   std::uint32_t material = 0;           ///< index into Scene::materials
   std::vector<glm::vec3> positions;     ///< object space
+  /// Clip-space positions (x, y, z, w; OpenGL convention: -w <= x, y, z <= w inside, y up) that a
+  /// captured vertex shader already computed (glTF attribute `_CLIP_POSITION`, docs/capture-import.md).
+  /// When present (same count as positions) the geometry unit takes them as they are: no instance
+  /// or camera transform. Empty for ordinary meshes.
+  std::vector<glm::vec4> clip_positions;
   std::vector<glm::vec3> normals;       ///< object space, same count as positions (generated if absent)
   std::vector<glm::vec2> uvs;           ///< same count as positions (zeros if absent)
   std::vector<std::uint32_t> indices;   ///< triangle list, 3 per triangle, all < positions.size()

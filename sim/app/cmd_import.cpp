@@ -1,0 +1,742 @@
+// `tbdrsim import CAPTURE --out FRAME.trace`: a captured frame of a real application as a trace
+// (docs/capture-import.md). CAPTURE is a RenderDoc capture (.rdc, exported first by
+// scripts/capture/rdc_export.py with Debian's python3-renderdoc) or an already exported capture
+// intermediate (frame.json, or the folder holding it). Writes FRAME.trace, FRAME.glb (the draws'
+// clip-space geometry and textures), FRAME.import.txt (the summary) and, when the capture has it,
+// FRAME.reference.png (the application's own frame); on any error nothing.
+#include "app/cmd_import.hpp"
+
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include <boost/program_options.hpp>
+#include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
+
+#include "app/commands.hpp"
+#include "app/worker_pool.hpp"
+#include "kernel/errors.hpp"
+#include "kernel/hash.hpp"
+#include "scene/gltf_loader.hpp"
+
+extern char** environ;
+
+namespace tbdr {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+/// The intermediate's format line (docs/capture-import.md, "The intermediate").
+constexpr const char* kCaptureFormat = "tbdrsim-capture 1";
+
+/// The most vertices one imported draw may hold: the glTF loader keeps 32-bit indices, and a
+/// frame's geometry is held in memory twice (JSON and GLB), so 2^24 (16.7 M, far above a real
+/// frame's draw) bounds the import's memory at a few GB.
+constexpr std::uint64_t kMaxDrawVertices = 1ull << 24;
+
+/// A trace camera is required by the format but clip-space geometry never uses it (the geometry
+/// unit takes _CLIP_POSITION as it is); this one is a valid, documented placeholder.
+Camera placeholder_camera() {
+  Camera c;
+  c.eye = {0.0f, 0.0f, 1.0f};
+  c.target = {0.0f, 0.0f, 0.0f};
+  c.up = {0.0f, 1.0f, 0.0f};
+  c.fov_y_deg = 90.0f;
+  c.near_plane = 0.5f;
+  c.far_plane = 2.0f;
+  return c;
+}
+
+/// Vulkan formats as the trace names them (docs/trace-format.md `attachment format=`).
+std::optional<Format> format_of(const std::string& vk) {
+  static const std::map<std::string, Format> formats = {
+      {"VK_FORMAT_R8_UNORM", Format::R8},           {"VK_FORMAT_R8G8_UNORM", Format::Rg8},
+      {"VK_FORMAT_R8G8B8A8_UNORM", Format::Rgba8},  {"VK_FORMAT_R8G8B8A8_SRGB", Format::Rgba8},
+      {"VK_FORMAT_B8G8R8A8_UNORM", Format::Rgba8},  {"VK_FORMAT_B8G8R8A8_SRGB", Format::Rgba8},
+      {"VK_FORMAT_A8B8G8R8_UNORM_PACK32", Format::Rgba8}, {"VK_FORMAT_A8B8G8R8_SRGB_PACK32", Format::Rgba8},
+      {"VK_FORMAT_A2B10G10R10_UNORM_PACK32", Format::Rgb10a2}, {"VK_FORMAT_A2R10G10B10_UNORM_PACK32", Format::Rgb10a2},
+      {"VK_FORMAT_B10G11R11_UFLOAT_PACK32", Format::R11g11b10f}, {"VK_FORMAT_R16_SFLOAT", Format::R16f},
+      {"VK_FORMAT_R16G16_SFLOAT", Format::Rg16f},   {"VK_FORMAT_R16G16B16A16_SFLOAT", Format::Rgba16f},
+      {"VK_FORMAT_R32_SFLOAT", Format::R32f},       {"VK_FORMAT_R32G32_SFLOAT", Format::Rg32f},
+      {"VK_FORMAT_R32G32B32A32_SFLOAT", Format::Rgba32f}, {"VK_FORMAT_R32_UINT", Format::R32ui},
+      {"VK_FORMAT_R32G32_UINT", Format::Rg32ui},    {"VK_FORMAT_R32G32B32A32_UINT", Format::Rgba32ui},
+      {"VK_FORMAT_D16_UNORM", Format::D16},         {"VK_FORMAT_X8_D24_UNORM_PACK32", Format::D24s8},
+      {"VK_FORMAT_D24_UNORM_S8_UINT", Format::D24s8}, {"VK_FORMAT_D32_SFLOAT", Format::D32f},
+      {"VK_FORMAT_D32_SFLOAT_S8_UINT", Format::D32fs8},
+  };
+  auto it = formats.find(vk);
+  if (it == formats.end()) return std::nullopt;
+  return it->second;
+}
+
+/// Reads the intermediate's members with errors that name the file and the element.
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+  [[noreturn]] void fail(const std::string& where, const std::string& msg) const {
+    throw InputError(file_, where + ": " + msg);
+  }
+  const json& get(const json& obj, const char* key, const std::string& where) const {
+    if (!obj.is_object() || !obj.contains(key)) fail(where, std::string("missing '") + key + "'");
+    return obj.at(key);
+  }
+  const json& array(const json& obj, const char* key, const std::string& where) const {
+    const json& v = get(obj, key, where);
+    if (!v.is_array()) fail(where, std::string("'") + key + "' is not an array");
+    return v;
+  }
+  std::string str(const json& obj, const char* key, const std::string& where) const {
+    const json& v = get(obj, key, where);
+    if (!v.is_string()) fail(where, std::string("'") + key + "' is not a string");
+    return v.get<std::string>();
+  }
+  bool boolean(const json& obj, const char* key, const std::string& where) const {
+    const json& v = get(obj, key, where);
+    if (!v.is_boolean()) fail(where, std::string("'") + key + "' is not true/false");
+    return v.get<bool>();
+  }
+  std::uint64_t uint(const json& obj, const char* key, const std::string& where, std::uint64_t max) const {
+    const json& v = get(obj, key, where);
+    if (!v.is_number_unsigned() || v.get<std::uint64_t>() > max) {
+      fail(where, std::string("'") + key + "' must be an integer in 0.." + std::to_string(max));
+    }
+    return v.get<std::uint64_t>();
+  }
+  float number(const json& v, const std::string& where) const {
+    if (!v.is_number()) fail(where, "not a number");
+    const double d = v.get<double>();
+    if (!std::isfinite(d) || std::abs(d) > 3.4e38) fail(where, "not a finite float");
+    return static_cast<float>(d);
+  }
+  const std::string& file() const { return file_; }
+
+ private:
+  std::string file_;
+};
+
+/// Appends little-endian bytes of trivially copyable values.
+template <typename T>
+void put(std::vector<std::uint8_t>& out, const T& v) {
+  const auto* p = reinterpret_cast<const std::uint8_t*>(&v);
+  out.insert(out.end(), p, p + sizeof(T));
+}
+
+/// Builds a GLB (glTF 2.0 binary container, spec section 4.4): one JSON chunk, one BIN chunk.
+class GlbBuilder {
+ public:
+  /// Adds bytes as a buffer view (4-byte aligned) and returns its index.
+  int view(const std::vector<std::uint8_t>& bytes, std::optional<int> target) {
+    while (bin_.size() % 4) bin_.push_back(0);
+    json v = {{"buffer", 0}, {"byteOffset", bin_.size()}, {"byteLength", bytes.size()}};
+    if (target) v["target"] = *target;
+    bin_.insert(bin_.end(), bytes.begin(), bytes.end());
+    views_.push_back(v);
+    return static_cast<int>(views_.size() - 1);
+  }
+  int accessor(json a) {
+    accessors_.push_back(std::move(a));
+    return static_cast<int>(accessors_.size() - 1);
+  }
+  json& doc() { return doc_; }
+  std::vector<std::uint8_t> finish() {
+    while (bin_.size() % 4) bin_.push_back(0);
+    doc_["buffers"] = json::array({{{"byteLength", bin_.size()}}});
+    doc_["bufferViews"] = views_;
+    doc_["accessors"] = accessors_;
+    std::string text = doc_.dump();
+    while (text.size() % 4) text.push_back(' ');
+    std::vector<std::uint8_t> out;
+    put(out, std::uint32_t{0x46546C67});  // "glTF"
+    put(out, std::uint32_t{2});
+    put(out, static_cast<std::uint32_t>(12 + 8 + text.size() + 8 + bin_.size()));
+    put(out, static_cast<std::uint32_t>(text.size()));
+    put(out, std::uint32_t{0x4E4F534A});  // "JSON"
+    out.insert(out.end(), text.begin(), text.end());
+    put(out, static_cast<std::uint32_t>(bin_.size()));
+    put(out, std::uint32_t{0x004E4942});  // "BIN\0"
+    out.insert(out.end(), bin_.begin(), bin_.end());
+    return out;
+  }
+
+ private:
+  json doc_ = {{"asset", {{"version", "2.0"}, {"generator", "tbdrsim import"}}}};
+  json views_ = json::array();
+  json accessors_ = json::array();
+  std::vector<std::uint8_t> bin_;
+};
+
+constexpr int kGlArrayBuffer = 34962;         // glTF bufferView.target for vertex attributes
+constexpr int kGlElementArrayBuffer = 34963;  // ... and for indices
+constexpr int kGlFloat = 5126;                // glTF accessor.componentType FLOAT
+constexpr int kGlUnsignedInt = 5125;          // ... UNSIGNED_INT
+
+std::vector<std::uint8_t> read_bytes(const fs::path& p, const std::string& what) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in) throw InputError(p.string(), what + ": cannot open file");
+  return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
+}
+
+}  // namespace
+
+CaptureImport convert_capture(const std::string& frame_json_path, const std::string& glb_name) {
+  const Reader r(frame_json_path);
+  json doc;
+  {
+    std::ifstream in(frame_json_path, std::ios::binary);
+    if (!in) throw InputError(frame_json_path, "cannot open the capture intermediate");
+    try {
+      doc = json::parse(in);
+    } catch (const json::exception& e) {
+      throw InputError(frame_json_path, std::string("not valid JSON (truncated export?): ") + e.what());
+    }
+  }
+  const std::string fmt = r.str(doc, "format", "header");
+  if (fmt != kCaptureFormat) r.fail("header", "format '" + fmt + "', expected '" + kCaptureFormat + "'");
+  const std::string convention = r.str(doc, "clip_convention", "header");
+  if (convention != "vulkan" && convention != "opengl") {
+    r.fail("header", "clip_convention '" + convention + "' (known: vulkan, opengl)");
+  }
+  const fs::path dir = fs::path(frame_json_path).parent_path();
+
+  CaptureImport out;
+  Trace& t = out.trace;
+  t.technique = "capture_import";
+  const json& source = r.get(doc, "source", "header");
+  for (const char* key : {"tool", "api", "capture"}) {
+    if (source.contains(key) && source[key].is_string()) {
+      std::string v = source[key].get<std::string>();
+      std::replace_if(v.begin(), v.end(), [](char c) { return c == ' ' || c == '"' || c == '#' || c == '\\'; }, '_');
+      if (!v.empty()) t.options[key] = v;
+    }
+  }
+  t.frame.width = static_cast<int>(r.uint(doc, "width", "header", kMaxFrameSide));
+  t.frame.height = static_cast<int>(r.uint(doc, "height", "header", kMaxFrameSide));
+  if (t.frame.width == 0 || t.frame.height == 0) r.fail("header", "frame of zero size");
+  t.frame.samples = 1;
+  t.camera = placeholder_camera();
+  t.camera_name = "captured_clip_space";
+
+  for (const auto& u : r.array(doc, "unsupported", "header")) {
+    if (u.is_string()) out.unsupported.push_back(u.get<std::string>());
+  }
+  for (const auto& d : r.array(doc, "dispatches", "header")) {
+    (void)d;  // each is listed in `unsupported` by the exporter (the application's own kernels)
+  }
+
+  GlbBuilder glb;
+  json meshes = json::array(), nodes = json::array(), materials = json::array(), textures = json::array(),
+       images = json::array();
+  std::map<std::string, int> image_of_file;  // texture file -> glTF texture index
+  std::map<std::string, std::string> shader_of_key;
+  std::map<std::uint64_t, Format> image_format;  // attachment image -> format across passes
+  std::set<std::uint64_t> stored_images;
+  std::uint32_t max_samples = 1;
+
+  for (const auto& pj : r.array(doc, "passes", "header")) {
+    const std::uint64_t pev = r.uint(pj, "event", "pass", 1ull << 40);
+    const std::string pwhere = "pass at event " + std::to_string(pev);
+    PassDesc pass;
+    pass.name = "pass_" + std::to_string(pev);
+    std::size_t color_targets = 0;
+    for (const auto& aj : r.array(pj, "attachments", pwhere)) {
+      const std::uint64_t index = r.uint(aj, "index", pwhere, 64);
+      const std::string awhere = pwhere + " attachment " + std::to_string(index);
+      Attachment a;
+      const std::string vk = r.str(aj, "vk_format", awhere);
+      const auto f = format_of(vk);
+      if (!f) r.fail(awhere, "format " + vk + " has no trace equivalent (docs/trace-format.md lists the formats)");
+      a.format = *f;
+      a.samples = static_cast<std::uint32_t>(r.uint(aj, "samples", awhere, 8));
+      if (a.samples != 1 && a.samples != 2 && a.samples != 4 && a.samples != 8) r.fail(awhere, "samples must be 1, 2, 4 or 8");
+      max_samples = std::max(max_samples, a.samples);
+      const std::string load = r.str(aj, "load", awhere), store = r.str(aj, "store", awhere);
+      const auto lo = parse_load_op(load);
+      const auto so = parse_store_op(store);
+      if (!lo || !so) r.fail(awhere, "load '" + load + "' / store '" + store + "' not known");
+      a.load = *lo;
+      a.store = *so;
+      a.usage = is_depth_format(a.format) ? AttachmentUsage::Depth : AttachmentUsage::Color;
+      if (aj.contains("image") && aj["image"].is_number_unsigned()) {
+        const std::uint64_t img = aj["image"].get<std::uint64_t>();
+        a.name = "img_" + std::to_string(img);
+        auto [it, fresh] = image_format.emplace(img, a.format);
+        if (!fresh && it->second != a.format) r.fail(awhere, "image " + std::to_string(img) + " changes format between passes");
+        if (a.load == LoadOp::Load && !stored_images.count(img)) {
+          // The trace's rule: load=load needs an earlier store in this frame. The capture's first
+          // pass loads what a previous frame left; it is imported as a clear and said so.
+          out.unsupported.push_back(awhere + ": loads " + a.name + ", which no earlier pass of the frame stored; "
+                                    "imported as load=clear");
+          a.load = LoadOp::Clear;
+        }
+        if (a.store == StoreOp::Store) stored_images.insert(img);
+      } else {
+        a.name = pass.name + "_att" + std::to_string(index);
+        if (a.load == LoadOp::Load) {
+          out.unsupported.push_back(awhere + ": loads an unnamed image; imported as load=clear");
+          a.load = LoadOp::Clear;
+        }
+      }
+      if (a.usage == AttachmentUsage::Depth && aj.contains("clear") && a.load == LoadOp::Clear) {
+        const float depth = r.number(r.get(r.get(aj, "clear", awhere), "depth", awhere), awhere + " clear depth");
+        if (depth != 1.0f) {
+          out.unsupported.push_back(awhere + ": clears depth to " + std::to_string(depth) +
+                                    "; the simulator clears depth to 1.0 (far)");
+        }
+      }
+      if (a.usage == AttachmentUsage::Color && aj.contains("clear") && a.load == LoadOp::Clear) {
+        const json& col = r.array(r.get(aj, "clear", awhere), "color", awhere + " clear");
+        bool black = true;
+        for (const auto& c : col) black = black && r.number(c, awhere + " clear colour") == 0.0f;
+        if (!black) {
+          out.unsupported.push_back(awhere + ": clears to colour " + col.dump() +
+                                    "; the simulator's images clear to black (counts and traffic are unaffected)");
+        }
+      }
+      if (a.usage == AttachmentUsage::Color) ++color_targets;
+      pass.attachments.push_back(a);
+    }
+    if (pass.attachments.empty()) r.fail(pwhere, "has no attachments");
+    for (const Attachment& a : pass.attachments) {
+      if (a.samples != pass.attachments.front().samples) {
+        r.fail(pwhere, "attachments with different sample counts (" + a.name + ": " + std::to_string(a.samples) + ", " +
+                           pass.attachments.front().name + ": " + std::to_string(pass.attachments.front().samples) +
+                           "): MSAA resolve attachments are not imported yet");
+      }
+    }
+    if (std::count_if(pass.attachments.begin(), pass.attachments.end(),
+                      [](const Attachment& a) { return a.usage == AttachmentUsage::Depth; }) > 1) {
+      r.fail(pwhere, "has more than one depth attachment");
+    }
+    const bool has_depth = pass.depth_attachment() != nullptr;
+
+    for (const auto& dj : r.array(pj, "draws", pwhere)) {
+      const std::uint64_t ev = r.uint(dj, "event", pwhere, 1ull << 40);
+      std::string dname = "draw_" + std::to_string(ev);
+      const std::string dwhere = "draw at event " + std::to_string(ev) +
+                                 (dj.contains("name") && dj["name"].is_string() ? " (" + dj["name"].get<std::string>() + ")" : "");
+      // Viewport: [x, y, width, height, min_depth, max_depth] in framebuffer pixels (y down for
+      // Vulkan). The simulator's viewport is the whole frame, so each vertex is moved in clip space
+      // to where the draw's own viewport puts it: with s = size / frame size and
+      // o = (2 origin + size) / frame size - 1, x_ndc' = s x_ndc + o, i.e. x' = s x + o w (same for
+      // y), and depth' = min + (max - min) depth, i.e. z' = (max - min) z + min w (Vulkan depth).
+      const float fw = static_cast<float>(t.frame.width), fh = static_cast<float>(t.frame.height);
+      float vp_x = 0, vp_y = 0, vp_w = fw, vp_h = fh, vmin = 0, vmax = 1;
+      if (dj.contains("viewport")) {
+        const json& vj = r.array(dj, "viewport", dwhere);
+        if (vj.size() != 6) r.fail(dwhere, "viewport is not [x, y, width, height, min_depth, max_depth]");
+        vp_x = r.number(vj[0], dwhere + " viewport");
+        vp_y = r.number(vj[1], dwhere + " viewport");
+        vp_w = r.number(vj[2], dwhere + " viewport");
+        vp_h = r.number(vj[3], dwhere + " viewport");
+        vmin = r.number(vj[4], dwhere + " viewport");
+        vmax = r.number(vj[5], dwhere + " viewport");
+        if (vp_w <= 0.0f || vp_h == 0.0f) r.fail(dwhere, "viewport of zero or negative width");
+      }
+      const bool full_viewport = vp_x == 0.0f && vp_y == 0.0f && vp_w == fw && vp_h == fh;
+      if (dj.contains("scissor")) {
+        const json& sj = r.array(dj, "scissor", dwhere);
+        if (sj.size() != 4) r.fail(dwhere, "scissor is not [x, y, width, height]");
+        const float sx = r.number(sj[0], dwhere + " scissor"), sy = r.number(sj[1], dwhere + " scissor");
+        const float sw = r.number(sj[2], dwhere + " scissor"), sh = r.number(sj[3], dwhere + " scissor");
+        if (sx > 0.0f || sy > 0.0f || sx + sw < fw || sy + sh < fh) {
+          out.unsupported.push_back(dwhere + ": scissor " + sj.dump() + " smaller than the frame; not applied");
+        }
+      }
+      std::size_t beyond_viewport = 0;
+      // Geometry: clip positions (x, y, z, w as the vertex shader wrote them), optional indices.
+      const json& cj = r.array(dj, "clip_positions", dwhere);
+      if (cj.empty()) r.fail(dwhere, "has no vertices");
+      if (cj.size() > kMaxDrawVertices) r.fail(dwhere, std::to_string(cj.size()) + " vertices, more than the import's limit");
+      std::vector<glm::vec4> clip(cj.size());
+      for (std::size_t v = 0; v < cj.size(); ++v) {
+        const std::string vtx = dwhere + " vertex " + std::to_string(v);
+        if (!cj[v].is_array() || cj[v].size() != 4) r.fail(vtx, "clip position is not 4 numbers");
+        glm::vec4 c(r.number(cj[v][0], vtx), r.number(cj[v][1], vtx), r.number(cj[v][2], vtx), r.number(cj[v][3], vtx));
+        if (!full_viewport) {
+          if (std::abs(c.x) > c.w || std::abs(c.y) > c.w) ++beyond_viewport;
+          const float sx = vp_w / fw, ox = (2.0f * vp_x + vp_w) / fw - 1.0f;
+          const float sy = vp_h / fh, oy = (2.0f * vp_y + vp_h) / fh - 1.0f;
+          c = glm::vec4(sx * c.x + ox * c.w, sy * c.y + oy * c.w, c.z, c.w);
+        }
+        if (vmin != 0.0f || vmax != 1.0f) {
+          if (convention != "vulkan") r.fail(dwhere, "a depth range other than [0, 1] is imported for Vulkan captures only");
+          c.z = (vmax - vmin) * c.z + vmin * c.w;
+        }
+        if (convention == "vulkan") {
+          // Vulkan clip space: y points down the framebuffer and depth is z/w in [0, 1]. The
+          // simulator's (OpenGL's): y up, depth (z/w + 1)/2. Same pixel and same depth value:
+          // y' = -y, z' = 2z - w.
+          c = glm::vec4(c.x, -c.y, 2.0f * c.z - c.w, c.w);
+        }
+        clip[v] = c;
+      }
+      if (beyond_viewport > 0) {
+        out.unsupported.push_back(dwhere + ": " + std::to_string(beyond_viewport) + " vertices outside its viewport " +
+                                  "(not the whole frame); the simulator clips to the frame, so they may draw beyond it");
+      }
+      std::vector<std::uint32_t> idx;
+      const bool indexed = dj.contains("indices");
+      if (indexed) {
+        for (const auto& ij : r.array(dj, "indices", dwhere)) {
+          if (!ij.is_number_unsigned() || ij.get<std::uint64_t>() >= clip.size()) {
+            r.fail(dwhere, "index " + ij.dump() + " is out of range (" + std::to_string(clip.size()) + " vertices)");
+          }
+          idx.push_back(ij.get<std::uint32_t>());
+        }
+      } else {
+        idx.resize(clip.size());
+        for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<std::uint32_t>(i);
+      }
+      // Strips and fans become lists here (the winding of each triangle as the API defines it).
+      const std::string topo = r.str(dj, "topology", dwhere);
+      std::vector<std::uint32_t> tri;
+      if (topo == "triangles") {
+        tri.assign(idx.begin(), idx.end() - static_cast<std::ptrdiff_t>(idx.size() % 3));
+      } else if (topo == "triangle_strip" || topo == "triangle_fan") {
+        for (std::size_t i = 0; i + 2 < idx.size(); ++i) {
+          if (topo == "triangle_fan") {
+            tri.insert(tri.end(), {idx[0], idx[i + 1], idx[i + 2]});
+          } else if (i % 2 == 0) {
+            tri.insert(tri.end(), {idx[i], idx[i + 1], idx[i + 2]});
+          } else {
+            tri.insert(tri.end(), {idx[i + 1], idx[i], idx[i + 2]});
+          }
+        }
+      } else {
+        r.fail(dwhere, "topology '" + topo + "' is not imported (triangles, triangle_strip, triangle_fan)");
+      }
+      if (tri.empty()) {
+        out.unsupported.push_back(dwhere + ": no whole triangle; skipped");
+        continue;
+      }
+      // Winding: the simulator's front faces are counter-clockwise in its (y-up, OpenGL) clip space
+      // (clipper.hpp, front_ccw). Vulkan decides facing from the triangle's area in framebuffer
+      // coordinates, whose y runs down, and the y flip above keeps every vertex on its pixel, so a
+      // Vulkan counter-clockwise front face is the simulator's as it is and a clockwise one is
+      // imported by reversing each triangle. Measured on vkcube (cull back, front counter-clockwise):
+      // as is, the visible triangles match RenderDoc's pixel history at 240 of 240 sampled pixels;
+      // reversed, at 84 (the far faces are drawn instead).
+      const bool front_cw = r.str(dj, "front_face", dwhere) == "cw";
+      const bool reverse = front_cw;
+      if (reverse) {
+        for (std::size_t i = 0; i + 2 < tri.size(); i += 3) std::swap(tri[i + 1], tri[i + 2]);
+      }
+      out.triangles += tri.size() / 3;
+
+      // The GLB mesh: POSITION (clip x, y, z: glTF requires it; the simulator uses it only as the
+      // vertex's world position, for lights, and an imported frame has none), _CLIP_POSITION,
+      // TEXCOORD_0 when exported, indices.
+      json attrs;
+      {
+        std::vector<std::uint8_t> bytes;
+        glm::vec3 lo(3.4e38f), hi(-3.4e38f);
+        for (const auto& c : clip) {
+          put(bytes, c.x);
+          put(bytes, c.y);
+          put(bytes, c.z);
+          lo = glm::min(lo, glm::vec3(c));
+          hi = glm::max(hi, glm::vec3(c));
+        }
+        attrs["POSITION"] = glb.accessor({{"bufferView", glb.view(bytes, kGlArrayBuffer)}, {"componentType", kGlFloat},
+                                          {"count", clip.size()}, {"type", "VEC3"},
+                                          {"min", {lo.x, lo.y, lo.z}}, {"max", {hi.x, hi.y, hi.z}}});
+        bytes.clear();
+        for (const auto& c : clip) {
+          put(bytes, c.x);
+          put(bytes, c.y);
+          put(bytes, c.z);
+          put(bytes, c.w);
+        }
+        attrs[kClipPositionAttribute] = glb.accessor({{"bufferView", glb.view(bytes, kGlArrayBuffer)},
+                                                      {"componentType", kGlFloat}, {"count", clip.size()}, {"type", "VEC4"}});
+      }
+      // Texture: the first the fragment shader binds, as the material's base colour, when the
+      // exporter saved it and found uvs for it.
+      json material = {{"name", dname}, {"doubleSided", false}};
+      std::string texture_note = "no texture";
+      const json& texs = r.array(dj, "textures", dwhere);
+      if (dj.contains("uvs") && !texs.empty() && texs[0].contains("file")) {
+        const json& uj = r.array(dj, "uvs", dwhere);
+        if (uj.size() != clip.size()) r.fail(dwhere, "has " + std::to_string(uj.size()) + " uvs for " + std::to_string(clip.size()) + " vertices");
+        std::vector<std::uint8_t> bytes;
+        for (std::size_t v = 0; v < uj.size(); ++v) {
+          const std::string vw = dwhere + " uv " + std::to_string(v);
+          if (!uj[v].is_array() || uj[v].size() != 2) r.fail(vw, "is not 2 numbers");
+          put(bytes, r.number(uj[v][0], vw));
+          put(bytes, r.number(uj[v][1], vw));
+        }
+        attrs["TEXCOORD_0"] = glb.accessor({{"bufferView", glb.view(bytes, kGlArrayBuffer)}, {"componentType", kGlFloat},
+                                            {"count", clip.size()}, {"type", "VEC2"}});
+        const std::string file = r.str(texs[0], "file", dwhere + " texture");
+        if (file.find('/') != std::string::npos || file.find("..") != std::string::npos) {
+          r.fail(dwhere, "texture file '" + file + "' must be a plain name in the intermediate's folder");
+        }
+        auto it = image_of_file.find(file);
+        if (it == image_of_file.end()) {
+          const auto png = read_bytes(dir / file, dwhere + " texture");
+          images.push_back({{"bufferView", glb.view(png, std::nullopt)}, {"mimeType", "image/png"}, {"name", file}});
+          textures.push_back({{"source", images.size() - 1}});
+          it = image_of_file.emplace(file, static_cast<int>(textures.size() - 1)).first;
+        }
+        material["pbrMetallicRoughness"] = {{"baseColorTexture", {{"index", it->second}}}, {"metallicFactor", 0.0}};
+        texture_note = file;
+      } else if (!texs.empty()) {
+        out.unsupported.push_back(dwhere + ": binds " + std::to_string(texs.size()) +
+                                  " texture(s) but no uvs were exported; drawn untextured");
+      }
+      if (texs.size() > 1) {
+        out.unsupported.push_back(dwhere + ": binds " + std::to_string(texs.size()) +
+                                  " textures; only the first is the material's (fetch counts come from the shader)");
+      }
+      materials.push_back(material);
+      json prim = {{"attributes", attrs}, {"material", materials.size() - 1}, {"mode", 4}};
+      const bool need_indices = indexed || topo != "triangles" || reverse;
+      if (need_indices) {
+        std::vector<std::uint8_t> bytes;
+        for (auto i : tri) put(bytes, i);
+        prim["indices"] = glb.accessor({{"bufferView", glb.view(bytes, kGlElementArrayBuffer)},
+                                        {"componentType", kGlUnsignedInt}, {"count", tri.size()}, {"type", "SCALAR"}});
+      }
+      meshes.push_back({{"name", dname}, {"primitives", json::array({prim})}});
+      nodes.push_back({{"name", dname}, {"mesh", meshes.size() - 1}});
+
+      // Shader: the fragment shader's static SPIR-V cost, one declaration per distinct cost.
+      const json& sj = r.get(dj, "shader", dwhere);
+      ShaderDesc sh;
+      sh.alu_ops = static_cast<std::uint32_t>(r.uint(sj, "alu_ops", dwhere + " shader", 1u << 20));
+      sh.tex_fetches = static_cast<std::uint32_t>(r.uint(sj, "tex_fetches", dwhere + " shader", 1u << 16));
+      sh.varyings = static_cast<std::uint32_t>(r.uint(sj, "varyings", dwhere + " shader", 128));
+      sh.discard = r.boolean(sj, "discard", dwhere + " shader");
+      const std::uint64_t outputs = r.uint(sj, "color_outputs", dwhere + " shader", 8);
+      sh.color_outputs = static_cast<std::uint32_t>(std::min<std::uint64_t>(outputs, color_targets));
+      if (outputs > color_targets) {
+        out.unsupported.push_back(dwhere + ": shader writes " + std::to_string(outputs) + " colour outputs, the pass has " +
+                                  std::to_string(color_targets) + " colour targets; counted as " + std::to_string(color_targets));
+      }
+      sh.light_source = LightSource::None;
+      const std::string skey = std::to_string(sh.alu_ops) + "_" + std::to_string(sh.tex_fetches) + "_" +
+                               std::to_string(sh.varyings) + "_" + std::to_string(sh.color_outputs) + (sh.discard ? "_d" : "");
+      auto sit = shader_of_key.find(skey);
+      if (sit == shader_of_key.end()) {
+        sh.name = "fs_" + std::to_string(shader_of_key.size());
+        t.shaders.push_back(sh);
+        sit = shader_of_key.emplace(skey, sh.name).first;
+      }
+      // Pipeline: the draw's own state.
+      PipelineState p;
+      p.name = "p_" + std::to_string(ev);
+      p.shader = sit->second;
+      p.depth_test = r.boolean(dj, "depth_test", dwhere) && has_depth;
+      p.depth_write = p.depth_test && r.boolean(dj, "depth_write", dwhere);
+      if (r.boolean(dj, "depth_test", dwhere) && !has_depth) {
+        out.unsupported.push_back(dwhere + ": depth test enabled without a depth attachment; imported without it");
+      }
+      const auto cmp = parse_compare_op(r.str(dj, "depth_compare", dwhere));
+      const auto blend = parse_blend_mode(r.str(dj, "blend", dwhere));
+      const auto cull = parse_cull_mode(r.str(dj, "cull", dwhere));
+      if (!cmp || !blend || !cull) r.fail(dwhere, "depth_compare, blend or cull not known");
+      p.depth_compare = *cmp;
+      p.blend = *blend;
+      p.cull = *cull;
+      t.pipelines.push_back(p);
+
+      DrawCmd d;
+      d.pipeline = p.name;
+      d.geometry = GeometryKind::Scene;
+      d.submesh = dname;
+      d.lights.all = false;
+      pass.draws.push_back(d);
+      ++out.draws;
+      out.summary.push_back(dwhere + ": " + std::to_string(tri.size() / 3) + " triangles, shader " + sit->second + " (" +
+                            std::to_string(sh.alu_ops) + " ALU, " + std::to_string(sh.tex_fetches) + " tex, " +
+                            std::to_string(sh.varyings) + " varyings; " +
+                            (sj.contains("source") && sj["source"].is_string() ? sj["source"].get<std::string>() : "?") +
+                            "), texture " + texture_note + ", depth " + (p.depth_test ? to_string(p.depth_compare) : "off") +
+                            (p.depth_write ? " write" : "") + ", blend " + to_string(p.blend) + ", cull " + to_string(p.cull));
+    }
+    if (pass.draws.empty()) {
+      out.unsupported.push_back(pwhere + ": no draws (a clear-only pass); imported with its load/store");
+    }
+    t.commands.push_back(std::move(pass));
+    ++out.passes;
+  }
+  if (out.draws == 0) r.fail("header", "the capture has no draws to import");
+  t.frame.samples = static_cast<int>(max_samples);
+
+  glb.doc()["meshes"] = meshes;
+  glb.doc()["nodes"] = nodes;
+  json scene_nodes = json::array();
+  for (std::size_t i = 0; i < nodes.size(); ++i) scene_nodes.push_back(i);
+  glb.doc()["scenes"] = json::array({{{"nodes", scene_nodes}}});
+  glb.doc()["scene"] = 0;
+  glb.doc()["materials"] = materials;
+  if (!images.empty()) {
+    glb.doc()["images"] = images;
+    glb.doc()["textures"] = textures;
+  }
+  out.glb = glb.finish();
+  t.scene.kind = SceneKind::Gltf;
+  t.scene.path = glb_name;
+  Fnv1a64 h;
+  h.update(out.glb.data(), out.glb.size());
+  t.scene.content_hash = h.hex();
+  out.summary.insert(out.summary.begin(),
+                     std::to_string(out.passes) + " passes, " + std::to_string(out.draws) + " draws, " +
+                         std::to_string(out.triangles) + " triangles, " + std::to_string(t.frame.width) + "x" +
+                         std::to_string(t.frame.height) + "; shader costs: static SPIR-V counts of each fragment "
+                         "shader (scripts/capture/spirv_cost.py); vertex shading: the hardware parameter "
+                         "geometry.vertex_shader_alu_ops");
+  return out;
+}
+
+namespace {
+
+/// Runs argv (argv[0] a path) with the tool's stdout and stderr; returns its exit code (128+signal).
+int run_program(const std::vector<std::string>& argv) {
+  std::vector<char*> cargv;
+  for (const auto& a : argv) cargv.push_back(const_cast<char*>(a.c_str()));
+  cargv.push_back(nullptr);
+  std::cout.flush();
+  std::cerr.flush();
+  pid_t pid = 0;
+  if (const int e = posix_spawn(&pid, cargv[0], nullptr, nullptr, cargv.data(), environ); e != 0) {
+    throw InputError(argv[0], std::string("cannot run: ") + std::strerror(e));
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+/// The exporter script: $TBDRSIM_CAPTURE_DIR, <prefix>/share/tbdrsim/capture, the checkout's scripts/capture.
+fs::path exporter_script() {
+  std::vector<fs::path> dirs;
+  if (const char* d = std::getenv("TBDRSIM_CAPTURE_DIR"); d && *d) dirs.emplace_back(d);
+  dirs.push_back(fs::path(self_executable()).parent_path().parent_path() / "share" / "tbdrsim" / "capture");
+  dirs.push_back(fs::path(TBDRSIM_SOURCE_DIR) / "scripts" / "capture");
+  std::string searched;
+  for (const auto& dir : dirs) {
+    std::error_code ec;
+    if (fs::is_regular_file(dir / "rdc_export.py", ec)) return dir / "rdc_export.py";
+    searched += (searched.empty() ? "" : ", ") + dir.string();
+  }
+  throw InputError("rdc_export.py", "capture exporter not found (looked in " + searched + "; set TBDRSIM_CAPTURE_DIR)");
+}
+
+void write_file(const fs::path& p, const void* data, std::size_t size) {
+  std::ofstream f(p, std::ios::binary);
+  f.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
+  if (!f) throw InputError(p.string(), "cannot write file");
+}
+
+}  // namespace
+
+int cmd_import(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  namespace po = boost::program_options;
+  po::options_description desc("import options");
+  desc.add_options()("capture", po::value<std::string>()->required(),
+                     "a RenderDoc capture (.rdc, Vulkan), or an exported capture intermediate (frame.json or its folder)")(
+      "out,o", po::value<std::string>()->required(),
+      "the trace to write (FRAME.trace); FRAME.glb, FRAME.import.txt and FRAME.reference.png go beside it")(
+      "history-samples", po::value<unsigned>()->default_value(1200),
+      "pixels whose triangle RenderDoc's pixel history records in the application's frame (for comparing "
+      "images; .rdc only, 0 for none)");
+  po::positional_options_description pos;
+  pos.add("capture", 1);
+  po::variables_map vm;
+  if (!parse_command_options("import", args, desc, &pos, vm, out)) return 0;
+  const fs::path input(vm["capture"].as<std::string>());
+  const fs::path trace_path(vm["out"].as<std::string>());
+  if (trace_path.extension() != ".trace") throw UsageError("tbdrsim import: --out must name a .trace file");
+  std::error_code ec;
+  if (!fs::exists(input, ec)) throw InputError(input.string(), "capture not found");
+  fs::path out_dir = trace_path.parent_path();
+  if (out_dir.empty()) out_dir = ".";
+  if (!fs::is_directory(out_dir, ec)) throw InputError(out_dir.string(), "output folder does not exist");
+
+  // Everything is made in a scratch folder beside the output and moved in at the end.
+  fs::path scratch = out_dir / (".tbdrsim-import-" + std::to_string(getpid()));
+  fs::remove_all(scratch, ec);
+  fs::create_directories(scratch);
+  struct Cleanup {
+    fs::path p;
+    ~Cleanup() {
+      std::error_code e;
+      fs::remove_all(p, e);
+    }
+  } cleanup{scratch};
+
+  fs::path frame_json;
+  if (fs::is_directory(input, ec)) {
+    frame_json = input / "frame.json";
+  } else if (input.extension() == ".rdc") {
+    const std::string python = std::getenv("TBDRSIM_PYTHON") && *std::getenv("TBDRSIM_PYTHON") ? std::getenv("TBDRSIM_PYTHON")
+                                                                                                 : "/usr/bin/python3";
+    const fs::path exported = scratch / "export";
+    const int rc = run_program({python, exporter_script().string(), input.string(), exported.string(),
+                                "--history-samples", std::to_string(vm["history-samples"].as<unsigned>())});
+    if (rc != 0) {
+      err << "tbdrsim import: the RenderDoc export of " << input.string() << " failed (its message is above); nothing written\n";
+      return 2;
+    }
+    frame_json = exported / "frame.json";
+  } else {
+    frame_json = input;
+  }
+  const std::string stem = trace_path.stem().string();
+  const std::string glb_name = stem + ".glb";
+  CaptureImport imp = convert_capture(frame_json.string(), glb_name);
+
+  // Read back what is written through the same reader and loader the simulator uses.
+  write_file(scratch / glb_name, imp.glb.data(), imp.glb.size());
+  const std::string text = trace_text(imp.trace);
+  write_file(scratch / (stem + ".trace"), text.data(), text.size());
+  {
+    const Trace back = read_trace((scratch / (stem + ".trace")).string());
+    const Scene scene = load_gltf((scratch / glb_name).string());
+    check_scene_references(back, scene, trace_path.string());
+  }
+  std::ostringstream summary;
+  summary << "tbdrsim import of " << input.string() << "\n";
+  for (const auto& s : imp.summary) summary << "  " << s << "\n";
+  summary << "not carried by the trace (" << imp.unsupported.size() << "):\n";
+  for (const auto& s : imp.unsupported) summary << "  - " << s << "\n";
+  if (imp.unsupported.empty()) summary << "  (nothing)\n";
+  const std::string st = summary.str();
+  write_file(scratch / (stem + ".import.txt"), st.data(), st.size());
+  std::vector<std::pair<fs::path, fs::path>> moves = {{scratch / glb_name, out_dir / glb_name},
+                                                      {scratch / (stem + ".trace"), trace_path},
+                                                      {scratch / (stem + ".import.txt"), out_dir / (stem + ".import.txt")}};
+  const fs::path ref = frame_json.parent_path() / "reference.png";
+  if (fs::is_regular_file(ref, ec)) {
+    fs::copy_file(ref, scratch / (stem + ".reference.png"), fs::copy_options::overwrite_existing);
+    moves.push_back({scratch / (stem + ".reference.png"), out_dir / (stem + ".reference.png")});
+  }
+  if (input.extension() == ".rdc") {  // keep the intermediate: it is what `tbdrsim import` reads without RenderDoc
+    fs::rename(frame_json.parent_path(), scratch / (stem + ".capture"));
+    fs::remove_all(out_dir / (stem + ".capture"), ec);
+    moves.push_back({scratch / (stem + ".capture"), out_dir / (stem + ".capture")});
+  }
+  for (const auto& [from, to] : moves) fs::rename(from, to);
+  out << st << "wrote " << trace_path.string() << " (scene " << glb_name << ", hash " << imp.trace.scene.content_hash
+      << ")\n";
+  return 0;
+}
+
+}  // namespace tbdr

@@ -1,0 +1,33 @@
+#pragma once
+// `tbdrsim import`: a frame of a real application, captured with RenderDoc, as a command trace
+// (docs/capture-import.md). A RenderDoc capture (.rdc) is first exported by
+// scripts/capture/rdc_export.py into the capture intermediate (frame.json beside the textures it
+// names); convert_capture() turns that intermediate into a Trace and a GLB file holding each draw's
+// post-vertex-shader clip positions (glTF attribute _CLIP_POSITION), which the trace names by its
+// content hash and the simulator reads back through the validated glTF loader.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "trace/trace.hpp"
+
+namespace tbdr {
+
+/// What one import produced: the trace, the GLB bytes it names, and the summary lines (counts and
+/// every capture feature that was approximated or dropped, never silently).
+struct CaptureImport {
+  Trace trace;
+  std::vector<std::uint8_t> glb;
+  std::vector<std::string> summary;      ///< one line each: counts, shader cost source, ...
+  std::vector<std::string> unsupported;  ///< one line each: what the trace does not carry, by event
+  std::uint64_t draws = 0;
+  std::uint64_t passes = 0;
+  std::uint64_t triangles = 0;
+};
+
+/// Converts a capture intermediate (frame.json; the textures it names are read from its folder)
+/// into a trace whose scene line names `glb_name` (a path relative to the trace's folder). Throws
+/// InputError naming the file and the event (draw, pass) at fault; writes nothing.
+CaptureImport convert_capture(const std::string& frame_json_path, const std::string& glb_name);
+
+}  // namespace tbdr
