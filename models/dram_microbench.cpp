@@ -49,4 +49,12 @@ DramBenchResult run_dram_microbench(const HwConfig& hw, DramPattern pattern, std
   return r;
 }
 
+MemspecPerBit preset_memspec_per_bit(const DramPresetMemspec& p, const HwConfig& hw) {
+  MemspecChannel ch;
+  ch.dies = p.dies;
+  ch.gbps = hw.dram.bandwidth_gbps / static_cast<double>(hw.dram.channels);
+  ch.io_pj_per_bit = hw.energy.dram_io_pj_per_bit;
+  return memspec_per_bit(*p.memspec, ch);
+}
+
 }  // namespace tbdr

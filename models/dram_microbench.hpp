@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "models/dram.hpp"
+#include "models/dram_memspec.hpp"
 #include "models/hw_config.hpp"
 
 namespace tbdr {
@@ -28,5 +29,9 @@ struct DramBenchResult {
 
 /// Runs `lines` 64 B reads of `pattern` on a fresh DRAM of `hw` (seeded: the same figures every run).
 DramBenchResult run_dram_microbench(const HwConfig& hw, DramPattern pattern, std::uint64_t lines, std::uint64_t seed = 1);
+
+/// The memspec's energy per bit for preset `p` loaded as `hw`: its dies on one of hw's channels,
+/// at hw's per-channel bandwidth, with hw's I/O energy where the memspec has no VDDQ currents.
+MemspecPerBit preset_memspec_per_bit(const DramPresetMemspec& p, const HwConfig& hw);
 
 }  // namespace tbdr

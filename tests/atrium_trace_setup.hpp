@@ -1,5 +1,10 @@
 #pragma once
 // Tests' generator setup for the atrium seen from its entrance, with seeded lights.
+#include <memory>
+#include <string>
+
+#include <gtest/gtest.h>
+
 #include "scene/lights.hpp"
 #include "scene/scene_library.hpp"
 #include "techniques/technique.hpp"
@@ -21,5 +26,21 @@ inline TraceSetup atrium_entrance_setup(const Scene& scene, int lights, int widt
   setup.height = height;
   return setup;
 }
+
+/// A suite over technique names (the parameter) sharing one atrium:1 scene, loaded once per suite.
+class AtriumTechniqueSuite : public ::testing::TestWithParam<const char*> {
+ protected:
+  static void SetUpTestSuite() { scene_ = std::make_unique<Scene>(load_scene("atrium:1")); }
+  static void TearDownTestSuite() { scene_.reset(); }
+  /// `technique`'s trace at 200x120 with 48 lights: every kind of pass of the technique in a
+  /// fraction of a second (7 x 4 = 28 tiles of 32x32 per render; forward_multipass with 8 lights
+  /// per pass: 6 additive passes).
+  static Trace small_trace(const std::string& technique) {
+    TraceSetup setup = atrium_entrance_setup(*scene_, 48, 200, 120);
+    if (technique == "forward_multipass") setup.options["lights_per_pass"] = "8";
+    return generate_trace(technique, setup);
+  }
+  inline static std::unique_ptr<Scene> scene_;
+};
 
 }  // namespace tbdr::testing_support

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "cli_run.hpp"
 #include "analysis/results_db.hpp"
 #include "analysis/sql.hpp"
 #include "app/cli.hpp"
@@ -18,17 +19,8 @@
 namespace tbdr {
 namespace {
 
-struct CliResult {
-  int code;
-  std::string out;
-  std::string err;
-};
-
-CliResult run_cli(const std::vector<std::string>& args) {
-  std::ostringstream out, err;
-  const int code = cli_main(args, out, err);
-  return {code, out.str(), err.str()};
-}
+using testing_support::CliResult;
+using testing_support::run_cli;
 
 TEST(Cli, HelpAndUnknownCommandOrOption) {
   const auto help = run_cli({"--help"});

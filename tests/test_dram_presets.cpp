@@ -105,11 +105,7 @@ TEST(DramPresets, EnergyPerBitAndEfficiencyAgainstTheMemspecAndTheTimings) {
   for (const DramPresetMemspec& p : dram_preset_memspecs()) {
     const HwConfig hw = preset(p);
     ASSERT_EQ(hw.dram.name, p.label);
-    MemspecChannel ch;
-    ch.dies = p.dies;
-    ch.gbps = hw.dram.bandwidth_gbps / static_cast<double>(hw.dram.channels);
-    ch.io_pj_per_bit = hw.energy.dram_io_pj_per_bit;
-    const MemspecPerBit m = memspec_per_bit(*p.memspec, ch);
+    const MemspecPerBit m = preset_memspec_per_bit(p, hw);
     const DramBenchResult s = run_dram_microbench(hw, DramPattern::Stream, 65536);
     const DramBenchResult r = run_dram_microbench(hw, DramPattern::Random, 16384);
     // The preset's own arithmetic for the stream: a refresh idles the bus tRP + tRFC + tRCD + RL of

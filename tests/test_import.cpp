@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli_run.hpp"
 #include "app/cli.hpp"
 #include "app/cmd_import.hpp"
 #include "kernel/errors.hpp"
@@ -33,17 +34,8 @@ const testing_scratch::ScratchCleanup cleanup{"import"};
 
 const fs::path kFixture = fs::path(TBDRSIM_SOURCE_DIR) / "tests" / "data" / "capture" / "vkcube";
 
-struct CliResult {
-  int code;
-  std::string out;
-  std::string err;
-};
-
-CliResult run_cli(const std::vector<std::string>& args) {
-  std::ostringstream out, err;
-  const int code = cli_main(args, out, err);
-  return {code, out.str(), err.str()};
-}
+using testing_support::CliResult;
+using testing_support::run_cli;
 
 nlohmann::json fixture_json() {
   std::ifstream in(kFixture / "frame.json");

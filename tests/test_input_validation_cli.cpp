@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "app/cli.hpp"
+#include "cli_run.hpp"
 #include "input_validation_fixture.hpp"
 
 namespace tbdr {
@@ -20,15 +21,7 @@ namespace {
 using namespace input_validation;
 const testing_scratch::ScratchCleanup cleanup{"input_validation"};
 
-struct CliResult {
-  int code;
-  std::string out, err;
-};
-CliResult run_cli(const std::vector<std::string>& args) {
-  std::ostringstream out, err;
-  const int code = cli_main(args, out, err);
-  return {code, out.str(), err.str()};
-}
+using testing_support::run_cli;
 
 TEST(InputValidation, DrawOfAMissingSubMeshExitsTwoNamingTheLineAndWritesNothing) {
   const fs::path dir = dir_for("missing_submesh");

@@ -67,23 +67,11 @@ void expect_same_rows(const ColourRun& with, const ColourRun& without, const std
   EXPECT_EQ(with.timing.frame_cycles, without.timing.frame_cycles) << what;
 }
 
-class SpeedEquivalence : public ::testing::TestWithParam<const char*> {
- protected:
-  static void SetUpTestSuite() { scene_ = new Scene(load_scene("atrium:1")); }
-  static void TearDownTestSuite() {
-    delete scene_;
-    scene_ = nullptr;
-  }
-  static Scene* scene_;
-};
-Scene* SpeedEquivalence::scene_ = nullptr;
+class SpeedEquivalence : public testing_support::AtriumTechniqueSuite {};
 
 TEST_P(SpeedEquivalence, EveryStatisticAndTileRowIsTheSameWithoutColours) {
   const std::string technique = GetParam();
-  // 200x120 pixels, 48 lights: every kind of pass of the technique, a few seconds in all.
-  TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 48, 200, 120);
-  if (technique == "forward_multipass") setup.options["lights_per_pass"] = "8";  // 6 additive passes
-  const Trace t = generate_trace(technique, setup);
+  const Trace t = small_trace(technique);
   const HwConfig hw = resolve_config({}, {}).hw;
   const ColourRun with = run(t, *scene_, hw, true);
   const ColourRun without = run(t, *scene_, hw, false);

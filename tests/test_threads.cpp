@@ -176,23 +176,11 @@ double stat(const FrameResult& f, const std::string& scope, const std::string& n
   return std::nan("");
 }
 
-class ThreadEquivalence : public ::testing::TestWithParam<const char*> {
- protected:
-  static void SetUpTestSuite() { scene_ = new Scene(load_scene("atrium:1")); }
-  static void TearDownTestSuite() {
-    delete scene_;
-    scene_ = nullptr;
-  }
-  static Scene* scene_;
-};
-Scene* ThreadEquivalence::scene_ = nullptr;
+class ThreadEquivalence : public testing_support::AtriumTechniqueSuite {};
 
 TEST_P(ThreadEquivalence, EveryStatisticTileRowAndImageIsTheSameAtOneTwoAndSevenThreads) {
   const std::string technique = GetParam();
-  // 200x120 pixels (7 x 4 = 28 tiles of 32x32 per render, for 7 threads), 48 lights.
-  TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 48, 200, 120);
-  if (technique == "forward_multipass") setup.options["lights_per_pass"] = "8";  // 6 additive passes
-  const Trace t = generate_trace(technique, setup);
+  const Trace t = small_trace(technique);
   const HwConfig hw = resolve_config({}, {}).hw;
   const ThreadedRun serial = expect_same_at_every_thread_count(t, *scene_, hw, technique);
   // The runs did shade something (a frame of nothing would compare equal at any count).

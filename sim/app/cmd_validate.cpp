@@ -468,11 +468,7 @@ void dram_memspecs(Validator& v, std::vector<AnchorRow>& rows, const HwConfig& v
     std::vector<std::string> files;
     for (const auto& c : p.configs) files.push_back(find_data_file(c, DataFolder::Configs));
     const HwConfig hw = resolve_config(files, {}).hw;
-    MemspecChannel ch;
-    ch.dies = p.dies;
-    ch.gbps = hw.dram.bandwidth_gbps / static_cast<double>(hw.dram.channels);
-    ch.io_pj_per_bit = hw.energy.dram_io_pj_per_bit;
-    const MemspecPerBit m = memspec_per_bit(*p.memspec, ch);
+    const MemspecPerBit m = preset_memspec_per_bit(p, hw);
     const DramBenchResult s = run_dram_microbench(hw, DramPattern::Stream, 65536);
     const DramBenchResult r = run_dram_microbench(hw, DramPattern::Random, 16384);
     std::string configs;
