@@ -89,7 +89,8 @@ void Isp::rop_color_outputs(std::uint32_t prim_index, bool punch) {
   }
 }
 
-void Isp::flush(const PixelRect& rect, bool mid_tile, IspStats& isp, TspStats& tsp) {
+void Isp::flush(const PixelRect& rect, const std::vector<std::uint32_t>& prims, bool mid_tile, IspStats& isp,
+                TspStats& tsp) {
   const int S = ctx_.pattern.count;
   const int rw = rect.width();
   const int L = layers_per_sample_;
@@ -103,7 +104,7 @@ void Isp::flush(const PixelRect& rect, bool mid_tile, IspStats& isp, TspStats& t
         const int n = depth_of_[li];
         for (int k = 0; k < n; ++k) {
           const Layer& l = layers_[li * static_cast<std::size_t>(L) + static_cast<std::size_t>(k)];
-          flush_samples_.push_back({l.tag, x, y, 1u << s, l.z, l.unresolved});
+          flush_samples_.push_back({l.list_pos, x, y, 1u << s, l.z, l.unresolved});
           resolves = resolves || l.unresolved;
         }
         depth_of_[li] = 0;
@@ -117,9 +118,24 @@ void Isp::flush(const PixelRect& rect, bool mid_tile, IspStats& isp, TspStats& t
   }
   isp.tag_buffer_read_bytes += flush_samples_.size() * static_cast<std::uint64_t>(ctx_.hw->isp.tag_bits / 8);
   // Shade primitive by primitive, in submission order (a sample's layers were pushed in that
-  // order, so each sample's layers are shaded bottom first); raster order within each.
-  std::stable_sort(flush_samples_.begin(), flush_samples_.end(),
-                   [](const PendingSample& a, const PendingSample& b) { return a.tag < b.tag; });
+  // order, so each sample's layers are shaded bottom first); raster order within each. A stable
+  // counting sort by position in the tile's list (the submission order): every layer was pushed
+  // since the last flush, so the positions span only the primitives rasterised since then.
+  std::uint32_t lo = flush_samples_.front().tag, hi = lo;
+  for (const PendingSample& ps : flush_samples_) {
+    lo = std::min(lo, ps.tag);
+    hi = std::max(hi, ps.tag);
+  }
+  sort_offsets_.assign(static_cast<std::size_t>(hi - lo) + 2, 0);
+  for (const PendingSample& ps : flush_samples_) ++sort_offsets_[ps.tag - lo + 1];
+  for (std::size_t k = 1; k < sort_offsets_.size(); ++k) sort_offsets_[k] += sort_offsets_[k - 1];
+  sorted_samples_.resize(flush_samples_.size());
+  for (const PendingSample& ps : flush_samples_) {
+    PendingSample& out = sorted_samples_[sort_offsets_[ps.tag - lo]++];
+    out = ps;
+    out.tag = prims[ps.tag];
+  }
+  flush_samples_.swap(sorted_samples_);
   std::size_t i = 0;
   while (i < flush_samples_.size()) {
     std::size_t j = i;
@@ -178,7 +194,8 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
   };
 
   RenderOutputUnit* const rop = ctx_.rop;  // imr: depth and colour go through the ROP caches
-  for (const std::uint32_t prim_index : prims) {
+  for (std::uint32_t list_pos = 0; list_pos < prims.size(); ++list_pos) {
+    const std::uint32_t prim_index = prims[list_pos];
     const Primitive& p = ctx_.prims[prim_index];
     const PipelineState& pl = *ctx_.draws[p.draw].pipeline;
     ++isp.primitives_fetched;
@@ -262,7 +279,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
         if (conflict) break;
       }
       if (conflict) {
-        flush(rect, true, isp, tsp);
+        flush(rect, prims, true, isp, tsp);
         if (depth_on) {
           // The flush wrote the punch-through depths: test again against them.
           for (Candidate& c : candidates_) {
@@ -292,7 +309,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
           isp.hsr_removed_samples += n;  // every layer beneath is hidden: never shaded
           n = 0;
         }
-        stack[n++] = {prim_index, c.z, unresolved};
+        stack[n++] = {list_pos, c.z, unresolved};
         isp.tag_buffer_write_bytes += tag_bytes;
         // Opaque and translucent depth is known now; punch-through depth waits for the alpha test.
         if (write_on && p.hsr != HsrClass::PunchThrough) {
@@ -354,7 +371,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
       }
     }
   }
-  if (ctx_.defer_shading) flush(rect, false, isp, tsp);
+  if (ctx_.defer_shading) flush(rect, prims, false, isp, tsp);
   while (!queue_.empty()) shade_queued(rect, isp, tsp);
 }
 

@@ -74,7 +74,7 @@ class Isp {
  private:
   /// One layer of a sample's stack: the primitive and, for punch-through, its depth there.
   struct Layer {
-    std::uint32_t tag;
+    std::uint32_t list_pos;  ///< the primitive's position in the tile's list (its tag)
     float z;
     bool unresolved;  ///< punch-through that writes depth and has not been alpha tested yet
   };
@@ -96,7 +96,8 @@ class Isp {
   };
   /// Shades every layer of the tile in submission order and empties the stacks; a mid-tile flush
   /// that resolves punch-through depth makes the ISP wait for those punch-through shaders.
-  void flush(const PixelRect& rect, bool mid_tile, IspStats& isp, TspStats& tsp);
+  void flush(const PixelRect& rect, const std::vector<std::uint32_t>& prims, bool mid_tile, IspStats& isp,
+             TspStats& tsp);
   /// Writes a punch-through primitive's depth where its alpha test kept the sample.
   void write_punch_depth(const PendingSample* begin, const PendingSample* end, IspStats& isp);
   /// imr: the colour outputs of the batch just shaded (batch_; alive_ for a punch-through
@@ -125,6 +126,8 @@ class Isp {
   std::vector<PendingSample> pending_;
   std::vector<PendingSample> rasterised_;  ///< isp.early_z=0: every sample the primitive covers
   std::vector<PendingSample> flush_samples_;
+  std::vector<PendingSample> sorted_samples_;  ///< scratch: flush_samples_ in submission order
+  std::vector<std::uint32_t> sort_offsets_;    ///< scratch: the counting sort's bucket offsets
   std::vector<ShadePixel> batch_;
   std::vector<std::uint32_t> alive_;
   std::deque<Queued> queue_;             ///< tbr forward pixel kill: primitives waiting to be shaded

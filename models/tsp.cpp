@@ -273,6 +273,51 @@ void Tsp::texture_addresses(const Primitive& p, std::uint32_t tex_fetches, std::
   stats.texture_line_accesses += accesses * tex_fetches;
 }
 
+std::size_t launched_quads(std::span<const ShadePixel> pixels, std::vector<std::uint64_t>& quads) {
+  quads.clear();
+  const auto key = [](std::int32_t qx, std::int32_t qy) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(qy)) << 32) | static_cast<std::uint32_t>(qx);
+  };
+  // Pixels come sorted by row then column: a quad row is at most two pixel rows, each ascending
+  // in x, so one merge of the two yields its quads in order, each once.
+  const std::size_t n = pixels.size();
+  std::size_t i = 0;
+  bool ordered = true;
+  while (i < n && ordered) {
+    const std::size_t a0 = i;
+    while (i < n && pixels[i].y == pixels[a0].y) ++i;
+    const std::size_t a1 = i, b0 = i;
+    while (i < n && pixels[i].y == pixels[b0].y && (pixels[i].y >> 1) == (pixels[a0].y >> 1)) ++i;
+    const std::size_t b1 = i;
+    const std::int32_t last_row = b1 > b0 ? pixels[b0].y : pixels[a0].y;
+    if ((b1 > b0 && pixels[b0].y < pixels[a0].y) || (i < n && pixels[i].y <= last_row)) ordered = false;
+    const std::int32_t qy = pixels[a0].y >> 1;
+    std::size_t a = a0, b = b0;
+    std::int32_t last = std::numeric_limits<std::int32_t>::min(), prev_a = last, prev_b = last;
+    while (a < a1 || b < b1) {
+      std::int32_t qx;
+      if (b == b1 || (a < a1 && pixels[a].x <= pixels[b].x)) {
+        if (pixels[a].x <= prev_a) ordered = false;
+        prev_a = pixels[a].x;
+        qx = pixels[a++].x >> 1;
+      } else {
+        if (pixels[b].x <= prev_b) ordered = false;
+        prev_b = pixels[b].x;
+        qx = pixels[b++].x >> 1;
+      }
+      if (qx != last) quads.push_back(key(qx, qy));
+      last = qx;
+    }
+  }
+  if (!ordered) {  // a caller broke the order: sort instead (same result)
+    quads.clear();
+    for (const ShadePixel& px : pixels) quads.push_back(key(px.x >> 1, px.y >> 1));
+    std::sort(quads.begin(), quads.end());
+    quads.erase(std::unique(quads.begin(), quads.end()), quads.end());
+  }
+  return quads.size();
+}
+
 void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, std::vector<std::uint32_t>* alive,
                 TspStats& stats) {
   if (pixels.empty()) return;
@@ -289,13 +334,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   const bool colour = ctx_.colour;
 
   // Quads: 2x2 pixel blocks aligned to even coordinates; every lane of a launched quad runs.
-  quad_seen_.clear();
-  for (const auto& px : pixels) {
-    quad_seen_.push_back((static_cast<std::uint64_t>(static_cast<std::uint32_t>(px.y >> 1)) << 32) |
-                         static_cast<std::uint32_t>(px.x >> 1));
-  }
-  std::sort(quad_seen_.begin(), quad_seen_.end());
-  const auto quads = static_cast<std::uint64_t>(std::unique(quad_seen_.begin(), quad_seen_.end()) - quad_seen_.begin());
+  const auto quads = static_cast<std::uint64_t>(launched_quads(pixels, quad_seen_));
   const std::uint64_t helpers = quads * 4 - pixels.size();
   stats.shader_invocations += pixels.size();
   stats.shaded_quads += quads;

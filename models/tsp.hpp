@@ -60,6 +60,11 @@ struct ShadePixel {
 /// to it keeps its format's precision.
 inline constexpr const char* kPlsAccumulatorName = "light_accum";
 
+/// The 2x2 quads (aligned to even coordinates) that `pixels` launch, written to `quads` as
+/// (row << 32 | column) quad keys, ascending, each once; returns their number. Linear for pixels
+/// sorted by row then column (Tsp::shade's contract), a sort otherwise.
+std::size_t launched_quads(std::span<const ShadePixel> pixels, std::vector<std::uint64_t>& quads);
+
 /// The fragment shading stage.
 class Tsp {
  public:

@@ -72,6 +72,42 @@ TEST(UnitTsp, QuadsAreAlignedToEvenPixels) {
   EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 4u + 4u + 9u);
 }
 
+// launched_quads merges the two pixel rows of each quad row in one pass (the pixels' order) and
+// must give what sorting every pixel's quad and dropping repeats gives, in the same order.
+TEST(UnitTsp, LaunchedQuadsEqualSortedUniqueQuadsOfThePixels) {
+  const auto by_sort = [](const std::vector<ShadePixel>& px) {
+    std::vector<std::uint64_t> q;
+    for (const ShadePixel& p : px) q.push_back((std::uint64_t{static_cast<std::uint32_t>(p.y >> 1)} << 32) | static_cast<std::uint32_t>(p.x >> 1));
+    std::sort(q.begin(), q.end());
+    q.erase(std::unique(q.begin(), q.end()), q.end());
+    return q;
+  };
+  std::vector<std::uint64_t> got;
+  // Hand-counted: a 3x3 block at (1,1) touches quads x 0..1, y 0..1 = 4 quads.
+  EXPECT_EQ(launched_quads(block(1, 1, 3, 3), got), 4u);
+  EXPECT_EQ(got, by_sort(block(1, 1, 3, 3)));
+  // The upper-left half of a tile (rows of falling length; odd and even first rows) and random
+  // sparse pixel sets in raster order, then the same sets shuffled (the sorting fallback).
+  EXPECT_EQ(launched_quads(upper_left_pixels(), got), by_sort(upper_left_pixels()).size());
+  EXPECT_EQ(got, by_sort(upper_left_pixels()));
+  std::uint32_t state = 12345u;
+  const auto next = [&] { return state = state * 1664525u + 1013904223u; };
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<ShadePixel> px;
+    const int y0 = static_cast<int>(next() % 5);
+    for (int y = y0; y < y0 + 9; ++y) {
+      for (int x = 0; x < 12; ++x) {
+        if (next() % 3 == 0) px.push_back({x, y, 1u});
+      }
+    }
+    EXPECT_EQ(launched_quads(px, got), by_sort(px).size());
+    EXPECT_EQ(got, by_sort(px));
+    std::reverse(px.begin(), px.end());
+    EXPECT_EQ(launched_quads(px, got), by_sort(px).size());
+    EXPECT_EQ(got, by_sort(px));
+  }
+}
+
 TEST(UnitTsp, QuadsAndHelperLanesOfATriangleWhoseEdgeCutsQuads) {
   // The ISP hands over UL (x + y <= 30, 496 pixels) in one batch. Quad (qx, qy) holds pixels with
   // x + y from 2(qx + qy) to 2(qx + qy) + 2: quads with qx + qy <= 14 are full (sum over s = 0..14
