@@ -28,7 +28,8 @@ inline TraceSetup atrium_entrance_setup(const Scene& scene, int lights, int widt
 }
 
 /// A suite over technique names (the parameter) sharing one atrium:1 scene, loaded once per suite.
-class AtriumTechniqueSuite : public ::testing::TestWithParam<const char*> {
+/// Instantiate it with every_technique() and technique_test_name.
+class AtriumTechniqueSuite : public ::testing::TestWithParam<std::string> {
  protected:
   static void SetUpTestSuite() { scene_ = std::make_unique<Scene>(load_scene("atrium:1")); }
   static void TearDownTestSuite() { scene_.reset(); }
@@ -42,5 +43,10 @@ class AtriumTechniqueSuite : public ::testing::TestWithParam<const char*> {
   }
   inline static std::unique_ptr<Scene> scene_;
 };
+
+/// Every registered technique (techniques/technique.hpp), so a new one is tested without a list to edit.
+inline auto every_technique() { return ::testing::ValuesIn(technique_names()); }
+/// Names each instance after its technique (SpeedEquivalence/Techniques.Same/deferred).
+inline std::string technique_test_name(const ::testing::TestParamInfo<std::string>& info) { return info.param; }
 
 }  // namespace tbdr::testing_support

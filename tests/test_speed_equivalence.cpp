@@ -81,12 +81,8 @@ TEST_P(SpeedEquivalence, EveryStatisticAndTileRowIsTheSameWithoutColours) {
   EXPECT_EQ(colour_sum(without.frame), 0.0) << technique;
 }
 
-INSTANTIATE_TEST_SUITE_P(Techniques, SpeedEquivalence,
-                         ::testing::Values("plain_forward", "forward_multipass", "forward_plus", "forward_light_stack",
-                                           "clustered_forward", "practical_clustered_forward",
-                                           "cascaded_clustered_forward", "deferred", "deferred_tile_store",
-                                           "light_prepass", "tiled_deferred", "clustered_deferred",
-                                           "visibility_buffer"));
+INSTANTIATE_TEST_SUITE_P(Techniques, SpeedEquivalence, testing_support::every_technique(),
+                         testing_support::technique_test_name);
 
 // MSAA 4x (the techniques that support it; G-buffer and PLS ones refuse it): per-sample coverage
 // of the alpha-tested cloth, blending and resolves, with and without colours.

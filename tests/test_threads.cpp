@@ -188,12 +188,8 @@ TEST_P(ThreadEquivalence, EveryStatisticTileRowAndImageIsTheSameAtOneTwoAndSeven
       << technique;
 }
 
-INSTANTIATE_TEST_SUITE_P(Techniques, ThreadEquivalence,
-                         ::testing::Values("plain_forward", "forward_multipass", "forward_plus", "forward_light_stack",
-                                           "clustered_forward", "practical_clustered_forward",
-                                           "cascaded_clustered_forward", "deferred", "deferred_tile_store",
-                                           "light_prepass", "tiled_deferred", "clustered_deferred",
-                                           "visibility_buffer"));
+INSTANTIATE_TEST_SUITE_P(Techniques, ThreadEquivalence, testing_support::every_technique(),
+                         testing_support::technique_test_name);
 
 // MSAA 4x (the techniques that support it): per-sample coverage of the alpha-tested cloth,
 // blending and the resolves at the end of each tile.
