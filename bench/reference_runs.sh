@@ -41,7 +41,8 @@ case "$mode" in
         --resolution 640x360 "$@" --out "$TMP/$t.$preset.trace" > /dev/null
       rm -f "$TMP/r.db"
       "$BIN" run --config "$cfg" --trace "$TMP/$t.$preset.trace" --db "$TMP/r.db" --quiet
-      dump "$TMP/r.db" > "$OUT/$t.$preset.tsv"
+      # The trace's scratch folder differs from capture to capture: name it once for all.
+      dump "$TMP/r.db" | sed "s|$TMP/|TRACES/|g" > "$OUT/$t.$preset.tsv"
       echo "captured $t.$preset ($(wc -l < "$OUT/$t.$preset.tsv") rows)"
     }
     for preset in series6xt_gx6450 mobile_16x16_lpddr4x; do
