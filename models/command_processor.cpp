@@ -399,6 +399,15 @@ class FrameSimulator {
 
 FrameResult simulate_frame(const Trace& trace, const std::string& trace_path, const Scene& scene, const HwConfig& hw,
                            const FrameOptions& options) {
+  if (options.colour) {
+    // Colours sample the base colour texels: a scene loaded without them (SceneLoadOptions)
+    // would shade every textured surface untextured.
+    for (const ColorTexels& t : scene.base_color_texels) {
+      if (t.width > 0 && t.height > 0 && t.rgba.empty()) {
+        throw std::logic_error("simulate_frame: colours asked of a scene loaded without its colour texels");
+      }
+    }
+  }
   FrameSimulator sim(trace, trace_path, scene, hw, options);
   return sim.run();
 }

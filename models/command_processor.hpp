@@ -83,7 +83,9 @@ struct FrameResult {
 
 /// How a frame is simulated (host choices: none changes a statistic).
 struct FrameOptions {
-  bool colour = true;  ///< compute the colour images (FrameInputs::colour); false when no image is read
+  /// Compute the colour images (FrameInputs::colour); false when no image is read. With it the
+  /// scene must hold its colour texels (SceneLoadOptions::colour_texels).
+  bool colour = true;
   /// Threads the tiles of each render run on (models/pass_renderer.hpp); 0: the machine's
   /// (default_thread_count). Every figure and image is the same at any count.
   unsigned threads = 1;

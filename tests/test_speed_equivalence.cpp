@@ -67,14 +67,40 @@ void expect_same_rows(const ColourRun& with, const ColourRun& without, const std
   EXPECT_EQ(with.timing.frame_cycles, without.timing.frame_cycles) << what;
 }
 
+/// The atrium:1 scene as `tbdrsim run` loads it without --images: no colour texels.
+const Scene& scene_without_texels() {
+  static const Scene bare = load_scene("atrium:1", SceneLoadOptions{.colour_texels = false});
+  return bare;
+}
+
 class SpeedEquivalence : public testing_support::AtriumTechniqueSuite {};
+
+// Without colour texels the textures keep their sizes (the texture traffic's address space) and
+// hash; colours asked of such a scene are refused rather than drawn untextured.
+TEST(SpeedEquivalenceScene, TheSceneWithoutColourTexelsKeepsItsTexturesAndRefusesColours) {
+  const Scene full = load_scene("atrium:1");
+  const Scene& bare = scene_without_texels();
+  EXPECT_EQ(bare.content_hash, full.content_hash);
+  ASSERT_EQ(bare.textures.size(), full.textures.size());
+  ASSERT_EQ(bare.base_color_texels.size(), full.base_color_texels.size());
+  for (std::size_t i = 0; i < full.textures.size(); ++i) {
+    EXPECT_EQ(bare.textures[i].gpu_bytes(), full.textures[i].gpu_bytes());
+    EXPECT_EQ(bare.base_color_texels[i].width, full.base_color_texels[i].width);
+    EXPECT_TRUE(bare.base_color_texels[i].rgba.empty());
+    EXPECT_FALSE(full.base_color_texels[i].rgba.empty());
+  }
+  EXPECT_EQ(bare.alpha_masks.size(), full.alpha_masks.size());  // the alpha tests' masks stay
+  TraceSetup setup = testing_support::atrium_entrance_setup(full, 8, 64, 32);
+  const Trace t = generate_trace("plain_forward", setup);
+  EXPECT_THROW(simulate_frame(t, "t.trace", bare, resolve_config({}, {}).hw, FrameOptions{.colour = true}), std::logic_error);
+}
 
 TEST_P(SpeedEquivalence, EveryStatisticAndTileRowIsTheSameWithoutColours) {
   const std::string technique = GetParam();
   const Trace t = small_trace(technique);
   const HwConfig hw = resolve_config({}, {}).hw;
   const ColourRun with = run(t, *scene_, hw, true);
-  const ColourRun without = run(t, *scene_, hw, false);
+  const ColourRun without = run(t, scene_without_texels(), hw, false);
   expect_same_rows(with, without, technique);
   // The flag did something: the image has colour with it and none without (the cleared black).
   EXPECT_GT(colour_sum(with.frame), 0.0) << technique;

@@ -27,8 +27,8 @@ double cpu_seconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC
 
 /// The scene a trace references: the atrium at its detail, or the glTF path relative to the
 /// trace file first, then to the working directory.
-Scene load_trace_scene(const Trace& trace, const std::string& trace_path) {
-  if (trace.scene.kind == SceneKind::Atrium) return load_scene("atrium:" + std::to_string(trace.scene.detail));
+Scene load_trace_scene(const Trace& trace, const std::string& trace_path, const SceneLoadOptions& options) {
+  if (trace.scene.kind == SceneKind::Atrium) return load_scene("atrium:" + std::to_string(trace.scene.detail), options);
   namespace fs = std::filesystem;
   const fs::path rel = fs::path(trace_path).parent_path() / trace.scene.path;
   const std::string path = fs::exists(rel) ? rel.string() : trace.scene.path;
@@ -36,7 +36,7 @@ Scene load_trace_scene(const Trace& trace, const std::string& trace_path) {
     throw InputError(trace_path, trace.scene.line, "scene file '" + trace.scene.path + "' not found (looked in " +
                                                        rel.string() + " and the working directory)");
   }
-  return load_scene(path);
+  return load_scene(path, options);
 }
 
 std::string stat_text(double v) {
@@ -167,16 +167,18 @@ RunOutcome run_one(const RunRequest& req) {
     if (ec || !fs::is_directory(req.images_dir)) throw InputError(req.images_dir, "cannot create the images folder");
   }
   const Trace trace = read_trace(req.trace_path);
-  const Scene scene = load_trace_scene(trace, req.trace_path);
+  // Colours (and the texels they sample) are computed only for the images that read them: the
+  // statistics are the same either way (tests/test_speed_equivalence.cpp).
+  const bool colour = !req.images_dir.empty();
+  const Scene scene = load_trace_scene(trace, req.trace_path, SceneLoadOptions{.colour_texels = colour});
   check_scene_references(trace, scene, req.trace_path);  // sub-mesh and material names, before any work
   outcome.load_seconds = seconds_since(t_load);
 
   const auto t_sim = std::chrono::steady_clock::now();
   const double c_sim = cpu_seconds();
-  // Colours are computed only for the images that read them (statistics are the same either way).
   outcome.threads = req.threads;
   outcome.frame = simulate_frame(trace, req.trace_path, scene, req.config.hw,
-                                 FrameOptions{.colour = !req.images_dir.empty(), .threads = req.threads});
+                                 FrameOptions{.colour = colour, .threads = req.threads});
   outcome.wall_seconds = seconds_since(t_sim);
   outcome.cpu_seconds = cpu_seconds() - c_sim;
   const auto t_timing = std::chrono::steady_clock::now();

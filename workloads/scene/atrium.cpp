@@ -133,6 +133,7 @@ struct Atrium {
   Scene scene;
   AtriumLayout L;
   int t = 1;  // tessellation factor 2^(detail-1)
+  bool colour_texels = true;  // generate the textures' texels (make_atrium's argument)
 
   std::uint32_t add_material(const std::string& name, AlphaMode mode, glm::vec4 color, int texture,
                              bool double_sided = false, int mask = -1) {
@@ -148,7 +149,12 @@ struct Atrium {
   int add_texture(const std::string& name, int w, int h, int cells_x, int cells_y) {
     scene.textures.push_back(TextureInfo{.name = name, .format = "procedural", .width = w, .height = h, .channels = 4});
     const auto seed = static_cast<std::uint32_t>(scene.textures.size()) * 0x9e3779b9U;
-    ColorTexels texels{w, h, std::vector<std::uint8_t>(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4, 255)};
+    ColorTexels texels{w, h, {}};
+    if (!colour_texels) {
+      scene.base_color_texels.push_back(std::move(texels));
+      return static_cast<int>(scene.textures.size() - 1);
+    }
+    texels.rgba.assign(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4, 255);
     const int cw = std::max(1, w / cells_x), ch = std::max(1, h / cells_y);
     const int joint_x = cells_x > 1 ? std::max(1, cw / 24) : 0, joint_y = cells_y > 1 ? std::max(1, ch / 24) : 0;
     for (int y = 0; y < h; ++y) {
@@ -451,12 +457,13 @@ void build_pot(Builder& b, int t) {
 
 }  // namespace
 
-Scene make_atrium(int detail) {
+Scene make_atrium(int detail, bool colour_texels) {
   if (detail < kAtriumMinDetail || detail > kAtriumMaxDetail) {
     throw InputError("atrium:" + std::to_string(detail), "atrium detail must be " + std::to_string(kAtriumMinDetail) +
                                                              ".." + std::to_string(kAtriumMaxDetail));
   }
   Atrium A;
+  A.colour_texels = colour_texels;
   A.t = 1 << (detail - 1);
   const int t = A.t;
   const AtriumLayout& L = A.L;

@@ -38,7 +38,8 @@ struct AtriumLayout {
 inline AtriumLayout atrium_layout() { return AtriumLayout{}; }
 
 /// Builds the atrium at a detail level in kAtriumMinDetail..kAtriumMaxDetail (1..5); throws InputError("atrium:N") otherwise.
-/// Deterministic: the same detail gives the same scene on every machine and run.
-Scene make_atrium(int detail);
+/// Deterministic: the same detail gives the same scene on every machine and run. Without
+/// `colour_texels` the textures' texels (read only for the colour of images) are left empty.
+Scene make_atrium(int detail, bool colour_texels = true);
 
 }  // namespace tbdr

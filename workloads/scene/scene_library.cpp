@@ -52,8 +52,10 @@ std::optional<AtriumSpec> parse_atrium_spec(const std::string& spec) {
   return AtriumSpec{detail};
 }
 
-Scene load_scene(const std::string& spec) {
-  if (const auto atrium = parse_atrium_spec(spec)) return make_atrium(atrium->detail.value_or(default_atrium_detail));
+Scene load_scene(const std::string& spec, const SceneLoadOptions& options) {
+  if (const auto atrium = parse_atrium_spec(spec)) {
+    return make_atrium(atrium->detail.value_or(default_atrium_detail), options.colour_texels);
+  }
   if (ends_with_ci(spec, ".gltf") || ends_with_ci(spec, ".glb")) return load_gltf(spec);
   throw InputError(spec, "unknown scene: expected 'atrium', 'atrium:N' (N in 1..5) or a .gltf/.glb file");
 }

@@ -20,9 +20,17 @@ struct AtriumSpec {
 /// the spec when N is not a non-negative integer (make_atrium checks the range 1..5).
 std::optional<AtriumSpec> parse_atrium_spec(const std::string& spec);
 
+/// What of a scene to build beyond what the statistics read.
+struct SceneLoadOptions {
+  /// The atrium's procedural base colour texels (ColorTexels::rgba), which only the colour of
+  /// images reads; without them the textures keep their sizes and every statistic is the same.
+  /// A glTF file's images are decoded either way (their alpha makes the masks the tests read).
+  bool colour_texels = true;
+};
+
 /// Loads a scene from a spec: "atrium" (detail 3), "atrium:N" (N in 1..5), or a path ending in
 /// .gltf or .glb. Throws InputError naming the spec (or the file) when it cannot.
-Scene load_scene(const std::string& spec);
+Scene load_scene(const std::string& spec, const SceneLoadOptions& options = {});
 
 /// Prints name, source, content hash, triangle/vertex/sub-mesh/instance counts, materials by alpha
 /// mode (count and triangles), bounds, textures (count and GPU bytes) and warnings.
