@@ -65,7 +65,7 @@ class FrameSimulator {
                           .viewport = viewport_, .frustum = &frustum_, .light_bins = &light_bins_, .colour = options_.colour};
     result_.images.width = f.width;
     result_.images.height = f.height;
-    result_.images.counters.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height));
+    result_.images.counters.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height), options_.colour);
 
     result_.work.width = f.width;
     result_.work.height = f.height;
@@ -135,7 +135,7 @@ class FrameSimulator {
     for (const auto& a : pass.attachments) {
       auto it = result_.images.attachments.find(a.name);
       if (it == result_.images.attachments.end()) {
-        AttachmentImage img = AttachmentImage::cleared(a, pixels);
+        AttachmentImage img = AttachmentImage::cleared(a, pixels, options_.colour);
         // An attachment named after an image buffer (trace version 2) is that image, as a dispatch wrote it.
         if (auto ib = result_.images.image_buffers.find(a.name); ib != result_.images.image_buffers.end()) {
           img.color = ib->second.color;
@@ -196,8 +196,8 @@ class FrameSimulator {
       // An attachment of this pass that earlier draws write: its surfaces are stored as they shade.
       AttachmentImage& img = result_.images.attachments.at(n);
       if (img.surface.empty() && (img.usage == AttachmentUsage::Gbuffer || img.usage == AttachmentUsage::Visibility)) {
-        img.surface.assign(img.color.size(), SurfacePoint{});
-        img.surface_valid.assign(img.color.size(), 0);
+        img.surface.assign(img.sample_count, SurfacePoint{});
+        img.surface_valid.assign(img.sample_count, 0);
       }
     }
     if (cmd.geometry != GeometryKind::Scene) {

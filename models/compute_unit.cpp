@@ -303,7 +303,7 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
           ++stats.compute_shaded_pixels;
           stats.compute_light_evaluations += count;
           stats.compute_alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * count;
-          ctx.images->counters.lights_evaluated[p] += static_cast<std::uint32_t>(count);
+          if (ctx.images->counters.images()) ctx.images->counters.lights_evaluated[p] += static_cast<std::uint32_t>(count);
           ctx.images->counters.shaded[p] += 1;
           if (vbuffer) refetched.insert({static_cast<std::size_t>((y / tile_px) * ((W + tile_px - 1) / tile_px) + x / tile_px), s.triangle});
         }

@@ -21,11 +21,12 @@ const char* to_string(HsrClass c) {
   return "?";
 }
 
-void PixelCounters::resize(std::size_t pixels) {
-  rasterised_samples.assign(pixels, 0);
+void PixelCounters::resize(std::size_t pixels, bool images) {
   shaded.assign(pixels, 0);
-  lights_evaluated.assign(pixels, 0);
-  triangle_id.assign(pixels, 0);
+  const std::size_t n = images ? pixels : 0;
+  rasterised_samples.assign(n, 0);
+  lights_evaluated.assign(n, 0);
+  triangle_id.assign(n, 0);
 }
 
 CameraXform CameraXform::from(const Camera& camera, float aspect) {

@@ -187,7 +187,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
   float* depth = depth_img ? depth_img->depth.data() : nullptr;
   std::uint8_t* stencil = depth_img ? depth_img->stencil.data() : nullptr;
   const bool has_st = depth_img && has_stencil(depth_img->format);
-  auto& overdraw = ctx_.images->counters.rasterised_samples;
+  std::uint32_t* const overdraw = ctx_.images->counters.images() ? ctx_.images->counters.rasterised_samples.data() : nullptr;
   auto global_index = [&](std::int32_t x, std::int32_t y, std::uint32_t bit) {
     return (static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x)) * static_cast<std::size_t>(S) +
            static_cast<std::size_t>(std::countr_zero(bit));
@@ -214,7 +214,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
       const std::size_t lbase = (static_cast<std::size_t>(y - rect.y0) * rw + static_cast<std::size_t>(x - rect.x0)) * S;
       for (int s = 0; s < S; ++s) {
         if (!(mask & (1u << s))) continue;
-        ++overdraw[pixel];
+        if (overdraw) ++overdraw[pixel];
         ++isp.samples_rasterised;
         if (late_z) rasterised_.push_back({prim_index, x, y, 1u << s, z[s], false});
         const std::size_t gi = pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(s);

@@ -160,8 +160,8 @@ AttachmentImage* PassRenderer::allocate_surfaces() {
     // The TSP stores a fragment's surface in the first non-colour target among its outputs: with
     // the targets in one order for every draw, this one.
     if (!t->surface.empty()) return nullptr;
-    t->surface.assign(t->color.size(), SurfacePoint{});
-    t->surface_valid.assign(t->color.size(), 0);
+    t->surface.assign(t->sample_count, SurfacePoint{});
+    t->surface_valid.assign(t->sample_count, 0);
     return t;
   }
   return nullptr;

@@ -91,24 +91,29 @@ struct AttachmentImage {
   std::uint32_t samples = 1;
   AttachmentUsage usage = AttachmentUsage::Color;
   bool defined = false;               ///< holds stored contents a later pass may load
-  std::vector<glm::vec4> color;       ///< width*height*samples, color-like formats
+  /// width*height*samples, color-like formats; empty when the frame computes no colours
+  /// (FrameOptions::colour): then nothing reads or writes them.
+  std::vector<glm::vec4> color;
   std::vector<float> depth;           ///< width*height*samples, depth formats
   std::vector<std::uint8_t> stencil;  ///< width*height*samples, depth formats
   /// G-buffer / visibility attachments: the surface each pixel's data stands for (kept in the
   /// first such attachment a shader writes; width*height*samples) and whether it was written.
   std::vector<SurfacePoint> surface;
   std::vector<std::uint8_t> surface_valid;
-  /// A cleared image for attachment `a` over `pixels` pixels (depth 1, stencil 0, color 0).
-  static AttachmentImage cleared(const Attachment& a, std::size_t pixels) {
+  std::size_t sample_count = 0;  ///< width*height*samples: the size of each array above that is kept
+  /// A cleared image for attachment `a` over `pixels` pixels (depth 1, stencil 0, color 0; no
+  /// color array without `colour`).
+  static AttachmentImage cleared(const Attachment& a, std::size_t pixels, bool colour) {
     AttachmentImage img;
     img.format = a.format;
     img.samples = a.samples;
     img.usage = a.usage;
+    img.sample_count = pixels * a.samples;
     if (is_depth_format(a.format)) {
-      img.depth.assign(pixels * a.samples, 1.0f);
-      img.stencil.assign(pixels * a.samples, 0);
-    } else {
-      img.color.assign(pixels * a.samples, glm::vec4(0.0f));
+      img.depth.assign(img.sample_count, 1.0f);
+      img.stencil.assign(img.sample_count, 0);
+    } else if (colour) {
+      img.color.assign(img.sample_count, glm::vec4(0.0f));
     }
     return img;
   }
@@ -132,13 +137,16 @@ struct ImageBuffer {
 };
 
 
-/// Per-pixel observations for the images written with --images.
+/// Per-pixel observations for the images written with --images (and `shaded`, which the
+/// covered_pixels statistic also reads). Without images the other three stay empty: the units
+/// that count into them skip it.
 struct PixelCounters {
   std::vector<std::uint32_t> rasterised_samples;  ///< overdraw: depth-tested samples per pixel
   std::vector<std::uint32_t> shaded;               ///< shader invocations per pixel (helpers excluded)
   std::vector<std::uint32_t> lights_evaluated;     ///< lights evaluated per pixel, all invocations
   std::vector<std::uint32_t> triangle_id;          ///< last primitive shaded at the pixel (+1, 0 none)
-  void resize(std::size_t pixels);
+  void resize(std::size_t pixels, bool images = true);
+  bool images() const { return !triangle_id.empty(); }  ///< the image-only counters are kept
 };
 
 /// The frame's images and per-pixel counters.

@@ -202,7 +202,7 @@ void TileMemory::begin_tile(const PixelRect& r, bool resumed, DramTraffic& dram,
       if (is_depth_format(a.format)) {
         std::fill(img.depth.begin() + static_cast<std::ptrdiff_t>(b), img.depth.begin() + static_cast<std::ptrdiff_t>(e), 1.0f);
         std::fill(img.stencil.begin() + static_cast<std::ptrdiff_t>(b), img.stencil.begin() + static_cast<std::ptrdiff_t>(e), 0);
-      } else {
+      } else if (!img.color.empty()) {  // (no colours computed: no color array)
         std::fill(img.color.begin() + static_cast<std::ptrdiff_t>(b), img.color.begin() + static_cast<std::ptrdiff_t>(e), glm::vec4(0.0f));
       }
     }
@@ -238,7 +238,8 @@ void TileMemory::end_tile(const PixelRect& r, bool partial, DramTraffic& dram, T
       AttachmentImage& src = ctx_.images->attachments.at(a.name);
       AttachmentImage& dst = ctx_.images->attachments.at(a.resolve);
       const std::size_t S = src.samples;
-      for (int y = r.y0; y < r.y1; ++y) {
+      const bool colours = !src.color.empty() && !dst.color.empty();  // (none computed: nothing to average)
+      for (int y = r.y0; y < r.y1 && colours; ++y) {
         for (int x = r.x0; x < r.x1; ++x) {
           const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
           glm::vec4 sum(0.0f);

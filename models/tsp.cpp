@@ -332,6 +332,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   // Colours only when someone reads them (FrameInputs::colour): without, the same work is counted
   // and the same surfaces, coverage and light stacks are kept, but no light is summed.
   const bool colour = ctx_.colour;
+  const bool image_counters = ctx_.images->counters.images();
 
   // Quads: 2x2 pixel blocks aligned to even coordinates; every lane of a launched quad runs.
   const auto quads = static_cast<std::uint64_t>(launched_quads(pixels, quad_seen_));
@@ -500,11 +501,11 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     stats.fragment_alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * fl.count;
     stats.light_evaluations += fl.count;
     ctx_.images->counters.shaded[pixel] += 1;
-    ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(fl.count);
+    if (image_counters) ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(fl.count);
     if (write_mask == 0) continue;
     // The frame-unique id (as SurfacePoint::triangle): a partial render restarts the render's
     // primitive indices, not the frame's.
-    ctx_.images->counters.triangle_id[pixel] = ctx_.frame_prim_base + prim_index + 1;
+    if (image_counters) ctx_.images->counters.triangle_id[pixel] = ctx_.frame_prim_base + prim_index + 1;
 
     // Sum of the evaluated lights' contributions at the surface.
     auto lighting = [&]() {
@@ -596,8 +597,8 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         const SurfacePoint stored = stored_surface(false, s);
         // G-buffer / visibility: the first such target keeps the surface the data stands for.
         if (target->surface.empty()) {
-          target->surface.assign(target->color.size(), SurfacePoint{});
-          target->surface_valid.assign(target->color.size(), 0);
+          target->surface.assign(target->sample_count, SurfacePoint{});
+          target->surface_valid.assign(target->sample_count, 0);
         }
         for (int smp = 0; smp < S; ++smp) {
           if (!(write_mask & (1u << smp))) continue;

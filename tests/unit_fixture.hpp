@@ -233,7 +233,7 @@ class RenderRig {
     images.counters.resize(pixels);
     int samples = -1;
     for (const auto& a : pass.attachments) {
-      images.attachments.emplace(a.name, AttachmentImage::cleared(a, pixels));
+      images.attachments.emplace(a.name, AttachmentImage::cleared(a, pixels, true));
       bool resolve_target = false;
       for (const auto& o : pass.attachments) resolve_target = resolve_target || o.resolve == a.name;
       if (!resolve_target && samples < 0) samples = static_cast<int>(a.samples);
@@ -497,6 +497,7 @@ class ComputeRig {
     img.format = Format::D24s8;
     img.usage = AttachmentUsage::Depth;
     img.defined = true;
+    img.sample_count = depth.size();
     img.stencil.assign(depth.size(), 0);
     img.depth = std::move(depth);
     images.attachments[name] = std::move(img);
@@ -508,6 +509,7 @@ class ComputeRig {
     img.format = Format::Rgba8;
     img.usage = AttachmentUsage::Gbuffer;
     img.defined = true;
+    img.sample_count = valid.size();
     img.color.assign(valid.size(), glm::vec4(0.0f));
     img.surface.assign(valid.size(), SurfacePoint{});
     img.surface_valid = valid;
