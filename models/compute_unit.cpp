@@ -275,7 +275,7 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
   std::set<std::pair<std::size_t, std::uint32_t>> refetched;  // (tile, triangle)
   const std::uint64_t shaded_before = stats.compute_shaded_pixels.value();
   ImageBuffer img;
-  img.color.assign(pixels, glm::vec4(0.0f));
+  if (ctx.colour) img.color.assign(pixels, glm::vec4(0.0f));
   for (int y = 0; y < H; ++y) {
     for (int x = 0; x < W; ++x) {
       const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
@@ -309,7 +309,7 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
         }
         sum += shaded_colors[k];
       }
-      if (n_shaded > 0) img.color[p] = FormatPrecision::color(kImageFormat, glm::vec4(sum / static_cast<float>(S), 1.0f));
+      if (n_shaded > 0 && ctx.colour) img.color[p] = FormatPrecision::color(kImageFormat, glm::vec4(sum / static_cast<float>(S), 1.0f));
     }
   }
   // Threads of uncovered pixels exit after reading their G-buffer sample: no texture fetches.

@@ -125,7 +125,7 @@ struct PlsState {
   std::uint32_t stack_capacity = 0;      ///< light indices a pixel's PLS holds
   std::vector<SurfacePoint> surface;     ///< width*height
   std::vector<std::uint8_t> valid;       ///< 1 when the surface is defined
-  std::vector<glm::vec3> accum;          ///< light accumulator
+  std::vector<glm::vec3> accum;          ///< light accumulator (empty when no colours are computed)
   std::vector<std::uint32_t> stack;      ///< width*height*stack_capacity light indices
   std::vector<std::uint16_t> stack_count;
   std::vector<std::uint8_t> overflow;    ///< 1 when more lights were pushed than fit
@@ -133,7 +133,7 @@ struct PlsState {
 
 /// A 1-sample color image written by a compute kernel (a `buffer ... content=image`).
 struct ImageBuffer {
-  std::vector<glm::vec4> color;  ///< width*height
+  std::vector<glm::vec4> color;  ///< width*height; empty when no colours are computed
 };
 
 

@@ -55,7 +55,7 @@ TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats)
     pls_.stack_capacity = pls_light_stack_capacity(pass.pls_bytes_per_pixel());
     pls_.surface.assign(pixels, SurfacePoint{});
     pls_.valid.assign(pixels, 0);
-    pls_.accum.assign(pixels, glm::vec3(0.0f));
+    pls_.accum.assign(ctx.colour ? pixels : 0, glm::vec3(0.0f));  // light sums: colours only
     pls_.stack.assign(pixels * pls_.stack_capacity, 0);
     pls_.stack_count.assign(pixels, 0);
     pls_.overflow.assign(pixels, 0);

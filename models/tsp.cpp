@@ -539,7 +539,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       if (from_triangle) {
         ctx_.pls->surface[pixel] = stored_surface(true, s);
         ctx_.pls->valid[pixel] = 1;
-        ctx_.pls->accum[pixel] = glm::vec3(0.0f);
+        if (colour) ctx_.pls->accum[pixel] = glm::vec3(0.0f);
         ctx_.pls->stack_count[pixel] = 0;
         ctx_.pls->overflow[pixel] = 0;
       } else if (sh.light_source == LightSource::Proxy) {
