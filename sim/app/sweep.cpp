@@ -12,9 +12,12 @@
 #include <map>
 #include <optional>
 #include <ostream>
+#include <set>
+#include <sstream>
 
 #include "analysis/results_db.hpp"
 #include "analysis/sql.hpp"
+#include "app/commands.hpp"
 #include "app/worker_pool.hpp"
 #include "kernel/errors.hpp"
 #include "models/hw_config.hpp"
@@ -93,9 +96,125 @@ std::string config_key(const SweepPoint& p) {
   return k;
 }
 
+/// The hash shown for a generated trace that a dry run has not generated: no run has it.
+constexpr const char* kNotGenerated = "(to generate)";
+
+/// The [generate] requests by the path of their trace.
+std::map<std::string, const TraceRequest*> generated_by_path(const SweepSpec& spec) {
+  std::map<std::string, const TraceRequest*> out;
+  for (const auto& g : spec.generate) out.emplace(generated_trace_path(spec, g), &g);
+  return out;
+}
+
+/// What is known of a generated trace that does not exist yet (a dry run): its technique.
+TraceInfo ungenerated_info(const TraceRequest& r) {
+  TraceInfo info;
+  info.hash = kNotGenerated;
+  info.technique = r.technique;
+  return info;
+}
+
+/// The file:line a failed generation is due to: the [generate] key of the option `tbdrsim trace`
+/// names in its error ("--lights 5x: ..." or "option pls_bytes=7: ..."), else the section.
+std::string generation_error_where(const TraceRequest& r, const InputError& e) {
+  const std::string& w = e.where();
+  for (std::size_t i = 0; i + 1 < r.args.size(); i += 2) {
+    const std::string& flag = r.args[i];
+    const std::string& value = r.args[i + 1];
+    const bool hit = flag == "--option" ? w.rfind("option " + value.substr(0, value.find('=') + 1), 0) == 0
+                                        : w.rfind(flag + " ", 0) == 0 || w == flag || w == value;
+    if (hit) return r.arg_where[i / 2];
+  }
+  return r.where;
+}
+
+/// The message of an InputError without its "where: " prefix.
+std::string bare_message(const InputError& e) {
+  const std::string what = e.what();
+  if (!e.where().empty() && what.rfind(e.where() + ": ", 0) == 0) return what.substr(e.where().size() + 2);
+  return what;
+}
+
+/// Generates the [generate] traces the points replay that are not in spec.generated_dir yet, with
+/// `tbdrsim trace` (cmd_trace, the same code path). All of them are written into a staging folder
+/// first and moved in only when every one succeeded, so a bad option value leaves nothing behind
+/// (InputError naming the [generate] line). Returns how many it generated.
+std::size_t generate_traces(const SweepSpec& spec, const std::vector<SweepPoint>& points, std::ostream& out) {
+  namespace fs = std::filesystem;
+  const auto by_path = generated_by_path(spec);
+  std::vector<const TraceRequest*> missing;
+  std::set<std::string> seen;
+  std::size_t present = 0;
+  for (const auto& p : points) {
+    const auto it = by_path.find(p.trace);
+    if (it == by_path.end() || !seen.insert(p.trace).second) continue;
+    if (fs::is_regular_file(p.trace)) {
+      ++present;
+    } else {
+      missing.push_back(it->second);
+    }
+  }
+  if (missing.empty()) {
+    if (present) out << "generate: " << present << " trace(s) already in " << spec.generated_dir << "\n" << std::flush;
+    return 0;
+  }
+  const fs::path dir(spec.generated_dir);
+  const bool made_dir = !fs::exists(dir);
+  const fs::path staging = dir / (".staging-" + std::to_string(getpid()));
+  // Removes the staging folder (and the folder, when this call made it) unless every trace is in.
+  struct Cleanup {
+    fs::path staging, dir;
+    bool made_dir, done = false;
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(staging, ec);
+      if (!done && made_dir) fs::remove(dir, ec);
+    }
+  } cleanup{staging, dir, made_dir};
+  try {
+    fs::create_directories(staging);
+  } catch (const fs::filesystem_error& e) {
+    throw InputError(spec.generated_dir, std::string("cannot create the folder of generated traces: ") + e.code().message());
+  }
+  out << "generate: " << missing.size() << " trace(s) into " << spec.generated_dir;
+  if (present) out << " (" << present << " already there)";
+  out << "\n" << std::flush;
+  for (const TraceRequest* r : missing) {
+    std::vector<std::string> args = r->args;
+    const fs::path final_path = generated_trace_path(spec, *r);
+    args.insert(args.end(), {"--out", (staging / final_path.filename()).string()});
+    std::ostringstream sink;
+    try {
+      cmd_trace(args, sink, sink);
+    } catch (const InputError& e) {
+      throw InputError(generation_error_where(*r, e), "generating the trace '" + r->label + "': " + bare_message(e));
+    } catch (const UsageError& e) {
+      // Boost's message ("tbdrsim trace: the argument ('x') for option '--lights' is invalid") without
+      // the usage text after it, at the line of the key it names.
+      std::string what = e.what();
+      what = what.substr(0, what.find('\n'));
+      if (what.rfind("tbdrsim trace: ", 0) == 0) what = what.substr(15);
+      std::string where = r->where;
+      for (std::size_t i = 0; i + 1 < r->args.size(); i += 2) {
+        if (what.find("'" + r->args[i] + "'") != std::string::npos) where = r->arg_where[i / 2];
+      }
+      throw InputError(where, "generating the trace '" + r->label + "': " + what);
+    }
+    out << "  " << r->label << " -> " << final_path.filename().string() << "\n" << std::flush;
+  }
+  for (const TraceRequest* r : missing) {
+    const fs::path final_path = generated_trace_path(spec, *r);
+    fs::rename(staging / final_path.filename(), final_path);
+  }
+  cleanup.done = true;
+  return missing.size();
+}
+
 /// Resolves every configuration and reads every trace: bad input stops the sweep before anything
-/// runs, and the hashes identify points already in the database.
+/// runs, and the hashes identify points already in the database. A generated trace that is not
+/// there yet (a dry run) is known by its request only.
 PointInputs resolve_inputs(const SweepSpec& spec, const std::vector<SweepPoint>& points) {
+  const auto generated = generated_by_path(spec);
   PointInputs in;
   in.config.resize(points.size());
   in.trace.resize(points.size());
@@ -114,7 +233,11 @@ PointInputs resolve_inputs(const SweepSpec& spec, const std::vector<SweepPoint>&
     }
     in.config[i] = &it->second;
     auto tt = in.traces.find(p.trace);
-    if (tt == in.traces.end()) tt = in.traces.emplace(p.trace, read_trace_info(p.trace)).first;
+    if (tt == in.traces.end()) {
+      const auto g = generated.find(p.trace);
+      const bool absent = g != generated.end() && !std::filesystem::exists(p.trace);
+      tt = in.traces.emplace(p.trace, absent ? ungenerated_info(*g->second) : read_trace_info(p.trace)).first;
+    }
     in.trace[i] = &tt->second;
   }
   return in;
@@ -351,6 +474,10 @@ void print_slow_points(const SweepSpec& spec, std::ostream& out) {
   for (const auto& t : spec.traces) {
     if (!traces.count(t)) traces.emplace(t, read_trace_info(t));
   }
+  for (const auto& g : spec.generate) {  // known once generated
+    const std::string t = generated_trace_path(spec, g);
+    if (!traces.count(t) && std::filesystem::is_regular_file(t)) traces.emplace(t, read_trace_info(t));
+  }
   warn_slow_traces(traces, expand_sweep(spec), out);
 }
 
@@ -366,6 +493,7 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
   if (!opt.dry_run && access(binary.c_str(), X_OK) != 0) {
     throw InputError(binary, "the tbdrsim binary for the workers is not executable");
   }
+  if (!opt.dry_run) generate_traces(spec, points, out);
   const PointInputs inputs = resolve_inputs(spec, points);
 
   if (opt.dry_run) {
@@ -380,6 +508,11 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
       if (done_before[i]) ++summary.skipped;
     }
     print_plan(spec, opt, points.size(), all.size(), inputs, summary.skipped, points.size() - summary.skipped, out);
+    std::size_t to_generate = 0;
+    for (const auto& [path, info] : inputs.traces) to_generate += info.hash == kNotGenerated ? 1 : 0;
+    if (to_generate) {
+      out << "dry run: would generate " << to_generate << " trace(s) into " << spec.generated_dir << "; generated none\n";
+    }
     warn_slow_traces(inputs.traces, points, out);
     for (std::size_t i = 0; i < points.size(); ++i) {
       out << "  " << std::setw(5) << points[i].index << "  " << (done_before[i] ? "done  " : "to run") << "  "

@@ -13,7 +13,10 @@
 #include <sstream>
 
 #include "kernel/errors.hpp"
+#include "kernel/hash.hpp"
 #include "models/hw_config.hpp"
+#include "tbdrsim_version.hpp"
+#include "techniques/technique.hpp"
 
 namespace tbdr {
 
@@ -271,15 +274,167 @@ void add_zip_key(SweepSpec& spec, std::map<std::string, std::size_t>& zip_axis, 
   for (std::size_t v = 0; v < values.size(); ++v) axis.values[v].push_back(values[v]);
 }
 
+// ---------------------------------------------------------------------------------------------
+// [generate]: traces made by `tbdrsim trace` for every combination of the section's lists
+
+/// The [generate] keys that are `tbdrsim trace` options of the same name (besides option.KEY).
+constexpr const char* kGenerateKeys[] = {"technique", "scene", "camera", "resolution", "lights", "light-seed", "samples", "light-file"};
+
+/// One [generate] key with its values (ranges expanded), in file order.
+struct GenerateKey {
+  std::string name;                 ///< "lights", "option.pls_bytes", ...
+  std::vector<std::string> values;  ///< paths already relative to the working folder
+  std::string where;
+};
+
+/// A scene value: atrium[:detail] stays as written; anything else is a glTF file relative to the
+/// sweep file, which must exist.
+bool is_atrium_scene(const std::string& v) { return v == "atrium" || v.rfind("atrium:", 0) == 0; }
+
+/// The values of one [generate] line, checked as far as they can be without generating: technique
+/// names, option keys (by parse_sweep_file), files that exist; the rest (light counts,
+/// resolutions, option values) `tbdrsim trace` checks when the sweep generates the trace.
+GenerateKey generate_key(const IniLine& l, const std::string& value, const std::string& where, const fs::path& base_dir) {
+  const bool option = l.name.rfind("option.", 0) == 0 && l.name.size() > 7;
+  if (!option && std::find(std::begin(kGenerateKeys), std::end(kGenerateKeys), l.name) == std::end(kGenerateKeys)) {
+    std::string known;
+    for (const char* k : kGenerateKeys) known += std::string(known.empty() ? "" : ", ") + k;
+    throw InputError(where, "unknown key '" + l.name + "' in [generate] (known: " + known +
+                                ", option.KEY for a technique option; `tbdrsim trace --list` lists them)");
+  }
+  GenerateKey key{l.name, {}, where};
+  if (l.name == "scene" || l.name == "light-file") {
+    for (const auto& v : split_commas(value)) {
+      if (v.empty()) throw InputError(where, "empty item in the list '" + value + "'");
+      if (l.name == "scene" && is_atrium_scene(v)) {
+        key.values.push_back(v);
+        continue;
+      }
+      const std::string p = checked_length(relative_to(base_dir, v), l.name, where);
+      if (!fs::is_regular_file(p)) throw InputError(where, l.name + " '" + p + "' not found");
+      key.values.push_back(p);
+    }
+    std::set<std::string> seen;
+    for (const auto& v : key.values) {
+      if (!seen.insert(v).second) throw InputError(where, "'" + v + "' listed twice");
+    }
+  } else {
+    key.values = expand_value_list(value, where);
+  }
+  if (l.name == "technique") {
+    for (const auto& t : key.values) {
+      try {
+        find_technique(t);
+      } catch (const InputError& e) {
+        throw InputError(where, bare_message(e));
+      }
+    }
+  }
+  return key;
+}
+
+/// Whether technique `t` reads option `key` (without the "option." prefix).
+bool technique_has_option(const std::string& t, const std::string& key) {
+  for (const auto& o : find_technique(t).options) {
+    if (o.key == key) return true;
+  }
+  return false;
+}
+
+/// The requests of a [generate] section: per technique (in order), the cartesian product of the
+/// keys that apply to it (every key but the options it does not read), the last key fastest.
+std::vector<TraceRequest> expand_generate(const std::vector<GenerateKey>& keys, const std::string& path, long line) {
+  const std::string where = path + ":" + std::to_string(line);
+  const auto tech = std::find_if(keys.begin(), keys.end(), [](const GenerateKey& k) { return k.name == "technique"; });
+  if (tech == keys.end()) throw InputError(where, "[generate] names no technique (technique = NAME, or a list)");
+  for (const auto& k : keys) {
+    if (k.name.rfind("option.", 0) != 0) continue;
+    const std::string opt = k.name.substr(7);
+    if (std::none_of(tech->values.begin(), tech->values.end(), [&](const std::string& t) { return technique_has_option(t, opt); })) {
+      std::string known;
+      for (const auto& t : tech->values) {
+        for (const auto& o : find_technique(t).options) known += (known.empty() ? "" : ", ") + o.key;
+      }
+      throw InputError(k.where, "no technique of this [generate] has the option '" + opt + "'" +
+                                    (known.empty() ? " (they take none)" : " (theirs: " + known + ")"));
+    }
+  }
+  // Counted before any request is made, with a cap, so a typing error cannot allocate millions.
+  std::uint64_t total = 0;
+  for (const auto& t : tech->values) {
+    std::uint64_t n = 1;
+    for (const auto& k : keys) {
+      if (&k == &*tech || (k.name.rfind("option.", 0) == 0 && !technique_has_option(t, k.name.substr(7)))) continue;
+      n = n > kMaxSweepPoints / k.values.size() ? kMaxSweepPoints + 1 : n * k.values.size();
+    }
+    total = std::min<std::uint64_t>(total + n, kMaxSweepPoints + 1);
+  }
+  if (total > kMaxSweepPoints) {
+    throw InputError(where, "[generate] makes more than " + std::to_string(kMaxSweepPoints) +
+                                " traces; split it into several sweeps (docs/limits.md)");
+  }
+  std::vector<TraceRequest> out;
+  for (const auto& t : tech->values) {
+    std::vector<const GenerateKey*> used;
+    for (const auto& k : keys) {
+      if (&k == &*tech || (k.name.rfind("option.", 0) == 0 && !technique_has_option(t, k.name.substr(7)))) continue;
+      used.push_back(&k);
+    }
+    std::vector<std::size_t> digit(used.size(), 0);
+    while (true) {
+      TraceRequest r;
+      r.technique = t;
+      r.where = where;
+      r.args = {"--technique", t};
+      r.arg_where = {tech->where};
+      r.label = t;
+      Fnv1a64 id;
+      id.update(std::string("tbdrsim ") + kToolVersion + "\ntechnique=" + t + "\n");
+      for (std::size_t u = 0; u < used.size(); ++u) {
+        const GenerateKey& k = *used[u];
+        const std::string& v = k.values[digit[u]];
+        const bool option = k.name.rfind("option.", 0) == 0;
+        const std::string shown = option ? k.name.substr(7) : k.name;
+        if (option) {
+          r.args.insert(r.args.end(), {"--option", shown + "=" + v});
+        } else {
+          r.args.insert(r.args.end(), {"--" + k.name, v});
+        }
+        r.arg_where.push_back(k.where);
+        const bool file = k.name == "light-file" || (k.name == "scene" && !is_atrium_scene(v));
+        if (k.values.size() > 1) r.label += " " + shown + "=" + (file ? fs::path(v).filename().string() : v);
+        // Files by content, so a sweep run from another folder (another relative path) finds them.
+        id.update(k.name + "=" + (file ? "file:" + hash_file_hex(v) : v) + "\n");
+      }
+      r.id = id.hex();
+      out.push_back(std::move(r));
+      std::size_t u = used.size();
+      while (u > 0 && ++digit[u - 1] == used[u - 1]->values.size()) digit[--u] = 0;
+      if (u == 0) break;
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
-SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::string>& traces) {
+std::string generated_trace_dir(const std::string& db_path) {
+  const fs::path db(db_path);
+  return (db.parent_path() / (db.stem().string() + ".traces")).string();
+}
+
+std::string generated_trace_path(const SweepSpec& spec, const TraceRequest& request) {
+  return (fs::path(spec.generated_dir) / (request.technique + "-" + request.id + ".trace")).string();
+}
+
+SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::string>& traces, const std::string& db_path) {
   IniRules rules;
   rules.what = "sweep file";
   rules.known_section = [](const std::string& section) {
-    return section == "sweep" || section == "set" || section == "vary" || (section.rfind("zip.", 0) == 0 && section.size() > 4);
+    return section == "sweep" || section == "set" || section == "vary" || section == "generate" ||
+           (section.rfind("zip.", 0) == 0 && section.size() > 4);
   };
-  rules.known_sections = "sweep, set, vary, zip.NAME";
+  rules.known_sections = "sweep, set, vary, zip.NAME, generate";
   rules.keys_need_section = true;
   rules.sections_once = true;
   rules.may_repeat = [](const IniLine& l) { return l.section == "sweep" && (l.name == "config" || l.name == "trace"); };
@@ -289,7 +444,9 @@ SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::strin
   SweepSpec spec;
   spec.path = path;
   spec.name = fs::path(path).stem().string();
+  spec.generated_dir = generated_trace_dir(db_path.empty() ? spec.name + ".db" : db_path);
   const fs::path base_dir = fs::path(path).parent_path();
+  std::vector<GenerateKey> generate_keys;
   std::map<std::string, std::string> key_where;  // every key set or swept, for conflicts
   std::map<std::string, std::size_t> zip_axis;   // zip group -> axis index
   for (std::size_t i = 0; i < lines.size(); ++i) {
@@ -299,6 +456,10 @@ SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::strin
     if (l.section == "sweep") {
       if (l.name == "trace" && !traces.empty()) continue;  // replaced by the command line's
       apply_sweep_key(spec, l, value, where, base_dir);
+      continue;
+    }
+    if (l.section == "generate") {
+      generate_keys.push_back(generate_key(l, value, where, base_dir));
       continue;
     }
     // [set], [vary], [zip.NAME]: the key is a parameter, or "config" (a config file axis).
@@ -324,9 +485,11 @@ SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::strin
     const auto found = expand_traces(t, fs::path(), "--trace " + t);
     spec.traces.insert(spec.traces.end(), found.begin(), found.end());
   }
+  if (section_lines.count("generate")) spec.generate = expand_generate(generate_keys, path, section_lines["generate"]);
   if (!section_lines.count("sweep")) throw InputError(path, "no [sweep] section (it names the traces)");
-  if (spec.traces.empty()) {
-    throw InputError(path, section_lines["sweep"], "[sweep] names no trace (trace = FILE or GLOB, repeatable)");
+  if (spec.traces.empty() && spec.generate.empty()) {
+    throw InputError(path, section_lines["sweep"],
+                     "[sweep] names no trace (trace = FILE or GLOB, repeatable) and there is no [generate] section");
   }
   for (const auto& [sec, line] : section_lines) {
     if (sec.rfind("zip.", 0) == 0 && !zip_axis.count(sec)) throw InputError(path, line, "[" + sec + "] is empty");
@@ -343,7 +506,7 @@ void check_sweep_size(const SweepSpec& spec) {
     product += " x " + std::to_string(n) + " " + what;
     points = n != 0 && points > kMaxSweepPoints / n ? kMaxSweepPoints + 1 : points * n;
   };
-  times(spec.traces.size(), "traces");
+  times(spec.traces.size() + spec.generate.size(), "traces");
   for (const auto& a : spec.axes) times(a.values.size(), a.keys.front() + (a.keys.size() > 1 ? " (zip)" : ""));
   if (points > kMaxSweepPoints) {
     throw InputError(spec.path, "the sweep has more than " + std::to_string(kMaxSweepPoints) + " points (" + product +
@@ -356,9 +519,12 @@ std::vector<SweepPoint> expand_sweep(const SweepSpec& spec) {
   std::size_t combos = 1;
   for (const auto& a : spec.axes) combos *= a.values.size();
   std::vector<SweepPoint> points;
-  points.reserve(combos * spec.traces.size() * static_cast<std::size_t>(spec.repetitions));
+  points.reserve(combos * (spec.traces.size() + spec.generate.size()) * static_cast<std::size_t>(spec.repetitions));
   std::vector<std::size_t> digit(spec.axes.size(), 0);
   std::size_t group = 0;
+  std::vector<std::pair<std::string, std::string>> traces;  // path, label
+  for (const auto& t : spec.traces) traces.emplace_back(t, fs::path(t).filename().string());
+  for (const auto& g : spec.generate) traces.emplace_back(generated_trace_path(spec, g), g.label);
   for (std::size_t c = 0; c < combos; ++c) {
     // Mixed-radix decode, the last axis fastest.
     std::size_t rest = c;
@@ -382,7 +548,7 @@ std::vector<SweepPoint> expand_sweep(const SweepSpec& spec) {
         }
       }
     }
-    for (const auto& trace : spec.traces) {
+    for (const auto& [trace, trace_label] : traces) {
       for (int r = 0; r < spec.repetitions; ++r) {
         SweepPoint p;
         p.index = points.size();
@@ -391,7 +557,7 @@ std::vector<SweepPoint> expand_sweep(const SweepSpec& spec) {
         p.configs = configs;
         p.sets = sets;
         p.trace = trace;
-        p.label = (label.empty() ? "" : label + " | ") + fs::path(trace).filename().string();
+        p.label = (label.empty() ? "" : label + " | ") + trace_label;
         if (spec.repetitions > 1) p.label += " #" + std::to_string(r + 1);
         points.push_back(std::move(p));
       }

@@ -17,6 +17,17 @@ struct SweepAxis {
   std::vector<std::string> where;                ///< "file:line" of each key
 };
 
+/// One trace a sweep generates from its [generate] section: the options of `tbdrsim trace` for one
+/// combination of the section's lists (docs/sweeps.md).
+struct TraceRequest {
+  std::string technique;
+  std::vector<std::string> args;   ///< `tbdrsim trace` arguments without --out: --technique T --lights N -o k=v ...
+  std::vector<std::string> arg_where;  ///< "file:line" of the [generate] key each option of args came from
+  std::string label;               ///< the technique and the settings that vary: "forward_light_stack pls_bytes=16"
+  std::string id;                  ///< 16 hex digits: hash of args, the tool version and the files they name
+  std::string where;               ///< "file:line" of the [generate] header
+};
+
 /// A parsed sweep file; every path is already relative to the working directory.
 struct SweepSpec {
   std::string path;                        ///< the sweep file
@@ -25,8 +36,17 @@ struct SweepSpec {
   std::vector<std::string> sets;           ///< fixed "key=value" overrides for every point
   std::vector<SweepAxis> axes;             ///< in file order; the last one varies fastest
   std::vector<std::string> traces;         ///< globs expanded, in file order (glob matches sorted)
+  std::vector<TraceRequest> generate;      ///< the [generate] traces, replayed after `traces`
+  std::string generated_dir;               ///< where generated traces live (set_generated_dir)
   int repetitions = 1;
 };
+
+/// The folder of a sweep's generated traces for a results database: `<db stem>.traces/` beside it.
+std::string generated_trace_dir(const std::string& db_path);
+
+/// Where a generated trace is: `<spec.generated_dir>/<technique>-<id>.trace` (the id is the
+/// request's hash, so a resumed sweep finds the traces it generated before).
+std::string generated_trace_path(const SweepSpec& spec, const TraceRequest& request);
 
 /// One simulation of a sweep: configuration, trace and repetition.
 struct SweepPoint {
@@ -55,17 +75,20 @@ inline constexpr std::uint64_t kMaxSweepPoints = 1'000'000;
 /// product of its axes), computed without overflow and before any point is made.
 void check_sweep_size(const SweepSpec& spec);
 
-/// Parses a sweep file. InputError naming file:line for anything malformed or unknown (sections,
+/// Parses a sweep file (generated traces go into generated_trace_dir(db_path); empty: a
+/// placeholder folder, for sweeps that only list or count points). InputError naming file:line for anything malformed or unknown (sections,
 /// keys, values out of range, bad ranges, zip lists of unequal length, globs matching nothing).
 /// Non-empty `traces` (files or globs from the working folder, `sweep --trace`) replace the file's
 /// [sweep] trace lines, which are then not read.
-SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::string>& traces = {});
+SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::string>& traces = {},
+                           const std::string& db_path = {});
 
 /// Expands one value list: "1, 2, 4", "16..64 step 16", "1..8 x 2" (also "*2"), "0.5..1 step 0.25".
 /// InputError naming `where` when malformed.
 std::vector<std::string> expand_value_list(const std::string& text, const std::string& where);
 
-/// All points in their deterministic order: axes (last fastest), then traces, then repetitions.
+/// All points in their deterministic order: axes (last fastest), then traces (the [sweep] traces,
+/// then the generated ones in [generate] order), then repetitions.
 std::vector<SweepPoint> expand_sweep(const SweepSpec& spec);
 
 /// Parses "i/K" (0 <= i < K). InputError naming the argument otherwise.
