@@ -32,6 +32,7 @@ constexpr std::uint64_t kLanesPerQuad = 4;
 /// A FIFO server with a throughput: jobs reserve it in arrival order.
 struct Server {
   std::string name;
+  std::size_t unit = 0;  ///< its index in TimingResult::units (and in each command's busy intervals)
   Tick free_at{0};
   double busy_cycles = 0;
   double stalled_cycles = 0;
@@ -57,13 +58,20 @@ class TimingSim final : public Unit {
         mem_(hw, eq_, "mem"),
         map_(work, mem_.address_space()),
         slots_(static_cast<std::uint64_t>(hw.usc.count * hw.usc.tasks_in_flight)) {
+    binner_.name = "binning";
+    binner_.unit = 0;
+    // unit 1: the tile fetch (kTileFetchUnit)
     isp_.name = "isp";
+    isp_.unit = 2;
     usc_.name = "usc";
+    usc_.unit = 3;
     tpu_.name = "texture";
+    tpu_.unit = 4;
     tile_buffer_.name = "tile_buffer";
+    tile_buffer_.unit = 5;
     tile_buffer_rate_ = static_cast<double>(hw.usc.count) * hw.pls.tile_buffer_bytes_per_clock;
     pbe_.name = "pixel_back_end";
-    binner_.name = "binning";
+    pbe_.unit = 6;
     alu_rate_ = static_cast<double>(hw.usc.count * hw.usc.lanes) * hw.usc.alu_ops_per_lane_per_clock;
     tex_rate_ = static_cast<double>(hw.texture.units) * hw.texture.texels_per_clock;
     raster_rate_ = static_cast<double>(hw.isp.samples_per_clock * hw.isp.raster_pipes);
@@ -83,8 +91,11 @@ class TimingSim final : public Unit {
           frag_jobs_.push_back({c, static_cast<int>(r)});
         }
       }
-      result_.commands.push_back({cmd.name, -1, 0, 0});
+      result_.commands.push_back({cmd.name, -1, 0, 0, {}});
     }
+    const std::size_t per_command = std::clamp(kFrameBusyIntervals / std::max<std::size_t>(1, work_.commands.size()),
+                                               kMinCommandBusyIntervals, kMaxCommandBusyIntervals);
+    busy_.assign(work_.commands.size(), std::vector<BusyIntervals>(kUnits, BusyIntervals(per_command)));
     bin_done_.assign(bin_jobs_.size(), false);
     frag_done_.assign(frag_jobs_.size(), false);
     eq_.schedule(Tick{0}, [this] {
@@ -105,6 +116,11 @@ class TimingSim final : public Unit {
                      {tpu_.name, tpu_.busy_cycles, tpu_.stalled_cycles},
                      {tile_buffer_.name, tile_buffer_.busy_cycles, tile_buffer_.stalled_cycles},
                      {pbe_.name, pbe_.busy_cycles, pbe_.stalled_cycles}};
+    for (std::size_t c = 0; c < busy_.size(); ++c) {
+      for (std::size_t u = 0; u < kUnits; ++u) {
+        if (!busy_[c][u].intervals().empty()) result_.commands[c].unit_busy.push_back({result_.units[u].name, busy_[c][u].intervals()});
+      }
+    }
     result_.dram = mem_.traffic();
     result_.requested = mem_.requested();
     mem_.collect(result_.memory_stats);
@@ -153,12 +169,13 @@ class TimingSim final : public Unit {
   Tick after_cycles(Tick start, double cycles) const {
     return core_.after(start, Cycles{static_cast<std::int64_t>(std::ceil(cycles))});
   }
-  /// Reserves `cycles` on a server no earlier than `ready`; returns the end tick.
-  Tick reserve(Server& s, Tick ready, double cycles) {
+  /// Reserves `cycles` on a server no earlier than `ready` for `command`'s work; returns the end tick.
+  Tick reserve(Server& s, std::size_t command, Tick ready, double cycles) {
     const Tick start = std::max(ready, s.free_at);
     const Tick end = after_cycles(start, cycles);
     s.free_at = end;
     s.busy_cycles += cycles;
+    if (cycles > 0) busy_[command][s.unit].add(cycles_of(start), cycles_of(start) + cycles, cycles);
     return end;
   }
 
@@ -185,7 +202,7 @@ class TimingSim final : public Unit {
     const BinningWork& b = rw.binning;
     const Tick start = eq_.now();
     if (result_.commands[j.command].start_cycle < 0) result_.commands[j.command].start_cycle = cycles_of(start);
-    const Tick compute_end = reserve_geometry(b, start);
+    const Tick compute_end = reserve_geometry(b, j.command, start);
     auto pending = std::make_shared<int>(1);
     auto finish = [this, k, compute_end, pending]() {
       if (--*pending > 0) return;
@@ -213,11 +230,12 @@ class TimingSim final : public Unit {
   /// Fixed-function geometry (and tiling) on the binning engine from `start`; the vertex shaders
   /// run on the unified shading clusters, competing with the fragment and compute work queued
   /// there. Returns when both are done.
-  Tick reserve_geometry(const BinningWork& b, Tick start) {
+  Tick reserve_geometry(const BinningWork& b, std::size_t command, Tick start) {
     const double cycles = std::max({static_cast<double>(b.primitives_in) / hw_.geometry.primitives_per_clock,
                                     static_cast<double>(b.primitives_binned) / hw_.tiling.primitives_per_clock,
                                     static_cast<double>(b.vertex_fetch_bytes + b.index_fetch_bytes) / hw_.geometry.vertex_fetch_bytes_per_clock});
-    return std::max(reserve(binner_, start, cycles), reserve(usc_, start, static_cast<double>(b.vertex_alu_ops) / alu_rate_));
+    return std::max(reserve(binner_, command, start, cycles),
+                    reserve(usc_, command, start, static_cast<double>(b.vertex_alu_ops) / alu_rate_));
   }
 
   /// Starts the vertex and index fetch of `b` (one sequential stream each, following the previous
@@ -290,8 +308,9 @@ class TimingSim final : public Unit {
 
   void start_dispatch(std::size_t f, const CommandWork& cmd) {
     const Tick start = eq_.now();
-    const Tick compute_end = std::max(reserve(usc_, start, static_cast<double>(cmd.compute_alu_ops) / alu_rate_),
-                                      reserve(tpu_, start, static_cast<double>(cmd.compute_texels) / tex_rate_));
+    const std::size_t command = frag_jobs_[f].command;
+    const Tick compute_end = std::max(reserve(usc_, command, start, static_cast<double>(cmd.compute_alu_ops) / alu_rate_),
+                                      reserve(tpu_, command, start, static_cast<double>(cmd.compute_texels) / tex_rate_));
     auto pending = std::make_shared<int>(1);
     auto finish = [this, f, compute_end, pending]() {
       if (--*pending > 0) return;
@@ -373,13 +392,17 @@ class TimingSim final : public Unit {
         if (--tiles_[i].pending_streams > 0) return;
         tiles_[i].fetched = true;
         // Busy while at least one tile is being fetched (several overlap: their union, not their sum).
-        if (--fetches_in_flight_ == 0) fetch_busy_cycles_ += cycles_of(eq_.now()) - cycles_of(fetch_busy_since_);
+        if (--fetches_in_flight_ == 0) {
+          const double from = cycles_of(fetch_busy_since_), to = cycles_of(eq_.now());
+          fetch_busy_cycles_ += to - from;
+          busy_[render_command_][kTileFetchUnit].add(from, to, to - from);
+        }
         advance_isp();
       };
       if (work_.immediate) {
         // imr: the batch's geometry is processed as it goes down the pipeline: the next batches'
         // geometry overlaps this one's rasterisation and shading (up to isp.tiles_in_flight).
-        const Tick geometry_end = reserve_geometry(t.geometry, eq_.now());
+        const Tick geometry_end = reserve_geometry(t.geometry, render_command_, eq_.now());
         ts.pending_streams += 1 + stream_geometry(t.geometry, on_stream);
         eq_.schedule(geometry_end, [on_stream] { on_stream(); });
       }
@@ -420,7 +443,7 @@ class TimingSim final : public Unit {
     const double isp_cycles = std::max(static_cast<double>(t.primitives), static_cast<double>(t.samples) / raster_rate_) +
                               std::max(static_cast<double>(t.isp_wait_alu_ops) / alu_rate_, static_cast<double>(t.isp_wait_texels) / tex_rate_);
     isp_busy_ = true;
-    const Tick raster_end = reserve(isp_, eq_.now(), isp_cycles);
+    const Tick raster_end = reserve(isp_, render_command_, eq_.now(), isp_cycles);
     if (t.rop_depth.empty()) {
       eq_.schedule(raster_end, [this, i] { request_slots(i); });
       return;
@@ -467,9 +490,9 @@ class TimingSim final : public Unit {
     const TileWork& t = render_->tiles[i];
     TileState& ts = tiles_[i];
     const Tick now = eq_.now();
-    ts.usc_end = std::max({reserve(usc_, now, static_cast<double>(t.alu_ops) / alu_rate_),
-                           reserve(tpu_, now, static_cast<double>(t.texels) / tex_rate_),
-                           reserve(tile_buffer_, now, static_cast<double>(t.tile_buffer_bytes) / tile_buffer_rate_)});
+    ts.usc_end = std::max({reserve(usc_, render_command_, now, static_cast<double>(t.alu_ops) / alu_rate_),
+                           reserve(tpu_, render_command_, now, static_cast<double>(t.texels) / tex_rate_),
+                           reserve(tile_buffer_, render_command_, now, static_cast<double>(t.tile_buffer_bytes) / tile_buffer_rate_)});
     ts.pending_shading = 1;
     eq_.schedule(ts.usc_end, [this, i] { shading_part_done(i); });
     if (!t.texture_lines.empty()) {
@@ -568,7 +591,7 @@ class TimingSim final : public Unit {
     const TileWork& t = render_->tiles[i];
     std::uint64_t store = 0;
     for (auto b : t.store_bytes) store += b;
-    const Tick pbe_end = reserve(pbe_, eq_.now(), static_cast<double>(store) / hw_.writeback.bytes_per_clock);
+    const Tick pbe_end = reserve(pbe_, render_command_, eq_.now(), static_cast<double>(store) / hw_.writeback.bytes_per_clock);
     auto pending = std::make_shared<int>(1);
     auto finish = [this, i, pbe_end, pending]() {
       if (--*pending > 0) return;
@@ -612,6 +635,11 @@ class TimingSim final : public Unit {
   TileRecordBook tile_records_;
   TimingResult result_;
   Server binner_, isp_, usc_, tpu_, tile_buffer_, pbe_;
+  /// The units of TimingResult::units: binning, tile fetch, ISP, USC, texture, tile buffer, PBE.
+  static constexpr std::size_t kUnits = 7;
+  /// The tile fetch's index there: not a Server (busy while any tile is being fetched).
+  static constexpr std::size_t kTileFetchUnit = 1;
+  std::vector<std::vector<BusyIntervals>> busy_;  ///< per command and unit: when it worked for it
   TaskSlots slots_;  ///< resident tasks across the USCs (usc.count x usc.tasks_in_flight)
   bool isp_busy_ = false;  ///< the ISP is resolving a tile or holds one waiting for task slots
   double alu_rate_ = 1, tex_rate_ = 1, raster_rate_ = 1, tile_buffer_rate_ = 1;

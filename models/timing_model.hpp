@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "models/busy_intervals.hpp"
 #include "models/frame_work.hpp"
 #include "models/hw_config.hpp"
 #include "models/memory_system.hpp"
@@ -44,12 +45,28 @@ struct UnitTime {
   double stalled_cycles = 0;
 };
 
-/// Start and end of a command (pass or dispatch).
+/// The busy intervals of one unit during one command (its reservations for that command's work).
+struct UnitBusy {
+  std::string unit;
+  std::vector<BusyInterval> intervals;
+};
+
+/// The most busy intervals one unit keeps over the frame: each command's unit gets a share,
+/// kFrameBusyIntervals / commands, clamped to [kMinCommandBusyIntervals, kMaxCommandBusyIntervals]
+/// (a timeline file of a few megabytes even for forward_multipass's hundreds of passes).
+inline constexpr std::size_t kFrameBusyIntervals = 1024;
+/// At least the first and the last stretch of a unit's work in a command.
+inline constexpr std::size_t kMinCommandBusyIntervals = 2;
+/// At most this many per command and unit: finer than a timeline viewer shows a pass.
+inline constexpr std::size_t kMaxCommandBusyIntervals = 64;
+
+/// Start and end of a command (pass or dispatch), and when each unit worked for it.
 struct CommandTime {
   std::string name;
   double start_cycle = 0;
   double binning_end_cycle = 0;
   double end_cycle = 0;
+  std::vector<UnitBusy> unit_busy;  ///< the units that worked for it, in TimingResult::units order
 };
 
 /// What the timing model measured.

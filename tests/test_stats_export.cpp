@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "analysis/results_db.hpp"
@@ -176,6 +177,61 @@ TEST_F(StatsExport, TimelineIsTraceEventJsonOfThePasses) {
                      db_number("SELECT busy_cycles FROM v_unit WHERE run_id = 1 AND unit = 'usc'"));
   }
   EXPECT_TRUE(usc) << "no usc unit track";
+}
+
+TEST_F(StatsExport, TimelineHasEveryUnitsBusyIntervalsInsideTheirPass) {
+  const json j = json::parse(file_text(*dir_ / "t.json"));  // throws (fails the test) unless valid JSON
+  const double cycles = db_number("SELECT cycles FROM v_run_summary WHERE run_id = 1");
+  const double ms = db_number("SELECT frame_time_ms FROM v_run_summary WHERE run_id = 1");
+  const double us_per_cycle = ms * 1000 / cycles;
+  std::map<int, std::string> units;  // pid -> unit, from "unit NAME: busy intervals per pass"
+  for (const auto& e : j.at("traceEvents")) {
+    if (e.at("ph") != "M" || e.at("name") != "process_name") continue;
+    const std::string name = e.at("args").at("name").get<std::string>();
+    if (name.rfind("unit ", 0) == 0) units[e.at("pid").get<int>()] = name.substr(5, name.find(':') - 5);
+  }
+  // Every unit of the timing model has its process (its per-pass tracks).
+  std::set<std::string> names;
+  for (const auto& [pid, unit] : units) names.insert(unit);
+  EXPECT_EQ(names, (std::set<std::string>{"binning", "tile_fetch", "isp", "usc", "texture", "tile_buffer", "pixel_back_end"}));
+  std::map<std::string, double> unit_busy;                          // unit -> busy cycles, all passes
+  std::map<std::pair<std::string, std::string>, double> pass_busy;  // (unit, pass) -> busy cycles
+  for (const auto& e : j.at("traceEvents")) {
+    if (e.at("ph") != "X" || !units.count(e.at("pid").get<int>())) continue;
+    const std::string unit = units.at(e.at("pid").get<int>());
+    const std::string pass = e.at("args").at("command").get<std::string>();
+    const double from = e.at("args").at("start_cycle").get<double>(), to = e.at("args").at("end_cycle").get<double>();
+    const double busy = e.at("args").at("busy_cycles").get<double>();
+    SqlConnection c(*db_);
+    SqlStatement q(c, "SELECT max(CASE WHEN name = 'start_cycle' THEN value END), "
+                      "max(CASE WHEN name = 'end_cycle' THEN value END) FROM stats WHERE run_id = 1 AND scope = ?");
+    q.bind(1, pass + "/timing");
+    ASSERT_TRUE(q.step() && !q.is_null(0)) << pass;
+    // Inside its pass (a reservation ends within the cycle its whole-cycle booking ends).
+    EXPECT_GE(from, q.real(0) - 1e-6) << unit << " " << pass;
+    EXPECT_LE(to, q.real(1) + 1e-6) << unit << " " << pass;
+    EXPECT_GT(busy, 0) << unit << " " << pass;
+    EXPECT_LE(busy, to - from + 1e-6) << unit << " " << pass;  // an interval holds at most its span of work
+    EXPECT_NEAR(e.at("ts").get<double>(), from * us_per_cycle, 1e-9);
+    unit_busy[unit] += busy;
+    pass_busy[{unit, pass}] += busy;
+  }
+  for (const auto& [key, busy] : pass_busy) {
+    const double start = db_number("SELECT value FROM stats WHERE run_id = 1 AND scope = '" + key.second + "/timing' AND name = 'start_cycle'");
+    const double end = db_number("SELECT value FROM stats WHERE run_id = 1 AND scope = '" + key.second + "/timing' AND name = 'end_cycle'");
+    EXPECT_LE(busy, end - start + 1e-6) << key.first << " " << key.second;
+  }
+  // The intervals split the database's busy cycles of each unit between the passes, losing none.
+  for (const auto& unit : names) {
+    EXPECT_NEAR(unit_busy[unit], db_number("SELECT busy_cycles FROM v_unit WHERE run_id = 1 AND unit = '" + unit + "'"), 1e-3)
+        << unit;
+  }
+  // By hand: the lighting pass stores only the 96x54 RGBA8 colour target (the G-buffer was stored
+  // by pass 0), 96 x 54 x 4 B = 20736 B, at writeback.bytes_per_clock = 32: 20736 / 32 = 648 cycles
+  // of pixel back end. The G-buffer pass stores albedo rgba8 + normal rgb10a2 + 4 B depth = 12 B/px:
+  // 3 x 648 = 1944 cycles.
+  EXPECT_DOUBLE_EQ(pass_busy.at({"pixel_back_end", "pass1.lighting"}), 648.0);
+  EXPECT_DOUBLE_EQ(pass_busy.at({"pixel_back_end", "pass0.gbuffer"}), 1944.0);
 }
 
 TEST_F(StatsExport, BadOutputPathIsRefusedBeforeTheRun) {

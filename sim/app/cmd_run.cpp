@@ -162,7 +162,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   if (vm.count("stats") || vm.count("timeline")) {
     const ResultsDb db(req.db_path, ResultsDb::QueryOnly{});
     if (vm.count("stats")) write_stats_file(db, outcome.run_id, vm["stats"].as<std::string>());
-    if (vm.count("timeline")) write_timeline_file(db, outcome.run_id, vm["timeline"].as<std::string>());
+    if (vm.count("timeline")) write_timeline_file(db, outcome.run_id, outcome.timing, vm["timeline"].as<std::string>());
   }
   if (!vm.count("quiet")) print_run_summary(outcome, out);
   return 0;

@@ -273,7 +273,7 @@ void write_stats_file(const ResultsDb& db, std::int64_t run_id, const std::strin
   write_file(path, json ? stats_json(id, figures, params) : stats_text(id, figures, params));
 }
 
-void write_timeline_file(const ResultsDb& db, std::int64_t run_id, const std::string& path) {
+void write_timeline_file(const ResultsDb& db, std::int64_t run_id, const TimingResult& timing, const std::string& path) {
   const RunIdentity id = run_identity(db, run_id);
   double frame_cycles = 0, frame_ms = 0;
   {
@@ -347,6 +347,28 @@ void write_timeline_file(const ResultsDb& db, std::int64_t run_id, const std::st
       events.push_back("{\"ph\": \"C\", \"name\": " + json_string(u.name + " %") + ", \"pid\": 2, \"tid\": " +
                        std::to_string(tid) + ", \"ts\": " + json_number(at * us_per_cycle) + ", \"args\": {\"busy\": " +
                        json_number(busy_pct) + ", \"stalled\": " + json_number(stalled_pct) + "}}");
+    }
+  }
+  // Processes 3..: one per unit of the timing model, a track per pass or dispatch it worked for
+  // (the tids of process 1), a slice per busy interval (merged and bounded: models/busy_intervals.hpp).
+  for (std::size_t u = 0; u < timing.units.size(); ++u) {
+    const int pid = static_cast<int>(u) + 3;
+    const std::string& unit = timing.units[u].name;
+    meta("process_name", pid, 0, "unit " + unit + ": busy intervals per pass");
+    events.push_back("{\"ph\": \"M\", \"name\": \"process_sort_index\", \"pid\": " + std::to_string(pid) +
+                     ", \"tid\": 0, \"args\": {\"sort_index\": " + std::to_string(pid) + "}}");
+    for (std::size_t c = 0; c < timing.commands.size(); ++c) {
+      const CommandTime& cmd = timing.commands[c];
+      const auto busy = std::find_if(cmd.unit_busy.begin(), cmd.unit_busy.end(), [&](const UnitBusy& b) { return b.unit == unit; });
+      if (busy == cmd.unit_busy.end()) continue;
+      const int tid = static_cast<int>(c) + 2;
+      meta("thread_name", pid, tid, cmd.name);
+      sort_index(pid, tid, tid);
+      for (const BusyInterval& i : busy->intervals) {
+        slice(pid, tid, unit + " " + cmd.name, i.start_cycle, i.end_cycle,
+              cycles_args(i.start_cycle, i.end_cycle) + ", \"busy_cycles\": " + json_number(i.busy_cycles) +
+                  ", \"unit\": " + json_string(unit) + ", \"command\": " + json_string(cmd.name));
+      }
     }
   }
   o << "{\n  \"displayTimeUnit\": \"ns\",\n  \"otherData\": {";

@@ -6,9 +6,13 @@
 //    file name ends in .json;
 //  - a timeline in the Chrome trace-event JSON format (opened by Perfetto, ui.perfetto.dev, and
 //    chrome://tracing): per pass or dispatch its binning and its tile or compute work, from the
-//    timing model's start / binning end / end cycles, and each unit's busy, stalled and idle share.
+//    timing model's start / binning end / end cycles, each unit's busy, stalled and idle share, and
+//    per unit and pass the intervals the unit was busy (TimingResult: the run just simulated, whose
+//    busy cycles per unit add up to what the database holds).
 #include <cstdint>
 #include <string>
+
+#include "models/timing_model.hpp"
 
 namespace tbdr {
 
@@ -25,7 +29,8 @@ void check_output_file(const std::string& option, const std::string& path);
 void write_stats_file(const ResultsDb& db, std::int64_t run_id, const std::string& path);
 
 /// Writes the timeline of run `run_id` as Chrome trace-event JSON (timestamps in microseconds of
-/// simulated time). InputError when the run has no timing figures or the file cannot be written.
-void write_timeline_file(const ResultsDb& db, std::int64_t run_id, const std::string& path);
+/// simulated time), with the units' busy intervals per pass from `timing` (that run's timing
+/// result). InputError when the run has no timing figures or the file cannot be written.
+void write_timeline_file(const ResultsDb& db, std::int64_t run_id, const TimingResult& timing, const std::string& path);
 
 }  // namespace tbdr
