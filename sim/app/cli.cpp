@@ -8,6 +8,7 @@
 #include <boost/program_options.hpp>
 
 #include "app/commands.hpp"
+#include "app/worker_pool.hpp"
 #include "kernel/thread_pool.hpp"
 #include "kernel/errors.hpp"
 #include "tbdrsim_version.hpp"
@@ -47,6 +48,20 @@ std::string& invocation_command_line() {
   return line;
 }
 
+/// The installed data folder, relative to the installed executable (<prefix>/bin/tbdrsim).
+constexpr const char* kInstalledDataFolder = "share/tbdrsim";
+
+std::string data_root() {
+  static const std::string root = [] {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::path installed = fs::path(self_executable()).parent_path().parent_path() / kInstalledDataFolder;
+    if (fs::is_directory(installed / "configs", ec)) return installed.lexically_normal().string();
+    return std::string(TBDRSIM_SOURCE_DIR);
+  }();
+  return root;
+}
+
 namespace {
 
 void print_usage(std::ostream& os) {
@@ -54,16 +69,17 @@ void print_usage(std::ostream& os) {
      << ": cycle-approximate simulator of a tile-based deferred rendering GPU\n\n"
      << "usage: tbdrsim <command> [options]\n"
      << "       tbdrsim <command> --help\n"
-     << "       tbdrsim --checkout   (prints the checkout: its configs/, configs/sweeps/ and analysis/ scripts)\n\ncommands:\n";
+     << "       tbdrsim --checkout   (prints the data folder: its configs/, configs/sweeps/ and analysis/ scripts)\n\ncommands:\n";
   for (const auto& c : cli_commands()) {
     os << "  " << c.name << std::string(c.name && std::string(c.name).size() < 10 ? 10 - std::string(c.name).size() : 1, ' ')
        << c.summary << "\n";
   }
   os << "\npaths: file arguments are taken from the working folder. A config (--config) or sweep file that is\n"
-     << "not there is looked up in the tbdrsim checkout " << TBDRSIM_SOURCE_DIR << ", in this order:\n"
+     << "not there is looked up in the tbdrsim data folder " << data_root() << "\n"
+     << "(the installed <prefix>/share/tbdrsim beside <prefix>/bin/tbdrsim, else the checkout), in this order:\n"
      << "  1. the path as given, from the working folder    configs/series6xt_gx6450.ini, ./mine.ini\n"
-     << "  2. the same relative path inside the checkout     configs/series6xt_gx6450.ini\n"
-     << "  3. a bare name in the checkout's configs/ (configs/sweeps/ for sweep files), .ini optional:\n"
+     << "  2. the same relative path inside the data folder  configs/series6xt_gx6450.ini\n"
+     << "  3. a bare name in the data folder's configs/ (configs/sweeps/ for sweep files), .ini optional:\n"
      << "                                                    series6xt_gx6450, tile_size\n"
      << "Traces, scenes, databases and output folders are not looked up: they are relative to the working folder.\n";
 }
@@ -75,7 +91,7 @@ void add_config_options(po::options_description& desc) {
       ("config,c", po::value<std::vector<std::string>>()->composing(),
        "hardware config: a file (INI) or a preset name (series6xt_gx6450, mobile_16x16_lpddr4x, ...); "
        "repeatable, later files win. Found as given (from the working folder), else in the tbdrsim "
-       "checkout (configs/NAME or configs/NAME.ini; see `tbdrsim --help`)")
+       "data folder, installed or the checkout (configs/NAME or configs/NAME.ini; see `tbdrsim --help`)")
       ("set,s", po::value<std::vector<std::string>>()->composing(),
        "override one parameter, section.key=value; repeatable, wins over files");
 }
@@ -115,7 +131,7 @@ namespace fs = std::filesystem;
 
 /// Where a data folder lives in the checkout the tool was built from.
 fs::path data_folder_path(DataFolder folder) {
-  const fs::path root(TBDRSIM_SOURCE_DIR);
+  const fs::path root(data_root());
   return folder == DataFolder::Configs ? root / "configs" : root / "configs" / "sweeps";
 }
 
@@ -159,7 +175,7 @@ std::string find_data_file(const std::string& arg, DataFolder folder) {
   const fs::path given(arg);
   std::vector<fs::path> tried = {given};
   if (given.is_relative()) {
-    tried.push_back(fs::path(TBDRSIM_SOURCE_DIR) / given);
+    tried.push_back(fs::path(data_root()) / given);
     if (!given.has_parent_path()) {
       const fs::path dir = data_folder_path(folder);
       tried.push_back(dir / given);
@@ -259,7 +275,7 @@ int cli_main(const std::vector<std::string>& args, std::ostream& out, std::ostre
       return 0;
     }
     if (name == "--checkout") {  // where the configs, sweeps and analysis scripts are
-      out << TBDRSIM_SOURCE_DIR << "\n";
+      out << data_root() << "\n";
       return 0;
     }
     if (name == "--version") {

@@ -25,4 +25,10 @@ const std::vector<CliCommand>& cli_commands();
 /// The command line that started this process, for the runs table.
 std::string& invocation_command_line();
 
+/// The folder that config and sweep names, `tbdrsim --checkout` and the scripts resolve against:
+/// the installed data folder `<prefix>/share/tbdrsim` when this executable is `<prefix>/bin/tbdrsim`
+/// of an installed tree (`cmake --install`; the folder holds configs/), else the checkout it was
+/// built from (TBDRSIM_SOURCE_DIR). docs/install.md.
+std::string data_root();
+
 }  // namespace tbdr

@@ -470,7 +470,7 @@ int write_plots(const std::string& db_path, const fs::path& plots) {
   fs::create_directories(plots, ec);
   int plotted = 0;
   for (const char* script : {"plot_techniques.py", "plot_scaling.py"}) {
-    const fs::path s = fs::path(TBDRSIM_SOURCE_DIR) / "analysis" / script;
+    const fs::path s = fs::path(data_root()) / "analysis" / script;  // installed, else the checkout
     if (!fs::exists(s) || !fs::exists("/usr/bin/python3")) continue;
     const std::string png = (plots / (std::string(script).substr(0, std::string(script).size() - 3) + ".png")).string();
     const std::string cmd = "/usr/bin/python3 " + s.string() + " --db " + db_path + " --out " + png + " > /dev/null 2>&1";
