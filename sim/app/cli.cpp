@@ -69,17 +69,17 @@ void print_usage(std::ostream& os) {
      << ": cycle-approximate simulator of a tile-based deferred rendering GPU\n\n"
      << "usage: tbdrsim <command> [options]\n"
      << "       tbdrsim <command> --help\n"
-     << "       tbdrsim --checkout   (prints the data folder: its configs/, configs/sweeps/ and analysis/ scripts)\n\ncommands:\n";
+     << "       tbdrsim --checkout   (prints the checkout, or the installed data folder: its configs/, configs/sweeps/ and analysis/ scripts)\n\ncommands:\n";
   for (const auto& c : cli_commands()) {
     os << "  " << c.name << std::string(c.name && std::string(c.name).size() < 10 ? 10 - std::string(c.name).size() : 1, ' ')
        << c.summary << "\n";
   }
   os << "\npaths: file arguments are taken from the working folder. A config (--config) or sweep file that is\n"
-     << "not there is looked up in the tbdrsim data folder " << data_root() << "\n"
-     << "(the installed <prefix>/share/tbdrsim beside <prefix>/bin/tbdrsim, else the checkout), in this order:\n"
+     << "not there is looked up in the tbdrsim checkout " << data_root() << "\n"
+     << "(an installed tbdrsim's is <prefix>/share/tbdrsim beside <prefix>/bin/tbdrsim), in this order:\n"
      << "  1. the path as given, from the working folder    configs/series6xt_gx6450.ini, ./mine.ini\n"
-     << "  2. the same relative path inside the data folder  configs/series6xt_gx6450.ini\n"
-     << "  3. a bare name in the data folder's configs/ (configs/sweeps/ for sweep files), .ini optional:\n"
+     << "  2. the same relative path inside the checkout     configs/series6xt_gx6450.ini\n"
+     << "  3. a bare name in the checkout's configs/ (configs/sweeps/ for sweep files), .ini optional:\n"
      << "                                                    series6xt_gx6450, tile_size\n"
      << "Traces, scenes, databases and output folders are not looked up: they are relative to the working folder.\n";
 }
