@@ -16,8 +16,19 @@ struct BusyInterval {
   double busy_cycles = 0;
 };
 
-/// A unit's busy intervals in the order they start, at most `cap` of them. Reservations that
-/// follow each other within kAdjacentCycles are one interval. When the list passes its cap, it is
+/// The most busy intervals one unit keeps over the frame: in the timing model each command's unit
+/// gets a share, kFrameBusyIntervals / commands, clamped to [kMinCommandBusyIntervals,
+/// kMaxCommandBusyIntervals]; a DRAM channel's data bus keeps kFrameBusyIntervals. A timeline
+/// file of a few megabytes even for forward_multipass's hundreds of passes.
+inline constexpr std::size_t kFrameBusyIntervals = 1024;
+/// At least the first and the last stretch of a unit's work in a command.
+inline constexpr std::size_t kMinCommandBusyIntervals = 2;
+/// At most this many per command and unit: finer than a timeline viewer shows a pass.
+inline constexpr std::size_t kMaxCommandBusyIntervals = 64;
+
+/// A unit's busy intervals in the order they start, at most `cap` of them, in the time unit of
+/// its caller (core cycles in the timing model, picoseconds in the DRAM). Reservations that follow
+/// each other within `adjacent` are one interval. When the list passes its cap, it is
 /// merged down to half the cap by closing its smallest gaps (ties: every other one, so evenly
 /// spaced work coarsens evenly); each interval's busy_cycles stays the exact sum of what it covers.
 class BusyIntervals {
@@ -26,12 +37,13 @@ class BusyIntervals {
   /// 3), so back-to-back reservations leave less than a cycle between one's work and the next's.
   static constexpr double kAdjacentCycles = 1.0;
 
-  explicit BusyIntervals(std::size_t cap = 64) : cap_(cap < 2 ? 2 : cap) {}
+  explicit BusyIntervals(std::size_t cap = kMaxCommandBusyIntervals, double adjacent = kAdjacentCycles)
+      : cap_(cap < 2 ? 2 : cap), adjacent_(adjacent) {}
 
   /// Books `busy` cycles of work from `start` to `end` (start no earlier than the previous start).
   void add(double start, double end, double busy) {
     if (!(end > start) && !(busy > 0)) return;
-    if (!list_.empty() && start - list_.back().end_cycle <= kAdjacentCycles) {
+    if (!list_.empty() && start - list_.back().end_cycle <= adjacent_) {
       BusyInterval& b = list_.back();
       if (end > b.end_cycle) b.end_cycle = end;
       b.busy_cycles += busy;
@@ -68,6 +80,7 @@ class BusyIntervals {
   }
 
   std::size_t cap_;
+  double adjacent_;
   std::vector<BusyInterval> list_;
 };
 

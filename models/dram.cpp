@@ -416,6 +416,7 @@ void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::in
     ch.idle_from = end;
   }
   ch.stats.busy_ps += static_cast<std::uint64_t>(busy.ps());
+  ch.bus_busy.add(static_cast<double>(start.ps()), static_cast<double>(end.ps()), static_cast<double>(busy.ps()));
   timed_bytes_ += e.bytes;
   const Tick done = end + timing_.controller;
   if (!e.is_write) {

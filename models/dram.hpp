@@ -23,6 +23,7 @@
 #include <string_view>
 #include <vector>
 
+#include "models/busy_intervals.hpp"
 #include "models/hw_config.hpp"
 #include "trace/traffic.hpp"
 #include "kernel/event_queue.hpp"
@@ -237,6 +238,8 @@ class Dram final : public Unit {
 
   const DramStats& stats() const { return stats_; }
   const DramChannelStats& channel_stats(std::uint32_t c) const { return channels_[c].stats; }
+  /// When channel `c`'s data bus transferred, in ps (at most kFrameBusyIntervals intervals).
+  const BusyIntervals& bus_busy(std::uint32_t c) const { return channels_[c].bus_busy; }
   const DramClassStats& class_stats(DramClass c) const { return class_stats_[static_cast<std::size_t>(c)]; }
   /// Bytes per class so far, in the shape the rest of the simulator uses.
   DramTraffic traffic() const;
@@ -314,6 +317,8 @@ class Dram final : public Unit {
     std::uint64_t pd_active_ps = 0;    // power-down time with a row open (ended periods)
     std::uint64_t pd_precharged_ps = 0;  // power-down time with every bank precharged (ended periods)
     DramChannelStats stats;
+    /// When the data bus transferred (ps; bursts that touch are one interval), for the timeline.
+    BusyIntervals bus_busy{kFrameBusyIntervals, 0.0};
   };
 
   RowOutcome outcome(const Bank& b, std::uint64_t row) const {

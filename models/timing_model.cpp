@@ -121,6 +121,13 @@ class TimingSim final : public Unit {
         if (!busy_[c][u].intervals().empty()) result_.commands[c].unit_busy.push_back({result_.units[u].name, busy_[c][u].intervals()});
       }
     }
+    for (std::uint32_t ch = 0; ch < mem_.dram().channels(); ++ch) {
+      UnitBusy bus{"dram.ch" + std::to_string(ch), {}};
+      for (const BusyInterval& i : mem_.dram().bus_busy(ch).intervals()) {
+        bus.intervals.push_back({i.start_cycle / core_.period_ps(), i.end_cycle / core_.period_ps(), i.busy_cycles / core_.period_ps()});
+      }
+      result_.dram_bus.push_back(std::move(bus));
+    }
     result_.dram = mem_.traffic();
     result_.requested = mem_.requested();
     mem_.collect(result_.memory_stats);

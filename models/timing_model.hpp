@@ -51,15 +51,6 @@ struct UnitBusy {
   std::vector<BusyInterval> intervals;
 };
 
-/// The most busy intervals one unit keeps over the frame: each command's unit gets a share,
-/// kFrameBusyIntervals / commands, clamped to [kMinCommandBusyIntervals, kMaxCommandBusyIntervals]
-/// (a timeline file of a few megabytes even for forward_multipass's hundreds of passes).
-inline constexpr std::size_t kFrameBusyIntervals = 1024;
-/// At least the first and the last stretch of a unit's work in a command.
-inline constexpr std::size_t kMinCommandBusyIntervals = 2;
-/// At most this many per command and unit: finer than a timeline viewer shows a pass.
-inline constexpr std::size_t kMaxCommandBusyIntervals = 64;
-
 /// Start and end of a command (pass or dispatch), and when each unit worked for it.
 struct CommandTime {
   std::string name;
@@ -75,6 +66,8 @@ struct TimingResult {
   double frame_time_ps = 0;
   std::vector<CommandTime> commands;
   std::vector<UnitTime> units;
+  /// Per DRAM channel ("dram.ch0", ...): when its data bus transferred, over the frame.
+  std::vector<UnitBusy> dram_bus;
   DramTraffic requested;              ///< bytes the units requested, per class (before the caches)
   DramTraffic dram;                   ///< bytes DRAM transferred, per class (after the caches)
   MemorySystemStats memory;           ///< the memory system's own totals (energies of caches and DRAM)

@@ -226,6 +226,39 @@ TEST_F(StatsExport, TimelineHasEveryUnitsBusyIntervalsInsideTheirPass) {
     EXPECT_NEAR(unit_busy[unit], db_number("SELECT busy_cycles FROM v_unit WHERE run_id = 1 AND unit = '" + unit + "'"), 1e-3)
         << unit;
   }
+  // The DRAM: a track per channel over the frame, its slices' busy cycles adding up to the
+  // channel's busy_ps in the database (ps -> cycles: x cycles / (ms x 1e9)).
+  int dram_pid = -1;
+  for (const auto& e : j.at("traceEvents")) {
+    if (e.at("ph") == "M" && e.at("name") == "process_name" &&
+        e.at("args").at("name").get<std::string>().rfind("dram:", 0) == 0) {
+      dram_pid = e.at("pid").get<int>();
+    }
+  }
+  ASSERT_GE(dram_pid, 0) << "no dram process";
+  // The memory system's run ends after the frame's last tile when writes it does not wait for
+  // (dirty lines evicted from the caches) are still draining: the DRAM's elapsed time, busy_ps /
+  // utilization, bounds its intervals.
+  const double dram_elapsed_ps = db_number(
+      "SELECT max(b.value / u.value) FROM stats b JOIN stats u ON u.run_id = b.run_id AND u.scope = b.scope "
+      "AND u.name = 'utilization' WHERE b.run_id = 1 AND b.scope GLOB 'mem/dram.ch*' AND b.name = 'busy_ps'");
+  const double dram_elapsed_cycles = dram_elapsed_ps * cycles / (ms * 1e9);
+  EXPECT_GE(dram_elapsed_cycles, cycles * 0.99);
+  std::map<std::string, double> channel_busy;
+  for (const auto& e : j.at("traceEvents")) {
+    if (e.at("ph") != "X" || e.at("pid") != dram_pid) continue;
+    const double from = e.at("args").at("start_cycle").get<double>(), to = e.at("args").at("end_cycle").get<double>();
+    EXPECT_GE(from, -1e-6);
+    EXPECT_LE(to, dram_elapsed_cycles + 1e-3);
+    EXPECT_LE(e.at("args").at("busy_cycles").get<double>(), to - from + 1e-6);
+    channel_busy[e.at("args").at("unit").get<std::string>()] += e.at("args").at("busy_cycles").get<double>();
+  }
+  const double channels = db_number("SELECT count(*) FROM stats WHERE run_id = 1 AND scope GLOB 'mem/dram.ch*' AND name = 'busy_ps'");
+  EXPECT_EQ(static_cast<double>(channel_busy.size()), channels);
+  for (const auto& [channel, busy] : channel_busy) {
+    const double busy_ps = db_number("SELECT value FROM stats WHERE run_id = 1 AND scope = 'mem/" + channel + "' AND name = 'busy_ps'");
+    EXPECT_NEAR(busy, busy_ps * cycles / (ms * 1e9), 1e-3) << channel;
+  }
   // By hand: the lighting pass stores only the 96x54 RGBA8 colour target (the G-buffer was stored
   // by pass 0), 96 x 54 x 4 B = 20736 B, at writeback.bytes_per_clock = 32: 20736 / 32 = 648 cycles
   // of pixel back end. The G-buffer pass stores albedo rgba8 + normal rgb10a2 + 4 B depth = 12 B/px:

@@ -371,6 +371,25 @@ void write_timeline_file(const ResultsDb& db, std::int64_t run_id, const TimingR
       }
     }
   }
+  // The DRAM: one process, a track per channel, a slice per stretch of data-bus transfers over the
+  // frame (the DRAM serves every unit and command at once, so it is not split by pass).
+  if (!timing.dram_bus.empty()) {
+    const int pid = static_cast<int>(timing.units.size()) + 3;
+    meta("process_name", pid, 0, "dram: data bus busy per channel (frame)");
+    events.push_back("{\"ph\": \"M\", \"name\": \"process_sort_index\", \"pid\": " + std::to_string(pid) +
+                     ", \"tid\": 0, \"args\": {\"sort_index\": " + std::to_string(pid) + "}}");
+    for (std::size_t ch = 0; ch < timing.dram_bus.size(); ++ch) {
+      const UnitBusy& bus = timing.dram_bus[ch];
+      const int tid = static_cast<int>(ch) + 1;
+      meta("thread_name", pid, tid, bus.unit);
+      sort_index(pid, tid, tid);
+      for (const BusyInterval& i : bus.intervals) {
+        slice(pid, tid, bus.unit, i.start_cycle, i.end_cycle,
+              cycles_args(i.start_cycle, i.end_cycle) + ", \"busy_cycles\": " + json_number(i.busy_cycles) +
+                  ", \"unit\": " + json_string(bus.unit));
+      }
+    }
+  }
   o << "{\n  \"displayTimeUnit\": \"ns\",\n  \"otherData\": {";
   for (std::size_t i = 0; i < id.fields.size(); ++i) {
     o << (i ? ", " : "") << json_string(id.fields[i].first) << ": " << json_string(id.fields[i].second);
