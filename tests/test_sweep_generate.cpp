@@ -51,7 +51,7 @@ TEST(SweepGenerate, ParsesListsAndPassesOptionsOnlyToTechniquesThatReadThem) {
              "resolution = 64x32\n"
              "lights = 16..32 step 16\n"
              "option.pls_bytes = 16, 32\n");
-  const SweepSpec spec = parse_sweep_file((dir / "g.ini").string(), {}, (dir / "out" / "r.db").string());
+  const SweepSpec spec = parse_sweep_file((dir / "g.ini").string(), {}, (dir / "out" / "r.db").string(), trace_generators());
   // plain_forward does not read pls_bytes: 2 light counts; forward_light_stack: 2 x 2. 2 + 4 = 6.
   ASSERT_EQ(spec.generate.size(), 6u);
   EXPECT_EQ(spec.generate[0].label, "plain_forward lights=16");
@@ -66,7 +66,7 @@ TEST(SweepGenerate, ParsesListsAndPassesOptionsOnlyToTechniquesThatReadThem) {
   EXPECT_EQ(generated_trace_path(spec, spec.generate[0]),
             (dir / "out" / "r.traces" / ("plain_forward-" + spec.generate[0].id + ".trace")).string());
   // The hash names what generates the trace, not where the database is: another database, same ids.
-  const SweepSpec again = parse_sweep_file((dir / "g.ini").string(), {}, (dir / "other.db").string());
+  const SweepSpec again = parse_sweep_file((dir / "g.ini").string(), {}, (dir / "other.db").string(), trace_generators());
   for (std::size_t i = 0; i < spec.generate.size(); ++i) EXPECT_EQ(again.generate[i].id, spec.generate[i].id);
   // Points: 2 configurations x 6 traces, labelled by the request.
   const auto points = expand_sweep(spec);
@@ -96,7 +96,7 @@ TEST(SweepGenerate, ErrorsNameFileAndLine) {
     const fs::path p = dir / "s.ini";
     write_file(p, c.body);
     try {
-      parse_sweep_file(p.string());
+      parse_sweep_file(p.string(), {}, {}, trace_generators());
       ADD_FAILURE() << "no error for:\n" << c.body;
     } catch (const InputError& e) {
       EXPECT_EQ(e.where(), p.string() + ":" + std::to_string(c.line)) << c.body << "\n" << e.what();
@@ -105,7 +105,16 @@ TEST(SweepGenerate, ErrorsNameFileAndLine) {
   }
   // No trace line and no [generate]: nothing to replay.
   write_file(dir / "none.ini", "[sweep]\nname = n\n");
-  EXPECT_THROW(parse_sweep_file((dir / "none.ini").string()), InputError);
+  EXPECT_THROW(parse_sweep_file((dir / "none.ini").string(), {}, {}, trace_generators()), InputError);
+  // The reader alone (no generators given, as tests/fuzz builds it) knows no technique.
+  write_file(dir / "alone.ini", head + "technique = plain_forward\n");
+  EXPECT_THROW(parse_sweep_file((dir / "alone.ini").string()), InputError);
+  // The tool version is part of each trace's hash: another version generates anew.
+  write_file(dir / "v.ini", head + "technique = plain_forward\n");
+  TraceGenerators other = trace_generators();
+  other.version += "+1";
+  EXPECT_NE(parse_sweep_file((dir / "v.ini").string(), {}, {}, trace_generators()).generate.at(0).id,
+            parse_sweep_file((dir / "v.ini").string(), {}, {}, other).generate.at(0).id);
 }
 
 TEST(SweepGenerate, DryRunListsThePointsAndGeneratesNothing) {

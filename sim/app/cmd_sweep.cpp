@@ -76,7 +76,7 @@ int cmd_sweep(const std::vector<std::string>& args, std::ostream& out, std::ostr
   const std::vector<std::string> traces =
       vm.count("trace") ? vm["trace"].as<std::vector<std::string>>() : std::vector<std::string>{};
   const SweepSpec spec = parse_sweep_file(find_data_file(vm["file"].as<std::string>(), DataFolder::Sweeps), traces,
-                                          vm.count("db") ? vm["db"].as<std::string>() : std::string());
+                                          vm.count("db") ? vm["db"].as<std::string>() : std::string(), trace_generators());
   const std::string binary = vm.count("tbdrsim") ? vm["tbdrsim"].as<std::string>() : self_executable();
   const int jobs = vm["jobs"].as<int>();
   const bool slurm = vm.count("emit-slurm") > 0;

@@ -22,6 +22,7 @@
 #include "kernel/errors.hpp"
 #include "models/hw_config.hpp"
 #include "tbdrsim_version.hpp"
+#include "techniques/technique.hpp"
 #include "trace/trace.hpp"
 
 namespace tbdr {
@@ -468,6 +469,17 @@ void print_summary(const SweepSpec& spec, const SweepSummary& summary, std::ostr
 }
 
 }  // namespace
+
+TraceGenerators trace_generators() {
+  TraceGenerators g;
+  for (const auto& t : techniques()) {
+    std::vector<std::string> options;
+    for (const auto& o : t.options) options.push_back(o.key);
+    g.techniques.emplace_back(t.name, std::move(options));
+  }
+  g.version = kToolVersion;
+  return g;
+}
 
 void print_slow_points(const SweepSpec& spec, std::ostream& out) {
   std::map<std::string, TraceInfo> traces;

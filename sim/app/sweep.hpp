@@ -37,6 +37,10 @@ struct SweepSummary {
   double seconds = 0;
 };
 
+/// The registered techniques with their options and this tool's version: what a sweep file's
+/// [generate] section is parsed against (parse_sweep_file).
+TraceGenerators trace_generators();
+
 /// Prints a "slow:" line for each trace of the sweep that draws the scene many times (such as
 /// forward_multipass, one pass per light batch), with its points and its cost relative to the
 /// sweep's lightest trace. run_sweep prints it too, before anything runs.

@@ -15,8 +15,6 @@
 #include "kernel/errors.hpp"
 #include "kernel/hash.hpp"
 #include "models/hw_config.hpp"
-#include "tbdrsim_version.hpp"
-#include "techniques/technique.hpp"
 
 namespace tbdr {
 
@@ -291,8 +289,8 @@ struct GenerateKey {
 /// sweep file, which must exist.
 bool is_atrium_scene(const std::string& v) { return v == "atrium" || v.rfind("atrium:", 0) == 0; }
 
-/// The values of one [generate] line, checked as far as they can be without generating: technique
-/// names, option keys (by parse_sweep_file), files that exist; the rest (light counts,
+/// The values of one [generate] line, checked as far as they can be without generating: files
+/// that exist (technique names and option keys: expand_generate); the rest (light counts,
 /// resolutions, option values) `tbdrsim trace` checks when the sweep generates the trace.
 GenerateKey generate_key(const IniLine& l, const std::string& value, const std::string& where, const fs::path& base_dir) {
   const bool option = l.name.rfind("option.", 0) == 0 && l.name.size() > 7;
@@ -321,39 +319,43 @@ GenerateKey generate_key(const IniLine& l, const std::string& value, const std::
   } else {
     key.values = expand_value_list(value, where);
   }
-  if (l.name == "technique") {
-    for (const auto& t : key.values) {
-      try {
-        find_technique(t);
-      } catch (const InputError& e) {
-        throw InputError(where, bare_message(e));
-      }
-    }
-  }
   return key;
 }
 
-/// Whether technique `t` reads option `key` (without the "option." prefix).
-bool technique_has_option(const std::string& t, const std::string& key) {
-  for (const auto& o : find_technique(t).options) {
-    if (o.key == key) return true;
+/// The option keys technique `t` reads; InputError naming `where` and the known techniques when
+/// `t` is not one of `generators`.
+const std::vector<std::string>& technique_options(const TraceGenerators& generators, const std::string& t,
+                                                  const std::string& where) {
+  for (const auto& [name, options] : generators.techniques) {
+    if (name == t) return options;
   }
-  return false;
+  std::string known;
+  for (const auto& [name, options] : generators.techniques) known += (known.empty() ? "" : ", ") + name;
+  throw InputError(where, "unknown technique '" + t + "' (known: " + known + ")");
+}
+
+/// Whether technique `t` reads option `key` (without the "option." prefix).
+bool technique_has_option(const TraceGenerators& generators, const std::string& t, const std::string& key) {
+  const auto& options = technique_options(generators, t, "");
+  return std::find(options.begin(), options.end(), key) != options.end();
 }
 
 /// The requests of a [generate] section: per technique (in order), the cartesian product of the
 /// keys that apply to it (every key but the options it does not read), the last key fastest.
-std::vector<TraceRequest> expand_generate(const std::vector<GenerateKey>& keys, const std::string& path, long line) {
+std::vector<TraceRequest> expand_generate(const std::vector<GenerateKey>& keys, const TraceGenerators& generators,
+                                         const std::string& path, long line) {
   const std::string where = path + ":" + std::to_string(line);
   const auto tech = std::find_if(keys.begin(), keys.end(), [](const GenerateKey& k) { return k.name == "technique"; });
   if (tech == keys.end()) throw InputError(where, "[generate] names no technique (technique = NAME, or a list)");
+  for (const auto& t : tech->values) technique_options(generators, t, tech->where);
+  auto has_option = [&](const std::string& t, const std::string& key) { return technique_has_option(generators, t, key); };
   for (const auto& k : keys) {
     if (k.name.rfind("option.", 0) != 0) continue;
     const std::string opt = k.name.substr(7);
-    if (std::none_of(tech->values.begin(), tech->values.end(), [&](const std::string& t) { return technique_has_option(t, opt); })) {
+    if (std::none_of(tech->values.begin(), tech->values.end(), [&](const std::string& t) { return has_option(t, opt); })) {
       std::string known;
       for (const auto& t : tech->values) {
-        for (const auto& o : find_technique(t).options) known += (known.empty() ? "" : ", ") + o.key;
+        for (const auto& o : technique_options(generators, t, tech->where)) known += (known.empty() ? "" : ", ") + o;
       }
       throw InputError(k.where, "no technique of this [generate] has the option '" + opt + "'" +
                                     (known.empty() ? " (they take none)" : " (theirs: " + known + ")"));
@@ -364,7 +366,7 @@ std::vector<TraceRequest> expand_generate(const std::vector<GenerateKey>& keys, 
   for (const auto& t : tech->values) {
     std::uint64_t n = 1;
     for (const auto& k : keys) {
-      if (&k == &*tech || (k.name.rfind("option.", 0) == 0 && !technique_has_option(t, k.name.substr(7)))) continue;
+      if (&k == &*tech || (k.name.rfind("option.", 0) == 0 && !has_option(t, k.name.substr(7)))) continue;
       n = n > kMaxSweepPoints / k.values.size() ? kMaxSweepPoints + 1 : n * k.values.size();
     }
     total = std::min<std::uint64_t>(total + n, kMaxSweepPoints + 1);
@@ -377,7 +379,7 @@ std::vector<TraceRequest> expand_generate(const std::vector<GenerateKey>& keys, 
   for (const auto& t : tech->values) {
     std::vector<const GenerateKey*> used;
     for (const auto& k : keys) {
-      if (&k == &*tech || (k.name.rfind("option.", 0) == 0 && !technique_has_option(t, k.name.substr(7)))) continue;
+      if (&k == &*tech || (k.name.rfind("option.", 0) == 0 && !has_option(t, k.name.substr(7)))) continue;
       used.push_back(&k);
     }
     std::vector<std::size_t> digit(used.size(), 0);
@@ -389,7 +391,7 @@ std::vector<TraceRequest> expand_generate(const std::vector<GenerateKey>& keys, 
       r.arg_where = {tech->where};
       r.label = t;
       Fnv1a64 id;
-      id.update(std::string("tbdrsim ") + kToolVersion + "\ntechnique=" + t + "\n");
+      id.update("tbdrsim " + generators.version + "\ntechnique=" + t + "\n");
       for (std::size_t u = 0; u < used.size(); ++u) {
         const GenerateKey& k = *used[u];
         const std::string& v = k.values[digit[u]];
@@ -427,7 +429,8 @@ std::string generated_trace_path(const SweepSpec& spec, const TraceRequest& requ
   return (fs::path(spec.generated_dir) / (request.technique + "-" + request.id + ".trace")).string();
 }
 
-SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::string>& traces, const std::string& db_path) {
+SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::string>& traces, const std::string& db_path,
+                           const TraceGenerators& generators) {
   IniRules rules;
   rules.what = "sweep file";
   rules.known_section = [](const std::string& section) {
@@ -485,7 +488,7 @@ SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::strin
     const auto found = expand_traces(t, fs::path(), "--trace " + t);
     spec.traces.insert(spec.traces.end(), found.begin(), found.end());
   }
-  if (section_lines.count("generate")) spec.generate = expand_generate(generate_keys, path, section_lines["generate"]);
+  if (section_lines.count("generate")) spec.generate = expand_generate(generate_keys, generators, path, section_lines["generate"]);
   if (!section_lines.count("sweep")) throw InputError(path, "no [sweep] section (it names the traces)");
   if (spec.traces.empty() && spec.generate.empty()) {
     throw InputError(path, section_lines["sweep"],

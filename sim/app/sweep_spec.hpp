@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace tbdr {
@@ -26,6 +27,16 @@ struct TraceRequest {
   std::string label;               ///< the technique and the settings that vary: "forward_light_stack pls_bytes=16"
   std::string id;                  ///< 16 hex digits: hash of args, the tool version and the files they name
   std::string where;               ///< "file:line" of the [generate] header
+};
+
+/// What a [generate] section is checked and expanded against, given by the caller (app/sweep.hpp's
+/// trace_generators(): the registered techniques) so that the sweep file reader does not depend on
+/// the trace generators (tests/fuzz builds it alone).
+struct TraceGenerators {
+  /// Each technique, in registry order, with the option keys it reads.
+  std::vector<std::pair<std::string, std::vector<std::string>>> techniques;
+  /// Folded into every generated trace's hash (the tool version: a new tbdrsim generates anew).
+  std::string version;
 };
 
 /// A parsed sweep file; every path is already relative to the working directory.
@@ -76,12 +87,13 @@ inline constexpr std::uint64_t kMaxSweepPoints = 1'000'000;
 void check_sweep_size(const SweepSpec& spec);
 
 /// Parses a sweep file (generated traces go into generated_trace_dir(db_path); empty: a
-/// placeholder folder, for sweeps that only list or count points). InputError naming file:line for anything malformed or unknown (sections,
+/// placeholder folder, for sweeps that only list or count points; a [generate] section is checked
+/// against `generators`, and names no known technique without them). InputError naming file:line for anything malformed or unknown (sections,
 /// keys, values out of range, bad ranges, zip lists of unequal length, globs matching nothing).
 /// Non-empty `traces` (files or globs from the working folder, `sweep --trace`) replace the file's
 /// [sweep] trace lines, which are then not read.
 SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::string>& traces = {},
-                           const std::string& db_path = {});
+                           const std::string& db_path = {}, const TraceGenerators& generators = {});
 
 /// Expands one value list: "1, 2, 4", "16..64 step 16", "1..8 x 2" (also "*2"), "0.5..1 step 0.25".
 /// InputError naming `where` when malformed.
