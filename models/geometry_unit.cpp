@@ -104,6 +104,7 @@ struct GeometryUnit::Emit {
   HsrClass hsr = HsrClass::Opaque;
   std::uint32_t varyings = 0;
   ClipConfig clip;
+  PixelRect scissor;  ///< the draw's scissor rectangle (the viewport when it has none)
 };
 
 GeometryUnit::GeometryUnit(const HwConfig& hw, const Scene* scene, const std::vector<Light>& lights,
@@ -220,8 +221,8 @@ void GeometryUnit::emit_triangle(const Emit& e, const glm::vec4 clip[3], const g
   stats.primitives_clipped += cs.clipped;
   for (const ScreenTriangle& st : screen) {
     Primitive p;
-    p.setup = setup_triangle(st, viewport_);
-    if (p.setup.empty) continue;  // covers no pixel of the viewport
+    p.setup = setup_triangle(st, viewport_, e.scissor);
+    if (p.setup.empty) continue;  // covers no pixel of the viewport inside the scissor
     p.draw = e.draw;
     p.object = e.object;
     p.material = e.material;
@@ -243,6 +244,43 @@ void GeometryUnit::emit_triangle(const Emit& e, const glm::vec4 clip[3], const g
     out.push_back(p);
     ++stats.primitives_out;
   }
+}
+
+namespace {
+
+/// The draw's scissor rectangle in pixels, or the whole viewport (setup clamps it to the viewport).
+PixelRect scissor_of(const DrawCmd& cmd, const Viewport& viewport) {
+  if (!cmd.scissor) return {0, 0, viewport.width_px, viewport.height_px};
+  const ScissorRect& s = *cmd.scissor;  // the reader bounds each coordinate by kMaxFrameSide
+  return {static_cast<int>(s.x0), static_cast<int>(s.y0), static_cast<int>(s.x1), static_cast<int>(s.y1)};
+}
+
+/// Whether two closed world-space boxes share a point.
+bool boxes_intersect(const Bounds& a, const CullBox& b) {
+  return a.min.x <= b.max.x && a.max.x >= b.min.x && a.min.y <= b.max.y && a.max.y >= b.min.y &&
+         a.min.z <= b.max.z && a.max.z >= b.min.z;
+}
+
+}  // namespace
+
+const Bounds& GeometryUnit::instance_bounds(std::size_t i) const {
+  if (instance_bounds_.size() != scene_->instances.size()) {
+    instance_bounds_.assign(scene_->instances.size(), Bounds{});
+    for (std::size_t ii = 0; ii < scene_->instances.size(); ++ii) {
+      const Instance& inst = scene_->instances[ii];
+      const SubMesh& sm = scene_->submeshes[inst.submesh];
+      // The same float expression as draw_scene's world positions, so a vertex it computes lies
+      // inside these bounds exactly.
+      glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+      for (const glm::vec3& p : sm.positions) {
+        const glm::vec3 w = glm::vec3(inst.world * glm::vec4(p, 1.0f));
+        lo = glm::min(lo, w);
+        hi = glm::max(hi, w);
+      }
+      instance_bounds_[ii] = Bounds{lo, hi};  // an instance without vertices keeps lo > hi: never drawn
+    }
+  }
+  return instance_bounds_[i];
 }
 
 void GeometryUnit::run_draw(const DrawContext& draw, std::uint32_t draw_index, std::vector<Primitive>& out,
@@ -278,6 +316,8 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
                         (cmd.subset == SceneSubset::Blended && mat.alpha_mode == AlphaMode::Translucent);
       if (!keep) continue;
     }
+    // The application's object culling: an instance whose bounds miss the box is not submitted.
+    if (cmd.cull && !boxes_intersect(instance_bounds(ii), *cmd.cull)) continue;
     float key = -std::numeric_limits<float>::max();  // opaque and punch-through first, in scene order
     if (hsr_class_of(*draw.pipeline, *draw.shader, *draw.cmd, scene_, sm.material) == HsrClass::Translucent && !sm.positions.empty()) {
       glm::vec3 lo(sm.positions[0]), hi(sm.positions[0]);
@@ -303,6 +343,7 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
     e.varyings = draw.shader->varyings;
     e.clip.viewport = viewport_;
     e.clip.cull = mat.double_sided ? FaceCull::None : face_cull_of(draw.pipeline->cull);
+    e.scissor = scissor_of(cmd, viewport_);
 
     // Transform every vertex of the instance once (what the vertex shader computes).
     const glm::mat4 mvp = camera_.view_proj * inst.world;
@@ -369,6 +410,7 @@ void GeometryUnit::draw_generated(const DrawContext& draw, std::uint32_t draw_in
   e.varyings = draw.shader->varyings;
   e.clip.viewport = viewport_;
   e.clip.cull = face_cull_of(draw.pipeline->cull);
+  e.scissor = scissor_of(cmd, viewport_);
   constexpr std::uint64_t kPositionBytes = 16;  // generated vertices: one vec4 position each
   const glm::vec3 zero3[3] = {};
   const glm::vec2 zero2[3] = {};

@@ -37,7 +37,11 @@ struct GeometryStats {
   TBDR_STATS(TBDR_GEOMETRY_STATS)
 };
 
-/// The geometry unit of one GPU; stateless between draws but for its configuration.
+/// The geometry unit of one GPU; stateless between draws but for its configuration (and the
+/// instances' world bounds it keeps once a draw culls against them). A draw's cull box
+/// (DrawCmd::cull) leaves out the instances whose bounds miss it, as the application never
+/// submitted them: no fetch, no vertex shading, no primitives. Its scissor rectangle
+/// (DrawCmd::scissor) cuts every primitive's pixel bounding box at setup.
 class GeometryUnit {
  public:
   GeometryUnit(const HwConfig& hw, const Scene* scene, const std::vector<Light>& lights, const CameraXform& camera,
@@ -63,8 +67,15 @@ class GeometryUnit {
   void draw_generated(const DrawContext& draw, std::uint32_t draw_index, std::vector<Primitive>& out,
                       std::vector<std::vector<std::uint32_t>>& object_lights, GeometryStats& stats, DramTraffic& dram) const;
 
+  /// The world-space bounds of scene instance `i` (what a draw's cull box is tested against).
+  const Bounds& instance_bounds(std::size_t i) const;
+
   const HwConfig& hw_;
   const Scene* scene_;
+  /// World-space bounds of every scene instance (its transformed vertices, as draw_scene
+  /// transforms them), computed at the first draw with a cull box: the scene has one box in all.
+  /// Draws run one after another (binning is serial), so filling it lazily needs no lock.
+  mutable std::vector<Bounds> instance_bounds_;
   const std::vector<Light>& lights_;
   CameraXform camera_;
   Viewport viewport_;

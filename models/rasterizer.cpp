@@ -61,6 +61,10 @@ SamplePattern standard_sample_pattern(int samples, int subpixel_bits) {
 }
 
 TriangleSetup setup_triangle(const ScreenTriangle& tri, const Viewport& viewport) {
+  return setup_triangle(tri, viewport, PixelRect{0, 0, viewport.width_px, viewport.height_px});
+}
+
+TriangleSetup setup_triangle(const ScreenTriangle& tri, const Viewport& viewport, const PixelRect& scissor) {
   TriangleSetup t;
   t.subpixel_bits = viewport.subpixel_bits;
   t.viewport = {0, 0, viewport.width_px, viewport.height_px};
@@ -103,11 +107,12 @@ TriangleSetup setup_triangle(const ScreenTriangle& tri, const Viewport& viewport
   const std::int64_t xmax = std::max({t.x_fixed[0], t.x_fixed[1], t.x_fixed[2]});
   const std::int64_t ymin = std::min({t.y_fixed[0], t.y_fixed[1], t.y_fixed[2]});
   const std::int64_t ymax = std::max({t.y_fixed[0], t.y_fixed[1], t.y_fixed[2]});
-  const std::int64_t bx0 = std::max<std::int64_t>(xmin >> bits, 0);
-  const std::int64_t by0 = std::max<std::int64_t>(ymin >> bits, 0);
-  const std::int64_t bx1 = std::min<std::int64_t>((xmax >> bits) + 1, viewport.width_px);
-  const std::int64_t by1 = std::min<std::int64_t>((ymax >> bits) + 1, viewport.height_px);
-  if (bx0 >= bx1 || by0 >= by1) return t;  // outside the viewport: empty
+  // Inside the viewport and the scissor rectangle (itself clamped to the viewport by the max/min).
+  const std::int64_t bx0 = std::max<std::int64_t>({xmin >> bits, 0, scissor.x0});
+  const std::int64_t by0 = std::max<std::int64_t>({ymin >> bits, 0, scissor.y0});
+  const std::int64_t bx1 = std::min<std::int64_t>({(xmax >> bits) + 1, viewport.width_px, scissor.x1});
+  const std::int64_t by1 = std::min<std::int64_t>({(ymax >> bits) + 1, viewport.height_px, scissor.y1});
+  if (bx0 >= bx1 || by0 >= by1) return t;  // outside the viewport or the scissor: empty
   t.bbox = {static_cast<int>(bx0), static_cast<int>(by0), static_cast<int>(bx1), static_cast<int>(by1)};
   t.empty = false;
   return t;

@@ -103,11 +103,15 @@ struct SamplePattern {
 SamplePattern standard_sample_pattern(int samples, int subpixel_bits = 8);
 
 /// Per-triangle state of the rasteriser: edge equations with the fill-rule bias, depth plane,
-/// pixel bounding box clipped to the viewport. Vertices are reordered to positive area.
+/// pixel bounding box clipped to the viewport and the draw's scissor rectangle. Vertices are
+/// reordered to positive area.
 struct TriangleSetup {
-  bool empty = true;            ///< zero area, or no pixel of the viewport can be covered
+  bool empty = true;            ///< zero area, or no pixel of the viewport (and scissor) can be covered
   int subpixel_bits = 8;
-  PixelRect bbox;               ///< pixels that may hold a covered sample, inside the viewport
+  /// Pixels that may hold a covered sample, inside the viewport and the scissor rectangle: every
+  /// coverage test (rasterize_in_rect, covers_any_sample, the tiler's binning) stays inside it,
+  /// so the scissor test (Vulkan: samples outside the rectangle are discarded) happens here once.
+  PixelRect bbox;
   PixelRect viewport;           ///< [0,width) x [0,height)
   std::int64_t area_x2 = 0;     ///< twice the area, > 0 after reordering
   /// Edge k is opposite vertex k: E_k(X,Y) = a[k]*X + b[k]*Y + c[k], = area_x2 at vertex k,
@@ -126,6 +130,9 @@ struct TriangleSetup {
 
 /// Setup of one screen triangle for the given viewport (degenerate triangles come out empty).
 TriangleSetup setup_triangle(const ScreenTriangle& tri, const Viewport& viewport);
+/// The same with a scissor rectangle (pixels, half-open; clamped to the viewport): the bounding
+/// box is cut to it, and a triangle with no pixel inside it comes out empty.
+TriangleSetup setup_triangle(const ScreenTriangle& tri, const Viewport& viewport, const PixelRect& scissor);
 
 /// The fixed-point position of sample `s` of pixel (px, py).
 inline glm::i64vec2 sample_position_fixed(const SamplePattern& pattern, int px, int py, int s) {

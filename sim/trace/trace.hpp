@@ -25,10 +25,13 @@
 namespace tbdr {
 
 /// The trace format version this build reads and writes. See docs/trace-format.md for what bumps it.
-inline constexpr int kTraceVersion = 2;
+inline constexpr int kTraceVersion = 3;
 /// The version that lets an attachment name a `content=image` buffer (a pass loading the frame a
 /// dispatch wrote); version 1 readers refuse the name as a duplicate.
 inline constexpr int kImageAttachmentVersion = 2;
+/// The version that gives a draw a scissor rectangle (`scissor=`) and an object-culling box
+/// (`cull_min=`, `cull_max=`); version 2 readers refuse the keys as unknown.
+inline constexpr int kDrawBoundsVersion = 3;
 
 /// Bytes one light occupies in a GPU light buffer: 3 x vec4 (position+radius, color+intensity,
 /// direction+cos_inner+cos_outer packed with std140 padding). A `content=lights` buffer holds at
@@ -311,6 +314,25 @@ struct PlsVariable {
   int line = 0;
 };
 
+/// A draw's scissor rectangle (Vulkan vkCmdSetScissor): pixels [x0, x1) x [y0, y1), y down from the
+/// top-left pixel. The simulator clamps it to the frame; samples outside it are discarded.
+struct ScissorRect {
+  std::uint32_t x0 = 0;
+  std::uint32_t y0 = 0;
+  std::uint32_t x1 = 0;
+  std::uint32_t y1 = 0;
+  friend bool operator==(const ScissorRect&, const ScissorRect&) = default;
+};
+
+/// The world-space box of an application's object culling (closed): a scene draw submits only the
+/// instances whose world-space bounding box intersects it, as a renderer that culls its objects
+/// against a light's volume before drawing them.
+struct CullBox {
+  glm::vec3 min{0.0f};  ///< world units, each component <= max's
+  glm::vec3 max{0.0f};
+  friend bool operator==(const CullBox&, const CullBox&) = default;
+};
+
 /// A draw inside a render pass.
 struct DrawCmd {
   std::string pipeline;                    ///< a PipelineState name
@@ -322,6 +344,8 @@ struct DrawCmd {
   std::uint32_t subdivisions = 1;          ///< light_spheres: icosphere level (20 * 4^n triangles)
   std::vector<std::string> reads;          ///< buffers and stored images read as textures/buffers (DRAM)
   std::vector<std::string> fetch;          ///< attachments of this pass read at the same pixel, on chip
+  std::optional<ScissorRect> scissor;      ///< the scissor rectangle (version 3); none: the whole frame
+  std::optional<CullBox> cull;             ///< scene draws: the object-culling box (version 3); none: every instance
   int line = 0;
 };
 

@@ -96,6 +96,13 @@ class Reader {
   std::string get_ident(const Line& l, std::string_view key) const;
   std::vector<std::string> get_ident_list(const Line& l, std::string_view key) const;
   LightSelection get_lights(const Line& l, std::string_view key) const;
+  /// A draw's `scissor=x0,y0,x1,y1` (version 3): integers up to kMaxFrameSide, x0 < x1, y0 < y1.
+  std::optional<ScissorRect> get_scissor(const Line& l) const;
+  /// A scene draw's `cull_min=` and `cull_max=` (version 3, both or neither): min <= max per
+  /// component, each within kMaxWorldCoordinate.
+  std::optional<CullBox> get_cull_box(const Line& l) const;
+  /// Refuses `key` in a trace older than kDrawBoundsVersion.
+  void need_draw_bounds_version(const Line& l, std::string_view key) const;
   template <typename E>
   E get_enum(const Line& l, std::string_view key, std::optional<E> (*parse)(std::string_view),
              std::optional<E> def = std::nullopt) const;
@@ -383,6 +390,51 @@ LightSelection Reader::get_lights(const Line& l, std::string_view key) const {
   }
   sel.ranges = std::move(merged);
   return sel;
+}
+
+void Reader::need_draw_bounds_version(const Line& l, std::string_view key) const {
+  if (trace_.version < kDrawBoundsVersion)
+    fail(l.number, "key " + q(key) + " needs trace version " + std::to_string(kDrawBoundsVersion) +
+                       " (this trace is version " + std::to_string(trace_.version) + ")");
+}
+
+std::optional<ScissorRect> Reader::get_scissor(const Line& l) const {
+  const auto* v = find(l, "scissor");
+  if (!v) return std::nullopt;
+  need_draw_bounds_version(l, "scissor");
+  std::uint32_t c[4] = {};
+  std::size_t start = 0;
+  for (int i = 0; i < 4; ++i) {
+    const auto comma = v->find(',', start);
+    const bool last = i == 3;
+    if (last != (comma == std::string::npos))
+      fail(l.number, "malformed scissor " + q(*v) + " (expected x0,y0,x1,y1 in pixels)");
+    c[i] = static_cast<std::uint32_t>(
+        to_u64(l, "scissor", v->substr(start, last ? std::string::npos : comma - start), kMaxFrameSide));
+    start = comma + 1;
+  }
+  const ScissorRect r{c[0], c[1], c[2], c[3]};
+  if (r.x0 >= r.x1 || r.y0 >= r.y1)
+    fail(l.number, "scissor " + q(*v) + " is empty (it needs x0 < x1 and y0 < y1: pixels [x0,x1) x [y0,y1))");
+  return r;
+}
+
+std::optional<CullBox> Reader::get_cull_box(const Line& l) const {
+  const bool has_min = find(l, "cull_min") != nullptr, has_max = find(l, "cull_max") != nullptr;
+  if (!has_min && !has_max) return std::nullopt;
+  need_draw_bounds_version(l, has_min ? "cull_min" : "cull_max");
+  if (!has_min) fail(l.number, "cull_max without cull_min (the culling box needs both corners)");
+  if (!has_max) fail(l.number, "cull_min without cull_max (the culling box needs both corners)");
+  CullBox b;
+  b.min = get_vec3(l, "cull_min");
+  b.max = get_vec3(l, "cull_max");
+  check_world(l, "cull_min", b.min);
+  check_world(l, "cull_max", b.max);
+  for (int c = 0; c < 3; ++c)
+    if (b.min[c] > b.max[c])
+      fail(l.number, "cull_min=" + require(l, "cull_min") + " is above cull_max=" + require(l, "cull_max") + " in " +
+                         "xyz"[c] + " (the box needs min <= max in every component)");
+  return b;
 }
 
 template <typename E>
@@ -852,9 +904,12 @@ void Reader::on_draw(const Line& l) {
   if (!kind) fail(l.number, "unknown geometry kind " + q(l.positional) + " (expected scene, fullscreen, light_spheres or light_quads)");
   d.geometry = *kind;
   switch (d.geometry) {
-    case GeometryKind::Scene: check_keys(l, {"pipeline", "subset", "submesh", "material", "lights", "reads", "fetch"}); break;
-    case GeometryKind::LightSpheres: check_keys(l, {"pipeline", "subdivisions", "lights", "reads", "fetch"}); break;
-    default: check_keys(l, {"pipeline", "lights", "reads", "fetch"}); break;
+    case GeometryKind::Scene:
+      check_keys(l, {"pipeline", "subset", "submesh", "material", "lights", "reads", "fetch", "scissor", "cull_min",
+                     "cull_max"});
+      break;
+    case GeometryKind::LightSpheres: check_keys(l, {"pipeline", "subdivisions", "lights", "reads", "fetch", "scissor"}); break;
+    default: check_keys(l, {"pipeline", "lights", "reads", "fetch", "scissor"}); break;
   }
   if (++draws_ > kMaxTraceDraws)
     fail(l.number, "more than " + std::to_string(kMaxTraceDraws) + " draws, the most accepted (docs/limits.md)");
@@ -872,6 +927,8 @@ void Reader::on_draw(const Line& l) {
   }
   if (d.geometry == GeometryKind::LightSpheres) d.subdivisions = get_u32_or(l, "subdivisions", 1, 6);
   d.lights = get_lights(l, "lights");
+  d.scissor = get_scissor(l);
+  d.cull = get_cull_box(l);
   d.reads = get_ident_list(l, "reads");
   d.fetch = get_ident_list(l, "fetch");
 

@@ -89,6 +89,9 @@ void write_pass(const PassDesc& p, std::ostream& out) {
     }
     if (d.geometry == GeometryKind::LightSpheres) out << " subdivisions=" << d.subdivisions;
     if (!d.lights.all) out << " lights=" << fmt_lights(d.lights);
+    if (d.scissor)
+      out << " scissor=" << d.scissor->x0 << "," << d.scissor->y0 << "," << d.scissor->x1 << "," << d.scissor->y1;
+    if (d.cull) out << " cull_min=" << fmt_vec3(d.cull->min) << " cull_max=" << fmt_vec3(d.cull->max);
     if (!d.reads.empty()) out << " reads=" << fmt_list(d.reads);
     if (!d.fetch.empty()) out << " fetch=" << fmt_list(d.fetch);
     out << "\n";

@@ -30,11 +30,41 @@ namespace tbdr {
 
 namespace {
 
+/// What the lights of one batch reach together: the union of their screen rectangles and of their
+/// culling boxes (light_reach), over the lights that reach a visible pixel.
+struct BatchReach {
+  bool visible = false;     ///< some light of the batch reaches a visible pixel
+  bool full_frame = false;  ///< one of them reaches every pixel (it crosses the near plane)
+  ScissorRect rect;
+  CullBox box;
+};
+
+/// The reach of lights [first, end) of the trace, seen by its camera in its frame.
+BatchReach batch_reach(const Trace& t, std::uint32_t first, std::uint32_t end) {
+  BatchReach out;
+  for (std::uint32_t l = first; l < end; ++l) {
+    const LightReach r = light_reach(t.lights[l], t.camera, t.frame.width, t.frame.height);
+    if (!r.visible) continue;
+    if (!out.visible) {
+      out.visible = true;
+      out.rect = r.rect;
+      out.box = r.box;
+    } else {
+      out.rect = {std::min(out.rect.x0, r.rect.x0), std::min(out.rect.y0, r.rect.y0), std::max(out.rect.x1, r.rect.x1),
+                  std::max(out.rect.y1, r.rect.y1)};
+      out.box = {glm::min(out.box.min, r.box.min), glm::max(out.box.max, r.box.max)};
+    }
+    out.full_frame = out.full_frame || r.full_frame;
+  }
+  return out;
+}
+
 Trace generate_forward_multipass(const TraceSetup& setup, const TechniqueOptions& options) {
   Trace t = begin_trace(setup, "forward_multipass", options);
   const std::string lights = add_light_buffer(t);
   const auto per_pass = static_cast<std::uint32_t>(options.get_int("lights_per_pass", 1, 1 << 20));
   const bool prez = options.get_bool("prez");
+  const bool light_bounds = options.get_bool("light_bounds");
   const auto samples = static_cast<std::uint32_t>(setup.samples);
   const auto light_count = static_cast<std::uint32_t>(t.lights.size());
   const LightSource source = light_count > 0 ? LightSource::All : LightSource::None;
@@ -59,9 +89,10 @@ Trace generate_forward_multipass(const TraceSetup& setup, const TechniqueOptions
   const std::uint32_t batches = light_count == 0 ? 1 : (light_count + per_pass - 1) / per_pass;
   for (std::uint32_t b = 0; b < batches; ++b) {
     LightSelection sel;
+    const std::uint32_t first_light = b * per_pass, end_light = std::min(light_count, (b + 1) * per_pass);
     if (light_count > 0) {
       sel.all = false;
-      sel.ranges.push_back({b * per_pass, std::min(light_count, (b + 1) * per_pass) - 1});
+      sel.ranges.push_back({first_light, end_light - 1});
     }
     const bool first = b == 0;
     const std::string opaque = first ? (prez ? "first_equal" : "first") : "additive";
@@ -69,6 +100,16 @@ Trace generate_forward_multipass(const TraceSetup& setup, const TechniqueOptions
     DrawCmd o = scene_draw(SceneSubset::Opaque, opaque, {lights});
     DrawCmd m = scene_draw(SceneSubset::Masked, masked, {lights});
     if (light_count > 0) o.lights = m.lights = sel;
+    // An additive pass adds only its lights' contributions, which are exactly 0 beyond their
+    // radii: it draws the objects their spheres touch inside their screen rectangle, or nothing
+    // when no light of the batch reaches a visible pixel. Pass 0 writes the ambient term of every
+    // pixel (and the depth without PreZ): the whole frame, every object.
+    if (!first && light_bounds) {
+      const BatchReach reach = batch_reach(t, first_light, end_light);
+      if (!reach.visible) continue;
+      o.cull = m.cull = reach.box;
+      if (!reach.full_frame) o.scissor = m.scissor = reach.rect;
+    }
     pass.draws.push_back(o);
     pass.draws.push_back(m);
   }
@@ -86,6 +127,11 @@ TechniqueInfo technique_forward_multipass() {
           {{"lights_per_pass", "1",
             "lights evaluated per additive geometry pass; 1 is the lecture's 'for each light: render scene with "
             "additive blending', larger batches model shaders specialised for N lights"},
+           {"light_bounds", "yes",
+            "yes: each additive pass (after the first) draws with a scissor rectangle around its lights' screen "
+            "bounds and culls the objects whose bounds miss their spheres, as multi-pass renderers do; no: every "
+            "pass draws the whole scene over the whole frame. The image is the same (lights add exactly 0 beyond "
+            "their radius)"},
            {"prez", "yes",
             "depth-only pre-pass first so every lighting pass tests depth equal (the lecture: 'assume z buffer is "
             "initialized using a z prepass'); no: the first lighting pass writes depth"}},

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -303,6 +304,44 @@ std::vector<std::string> non_empty(const std::vector<std::string>& names) {
 }
 
 }  // namespace
+
+LightReach light_reach(const Light& light, const Camera& camera, int width, int height) {
+  LightReach out;
+  const float r = light.radius;
+  const glm::vec3 c = light.position;
+  const float pad = r * kLightBoxMarginRadius +
+                    (std::max({std::fabs(c.x), std::fabs(c.y), std::fabs(c.z)}) + r) * kLightBoxMarginCoordinate;
+  out.box = CullBox{c - glm::vec3(r + pad), c + glm::vec3(r + pad)};
+  const ScissorRect frame{0, 0, static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height)};
+  // View space looks down -z; visible points have z < -near (as the simulator's camera transform).
+  const glm::vec3 v = glm::vec3(camera.view() * glm::vec4(c, 1.0f));
+  if (v.z - r >= -camera.near_plane) return out;  // wholly behind the near plane: reaches no visible point
+  out.visible = true;
+  if (v.z + r > -camera.near_plane) {  // crosses the near plane or holds the eye: every pixel
+    out.full_frame = true;
+    out.rect = frame;
+    return out;
+  }
+  const glm::mat4 proj = camera.projection(static_cast<float>(width) / static_cast<float>(height));
+  float x0 = std::numeric_limits<float>::max(), y0 = x0, x1 = -x0, y1 = -x0;
+  for (int i = 0; i < 8; ++i) {
+    const glm::vec4 clip = proj * glm::vec4(v.x + ((i & 1) ? r : -r), v.y + ((i & 2) ? r : -r), v.z + ((i & 4) ? r : -r), 1.0f);
+    // Pixel coordinates, y down from the top-left pixel (the rasteriser's viewport transform).
+    const float px = (clip.x / clip.w * 0.5f + 0.5f) * static_cast<float>(width);
+    const float py = (0.5f - clip.y / clip.w * 0.5f) * static_cast<float>(height);
+    x0 = std::min(x0, px);
+    x1 = std::max(x1, px);
+    y0 = std::min(y0, py);
+    y1 = std::max(y1, py);
+  }
+  const auto clamp_px = [](float p, int size) {
+    return static_cast<std::uint32_t>(std::clamp(p, 0.0f, static_cast<float>(size)));
+  };
+  out.rect = ScissorRect{clamp_px(std::floor(x0) - kLightRectMarginPx, width), clamp_px(std::floor(y0) - kLightRectMarginPx, height),
+                         clamp_px(std::ceil(x1) + kLightRectMarginPx, width), clamp_px(std::ceil(y1) + kLightRectMarginPx, height)};
+  out.visible = out.rect.x0 < out.rect.x1 && out.rect.y0 < out.rect.y1;  // off the frame: no pixel
+  return out;
+}
 
 DrawCmd make_draw(GeometryKind geometry, const std::string& pipeline, const std::vector<std::string>& reads,
                   const std::vector<std::string>& fetch) {

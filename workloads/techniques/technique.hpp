@@ -257,6 +257,33 @@ DispatchCmd make_dispatch(ComputeKernel kernel, std::uint32_t groups_x, std::uin
 /// A barrier on the named resources.
 BarrierCmd make_barrier(const std::vector<std::string>& resources);
 
+// ---- what one light reaches ---------------------------------------------------------------------------
+
+/// What one light can reach, as a renderer that draws per light sets up the light's draws: the
+/// screen rectangle of its sphere (the scissor, Vulkan vkCmdSetScissor) and the sphere's world box
+/// (the object culling). Lights contribute exactly 0 at and beyond their radius
+/// (scene/lights.hpp), so a draw limited to both shades every non-zero contribution.
+struct LightReach {
+  bool visible = false;  ///< some pixel of the frame may see a point inside the sphere
+  bool full_frame = false;  ///< the sphere reaches the near plane (or holds the eye): every pixel
+  ScissorRect rect;      ///< the pixels the sphere can cover (the frame when full_frame), if visible
+  CullBox box;           ///< the sphere's world-space bounding box, padded by kLightBoxMargin*
+};
+/// The padding of a light's culling box: kLightBoxMarginRadius of its radius plus
+/// kLightBoxMarginCoordinate of its largest coordinate. Float rounding of centre +- radius and of
+/// interpolated surface positions is a few ulps (2^-23 relative) of the coordinates: 2^-20 of them
+/// (8 ulps) and 2^-10 of the radius keep every point the shading's radius test accepts inside.
+inline constexpr float kLightBoxMarginRadius = 1.0f / 1024.0f;
+inline constexpr float kLightBoxMarginCoordinate = 1.0f / 1048576.0f;
+/// Pixels of margin around a sphere's projected rectangle: float rounding of the projection stays
+/// far below a pixel (the same margin as the simulator's light_screen_rect).
+inline constexpr int kLightRectMarginPx = 1;
+/// What `light` reaches seen by `camera` in a `width` x `height` frame: the view-space box of the
+/// sphere projected (its 8 corners; the projection of a convex box in front of the camera is the
+/// hull of its corners' projections) and widened by kLightRectMarginPx. A sphere wholly behind the
+/// near plane or off the frame is not visible.
+LightReach light_reach(const Light& light, const Camera& camera, int width, int height);
+
 // ---- sizes and options ---------------------------------------------------------------------------------
 
 /// Number of `tile_px` tiles covering `pixels` (rounded up).
