@@ -3,7 +3,8 @@
 // light: render scene with additive blending", z buffer initialised by a z pre-pass).
 // Billeter's table (not listed there; by the same criteria): off-chip buffers = color only (every
 // pass is a draw of one render pass, so depth and color stay on chip); geometry passes =
-// ceil(lights / lights_per_pass) (+1 with PreZ); overshading no with PreZ (equal test); MSAA yes;
+// ceil(lights / lights_per_pass) (+1 with PreZ; bounded to what each batch's lights reach);
+// overshading no with PreZ (equal test); MSAA yes;
 // blending yes (translucent geometry is drawn once, after the additive passes).
 //
 // Render pass `main`: color rgba8 (clear, store; MSAA resolves on chip) and depth d24s8 (transient).
@@ -14,6 +15,14 @@
 //   lighting pass b > 0: opaque + masked, depth equal, no write, blend add: the batch's light
 //     contributions only (docs/kernels.md: blend=add leaves the ambient term out). Punch-through
 //     geometry is forced opaque there: its discarded samples fail the equal test.
+//     With light_bounds=yes (the default) each such pass is drawn as a multi-pass renderer draws
+//     a light: a scissor rectangle around the screen rectangle of the batch's light spheres (the
+//     whole frame when one reaches the near plane) and only the objects whose bounds touch the
+//     union of the spheres' boxes (the application's object culling: trace keys scissor=,
+//     cull_min=, cull_max=, version 3); a batch that reaches no visible pixel is not drawn.
+//     Lights add exactly 0 beyond their radius, so the image is the same as light_bounds=no,
+//     which draws the whole scene over the whole frame in every pass. Pass 0 writes the ambient
+//     term of every pixel, so it stays whole.
 //   translucent (BLEND) geometry: once, lights from the per-object lists, alpha blending (additive
 //     multi-pass cannot alpha-blend a surface lit in several passes).
 //
