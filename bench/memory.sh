@@ -11,7 +11,7 @@
 # Usage: bash bench/memory.sh [--cases L] [--techniques L] [--threads N] [build-dir]
 #   --cases L       comma-separated subset of atrium5,uhd,multipass (default: all three)
 #   --techniques L  techniques of the atrium5 and uhd cases (default: all 13; forward_multipass at
-#                   64 lights per pass there, the study's batch)
+#                   64 lights per pass there: the multipass case runs its one-light-per-pass form)
 #   --threads N     threads inside each run (default 1: memory grows with per-thread scratch)
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -18,8 +18,8 @@
 #   --against DIR    a second build measured side by side (interleaved run by run, same load):
 #                    prints both and the ratio of this build's CPU seconds to DIR's
 #   --techniques L   comma-separated subset (default: all 13)
-#   --multipass-lpp K  forward_multipass lights per pass (default 64, the study's batch: the
-#                    technique's own default of 1 light per pass is 1024 passes, tens of minutes)
+#   --multipass-lpp K  forward_multipass lights per pass (default 1, the technique's own default and
+#                    the study's: 1024 light-bounded passes, about 30 CPU s at 1080p; issue 15 bounds it at 60 s)
 #   --threads T      threads of the second run of each repetition (default: nproc; 1: one run, as before)
 #   --record         rewrite this mode's rows of bench/speed_baseline.txt with the figures measured
 #                    (with --against: DIR's figures, i.e. DIR is the baseline)
@@ -34,7 +34,7 @@ RES=1920x1080
 IMAGES=no
 AGAINST=
 RECORD=no
-LPP=64
+LPP=1
 TECHS=
 THREADS=$(nproc)
 BUILD=build

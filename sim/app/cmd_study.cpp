@@ -38,9 +38,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// Lights per additive pass of forward_multipass in the study.
-constexpr int kMultipassBatch = 64;
-
 /// What the study runs, from its command line.
 struct StudyPlan {
   std::string dir;
@@ -198,9 +195,8 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
       }
       std::vector<std::string> a = {"trace", "--technique", t, "--lights", std::to_string(n), "--out", p.trace_path};
       a.insert(a.end(), trace_args.begin(), trace_args.end());
-      // One additive pass per light would replay the scene 1024 times: the study batches lights
-      // (the issue allows "one additive pass per light or per light batch").
-      if (t == "forward_multipass") a.insert(a.end(), {"--option", "lights_per_pass=" + std::to_string(kMultipassBatch)});
+      // forward_multipass runs in its textbook form, one additive pass per light, each bounded by
+      // its light's scissor and cull box (its light_bounds option; docs/techniques.md).
       if (given != plan.options.end()) {
         for (const auto& kv : given->second) a.insert(a.end(), {"--option", kv});  // the last one given wins
       }
@@ -320,18 +316,17 @@ std::string fig(const std::optional<double>& v, int decimals) { return v ? fmt(*
 void print_comparison(const StudyPlan& plan, const std::vector<StudyPoint>& points, StudyResults& results,
                       std::ostream& out) {
   const bool modes = plan.configs.size() > 1;
-  // The technique options the study set (the study's batch of forward_multipass, then --option).
+  // The technique options the study set (--option; the techniques' defaults otherwise).
   std::string options;
   for (const auto& t : plan.techniques) {
     std::vector<std::string> kv;
-    if (t == "forward_multipass") kv.push_back("lights_per_pass=" + std::to_string(kMultipassBatch));
     if (const auto it = plan.options.find(t); it != plan.options.end()) kv.insert(kv.end(), it->second.begin(), it->second.end());
     if (kv.empty()) continue;
     options += (options.empty() ? "" : "; ") + t;
     for (const auto& o : kv) options += " " + o;
   }
   out << "\nComparison (" << plan.config_label << "): frame time, DRAM traffic requested by the units, energy"
-      << " (technique options: " << options << ")\n";
+      << " (technique options: " << (options.empty() ? "the techniques' defaults" : options) << ")\n";
   out << std::left << std::setw(30) << "technique" << std::right << std::setw(7) << "lights";
   if (modes) out << std::setw(6) << "mode";
   out << std::setw(11) << "frame ms" << std::setw(11) << "DRAM MB" << std::setw(11) << "energy mJ" << std::setw(10)
