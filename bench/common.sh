@@ -16,3 +16,9 @@ bench_reference_frame() {
   "$BUILD/tbdrsim" trace --technique plain_forward --scene atrium:3 --lights 256 --camera entrance \
     --resolution 1920x1080 --out "$TMP/pf.trace" > /dev/null
 }
+
+# bench_positive_int SCRIPT OPTION VALUE: exits 2 with a message naming the option unless VALUE is
+# a positive integer.
+bench_positive_int() {
+  case "$3" in ''|*[!0-9]*|0) echo "$1: $2 expects a positive integer, got '$3'" >&2; exit 2 ;; esac
+}

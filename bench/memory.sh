@@ -31,7 +31,7 @@ while [ $# -gt 0 ]; do
     *) BUILD=$1; shift ;;
   esac
 done
-case "$THREADS" in ''|*[!0-9]*|0) echo "memory.sh: --threads expects a positive integer, got '$THREADS'" >&2; exit 2 ;; esac
+bench_positive_int memory.sh --threads "$THREADS"
 [ -x "$BUILD/tbdrsim" ] || { echo "memory.sh: no tbdrsim in '$BUILD' (build it first)" >&2; exit 2; }
 IFS=, read -r -a CASE_LIST <<< "${CASES%,}"
 IFS=, read -r -a TECH_LIST <<< "${TECHS%,}"

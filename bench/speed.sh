@@ -53,8 +53,8 @@ while [ $# -gt 0 ]; do
     *) BUILD=$1; shift ;;
   esac
 done
-case "$REPS" in ''|*[!0-9]*|0) echo "speed.sh: -n expects a positive integer, got '$REPS'" >&2; exit 2 ;; esac
-case "$THREADS" in ''|*[!0-9]*|0) echo "speed.sh: --threads expects a positive integer, got '$THREADS'" >&2; exit 2 ;; esac
+bench_positive_int speed.sh -n "$REPS"
+bench_positive_int speed.sh --threads "$THREADS"
 [ -n "$AGAINST" ] && THREADS=1  # side by side: both builds on one thread
 for b in "$BUILD" $AGAINST; do
   [ -x "$b/tbdrsim" ] || { echo "speed.sh: no tbdrsim in '$b' (build it first)" >&2; exit 2; }
