@@ -258,6 +258,7 @@ class FrameSimulator {
     std::vector<std::uint64_t> texture_lines;
     cc.textures = textures_.get();
     cc.texture_lines = &texture_lines;
+    cc.pool = &pool_;
     std::string image;
     run_dispatch(cc, d, stats, dram, image);
     CommandWork cw;

@@ -28,6 +28,9 @@ constexpr std::uint64_t kDepthBoundsTileBytes = 8;  // min and max depth per til
 constexpr std::uint64_t kUsedClusterBytes = 4;      // one cluster index in the compact used list
 constexpr std::uint64_t kWorkListEntryBytes = 8;    // (tile, material) per work list entry
 constexpr Format kImageFormat = Format::Rgba8;      // an image buffer is rgba8 (what the kernels store)
+// Rows per item of a shading kernel on the thread pool: a host-side work split (no hardware
+// meaning), 1080 rows = 68 items, enough to balance two to a few dozen threads.
+constexpr int kShadeBandRows = 16;
 constexpr std::uint64_t kImageBytesPerPixel = 4;    // bytes of kImageFormat
 // Culling stays conservative against float rounding: a tile's depth range is widened by 0.1 %.
 constexpr float kBoundsFarScale = 1.001f;
@@ -272,45 +275,64 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
   const auto n_lights = static_cast<std::uint64_t>(ctx.trace->lights.size());
   const bool vbuffer = refetch_tile_px > 0;
   const int tile_px = vbuffer ? refetch_tile_px : 1;
-  std::set<std::pair<std::size_t, std::uint32_t>> refetched;  // (tile, triangle)
   const std::uint64_t shaded_before = stats.compute_shaded_pixels.value();
   ImageBuffer img;
   if (ctx.colour) img.color.assign(pixels, glm::vec4(0.0f));
-  for (int y = 0; y < H; ++y) {
-    for (int x = 0; x < W; ++x) {
-      const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
-      // Shade each distinct surface of the pixel once (with MSAA a pixel's samples may hold
-      // several triangles) and resolve: the average over the samples, uncovered ones black.
-      const std::size_t S = surfaces.samples;
-      glm::vec3 sum(0.0f);
-      std::uint32_t shaded_triangles[kMaxSamplesPerPixel];
-      glm::vec3 shaded_colors[kMaxSamplesPerPixel];
-      std::size_t n_shaded = 0;
-      for (std::size_t smp = 0; smp < S; ++smp) {
-        if (!surfaces.surface_valid[p * S + smp]) continue;
-        const SurfacePoint& s = surfaces.surface[p * S + smp];
-        std::size_t k = 0;
-        while (k < n_shaded && shaded_triangles[k] != s.triangle) ++k;
-        if (k == n_shaded) {
-          const std::vector<std::uint32_t>* list = nullptr;
-          std::uint64_t count = n_lights;
-          if (tgrid) list = &tgrid->at_pixel(x, y);
-          if (cgrid) list = &cgrid->lists[cgrid->cluster_of(x, y, ctx.frustum->distance_of(s.position))];
-          if (list) count = list->size();
-          shaded_triangles[k] = s.triangle;
-          shaded_colors[k] = ctx.colour ? shade_surface(ctx, s, x, y, list) : glm::vec3(0.0f);  // FrameInputs::colour
-          ++n_shaded;
-          ++stats.compute_shaded_pixels;
-          stats.compute_light_evaluations += count;
-          stats.compute_alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * count;
-          if (ctx.images->counters.images()) ctx.images->counters.lights_evaluated[p] += static_cast<std::uint32_t>(count);
-          ctx.images->counters.shaded[p] += 1;
-          if (vbuffer) refetched.insert({static_cast<std::size_t>((y / tile_px) * ((W + tile_px - 1) / tile_px) + x / tile_px), s.triangle});
+  // Bands of rows are independent (each pixel writes only its own image and counter entries): they
+  // run on the pool, each with its own statistics and re-fetch set, merged in band order after.
+  const int bands = (H + kShadeBandRows - 1) / kShadeBandRows;
+  std::vector<ComputeStats> band_stats(static_cast<std::size_t>(bands));
+  std::vector<std::set<std::pair<std::size_t, std::uint32_t>>> band_refetched(static_cast<std::size_t>(bands));  // (tile, triangle)
+  auto shade_band = [&](std::size_t band, unsigned /*worker*/) {
+    ComputeStats& stats = band_stats[band];
+    auto& refetched = band_refetched[band];
+    const int y_end = std::min(H, static_cast<int>(band + 1) * kShadeBandRows);
+    for (int y = static_cast<int>(band) * kShadeBandRows; y < y_end; ++y) {
+      for (int x = 0; x < W; ++x) {
+        const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
+        // Shade each distinct surface of the pixel once (with MSAA a pixel's samples may hold
+        // several triangles) and resolve: the average over the samples, uncovered ones black.
+        const std::size_t S = surfaces.samples;
+        glm::vec3 sum(0.0f);
+        std::uint32_t shaded_triangles[kMaxSamplesPerPixel];
+        glm::vec3 shaded_colors[kMaxSamplesPerPixel];
+        std::size_t n_shaded = 0;
+        for (std::size_t smp = 0; smp < S; ++smp) {
+          if (!surfaces.surface_valid[p * S + smp]) continue;
+          const SurfacePoint& s = surfaces.surface[p * S + smp];
+          std::size_t k = 0;
+          while (k < n_shaded && shaded_triangles[k] != s.triangle) ++k;
+          if (k == n_shaded) {
+            const std::vector<std::uint32_t>* list = nullptr;
+            std::uint64_t count = n_lights;
+            if (tgrid) list = &tgrid->at_pixel(x, y);
+            if (cgrid) list = &cgrid->lists[cgrid->cluster_of(x, y, ctx.frustum->distance_of(s.position))];
+            if (list) count = list->size();
+            shaded_triangles[k] = s.triangle;
+            shaded_colors[k] = ctx.colour ? shade_surface(ctx, s, x, y, list) : glm::vec3(0.0f);  // FrameInputs::colour
+            ++n_shaded;
+            ++stats.compute_shaded_pixels;
+            stats.compute_light_evaluations += count;
+            stats.compute_alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * count;
+            if (ctx.images->counters.images()) ctx.images->counters.lights_evaluated[p] += static_cast<std::uint32_t>(count);
+            ctx.images->counters.shaded[p] += 1;
+            if (vbuffer) refetched.insert({static_cast<std::size_t>((y / tile_px) * ((W + tile_px - 1) / tile_px) + x / tile_px), s.triangle});
+          }
+          sum += shaded_colors[k];
         }
-        sum += shaded_colors[k];
+        if (n_shaded > 0 && ctx.colour) img.color[p] = FormatPrecision::color(kImageFormat, glm::vec4(sum / static_cast<float>(S), 1.0f));
       }
-      if (n_shaded > 0 && ctx.colour) img.color[p] = FormatPrecision::color(kImageFormat, glm::vec4(sum / static_cast<float>(S), 1.0f));
     }
+  };
+  if (ctx.pool != nullptr) {
+    ctx.pool->for_each(static_cast<std::size_t>(bands), shade_band);
+  } else {
+    for (std::size_t b = 0; b < static_cast<std::size_t>(bands); ++b) shade_band(b, 0);
+  }
+  std::set<std::pair<std::size_t, std::uint32_t>> refetched;
+  for (std::size_t b = 0; b < static_cast<std::size_t>(bands); ++b) {
+    stats += band_stats[b];
+    refetched.insert(band_refetched[b].begin(), band_refetched[b].end());
   }
   // Threads of uncovered pixels exit after reading their G-buffer sample: no texture fetches.
   stats.compute_texture_fetches += (stats.compute_shaded_pixels.value() - shaded_before) * sh.tex_fetches;

@@ -15,6 +15,7 @@
 #include "models/texture_unit.hpp"
 #include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
+#include "kernel/thread_pool.hpp"
 #include "trace/trace.hpp"
 
 namespace tbdr {
@@ -52,6 +53,9 @@ struct ComputeContext : FrameInputs {
   /// no addresses.
   const TextureLayout* textures = nullptr;
   std::vector<std::uint64_t>* texture_lines = nullptr;
+  /// Threads the per-pixel shading kernels run their bands of rows on (null: the caller's
+  /// thread); the figures are the same at any count (bands are merged in row order).
+  ThreadPool* pool = nullptr;
 };
 
 /// Runs one dispatch; InputError (trace:line) for an unknown kernel, a bad parameter or a
