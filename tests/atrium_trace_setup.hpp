@@ -1,5 +1,6 @@
 #pragma once
 // Tests' generator setup for the atrium seen from its entrance, with seeded lights.
+#include <array>
 #include <memory>
 #include <string>
 
@@ -39,6 +40,17 @@ class AtriumTechniqueSuite : public ::testing::TestWithParam<std::string> {
   static Trace small_trace(const std::string& technique) {
     TraceSetup setup = atrium_entrance_setup(*scene_, 48, 200, 120);
     if (technique == "forward_multipass") setup.options["lights_per_pass"] = "8";
+    return generate_trace(technique, setup);
+  }
+  /// The techniques that run MSAA (G-buffer and PLS ones refuse it), one of each kind: forward,
+  /// additive multi-pass, visibility buffer (its compute kernel resolves) and clustered forward.
+  static constexpr std::array<const char*, 4> kMultisampledTechniques = {"plain_forward", "forward_multipass",
+                                                                         "visibility_buffer", "clustered_forward"};
+  /// `technique`'s trace at 160x96, 4x MSAA, 32 lights: per-sample coverage of the alpha-tested
+  /// cloth, blending and resolves.
+  static Trace msaa4_trace(const std::string& technique) {
+    TraceSetup setup = atrium_entrance_setup(*scene_, 32, 160, 96);
+    setup.samples = 4;
     return generate_trace(technique, setup);
   }
   inline static std::unique_ptr<Scene> scene_;

@@ -194,10 +194,8 @@ INSTANTIATE_TEST_SUITE_P(Techniques, ThreadEquivalence, testing_support::every_t
 // MSAA 4x (the techniques that support it): per-sample coverage of the alpha-tested cloth,
 // blending and the resolves at the end of each tile.
 TEST_F(ThreadEquivalence, MultisampledRunsAreTheSameAtEveryThreadCount) {
-  for (const char* technique : {"plain_forward", "forward_multipass", "visibility_buffer", "clustered_forward"}) {
-    TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 160, 96);
-    setup.samples = 4;
-    const Trace t = generate_trace(technique, setup);
+  for (const char* technique : kMultisampledTechniques) {
+    const Trace t = msaa4_trace(technique);
     const HwConfig hw = resolve_config({}, {}).hw;
     const ThreadedRun serial = expect_same_at_every_thread_count(t, *scene_, hw, std::string(technique) + " 4x");
     // The resolves ran (visibility_buffer resolves in its compute shading kernel instead).
