@@ -107,6 +107,13 @@ struct GeometryUnit::Emit {
   PixelRect scissor;  ///< the draw's scissor rectangle (the viewport when it has none)
 };
 
+/// One draw's delivery: the sink and how many primitives the draw has delivered (a vertex made by
+/// clipping gets an identity from it, unique within the draw, as primitive blocks never span draws).
+struct GeometryUnit::DrawOutput {
+  PrimitiveSink& sink;
+  std::uint64_t delivered = 0;
+};
+
 GeometryUnit::GeometryUnit(const HwConfig& hw, const Scene* scene, const std::vector<Light>& lights,
                            const CameraXform& camera, const Viewport& viewport)
     : hw_(hw), scene_(scene), lights_(lights), camera_(camera), viewport_(viewport) {}
@@ -208,7 +215,7 @@ const std::vector<glm::vec3>& GeometryUnit::icosphere(std::uint32_t subdivisions
 
 void GeometryUnit::emit_triangle(const Emit& e, const glm::vec4 clip[3], const glm::vec3 world[3],
                                  const glm::vec3 normal[3], const glm::vec2 uv[3], const std::uint64_t keys[3],
-                                 std::vector<Primitive>& out, GeometryStats& stats) const {
+                                 DrawOutput& out, GeometryStats& stats) const {
   ClipStats cs;
   thread_local std::vector<ScreenTriangle> screen;
   screen.clear();
@@ -229,6 +236,7 @@ void GeometryUnit::emit_triangle(const Emit& e, const glm::vec4 clip[3], const g
     p.proxy_light = e.proxy_light;
     p.hsr = e.hsr;
     p.varyings = e.varyings;
+    VertexKeys vertex_keys;
     for (int i = 0; i < 3; ++i) {
       p.world[i] = world[i];
       p.normal[i] = normal[i];
@@ -239,9 +247,10 @@ void GeometryUnit::emit_triangle(const Emit& e, const glm::vec4 clip[3], const g
       for (int k = 0; k < 3; ++k) {
         if (b[k] == 1.0f) orig = k;
       }
-      p.vertex_key[i] = orig >= 0 ? keys[orig] : (0x8000000000000000ull | (out.size() * 3 + i));
+      vertex_keys[i] = orig >= 0 ? keys[orig] : (0x8000000000000000ull | (out.delivered * 3 + i));
     }
-    out.push_back(p);
+    out.sink.accept(p, vertex_keys);
+    ++out.delivered;
     ++stats.primitives_out;
   }
 }
@@ -283,10 +292,11 @@ const Bounds& GeometryUnit::instance_bounds(std::size_t i) const {
   return instance_bounds_[i];
 }
 
-void GeometryUnit::run_draw(const DrawContext& draw, std::uint32_t draw_index, std::vector<Primitive>& out,
+void GeometryUnit::run_draw(const DrawContext& draw, std::uint32_t draw_index, PrimitiveSink& sink,
                             std::vector<std::vector<std::uint32_t>>& object_lights, GeometryStats& stats,
                             DramTraffic& dram) const {
   ++stats.draws;
+  DrawOutput out{sink};
   if (draw.cmd->geometry == GeometryKind::Scene) {
     draw_scene(draw, draw_index, out, object_lights, stats, dram);
   } else {
@@ -294,7 +304,7 @@ void GeometryUnit::run_draw(const DrawContext& draw, std::uint32_t draw_index, s
   }
 }
 
-void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index, std::vector<Primitive>& out,
+void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index, DrawOutput& out,
                               std::vector<std::vector<std::uint32_t>>& object_lights, GeometryStats& stats,
                               DramTraffic& dram) const {
   const DrawCmd& cmd = *draw.cmd;
@@ -400,7 +410,7 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
   }
 }
 
-void GeometryUnit::draw_generated(const DrawContext& draw, std::uint32_t draw_index, std::vector<Primitive>& out,
+void GeometryUnit::draw_generated(const DrawContext& draw, std::uint32_t draw_index, DrawOutput& out,
                                   std::vector<std::vector<std::uint32_t>>& object_lights, GeometryStats& stats,
                                   DramTraffic& dram) const {
   const DrawCmd& cmd = *draw.cmd;

@@ -47,10 +47,11 @@ class GeometryUnit {
   GeometryUnit(const HwConfig& hw, const Scene* scene, const std::vector<Light>& lights, const CameraXform& camera,
                const Viewport& viewport);
 
-  /// Processes one draw: appends its accepted primitives to `out` and one object per drawn
-  /// instance (or proxy) to `object_lights` (the lights touching the object's bounds, filled only
-  /// when the shader reads an object list); counts fetch traffic into `dram`.
-  void run_draw(const DrawContext& draw, std::uint32_t draw_index, std::vector<Primitive>& out,
+  /// Processes one draw: delivers its accepted primitives to `out` as they are set up, and
+  /// appends one object per drawn instance (or proxy) to `object_lights` (the lights touching the
+  /// object's bounds, filled only when the shader reads an object list); counts fetch traffic
+  /// into `dram`.
+  void run_draw(const DrawContext& draw, std::uint32_t draw_index, PrimitiveSink& out,
                 std::vector<std::vector<std::uint32_t>>& object_lights, GeometryStats& stats, DramTraffic& dram) const;
 
   /// Triangles of the icosphere used as a light proxy at this subdivision level (unit radius,
@@ -59,12 +60,12 @@ class GeometryUnit {
 
  private:
   struct Emit;
+  struct DrawOutput;
   void emit_triangle(const Emit& e, const glm::vec4 clip[3], const glm::vec3 world[3], const glm::vec3 normal[3],
-                     const glm::vec2 uv[3], const std::uint64_t keys[3], std::vector<Primitive>& out,
-                     GeometryStats& stats) const;
-  void draw_scene(const DrawContext& draw, std::uint32_t draw_index, std::vector<Primitive>& out,
+                     const glm::vec2 uv[3], const std::uint64_t keys[3], DrawOutput& out, GeometryStats& stats) const;
+  void draw_scene(const DrawContext& draw, std::uint32_t draw_index, DrawOutput& out,
                   std::vector<std::vector<std::uint32_t>>& object_lights, GeometryStats& stats, DramTraffic& dram) const;
-  void draw_generated(const DrawContext& draw, std::uint32_t draw_index, std::vector<Primitive>& out,
+  void draw_generated(const DrawContext& draw, std::uint32_t draw_index, DrawOutput& out,
                       std::vector<std::vector<std::uint32_t>>& object_lights, GeometryStats& stats, DramTraffic& dram) const;
 
   /// The world-space bounds of scene instance `i` (what a draw's cull box is tested against).

@@ -58,31 +58,40 @@ PassRenderer::PassRenderer(RenderContext& ctx, const HwConfig& frame_hw, PassSta
 PassRenderer::~PassRenderer() = default;
 
 void PassRenderer::run() {
-  if (ctx_.rop) {
-    run_immediate();
-    return;
-  }
-  std::vector<Primitive> staged;
   for (std::uint32_t i = 0; i < ctx_.draws.size(); ++i) {
-    if (static_cast<int>(i) == tile_memory_.split_draw()) {
+    if (!ctx_.rop && static_cast<int>(i) == tile_memory_.split_draw()) {
       // pls.over_budget = split_render: the driver ends the render at this subpass boundary.
       render(true);
       tile_memory_.begin_split_render(ctx_.draws);
     }
-    staged.clear();
-    geometry_.run_draw(ctx_.draws[i], i, staged, ctx_.object_lights, stats_.geometry, dram_);
-    for (const Primitive& p : staged) {
-      ctx_.prims.push_back(p);
-      if (!tiler_.bin(static_cast<std::uint32_t>(ctx_.prims.size() - 1), ctx_.prims.back(), stats_.tiler)) {
-        ctx_.prims.pop_back();
-        ++stats_.tiler.partial_renders;
-        render(true);
-        ctx_.prims.push_back(p);
-        tiler_.bin(0, ctx_.prims.back(), stats_.tiler);
-      }
-    }
+    geometry_.run_draw(ctx_.draws[i], i, *this, ctx_.object_lights, stats_.geometry, dram_);
   }
-  render(false);
+  if (ctx_.rop) {
+    render_batch(true);  // the last batch (also when empty: the pass's clears, resolves and the ROP flush)
+    cw_.renders.push_back(std::move(immediate_));
+  } else {
+    render(false);
+  }
+}
+
+void PassRenderer::accept(const Primitive& p, const VertexKeys& keys) {
+  Primitive& taken = ctx_.prims.emplace_back(p);
+  taken.id = ctx_.frame_prim_base++;
+  if (ctx_.rop) {
+    if (ctx_.prims.size() >= static_cast<std::size_t>(hw_.imr.primitives_per_batch)) render_batch(false);
+    return;
+  }
+  switch (tiler_.bin(static_cast<std::uint32_t>(ctx_.prims.size() - 1), taken, keys, stats_.tiler)) {
+    case BinResult::Binned: return;
+    case BinResult::NoSample: ctx_.prims.pop_back(); return;  // touches no tile: no tile reads it
+    case BinResult::Full: break;
+  }
+  const Primitive held = ctx_.prims.back();
+  ctx_.prims.pop_back();
+  ++stats_.tiler.partial_renders;
+  render(true);
+  ctx_.prims.push_back(held);
+  tiler_.bin(0, ctx_.prims.back(), keys, stats_.tiler);  // binned: it touched a tile, and the buffer is empty
 }
 
 /// imr: no binning. The draws' primitives go down the pipeline in submission order, in batches
@@ -90,33 +99,15 @@ void PassRenderer::run() {
 /// it arrives, its depth and colour through the ROP caches: one render whose "tiles" are the
 /// batches (FrameWork::immediate), each carrying its own geometry work. The batches share the
 /// ROP caches in order: they render one after another, on the first worker.
-void PassRenderer::run_immediate() {
+void PassRenderer::render_batch(bool last) {
   const PixelRect frame{0, 0, ctx_.viewport.width_px, ctx_.viewport.height_px};
-  const auto batch = static_cast<std::size_t>(hw_.imr.primitives_per_batch);
-  RenderWork rw;
-  std::vector<Primitive> staged;
-  std::vector<std::uint32_t> indices;
-  bool first = true;
-  auto emit = [&](bool last) {
-    indices.resize(ctx_.prims.size());
-    std::iota(indices.begin(), indices.end(), 0u);
-    TileWork tw = merge(render_tile(*workers_[0], 0, frame, indices, false, first, last));
-    tw.geometry = binning_since_last_render();
-    rw.tiles.push_back(std::move(tw));
-    first = false;
-    ctx_.frame_prim_base += static_cast<std::uint32_t>(ctx_.prims.size());
-    ctx_.prims.clear();
-  };
-  for (std::uint32_t i = 0; i < ctx_.draws.size(); ++i) {
-    staged.clear();
-    geometry_.run_draw(ctx_.draws[i], i, staged, ctx_.object_lights, stats_.geometry, dram_);
-    for (const Primitive& p : staged) {
-      ctx_.prims.push_back(p);
-      if (ctx_.prims.size() >= batch) emit(false);
-    }
-  }
-  emit(true);  // the last batch (also when empty: the pass's clears, resolves and the ROP flush)
-  cw_.renders.push_back(std::move(rw));
+  batch_indices_.resize(ctx_.prims.size());
+  std::iota(batch_indices_.begin(), batch_indices_.end(), 0u);
+  TileWork tw = merge(render_tile(*workers_[0], 0, frame, batch_indices_, false, first_batch_, last));
+  tw.geometry = binning_since_last_render();
+  immediate_.tiles.push_back(std::move(tw));
+  first_batch_ = false;
+  ctx_.prims.clear();
 }
 
 HwConfig PassRenderer::pass_hw(const HwConfig& frame_hw, const RenderContext& ctx) {
@@ -207,7 +198,6 @@ void PassRenderer::render(bool partial) {
   }
   cw_.renders.push_back(std::move(rw));
   tiler_.reset();
-  ctx_.frame_prim_base += static_cast<std::uint32_t>(ctx_.prims.size());
   ctx_.prims.clear();
 }
 

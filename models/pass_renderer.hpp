@@ -31,8 +31,9 @@ class ThreadPool;
 /// Tile indices in the configured dispatch order (tiling.tile_order).
 std::vector<int> tile_order(int tiles_x, int tiles_y, TileOrder order);
 
-/// Renders one pass through the units (see the file comment).
-class PassRenderer {
+/// Renders one pass through the units (see the file comment). The geometry unit delivers each
+/// primitive to it (PrimitiveSink): it joins the render's table and is binned at once.
+class PassRenderer final : private PrimitiveSink {
  public:
   /// `pool` runs the tiles of each render; its size() worker contexts are made here.
   PassRenderer(RenderContext& ctx, const HwConfig& frame_hw, PassStats& stats, DramTraffic& dram, CommandWork& cw,
@@ -67,8 +68,11 @@ class PassRenderer {
     DramTraffic dram;
   };
 
-  /// imr: no binning; the draws' primitives go down the pipeline in batches over the whole frame.
-  void run_immediate();
+  /// Takes a primitive from the geometry unit: tbdr bins it (dropped when it touches no tile; a
+  /// partial render first when the parameter buffer is full), imr adds it to the current batch.
+  void accept(const Primitive& p, const VertexKeys& keys) override;
+  /// imr: renders the batch of primitives taken since the last (`last`: the pass's last batch).
+  void render_batch(bool last);
   /// imr has no binning: the whole frame is one "tile" and nothing goes through a parameter buffer.
   static HwConfig pass_hw(const HwConfig& frame_hw, const RenderContext& ctx);
   /// Points the context at the pass's hardware.
@@ -106,6 +110,9 @@ class PassRenderer {
   std::vector<std::uint8_t> resumed_;    ///< per tile: rendered before by a partial render
   std::vector<TileJob> jobs_;            ///< the current render's tiles, in dispatch order
   std::vector<TileResult> results_;      ///< their results, by job
+  RenderWork immediate_;                 ///< imr: the pass's one render, a "tile" per batch
+  std::vector<std::uint32_t> batch_indices_;  ///< imr: the current batch's primitive indices
+  bool first_batch_ = true;              ///< imr: no batch rendered yet (it clears the attachments)
   GeometryStats geometry_base_;          ///< the statistics at the start of the current render
   TilerStats tiler_base_;
   double tile_seconds_ = 0;

@@ -67,20 +67,17 @@ TriangleSetup setup_triangle(const ScreenTriangle& tri, const Viewport& viewport
 TriangleSetup setup_triangle(const ScreenTriangle& tri, const Viewport& viewport, const PixelRect& scissor) {
   TriangleSetup t;
   t.subpixel_bits = viewport.subpixel_bits;
-  t.viewport = {0, 0, viewport.width_px, viewport.height_px};
   t.front_facing = tri.front_facing;
-  t.x_fixed = tri.x_fixed;
-  t.y_fixed = tri.y_fixed;
+  std::array<std::int32_t, 3> xf = tri.x_fixed, yf = tri.y_fixed;  // reordered below
   t.z = tri.z;
   t.inv_w = tri.inv_w;
   t.bary = tri.bary;
-  std::int64_t area = signed_area_x2(t.x_fixed[0], t.y_fixed[0], t.x_fixed[1], t.y_fixed[1], t.x_fixed[2],
-                                     t.y_fixed[2]);
+  std::int64_t area = signed_area_x2(xf[0], yf[0], xf[1], yf[1], xf[2], yf[2]);
   if (area == 0) return t;  // empty
   if (area < 0) {
     // Make the triangle visually clockwise on the y-down screen so every edge is positive inside.
-    std::swap(t.x_fixed[1], t.x_fixed[2]);
-    std::swap(t.y_fixed[1], t.y_fixed[2]);
+    std::swap(xf[1], xf[2]);
+    std::swap(yf[1], yf[2]);
     std::swap(t.z[1], t.z[2]);
     std::swap(t.inv_w[1], t.inv_w[2]);
     std::swap(t.bary[1], t.bary[2]);
@@ -89,24 +86,24 @@ TriangleSetup setup_triangle(const ScreenTriangle& tri, const Viewport& viewport
   t.area_x2 = area;
   for (int k = 0; k < 3; ++k) {
     // Edge k runs from vertex k+1 to vertex k+2 (opposite vertex k).
-    const std::int64_t px = t.x_fixed[(k + 1) % 3], py = t.y_fixed[(k + 1) % 3];
-    const std::int64_t qx = t.x_fixed[(k + 2) % 3], qy = t.y_fixed[(k + 2) % 3];
+    const std::int64_t px = xf[(k + 1) % 3], py = yf[(k + 1) % 3];
+    const std::int64_t qx = xf[(k + 2) % 3], qy = yf[(k + 2) % 3];
     t.a[k] = py - qy;  // = -dy
     t.b[k] = qx - px;  // = dx
     t.c[k] = -(t.a[k] * px + t.b[k] * py);
     const bool left = t.a[k] > 0;                 // dy < 0: inside to the right
     const bool top = t.a[k] == 0 && t.b[k] > 0;   // horizontal, dx > 0: inside below
-    t.bias[k] = (left || top) ? 0 : -1;
+    t.bias[k] = static_cast<std::int8_t>((left || top) ? 0 : -1);
   }
   t.dz1 = (static_cast<double>(t.z[1]) - static_cast<double>(t.z[0])) / static_cast<double>(area);
   t.dz2 = (static_cast<double>(t.z[2]) - static_cast<double>(t.z[0])) / static_cast<double>(area);
 
   // Pixels whose samples (offsets in [0, 2^bits)) can fall in the vertices' bounding box.
   const int bits = t.subpixel_bits;
-  const std::int64_t xmin = std::min({t.x_fixed[0], t.x_fixed[1], t.x_fixed[2]});
-  const std::int64_t xmax = std::max({t.x_fixed[0], t.x_fixed[1], t.x_fixed[2]});
-  const std::int64_t ymin = std::min({t.y_fixed[0], t.y_fixed[1], t.y_fixed[2]});
-  const std::int64_t ymax = std::max({t.y_fixed[0], t.y_fixed[1], t.y_fixed[2]});
+  const std::int64_t xmin = std::min({xf[0], xf[1], xf[2]});
+  const std::int64_t xmax = std::max({xf[0], xf[1], xf[2]});
+  const std::int64_t ymin = std::min({yf[0], yf[1], yf[2]});
+  const std::int64_t ymax = std::max({yf[0], yf[1], yf[2]});
   // Inside the viewport and the scissor rectangle (itself clamped to the viewport by the max/min).
   const std::int64_t bx0 = std::max<std::int64_t>({xmin >> bits, 0, scissor.x0});
   const std::int64_t by0 = std::max<std::int64_t>({ymin >> bits, 0, scissor.y0});

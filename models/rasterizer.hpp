@@ -104,27 +104,27 @@ SamplePattern standard_sample_pattern(int samples, int subpixel_bits = 8);
 
 /// Per-triangle state of the rasteriser: edge equations with the fill-rule bias, depth plane,
 /// pixel bounding box clipped to the viewport and the draw's scissor rectangle. Vertices are
-/// reordered to positive area.
+/// reordered to positive area. Every binned primitive holds one (Primitive::setup), so it keeps
+/// only what the coverage, depth and interpolation formulas read (184 bytes; the vertices' fixed
+/// point positions are folded into the edge equations, the viewport into the bounding box).
 struct TriangleSetup {
-  bool empty = true;            ///< zero area, or no pixel of the viewport (and scissor) can be covered
-  int subpixel_bits = 8;
+  /// Edge k is opposite vertex k: E_k(X,Y) = a[k]*X + b[k]*Y + c[k], = area_x2 at vertex k,
+  /// 0 on the edge; barycentric weight of vertex k is E_k / area_x2.
+  std::array<std::int64_t, 3> a{}, b{}, c{};
+  std::int64_t area_x2 = 0;     ///< twice the area, > 0 after reordering
+  double dz1 = 0.0;  ///< (z1 - z0) / area_x2
+  double dz2 = 0.0;  ///< (z2 - z0) / area_x2
   /// Pixels that may hold a covered sample, inside the viewport and the scissor rectangle: every
   /// coverage test (rasterize_in_rect, covers_any_sample, the tiler's binning) stays inside it,
   /// so the scissor test (Vulkan: samples outside the rectangle are discarded) happens here once.
   PixelRect bbox;
-  PixelRect viewport;           ///< [0,width) x [0,height)
-  std::int64_t area_x2 = 0;     ///< twice the area, > 0 after reordering
-  /// Edge k is opposite vertex k: E_k(X,Y) = a[k]*X + b[k]*Y + c[k], = area_x2 at vertex k,
-  /// 0 on the edge; barycentric weight of vertex k is E_k / area_x2.
-  std::array<std::int64_t, 3> a{}, b{}, c{};
-  /// 0 for a top/left edge, -1 otherwise: a sample is covered iff E_k + bias[k] >= 0 for all k.
-  std::array<std::int64_t, 3> bias{};
-  std::array<std::int32_t, 3> x_fixed{}, y_fixed{};  ///< reordered vertices
   std::array<float, 3> z{};
   std::array<float, 3> inv_w{};
   std::array<glm::vec3, 3> bary{};
-  double dz1 = 0.0;  ///< (z1 - z0) / area_x2
-  double dz2 = 0.0;  ///< (z2 - z0) / area_x2
+  int subpixel_bits = 8;
+  /// 0 for a top/left edge, -1 otherwise: a sample is covered iff E_k + bias[k] >= 0 for all k.
+  std::array<std::int8_t, 3> bias{};
+  bool empty = true;            ///< zero area, or no pixel of the viewport (and scissor) can be covered
   bool front_facing = true;
 };
 
@@ -299,9 +299,11 @@ struct TileCoord {
   friend bool operator==(const TileCoord&, const TileCoord&) = default;
 };
 
-/// The pixel rectangle of tile (tx,ty) for the given tile size, clipped to the viewport.
+/// The pixels of tile (tx,ty) for the given tile size that the triangle's bounding box holds
+/// (the bounding box lies in the viewport, so this is the tile clipped to the viewport as far as
+/// any coverage test can tell).
 inline PixelRect tile_rect(const TriangleSetup& tri, int tile_w_px, int tile_h_px, int tx, int ty) {
-  return intersect({tx * tile_w_px, ty * tile_h_px, (tx + 1) * tile_w_px, (ty + 1) * tile_h_px}, tri.viewport);
+  return intersect({tx * tile_w_px, ty * tile_h_px, (tx + 1) * tile_w_px, (ty + 1) * tile_h_px}, tri.bbox);
 }
 
 /// Calls fn(tx, ty) for every tile the triangle touches per `test`, row by row.

@@ -70,19 +70,45 @@ struct DrawContext {
 };
 
 /// One primitive after the geometry unit: rasteriser setup plus the original triangle's
-/// attributes for the shader (perspective-correct barycentrics weight these).
+/// attributes for the shader (perspective-correct barycentrics weight these). The render's table
+/// holds one per binned primitive (312 bytes), so it keeps only what the tile units read: the
+/// vertices' identities, which only binning reads, travel beside it (PrimitiveSink).
 struct Primitive {
   TriangleSetup setup;
   std::uint32_t draw = 0;          ///< index into the render's DrawContext table
   std::uint32_t object = 0;        ///< index into the render's object table (object light lists)
   std::uint32_t material = kNoMaterial;
   std::int32_t proxy_light = -1;   ///< the light a proxy primitive stands for
-  HsrClass hsr = HsrClass::Opaque;
   std::uint32_t varyings = 0;      ///< 32-bit varyings stored per vertex in the parameter buffer
+  /// Frame-unique id: the primitive's position among all the frame's primitives the geometry unit
+  /// delivered (SurfacePoint::triangle, the triangle-id image); set when the render takes it.
+  std::uint32_t id = 0;
+  HsrClass hsr = HsrClass::Opaque;
   std::array<glm::vec3, 3> world{};   ///< original triangle, world space
   std::array<glm::vec3, 3> normal{};  ///< original triangle, world space
   std::array<glm::vec2, 3> uv{};      ///< original triangle
-  std::array<std::uint64_t, 3> vertex_key{};  ///< identity of each vertex (re-use within a primitive block)
+};
+
+/// The identity of a primitive's three vertices (vertex re-use within a primitive block).
+using VertexKeys = std::array<std::uint64_t, 3>;
+
+/// Where the geometry unit delivers a draw's primitives, one at a time in submission order, with
+/// their vertices' identities: the pass renderer bins each as it arrives (a full parameter
+/// buffer may end the render in the middle of a draw, as the hardware's partial render does).
+class PrimitiveSink {
+ public:
+  virtual ~PrimitiveSink() = default;
+  virtual void accept(const Primitive& p, const VertexKeys& keys) = 0;
+};
+
+/// A sink that keeps what it is given (tests, and any caller that wants a draw's primitives).
+struct PrimitiveList final : PrimitiveSink {
+  std::vector<Primitive> prims;
+  std::vector<VertexKeys> keys;  ///< per primitive
+  void accept(const Primitive& p, const VertexKeys& k) override {
+    prims.push_back(p);
+    keys.push_back(k);
+  }
 };
 
 /// An attachment's contents for the whole frame (kept across passes by name).
@@ -212,7 +238,7 @@ struct RenderContext : FrameInputs {
   AttachmentImage* depth = nullptr;           ///< the pass's depth attachment image, or nullptr
   PlsState* pls = nullptr;                    ///< the pass's pixel local storage, or nullptr
   DramTraffic* dram = nullptr;                ///< the pass's DRAM traffic (shader image reads)
-  std::uint32_t frame_prim_base = 0;      ///< added to a primitive's index to make a frame-unique id
+  std::uint32_t frame_prim_base = 0;      ///< the next Primitive::id: primitives the frame's geometry delivered so far
   /// Texture addresses of scene triangles' fetches: where textures live, and the list the TSP
   /// appends the current tile's touched lines to (per quad and fetch slot, unsorted, repeats
   /// kept). Either null: no addresses are generated.

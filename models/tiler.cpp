@@ -52,17 +52,17 @@ void Tiler::close_block() {
   open_prims_ = 0;
 }
 
-bool Tiler::bin(std::uint32_t index, const Primitive& p, TilerStats& stats) {
+BinResult Tiler::bin(std::uint32_t index, const Primitive& p, const VertexKeys& vertex_keys, TilerStats& stats) {
   touched_.clear();
   for_each_overlapped_tile(p.setup, tile_w_, tile_h_, test_, pattern_,
                            [&](int tx, int ty) { touched_.push_back(ty * tiles_x_ + tx); });
-  if (touched_.empty()) return true;  // covers no sample: dropped, nothing written
+  if (touched_.empty()) return BinResult::NoSample;  // covers no sample: dropped, nothing written
 
   // Which primitive block the primitive joins.
   std::uint32_t new_keys = 0;
   std::uint64_t keys[3];
   for (int i = 0; i < 3; ++i) {
-    keys[i] = p.vertex_key[i];
+    keys[i] = vertex_keys[i];
     bool seen = std::find(open_keys_.begin(), open_keys_.end(), keys[i]) != open_keys_.end();
     for (int j = 0; j < i && !seen; ++j) seen = keys[j] == keys[i];
     if (!seen) ++new_keys;
@@ -88,7 +88,7 @@ bool Tiler::bin(std::uint32_t index, const Primitive& p, TilerStats& stats) {
                                                  fits ? open_prims_ + 1 : 1, p.varyings) -
                                      (fits ? block_bytes(static_cast<std::uint32_t>(open_keys_.size()), open_prims_, p.varyings) : 0);
   const auto capacity = static_cast<std::uint64_t>(hw_.tiling.pb_capacity_bytes);
-  if (binned_ > 0 && allocated_with(vertex_bytes, extra_ctrl) > capacity) return false;
+  if (binned_ > 0 && allocated_with(vertex_bytes, extra_ctrl) > capacity) return BinResult::Full;
 
   if (!fits) {
     close_block();
@@ -112,7 +112,7 @@ bool Tiler::bin(std::uint32_t index, const Primitive& p, TilerStats& stats) {
   ++binned_;
   ++stats.primitives_binned;
   stats.tile_references += touched_.size();
-  return true;
+  return BinResult::Binned;
 }
 
 void Tiler::finish_render(TilerStats& stats, DramTraffic& dram) {

@@ -36,6 +36,13 @@ struct TilerStats {
   TBDR_STATS(TBDR_TILER_STATS)
 };
 
+/// What Tiler::bin did with a primitive.
+enum class BinResult : std::uint8_t {
+  Binned,    ///< written to the parameter buffer and the lists of the tiles it touches
+  NoSample,  ///< covers no sample of any tile: dropped, nothing written
+  Full,      ///< would overflow the parameter buffer: nothing written, a partial render is due
+};
+
 /// The tiling engine and the parameter buffer of one render.
 class Tiler {
  public:
@@ -49,10 +56,11 @@ class Tiler {
   /// Pixel rectangle of tile t (clipped to the viewport).
   PixelRect tile_rect(int t) const;
 
-  /// Bins primitive `index` of the render's primitive table. Returns false, binning nothing, when
-  /// the page-rounded parameter buffer would exceed its capacity: the caller renders what is
-  /// binned (a partial render), calls reset(), and bins the primitive again.
-  bool bin(std::uint32_t index, const Primitive& p, TilerStats& stats);
+  /// Bins primitive `index` of the render's primitive table, whose vertices are `keys`. Returns
+  /// Full, binning nothing, when the page-rounded parameter buffer would exceed its capacity:
+  /// the caller renders what is binned (a partial render), calls reset(), and bins the primitive
+  /// again. NoSample: the primitive touches no tile (the caller need not keep it).
+  BinResult bin(std::uint32_t index, const Primitive& p, const VertexKeys& keys, TilerStats& stats);
   /// Closes the open primitive block and books the render's parameter buffer writes and region
   /// headers (call once per render, before the tiles are rendered).
   void finish_render(TilerStats& stats, DramTraffic& dram);

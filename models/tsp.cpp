@@ -426,7 +426,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         s.albedo *= ctx_.scene->base_color_texels[static_cast<std::size_t>(mat->base_color_texels)].sample_linear_rgb(uv);
       s.alpha = mat->base_color.w;
       s.material = p.material;
-      s.triangle = ctx_.frame_prim_base + prim_index;
+      s.triangle = p.id;
       {
         const std::int64_t qx = px.x & ~std::int32_t{1}, qy = px.y & ~std::int32_t{1};
         const std::int64_t x0 = (qx << bits) + half, y0 = (qy << bits) + half;
@@ -503,9 +503,8 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     ctx_.images->counters.shaded[pixel] += 1;
     if (image_counters) ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(fl.count);
     if (write_mask == 0) continue;
-    // The frame-unique id (as SurfacePoint::triangle): a partial render restarts the render's
-    // primitive indices, not the frame's.
-    if (image_counters) ctx_.images->counters.triangle_id[pixel] = ctx_.frame_prim_base + prim_index + 1;
+    // The frame-unique id (as SurfacePoint::triangle).
+    if (image_counters) ctx_.images->counters.triangle_id[pixel] = p.id + 1;
 
     // Sum of the evaluated lights' contributions at the surface.
     auto lighting = [&]() {

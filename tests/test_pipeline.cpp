@@ -170,6 +170,28 @@ TEST(PipelinePartialRender, SmallParameterBufferForcesPartialRendersWithDepthTra
   EXPECT_LE(stat(small, "frame/tiler", "pb_peak_allocated_bytes"), 65536);
 }
 
+TEST(PipelinePartialRender, TheRestOfADrawAfterAPartialRenderIsTheNextRendersGeometry) {
+  // The geometry unit delivers the grid's triangles one at a time and the tiler bins each as it
+  // arrives, so when the 64 KiB parameter buffer fills in the middle of the grid draw, the
+  // partial render holds what was binned so far and the grid's remaining triangles are the next
+  // render's geometry work, as on the hardware: every render has primitives in of its own (when
+  // the whole draw went through geometry before binning, the first render had all 12802 and the
+  // others none), and they add up to the back quad's 2 + the grid's 12800 triangles.
+  const Scene s = partial_render_grid_scene();
+  const FrameResult small = run(s, {draw_of("back"), draw_of("grid")}, {"tiling.pb_capacity_bytes=65536"});
+  const std::vector<RenderWork>& renders = small.work.commands.at(0).renders;
+  ASSERT_GE(renders.size(), 3u);
+  std::uint64_t in = 0, binned = 0;
+  for (const RenderWork& r : renders) {
+    EXPECT_GT(r.binning.primitives_in, 0u);
+    EXPECT_GE(r.binning.primitives_in, r.binning.primitives_binned);
+    in += r.binning.primitives_in;
+    binned += r.binning.primitives_binned;
+  }
+  EXPECT_EQ(in, 2u + 12800u);
+  EXPECT_EQ(static_cast<double>(binned), stat(small, "frame/tiler", "primitives_binned"));
+}
+
 TEST(PipelineTileMemory, OverBudgetPassSplitsTilesOrSpills) {
   Scene s = base_scene();
   add_quad(s, "wall", 5, -32, 96, 0);

@@ -109,8 +109,9 @@ TEST(UnitGeometry, ATriangleCrossingTheNearPlaneIsClippedIntoTwo) {
   ASSERT_EQ(rig.prims.size(), 2u);
   // The clipped vertices are new (no re-use in primitive blocks); the original ones keep theirs.
   std::uint64_t made_by_clipping = 0;
-  for (const auto& p : rig.prims) {
-    for (std::uint64_t k : p.vertex_key) made_by_clipping += (k >> 63) & 1u;
+  ASSERT_EQ(rig.out.keys.size(), 2u);
+  for (const VertexKeys& keys : rig.out.keys) {
+    for (std::uint64_t k : keys) made_by_clipping += (k >> 63) & 1u;
   }
   EXPECT_EQ(made_by_clipping, 3u);  // (1/3,-1/6) once, (-1/3,-1/6) in both triangles of the fan
 }

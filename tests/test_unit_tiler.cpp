@@ -69,9 +69,13 @@ TEST(UnitTiler, AVertexOnATileEdgeWidensTheBoundingBoxByAPixel) {
 }
 
 TEST(UnitTiler, ATriangleCoveringNoSampleIsDropped) {
-  // A sliver between pixel centres: (0.6, 0) (0.9, 0) (0.6, 64) contains no x + 0.5 column.
+  // A sliver between pixel centres: (0.6, 0) (0.9, 0) (0.6, 64) contains no x + 0.5 column. The
+  // tiler says so (NoSample), and the pass renderer then keeps no record of it.
   TilerRig rig;
-  ASSERT_TRUE(rig.bin(ScreenTri{{0.6f, 0}, {0.9f, 0}, {0.6f, 64}}));
+  const ScreenTri sliver{{0.6f, 0}, {0.9f, 0}, {0.6f, 64}};
+  EXPECT_EQ(rig.tiler().bin(0, make_primitive(sliver, rig.viewport, 0), make_vertex_keys(sliver, 0), rig.stats),
+            BinResult::NoSample);
+  ASSERT_TRUE(rig.bin(sliver));
   EXPECT_EQ(rig.stats.primitives_binned.value(), 0u);
   EXPECT_EQ(rig.stats.tile_references.value(), 0u);
 }

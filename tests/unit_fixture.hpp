@@ -107,9 +107,17 @@ inline Primitive make_primitive(const ScreenTri& t, const Viewport& vp, std::uin
     p.world[k] = glm::vec3(v[i].x, -v[i].y, -1.0f);
     p.normal[k] = glm::vec3(0.0f, 0.0f, 1.0f);
   }
-  const bool auto_keys = t.keys[0] == 0 && t.keys[1] == 0 && t.keys[2] == 0;
-  for (std::size_t i = 0; i < 3; ++i) p.vertex_key[i] = auto_keys ? (std::uint64_t{1} << 62) | (serial * 3 + i) : t.keys[i];
+  p.id = static_cast<std::uint32_t>(serial);
   return p;
+}
+
+/// The vertex identities of make_primitive(t, vp, serial): the triangle's keys, or three keys of
+/// its own when it gives none.
+inline VertexKeys make_vertex_keys(const ScreenTri& t, std::uint64_t serial) {
+  const bool auto_keys = t.keys[0] == 0 && t.keys[1] == 0 && t.keys[2] == 0;
+  VertexKeys keys;
+  for (std::size_t i = 0; i < 3; ++i) keys[i] = auto_keys ? (std::uint64_t{1} << 62) | (serial * 3 + i) : t.keys[i];
+  return keys;
 }
 
 /// A shader with the given costs (1 color output unless told otherwise).
@@ -342,9 +350,10 @@ class TilerRig {
   /// Bins the triangle as the next primitive of the render; false when the parameter buffer is
   /// full (nothing binned: a partial render is due).
   bool bin(const ScreenTri& t) {
-    const Primitive p = make_primitive(t, viewport, serial_++);
+    const Primitive p = make_primitive(t, viewport, serial_);
+    const VertexKeys keys = make_vertex_keys(t, serial_++);
     const auto index = static_cast<std::uint32_t>(binned_);
-    const bool ok = tiler_->bin(index, p, stats);
+    const bool ok = tiler_->bin(index, p, keys, stats) != BinResult::Full;
     if (ok) ++binned_;
     return ok;
   }
@@ -410,11 +419,12 @@ class GeometryRig {
   GeometryRig(const GeometryRig&) = delete;
   GeometryRig& operator=(const GeometryRig&) = delete;
 
-  /// Runs one draw through the geometry unit (primitives appended to `prims`).
+  /// Runs one draw through the geometry unit (primitives appended to `prims`, their vertex
+  /// identities to `out.keys`).
   void run(const DrawCmd& cmd, const ShaderDesc& shader = make_shader(1), const PipelineState& pipeline = {},
            const std::vector<std::uint32_t>& selected_lights = {}) {
     const DrawContext d = store_.add(cmd, shader, pipeline, selected_lights, lights.size());
-    unit_->run_draw(d, draws_++, prims, object_lights, stats, dram);
+    unit_->run_draw(d, draws_++, out, object_lights, stats, dram);
   }
 
   HwConfig hw;
@@ -424,7 +434,8 @@ class GeometryRig {
   Viewport viewport;
   GeometryStats stats;
   DramTraffic dram;
-  std::vector<Primitive> prims;
+  PrimitiveList out;
+  std::vector<Primitive>& prims = out.prims;
   std::vector<std::vector<std::uint32_t>> object_lights;
 
  private:
