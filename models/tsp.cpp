@@ -361,6 +361,13 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   for (std::uint32_t o = 0; o < outputs; ++o) out_bytes_per_sample += bytes_per_sample(ctx_.color_targets[o]->format);
   const BlendMode blend = d.pipeline->blend;
   if (alive) alive->assign(pixels.size(), 0);
+  // Whether anything reads a stored surface (G-buffer or PLS) this batch loads: its colour, its
+  // cluster (its depth), or a G-buffer target it is stored to. Without colours, a light volume's
+  // fragments read none of it: the same counts without touching the stored surfaces.
+  bool reads_loaded_surface = colour || sh.light_source == LightSource::ClusterList;
+  for (std::uint32_t o = 0; o < outputs; ++o) {
+    if (ctx_.color_targets[o]->usage != AttachmentUsage::Color) reads_loaded_surface = true;
+  }
   // Every write keeps what its target's format holds (FormatPrecision): colour targets per format;
   // the surface a G-buffer stands for per the targets (or PLS variables) holding its attributes.
   if (formats_pass_ != ctx_.pass) {
@@ -440,6 +447,8 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
           write_mask = 0;
         }
       }
+    } else if (!reads_loaded_surface) {
+      // Nothing below reads the surface (have_surface only gates reads of it).
     } else if (d.surface_source) {
       const std::size_t k = pixel * d.surface_source->samples;
       if (d.surface_source->surface_valid[k]) {
