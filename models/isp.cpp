@@ -95,6 +95,7 @@ void Isp::flush(const PixelRect& rect, const std::vector<std::uint32_t>& prims, 
   const int rw = rect.width();
   const int L = layers_per_sample_;
   flush_samples_.clear();
+  unresolved_layers_ = 0;  // every layer leaves the stacks
   bool resolves = false;
   for (int y = rect.y0; y < rect.y1; ++y) {
     for (int x = rect.x0; x < rect.x1; ++x) {
@@ -167,6 +168,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
   if (ctx_.defer_shading) {
     depth_of_.assign(tile_samples, 0);
     layers_.resize(tile_samples * static_cast<std::size_t>(L));
+    unresolved_layers_ = 0;
   }
   // tbr / imr with isp.early_z=0: every rasterised sample is shaded, the tests decide the writes.
   const bool late_z = !ctx_.defer_shading && ctx_.hw->isp.early_z == 0;
@@ -208,6 +210,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     candidates_.clear();
     pending_.clear();
     rasterised_.clear();
+    std::uint64_t final_fails = 0;  // tbdr: samples whose depth test failed for good while rasterising
 
     rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) {
       const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
@@ -229,11 +232,20 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
         }
         if (ctx_.defer_shading) {
           // The depth test's verdict may change if a flush resolves punch-through depth first:
-          // the stencil ops that depend on it wait for the final verdict.
+          // the stencil ops that depend on it wait for the final verdict. With no unresolved
+          // punch-through layer in the tile, no flush can change the depth buffer: a failed
+          // test is final now (its stencil op applies at once; a re-test after a flush would
+          // read the depth again and fail again, counted in final_fails).
           bool pass = true;
           if (depth_on) {
             isp.depth_buffer_read_bytes += ds_bytes;
             pass = passes<float>(pl.depth_compare, z[s], depth[gi]);
+            if (!pass && unresolved_layers_ == 0) {
+              ++final_fails;
+              ++isp.depth_test_failed_samples;
+              if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
+              continue;
+            }
           }
           candidates_.push_back({static_cast<std::uint32_t>(lbase + static_cast<std::size_t>(s)), x, y, 1u << s, z[s], pass});
           continue;
@@ -258,7 +270,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     });
 
     if (ctx_.defer_shading) {
-      if (candidates_.empty()) continue;
+      if (candidates_.empty()) continue;  // (final fails need no flush: nothing of them is pending)
       // Can every sample take this primitive without knowing a punch-through's alpha result or
       // without a free layer? If not, flush the tile's layers first.
       const bool layered = p.hsr != HsrClass::Opaque;
@@ -269,7 +281,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
           conflict = true;
           break;
         }
-        if (!depth_on) continue;
+        if (!depth_on || unresolved_layers_ == 0) continue;
         // The verdict is open when a punch-through layer's depth, if its alpha test keeps the
         // sample, would change it (either way: a greater test may pass only against it).
         const Layer* stack = &layers_[static_cast<std::size_t>(c.li) * static_cast<std::size_t>(L)];
@@ -281,7 +293,9 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
       if (conflict) {
         flush(rect, prims, true, isp, tsp);
         if (depth_on) {
-          // The flush wrote the punch-through depths: test again against them.
+          // The flush wrote the punch-through depths: test again against them (the samples that
+          // failed for good read the depth again too).
+          isp.depth_buffer_read_bytes += ds_bytes * final_fails;
           for (Candidate& c : candidates_) {
             isp.depth_buffer_read_bytes += ds_bytes;
             c.depth_pass = passes<float>(pl.depth_compare, c.z, depth[global_index(c.x, c.y, c.bit)]);
@@ -310,6 +324,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
           n = 0;
         }
         stack[n++] = {list_pos, c.z, unresolved};
+        if (unresolved) ++unresolved_layers_;
         isp.tag_buffer_write_bytes += tag_bytes;
         // Opaque and translucent depth is known now; punch-through depth waits for the alpha test.
         if (write_on && p.hsr != HsrClass::PunchThrough) {

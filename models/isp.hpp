@@ -122,6 +122,9 @@ class Isp {
   int layers_per_sample_ = 1;           ///< isp.tag_buffers
   std::vector<Layer> layers_;           ///< tile samples x layers_per_sample_
   std::vector<std::uint8_t> depth_of_;  ///< per tile sample: layers in use
+  /// Unresolved punch-through layers pushed since the tile's last flush (an upper bound: a layer
+  /// an opaque sample hides still counts). 0: no flush can change the depth buffer.
+  std::uint64_t unresolved_layers_ = 0;
   std::vector<Candidate> candidates_;
   std::vector<PendingSample> pending_;
   std::vector<PendingSample> rasterised_;  ///< isp.early_z=0: every sample the primitive covers
