@@ -264,8 +264,12 @@ TEST(Import, BadCapturesNameTheDrawAndWriteNothing) {
   }
   // A .rdc that is not a capture: refused by RenderDoc when it is installed, by the exporter's
   // "not installed" message when not; either way exit 2 and nothing written.
+  // Both the wrong magic (refused before RenderDoc starts) and the right magic over junk (refused
+  // by RenderDoc, which is then shut down: the exporter used to hang at exit in 2 runs of 3).
   std::ofstream(in / "junk.rdc") << "not a capture";
   expect_refused(in / "junk.rdc", out, "nothing written");
+  std::ofstream(in / "junk_magic.rdc") << "RDOCjunkjunkjunk";
+  expect_refused(in / "junk_magic.rdc", out, "nothing written");
   expect_refused(in / "missing.rdc", out, "capture not found");
 }
 

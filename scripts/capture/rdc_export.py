@@ -63,25 +63,38 @@ def export(rdc_path, outdir, history_samples):
 
     if not os.path.isfile(rdc_path):
         fail("%s: capture file not found" % rdc_path)
+    # A RenderDoc capture starts with the magic "RDOC" (renderdoc/serialise/rdcfile.cpp): anything
+    # else is refused before RenderDoc starts its replay threads.
+    with open(rdc_path, "rb") as f:
+        magic = f.read(4)
+    if magic != b"RDOC":
+        fail("%s: not a RenderDoc capture (it does not start with the magic RDOC)" % rdc_path)
     rd.InitialiseReplay(rd.GlobalEnvironment(), [])
-    cap = rd.OpenCaptureFile()
-    status = cap.OpenFile(rdc_path, "", None)
-    if status != rd.ResultCode.Succeeded:
-        fail("%s: RenderDoc cannot open it (%s): not a capture, or truncated" % (rdc_path, status))
-    if cap.LocalReplaySupport() != rd.ReplaySupport.Supported:
-        fail("%s: this machine cannot replay a %s capture (RenderDoc: %s)" % (rdc_path, cap.DriverName(),
-                                                                             cap.LocalReplaySupport()))
-    api = cap.DriverName()
-    if api != "Vulkan":
-        fail("%s: a %s capture; only Vulkan captures are imported (docs/capture-import.md)" % (rdc_path, api))
-    status, c = cap.OpenCapture(rd.ReplayOptions(), None)
-    if status != rd.ResultCode.Succeeded:
-        fail("%s: RenderDoc cannot replay it (%s)" % (rdc_path, status))
+    cap = None
+    c = None
+    # Every way out shuts RenderDoc down first: a process leaving with its replay threads running
+    # can hang at exit.
     try:
+        cap = rd.OpenCaptureFile()
+        status = cap.OpenFile(rdc_path, "", None)
+        if status != rd.ResultCode.Succeeded:
+            fail("%s: RenderDoc cannot open it (%s): not a capture, or truncated" % (rdc_path, status))
+        if cap.LocalReplaySupport() != rd.ReplaySupport.Supported:
+            fail("%s: this machine cannot replay a %s capture (RenderDoc: %s)" % (rdc_path, cap.DriverName(),
+                                                                                 cap.LocalReplaySupport()))
+        api = cap.DriverName()
+        if api != "Vulkan":
+            fail("%s: a %s capture; only Vulkan captures are imported (docs/capture-import.md)" % (rdc_path, api))
+        status, c = cap.OpenCapture(rd.ReplayOptions(), None)
+        if status != rd.ResultCode.Succeeded:
+            c = None
+            fail("%s: RenderDoc cannot replay it (%s)" % (rdc_path, status))
         return export_replay(rd, c, rdc_path, outdir, history_samples, api)
     finally:
-        c.Shutdown()
-        cap.Shutdown()
+        if c is not None:
+            c.Shutdown()
+        if cap is not None:
+            cap.Shutdown()
         rd.ShutdownReplay()
 
 
