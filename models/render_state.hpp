@@ -147,12 +147,16 @@ struct AttachmentImage {
 
 /// Pixel local storage of one pass, functionally: per pixel the stored surface, a light
 /// accumulator and a stack of light indices (see docs/kernels.md).
+/// Without colours, the arrays only colours read are left empty: the stored surfaces unless a
+/// shader reading the PLS needs them for a count (its cluster, a G-buffer output), the light sums
+/// and the stacks' light indices (their counts and overflow flags stay: they decide what is
+/// charged).
 struct PlsState {
   std::uint32_t stack_capacity = 0;      ///< light indices a pixel's PLS holds
-  std::vector<SurfacePoint> surface;     ///< width*height
+  std::vector<SurfacePoint> surface;     ///< width*height, or empty (above)
   std::vector<std::uint8_t> valid;       ///< 1 when the surface is defined
   std::vector<glm::vec3> accum;          ///< light accumulator (empty when no colours are computed)
-  std::vector<std::uint32_t> stack;      ///< width*height*stack_capacity light indices
+  std::vector<std::uint32_t> stack;      ///< width*height*stack_capacity light indices (empty without colours)
   std::vector<std::uint16_t> stack_count;
   std::vector<std::uint8_t> overflow;    ///< 1 when more lights were pushed than fit
 };

@@ -37,6 +37,26 @@ void check_pls_layout(const PlsParams& p, const PassDesc& pass, const std::strin
   }
 }
 
+namespace {
+
+/// Whether a shader of the pass that reads the PLS reads a stored surface for something counted
+/// (not a colour): its cluster (its depth) or a G-buffer output it stores the surface to. As
+/// Tsp::shade decides per batch.
+bool pls_surface_counted(const RenderContext& ctx) {
+  for (const DrawContext& d : ctx.draws) {
+    const ShaderDesc& sh = *d.shader;
+    if (sh.pls != PlsAccess::Read && sh.pls != PlsAccess::ReadWrite) continue;
+    if (sh.light_source == LightSource::ClusterList) return true;
+    const std::size_t outputs = std::min<std::size_t>(sh.color_outputs, ctx.color_targets.size());
+    for (std::size_t o = 0; o < outputs; ++o) {
+      if (ctx.color_targets[o]->usage != AttachmentUsage::Color) return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
 TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats)
     : ctx_(ctx), stats_(stats), in_memory_(ctx.pass->attachments.size(), 0), evicted_(ctx.pass->attachments.size(), 0) {
   const PassDesc& pass = *ctx.pass;
@@ -53,10 +73,10 @@ TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats)
     // The pass's pixel local storage lives in tile memory: sized from its declared layout.
     const std::size_t pixels = static_cast<std::size_t>(ctx.viewport.width_px) * static_cast<std::size_t>(ctx.viewport.height_px);
     pls_.stack_capacity = pls_light_stack_capacity(pass.pls_bytes_per_pixel());
-    pls_.surface.assign(pixels, SurfacePoint{});
+    pls_.surface.assign(ctx.colour || pls_surface_counted(ctx) ? pixels : 0, SurfacePoint{});
     pls_.valid.assign(pixels, 0);
     pls_.accum.assign(ctx.colour ? pixels : 0, glm::vec3(0.0f));  // light sums: colours only
-    pls_.stack.assign(pixels * pls_.stack_capacity, 0);
+    pls_.stack.assign(ctx.colour ? pixels * pls_.stack_capacity : 0, 0);  // which lights: colours only
     pls_.stack_count.assign(pixels, 0);
     pls_.overflow.assign(pixels, 0);
     ctx.pls = &pls_;

@@ -5,6 +5,7 @@
 #include <bit>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 
 #if defined(__SSE2__)
 #include <xmmintrin.h>
@@ -456,6 +457,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         have_surface = true;
       }
     } else if (pls_reads && ctx_.pls->valid[pixel]) {
+      if (ctx_.pls->surface.empty()) throw std::logic_error("Tsp::shade: a PLS surface is read but the pass keeps none");
       s = ctx_.pls->surface[pixel];
       have_surface = true;
     }
@@ -545,7 +547,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     // Pixel local storage effects of shaders without color outputs.
     if (pls_writes && outputs == 0) {
       if (from_triangle) {
-        ctx_.pls->surface[pixel] = stored_surface(true, s);
+        if (!ctx_.pls->surface.empty()) ctx_.pls->surface[pixel] = stored_surface(true, s);
         ctx_.pls->valid[pixel] = 1;
         if (colour) ctx_.pls->accum[pixel] = glm::vec3(0.0f);
         ctx_.pls->stack_count[pixel] = 0;
@@ -559,7 +561,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       } else if (p.proxy_light >= 0) {
         auto& n = ctx_.pls->stack_count[pixel];
         if (n < ctx_.pls->stack_capacity) {
-          ctx_.pls->stack[pixel * ctx_.pls->stack_capacity + n] = static_cast<std::uint32_t>(p.proxy_light);
+          if (!ctx_.pls->stack.empty()) ctx_.pls->stack[pixel * ctx_.pls->stack_capacity + n] = static_cast<std::uint32_t>(p.proxy_light);
           ++n;
         } else {
           ctx_.pls->overflow[pixel] = 1;
