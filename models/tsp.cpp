@@ -501,16 +501,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         }
         break;
     }
-    light_sum += fl.count;
-    // Pixel local storage traffic: the pass's whole PLS layout, read and/or written per fragment.
-    if (pls_reads) stats.pls_bytes_accessed += pls_bytes;
-    if (pls_writes && outputs == 0) stats.pls_bytes_accessed += pls_bytes;
-    // Framebuffer fetch: the fetched attachments are read from the tile buffer at this pixel.
-    stats.tile_buffer_read_bytes += d.fetch_bytes;
-    if (from_triangle && sh.light_source != LightSource::None && sh.light_source != LightSource::Proxy) ++stats.lit_surface_invocations;
-    for (const auto& [cls, bytes] : d.per_pixel_reads) dram_out_->read(cls, bytes);
-    stats.fragment_alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * fl.count;
-    stats.light_evaluations += fl.count;
+    light_sum += fl.count;  // the per-fragment charges are booked for the batch after the loop
     ctx_.images->counters.shaded[pixel] += 1;
     if (image_counters) ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(fl.count);
     if (write_mask == 0) continue;
@@ -624,6 +615,17 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       ctx_.pls->stack_count[pixel] = 0;
     }
   }
+  // What every fragment of the batch is charged, booked once (integer sums: the same totals).
+  const std::uint64_t n = pixels.size();
+  // Pixel local storage traffic: the pass's whole PLS layout, read and/or written per fragment.
+  if (pls_reads) stats.pls_bytes_accessed += n * pls_bytes;
+  if (pls_writes && outputs == 0) stats.pls_bytes_accessed += n * pls_bytes;
+  // Framebuffer fetch: the fetched attachments are read from the tile buffer at each pixel.
+  stats.tile_buffer_read_bytes += n * d.fetch_bytes;
+  if (from_triangle && sh.light_source != LightSource::None && sh.light_source != LightSource::Proxy) stats.lit_surface_invocations += n;
+  for (const auto& [cls, bytes] : d.per_pixel_reads) dram_out_->read(cls, n * bytes);
+  stats.fragment_alu_ops += n * sh.alu_ops + std::uint64_t{sh.light_alu_ops} * light_sum;
+  stats.light_evaluations += light_sum;
   // Helper lanes run the same code (their light loops as long as the batch's average fragment).
   stats.fragment_alu_ops += helpers * sh.alu_ops + (helpers * std::uint64_t{sh.light_alu_ops} * light_sum) / pixels.size();
 }
