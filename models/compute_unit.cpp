@@ -1,6 +1,7 @@
 #include "models/compute_unit.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <charconv>
 #include <cmath>
 #include <functional>
@@ -229,6 +230,60 @@ glm::vec3 shade_surface(const ComputeContext& ctx, const SurfacePoint& s, int x,
   return c;
 }
 
+/// The distinct texture lines of one workgroup tile, in the order first inserted: an open-addressing
+/// hash set (a tile's fetches repeat each line about 8 times at 1080p; sorting every repeat cost
+/// more than hashing it), emptied in the time of its size.
+class TileLineSet {
+ public:
+  void insert(std::uint64_t line) {
+    if ((values_.size() + 1) * 2 > slots_.size()) grow();
+    std::size_t i = slot_of(line);
+    while (slots_[i] != kEmpty) {
+      if (slots_[i] == line) return;
+      i = (i + 1) & (slots_.size() - 1);
+    }
+    slots_[i] = line;
+    values_.push_back(line);
+  }
+  /// The distinct lines inserted since the last clear, sorted.
+  const std::vector<std::uint64_t>& sorted() {
+    std::sort(values_.begin(), values_.end());
+    return values_;
+  }
+  void clear() {
+    for (std::uint64_t v : values_) {
+      std::size_t i = slot_of(v);
+      while (slots_[i] != v) i = (i + 1) & (slots_.size() - 1);
+      slots_[i] = kEmpty;
+    }
+    values_.clear();
+  }
+
+ private:
+  // No line starts at the last byte of the address space: an empty slot.
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  // Fibonacci hashing: multiply by 2^64 / golden ratio, keep the top bits (line offsets are
+  // multiples of the line size, so their low bits are all zero).
+  static constexpr std::uint64_t kHashMultiplier = 0x9E3779B97F4A7C15ull;
+  static constexpr std::size_t kInitialSlots = 1024;
+
+  std::size_t slot_of(std::uint64_t v) const { return static_cast<std::size_t>((v * kHashMultiplier) >> shift_); }
+  void grow() {
+    const std::size_t n = slots_.empty() ? kInitialSlots : slots_.size() * 2;
+    slots_.assign(n, kEmpty);
+    shift_ = 64 - static_cast<unsigned>(std::countr_zero(n));
+    for (std::uint64_t v : values_) {
+      std::size_t i = slot_of(v);
+      while (slots_[i] != kEmpty) i = (i + 1) & (n - 1);
+      slots_[i] = v;
+    }
+  }
+
+  std::vector<std::uint64_t> slots_;
+  std::vector<std::uint64_t> values_;
+  unsigned shift_ = 64;
+};
+
 /// The texture lines of a shading kernel's material fetches (slots 0 .. fetches-1 of each surface's
 /// material texture): per workgroup tile of `group_px` pixels, every (2x2 quad, triangle) with a
 /// stored surface reads the bilinear footprint of its quad uvs (SurfacePoint::quad_uv, what the TSP
@@ -253,7 +308,7 @@ void material_texture_lines(const ComputeContext& ctx, const AttachmentImage& su
   auto tile_row = [&](std::size_t row, unsigned /*worker*/) {
     RowLines& out = row_lines[row];
     const int ty = static_cast<int>(row) * g, y_end = std::min(H, ty + g);
-    std::vector<std::uint64_t> lines;
+    TileLineSet lines;
     QuadFootprint fp;
     for (int tx = 0; tx < W; tx += g) {
       const int x_end = std::min(W, tx + g);
@@ -277,16 +332,15 @@ void material_texture_lines(const ComputeContext& ctx, const AttachmentImage& su
                 layout.quad_footprint(tex, s.quad_uv, fp);
                 out.accesses += std::uint64_t{fp.count} * fetches;
                 for (std::uint32_t j = 0; j < fp.count; ++j) {
-                  for (std::uint32_t f = 0; f < fetches; ++f) lines.push_back(fp.lines[j] + std::uint64_t{f} * tex.slot_bytes);
+                  for (std::uint32_t f = 0; f < fetches; ++f) lines.insert(fp.lines[j] + std::uint64_t{f} * tex.slot_bytes);
                 }
               }
             }
           }
         }
       }
-      std::sort(lines.begin(), lines.end());
-      lines.erase(std::unique(lines.begin(), lines.end()), lines.end());
-      out.lines.insert(out.lines.end(), lines.begin(), lines.end());
+      const std::vector<std::uint64_t>& tile_lines = lines.sorted();
+      out.lines.insert(out.lines.end(), tile_lines.begin(), tile_lines.end());
     }
   };
   run_items(ctx, row_lines.size(), tile_row);
