@@ -230,25 +230,22 @@ glm::vec3 shade_surface(const ComputeContext& ctx, const SurfacePoint& s, int x,
   return c;
 }
 
-/// The distinct texture lines of one workgroup tile, in the order first inserted: an open-addressing
-/// hash set (a tile's fetches repeat each line about 8 times at 1080p; sorting every repeat cost
-/// more than hashing it), emptied in the time of its size.
+/// The distinct texture lines of one workgroup tile: an open-addressing hash set (a tile's quads
+/// repeat each line about 8 times at 1080p; sorting every repeat cost more than hashing it),
+/// emptied in the time of its size.
 class TileLineSet {
  public:
-  void insert(std::uint64_t line) {
+  /// Adds `line`; true when it was not in the set.
+  bool insert(std::uint64_t line) {
     if ((values_.size() + 1) * 2 > slots_.size()) grow();
     std::size_t i = slot_of(line);
     while (slots_[i] != kEmpty) {
-      if (slots_[i] == line) return;
+      if (slots_[i] == line) return false;
       i = (i + 1) & (slots_.size() - 1);
     }
     slots_[i] = line;
     values_.push_back(line);
-  }
-  /// The distinct lines inserted since the last clear, sorted.
-  const std::vector<std::uint64_t>& sorted() {
-    std::sort(values_.begin(), values_.end());
-    return values_;
+    return true;
   }
   void clear() {
     for (std::uint64_t v : values_) {
@@ -308,11 +305,17 @@ void material_texture_lines(const ComputeContext& ctx, const AttachmentImage& su
   auto tile_row = [&](std::size_t row, unsigned /*worker*/) {
     RowLines& out = row_lines[row];
     const int ty = static_cast<int>(row) * g, y_end = std::min(H, ty + g);
-    TileLineSet lines;
+    // Slot 0's lines, kept once with their texture's copy stride: a texture's copies follow one
+    // another and textures do not overlap (TextureLayout), so the copies of distinct slot-0
+    // lines are distinct lines.
+    TileLineSet seen;
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> firsts;  // (slot-0 line, copy stride)
+    std::vector<std::uint64_t> lines;
     QuadFootprint fp;
     for (int tx = 0; tx < W; tx += g) {
       const int x_end = std::min(W, tx + g);
-      lines.clear();
+      seen.clear();
+      firsts.clear();
       // Each 2x2 quad (its pixels inside this tile) reads the footprint of every distinct triangle
       // among its samples once; the triangle's surfaces in the quad carry the same quad uvs.
       for (int qy = ty >> 1; qy <= (y_end - 1) >> 1; ++qy) {
@@ -332,15 +335,19 @@ void material_texture_lines(const ComputeContext& ctx, const AttachmentImage& su
                 layout.quad_footprint(tex, s.quad_uv, fp);
                 out.accesses += std::uint64_t{fp.count} * fetches;
                 for (std::uint32_t j = 0; j < fp.count; ++j) {
-                  for (std::uint32_t f = 0; f < fetches; ++f) lines.insert(fp.lines[j] + std::uint64_t{f} * tex.slot_bytes);
+                  if (seen.insert(fp.lines[j])) firsts.push_back({fp.lines[j], tex.slot_bytes});
                 }
               }
             }
           }
         }
       }
-      const std::vector<std::uint64_t>& tile_lines = lines.sorted();
-      out.lines.insert(out.lines.end(), tile_lines.begin(), tile_lines.end());
+      lines.clear();
+      for (const auto& [line, stride] : firsts) {
+        for (std::uint32_t f = 0; f < fetches; ++f) lines.push_back(line + std::uint64_t{f} * stride);
+      }
+      std::sort(lines.begin(), lines.end());
+      out.lines.insert(out.lines.end(), lines.begin(), lines.end());
     }
   };
   run_items(ctx, row_lines.size(), tile_row);
