@@ -1,10 +1,11 @@
 #include "models/compute_unit.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <charconv>
 #include <cmath>
+#include <functional>
 #include <optional>
-#include <set>
 #include <utility>
 
 #include "models/geometry_unit.hpp"
@@ -179,21 +180,41 @@ class Dispatch {
   DramTraffic& dram_;
 };
 
-/// The lights touching a screen rectangle's volume between two distances, using the light's
-/// screen rectangle as a first test (what a hierarchical kernel computes).
-void cull_lights(const ComputeContext& ctx, const std::vector<PixelRect>& light_rects, const PixelRect& rect, float d0,
-                 float d1, std::vector<std::uint32_t>& out) {
-  const auto& lights = ctx.trace->lights;
-  for (std::uint32_t l = 0; l < lights.size(); ++l) {
-    const PixelRect& lr = light_rects[l];
-    if (lr.empty() || intersect(lr, rect).empty()) continue;
-    if (sphere_touches_tile_volume(*ctx.frustum, lights[l], rect, d0, d1)) out.push_back(l);
+/// Runs fn(item, worker) for every item in [0, count): on the context's pool when it has one,
+/// else in item order on the caller's thread. Items write only their own outputs.
+void run_items(const ComputeContext& ctx, std::size_t count, const std::function<void(std::size_t, unsigned)>& fn) {
+  if (ctx.pool != nullptr) {
+    ctx.pool->for_each(count, fn);
+  } else {
+    for (std::size_t i = 0; i < count; ++i) fn(i, 0);
   }
 }
 
 std::vector<PixelRect> light_rects(const ComputeContext& ctx) {
   std::vector<PixelRect> r;
+  r.reserve(ctx.trace->lights.size());
   for (const auto& l : ctx.trace->lights) r.push_back(light_screen_rect(l, ctx.camera, ctx.viewport));
+  return r;
+}
+
+/// The lights' spheres in view space, in light order.
+std::vector<ViewSphere> view_spheres(const ComputeContext& ctx) {
+  std::vector<ViewSphere> v;
+  v.reserve(ctx.trace->lights.size());
+  for (const auto& l : ctx.trace->lights) v.push_back(ViewSphere::of(*ctx.frustum, l));
+  return v;
+}
+
+/// Per row of `tile_px` tiles (`rows` of them), the lights whose screen rectangle reaches the
+/// row, ascending: a tile then tests only its row's lights (rectangles are inside the viewport).
+std::vector<std::vector<std::uint32_t>> lights_by_tile_row(const std::vector<PixelRect>& rects, int tile_px, int rows) {
+  std::vector<std::vector<std::uint32_t>> r(static_cast<std::size_t>(rows));
+  for (std::uint32_t l = 0; l < rects.size(); ++l) {
+    const PixelRect& lr = rects[l];
+    if (lr.empty()) continue;
+    const int r0 = std::max(0, lr.y0 / tile_px), r1 = std::min(rows - 1, (lr.y1 - 1) / tile_px);
+    for (int ty = r0; ty <= r1; ++ty) r[static_cast<std::size_t>(ty)].push_back(l);
+  }
   return r;
 }
 
@@ -209,6 +230,57 @@ glm::vec3 shade_surface(const ComputeContext& ctx, const SurfacePoint& s, int x,
   return c;
 }
 
+/// The distinct texture lines of one workgroup tile: an open-addressing hash set (a tile's quads
+/// repeat each line about 8 times at 1080p; sorting every repeat cost more than hashing it),
+/// emptied in the time of its size.
+class TileLineSet {
+ public:
+  /// Adds `line`; true when it was not in the set.
+  bool insert(std::uint64_t line) {
+    if ((values_.size() + 1) * 2 > slots_.size()) grow();
+    std::size_t i = slot_of(line);
+    while (slots_[i] != kEmpty) {
+      if (slots_[i] == line) return false;
+      i = (i + 1) & (slots_.size() - 1);
+    }
+    slots_[i] = line;
+    values_.push_back(line);
+    return true;
+  }
+  void clear() {
+    for (std::uint64_t v : values_) {
+      std::size_t i = slot_of(v);
+      while (slots_[i] != v) i = (i + 1) & (slots_.size() - 1);
+      slots_[i] = kEmpty;
+    }
+    values_.clear();
+  }
+
+ private:
+  // No line starts at the last byte of the address space: an empty slot.
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  // Fibonacci hashing: multiply by 2^64 / golden ratio, keep the top bits (line offsets are
+  // multiples of the line size, so their low bits are all zero).
+  static constexpr std::uint64_t kHashMultiplier = 0x9E3779B97F4A7C15ull;
+  static constexpr std::size_t kInitialSlots = 1024;
+
+  std::size_t slot_of(std::uint64_t v) const { return static_cast<std::size_t>((v * kHashMultiplier) >> shift_); }
+  void grow() {
+    const std::size_t n = slots_.empty() ? kInitialSlots : slots_.size() * 2;
+    slots_.assign(n, kEmpty);
+    shift_ = 64 - static_cast<unsigned>(std::countr_zero(n));
+    for (std::uint64_t v : values_) {
+      std::size_t i = slot_of(v);
+      while (slots_[i] != kEmpty) i = (i + 1) & (n - 1);
+      slots_[i] = v;
+    }
+  }
+
+  std::vector<std::uint64_t> slots_;
+  std::vector<std::uint64_t> values_;
+  unsigned shift_ = 64;
+};
+
 /// The texture lines of a shading kernel's material fetches (slots 0 .. fetches-1 of each surface's
 /// material texture): per workgroup tile of `group_px` pixels, every (2x2 quad, triangle) with a
 /// stored surface reads the bilinear footprint of its quad uvs (SurfacePoint::quad_uv, what the TSP
@@ -222,42 +294,69 @@ void material_texture_lines(const ComputeContext& ctx, const AttachmentImage& su
   const int W = ctx.viewport.width_px, H = ctx.viewport.height_px;
   const std::size_t S = surfaces.samples;
   const int g = std::max(1, group_px);
-  std::vector<std::pair<std::uint64_t, std::size_t>> quads;  // ((quad << 32) | triangle, surface index)
-  std::vector<std::uint64_t> lines;
-  QuadFootprint fp;
-  std::uint64_t accesses = 0, total = 0;
-  for (int ty = 0; ty < H; ty += g) {
+  const int rows = (H + g - 1) / g;
+  // One item per row of workgroup tiles, with its own lines (its tiles' footprints in tile order)
+  // and counts, appended in row order after: the serial order at any thread count.
+  struct RowLines {
+    std::vector<std::uint64_t> lines;
+    std::uint64_t accesses = 0;
+  };
+  std::vector<RowLines> row_lines(static_cast<std::size_t>(rows));
+  auto tile_row = [&](std::size_t row, unsigned /*worker*/) {
+    RowLines& out = row_lines[row];
+    const int ty = static_cast<int>(row) * g, y_end = std::min(H, ty + g);
+    // Slot 0's lines, kept once with their texture's copy stride: a texture's copies follow one
+    // another and textures do not overlap (TextureLayout), so the copies of distinct slot-0
+    // lines are distinct lines.
+    TileLineSet seen;
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> firsts;  // (slot-0 line, copy stride)
+    std::vector<std::uint64_t> lines;
+    QuadFootprint fp;
     for (int tx = 0; tx < W; tx += g) {
-      quads.clear();
-      for (int y = ty; y < std::min(H, ty + g); ++y) {
-        for (int x = tx; x < std::min(W, tx + g); ++x) {
-          const std::size_t p = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
-          for (std::size_t smp = 0; smp < S; ++smp) {
-            const std::size_t k = p * S + smp;
-            if (!surfaces.surface_valid[k] || surfaces.surface[k].material == kNoMaterial) continue;
-            // Quad index within the frame (at most 8192 x 8192 quads) above the triangle id.
-            const std::uint64_t quad = static_cast<std::uint64_t>(y >> 1) * 8192u + static_cast<std::uint64_t>(x >> 1);
-            quads.push_back({(quad << 32) | surfaces.surface[k].triangle, k});
+      const int x_end = std::min(W, tx + g);
+      seen.clear();
+      firsts.clear();
+      // Each 2x2 quad (its pixels inside this tile) reads the footprint of every distinct triangle
+      // among its samples once; the triangle's surfaces in the quad carry the same quad uvs.
+      for (int qy = ty >> 1; qy <= (y_end - 1) >> 1; ++qy) {
+        for (int qx = tx >> 1; qx <= (x_end - 1) >> 1; ++qx) {
+          std::uint32_t triangles[4 * kMaxSamplesPerPixel];
+          std::size_t n = 0;
+          for (int y = std::max(2 * qy, ty); y <= std::min(2 * qy + 1, y_end - 1); ++y) {
+            for (int x = std::max(2 * qx, tx); x <= std::min(2 * qx + 1, x_end - 1); ++x) {
+              const std::size_t p = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
+              for (std::size_t smp = 0; smp < S; ++smp) {
+                const std::size_t k = p * S + smp;
+                if (!surfaces.surface_valid[k] || surfaces.surface[k].material == kNoMaterial) continue;
+                const SurfacePoint& s = surfaces.surface[k];
+                if (std::find(triangles, triangles + n, s.triangle) != triangles + n) continue;
+                triangles[n++] = s.triangle;
+                const TextureStorage& tex = layout.of_material(s.material);
+                layout.quad_footprint(tex, s.quad_uv, fp);
+                out.accesses += std::uint64_t{fp.count} * fetches;
+                for (std::uint32_t j = 0; j < fp.count; ++j) {
+                  if (seen.insert(fp.lines[j])) firsts.push_back({fp.lines[j], tex.slot_bytes});
+                }
+              }
+            }
           }
         }
       }
-      std::sort(quads.begin(), quads.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
       lines.clear();
-      for (std::size_t i = 0; i < quads.size(); ++i) {
-        if (i > 0 && quads[i].first == quads[i - 1].first) continue;
-        const SurfacePoint& s = surfaces.surface[quads[i].second];
-        const TextureStorage& tex = layout.of_material(s.material);
-        layout.quad_footprint(tex, s.quad_uv, fp);
-        accesses += std::uint64_t{fp.count} * fetches;
-        for (std::uint32_t j = 0; j < fp.count; ++j) {
-          for (std::uint32_t f = 0; f < fetches; ++f) lines.push_back(fp.lines[j] + std::uint64_t{f} * tex.slot_bytes);
-        }
+      for (const auto& [line, stride] : firsts) {
+        for (std::uint32_t f = 0; f < fetches; ++f) lines.push_back(line + std::uint64_t{f} * stride);
       }
       std::sort(lines.begin(), lines.end());
-      lines.erase(std::unique(lines.begin(), lines.end()), lines.end());
-      ctx.texture_lines->insert(ctx.texture_lines->end(), lines.begin(), lines.end());
-      total += lines.size();
+      out.lines.insert(out.lines.end(), lines.begin(), lines.end());
     }
+  };
+  run_items(ctx, row_lines.size(), tile_row);
+  std::uint64_t accesses = 0, total = 0;
+  for (const RowLines& r : row_lines) total += r.lines.size();
+  ctx.texture_lines->reserve(ctx.texture_lines->size() + total);
+  for (const RowLines& r : row_lines) {
+    ctx.texture_lines->insert(ctx.texture_lines->end(), r.lines.begin(), r.lines.end());
+    accesses += r.accesses;
   }
   stats.compute_texture_line_accesses += accesses;
   stats.compute_texture_tile_lines += total;
@@ -279,15 +378,19 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
   ImageBuffer img;
   if (ctx.colour) img.color.assign(pixels, glm::vec4(0.0f));
   // Bands of rows are independent (each pixel writes only its own image and counter entries): they
-  // run on the pool, each with its own statistics and re-fetch set, merged in band order after.
-  const int bands = (H + kShadeBandRows - 1) / kShadeBandRows;
+  // run on the pool, each with its own statistics, merged in band order after. With re-fetches a
+  // band holds whole rows of tiles, so each band counts the distinct (tile, triangle) pairs of its
+  // own tiles and the frame's count is their sum.
+  const int band_rows = vbuffer ? (kShadeBandRows + tile_px - 1) / tile_px * tile_px : kShadeBandRows;
+  const int bands = (H + band_rows - 1) / band_rows;
+  const std::uint64_t tiles_x = static_cast<std::uint64_t>((W + tile_px - 1) / tile_px);
   std::vector<ComputeStats> band_stats(static_cast<std::size_t>(bands));
-  std::vector<std::set<std::pair<std::size_t, std::uint32_t>>> band_refetched(static_cast<std::size_t>(bands));  // (tile, triangle)
+  std::vector<std::uint64_t> band_refetched(static_cast<std::size_t>(bands), 0);
   auto shade_band = [&](std::size_t band, unsigned /*worker*/) {
     ComputeStats& stats = band_stats[band];
-    auto& refetched = band_refetched[band];
-    const int y_end = std::min(H, static_cast<int>(band + 1) * kShadeBandRows);
-    for (int y = static_cast<int>(band) * kShadeBandRows; y < y_end; ++y) {
+    std::vector<std::uint64_t> refetched;  // (tile << 32) | triangle, a run of equal pairs once
+    const int y_end = std::min(H, static_cast<int>(band + 1) * band_rows);
+    for (int y = static_cast<int>(band) * band_rows; y < y_end; ++y) {
       for (int x = 0; x < W; ++x) {
         const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
         // Shade each distinct surface of the pixel once (with MSAA a pixel's samples may hold
@@ -316,30 +419,31 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
             stats.compute_alu_ops += sh.alu_ops + std::uint64_t{sh.light_alu_ops} * count;
             if (ctx.images->counters.images()) ctx.images->counters.lights_evaluated[p] += static_cast<std::uint32_t>(count);
             ctx.images->counters.shaded[p] += 1;
-            if (vbuffer) refetched.insert({static_cast<std::size_t>((y / tile_px) * ((W + tile_px - 1) / tile_px) + x / tile_px), s.triangle});
+            if (vbuffer) {
+              const std::uint64_t key = ((static_cast<std::uint64_t>(y / tile_px) * tiles_x + static_cast<std::uint64_t>(x / tile_px)) << 32) | s.triangle;
+              if (refetched.empty() || refetched.back() != key) refetched.push_back(key);
+            }
           }
           sum += shaded_colors[k];
         }
         if (n_shaded > 0 && ctx.colour) img.color[p] = FormatPrecision::color(kImageFormat, glm::vec4(sum / static_cast<float>(S), 1.0f));
       }
     }
+    std::sort(refetched.begin(), refetched.end());
+    band_refetched[band] = static_cast<std::uint64_t>(std::unique(refetched.begin(), refetched.end()) - refetched.begin());
   };
-  if (ctx.pool != nullptr) {
-    ctx.pool->for_each(static_cast<std::size_t>(bands), shade_band);
-  } else {
-    for (std::size_t b = 0; b < static_cast<std::size_t>(bands); ++b) shade_band(b, 0);
-  }
-  std::set<std::pair<std::size_t, std::uint32_t>> refetched;
+  run_items(ctx, static_cast<std::size_t>(bands), shade_band);
+  std::uint64_t refetched = 0;
   for (std::size_t b = 0; b < static_cast<std::size_t>(bands); ++b) {
     stats += band_stats[b];
-    refetched.insert(band_refetched[b].begin(), band_refetched[b].end());
+    refetched += band_refetched[b];
   }
   // Threads of uncovered pixels exit after reading their G-buffer sample: no texture fetches.
   stats.compute_texture_fetches += (stats.compute_shaded_pixels.value() - shaded_before) * sh.tex_fetches;
   if (vbuffer) {
     // Each tile re-fetches the three vertices of every triangle it shades (Burns & Hunt).
-    stats.refetched_vertices += refetched.size() * 3;
-    dram.read(DramClass::Vertices, refetched.size() * 3 * kRefetchVertexBytes);
+    stats.refetched_vertices += refetched * 3;
+    dram.read(DramClass::Vertices, refetched * 3 * kRefetchVertexBytes);
   }
   return img;
 }
@@ -375,7 +479,7 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     if (!depth) k.fail("needs a depth image in reads=");
     const std::string out = k.buffer_with(cmd.writes, BufferContent::DepthBounds);
     if (out.empty()) k.fail("needs a depth_bounds buffer in writes=");
-    auto b = std::make_shared<DepthBounds>(DepthBounds::compute(*ctx.frustum, *depth, tile_px));
+    auto b = std::make_shared<DepthBounds>(DepthBounds::compute(*ctx.frustum, *depth, tile_px, ctx.pool));
     stats.compute_alu_ops += pixels * depth->samples * kDepthReduceOps;
     k.charge_write(out, b->min_distance.size() * kDepthBoundsTileBytes);
     ctx.images->depth_bounds[out] = b;
@@ -408,11 +512,18 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
       if (it->second->tile_px != tile_px) k.fail("depth_bounds buffer '" + bname + "' has another tile size");
       bounds = it->second;
     } else if (const AttachmentImage* depth = k.read_depth(); depth && bounds_mode != DepthRange::None) {
-      bounds = std::make_shared<DepthBounds>(DepthBounds::compute(*ctx.frustum, *depth, tile_px));
+      bounds = std::make_shared<DepthBounds>(DepthBounds::compute(*ctx.frustum, *depth, tile_px, ctx.pool));
       stats.compute_alu_ops += pixels * depth->samples * kDepthReduceOps;
     }
+    // Each tile keeps the lights whose screen rectangle meets it and whose sphere touches its
+    // volume, ascending (what a hierarchical kernel computes). One item per row of tiles: it alone
+    // writes its tiles' lists and counts its overflows.
     const auto rects = light_rects(ctx);
-    for (int ty = 0; ty < grid->tiles_y; ++ty) {
+    const auto spheres = view_spheres(ctx);
+    const auto row_lights = lights_by_tile_row(rects, tile_px, grid->tiles_y);
+    std::vector<std::uint64_t> row_overflows(static_cast<std::size_t>(grid->tiles_y), 0);
+    run_items(ctx, static_cast<std::size_t>(grid->tiles_y), [&](std::size_t row, unsigned /*worker*/) {
+      const int ty = static_cast<int>(row);
       for (int tx = 0; tx < grid->tiles_x; ++tx) {
         const std::size_t t = static_cast<std::size_t>(ty * grid->tiles_x + tx);
         float d0 = 0.0f, d1 = 1e30f;
@@ -422,10 +533,16 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
           if (bounds_mode == DepthRange::MinMax) d0 = bounds->min_distance[t] * kBoundsNearScale;
         }
         const PixelRect rect = intersect({tx * tile_px, ty * tile_px, (tx + 1) * tile_px, (ty + 1) * tile_px}, {0, 0, W, H});
-        cull_lights(ctx, rects, rect, d0, d1, grid->lists[t]);
-        if (cap > 0 && grid->lists[t].size() > static_cast<std::size_t>(cap)) ++grid->overflowed_tiles;
+        const TileSides sides = TileSides::of(*ctx.frustum, rect);
+        std::vector<std::uint32_t>& list = grid->lists[t];
+        for (std::uint32_t l : row_lights[row]) {
+          if (intersect(rects[l], rect).empty()) continue;
+          if (sides.touches(spheres[l], d0, d1)) list.push_back(l);
+        }
+        if (cap > 0 && list.size() > static_cast<std::size_t>(cap)) ++row_overflows[row];
       }
-    }
+    });
+    for (std::uint64_t o : row_overflows) grid->overflowed_tiles += o;
     stats.light_volume_tests += tiles * n_lights;
     stats.compute_alu_ops += tiles * n_lights * kSphereVolumeTestOps;
     stats.light_list_entries += grid->total_entries();
@@ -470,15 +587,19 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
       if (!depth) k.fail("needs a depth image in reads=");
       const std::string out = k.buffer_with(cmd.writes, BufferContent::UsedClusters);
       if (out.empty()) k.fail("needs a used_clusters buffer in writes=");
-      for (int y = 0; y < H; ++y) {
-        for (int x = 0; x < W; ++x) {
-          const std::size_t p = (static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x)) * depth->samples;
-          for (std::size_t s = 0; s < depth->samples; ++s) {
-            const float d = depth->depth[p + s];
-            if (d < 1.0f) grid->used[grid->cluster_of(x, y, ctx.frustum->distance_of_window_depth(d))] = 1;
+      // One item per row of cluster tiles: it alone flags that row's clusters.
+      run_items(ctx, static_cast<std::size_t>(grid->tiles_y), [&](std::size_t row, unsigned /*worker*/) {
+        const int y_end = std::min(H, (static_cast<int>(row) + 1) * tile_px);
+        for (int y = static_cast<int>(row) * tile_px; y < y_end; ++y) {
+          for (int x = 0; x < W; ++x) {
+            const std::size_t p = (static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x)) * depth->samples;
+            for (std::size_t s = 0; s < depth->samples; ++s) {
+              const float d = depth->depth[p + s];
+              if (d < 1.0f) grid->used[grid->cluster_of(x, y, ctx.frustum->distance_of_window_depth(d))] = 1;
+            }
           }
         }
-      }
+      });
       stats.compute_alu_ops += pixels * depth->samples * kClusterIndexOps;
       stats.clusters_used += grid->used_count();
       k.charge_write(out, clusters / 8 + grid->used_count() * kUsedClusterBytes);  // flag bits + compact list of used clusters
@@ -498,27 +619,38 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     } else {
       std::fill(grid->used.begin(), grid->used.end(), 1);
     }
+    // Each light is tested against the used clusters its screen rectangle and depth extent reach.
+    // One item per row of cluster tiles, lights ascending: it alone writes that row's lists.
     const auto rects = light_rects(ctx);
+    const auto spheres = view_spheres(ctx);
+    const auto row_lights = lights_by_tile_row(rects, tile_px, grid->tiles_y);
     const auto& lights = ctx.trace->lights;
+    std::vector<std::pair<int, int>> light_slices(lights.size());  // first and last slice each light reaches
     for (std::uint32_t l = 0; l < lights.size(); ++l) {
-      const PixelRect& lr = rects[l];
-      if (lr.empty()) continue;
       const float dist = ctx.frustum->distance_of(lights[l].position);
-      const int s0 = grid->slice_of(std::max(0.0f, dist - lights[l].radius));
-      const int s1 = grid->slice_of(dist + lights[l].radius);
-      for (int s = s0; s <= s1; ++s) {
-        float d0 = 0, d1 = 0;
-        grid->slice_range(s, d0, d1);
-        for (int ty = lr.y0 / tile_px; ty <= (lr.y1 - 1) / tile_px; ++ty) {
+      light_slices[l] = {grid->slice_of(std::max(0.0f, dist - lights[l].radius)), grid->slice_of(dist + lights[l].radius)};
+    }
+    std::vector<std::pair<float, float>> slice_ranges(static_cast<std::size_t>(grid->slices));
+    for (int s = 0; s < grid->slices; ++s) grid->slice_range(s, slice_ranges[static_cast<std::size_t>(s)].first, slice_ranges[static_cast<std::size_t>(s)].second);
+    run_items(ctx, static_cast<std::size_t>(grid->tiles_y), [&](std::size_t row, unsigned /*worker*/) {
+      const int ty = static_cast<int>(row);
+      std::vector<TileSides> sides(static_cast<std::size_t>(grid->tiles_x));
+      for (int tx = 0; tx < grid->tiles_x; ++tx) {
+        sides[static_cast<std::size_t>(tx)] =
+            TileSides::of(*ctx.frustum, intersect({tx * tile_px, ty * tile_px, (tx + 1) * tile_px, (ty + 1) * tile_px}, {0, 0, W, H}));
+      }
+      for (std::uint32_t l : row_lights[row]) {
+        const PixelRect& lr = rects[l];
+        for (int s = light_slices[l].first; s <= light_slices[l].second; ++s) {
+          const auto [d0, d1] = slice_ranges[static_cast<std::size_t>(s)];
           for (int tx = lr.x0 / tile_px; tx <= (lr.x1 - 1) / tile_px; ++tx) {
             const std::size_t c = grid->index(tx, ty, s);
             if (!grid->used[c]) continue;
-            const PixelRect rect = intersect({tx * tile_px, ty * tile_px, (tx + 1) * tile_px, (ty + 1) * tile_px}, {0, 0, W, H});
-            if (sphere_touches_tile_volume(*ctx.frustum, lights[l], rect, d0, d1)) grid->lists[c].push_back(l);
+            if (sides[static_cast<std::size_t>(tx)].touches(spheres[l], d0, d1)) grid->lists[c].push_back(l);
           }
         }
       }
-    }
+    });
     const std::uint64_t processed = grid->used_count();
     stats.light_volume_tests += processed * n_lights;
     stats.compute_alu_ops += processed * n_lights * kSphereVolumeTestOps;
@@ -569,18 +701,31 @@ void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStat
     if (!vis) k.fail("needs a visibility image (written by a pass) in reads=");
     const std::string out = k.buffer_with(cmd.writes, BufferContent::WorkLists);
     if (out.empty()) k.fail("needs a work_lists buffer in writes=");
-    std::set<std::pair<std::size_t, std::uint32_t>> entries;  // (tile, material)
-    for (int y = 0; y < H; ++y) {
-      for (int x = 0; x < W; ++x) {
-        const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
-        if (!vis->surface_valid[p * vis->samples]) continue;
-        entries.insert({static_cast<std::size_t>((y / tile_px) * ((W + tile_px - 1) / tile_px) + x / tile_px),
-                        vis->surface[p * vis->samples].material});
+    // One entry per distinct (tile, material). One item per row of tiles, counting its own tiles'
+    // pairs; the rows' counts add up to the frame's.
+    const int rows = (H + tile_px - 1) / tile_px;
+    const std::uint64_t tiles_x = static_cast<std::uint64_t>((W + tile_px - 1) / tile_px);
+    std::vector<std::uint64_t> row_entries(static_cast<std::size_t>(rows), 0);
+    run_items(ctx, row_entries.size(), [&](std::size_t row, unsigned /*worker*/) {
+      std::vector<std::uint64_t> pairs;  // (tile << 32) | material, a run of equal pairs once
+      const int y_end = std::min(H, (static_cast<int>(row) + 1) * tile_px);
+      for (int y = static_cast<int>(row) * tile_px; y < y_end; ++y) {
+        for (int x = 0; x < W; ++x) {
+          const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
+          if (!vis->surface_valid[p * vis->samples]) continue;
+          const std::uint64_t key = ((static_cast<std::uint64_t>(row) * tiles_x + static_cast<std::uint64_t>(x / tile_px)) << 32) |
+                                    vis->surface[p * vis->samples].material;
+          if (pairs.empty() || pairs.back() != key) pairs.push_back(key);
+        }
       }
-    }
+      std::sort(pairs.begin(), pairs.end());
+      row_entries[row] = static_cast<std::uint64_t>(std::unique(pairs.begin(), pairs.end()) - pairs.begin());
+    });
+    std::uint64_t entries = 0;
+    for (std::uint64_t e : row_entries) entries += e;
     stats.compute_alu_ops += pixels * kWorkListOps;
-    stats.work_list_entries += entries.size();
-    k.charge_write(out, entries.size() * kWorkListEntryBytes);
+    stats.work_list_entries += entries;
+    k.charge_write(out, entries * kWorkListEntryBytes);
     return;
   }
 

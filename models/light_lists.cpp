@@ -1,6 +1,7 @@
 #include "models/light_lists.hpp"
 
 #include "models/geometry_unit.hpp"
+#include "kernel/thread_pool.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -29,26 +30,28 @@ float ViewFrustum::distance_of_window_depth(float depth01) const {
 
 float ViewFrustum::distance_of(const glm::vec3& world) const { return -(view * glm::vec4(world, 1.0f)).z; }
 
-bool sphere_touches_tile_volume(const ViewFrustum& f, const Light& light, const PixelRect& rect, float d0, float d1) {
-  const glm::vec3 c = glm::vec3(f.view * glm::vec4(light.position, 1.0f));
-  const float r = light.radius;
-  const float dist = -c.z;
-  if (dist + r < d0 || dist - r > d1) return false;
+ViewSphere ViewSphere::of(const ViewFrustum& f, const Light& light) {
+  return {glm::vec3(f.view * glm::vec4(light.position, 1.0f)), light.radius};
+}
+
+TileSides TileSides::of(const ViewFrustum& f, const PixelRect& rect) {
   // NDC extents of the rectangle (y up in NDC, rows grow downwards).
   const float ax = (2.0f * static_cast<float>(rect.x0) / static_cast<float>(f.width_px) - 1.0f) * f.tan_half_x;
   const float bx = (2.0f * static_cast<float>(rect.x1) / static_cast<float>(f.width_px) - 1.0f) * f.tan_half_x;
   const float ay = (1.0f - 2.0f * static_cast<float>(rect.y1) / static_cast<float>(f.height_px)) * f.tan_half_y;
   const float by = (1.0f - 2.0f * static_cast<float>(rect.y0) / static_cast<float>(f.height_px)) * f.tan_half_y;
-  // Inside: x >= ax*(-z), x <= bx*(-z), y >= ay*(-z), y <= by*(-z). Signed distances to the planes.
-  auto outside = [&](glm::vec3 n) { return glm::dot(glm::normalize(n), c) < -r; };
-  if (outside({1.0f, 0.0f, ax})) return false;
-  if (outside({-1.0f, 0.0f, -bx})) return false;
-  if (outside({0.0f, 1.0f, ay})) return false;
-  if (outside({0.0f, -1.0f, -by})) return false;
-  return true;
+  // Inside: x >= ax*(-z), x <= bx*(-z), y >= ay*(-z), y <= by*(-z).
+  TileSides t;
+  t.normals = {glm::normalize(glm::vec3(1.0f, 0.0f, ax)), glm::normalize(glm::vec3(-1.0f, 0.0f, -bx)),
+               glm::normalize(glm::vec3(0.0f, 1.0f, ay)), glm::normalize(glm::vec3(0.0f, -1.0f, -by))};
+  return t;
 }
 
-DepthBounds DepthBounds::compute(const ViewFrustum& f, const AttachmentImage& depth, int tile_px) {
+bool sphere_touches_tile_volume(const ViewFrustum& f, const Light& light, const PixelRect& rect, float d0, float d1) {
+  return TileSides::of(f, rect).touches(ViewSphere::of(f, light), d0, d1);
+}
+
+DepthBounds DepthBounds::compute(const ViewFrustum& f, const AttachmentImage& depth, int tile_px, ThreadPool* pool) {
   DepthBounds b;
   b.tile_px = tile_px;
   b.tiles_x = (f.width_px + tile_px - 1) / tile_px;
@@ -57,18 +60,28 @@ DepthBounds DepthBounds::compute(const ViewFrustum& f, const AttachmentImage& de
   b.min_distance.assign(n, 1e30f);
   b.max_distance.assign(n, -1e30f);
   const std::size_t S = depth.samples;
-  for (int y = 0; y < f.height_px; ++y) {
-    for (int x = 0; x < f.width_px; ++x) {
-      const std::size_t t = static_cast<std::size_t>((y / tile_px) * b.tiles_x + x / tile_px);
-      const std::size_t p = (static_cast<std::size_t>(y) * static_cast<std::size_t>(f.width_px) + static_cast<std::size_t>(x)) * S;
-      for (std::size_t s = 0; s < S; ++s) {
-        const float d = depth.depth[p + s];
-        if (!(d < 1.0f)) continue;
-        const float dist = f.distance_of_window_depth(d);
-        b.min_distance[t] = std::min(b.min_distance[t], dist);
-        b.max_distance[t] = std::max(b.max_distance[t], dist);
+  // One item per row of tiles: it alone writes its tiles' bounds.
+  auto tile_row = [&](std::size_t ty, unsigned /*worker*/) {
+    const int y_end = std::min(f.height_px, (static_cast<int>(ty) + 1) * tile_px);
+    for (int y = static_cast<int>(ty) * tile_px; y < y_end; ++y) {
+      for (int x = 0; x < f.width_px; ++x) {
+        const std::size_t t = static_cast<std::size_t>((y / tile_px) * b.tiles_x + x / tile_px);
+        const std::size_t p = (static_cast<std::size_t>(y) * static_cast<std::size_t>(f.width_px) + static_cast<std::size_t>(x)) * S;
+        for (std::size_t s = 0; s < S; ++s) {
+          const float d = depth.depth[p + s];
+          if (!(d < 1.0f)) continue;
+          const float dist = f.distance_of_window_depth(d);
+          b.min_distance[t] = std::min(b.min_distance[t], dist);
+          b.max_distance[t] = std::max(b.max_distance[t], dist);
+        }
       }
     }
+  };
+  const auto rows = static_cast<std::size_t>(b.tiles_y);
+  if (pool != nullptr) {
+    pool->for_each(rows, tile_row);
+  } else {
+    for (std::size_t ty = 0; ty < rows; ++ty) tile_row(ty, 0);
   }
   return b;
 }
@@ -105,6 +118,8 @@ void ClusterGrid::configure(const ViewFrustum& f, int tile_px_, int slices_, Sli
   } else {
     slices = slices_;
   }
+  log_depth_range = std::log(far_plane / near_plane);
+  log_slice_ratio = std::log(slice_ratio);
   const std::size_t n = static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y) * static_cast<std::size_t>(slices);
   used.assign(n, 0);
   lists.assign(n, {});
@@ -114,10 +129,10 @@ int ClusterGrid::slice_of(float d) const {
   int k = 0;
   if (slicing == Slicing::Log) {
     if (d <= near_plane) return 0;
-    k = static_cast<int>(std::floor(std::log(d / near_plane) / std::log(far_plane / near_plane) * slices));
+    k = static_cast<int>(std::floor(std::log(d / near_plane) / log_depth_range * slices));
   } else {
     if (d <= min_depth) return 0;
-    k = 1 + static_cast<int>(std::floor(std::log(d / min_depth) / std::log(slice_ratio)));
+    k = 1 + static_cast<int>(std::floor(std::log(d / min_depth) / log_slice_ratio));
   }
   return std::clamp(k, 0, slices - 1);
 }

@@ -3,6 +3,7 @@
 // Forward+) and per cluster (clustered shading, Olsson; cascaded near-cubical clusters, Billeter).
 // A light is kept when its bounding sphere can reach the tile's or cluster's view-space volume, so
 // lists are conservative and shading from them gives the image of shading every light.
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -29,6 +30,32 @@ struct ViewFrustum {
   float distance_of(const glm::vec3& world) const;
 };
 
+class ThreadPool;
+
+/// A light's bounding sphere in view space: transformed once per light, tested against many
+/// tiles or clusters.
+struct ViewSphere {
+  glm::vec3 center{0.0f};
+  float radius = 0.0f;
+  static ViewSphere of(const ViewFrustum& f, const Light& light);
+};
+
+/// The four side planes (through the eye, unit inward normals) of a pixel rectangle's view-space
+/// volume: set up once per tile, shared by every light and depth range tested against it.
+struct TileSides {
+  std::array<glm::vec3, 4> normals{};
+  static TileSides of(const ViewFrustum& f, const PixelRect& rect);
+  /// True when `s` can intersect the volume between view distances [d0, d1].
+  bool touches(const ViewSphere& s, float d0, float d1) const {
+    const float dist = -s.center.z;
+    if (dist + s.radius < d0 || dist - s.radius > d1) return false;
+    for (const glm::vec3& n : normals) {
+      if (glm::dot(n, s.center) < -s.radius) return false;
+    }
+    return true;
+  }
+};
+
 /// True when the light's sphere can intersect the view-space volume of pixel rectangle `rect`
 /// between distances [d0, d1] (planes through the eye for the sides, d0/d1 for the ends).
 bool sphere_touches_tile_volume(const ViewFrustum& f, const Light& light, const PixelRect& rect, float d0, float d1);
@@ -40,8 +67,9 @@ struct DepthBounds {
   int tiles_y = 0;
   std::vector<float> min_distance;
   std::vector<float> max_distance;
-  /// Computes the bounds of a depth image (window depth < 1 counts as covered).
-  static DepthBounds compute(const ViewFrustum& f, const AttachmentImage& depth, int tile_px);
+  /// Computes the bounds of a depth image (window depth < 1 counts as covered); with a pool, rows
+  /// of tiles on its threads (each tile's bounds are its own: the same at any thread count).
+  static DepthBounds compute(const ViewFrustum& f, const AttachmentImage& depth, int tile_px, ThreadPool* pool = nullptr);
 };
 
 /// Per screen tile light lists (the grid plus the index list a tile culling kernel writes).
@@ -75,6 +103,8 @@ struct ClusterGrid {
   float far_plane = 100.0f;
   float min_depth = 0.1f;     ///< start of the first slice (cubical)
   float slice_ratio = 1.0f;   ///< cubical: z_{k+1} / z_k
+  float log_depth_range = 1.0f;  ///< log(far / near), set by configure (slice_of divides by it)
+  float log_slice_ratio = 1.0f;  ///< log(slice_ratio), set by configure
   std::vector<std::uint8_t> used;  ///< per cluster: 1 when flagged (or dense)
   std::vector<std::vector<std::uint32_t>> lists;
   std::uint64_t used_count() const;
