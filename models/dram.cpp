@@ -290,7 +290,24 @@ void Dram::refresh_until(Channel& ch, std::int64_t n) {
     if (ch.closed_since < 0) ch.closed_since = end;
     ++stats_.refreshes;
     ++ch.stats.refreshes;
+    const bool on_time = start == ch.next_refresh;
     ch.next_refresh += timing_.t_refi_cycles;
+    if (on_time && ch.next_refresh <= n) {
+      // Every bank is now closed and free from `end`, before the next refresh is due (tRFC <
+      // tREFI): each further refresh up to n starts when due and ends tRFC later, as this one did.
+      // Book them at once: an idle channel catches up thousands of refreshes per frame.
+      const std::int64_t more = (n - ch.next_refresh) / timing_.t_refi_cycles + 1;
+      const std::int64_t last_end = ch.next_refresh + (more - 1) * timing_.t_refi_cycles + timing_.t_rfc_cycles;
+      for (Bank& b : ch.banks) {
+        b.act_ready = last_end;
+        b.col_ready = last_end;
+        b.pre_ready = last_end;
+      }
+      stats_.refreshes += static_cast<std::uint64_t>(more);
+      ch.stats.refreshes += static_cast<std::uint64_t>(more);
+      ch.next_refresh += more * timing_.t_refi_cycles;
+      return;
+    }
   }
 }
 

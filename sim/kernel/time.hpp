@@ -87,6 +87,12 @@ class ClockDomain {
     num_ = static_cast<std::uint64_t>(kPsPerSecond / g);
     den_ = static_cast<std::uint64_t>(hz_ / g);
     fast_ = num_ <= UINT64_MAX / den_;
+    // The reciprocal path needs every dividend below 2^63: r*num + den - 1 < num*den + den.
+    magic_ = num_ < (std::uint64_t{1} << 62) / den_;
+    if (magic_) {
+      by_num_ = DivideBy(num_);
+      by_den_ = DivideBy(den_);
+    }
   }
   /// Convenience for configs that give MHz: rounds to the nearest integer Hz (1866 -> 1866000000).
   static ClockDomain from_mhz(std::string name, double mhz) {
@@ -107,6 +113,17 @@ class ClockDomain {
   Tick tick_of(Cycles n) const {
     if (n.count() < 0) throw std::domain_error("clock domain '" + name_ + "': negative cycle index");
     const auto cycles = static_cast<std::uint64_t>(n.count());
+    if (magic_) {
+      // As below, with the divisions by den replaced by exact reciprocal multiplications
+      // (cycles < 2^63 and r*num + den - 1 < 2^63).
+      const std::uint64_t q = by_den_.quotient(cycles), r = cycles - q * den_;
+      std::uint64_t ps;
+      if (__builtin_mul_overflow(q, num_, &ps) || __builtin_add_overflow(ps, by_den_.quotient(r * num_ + den_ - 1), &ps) ||
+          ps > static_cast<std::uint64_t>(INT64_MAX)) {
+        throw_overflow(n);
+      }
+      return Tick{static_cast<std::int64_t>(ps)};
+    }
     if (fast_) {
       // n = q*den + r: tick = q*num + ceil(r*num/den), with r*num < den*num < 2^64.
       const std::uint64_t q = cycles / den_, r = cycles % den_;
@@ -126,6 +143,10 @@ class ClockDomain {
   Cycles cycles_at(Tick t) const {
     if (t.ps() < 0) throw std::domain_error("clock domain '" + name_ + "': negative tick");
     const auto ps = static_cast<std::uint64_t>(t.ps());
+    if (magic_) {  // as below, dividing by reciprocal multiplication (ps < 2^63, r*den < 2^62)
+      const std::uint64_t q = by_num_.quotient(ps), r = ps - q * num_;
+      return Cycles{static_cast<std::int64_t>(q * den_ + by_num_.quotient(r * den_))};
+    }
     if (fast_) {
       // t = q*num + r: cycles = q*den + floor(r*den/num), with r*den < den*num < 2^64.
       const std::uint64_t q = ps / num_, r = ps % num_;
@@ -134,22 +155,48 @@ class ClockDomain {
     return Cycles{static_cast<std::int64_t>(static_cast<U128>(ps) * den_ / num_)};
   }
 
-  /// The first cycle boundary at or after t (t itself when t is an edge).
-  Tick next_edge(Tick t) const {
-    const Cycles n = cycles_at(t);
-    const Tick edge = tick_of(n);  // <= t by construction
-    return edge == t ? t : tick_of(n + Cycles{1});
+  /// The index of the first cycle boundary at or after t: cycles_at(next_edge(t)), computed with
+  /// one conversion. tick_of is strictly increasing, so it is the least n with tick_of(n) >= t,
+  /// i.e. with n*num/den > t - 1: floor((t - 1)*den/num) + 1 = cycles_at(t - 1) + 1 (0 for t = 0).
+  Cycles edge_index(Tick t) const {
+    if (t.ps() < 0) throw std::domain_error("clock domain '" + name_ + "': negative tick");
+    return t.ps() == 0 ? Cycles{0} : cycles_at(Tick{t.ps() - 1}) + Cycles{1};
   }
+
+  /// The first cycle boundary at or after t (t itself when t is an edge).
+  Tick next_edge(Tick t) const { return tick_of(edge_index(t)); }
 
   /// The first cycle boundary strictly after t.
   Tick edge_after(Tick t) const { return tick_of(cycles_at(t) + Cycles{1}); }
 
   /// The edge n cycles after the current-or-next edge of t: when a unit acting at `now` is done
   /// after a latency of n cycles. after(now, Cycles{0}) == next_edge(now).
-  Tick after(Tick now, Cycles n) const { return tick_of(cycles_at(next_edge(now)) + n); }
+  Tick after(Tick now, Cycles n) const { return tick_of(edge_index(now) + n); }
 
  private:
   __extension__ typedef unsigned __int128 U128;
+
+  /// Exact unsigned division by a constant d of dividends below 2^63 as a multiplication by a
+  /// rounded-up reciprocal (Granlund & Montgomery, "Division by invariant integers using
+  /// multiplication", PLDI 1994): with s = floor(log2 d) and m = ceil(2^(64+s) / d) < 2^64 (d
+  /// not a power of two), n*m / 2^(64+s) = n/d + n*e / (d*2^(64+s)) where e = m*d - 2^(64+s) < d;
+  /// the error term is below 1/d when n*e < 2^63 * 2^(s+1), so the floor is exactly n/d.
+  /// Powers of two shift.
+  struct DivideBy {
+    DivideBy() = default;
+    explicit DivideBy(std::uint64_t d) {
+      shift = 63u - static_cast<unsigned>(__builtin_clzll(d));
+      pow2 = (d & (d - 1)) == 0;
+      if (!pow2) mul = static_cast<std::uint64_t>(((static_cast<U128>(1) << (64 + shift)) - 1) / d + 1);
+    }
+    std::uint64_t quotient(std::uint64_t n) const {  // n < 2^63
+      if (pow2) return n >> shift;
+      return static_cast<std::uint64_t>((static_cast<U128>(n) * mul) >> 64) >> shift;
+    }
+    std::uint64_t mul = 0;
+    unsigned shift = 0;
+    bool pow2 = true;
+  };
 
   [[noreturn]] void throw_overflow(Cycles n) const {
     throw std::overflow_error("clock domain '" + name_ + "': cycle " + std::to_string(n.count()) +
@@ -162,6 +209,8 @@ class ClockDomain {
   std::uint64_t num_ = 1;
   std::uint64_t den_ = 1;
   bool fast_ = true;  // num_ * den_ fits 64 bits: conversions need no 128-bit division
+  bool magic_ = true;  // num_ * den_ < 2^62: conversions divide by reciprocal multiplication
+  DivideBy by_num_, by_den_;
 };
 
 }  // namespace tbdr
