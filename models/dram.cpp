@@ -377,13 +377,17 @@ void Dram::open_row(Channel& ch, Entry& e, std::int64_t n) {
 std::int64_t Dram::next_column_cycle(const Channel& ch, const std::vector<Entry>& q, std::int64_t n, Tick now) const {
   if (q.empty()) return kNever;
   const std::int64_t bus_ready = bus_ready_cycle(ch, n, now, q.front().is_write);
-  std::int64_t next = kNever;
+  // When a row hit can go depends only on its bank: collect the banks with an arrived row hit,
+  // then take the earliest of theirs.
+  std::uint64_t hit_banks = 0;
   for (const Entry& e : q) {
     if (e.arrival > now) break;
-    const Bank& b = ch.banks[e.bank];
-    if (b.open_row == static_cast<std::int64_t>(e.row)) {
-      next = std::min(next, std::max({b.col_ready, bus_ready, ccd_ready_cycle(ch, e.bank)}));
-    }
+    if (ch.banks[e.bank].open_row == static_cast<std::int64_t>(e.row)) hit_banks |= std::uint64_t{1} << e.bank;
+  }
+  std::int64_t next = kNever;
+  for (; hit_banks != 0; hit_banks &= hit_banks - 1) {
+    const auto bank = static_cast<std::uint32_t>(__builtin_ctzll(hit_banks));
+    next = std::min(next, std::max({ch.banks[bank].col_ready, bus_ready, ccd_ready_cycle(ch, bank)}));
   }
   return next == kNever ? kNever : std::max(next, n + 1);
 }
@@ -497,13 +501,21 @@ void Dram::wakeup(std::uint32_t c) {
     std::uint64_t wanted = 0;
     std::fill(first_need_.begin(), first_need_.end(), -1);
     int issue = -1;
+    std::uint64_t not_ready = 0;  // banks whose row hits cannot take their column command now
     for (std::size_t i = 0; i < q->size(); ++i) {
       const Entry& e = (*q)[i];
       if (e.arrival > now) break;
       const Bank& b = ch.banks[e.bank];
       if (b.open_row == static_cast<std::int64_t>(e.row)) {
-        wanted |= std::uint64_t{1} << e.bank;
-        if (issue < 0 && std::max({b.col_ready, bus_ready, ccd_ready_cycle(ch, e.bank)}) <= n) issue = static_cast<int>(i);
+        const std::uint64_t bit = std::uint64_t{1} << e.bank;
+        wanted |= bit;
+        if (issue < 0 && (not_ready & bit) == 0) {
+          if (std::max({b.col_ready, bus_ready, ccd_ready_cycle(ch, e.bank)}) <= n) {
+            issue = static_cast<int>(i);
+          } else {
+            not_ready |= bit;  // the same for every row hit of this bank
+          }
+        }
       } else if (first_need_[e.bank] < 0) {
         first_need_[e.bank] = static_cast<int>(i);
       }

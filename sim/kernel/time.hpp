@@ -111,7 +111,7 @@ class ClockDomain {
 
   /// The tick at which cycle n starts: ceil(n * 1e12 / f). n must be >= 0.
   Tick tick_of(Cycles n) const {
-    if (n.count() < 0) throw std::domain_error("clock domain '" + name_ + "': negative cycle index");
+    if (n.count() < 0) throw_negative("cycle index");
     const auto cycles = static_cast<std::uint64_t>(n.count());
     if (magic_) {
       // As below, with the divisions by den replaced by exact reciprocal multiplications
@@ -141,7 +141,7 @@ class ClockDomain {
 
   /// Whole cycles elapsed at tick t (the index of the cycle in progress): floor(t * f / 1e12).
   Cycles cycles_at(Tick t) const {
-    if (t.ps() < 0) throw std::domain_error("clock domain '" + name_ + "': negative tick");
+    if (t.ps() < 0) throw_negative("tick");
     const auto ps = static_cast<std::uint64_t>(t.ps());
     if (magic_) {  // as below, dividing by reciprocal multiplication (ps < 2^63, r*den < 2^62)
       const std::uint64_t q = by_num_.quotient(ps), r = ps - q * num_;
@@ -159,7 +159,7 @@ class ClockDomain {
   /// one conversion. tick_of is strictly increasing, so it is the least n with tick_of(n) >= t,
   /// i.e. with n*num/den > t - 1: floor((t - 1)*den/num) + 1 = cycles_at(t - 1) + 1 (0 for t = 0).
   Cycles edge_index(Tick t) const {
-    if (t.ps() < 0) throw std::domain_error("clock domain '" + name_ + "': negative tick");
+    if (t.ps() < 0) throw_negative("tick");
     return t.ps() == 0 ? Cycles{0} : cycles_at(Tick{t.ps() - 1}) + Cycles{1};
   }
 
@@ -198,7 +198,11 @@ class ClockDomain {
     bool pow2 = true;
   };
 
-  [[noreturn]] void throw_overflow(Cycles n) const {
+  // The error paths live out of line so that the conversions stay small enough to inline.
+  [[noreturn, gnu::cold, gnu::noinline]] void throw_negative(const char* what) const {
+    throw std::domain_error("clock domain '" + name_ + "': negative " + what);
+  }
+  [[noreturn, gnu::cold, gnu::noinline]] void throw_overflow(Cycles n) const {
     throw std::overflow_error("clock domain '" + name_ + "': cycle " + std::to_string(n.count()) +
                               " is beyond the representable tick range");
   }
