@@ -8,7 +8,9 @@
 // 535.91 ps). Frequencies are stored as integer Hz and conversions use 128-bit integer arithmetic,
 // so cycle n of any domain lands on the same tick no matter how long the simulation has run.
 // (Common clocks reduce to a small fraction, e.g. 600 MHz = 5000/3 ps per cycle, and convert with
-// 64-bit arithmetic; 128-bit division is the fallback for awkward frequencies.)
+// 64-bit arithmetic: when num x den < 2^62 (every clock of the configs) by an exact multiplication
+// with a reciprocal instead of the divisions; 128-bit division is the fallback for awkward
+// frequencies. tests/test_clock_fast_paths.cpp checks every path against 128-bit arithmetic.)
 #include <compare>
 #include <cstdint>
 #include <numeric>
