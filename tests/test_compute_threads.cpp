@@ -42,13 +42,6 @@ struct Lcg {
   }
 };
 
-Light light_at(const glm::vec3& position, float radius) {
-  Light l;
-  l.position = position;
-  l.radius = radius;
-  return l;
-}
-
 /// 400 lights over the frame at view distances 2..30 with radii 0.2..2.7, and one behind the eye.
 ComputeSpec spec() {
   ComputeSpec s;

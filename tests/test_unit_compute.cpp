@@ -18,13 +18,6 @@ using namespace unit;
 
 constexpr std::uint64_t kPixels = 64 * 64;
 
-Light light_at(const glm::vec3& position, float radius) {
-  Light l;
-  l.position = position;
-  l.radius = radius;
-  return l;
-}
-
 /// Four lights at view distance 10 (radius 0.5: about 2.8 pixels on screen):
 ///   0 centred on pixel (16, 16): inside tile (0, 0) of a 32 px grid only;
 ///   1 centred on pixel (32, 32): the corner the 4 tiles share, it reaches into each;

@@ -465,6 +465,14 @@ inline glm::vec3 world_at_pixel(float px, float py, float d, int width = kViewpo
   return {(2.0f * px / w - 1.0f) * d * t * (w / h), (1.0f - 2.0f * py / h) * d * t, -d};
 }
 
+/// A light at `position` (world) of radius `radius`, default otherwise.
+inline Light light_at(const glm::vec3& position, float radius) {
+  Light l;
+  l.position = position;
+  l.radius = radius;
+  return l;
+}
+
 /// What a compute rig holds: the trace's lights, buffers and shaders.
 struct ComputeSpec {
   std::vector<std::string> sets{};
