@@ -229,7 +229,10 @@ void GeometryUnit::emit_triangle(const Emit& e, const glm::vec4 clip[3], const g
   for (const ScreenTriangle& st : screen) {
     Primitive p;
     p.setup = setup_triangle(st, viewport_, e.scissor);
-    if (p.setup.empty) continue;  // covers no pixel of the viewport inside the scissor
+    if (p.setup.empty) {  // covers no pixel of the viewport inside the scissor
+      ++stats.primitives_culled_scissor;
+      continue;
+    }
     p.draw = e.draw;
     p.object = e.object;
     p.material = e.material;

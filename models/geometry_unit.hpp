@@ -27,6 +27,7 @@ PixelRect light_screen_rect(const Light& light, const CameraXform& camera, const
   X(Counter, primitives_culled_backface, "primitives", Sum, "Triangles removed by face culling") \
   X(Counter, primitives_culled_zero_area, "primitives", Sum, "Triangles with zero area after snapping") \
   X(Counter, primitives_clipped, "primitives", Sum, "Triangles cut by the near (or far) plane") \
+  X(Counter, primitives_culled_scissor, "primitives", Sum, "Screen triangles with no pixel inside the viewport and the draw's scissor rectangle (removed at setup)") \
   X(Counter, primitives_out, "primitives", Sum, "Screen triangles sent to the tiler") \
   X(Counter, vertices_shaded, "vertices", Sum, "Vertex shader invocations (post-transform cache misses)") \
   X(Counter, vertex_alu_ops, "ops", Sum, "Vertex shader ALU operations") \

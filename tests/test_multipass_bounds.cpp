@@ -231,6 +231,22 @@ TEST(RasterizerScissor, ADrawsScissorBoundsItsFragmentsAndBinning) {
   }
 }
 
+TEST(RasterizerScissor, TrianglesTheScissorRemovesAtSetupAreCounted) {
+  // The 80x80 grid's 12800 small triangles drawn with scissor [0, 16) x [0, 16): every screen
+  // triangle is either set up (primitives_out) or removed at setup because its pixel box misses
+  // the rectangle (primitives_culled_scissor), so the two add up to the unscissored draw's
+  // primitives_out, and the rectangle's 1/16 of the 64x64 frame leaves most of them removed.
+  const Scene s = partial_render_grid_scene();
+  const FrameResult full = run_synthetic(s, {draw_of("grid")});
+  DrawCmd cut = draw_of("grid");
+  cut.scissor = ScissorRect{0, 0, 16, 16};
+  const FrameResult scissored = run_synthetic(s, {cut});
+  EXPECT_EQ(stat(full, "frame/geometry", "primitives_culled_scissor"), 0);
+  EXPECT_EQ(stat(scissored, "frame/geometry", "primitives_out") + stat(scissored, "frame/geometry", "primitives_culled_scissor"),
+            stat(full, "frame/geometry", "primitives_out"));
+  EXPECT_GT(stat(scissored, "frame/geometry", "primitives_culled_scissor"), stat(full, "frame/geometry", "primitives_out") / 2);
+}
+
 // ---- forward_multipass: bounded additive passes, the same image -----------------------------------
 
 /// The atrium at detail 1, loaded once for the suite.
