@@ -17,8 +17,8 @@ namespace {
 /// CPU time in the kernel on the machines measured. hugetlb=1 backs the heap with transparent
 /// huge pages (512 times fewer faults) where the kernel allows them on request (madvise mode);
 /// the mmap and trim thresholds of 4 GiB keep freed blocks in the heap for the next pass
-/// instead of returning them to the kernel. Measured (bench/speed.sh, docs/performance.md):
-/// plain_forward 1.31 -> 0.95 CPU s, the kernel's share 0.24 -> 0.06 s.
+/// instead of returning them to the kernel. Measured side by side (1 thread, atrium:3 1080p, 1024 lights):
+/// plain_forward 1.31 -> 0.95 CPU s, the kernel's share 0.24 -> 0.06 s. docs/architecture.md says more.
 constexpr const char* kMallocTunables =
     "glibc.malloc.hugetlb=1:glibc.malloc.mmap_threshold=4294967296:glibc.malloc.trim_threshold=4294967296";
 /// Set in the environment of the re-executed process, so it runs once (and its children, which
