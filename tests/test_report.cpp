@@ -621,5 +621,29 @@ TEST(ReportRealOptions, StudyComparesModesAndPassesTechniqueOptions) {
   EXPECT_NE(bad_err.str().find("not in this study"), std::string::npos) << bad_err.str();
 }
 
+// The study starts its runs longest first: most scene draws, then most lights. With one worker
+// the runs end, and are written, in the order they start. plain_forward draws the scene 3 times
+// (opaque, masked, translucent) at any light count; forward_multipass (one light per pass) draws
+// a depth pre-pass and the first light's pass (opaque and masked each), an opaque and a masked
+// additive draw per further light whose box reaches the view, and the translucent draw: 5 draws
+// at 2 lights and 9 at 4 in these traces. So the order is forward_multipass 4, forward_multipass
+// 2, plain_forward 4, plain_forward 2 (the points were generated plain_forward first, 2 lights first).
+TEST(ReportRealOptions, StudyRunsTheLongestPointsFirst) {
+  const fs::path dir = scratch("study_order");
+  std::ostringstream out, err;
+  ASSERT_EQ(cli_main({"study", "--out", (dir / "s").string(), "--technique", "plain_forward", "forward_multipass",
+                      "--lights", "2", "4", "--resolution", "64x36", "--scene", "atrium:1", "--images", "none", "--jobs", "1"},
+                     out, err),
+            0)
+      << err.str();
+  ResultsDb db((dir / "s" / "study.db").string());
+  std::vector<std::string> order;
+  SqlStatement q(db.sql(), "SELECT trace_path FROM runs ORDER BY id");
+  while (q.step()) order.push_back(fs::path(q.text(0)).filename().string());
+  const std::vector<std::string> expected = {"forward_multipass_4.trace", "forward_multipass_2.trace",
+                                             "plain_forward_4.trace", "plain_forward_2.trace"};
+  EXPECT_EQ(order, expected);
+}
+
 }  // namespace
 }  // namespace tbdr

@@ -71,7 +71,9 @@ struct StudyPoint {
   std::string mode;        ///< gpu.mode of that configuration
   std::string trace_path;
   std::string images_dir;
-  std::size_t passes = 0;  ///< render passes in the trace (the replay's dominant unit of work)
+  /// Draws of the scene's geometry in the trace: each sends (the part inside its cull box of) the
+  /// scene through the geometry unit, the tiler and the ISP, the replay's dominant unit of work.
+  std::size_t scene_draws = 0;
 };
 
 std::string fmt(double v, int decimals) {
@@ -207,7 +209,11 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
       }
       std::ostringstream sink, errs;
       if (cli_main(a, sink, errs) != 0) throw InputError("study", "generating " + t + ": " + errs.str());
-      for (const TraceCommand& c : read_trace(p.trace_path).commands) p.passes += std::holds_alternative<PassDesc>(c) ? 1 : 0;
+      for (const TraceCommand& c : read_trace(p.trace_path).commands) {
+        if (const auto* pass = std::get_if<PassDesc>(&c)) {
+          for (const DrawCmd& d : pass->draws) p.scene_draws += d.geometry == GeometryKind::Scene ? 1 : 0;
+        }
+      }
       for (std::size_t c = 0; c < plan.configs.size(); ++c) {
         StudyPoint q = p;
         q.config = c;
@@ -232,13 +238,13 @@ int run_points(const StudyPlan& plan, const std::vector<StudyPoint>& points, std
   const auto interval = std::chrono::milliseconds(tty ? 200 : 1000);
   auto last_draw = std::chrono::steady_clock::now();
   draw_progress(out, 0, points.size(), seconds(), tty);
-  // Longest first (so that the last run to finish is a short one): a pass renders every tile of
-  // the frame, and forward_multipass's 1024 passes take about a third of the study's CPU time;
-  // among equal pass counts, more lights are more work. Ties keep the points' order.
+  // Longest first, so that the last run to end is a short one: most scene draws first
+  // (forward_multipass draws the scene once per light, about a third of the study's CPU time at
+  // 1024 lights), then most lights. Ties keep the points' order.
   std::vector<std::size_t> order(points.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return std::tie(points[b].passes, points[b].lights) < std::tie(points[a].passes, points[a].lights);
+    return std::tie(points[b].scene_draws, points[b].lights) < std::tie(points[a].scene_draws, points[a].lights);
   });
   WorkerPoolHooks hooks;
   hooks.next = [&]() -> std::optional<WorkerJob> {
