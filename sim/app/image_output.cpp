@@ -206,7 +206,9 @@ void check_size(std::size_t n, int w, int h, const char* what) {
 /// linear_to_srgb8 for single-precision inputs by table, exactly: the formula is monotone in its
 /// input, so the code of x is the number of thresholds at or below x, where threshold k (1..255)
 /// is the smallest float whose code is k or more (found once by bisection over the floats' bit
-/// patterns, which order non-negative floats as their values). No pow per pixel.
+/// patterns, which order non-negative floats as their values). No pow per pixel: a bucket table
+/// indexed by the float's exponent and top mantissa bits gives the code at the bucket's start,
+/// and at most a step or two over the thresholds inside the bucket finish the count.
 class SrgbTable {
  public:
   SrgbTable() {
@@ -223,20 +225,27 @@ class SrgbTable {
       }
       thresholds_[static_cast<std::size_t>(k - 1)] = std::bit_cast<float>(lo);
     }
+    for (std::size_t b = 0; b < bucket_start_.size(); ++b) {
+      const float first = std::bit_cast<float>(static_cast<std::uint32_t>(b << kBucketShift));
+      bucket_start_[b] = static_cast<std::uint8_t>(std::upper_bound(thresholds_.begin(), thresholds_.end(), first) - thresholds_.begin());
+    }
   }
   /// linear_to_srgb8(x) for a float x.
   std::uint8_t operator()(float x) const {
     if (!(x > 0.0f)) return 0;  // also NaN
-    // Branch-free binary search: the count of thresholds <= x (8 halvings of 256 slots).
-    std::size_t i = 0;
-    for (std::size_t step = 128; step > 0; step /= 2) {
-      if (i + step <= thresholds_.size() && thresholds_[i + step - 1] <= x) i += step;
-    }
+    if (x >= thresholds_.back()) return 255;  // also every x >= 1: the buckets end below 1
+    std::size_t i = bucket_start_[std::bit_cast<std::uint32_t>(x) >> kBucketShift];
+    while (thresholds_[i] <= x) ++i;  // stops by i = 254: x < thresholds_[254]
     return static_cast<std::uint8_t>(i);
   }
 
  private:
+  /// Buckets of 2^16 float bit patterns: 7 mantissa bits, 1/128 of an octave, across which the
+  /// code grows by at most about 1 (the curve's steepest relative slope is 1/2.4 near 255).
+  static constexpr unsigned kBucketShift = 16;
   std::array<float, 255> thresholds_{};
+  /// The code of each bucket's first float, for the buckets of [0, 1).
+  std::array<std::uint8_t, (0x3f800000u >> kBucketShift)> bucket_start_{};
 };
 
 template <typename Vec>
