@@ -5,6 +5,25 @@
 
 namespace tbdr {
 
+namespace {
+
+/// The Blinn-Phong exponent as a whole number: the specular power is computed by repeated
+/// squaring (five multiplications for 32) instead of a powf call per lit light.
+constexpr unsigned kWholeShininess = static_cast<unsigned>(ShadingModel::kShininess);
+static_assert(static_cast<float>(kWholeShininess) == ShadingModel::kShininess, "the exponent must be whole");
+
+/// x^n by binary exponentiation.
+float whole_power(float x, unsigned n) {
+  float r = 1.0f;
+  for (; n != 0; n >>= 1) {
+    if (n & 1u) r *= x;
+    x *= x;
+  }
+  return r;
+}
+
+}  // namespace
+
 glm::vec3 ShadingModel::lit_contribution(const SurfacePoint& s, glm::vec3 eye, const Light& light) {
   const glm::vec3 to_light = light.position - s.position;
   const float dist2 = glm::dot(to_light, to_light);
@@ -24,7 +43,7 @@ glm::vec3 ShadingModel::lit_contribution(const SurfacePoint& s, glm::vec3 eye, c
   if (n_dot_l <= 0.0f) return glm::vec3(0.0f);
   const glm::vec3 v = glm::normalize(eye - s.position);
   const glm::vec3 h = glm::normalize(l + v);
-  const float spec = std::pow(glm::max(glm::dot(s.normal, h), 0.0f), kShininess) * kSpecular;
+  const float spec = whole_power(glm::max(glm::dot(s.normal, h), 0.0f), kWholeShininess) * kSpecular;
   return light.color * (light.intensity * atten * cone) * (s.albedo * n_dot_l + glm::vec3(spec * n_dot_l));
 }
 
