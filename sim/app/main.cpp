@@ -27,10 +27,13 @@ constexpr const char* kTunedMarker = "TBDRSIM_MALLOC_TUNED";
 
 /// glibc reads its tunables only at process start: re-execute this program once with them set.
 /// A user's own GLIBC_TUNABLES is respected as it is; without /proc (exec fails) the run goes
-/// on with the defaults. Sanitizer builds have their own allocator and skip this.
+/// on with the defaults. Sanitizer builds have their own allocator and skip this, and so does a
+/// process with a preloaded library (LD_PRELOAD: valgrind, heaptrack, a profiler), which the
+/// tool under which it runs may not follow into a new program.
 void reexec_with_malloc_tunables(char** argv) {
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
   if (std::getenv("GLIBC_TUNABLES") != nullptr || std::getenv(kTunedMarker) != nullptr) return;
+  if (const char* preload = std::getenv("LD_PRELOAD"); preload != nullptr && *preload != '\0') return;
   if (setenv("GLIBC_TUNABLES", kMallocTunables, 1) != 0 || setenv(kTunedMarker, "1", 1) != 0) return;
   execv("/proc/self/exe", argv);
   unsetenv("GLIBC_TUNABLES");  // exec failed: run here, untuned
