@@ -196,7 +196,7 @@ class FrameSimulator {
       // An attachment of this pass that earlier draws write: its surfaces are stored as they shade.
       AttachmentImage& img = result_.images.attachments.at(n);
       if (img.surface.empty() && (img.usage == AttachmentUsage::Gbuffer || img.usage == AttachmentUsage::Visibility)) {
-        img.surface.assign(img.sample_count, SurfacePoint{});
+        img.surface.assign(img.sample_count, options_.colour);
         img.surface_valid.assign(img.sample_count, 0);
       }
     }

@@ -327,8 +327,9 @@ void material_texture_lines(const ComputeContext& ctx, const AttachmentImage& su
               const std::size_t p = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
               for (std::size_t smp = 0; smp < S; ++smp) {
                 const std::size_t k = p * S + smp;
-                if (!surfaces.surface_valid[k] || surfaces.surface[k].material == kNoMaterial) continue;
-                const SurfacePoint& s = surfaces.surface[k];
+                if (!surfaces.surface_valid[k]) continue;
+                const SurfaceSite& s = surfaces.surface.site(k);
+                if (s.material == kNoMaterial) continue;
                 if (std::find(triangles, triangles + n, s.triangle) != triangles + n) continue;
                 triangles[n++] = s.triangle;
                 const TextureStorage& tex = layout.of_material(s.material);
@@ -402,7 +403,7 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
         std::size_t n_shaded = 0;
         for (std::size_t smp = 0; smp < S; ++smp) {
           if (!surfaces.surface_valid[p * S + smp]) continue;
-          const SurfacePoint& s = surfaces.surface[p * S + smp];
+          const SurfaceSite& s = surfaces.surface.site(p * S + smp);
           std::size_t k = 0;
           while (k < n_shaded && shaded_triangles[k] != s.triangle) ++k;
           if (k == n_shaded) {
@@ -412,7 +413,7 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
             if (cgrid) list = &cgrid->lists[cgrid->cluster_of(x, y, ctx.frustum->distance_of(s.position))];
             if (list) count = list->size();
             shaded_triangles[k] = s.triangle;
-            shaded_colors[k] = ctx.colour ? shade_surface(ctx, s, x, y, list) : glm::vec3(0.0f);  // FrameInputs::colour
+            shaded_colors[k] = ctx.colour ? shade_surface(ctx, surfaces.surface[p * S + smp], x, y, list) : glm::vec3(0.0f);  // FrameInputs::colour
             ++n_shaded;
             ++stats.compute_shaded_pixels;
             stats.compute_light_evaluations += count;

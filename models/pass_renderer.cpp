@@ -151,7 +151,7 @@ AttachmentImage* PassRenderer::allocate_surfaces() {
     // The TSP stores a fragment's surface in the first non-colour target among its outputs: with
     // the targets in one order for every draw, this one.
     if (!t->surface.empty()) return nullptr;
-    t->surface.assign(t->sample_count, SurfacePoint{});
+    t->surface.assign(t->sample_count, ctx_.colour);
     t->surface_valid.assign(t->sample_count, 0);
     return t;
   }
@@ -161,7 +161,7 @@ AttachmentImage* PassRenderer::allocate_surfaces() {
 void PassRenderer::release_unwritten_surfaces(AttachmentImage* fresh) {
   if (fresh == nullptr) return;
   if (std::find(fresh->surface_valid.begin(), fresh->surface_valid.end(), std::uint8_t{1}) != fresh->surface_valid.end()) return;
-  fresh->surface = {};
+  fresh->surface.release();
   fresh->surface_valid = {};
 }
 

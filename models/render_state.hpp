@@ -123,8 +123,9 @@ struct AttachmentImage {
   std::vector<float> depth;           ///< width*height*samples, depth formats
   std::vector<std::uint8_t> stencil;  ///< width*height*samples, depth formats
   /// G-buffer / visibility attachments: the surface each pixel's data stands for (kept in the
-  /// first such attachment a shader writes; width*height*samples) and whether it was written.
-  std::vector<SurfacePoint> surface;
+  /// first such attachment a shader writes; width*height*samples, looks only with colours) and
+  /// whether it was written.
+  SurfaceStore surface;
   std::vector<std::uint8_t> surface_valid;
   std::size_t sample_count = 0;  ///< width*height*samples: the size of each array above that is kept
   /// A cleared image for attachment `a` over `pixels` pixels (depth 1, stencil 0, color 0; no
@@ -153,7 +154,7 @@ struct AttachmentImage {
 /// charged).
 struct PlsState {
   std::uint32_t stack_capacity = 0;      ///< light indices a pixel's PLS holds
-  std::vector<SurfacePoint> surface;     ///< width*height, or empty (above)
+  SurfaceStore surface;                  ///< width*height (looks only with colours), or empty (above)
   std::vector<std::uint8_t> valid;       ///< 1 when the surface is defined
   std::vector<glm::vec3> accum;          ///< light accumulator (empty when no colours are computed)
   std::vector<std::uint32_t> stack;      ///< width*height*stack_capacity light indices (empty without colours)

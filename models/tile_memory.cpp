@@ -73,7 +73,7 @@ TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats)
     // The pass's pixel local storage lives in tile memory: sized from its declared layout.
     const std::size_t pixels = static_cast<std::size_t>(ctx.viewport.width_px) * static_cast<std::size_t>(ctx.viewport.height_px);
     pls_.stack_capacity = pls_light_stack_capacity(pass.pls_bytes_per_pixel());
-    pls_.surface.assign(ctx.colour || pls_surface_counted(ctx) ? pixels : 0, SurfacePoint{});
+    pls_.surface.assign(ctx.colour || pls_surface_counted(ctx) ? pixels : 0, ctx.colour);
     pls_.valid.assign(pixels, 0);
     pls_.accum.assign(ctx.colour ? pixels : 0, glm::vec3(0.0f));  // light sums: colours only
     pls_.stack.assign(ctx.colour ? pixels * pls_.stack_capacity : 0, 0);  // which lights: colours only

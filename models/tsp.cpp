@@ -160,9 +160,9 @@ bool Tsp::surface_bounds(const Primitive& p, const DrawContext& d, std::span<con
       add(triangle_position(p, px.x, px.y));
     } else if (d.surface_source) {
       const std::size_t k = pixel * d.surface_source->samples;
-      if (d.surface_source->surface_valid[k]) add(d.surface_source->surface[k].position);
+      if (d.surface_source->surface_valid[k]) add(d.surface_source->surface.site(k).position);
     } else if (pls_reads && ctx_.pls->valid[pixel]) {
-      add(ctx_.pls->surface[pixel].position);
+      add(ctx_.pls->surface.site(pixel).position);
     }
   }
   return any;
@@ -384,6 +384,8 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   }
   const std::optional<Format> pls_accum_format = pls_accum_format_;
   auto stored_surface = [&](bool pls, SurfacePoint q) {
+    // The formats keep the looks (normal, albedo, alpha), which a store keeps only with colours.
+    if (!colour) return q;
     if (pls) {
       for (const auto& [name, format] : pls_formats_) FormatPrecision::surface(*name, format, q);
     } else {
@@ -538,7 +540,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     // Pixel local storage effects of shaders without color outputs.
     if (pls_writes && outputs == 0) {
       if (from_triangle) {
-        if (!ctx_.pls->surface.empty()) ctx_.pls->surface[pixel] = stored_surface(true, s);
+        if (!ctx_.pls->surface.empty()) ctx_.pls->surface.set(pixel, stored_surface(true, s));
         ctx_.pls->valid[pixel] = 1;
         if (colour) ctx_.pls->accum[pixel] = glm::vec3(0.0f);
         ctx_.pls->stack_count[pixel] = 0;
@@ -598,12 +600,12 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         const SurfacePoint stored = stored_surface(false, s);
         // G-buffer / visibility: the first such target keeps the surface the data stands for.
         if (target->surface.empty()) {
-          target->surface.assign(target->sample_count, SurfacePoint{});
+          target->surface.assign(target->sample_count, colour);
           target->surface_valid.assign(target->sample_count, 0);
         }
         for (int smp = 0; smp < S; ++smp) {
           if (!(write_mask & (1u << smp))) continue;
-          target->surface[pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(smp)] = stored;
+          target->surface.set(pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(smp), stored);
           target->surface_valid[pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(smp)] = 1;
         }
         surface_stored = true;

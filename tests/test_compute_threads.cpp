@@ -124,12 +124,14 @@ struct Frame {
     auto& surfaces = rig.images.attachments.at("vis").surface;
     for (int y = 0; y < kH; ++y) {
       for (int x = 0; x < kW; ++x) {
-        SurfacePoint& s = surfaces[static_cast<std::size_t>(y) * kW + static_cast<std::size_t>(x)];
+        const std::size_t p = static_cast<std::size_t>(y) * kW + static_cast<std::size_t>(x);
+        SurfacePoint s = surfaces[p];
         s.triangle = static_cast<std::uint32_t>((y / 5) * kW + x) / 3;
         s.material = s.triangle % 3;
         const float u = static_cast<float>(x >> 1) / 64.0f + 0.01f * static_cast<float>(s.triangle % 7);
         const float v = static_cast<float>(y >> 1) / 48.0f;
         s.quad_uv = {glm::vec2(u, v), glm::vec2(u + 1.0f / 128, v), glm::vec2(u, v + 1.0f / 96), glm::vec2(u + 1.0f / 128, v + 1.0f / 96)};
+        surfaces.set(p, s);
       }
     }
     add_materials(rig.scene);

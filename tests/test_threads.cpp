@@ -121,7 +121,8 @@ void expect_same_images(const FrameImages& a, const FrameImages& b, const std::s
     EXPECT_TRUE(same_bits(x.color, y.color)) << what << ": attachment " << name << " colour";
     EXPECT_TRUE(same_bits(x.depth, y.depth)) << what << ": attachment " << name << " depth";
     EXPECT_TRUE(same_bits(x.stencil, y.stencil)) << what << ": attachment " << name << " stencil";
-    EXPECT_TRUE(same_bits(x.surface, y.surface)) << what << ": attachment " << name << " surfaces";
+    EXPECT_TRUE(same_bits(x.surface.sites(), y.surface.sites())) << what << ": attachment " << name << " surface sites";
+    EXPECT_TRUE(same_bits(x.surface.looks(), y.surface.looks())) << what << ": attachment " << name << " surface looks";
     EXPECT_TRUE(same_bits(x.surface_valid, y.surface_valid)) << what << ": attachment " << name << " surface_valid";
   }
   ASSERT_EQ(a.image_buffers.size(), b.image_buffers.size()) << what;

@@ -183,7 +183,12 @@ TEST(UnitCompute, ShadingKernelsMaterialFetchesAreTheFetchesBeyondTheImagesRead)
   for (const auto& [fetches, lines] : {std::pair{1u, 0u}, std::pair{3u, 8u}}) {
     ComputeRig rig(four_lights_and_shader("resolve", LightSource::All, fetches));
     rig.add_gbuffer("gbuf", hundred_surfaces());
-    for (auto& surface : rig.images.attachments.at("gbuf").surface) surface.material = 0;
+    SurfaceStore& surfaces = rig.images.attachments.at("gbuf").surface;
+    for (std::size_t k = 0; k < surfaces.size(); ++k) {
+      SurfacePoint s = surfaces[k];
+      s.material = 0;
+      surfaces.set(k, s);
+    }
     const TextureLayout layout(&rig.scene, rig.hw, 3);
     std::vector<std::uint64_t> texture_lines;
     ComputeContext cc = rig.context();

@@ -530,13 +530,15 @@ class ComputeRig {
     img.defined = true;
     img.sample_count = valid.size();
     img.color.assign(valid.size(), glm::vec4(0.0f));
-    img.surface.assign(valid.size(), SurfacePoint{});
+    img.surface.assign(valid.size(), true);
     img.surface_valid = valid;
     for (std::size_t p = 0; p < valid.size(); ++p) {
-      img.surface[p].position = glm::vec3(0.0f, 0.0f, -5.0f);
-      img.surface[p].normal = glm::vec3(0.0f, 0.0f, 1.0f);
-      img.surface[p].albedo = glm::vec3(0.5f);
-      img.surface[p].triangle = static_cast<std::uint32_t>(p);
+      SurfacePoint s;
+      s.position = glm::vec3(0.0f, 0.0f, -5.0f);
+      s.normal = glm::vec3(0.0f, 0.0f, 1.0f);
+      s.albedo = glm::vec3(0.5f);
+      s.triangle = static_cast<std::uint32_t>(p);
+      img.surface.set(p, s);
     }
     images.attachments[name] = std::move(img);
   }
