@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <span>
 
 #include "models/rop.hpp"
 
@@ -10,6 +11,15 @@ namespace tbdr {
 namespace {
 
 constexpr std::uint32_t kNoTag = 0xffffffffu;
+
+// The ISP's per-sample visitor is inlined into the rasteriser's pixel loop (GCC declines on its
+// own: the visitor is large and the loop is instantiated for five sample counts), so the loop
+// keeps the primitive's state in registers. Compilers without the attribute decide for themselves.
+#if defined(__GNUC__)
+#define TBDR_ISP_INLINE_VISITOR __attribute__((always_inline))
+#else
+#define TBDR_ISP_INLINE_VISITOR
+#endif
 
 /// A comparison as the outcomes it passes, a table indexed by the outcome of `incoming` against
 /// `stored`: bit 0 unordered (a NaN), bit 1 less, bit 2 equal, bit 4 greater. Set once per
@@ -159,6 +169,8 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     layers_.resize(tile_samples * static_cast<std::size_t>(L));
     pushed_.clear();
     unresolved_layers_ = 0;
+    // A primitive has at most one candidate per tile sample: written without growth checks.
+    if (candidates_.size() < tile_samples) candidates_.resize(tile_samples);
   }
   // tbr / imr with isp.early_z=0: every rasterised sample is shaded, the tests decide the writes.
   const bool late_z = !ctx_.defer_shading && ctx_.hw->isp.early_z == 0;
@@ -197,7 +209,6 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     const bool stencil_on = has_st && pl.stencil_test;
     const auto ref = static_cast<std::uint8_t>(pl.stencil_ref & 0xffu);
     const bool early_write = !ctx_.defer_shading && p.hsr == HsrClass::Opaque && write_on;
-    candidates_.clear();
     pending_.clear();
     rasterised_.clear();
     const std::uint32_t depth_outcomes = passing_outcomes(pl.depth_compare);
@@ -208,11 +219,19 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     // tbdr: whether a sample cannot take this primitive without knowing a punch-through's alpha
     // result or without a free layer: then the tile's layers are flushed first.
     bool conflict = false;
-    const std::size_t L_size = static_cast<std::size_t>(L);
+    // The tile state the per-sample loop reads, as locals it can keep in registers (rasterising
+    // changes none of it).
+    const bool defer = ctx_.defer_shading;
+    const bool open_verdicts = depth_on && unresolved_layers_ != 0;  // a punch-through may change a verdict
+    const std::uint8_t* const stack_depth = depth_of_.data();
+    const Layer* const stacks = layers_.data();
+    Candidate* const cand = candidates_.data();
+    std::size_t n_cand = 0;
+    const int x0 = rect.x0, y0 = rect.y0;
 
-    rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) __attribute__((always_inline)) {
+    rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {
       const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
-      const std::size_t lbase = (static_cast<std::size_t>(y - rect.y0) * rw + static_cast<std::size_t>(x - rect.x0)) * S;
+      const std::size_t lbase = (static_cast<std::size_t>(y - y0) * rw + static_cast<std::size_t>(x - x0)) * S;
       for (std::uint32_t m = mask; m != 0; m &= m - 1) {
         const int s = std::countr_zero(m);
         if (overdraw) ++overdraw[pixel];
@@ -228,7 +247,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
             continue;
           }
         }
-        if (ctx_.defer_shading) {
+        if (defer) {
           // The depth test's verdict may change if a flush resolves punch-through depth first:
           // the stencil ops that depend on it wait for the final verdict. With no unresolved
           // punch-through layer in the tile, no flush can change the depth buffer: a failed
@@ -238,7 +257,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
           if (depth_on) {
             ++depth_reads;
             pass = passes_outcomes(depth_outcomes, z[s], depth[gi]);
-            if (!pass && unresolved_layers_ == 0) {
+            if (!pass && !open_verdicts) {
               ++final_fails;
               if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
               continue;
@@ -246,18 +265,18 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
           }
           const auto li = static_cast<std::uint32_t>(lbase + static_cast<std::size_t>(s));
           if (!conflict) {
-            const int n = depth_of_[li];
+            const int n = stack_depth[li];
             conflict = layered && pass && n >= L;
-            if (depth_on && unresolved_layers_ != 0) {
+            if (open_verdicts) {
               // The verdict is open when a punch-through layer's depth, if its alpha test keeps
               // the sample, would change it (either way: a greater test may pass only against it).
-              const Layer* stack = &layers_[li * L_size];
+              const Layer* stack = stacks + static_cast<std::size_t>(li) * static_cast<std::size_t>(L);
               for (int k = 0; k < n && !conflict; ++k) {
                 conflict = stack[k].unresolved && passes_outcomes(depth_outcomes, z[s], stack[k].z) != pass;
               }
             }
           }
-          candidates_.push_back({li, x, y, 1u << s, z[s], pass});
+          cand[n_cand++] = {li, x, y, 1u << s, z[s], pass};
           continue;
         }
         if (depth_on) {
@@ -282,15 +301,16 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     isp.depth_buffer_read_bytes += ds_bytes * depth_reads;
     isp.depth_test_failed_samples += final_fails;
 
-    if (ctx_.defer_shading) {
-      if (candidates_.empty()) continue;  // (final fails need no flush: nothing of them is pending)
+    if (defer) {
+      if (n_cand == 0) continue;  // (final fails need no flush: nothing of them is pending)
+      const std::span<Candidate> candidates(cand, n_cand);
       if (conflict) {
         flush(prims, true, isp, tsp);
         if (depth_on) {
           // The flush wrote the punch-through depths: test again against them (the samples that
           // failed for good read the depth again too).
-          isp.depth_buffer_read_bytes += ds_bytes * (final_fails + candidates_.size());
-          for (Candidate& c : candidates_) {
+          isp.depth_buffer_read_bytes += ds_bytes * (final_fails + candidates.size());
+          for (Candidate& c : candidates) {
             c.depth_pass = passes_outcomes(depth_outcomes, c.z, depth[global_index(c.x, c.y, c.bit)]);
           }
         }
@@ -299,7 +319,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
       const bool unresolved = p.hsr == HsrClass::PunchThrough && write_on;
       const bool writes_depth_now = write_on && p.hsr != HsrClass::PunchThrough;
       std::uint64_t kept = 0;
-      for (const Candidate& c : candidates_) {
+      for (const Candidate& c : candidates) {
         if (!c.depth_pass) {
           ++isp.depth_test_failed_samples;
           if (stencil_on) {
@@ -313,7 +333,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
           const std::size_t gi = global_index(c.x, c.y, c.bit);
           stencil[gi] = apply_stencil(pl.stencil_pass_op, stencil[gi], ref);
         }
-        Layer* stack = &layers_[static_cast<std::size_t>(c.li) * L_size];
+        Layer* stack = &layers_[static_cast<std::size_t>(c.li) * static_cast<std::size_t>(L)];
         std::uint8_t& n = depth_of_[c.li];
         if (!layered) {
           isp.hsr_removed_samples += n;  // every layer beneath is hidden: never shaded

@@ -133,7 +133,7 @@ class Isp {
   /// Unresolved punch-through layers pushed since the tile's last flush (an upper bound: a layer
   /// an opaque sample hides still counts). 0: no flush can change the depth buffer.
   std::uint64_t unresolved_layers_ = 0;
-  std::vector<Candidate> candidates_;
+  std::vector<Candidate> candidates_;  ///< tbdr: one per tile sample, the current primitive's first n
   std::vector<PendingSample> pending_;
   std::vector<PendingSample> rasterised_;  ///< isp.early_z=0: every sample the primitive covers
   std::vector<PushedLayer> pushed_;  ///< the layers pushed since the tile's last flush
