@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <span>
 
 #include "models/rop.hpp"
 
@@ -11,19 +12,43 @@ namespace {
 
 constexpr std::uint32_t kNoTag = 0xffffffffu;
 
+// The ISP's per-sample visitor is inlined into the rasteriser's pixel loop (GCC declines on its
+// own: the visitor is large and the loop is instantiated for five sample counts), so the loop
+// keeps the primitive's state in registers. Compilers without the attribute decide for themselves.
+#if defined(__GNUC__)
+#define TBDR_ISP_INLINE_VISITOR __attribute__((always_inline))
+#else
+#define TBDR_ISP_INLINE_VISITOR
+#endif
+
+/// A comparison as the outcomes it passes, a table indexed by the outcome of `incoming` against
+/// `stored`: bit 0 unordered (a NaN), bit 1 less, bit 2 equal, bit 4 greater. Set once per
+/// primitive, so the per-sample test is three compares and a shift, not a switch.
+constexpr std::uint32_t passing_outcomes(CompareOp op) {
+  switch (op) {
+    case CompareOp::Never: return 0x00;
+    case CompareOp::Less: return 0x02;
+    case CompareOp::Equal: return 0x04;
+    case CompareOp::LessEqual: return 0x06;
+    case CompareOp::Greater: return 0x10;
+    case CompareOp::NotEqual: return 0x13;  // less, greater or unordered (IEEE: NaN != x)
+    case CompareOp::GreaterEqual: return 0x14;
+    case CompareOp::Always: return 0x17;
+  }
+  return 0x17;
+}
+
+/// Whether `incoming` passes the comparison whose passing_outcomes() is `outcomes`.
+template <class T>
+bool passes_outcomes(std::uint32_t outcomes, T incoming, T stored) {
+  const auto outcome = static_cast<std::uint32_t>(incoming < stored) | static_cast<std::uint32_t>(incoming == stored) << 1 |
+                       static_cast<std::uint32_t>(incoming > stored) << 2;
+  return ((outcomes >> outcome) & 1u) != 0;
+}
+
 template <class T>
 bool passes(CompareOp op, T incoming, T stored) {
-  switch (op) {
-    case CompareOp::Never: return false;
-    case CompareOp::Less: return incoming < stored;
-    case CompareOp::Equal: return incoming == stored;
-    case CompareOp::LessEqual: return incoming <= stored;
-    case CompareOp::Greater: return incoming > stored;
-    case CompareOp::NotEqual: return incoming != stored;
-    case CompareOp::GreaterEqual: return incoming >= stored;
-    case CompareOp::Always: return true;
-  }
-  return true;
+  return passes_outcomes(passing_outcomes(op), incoming, stored);
 }
 
 std::uint8_t apply_stencil(StencilOp op, std::uint8_t v, std::uint8_t ref) {
@@ -89,54 +114,28 @@ void Isp::rop_color_outputs(std::uint32_t prim_index, bool punch) {
   }
 }
 
-void Isp::flush(const PixelRect& rect, const std::vector<std::uint32_t>& prims, bool mid_tile, IspStats& isp,
-                TspStats& tsp) {
-  const int S = ctx_.pattern.count;
-  const int rw = rect.width();
-  const int L = layers_per_sample_;
+void Isp::flush(const std::vector<std::uint32_t>& prims, bool mid_tile, IspStats& isp, TspStats& tsp) {
+  const auto L = static_cast<std::size_t>(layers_per_sample_);
   flush_samples_.clear();
   unresolved_layers_ = 0;  // every layer leaves the stacks
   bool resolves = false;
-  for (int y = rect.y0; y < rect.y1; ++y) {
-    for (int x = rect.x0; x < rect.x1; ++x) {
-      const std::size_t base = (static_cast<std::size_t>(y - rect.y0) * rw + static_cast<std::size_t>(x - rect.x0)) * S;
-      for (int s = 0; s < S; ++s) {
-        const std::size_t li = base + static_cast<std::size_t>(s);
-        const int n = depth_of_[li];
-        for (int k = 0; k < n; ++k) {
-          const Layer& l = layers_[li * static_cast<std::size_t>(L) + static_cast<std::size_t>(k)];
-          flush_samples_.push_back({l.list_pos, x, y, 1u << s, l.z, l.unresolved});
-          resolves = resolves || l.unresolved;
-        }
-        depth_of_[li] = 0;
-      }
-    }
+  // Shade primitive by primitive, in submission order (a sample's layers were pushed in that
+  // order, so each sample's layers are shaded bottom first); raster order within each: the order
+  // the layers were pushed in, less those a later opaque sample hid.
+  for (const PushedLayer& pl : pushed_) {
+    if (pl.slot >= depth_of_[pl.li] || layers_[pl.li * L + pl.slot].list_pos != pl.sample.tag) continue;
+    flush_samples_.push_back(pl.sample);
+    flush_samples_.back().tag = prims[pl.sample.tag];
+    resolves = resolves || pl.sample.unresolved;
   }
+  for (const PushedLayer& pl : pushed_) depth_of_[pl.li] = 0;
+  pushed_.clear();
   if (flush_samples_.empty()) return;
   if (mid_tile) {
     ++isp.tag_flushes;
     isp.tag_flushed_samples += flush_samples_.size();
   }
   isp.tag_buffer_read_bytes += flush_samples_.size() * static_cast<std::uint64_t>(ctx_.hw->isp.tag_bits / 8);
-  // Shade primitive by primitive, in submission order (a sample's layers were pushed in that
-  // order, so each sample's layers are shaded bottom first); raster order within each. A stable
-  // counting sort by position in the tile's list (the submission order): every layer was pushed
-  // since the last flush, so the positions span only the primitives rasterised since then.
-  std::uint32_t lo = flush_samples_.front().tag, hi = lo;
-  for (const PendingSample& ps : flush_samples_) {
-    lo = std::min(lo, ps.tag);
-    hi = std::max(hi, ps.tag);
-  }
-  sort_offsets_.assign(static_cast<std::size_t>(hi - lo) + 2, 0);
-  for (const PendingSample& ps : flush_samples_) ++sort_offsets_[ps.tag - lo + 1];
-  for (std::size_t k = 1; k < sort_offsets_.size(); ++k) sort_offsets_[k] += sort_offsets_[k - 1];
-  sorted_samples_.resize(flush_samples_.size());
-  for (const PendingSample& ps : flush_samples_) {
-    PendingSample& out = sorted_samples_[sort_offsets_[ps.tag - lo]++];
-    out = ps;
-    out.tag = prims[ps.tag];
-  }
-  flush_samples_.swap(sorted_samples_);
   std::size_t i = 0;
   while (i < flush_samples_.size()) {
     std::size_t j = i;
@@ -168,7 +167,10 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
   if (ctx_.defer_shading) {
     depth_of_.assign(tile_samples, 0);
     layers_.resize(tile_samples * static_cast<std::size_t>(L));
+    pushed_.clear();
     unresolved_layers_ = 0;
+    // A primitive has at most one candidate per tile sample: written without growth checks.
+    if (candidates_.size() < tile_samples) candidates_.resize(tile_samples);
   }
   // tbr / imr with isp.early_z=0: every rasterised sample is shaded, the tests decide the writes.
   const bool late_z = !ctx_.defer_shading && ctx_.hw->isp.early_z == 0;
@@ -207,18 +209,33 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     const bool stencil_on = has_st && pl.stencil_test;
     const auto ref = static_cast<std::uint8_t>(pl.stencil_ref & 0xffu);
     const bool early_write = !ctx_.defer_shading && p.hsr == HsrClass::Opaque && write_on;
-    candidates_.clear();
     pending_.clear();
     rasterised_.clear();
+    const std::uint32_t depth_outcomes = passing_outcomes(pl.depth_compare);
+    const bool layered = p.hsr != HsrClass::Opaque;
+    // Counted here and added once the primitive is done (the per-sample loop keeps them in registers).
+    std::uint64_t rasterised = 0, depth_reads = 0;
     std::uint64_t final_fails = 0;  // tbdr: samples whose depth test failed for good while rasterising
+    // tbdr: whether a sample cannot take this primitive without knowing a punch-through's alpha
+    // result or without a free layer: then the tile's layers are flushed first.
+    bool conflict = false;
+    // The tile state the per-sample loop reads, as locals it can keep in registers (rasterising
+    // changes none of it).
+    const bool defer = ctx_.defer_shading;
+    const bool open_verdicts = depth_on && unresolved_layers_ != 0;  // a punch-through may change a verdict
+    const std::uint8_t* const stack_depth = depth_of_.data();
+    const Layer* const stacks = layers_.data();
+    Candidate* const cand = candidates_.data();
+    std::size_t n_cand = 0;
+    const int x0 = rect.x0, y0 = rect.y0;
 
-    rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) {
+    rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {
       const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
-      const std::size_t lbase = (static_cast<std::size_t>(y - rect.y0) * rw + static_cast<std::size_t>(x - rect.x0)) * S;
-      for (int s = 0; s < S; ++s) {
-        if (!(mask & (1u << s))) continue;
+      const std::size_t lbase = (static_cast<std::size_t>(y - y0) * rw + static_cast<std::size_t>(x - x0)) * S;
+      for (std::uint32_t m = mask; m != 0; m &= m - 1) {
+        const int s = std::countr_zero(m);
         if (overdraw) ++overdraw[pixel];
-        ++isp.samples_rasterised;
+        ++rasterised;
         if (late_z) rasterised_.push_back({prim_index, x, y, 1u << s, z[s], false});
         const std::size_t gi = pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(s);
         if (rop && (depth_on || stencil_on)) rop->depth(x, y, s, false);
@@ -230,7 +247,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
             continue;
           }
         }
-        if (ctx_.defer_shading) {
+        if (defer) {
           // The depth test's verdict may change if a flush resolves punch-through depth first:
           // the stencil ops that depend on it wait for the final verdict. With no unresolved
           // punch-through layer in the tile, no flush can change the depth buffer: a failed
@@ -238,21 +255,33 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
           // read the depth again and fail again, counted in final_fails).
           bool pass = true;
           if (depth_on) {
-            isp.depth_buffer_read_bytes += ds_bytes;
-            pass = passes<float>(pl.depth_compare, z[s], depth[gi]);
-            if (!pass && unresolved_layers_ == 0) {
+            ++depth_reads;
+            pass = passes_outcomes(depth_outcomes, z[s], depth[gi]);
+            if (!pass && !open_verdicts) {
               ++final_fails;
-              ++isp.depth_test_failed_samples;
               if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
               continue;
             }
           }
-          candidates_.push_back({static_cast<std::uint32_t>(lbase + static_cast<std::size_t>(s)), x, y, 1u << s, z[s], pass});
+          const auto li = static_cast<std::uint32_t>(lbase + static_cast<std::size_t>(s));
+          if (!conflict) {
+            const int n = stack_depth[li];
+            conflict = layered && pass && n >= L;
+            if (open_verdicts) {
+              // The verdict is open when a punch-through layer's depth, if its alpha test keeps
+              // the sample, would change it (either way: a greater test may pass only against it).
+              const Layer* stack = stacks + static_cast<std::size_t>(li) * static_cast<std::size_t>(L);
+              for (int k = 0; k < n && !conflict; ++k) {
+                conflict = stack[k].unresolved && passes_outcomes(depth_outcomes, z[s], stack[k].z) != pass;
+              }
+            }
+          }
+          cand[n_cand++] = {li, x, y, 1u << s, z[s], pass};
           continue;
         }
         if (depth_on) {
-          isp.depth_buffer_read_bytes += ds_bytes;
-          if (!passes<float>(pl.depth_compare, z[s], depth[gi])) {
+          ++depth_reads;
+          if (!passes_outcomes(depth_outcomes, z[s], depth[gi])) {
             ++isp.depth_test_failed_samples;
             if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
             if (rop && stencil_on && pl.stencil_depth_fail_op != StencilOp::Keep) rop->depth(x, y, s, true);
@@ -268,72 +297,58 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
         if (rop && (early_write || (stencil_on && pl.stencil_pass_op != StencilOp::Keep))) rop->depth(x, y, s, true);
       }
     });
+    isp.samples_rasterised += rasterised;
+    isp.depth_buffer_read_bytes += ds_bytes * depth_reads;
+    isp.depth_test_failed_samples += final_fails;
 
-    if (ctx_.defer_shading) {
-      if (candidates_.empty()) continue;  // (final fails need no flush: nothing of them is pending)
-      // Can every sample take this primitive without knowing a punch-through's alpha result or
-      // without a free layer? If not, flush the tile's layers first.
-      const bool layered = p.hsr != HsrClass::Opaque;
-      bool conflict = false;
-      for (const Candidate& c : candidates_) {
-        const int n = depth_of_[c.li];
-        if (layered && c.depth_pass && n >= L) {
-          conflict = true;
-          break;
-        }
-        if (!depth_on || unresolved_layers_ == 0) continue;
-        // The verdict is open when a punch-through layer's depth, if its alpha test keeps the
-        // sample, would change it (either way: a greater test may pass only against it).
-        const Layer* stack = &layers_[static_cast<std::size_t>(c.li) * static_cast<std::size_t>(L)];
-        for (int k = 0; k < n && !conflict; ++k) {
-          conflict = stack[k].unresolved && passes<float>(pl.depth_compare, c.z, stack[k].z) != c.depth_pass;
-        }
-        if (conflict) break;
-      }
+    if (defer) {
+      if (n_cand == 0) continue;  // (final fails need no flush: nothing of them is pending)
+      const std::span<Candidate> candidates(cand, n_cand);
       if (conflict) {
-        flush(rect, prims, true, isp, tsp);
+        flush(prims, true, isp, tsp);
         if (depth_on) {
           // The flush wrote the punch-through depths: test again against them (the samples that
           // failed for good read the depth again too).
-          isp.depth_buffer_read_bytes += ds_bytes * final_fails;
-          for (Candidate& c : candidates_) {
-            isp.depth_buffer_read_bytes += ds_bytes;
-            c.depth_pass = passes<float>(pl.depth_compare, c.z, depth[global_index(c.x, c.y, c.bit)]);
+          isp.depth_buffer_read_bytes += ds_bytes * (final_fails + candidates.size());
+          for (Candidate& c : candidates) {
+            c.depth_pass = passes_outcomes(depth_outcomes, c.z, depth[global_index(c.x, c.y, c.bit)]);
           }
         }
       }
-      // Final verdicts: stencil ops, then the passing samples become tags.
-      std::size_t kept = 0;
-      for (const Candidate& c : candidates_) {
-        const std::size_t gi = global_index(c.x, c.y, c.bit);
+      // Final verdicts: stencil ops, and the passing samples become tags.
+      const bool unresolved = p.hsr == HsrClass::PunchThrough && write_on;
+      const bool writes_depth_now = write_on && p.hsr != HsrClass::PunchThrough;
+      std::uint64_t kept = 0;
+      for (const Candidate& c : candidates) {
         if (!c.depth_pass) {
           ++isp.depth_test_failed_samples;
-          if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
+          if (stencil_on) {
+            const std::size_t gi = global_index(c.x, c.y, c.bit);
+            stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
+          }
           continue;
         }
-        if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_pass_op, stencil[gi], ref);
-        candidates_[kept++] = c;
-      }
-      candidates_.resize(kept);
-      const bool unresolved = p.hsr == HsrClass::PunchThrough && write_on;
-      for (const Candidate& c : candidates_) {
+        ++kept;
+        if (stencil_on) {
+          const std::size_t gi = global_index(c.x, c.y, c.bit);
+          stencil[gi] = apply_stencil(pl.stencil_pass_op, stencil[gi], ref);
+        }
         Layer* stack = &layers_[static_cast<std::size_t>(c.li) * static_cast<std::size_t>(L)];
         std::uint8_t& n = depth_of_[c.li];
         if (!layered) {
           isp.hsr_removed_samples += n;  // every layer beneath is hidden: never shaded
           n = 0;
         }
+        pushed_.push_back({{list_pos, c.x, c.y, c.bit, c.z, unresolved}, c.li, n});
         stack[n++] = {list_pos, c.z, unresolved};
-        if (unresolved) ++unresolved_layers_;
-        isp.tag_buffer_write_bytes += tag_bytes;
         // Opaque and translucent depth is known now; punch-through depth waits for the alpha test.
-        if (write_on && p.hsr != HsrClass::PunchThrough) {
-          depth[global_index(c.x, c.y, c.bit)] = c.z;
-          isp.depth_buffer_write_bytes += ds_bytes;
-        }
+        if (writes_depth_now) depth[global_index(c.x, c.y, c.bit)] = c.z;
       }
-      if (p.hsr == HsrClass::PunchThrough) isp.punch_through_samples += candidates_.size();
-      if (p.hsr == HsrClass::Translucent) isp.translucent_samples += candidates_.size();
+      if (unresolved) unresolved_layers_ += kept;
+      isp.tag_buffer_write_bytes += tag_bytes * kept;
+      if (writes_depth_now) isp.depth_buffer_write_bytes += ds_bytes * kept;
+      if (p.hsr == HsrClass::PunchThrough) isp.punch_through_samples += kept;
+      if (p.hsr == HsrClass::Translucent) isp.translucent_samples += kept;
       continue;
     }
 
@@ -386,7 +401,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
       }
     }
   }
-  if (ctx_.defer_shading) flush(rect, prims, false, isp, tsp);
+  if (ctx_.defer_shading) flush(prims, false, isp, tsp);
   while (!queue_.empty()) shade_queued(rect, isp, tsp);
 }
 

@@ -94,10 +94,18 @@ class Isp {
     float z;
     bool unresolved;
   };
+  /// A layer pushed since the tile's last flush, kept in push order: primitive by primitive in
+  /// submission order, raster order within each, which is the order the flush shades them in.
+  /// It is still pending unless an opaque sample emptied its stack after the push (then its slot
+  /// is beyond the stack's depth or holds a later primitive's layer).
+  struct PushedLayer {
+    PendingSample sample;  ///< tag: the primitive's position in the tile's list
+    std::uint32_t li;      ///< sample index in the tile
+    std::uint32_t slot;    ///< its place in the sample's stack
+  };
   /// Shades every layer of the tile in submission order and empties the stacks; a mid-tile flush
   /// that resolves punch-through depth makes the ISP wait for those punch-through shaders.
-  void flush(const PixelRect& rect, const std::vector<std::uint32_t>& prims, bool mid_tile, IspStats& isp,
-             TspStats& tsp);
+  void flush(const std::vector<std::uint32_t>& prims, bool mid_tile, IspStats& isp, TspStats& tsp);
   /// Writes a punch-through primitive's depth where its alpha test kept the sample.
   void write_punch_depth(const PendingSample* begin, const PendingSample* end, IspStats& isp);
   /// imr: the colour outputs of the batch just shaded (batch_; alive_ for a punch-through
@@ -125,12 +133,11 @@ class Isp {
   /// Unresolved punch-through layers pushed since the tile's last flush (an upper bound: a layer
   /// an opaque sample hides still counts). 0: no flush can change the depth buffer.
   std::uint64_t unresolved_layers_ = 0;
-  std::vector<Candidate> candidates_;
+  std::vector<Candidate> candidates_;  ///< tbdr: one per tile sample, the current primitive's first n
   std::vector<PendingSample> pending_;
   std::vector<PendingSample> rasterised_;  ///< isp.early_z=0: every sample the primitive covers
+  std::vector<PushedLayer> pushed_;  ///< the layers pushed since the tile's last flush
   std::vector<PendingSample> flush_samples_;
-  std::vector<PendingSample> sorted_samples_;  ///< scratch: flush_samples_ in submission order
-  std::vector<std::uint32_t> sort_offsets_;    ///< scratch: the counting sort's bucket offsets
   std::vector<ShadePixel> batch_;
   std::vector<std::uint32_t> alive_;
   std::deque<Queued> queue_;             ///< tbr forward pixel kill: primitives waiting to be shaded

@@ -10,6 +10,7 @@
 #endif
 
 #include "models/hw_config.hpp"
+#include "kernel/bits.hpp"
 #include "scene/scene.hpp"
 
 namespace tbdr {
@@ -232,14 +233,6 @@ inline float floor_small(float c) {
 
 /// The blocks a bilinear pair covers in an 8x8 window: 1x1, 2x1, 1x2 or 2x2, by (dx + 2 dy).
 constexpr std::array<std::uint64_t, 4> kPairBlocks{0x1, 0x3, 0x101, 0x303};
-
-/// Set bits of x (SWAR; std::popcount is a library call without a popcnt instruction).
-inline std::uint32_t bit_count(std::uint64_t x) {
-  x -= (x >> 1) & 0x5555555555555555ull;
-  x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
-  x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Full;
-  return static_cast<std::uint32_t>((x * 0x0101010101010101ull) >> 56);
-}
 
 /// Per byte (window row), the low k bits: the columns kept when the window shifts by 8 - k.
 constexpr std::uint64_t low_columns(int k) { return k <= 0 ? 0 : (0x0101010101010101ull * ((1u << k) - 1u)); }

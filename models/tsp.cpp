@@ -11,6 +11,7 @@
 #include <xmmintrin.h>
 #endif
 
+#include "kernel/bits.hpp"
 #include "models/light_lists.hpp"
 #include "models/shading.hpp"
 #include "models/texture_unit.hpp"
@@ -446,7 +447,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       if (p.hsr == HsrClass::PunchThrough) {
         const float a = s.alpha * (mask_tex ? mask_tex->sample(uv) : 1.0f);
         if (a < mat->alpha_cutoff) {
-          stats.alpha_test_killed_samples += static_cast<std::uint64_t>(std::popcount(write_mask));
+          stats.alpha_test_killed_samples += static_cast<std::uint64_t>(bit_count(write_mask));
           write_mask = 0;
         }
       }
@@ -571,7 +572,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       if (pls_reads && ctx_.pls->valid[pixel]) lit += ctx_.pls->accum[pixel];
     }
     const glm::vec4 src(lit, have_surface ? s.alpha : 0.0f);
-    const auto written = static_cast<std::uint64_t>(std::popcount(write_mask));
+    const auto written = static_cast<std::uint64_t>(bit_count(write_mask));
     stats.shaded_samples += written;
     stats.tile_buffer_write_bytes += written * out_bytes_per_sample;
     if (blend != BlendMode::Off) {

@@ -15,6 +15,7 @@
 #include <tuple>
 #include <vector>
 
+#include "kernel/bits.hpp"
 #include "kernel/errors.hpp"
 #include "kernel/event_queue.hpp"
 #include "kernel/run_loop.hpp"
@@ -483,6 +484,15 @@ TEST(RunLoopTest, ZeroTimeLivelockThrows) {
   RunLoop loop(q, {}, WatchdogConfig{Tick::from_us(1), 10'000});
   expect_contains(stall_message(loop), {"livelock", "no unit reports pending work", "tick 42 ps"});
   EXPECT_LE(q.events_executed(), 20'000u);
+}
+
+TEST(Bits, BitCountSumsTheSetBits) {
+  static_assert(bit_count(0) == 0);
+  EXPECT_EQ(bit_count(0xF0F0u), 8u);                  // two nibbles of 4
+  EXPECT_EQ(bit_count(0x8000000000000001ull), 2u);    // the two ends of the word
+  EXPECT_EQ(bit_count(0x5555555555555555ull), 32u);   // every other bit of 64
+  EXPECT_EQ(bit_count(~std::uint64_t{0}), 64u);       // every byte sums to 8, 8 x 8
+  EXPECT_EQ(bit_count(0xffffu), 16u);                 // a full 16x coverage mask
 }
 
 }  // namespace

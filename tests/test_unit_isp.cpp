@@ -112,6 +112,38 @@ TEST(UnitIsp, TriangleBehindTheFirstFailsTheDepthTest) {
   EXPECT_FLOAT_EQ(rig.depth_at(5, 5), 0.25f);
 }
 
+TEST(UnitIsp, EveryDepthComparisonPassesExactlyWhereItHolds) {
+  // Draw 0 (Always, writes depth) lays 0.5 over the tile; draw 1 (no depth write) covers it at z
+  // 0.25, 0.5 or 0.75 and tests against 0.5: all 1024 samples pass or all fail, per comparison
+  // and per outcome (incoming less, equal or greater than the stored 0.5).
+  struct Case {
+    CompareOp op;
+    bool less, equal, greater;  // passes when incoming < / == / > stored
+  };
+  const Case cases[] = {{CompareOp::Never, false, false, false},     {CompareOp::Less, true, false, false},
+                        {CompareOp::Equal, false, true, false},      {CompareOp::LessEqual, true, true, false},
+                        {CompareOp::Greater, false, false, true},    {CompareOp::NotEqual, true, false, true},
+                        {CompareOp::GreaterEqual, false, true, true}, {CompareOp::Always, true, true, true}};
+  for (const Case& c : cases) {
+    for (const float z : {0.25f, 0.5f, 0.75f}) {
+      RenderRig rig;
+      PipelineState lay;
+      lay.depth_compare = CompareOp::Always;
+      PipelineState test;
+      test.depth_compare = c.op;
+      test.depth_write = false;
+      rig.add_draw(make_shader(1), lay);
+      rig.add_draw(make_shader(1), test);
+      rig.add_triangle(at(kFull, 0.5f, 0));
+      rig.add_triangle(at(kFull, z, 1));
+      rig.render_tile(RenderRig::tile_rect(0, 0));
+      const bool pass = z < 0.5f ? c.less : z == 0.5f ? c.equal : c.greater;
+      EXPECT_EQ(rig.isp_stats.depth_test_failed_samples.value(), pass ? 0u : kTileSamples)
+          << "compare " << static_cast<int>(c.op) << " at z " << z;
+    }
+  }
+}
+
 TEST(UnitIsp, OpaqueOverOpaqueRemovesTheHiddenSamplesBeforeShading) {
   // Back (z 0.75) then front (z 0.25): every back sample passes the depth test and is tagged,
   // then the front one overwrites all 1024 tags: the back triangle is never shaded.
