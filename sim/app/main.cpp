@@ -12,15 +12,19 @@ namespace {
 
 /// glibc's allocator settings for a simulation run (issue 15). A 1080p frame touches a few
 /// hundred MB in vectors that grow, are freed and are allocated again per pass and per render;
-/// with glibc's defaults each large block is a fresh mmap and is trimmed when freed, so the
-/// kernel zeroes and maps every 4 KiB page again: 23,000-80,000 page faults and 20 % of a run's
-/// CPU time in the kernel on the machines measured. hugetlb=1 backs the heap with transparent
-/// huge pages (512 times fewer faults) where the kernel allows them on request (madvise mode);
-/// the mmap and trim thresholds of 4 GiB keep freed blocks in the heap for the next pass
-/// instead of returning them to the kernel. Measured side by side (1 thread, atrium:3 1080p, 1024 lights):
-/// plain_forward 1.31 -> 0.95 CPU s, the kernel's share 0.24 -> 0.06 s. docs/architecture.md says more.
+/// with glibc's defaults each block over 128 KiB is a fresh mmap whose 4 KiB pages the kernel maps
+/// and zeroes one fault at a time, and freed memory goes back to the kernel: 23,000-84,000 page
+/// faults per 1080p run and a fifth of its CPU time in the kernel on the machines measured.
+/// hugetlb=1 backs the heap and the mmapped blocks with transparent huge pages where the kernel
+/// grants them on request (madvise mode): 512 times fewer faults. Blocks up to 32 MiB (glibc's
+/// largest mmap threshold) come from the heap and are kept for the next pass, and the heap is
+/// trimmed only past 256 MiB free; larger blocks (whole-frame arrays) are mapped and unmapped
+/// as before, so a run's peak stays that of its largest pass. Measured side by side (1 thread,
+/// atrium:3 1080p, 1024 lights; docs/architecture.md): plain_forward 23,400 -> 1,200 faults and
+/// 0.2 -> 0.03 s in the kernel; forward_multipass (256 lights) peak 202 -> 231 MB, where 4 GiB
+/// thresholds (no mapping, no trimming) grew it to 348 MB.
 constexpr const char* kMallocTunables =
-    "glibc.malloc.hugetlb=1:glibc.malloc.mmap_threshold=4294967296:glibc.malloc.trim_threshold=4294967296";
+    "glibc.malloc.hugetlb=1:glibc.malloc.mmap_threshold=33554432:glibc.malloc.trim_threshold=268435456";
 /// Set in the environment of the re-executed process, so it runs once (and its children, which
 /// inherit GLIBC_TUNABLES, do not re-execute either).
 constexpr const char* kTunedMarker = "TBDRSIM_MALLOC_TUNED";
