@@ -621,6 +621,31 @@ TEST(ReportRealOptions, StudyComparesModesAndPassesTechniqueOptions) {
   EXPECT_NE(bad_err.str().find("not in this study"), std::string::npos) << bad_err.str();
 }
 
+// A technique option its generator refuses (pls_bytes must be 8..128) is bad input: exit 2, the
+// message names the technique and the option, and nothing is written: a new study folder is
+// removed, an existing one keeps exactly what it held (no traces folder, no database).
+TEST(ReportRealOptions, StudyWithARefusedOptionWritesNothing) {
+  const fs::path dir = scratch("study_refused_option");
+  const std::vector<std::string> bad = {"--technique", "plain_forward", "forward_light_stack", "--lights", "4", "--resolution", "64x36",
+                                        "--scene", "atrium:1", "--option", "forward_light_stack:pls_bytes=7"};
+  std::vector<std::string> a = {"study", "--out", (dir / "new").string()};
+  a.insert(a.end(), bad.begin(), bad.end());
+  std::ostringstream out, err;
+  EXPECT_EQ(cli_main(a, out, err), 2);
+  EXPECT_NE(err.str().find("generating forward_light_stack"), std::string::npos) << err.str();
+  EXPECT_NE(err.str().find("pls_bytes=7"), std::string::npos) << err.str();
+  EXPECT_FALSE(std::filesystem::exists(dir / "new"));
+
+  std::filesystem::create_directories(dir / "old");
+  std::ofstream(dir / "old" / "keep.txt") << "kept\n";
+  a[2] = (dir / "old").string();
+  std::ostringstream out2, err2;
+  EXPECT_EQ(cli_main(a, out2, err2), 2);
+  std::vector<std::string> left;
+  for (const auto& e : std::filesystem::directory_iterator(dir / "old")) left.push_back(e.path().filename().string());
+  EXPECT_EQ(left, std::vector<std::string>{"keep.txt"});
+}
+
 // The study starts its runs longest first: most scene draws, then most lights. With one worker
 // the runs end, and are written, in the order they start. plain_forward draws the scene 3 times
 // (opaque, masked, translucent) at any light count; forward_multipass (one light per pass) draws

@@ -16,6 +16,7 @@
 #include <map>
 #include <numeric>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <tuple>
 #include <variant>
@@ -82,11 +83,11 @@ std::string fmt(double v, int decimals) {
   return o.str();
 }
 
-/// Share of pixels whose color differs from the reference by more than 1/255 in a channel (1 when
-/// the sizes differ or an image is missing).
-double differing_pixels(const std::string& a, const std::string& b) {
+/// Share of pixels whose color differs from the reference `x` (decoded once for every
+/// technique) by more than 1/255 in a channel (1 when the sizes differ or the image is missing).
+double differing_pixels(const ImageRGB8& x, const std::string& b) {
   try {
-    const ImageRGB8 x = read_png(a), y = read_png(b);
+    const ImageRGB8 y = read_png(b);
     if (x.rgb.size() != y.rgb.size() || x.rgb.empty()) return 1.0;
     std::size_t n = 0;
     for (std::size_t p = 0; p < x.rgb.size(); p += 3) {
@@ -173,10 +174,12 @@ std::string mode_of(const ResolvedConfig& c) {
   return format_param_value(c.params.values[static_cast<std::size_t>(table.find("gpu.mode"))]);
 }
 
-/// Generates every point's trace (cheap, here; the workers replay them), one point per
-/// configuration (mode) replaying it.
+/// Generates every point's trace (a fraction of a second each, on the worker pool: one child
+/// process per trace, plan.jobs at once), one point per configuration (mode) replaying it.
 std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
   std::vector<StudyPoint> points;
+  std::vector<StudyPoint> traces;                  // one point per trace, in the study's order
+  std::vector<std::vector<std::string>> generate;  // its `tbdrsim trace` arguments
   const std::vector<std::string> trace_args = {"--scene", plan.scene, "--resolution", plan.resolution};
   for (int n : plan.light_counts) {
     for (const auto& t : plan.techniques) {
@@ -207,20 +210,51 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
       if (given != plan.options.end()) {
         for (const auto& kv : given->second) a.insert(a.end(), {"--option", kv});  // the last one given wins
       }
-      std::ostringstream sink, errs;
-      if (cli_main(a, sink, errs) != 0) throw InputError("study", "generating " + t + ": " + errs.str());
-      for (const TraceCommand& c : read_trace(p.trace_path).commands) {
-        if (const auto* pass = std::get_if<PassDesc>(&c)) {
-          for (const DrawCmd& d : pass->draws) p.scene_draws += d.geometry == GeometryKind::Scene ? 1 : 0;
-        }
+      traces.push_back(p);
+      generate.push_back(std::move(a));
+    }
+  }
+  // The generators run in forked children; a failure's message (what the generator wrote to its
+  // stderr) names the technique.
+  std::size_t next = 0;
+  std::string failed;
+  WorkerPoolHooks hooks;
+  hooks.next = [&]() -> std::optional<WorkerJob> {
+    if (next == generate.size()) return std::nullopt;
+    const std::size_t i = next++;
+    WorkerJob job;
+    job.id = i;
+    job.function = [&generate, i] {
+      std::ostringstream sink;
+      return cli_main(generate[i], sink, std::cerr);
+    };
+    return job;
+  };
+  hooks.ended = [&](const WorkerEnd& end) {
+    if (!end.ok() && failed.empty()) failed = "generating " + traces[end.id].technique + ": " + end.stderr_text;
+  };
+  std::vector<bool> existed;
+  for (const StudyPoint& p : traces) existed.push_back(fs::exists(p.trace_path));
+  run_worker_pool({plan.jobs, false}, hooks);
+  if (!failed.empty()) {
+    for (std::size_t i = 0; i < traces.size(); ++i) {
+      std::error_code ec;
+      if (!existed[i]) fs::remove(traces[i].trace_path, ec);
+    }
+    throw InputError("study", failed);
+  }
+  for (StudyPoint& p : traces) {
+    for (const TraceCommand& c : read_trace(p.trace_path).commands) {
+      if (const auto* pass = std::get_if<PassDesc>(&c)) {
+        for (const DrawCmd& d : pass->draws) p.scene_draws += d.geometry == GeometryKind::Scene ? 1 : 0;
       }
-      for (std::size_t c = 0; c < plan.configs.size(); ++c) {
-        StudyPoint q = p;
-        q.config = c;
-        q.mode = mode_of(plan.configs[c]);
-        if (c > 0) q.images_dir.clear();  // images of the first configuration only
-        points.push_back(q);
-      }
+    }
+    for (std::size_t c = 0; c < plan.configs.size(); ++c) {
+      StudyPoint q = p;
+      q.config = c;
+      q.mode = mode_of(plan.configs[c]);
+      if (c > 0) q.images_dir.clear();  // images of the first configuration only
+      points.push_back(q);
     }
   }
   return points;
@@ -441,10 +475,45 @@ void print_method_table(const StudyPlan& plan, const std::vector<StudyPoint>& po
       << std::setw(14) << "overshading" << std::setw(6) << "MSAA" << std::setw(10) << "blending" << "\n";
   out << "  (overshading: lighting computed on surfaces or by kernels per visible pixel (views.sql), yes above 1.10 (translucent layers add about 5 %);\n"
       << "   blending: the image with the translucent glass equals plain forward's; MSAA: the generator produces a 4x trace)\n";
-  std::string reference_color;
+  // MSAA: does the technique's generator produce a 4x trace? Probed with a one-light 64x36 trace
+  // per technique, the probes on the worker pool.
+  std::vector<std::string> probed;
+  for (const auto& p : points) {
+    if (p.lights == plan.max_lights && p.config == 0) probed.push_back(p.technique);
+  }
+  std::set<std::string> msaa_techniques;
+  {
+    std::size_t next = 0;
+    WorkerPoolHooks hooks;
+    hooks.next = [&]() -> std::optional<WorkerJob> {
+      if (next == probed.size()) return std::nullopt;
+      const std::size_t i = next++;
+      WorkerJob job;
+      job.id = i;
+      job.function = [&plan, &probed, i] {
+        const std::string probe = (fs::path(plan.dir) / "traces" / ("msaa_probe_" + probed[i] + ".trace")).string();
+        std::ostringstream sink, errs;
+        const int rc = cli_main({"trace", "--technique", probed[i], "--lights", "1", "--resolution", "64x36", "--samples", "4", "--out", probe},
+                                sink, errs);
+        std::error_code ec;
+        fs::remove(probe, ec);
+        return rc;
+      };
+      return job;
+    };
+    hooks.ended = [&](const WorkerEnd& end) {
+      if (end.ok()) msaa_techniques.insert(probed[end.id]);
+    };
+    run_worker_pool({plan.jobs, false}, hooks);
+  }
+  std::optional<ImageRGB8> reference_color;  // plain forward's image, when there is one
   for (const auto& p : points) {
     if (p.lights == plan.max_lights && p.technique == "plain_forward" && !p.images_dir.empty()) {
-      reference_color = (fs::path(p.images_dir) / "color.png").string();
+      try {
+        reference_color = read_png((fs::path(p.images_dir) / "color.png").string());
+      } catch (const InputError&) {
+        reference_color.reset();  // its run failed: no blending column
+      }
     }
   }
   for (const auto& p : points) {
@@ -456,20 +525,13 @@ void print_method_table(const StudyPlan& plan, const std::vector<StudyPoint>& po
       if (results.dram_bytes(*run, std::string("frame/dram.") + cls) > 0) offchip += (offchip.empty() ? "" : ",") + std::string(cls);
     }
     const std::optional<double> overshading = results.derived(*run).overshading;
-    // MSAA: does the technique's generator produce a 4x trace?
-    bool msaa = true;
-    {
-      std::ostringstream sink, errs;
-      msaa = cli_main({"trace", "--technique", p.technique, "--lights", "1", "--resolution", "64x36", "--samples", "4", "--out",
-                       (fs::path(plan.dir) / "traces" / "msaa_probe.trace").string()},
-                      sink, errs) == 0;
-    }
+    const bool msaa = msaa_techniques.count(p.technique) > 0;
     // Blending: does its image, translucent glass included, equal plain forward's?
     std::string blending = "n/a";
-    if (!reference_color.empty() && !p.images_dir.empty()) {
+    if (reference_color && !p.images_dir.empty()) {
       // The atrium has a few exactly coplanar faces (z-fighting, about 0.02 % of the pixels) whose
       // visible one depends on the depth test; more than 0.1 % of differing pixels is real.
-      blending = differing_pixels(reference_color, (fs::path(p.images_dir) / "color.png").string()) <= 0.001 ? "yes" : "no";
+      blending = differing_pixels(*reference_color, (fs::path(p.images_dir) / "color.png").string()) <= 0.001 ? "yes" : "no";
     }
     out << std::left << std::setw(30) << p.technique << std::setw(56) << offchip << std::right << std::setw(9)
         << fmt(results.stat(*run, "frame/frame", "geometry_passes"), 0) << std::setw(14)
@@ -478,19 +540,30 @@ void print_method_table(const StudyPlan& plan, const std::vector<StudyPoint>& po
   }
 }
 
-/// Plots, when the analysis scripts and Debian's python3 with pandas and matplotlib are present;
-/// returns how many were written.
-int write_plots(const std::string& db_path, const fs::path& plots) {
+/// Plots, when the analysis scripts and Debian's python3 with pandas and matplotlib are present
+/// (the scripts run at once, up to `jobs` of them); returns how many were written.
+int write_plots(const std::string& db_path, const fs::path& plots, int jobs) {
   std::error_code ec;
   fs::create_directories(plots, ec);
-  int plotted = 0;
+  std::vector<std::vector<std::string>> scripts;
   for (const char* script : {"plot_techniques.py", "plot_scaling.py"}) {
     const fs::path s = fs::path(data_root()) / "analysis" / script;  // installed, else the checkout
     if (!fs::exists(s) || !fs::exists("/usr/bin/python3")) continue;
     const std::string png = (plots / (std::string(script).substr(0, std::string(script).size() - 3) + ".png")).string();
-    const std::string cmd = "/usr/bin/python3 " + s.string() + " --db " + db_path + " --out " + png + " > /dev/null 2>&1";
-    if (std::system(cmd.c_str()) == 0) ++plotted;
+    scripts.push_back({"/usr/bin/python3", s.string(), "--db", db_path, "--out", png});
   }
+  std::size_t next = 0;
+  int plotted = 0;
+  WorkerPoolHooks hooks;
+  hooks.next = [&]() -> std::optional<WorkerJob> {
+    if (next == scripts.size()) return std::nullopt;
+    WorkerJob job;
+    job.id = next;
+    job.argv = scripts[next++];
+    return job;
+  };
+  hooks.ended = [&](const WorkerEnd& end) { plotted += end.ok() ? 1 : 0; };
+  run_worker_pool({std::max(1, jobs), false}, hooks);
   return plotted;
 }
 
@@ -517,11 +590,12 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
   if (!parse_command_options("study", args, desc, nullptr, vm, out)) return 0;
   const StudyPlan plan = plan_from_options(vm);
   std::error_code ec;
+  // A generator refusing its options (bad input) leaves nothing behind: generate_traces removes
+  // the traces it wrote, and here a folder this study created; the database comes after the traces.
+  const bool dir_existed = fs::exists(plan.dir);
+  const bool traces_existed = fs::exists(fs::path(plan.dir) / "traces");
   fs::create_directories(fs::path(plan.dir) / "traces", ec);
-  fs::create_directories(fs::path(plan.dir) / "images", ec);
   if (ec) throw InputError(plan.dir, "cannot create the study folder: " + ec.message());
-  { ResultsDb db(plan.db_path); }  // create or migrate before the workers start
-
   out << "study: " << plan.techniques.size() << " techniques x " << plan.light_counts.size() << " light counts on "
       << plan.scene << " at " << plan.resolution << ", configuration '" << plan.config_label << "'";
   if (!plan.modes.empty()) {
@@ -529,7 +603,20 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
     for (const auto& m : plan.modes) out << " " << m;
   }
   out << ", " << plan.jobs << " workers x " << plan.threads << (plan.threads == 1 ? " thread" : " threads") << std::endl;
-  const std::vector<StudyPoint> points = generate_traces(plan);
+  std::vector<StudyPoint> points;
+  try {
+    points = generate_traces(plan);
+  } catch (...) {
+    if (!dir_existed) {
+      fs::remove_all(plan.dir, ec);
+    } else if (!traces_existed) {
+      fs::remove(fs::path(plan.dir) / "traces", ec);  // empty again
+    }
+    throw;
+  }
+  fs::create_directories(fs::path(plan.dir) / "images", ec);
+  if (ec) throw InputError(plan.dir, "cannot create the study folder: " + ec.message());
+  { ResultsDb db(plan.db_path); }  // create or migrate before the workers start
   const int failures = run_points(plan, points, out, err);
   if (failures > 0) err << "study: " << failures << " worker(s) reported failed runs (see above)\n";
   {
@@ -540,7 +627,7 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
     print_method_table(plan, points, results, out);
   }
   const fs::path plots = fs::path(plan.dir) / "plots";
-  const int plotted = write_plots(plan.db_path, plots);
+  const int plotted = write_plots(plan.db_path, plots, plan.jobs);
   close_results_db_cleanly(plan.db_path);  // the plot scripts read it: leave no -wal/-shm beside it
   out << "\nresults: " << plan.db_path << " (" << points.size() << " runs), traces in " << (fs::path(plan.dir) / "traces").string()
       << ", images and heat maps in " << (fs::path(plan.dir) / "images").string() << ", " << plotted << " plots in " << plots.string()
