@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -306,3 +307,21 @@ TEST(Cli, ConfigNamesAreFoundFromAnyFolder) {
 
 }  // namespace
 }  // namespace tbdr
+
+// The version a run records names the commit the binary was built from: `git describe` is taken
+// at every build (scripts/version_source.cmake), not only when CMake configured the build folder,
+// so rebuilding after a commit changes it. (Run the tests after building, as .ci/run does.)
+TEST(Cli, VersionNamesTheCommitBuilt) {
+  const std::string cmd = std::string("git -C '") + TBDRSIM_SOURCE_DIR + "' describe --always --tags 2>/dev/null";
+  FILE* p = popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  char buf[256] = {};
+  const bool read = std::fgets(buf, sizeof buf, p) != nullptr;
+  const int status = pclose(p);
+  if (!read || status != 0) GTEST_SKIP() << "not a git checkout";
+  std::string describe(buf);
+  while (!describe.empty() && (describe.back() == '\n' || describe.back() == '\r')) describe.pop_back();
+  std::ostringstream out, err;
+  ASSERT_EQ(tbdr::cli_main({"--version"}, out, err), 0);
+  EXPECT_NE(out.str().find("(" + describe), std::string::npos) << out.str() << " vs git describe " << describe;
+}
