@@ -15,6 +15,7 @@
 #include <map>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 #include "app/worker_pool.hpp"
 #include "scratch_dir.hpp"
@@ -89,6 +90,26 @@ TEST(WorkerPool, RunsProgramsAndReportsExceptionsOfFunctions) {
   EXPECT_EQ(rec.ends[1].stderr_text, "to stderr\n");  // stdout goes to /dev/null
   EXPECT_EQ(WEXITSTATUS(rec.ends[2].status), 127);
   EXPECT_EQ(rec.ends[2].stderr_text, "cannot execute the tbdrsim binary\n");
+}
+
+// run_worker_jobs: a fixed list, every job run once, the ends indexed as the list whatever order
+// the jobs end in (job 0 sleeps longest, so it ends last of the first two).
+TEST(WorkerPool, RunWorkerJobsReturnsTheEndsInTheJobsOrder) {
+  std::vector<WorkerJob> jobs;
+  for (int i = 0; i < 5; ++i) {
+    jobs.push_back(function_job(99, [i] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(i == 0 ? 150 : 10));
+      std::fprintf(stderr, "%d", i);
+      return i;
+    }));
+  }
+  const std::vector<WorkerEnd> ends = run_worker_jobs(2, std::move(jobs));
+  ASSERT_EQ(ends.size(), 5u);
+  for (std::size_t i = 0; i < ends.size(); ++i) {
+    EXPECT_EQ(ends[i].id, i);
+    EXPECT_EQ(WEXITSTATUS(ends[i].status), static_cast<int>(i));
+    EXPECT_EQ(ends[i].stderr_text, std::to_string(i));
+  }
 }
 
 TEST(WorkerPool, AThrowingHookKillsTheRunningChildren) {

@@ -216,26 +216,21 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
   }
   // The generators run in forked children; a failure's message (what the generator wrote to its
   // stderr) names the technique.
-  std::size_t next = 0;
-  std::string failed;
-  WorkerPoolHooks hooks;
-  hooks.next = [&]() -> std::optional<WorkerJob> {
-    if (next == generate.size()) return std::nullopt;
-    const std::size_t i = next++;
+  std::vector<bool> existed;
+  std::vector<WorkerJob> jobs;
+  for (std::size_t i = 0; i < traces.size(); ++i) {
+    existed.push_back(fs::exists(traces[i].trace_path));
     WorkerJob job;
-    job.id = i;
     job.function = [&generate, i] {
       std::ostringstream sink;
       return cli_main(generate[i], sink, std::cerr);
     };
-    return job;
-  };
-  hooks.ended = [&](const WorkerEnd& end) {
+    jobs.push_back(std::move(job));
+  }
+  std::string failed;
+  for (const WorkerEnd& end : run_worker_jobs(plan.jobs, std::move(jobs))) {
     if (!end.ok() && failed.empty()) failed = "generating " + traces[end.id].technique + ": " + end.stderr_text;
-  };
-  std::vector<bool> existed;
-  for (const StudyPoint& p : traces) existed.push_back(fs::exists(p.trace_path));
-  run_worker_pool({plan.jobs, false}, hooks);
+  }
   if (!failed.empty()) {
     for (std::size_t i = 0; i < traces.size(); ++i) {
       std::error_code ec;
@@ -481,30 +476,23 @@ void print_method_table(const StudyPlan& plan, const std::vector<StudyPoint>& po
   for (const auto& p : points) {
     if (p.lights == plan.max_lights && p.config == 0) probed.push_back(p.technique);
   }
+  std::vector<WorkerJob> probes;
+  for (const std::string& technique : probed) {
+    WorkerJob job;
+    job.function = [&plan, technique] {
+      const std::string probe = (fs::path(plan.dir) / "traces" / ("msaa_probe_" + technique + ".trace")).string();
+      std::ostringstream sink, errs;
+      const int rc = cli_main({"trace", "--technique", technique, "--lights", "1", "--resolution", "64x36", "--samples", "4", "--out", probe},
+                              sink, errs);
+      std::error_code ec;
+      fs::remove(probe, ec);
+      return rc;
+    };
+    probes.push_back(std::move(job));
+  }
   std::set<std::string> msaa_techniques;
-  {
-    std::size_t next = 0;
-    WorkerPoolHooks hooks;
-    hooks.next = [&]() -> std::optional<WorkerJob> {
-      if (next == probed.size()) return std::nullopt;
-      const std::size_t i = next++;
-      WorkerJob job;
-      job.id = i;
-      job.function = [&plan, &probed, i] {
-        const std::string probe = (fs::path(plan.dir) / "traces" / ("msaa_probe_" + probed[i] + ".trace")).string();
-        std::ostringstream sink, errs;
-        const int rc = cli_main({"trace", "--technique", probed[i], "--lights", "1", "--resolution", "64x36", "--samples", "4", "--out", probe},
-                                sink, errs);
-        std::error_code ec;
-        fs::remove(probe, ec);
-        return rc;
-      };
-      return job;
-    };
-    hooks.ended = [&](const WorkerEnd& end) {
-      if (end.ok()) msaa_techniques.insert(probed[end.id]);
-    };
-    run_worker_pool({plan.jobs, false}, hooks);
+  for (const WorkerEnd& end : run_worker_jobs(plan.jobs, std::move(probes))) {
+    if (end.ok()) msaa_techniques.insert(probed[end.id]);
   }
   std::optional<ImageRGB8> reference_color;  // plain forward's image, when there is one
   for (const auto& p : points) {
@@ -545,25 +533,17 @@ void print_method_table(const StudyPlan& plan, const std::vector<StudyPoint>& po
 int write_plots(const std::string& db_path, const fs::path& plots, int jobs) {
   std::error_code ec;
   fs::create_directories(plots, ec);
-  std::vector<std::vector<std::string>> scripts;
+  std::vector<WorkerJob> scripts;
   for (const char* script : {"plot_techniques.py", "plot_scaling.py"}) {
     const fs::path s = fs::path(data_root()) / "analysis" / script;  // installed, else the checkout
     if (!fs::exists(s) || !fs::exists("/usr/bin/python3")) continue;
     const std::string png = (plots / (std::string(script).substr(0, std::string(script).size() - 3) + ".png")).string();
-    scripts.push_back({"/usr/bin/python3", s.string(), "--db", db_path, "--out", png});
-  }
-  std::size_t next = 0;
-  int plotted = 0;
-  WorkerPoolHooks hooks;
-  hooks.next = [&]() -> std::optional<WorkerJob> {
-    if (next == scripts.size()) return std::nullopt;
     WorkerJob job;
-    job.id = next;
-    job.argv = scripts[next++];
-    return job;
-  };
-  hooks.ended = [&](const WorkerEnd& end) { plotted += end.ok() ? 1 : 0; };
-  run_worker_pool({std::max(1, jobs), false}, hooks);
+    job.argv = {"/usr/bin/python3", s.string(), "--db", db_path, "--out", png};
+    scripts.push_back(std::move(job));
+  }
+  int plotted = 0;
+  for (const WorkerEnd& end : run_worker_jobs(jobs, std::move(scripts))) plotted += end.ok() ? 1 : 0;
   return plotted;
 }
 

@@ -245,6 +245,20 @@ bool run_worker_pool(const WorkerPoolOptions& opt, const WorkerPoolHooks& hooks)
   return opt.handle_signals && (g_interrupts > 0 || g_terminate);
 }
 
+std::vector<WorkerEnd> run_worker_jobs(int workers, std::vector<WorkerJob> jobs) {
+  std::vector<WorkerEnd> ends(jobs.size());
+  std::size_t next = 0;
+  WorkerPoolHooks hooks;
+  hooks.next = [&]() -> std::optional<WorkerJob> {
+    if (next == jobs.size()) return std::nullopt;
+    jobs[next].id = next;
+    return std::move(jobs[next++]);
+  };
+  hooks.ended = [&](const WorkerEnd& end) { ends[end.id] = end; };
+  run_worker_pool({std::max(1, workers), false}, hooks);
+  return ends;
+}
+
 std::string self_executable() {
   std::error_code ec;
   const std::filesystem::path p = std::filesystem::read_symlink("/proc/self/exe", ec);

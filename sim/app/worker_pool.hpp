@@ -57,6 +57,10 @@ struct WorkerPoolOptions {
 /// /dev/null. When a hook throws, the running children are killed and reaped before it propagates.
 bool run_worker_pool(const WorkerPoolOptions& options, const WorkerPoolHooks& hooks);
 
+/// Runs a fixed list of jobs, `workers` at once (no signal handling), and returns how each ended,
+/// indexed as `jobs` (each job's id is set to its index).
+std::vector<WorkerEnd> run_worker_jobs(int workers, std::vector<WorkerJob> jobs);
+
 /// This executable's path (/proc/self/exe): the program sweep workers run by default.
 std::string self_executable();
 
