@@ -414,7 +414,51 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   std::optional<std::pair<glm::vec3, glm::vec3>> bounds;  // the batch's surface box, when the colour loop needs it
   near_.bin = nullptr;  // gathered for another batch
 
-  for (std::size_t i = 0; i < pixels.size(); ++i) {
+  // Fragments that only count (a light volume or a full-screen pass without colours): no
+  // surface is built or read, every fragment evaluates the same number of lights, and nothing is
+  // pushed to pixel local storage. The loop below would do exactly this for them, fragment by
+  // fragment; here the per-fragment state is only what the counts and the image counters need.
+  const bool fixed_lights = sh.light_source == LightSource::None || sh.light_source == LightSource::All ||
+                            sh.light_source == LightSource::ObjectList || sh.light_source == LightSource::Proxy;
+  const bool counts_only = !from_triangle && !reads_loaded_surface && !colour && fixed_lights && !(pls_writes && outputs == 0);
+  if (counts_only) {
+    std::uint64_t count = 0;
+    switch (sh.light_source) {
+      case LightSource::All: count = d.lights.size(); break;
+      case LightSource::ObjectList: count = ctx_.object_lights[p.object].size(); break;
+      case LightSource::Proxy: count = p.proxy_light >= 0 ? 1 : 0; break;
+      default: break;
+    }
+    std::uint32_t* const shaded = ctx_.images->counters.shaded.data();
+    std::uint64_t written = 0;
+    for (std::size_t i = 0; i < pixels.size(); ++i) {
+      const ShadePixel& px = pixels[i];
+      const std::size_t pixel = static_cast<std::size_t>(px.y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(px.x);
+      const std::uint32_t write_mask = px.mask & px.write;
+      if (alive) (*alive)[i] = write_mask;
+      shaded[pixel] += 1;
+      if (image_counters) {
+        ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(count);
+        if (write_mask != 0) ctx_.images->counters.triangle_id[pixel] = p.id + 1;
+      }
+      if (write_mask == 0 || outputs == 0) continue;
+      written += static_cast<std::uint64_t>(bit_count(write_mask));
+      // Writing a color output makes the pixel's PLS undefined (EXT_shader_pixel_local_storage).
+      if (ctx_.pls) {
+        ctx_.pls->valid[pixel] = 0;
+        ctx_.pls->stack_count[pixel] = 0;
+      }
+    }
+    light_sum = count * pixels.size();
+    stats.shaded_samples += written;
+    stats.tile_buffer_write_bytes += written * out_bytes_per_sample;
+    if (blend != BlendMode::Off) {
+      stats.blended_samples += written;
+      stats.tile_buffer_read_bytes += written * out_bytes_per_sample;
+    }
+  }
+
+  for (std::size_t i = 0; !counts_only && i < pixels.size(); ++i) {
     const ShadePixel& px = pixels[i];
     const std::size_t pixel = static_cast<std::size_t>(px.y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(px.x);
     std::uint32_t write_mask = px.mask & px.write;
