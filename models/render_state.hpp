@@ -160,6 +160,17 @@ struct PlsState {
   std::vector<std::uint32_t> stack;      ///< width*height*stack_capacity light indices (empty without colours)
   std::vector<std::uint16_t> stack_count;
   std::vector<std::uint8_t> overflow;    ///< 1 when more lights were pushed than fit
+
+  /// Pushes `light` on the pixel's stack, or marks the pixel overflowed when the stack is full.
+  void push_light(std::size_t pixel, std::uint32_t light) {
+    auto& n = stack_count[pixel];
+    if (n < stack_capacity) {
+      if (!stack.empty()) stack[pixel * stack_capacity + n] = light;
+      ++n;
+    } else {
+      overflow[pixel] = 1;
+    }
+  }
 };
 
 /// A 1-sample color image written by a compute kernel (a `buffer ... content=image`).

@@ -415,12 +415,13 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   near_.bin = nullptr;  // gathered for another batch
 
   // Fragments that only count (a light volume or a full-screen pass without colours): no
-  // surface is built or read, every fragment evaluates the same number of lights, and nothing is
-  // pushed to pixel local storage. The loop below would do exactly this for them, fragment by
-  // fragment; here the per-fragment state is only what the counts and the image counters need.
+  // surface is built or read and every fragment evaluates the same number of lights; a light
+  // volume may push its light on the pixel's PLS light stack. The loop below would do exactly
+  // this for them, fragment by fragment; here the per-fragment state is only what the counts,
+  // the light stacks and the image counters need.
   const bool fixed_lights = sh.light_source == LightSource::None || sh.light_source == LightSource::All ||
                             sh.light_source == LightSource::ObjectList || sh.light_source == LightSource::Proxy;
-  const bool counts_only = !from_triangle && !reads_loaded_surface && !colour && fixed_lights && !(pls_writes && outputs == 0);
+  const bool counts_only = !from_triangle && !reads_loaded_surface && !colour && fixed_lights;
   if (counts_only) {
     std::uint64_t count = 0;
     switch (sh.light_source) {
@@ -441,7 +442,15 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(count);
         if (write_mask != 0) ctx_.images->counters.triangle_id[pixel] = p.id + 1;
       }
-      if (write_mask == 0 || outputs == 0) continue;
+      if (write_mask == 0) continue;
+      if (outputs == 0) {
+        // Pixel local storage effects of shaders without color outputs, as below: without
+        // colours, a light volume's push of its light on the stack (a proxy accumulates colour only).
+        if (pls_writes && sh.light_source != LightSource::Proxy && p.proxy_light >= 0) {
+          ctx_.pls->push_light(pixel, static_cast<std::uint32_t>(p.proxy_light));
+        }
+        continue;
+      }
       written += static_cast<std::uint64_t>(bit_count(write_mask));
       // Writing a color output makes the pixel's PLS undefined (EXT_shader_pixel_local_storage).
       if (ctx_.pls) {
@@ -597,13 +606,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
           if (pls_accum_format) acc = glm::vec3(FormatPrecision::color(*pls_accum_format, glm::vec4(acc, 1.0f)));
         }
       } else if (p.proxy_light >= 0) {
-        auto& n = ctx_.pls->stack_count[pixel];
-        if (n < ctx_.pls->stack_capacity) {
-          if (!ctx_.pls->stack.empty()) ctx_.pls->stack[pixel * ctx_.pls->stack_capacity + n] = static_cast<std::uint32_t>(p.proxy_light);
-          ++n;
-        } else {
-          ctx_.pls->overflow[pixel] = 1;
-        }
+        ctx_.pls->push_light(pixel, static_cast<std::uint32_t>(p.proxy_light));
       }
     }
     if (outputs == 0) continue;
