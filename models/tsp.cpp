@@ -401,11 +401,17 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   if (from_triangle && sh.tex_fetches > 0 && ctx_.textures && texture_lines_out_) {
     texture_addresses(p, sh.tex_fetches, static_cast<std::size_t>(quads), stats);
   }
+  // Whether a scene triangle's fragments need their surface: for colours, for a cluster (the
+  // depth), to store it (a G-buffer target, the PLS surfaces) and for the alpha test (the uv).
+  // Without, a fragment counts the same (forward+ without images: its tile's lights).
+  const bool builds_surface = reads_loaded_surface || p.hsr == HsrClass::PunchThrough ||
+                              (pls_writes && outputs == 0 && !ctx_.pls->surface.empty());
+
   // The quad uvs every surface of a scene triangle carries (SurfacePoint::quad_uv), computed as
   // texture_addresses computes them.
   std::optional<UvPlane> uv_plane;
   std::optional<QuadUv> quad_uv;
-  if (from_triangle) {
+  if (from_triangle && builds_surface) {
     const std::int64_t step = std::int64_t{1} << bits;
     uv_plane.emplace(p.setup, p.uv);
     quad_uv.emplace(*uv_plane, p.setup.a[1] * step, p.setup.b[1] * step, p.setup.a[2] * step, p.setup.b[2] * step);
@@ -475,7 +481,9 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     // The surface this fragment shades.
     SurfacePoint s;
     bool have_surface = false;
-    if (from_triangle) {
+    if (from_triangle && !builds_surface) {
+      have_surface = true;  // (nothing below reads it: see builds_surface)
+    } else if (from_triangle) {
       glm::vec3 b;
       s.position = triangle_position(p, px.x, px.y, &b);
       glm::vec3 n = p.normal[0] * b.x + p.normal[1] * b.y + p.normal[2] * b.z;
