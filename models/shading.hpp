@@ -6,8 +6,10 @@
 // culling gives the same color.
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -55,26 +57,34 @@ struct SurfaceLook {
 /// (FrameInputs::colour). At 3840x2160 a store is 8.3 M samples: 431 MB without colours instead
 /// of the 663 MB of whole SurfacePoints. Values read back are bit-identical to those stored; a
 /// store without looks reads back SurfacePoint's defaults for them (nothing reads them then).
+/// The arrays are not initialised: a sample is read only where its owner's valid flag
+/// (AttachmentImage::surface_valid, PlsState::valid) says set() stored it. So allocating a store
+/// writes nothing: the pages a frame's tiles write are faulted in by the threads that write them,
+/// and those of samples never written (the sky) are never touched.
 class SurfaceStore {
+  static_assert(std::is_trivially_default_constructible_v<SurfaceSite> && std::is_trivially_default_constructible_v<SurfaceLook>,
+                "a store's allocation must write nothing");
+
  public:
-  /// `n` default surfaces; their looks only with `colour`.
+  /// `n` unset surfaces; their looks only with `colour`.
   void assign(std::size_t n, bool colour) {
-    const SurfacePoint none{};
-    sites_.assign(n, site_of(none));
-    looks_.assign(colour ? n : 0, look_of(none));
+    release();
+    if (n == 0) return;
+    sites_.reset(new SurfaceSite[n]);  // default-initialised: no writes (see the class comment)
+    if (colour) looks_.reset(new SurfaceLook[n]);
+    size_ = n;
   }
   /// Gives the memory back (empty() after).
   void release() {
-    sites_ = {};
-    looks_ = {};
+    sites_.reset();
+    looks_.reset();
+    size_ = 0;
   }
-  bool empty() const { return sites_.empty(); }
-  std::size_t size() const { return sites_.size(); }
-  const std::vector<SurfaceSite>& sites() const { return sites_; }
-  const std::vector<SurfaceLook>& looks() const { return looks_; }  ///< empty without colours
-  /// The site of sample `k`, without copying its look.
+  bool empty() const { return size_ == 0; }
+  std::size_t size() const { return size_; }
+  /// The site of sample `k` (set before), without copying its look.
   const SurfaceSite& site(std::size_t k) const { return sites_[k]; }
-  /// The whole surface of sample `k`.
+  /// The whole surface of sample `k` (set before).
   SurfacePoint operator[](std::size_t k) const {
     SurfacePoint s;
     const SurfaceSite& a = sites_[k];
@@ -82,7 +92,7 @@ class SurfaceStore {
     s.material = a.material;
     s.triangle = a.triangle;
     s.quad_uv = a.quad_uv;
-    if (!looks_.empty()) {
+    if (looks_) {
       const SurfaceLook& b = looks_[k];
       s.normal = b.normal;
       s.albedo = b.albedo;
@@ -93,15 +103,16 @@ class SurfaceStore {
   /// Stores `s` at sample `k` (its look only if looks are kept).
   void set(std::size_t k, const SurfacePoint& s) {
     sites_[k] = site_of(s);
-    if (!looks_.empty()) looks_[k] = look_of(s);
+    if (looks_) looks_[k] = look_of(s);
   }
 
  private:
   static SurfaceSite site_of(const SurfacePoint& s) { return {s.position, s.material, s.triangle, s.quad_uv}; }
   static SurfaceLook look_of(const SurfacePoint& s) { return {s.normal, s.albedo, s.alpha}; }
 
-  std::vector<SurfaceSite> sites_;
-  std::vector<SurfaceLook> looks_;  ///< empty without colours
+  std::unique_ptr<SurfaceSite[]> sites_;
+  std::unique_ptr<SurfaceLook[]> looks_;  ///< null without colours
+  std::size_t size_ = 0;
 };
 
 /// Constants of the shading model.
