@@ -323,5 +323,6 @@ TEST(Cli, VersionNamesTheCommitBuilt) {
   while (!describe.empty() && (describe.back() == '\n' || describe.back() == '\r')) describe.pop_back();
   std::ostringstream out, err;
   ASSERT_EQ(tbdr::cli_main({"--version"}, out, err), 0);
-  EXPECT_NE(out.str().find("(" + describe), std::string::npos) << out.str() << " vs git describe " << describe;
+  EXPECT_NE(out.str().find("(" + describe), std::string::npos)
+      << out.str() << " vs git describe " << describe << " (a build older than the checkout: run cmake --build first)";
 }
