@@ -1,7 +1,9 @@
 #include "models/shading.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 
 namespace tbdr {
 
@@ -59,20 +61,30 @@ float unorm(float x, int bits) {
 
 /// A small float channel: `mantissa` bits, exponent bias 15 (fp16, r11g11b10f's 5-bit exponent),
 /// rounded to nearest even, saturating at the largest finite value; unsigned ones clamp
-/// negatives to 0.
+/// negatives to 0. The rounding step is the power of two 2^(lead - mantissa), lead being the
+/// exponent of x's leading bit (at least the smallest normal exponent, -14: below it, the
+/// denormal step), read from x's exponent field; dividing by a power of two and multiplying back
+/// are exact, and adding and subtracting 2^23 rounds a value below 2^23 to the nearest integer,
+/// ties to even (IEEE 754's default rounding): the same value as
+/// nearbyint(|x| / ldexp(1, lead - mantissa)) * step, without the library calls
+/// (test UnitTsp.SmallFloatRoundingMatchesTheLibraryFormulaEverywhere).
 float small_float(float x, int mantissa, bool is_signed) {
   constexpr int kMinExponent = -14;  // smallest normal exponent with a 5-bit exponent, bias 15
   constexpr int kMaxExponent = 15;
+  constexpr int kFloatBias = 127;
+  constexpr float kRoundingMagic = 8388608.0f;  // 2^23: float's spacing is 1 from here on
   if (std::isnan(x)) return 0.0f;
   if (!is_signed && x < 0.0f) return 0.0f;
   const float a = std::fabs(x);
   if (a == 0.0f) return x;
-  int e = 0;
-  std::frexp(a, &e);  // a = f 2^e, f in [0.5, 1): the leading bit is 2^(e-1)
-  const int lead = std::max(e - 1, kMinExponent);  // below the normals: the denormal step
-  const float step = std::ldexp(1.0f, lead - mantissa);
-  const float largest = std::ldexp(2.0f - std::ldexp(1.0f, -mantissa), kMaxExponent);
-  const float q = std::min(std::nearbyint(a / step) * step, largest);
+  const int exponent = static_cast<int>(std::bit_cast<std::uint32_t>(a) >> 23) - kFloatBias;  // infinity: 128
+  const int lead = std::max(exponent, kMinExponent);  // float denormals (exponent -127) too
+  const auto power_of_two = [](int e) { return std::bit_cast<float>(static_cast<std::uint32_t>(e + kFloatBias) << 23); };
+  const float step = power_of_two(lead - mantissa);  // -24 .. 118: a normal float
+  const float units = a * power_of_two(mantissa - lead);  // a / step, exact; below 2^(mantissa+1) (or infinite)
+  const float rounded = (units + kRoundingMagic) - kRoundingMagic;
+  const float largest = power_of_two(kMaxExponent + 1) - power_of_two(kMaxExponent - mantissa);  // (2 - 2^-mantissa) 2^15, exact
+  const float q = std::min(rounded * step, largest);
   return std::copysign(q, x);
 }
 
@@ -123,6 +135,14 @@ bool is_unorm(Format f) {
 }  // namespace
 
 glm::vec4 FormatPrecision::color(Format f, glm::vec4 v) {
+  // The formats colour targets use most, one switch per value rather than one per channel
+  // (additive light passes quantise every blended sample).
+  switch (f) {
+    case Format::Rgba16f: return {small_float(v.x, 10, true), small_float(v.y, 10, true), small_float(v.z, 10, true), small_float(v.w, 10, true)};
+    case Format::Rgba8: return {unorm(v.x, 8), unorm(v.y, 8), unorm(v.z, 8), unorm(v.w, 8)};
+    case Format::Rgba32f: return v;
+    default: break;
+  }
   const int n = channels_of(f);
   if (n == 0) return v;
   glm::vec4 out(0.0f, 0.0f, 0.0f, 1.0f);
