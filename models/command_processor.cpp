@@ -38,6 +38,38 @@ void collect_dram(const std::string& prefix, const DramTraffic& dram, std::vecto
   out.push_back({prefix + "/dram", "write_bytes", static_cast<double>(w), "bytes", "DRAM bytes written, all classes"});
 }
 
+/// The attachments whose stored surfaces (AttachmentImage::surface) some command of `trace` reads
+/// without colours: every image a dispatch reads (its kernels read the surfaces' sites), and the
+/// G-buffer or visibility attachments a draw of generated geometry fetches or reads when its
+/// shader reads the stored surface (reads_stored_surface). Conservative: any such command, before
+/// or after the writer. The others keep only their written marks (AttachmentImage::keeps_surface).
+std::set<std::string> stored_surface_readers(const Trace& trace) {
+  std::set<std::string> names;
+  for (const auto& cmd : trace.commands) {
+    if (const auto* d = std::get_if<DispatchCmd>(&cmd)) {
+      names.insert(d->reads.begin(), d->reads.end());
+      continue;
+    }
+    const auto* pass = std::get_if<PassDesc>(&cmd);
+    if (!pass) continue;
+    const auto targets = pass->color_targets();
+    for (const DrawCmd& draw : pass->draws) {
+      if (draw.geometry == GeometryKind::Scene) continue;
+      const PipelineState* pipeline = trace.find_pipeline(draw.pipeline);
+      const ShaderDesc* sh = pipeline ? trace.find_shader(pipeline->shader) : nullptr;
+      if (!sh) continue;  // refused when the draw is replayed
+      bool writes_surface_target = false;
+      for (std::uint32_t o = 0; o < sh->color_outputs && o < targets.size(); ++o) {
+        if (targets[o]->usage != AttachmentUsage::Color) writes_surface_target = true;
+      }
+      if (!reads_stored_surface(*sh, writes_surface_target)) continue;
+      names.insert(draw.fetch.begin(), draw.fetch.end());
+      names.insert(draw.reads.begin(), draw.reads.end());
+    }
+  }
+  return names;
+}
+
 class FrameSimulator {
  public:
   FrameSimulator(const Trace& trace, const std::string& path, const Scene& scene, const HwConfig& hw, const FrameOptions& options)
@@ -79,6 +111,7 @@ class FrameSimulator {
     result_.work.texture_bytes = textures_->total_bytes();
     result_.work.immediate = hw_.gpu.mode == GpuMode::Imr;
     if (result_.work.immediate) rop_ = std::make_unique<RenderOutputUnit>(hw_, f.width, f.height);
+    surface_readers_ = stored_surface_readers(trace_);
     int pass_index = 0;
     std::uint64_t dispatches = 0;
     for (const auto& cmd : trace_.commands) {
@@ -136,6 +169,7 @@ class FrameSimulator {
       auto it = result_.images.attachments.find(a.name);
       if (it == result_.images.attachments.end()) {
         AttachmentImage img = AttachmentImage::cleared(a, pixels, options_.colour);
+        img.keeps_surface = options_.colour || surface_readers_.contains(a.name);
         // An attachment named after an image buffer (trace version 2) is that image, as a dispatch wrote it.
         if (auto ib = result_.images.image_buffers.find(a.name); ib != result_.images.image_buffers.end()) {
           img.color = ib->second.color;
@@ -195,8 +229,8 @@ class FrameSimulator {
       d.fetch_bytes += a->bytes_per_pixel();
       // An attachment of this pass that earlier draws write: its surfaces are stored as they shade.
       AttachmentImage& img = result_.images.attachments.at(n);
-      if (img.surface.empty() && (img.usage == AttachmentUsage::Gbuffer || img.usage == AttachmentUsage::Visibility)) {
-        img.surface.assign(img.sample_count, options_.colour);
+      if (img.surface_valid.empty() && (img.usage == AttachmentUsage::Gbuffer || img.usage == AttachmentUsage::Visibility)) {
+        if (img.keeps_surface) img.surface.assign(img.sample_count, options_.colour);
         img.surface_valid.assign(img.sample_count, 0);
       }
     }
@@ -207,7 +241,7 @@ class FrameSimulator {
       for (const auto& n : cmd.reads) {
         if (!d.surface_source) d.surface_source = surfaces_of(n);
       }
-      if (d.surface_source && d.surface_source->surface.empty()) {
+      if (d.surface_source && d.surface_source->surface_valid.empty()) {
         throw InputError(path_, cmd.line, "the G-buffer or visibility attachment this draw reads holds no surface: no shader wrote it");
       }
     }
@@ -310,8 +344,14 @@ class FrameSimulator {
     cw.read_bytes = book_buffer_reads(pass, dram).read_bytes;  // buffers read once per pass, at its start
     cw.depends_on_previous = reads_earlier_results(pass);
 
+    // The render's primitive records live in one buffer kept across the frame's passes: each pass
+    // touches the pages its largest render needs, which earlier passes faulted in already.
+    ctx.prims = std::move(prims_buffer_);
+    if (ctx.prims.capacity() == 0) ctx.prims.reserve(kReservedPrimitives);
     PassRenderer renderer(ctx, hw_, *ps, dram, cw, pool_);
     renderer.run();
+    prims_buffer_ = std::move(ctx.prims);
+    prims_buffer_.clear();
     result_.host_tile_seconds += renderer.tile_seconds();
     prim_base_ = ctx.frame_prim_base;
     for (const auto& a : pass.attachments) {
@@ -392,6 +432,12 @@ class FrameSimulator {
   int geometry_passes_ = 0;
   std::unique_ptr<TextureLayout> textures_;  ///< the frame's texture address space
   std::unique_ptr<RenderOutputUnit> rop_;    ///< gpu.mode=imr: the ROP caches, kept across the frame's passes
+  std::set<std::string> surface_readers_;    ///< stored_surface_readers of the trace
+  /// The primitive buffer's first reservation: address space only (pages are faulted in as records
+  /// are written), so that a render of up to this many primitives never copies its records while
+  /// it grows. 1 M records (about 0.3 GB of addresses) covers the atrium at detail 3 many times.
+  static constexpr std::size_t kReservedPrimitives = std::size_t{1} << 20;
+  std::vector<Primitive> prims_buffer_;      ///< RenderContext::prims between passes (capacity kept)
   ThreadPool pool_;                          ///< the threads the passes' tiles render on
   FrameResult result_;
 };

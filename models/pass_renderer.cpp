@@ -150,8 +150,8 @@ AttachmentImage* PassRenderer::allocate_surfaces() {
     if (t->usage == AttachmentUsage::Color) continue;
     // The TSP stores a fragment's surface in the first non-colour target among its outputs: with
     // the targets in one order for every draw, this one.
-    if (!t->surface.empty()) return nullptr;
-    t->surface.assign(t->sample_count, ctx_.colour);
+    if (!t->surface_valid.empty()) return nullptr;
+    if (t->keeps_surface) t->surface.assign(t->sample_count, ctx_.colour);
     t->surface_valid.assign(t->sample_count, 0);
     return t;
   }

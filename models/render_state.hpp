@@ -127,6 +127,11 @@ struct AttachmentImage {
   /// whether it was written.
   SurfaceStore surface;
   std::vector<std::uint8_t> surface_valid;
+  /// Whether the surfaces are stored (`surface`) or only marked written (`surface_valid`): with
+  /// colours always; without, only when a command of the trace reads them
+  /// (stored_surface_readers): a deferred G-buffer read only by light volumes counts the same
+  /// without its 52 bytes per sample.
+  bool keeps_surface = true;
   std::size_t sample_count = 0;  ///< width*height*samples: the size of each array above that is kept
   /// A cleared image for attachment `a` over `pixels` pixels (depth 1, stencil 0, color 0; no
   /// color array without `colour`).
@@ -145,6 +150,14 @@ struct AttachmentImage {
     return img;
   }
 };
+
+/// Whether a draw of generated geometry (a light volume, a full-screen pass) reads the surface
+/// stored in the G-buffer or visibility attachment it shades (DrawContext::surface_source) when no
+/// colours are computed: a cluster list needs its depth, and a shader writing a G-buffer or
+/// visibility target (`writes_surface_target`) stores it on. Colours read it always.
+inline bool reads_stored_surface(const ShaderDesc& sh, bool writes_surface_target) {
+  return sh.light_source == LightSource::ClusterList || writes_surface_target;
+}
 
 /// Pixel local storage of one pass, functionally: per pixel the stored surface, a light
 /// accumulator and a stack of light indices (see docs/kernels.md).

@@ -366,9 +366,14 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   // Whether anything reads a stored surface (G-buffer or PLS) this batch loads: its colour, its
   // cluster (its depth), or a G-buffer target it is stored to. Without colours, a light volume's
   // fragments read none of it: the same counts without touching the stored surfaces.
-  bool reads_loaded_surface = colour || sh.light_source == LightSource::ClusterList;
+  bool writes_kept_surface = false;
   for (std::uint32_t o = 0; o < outputs; ++o) {
-    if (ctx_.color_targets[o]->usage != AttachmentUsage::Color) reads_loaded_surface = true;
+    const AttachmentImage* t = ctx_.color_targets[o];
+    if (t->usage != AttachmentUsage::Color && t->keeps_surface) writes_kept_surface = true;
+  }
+  const bool reads_loaded_surface = colour || reads_stored_surface(sh, writes_kept_surface);
+  if (reads_loaded_surface && d.surface_source && d.surface_source->surface.empty()) {
+    throw std::logic_error("Tsp::shade: a draw reads a stored surface the frame did not keep (stored_surface_readers)");
   }
   // Every write keeps what its target's format holds (FormatPrecision): colour targets per format;
   // the surface a G-buffer stands for per the targets (or PLS variables) holding its attributes.
@@ -653,16 +658,21 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
           }
         }
       } else if (!surface_stored && have_surface) {
-        const SurfacePoint stored = stored_surface(false, s);
-        // G-buffer / visibility: the first such target keeps the surface the data stands for.
-        if (target->surface.empty()) {
-          target->surface.assign(target->sample_count, colour);
+        // G-buffer / visibility: the first such target keeps the surface the data stands for
+        // (PassRenderer::allocate_surfaces made its arrays; only its marks when no command reads it).
+        if (target->surface_valid.empty()) {  // (a TSP driven alone; PassRenderer::allocate_surfaces makes them before tiles run)
+          if (target->keeps_surface) target->surface.assign(target->sample_count, colour);
           target->surface_valid.assign(target->sample_count, 0);
         }
+        std::uint8_t* const valid = target->surface_valid.data() + pixel * static_cast<std::size_t>(S);
+        if (target->keeps_surface) {
+          const SurfacePoint stored = stored_surface(false, s);
+          for (int smp = 0; smp < S; ++smp) {
+            if (write_mask & (1u << smp)) target->surface.set(pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(smp), stored);
+          }
+        }
         for (int smp = 0; smp < S; ++smp) {
-          if (!(write_mask & (1u << smp))) continue;
-          target->surface.set(pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(smp), stored);
-          target->surface_valid[pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(smp)] = 1;
+          if (write_mask & (1u << smp)) valid[smp] = 1;
         }
         surface_stored = true;
       }

@@ -110,6 +110,33 @@ TEST_P(SpeedEquivalence, EveryStatisticAndTileRowIsTheSameWithoutColours) {
 INSTANTIATE_TEST_SUITE_P(Techniques, SpeedEquivalence, testing_support::every_technique(),
                          testing_support::technique_test_name);
 
+// Without colours a G-buffer keeps its stored surfaces only when a command reads them
+// (stored_surface_readers): deferred's and light_prepass's G-buffers, read only by light volumes
+// that count without them, keep just their written marks (52 bytes a sample saved: 108 MB at
+// 1080p); tiled_deferred's, read by its shading kernel, and visibility_buffer's ids, read by its
+// material passes, keep theirs. With colours every one is kept. The rows are the same either way
+// (EveryStatisticAndTileRowIsTheSameWithoutColours).
+TEST_F(SpeedEquivalence, GbufferSurfacesAreStoredOnlyWhereSomethingReadsThem) {
+  const HwConfig hw = resolve_config({}, {}).hw;
+  struct Case { const char* technique; bool kept_without_colours; };
+  for (const Case c : {Case{"deferred", false}, Case{"light_prepass", false}, Case{"tiled_deferred", true},
+                       Case{"clustered_deferred", true}, Case{"visibility_buffer", true}}) {
+    const Trace t = small_trace(c.technique);
+    for (const bool colour : {true, false}) {
+      const FrameResult f = simulate_frame(t, "t.trace", colour ? *scene_ : scene_without_texels(), hw, FrameOptions{.colour = colour});
+      std::size_t written = 0, stored = 0;
+      for (const auto& [name, img] : f.images.attachments) {
+        if (img.surface_valid.empty()) continue;
+        ++written;
+        if (!img.surface.empty()) ++stored;
+        EXPECT_EQ(img.keeps_surface, colour || c.kept_without_colours) << c.technique << " " << name;
+      }
+      EXPECT_GE(written, 1u) << c.technique << ": no attachment holds the G-buffer's written marks";
+      EXPECT_EQ(stored, colour || c.kept_without_colours ? written : 0u) << c.technique << (colour ? " with" : " without") << " colours";
+    }
+  }
+}
+
 // MSAA 4x (the techniques that support it; G-buffer and PLS ones refuse it): per-sample coverage
 // of the alpha-tested cloth, blending and resolves, with and without colours.
 TEST_F(SpeedEquivalence, MultisampledRunsCountTheSameWithoutColours) {
