@@ -117,8 +117,9 @@ struct AttachmentImage {
   std::uint32_t samples = 1;
   AttachmentUsage usage = AttachmentUsage::Color;
   bool defined = false;               ///< holds stored contents a later pass may load
-  /// width*height*samples, color-like formats; empty when the frame computes no colours
-  /// (FrameOptions::colour): then nothing reads or writes them.
+  /// width*height*samples, colour attachments (AttachmentUsage::Color); empty when the frame
+  /// computes no colours (FrameOptions::colour): then nothing reads or writes them. G-buffer and
+  /// visibility attachments hold their surfaces instead (`surface`).
   std::vector<glm::vec4> color;
   std::vector<float> depth;           ///< width*height*samples, depth formats
   std::vector<std::uint8_t> stencil;  ///< width*height*samples, depth formats
@@ -133,8 +134,8 @@ struct AttachmentImage {
   /// without its 52 bytes per sample.
   bool keeps_surface = true;
   std::size_t sample_count = 0;  ///< width*height*samples: the size of each array above that is kept
-  /// A cleared image for attachment `a` over `pixels` pixels (depth 1, stencil 0, color 0; no
-  /// color array without `colour`).
+  /// A cleared image for attachment `a` over `pixels` pixels (depth 1, stencil 0, color 0; a
+  /// color array only for colour attachments with `colour`).
   static AttachmentImage cleared(const Attachment& a, std::size_t pixels, bool colour) {
     AttachmentImage img;
     img.format = a.format;
@@ -144,7 +145,7 @@ struct AttachmentImage {
     if (is_depth_format(a.format)) {
       img.depth.assign(img.sample_count, 1.0f);
       img.stencil.assign(img.sample_count, 0);
-    } else if (colour) {
+    } else if (colour && a.usage == AttachmentUsage::Color) {
       img.color.assign(img.sample_count, glm::vec4(0.0f));
     }
     return img;

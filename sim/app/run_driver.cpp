@@ -1,6 +1,8 @@
 #include "app/run_driver.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <ctime>
 #include <time.h>
 #include <filesystem>
@@ -68,6 +70,48 @@ std::vector<RunParam> trace_run_params(const Trace& trace, const std::string& tr
   return params;
 }
 
+/// The image of a G-buffer or visibility attachment: what its data stands for, from the surfaces
+/// the frame stored (the first G-buffer target a shader writes keeps them for its siblings;
+/// FormatPrecision::surface has applied each target's format). `albedo` shows the stored base
+/// colour, `normal` the normal as n/2 + 1/2, a visibility attachment its triangle ids (as
+/// triangle_id.png); sample 0 of each pixel, black where none was written. Other G-buffer targets
+/// hold nothing the model keeps: no image.
+template <class Save>
+void write_surface_image(const FrameImages& images, const std::string& name, const AttachmentImage& img, int w, int h, Save&& save) {
+  const AttachmentImage* store = img.surface.empty() ? nullptr : &img;
+  for (const auto& [other, o] : images.attachments) {
+    if (!store && o.usage == img.usage && !o.surface.empty() && o.samples == img.samples) store = &o;
+  }
+  if (!store) return;
+  const std::size_t pixels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  const std::size_t S = store->samples;
+  if (img.usage == AttachmentUsage::Visibility) {
+    std::vector<std::uint32_t> ids(pixels, 0);
+    for (std::size_t p = 0; p < pixels; ++p) {
+      if (store->surface_valid[p * S]) ids[p] = store->surface.site(p * S).triangle + 1;
+    }
+    save("attachment_" + name + ".png", ids_to_image(ids, w, h, 0));
+    return;
+  }
+  if (name == "albedo") {
+    std::vector<glm::vec3> rgb(pixels, glm::vec3(0.0f));
+    for (std::size_t p = 0; p < pixels; ++p) {
+      if (store->surface_valid[p * S]) rgb[p] = store->surface[p * S].albedo;  // linear colour: shown in sRGB
+    }
+    save("attachment_" + name + ".png", color_to_image(rgb, w, h));
+  } else if (name == "normal") {
+    // A normal map's usual picture: n/2 + 1/2 as 8-bit unorm, not a colour (no sRGB curve).
+    ImageRGB8 out(w, h);
+    auto unorm8 = [](float v) { return static_cast<std::uint8_t>(std::lround(std::clamp(v * 0.5f + 0.5f, 0.0f, 1.0f) * 255.0f)); };
+    for (std::size_t p = 0; p < pixels; ++p) {
+      if (!store->surface_valid[p * S]) continue;
+      const glm::vec3 n = store->surface[p * S].normal;
+      out.set(static_cast<int>(p % static_cast<std::size_t>(w)), static_cast<int>(p / static_cast<std::size_t>(w)), Rgb8{unorm8(n.x), unorm8(n.y), unorm8(n.z)});
+    }
+    save("attachment_" + name + ".png", out);
+  }
+}
+
 std::vector<std::string> write_frame_images(const FrameResult& frame, const std::string& dir) {
   namespace fs = std::filesystem;
   std::vector<std::string> written;
@@ -85,6 +129,8 @@ std::vector<std::string> write_frame_images(const FrameResult& frame, const std:
       save("depth_" + name + ".png", depth_to_image(d, w, h));
     } else if (!img.color.empty() && img.samples == 1) {
       save("attachment_" + name + ".png", color_to_image(img.color, w, h));
+    } else if (img.usage == AttachmentUsage::Gbuffer || img.usage == AttachmentUsage::Visibility) {
+      write_surface_image(frame.images, name, img, w, h, [&](const std::string& file, const ImageRGB8& image) { save(file, image); });
     }
   }
   if (auto it = frame.images.attachments.find(frame.final_color); it != frame.images.attachments.end()) {
