@@ -347,7 +347,7 @@ class FrameSimulator {
     // The render's primitive records live in one buffer kept across the frame's passes: each pass
     // touches the pages its largest render needs, which earlier passes faulted in already.
     ctx.prims = std::move(prims_buffer_);
-    if (ctx.prims.capacity() == 0) ctx.prims.reserve(kReservedPrimitives);
+    if (ctx.prims.capacity() == 0) ctx.prims.reserve(std::max<std::size_t>(kMinReservedPrimitives, scene_.triangle_count()));
     PassRenderer renderer(ctx, hw_, *ps, dram, cw, pool_);
     renderer.run();
     prims_buffer_ = std::move(ctx.prims);
@@ -433,10 +433,11 @@ class FrameSimulator {
   std::unique_ptr<TextureLayout> textures_;  ///< the frame's texture address space
   std::unique_ptr<RenderOutputUnit> rop_;    ///< gpu.mode=imr: the ROP caches, kept across the frame's passes
   std::set<std::string> surface_readers_;    ///< stored_surface_readers of the trace
-  /// The primitive buffer's first reservation: address space only (pages are faulted in as records
-  /// are written), so that a render of up to this many primitives never copies its records while
-  /// it grows. 1 M records (about 0.3 GB of addresses) covers the atrium at detail 3 many times.
-  static constexpr std::size_t kReservedPrimitives = std::size_t{1} << 20;
+  /// The primitive buffer's first reservation is the scene's triangle count, at least this many:
+  /// address space only (pages are faulted in as records are written), so that a render of the
+  /// whole scene never copies its records while it grows (light volumes and clipped triangles
+  /// beyond that grow it by doubling). 64 K records: a light pass's volumes without regrowth.
+  static constexpr std::size_t kMinReservedPrimitives = std::size_t{1} << 16;
   std::vector<Primitive> prims_buffer_;      ///< RenderContext::prims between passes (capacity kept)
   ThreadPool pool_;                          ///< the threads the passes' tiles render on
   FrameResult result_;
