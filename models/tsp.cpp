@@ -139,6 +139,12 @@ inline glm::vec3 triangle_position(const Primitive& p, std::int32_t x, std::int3
 /// relative, against this 1e-4). The exact test is ShadingModel::lit_contribution's own.
 constexpr float kReachMargin = 1.0001f;
 
+/// Up to this many selected lights, an "every light" shader's colour loop tests each selected
+/// light at the surface instead of cutting the screen bin's candidates to the batch's box: with a
+/// handful the cut costs more than it saves (forward_multipass's one light per pass). Host speed
+/// only: either way the same lights add the same contributions in the same order.
+constexpr std::size_t kDirectLights = 8;
+
 }  // namespace
 
 bool Tsp::surface_bounds(const Primitive& p, const DrawContext& d, std::span<const ShadePixel> pixels, glm::vec3& lo,
@@ -581,7 +587,11 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     auto lighting = [&]() {
       glm::vec3 c(0.0f);
       if (!have_surface) return c;
-      if (fl.all_selected) {
+      if (fl.all_selected && d.lights.size() <= kDirectLights) {
+        // A few selected lights (a multi-pass renderer's pass): each tested at the surface, in
+        // ascending order as below; those a bin or the batch's box would cut add exactly 0.
+        for (const std::uint32_t l : d.lights) c += ShadingModel::light_contribution(s, eye, lights[l]);
+      } else if (fl.all_selected) {
         // The pixel's screen-bin candidates, cut once per batch and bin to those reaching the
         // batch's surfaces (lights beyond their radius add exactly 0: the sum is unchanged).
         if (!bounds) {

@@ -282,11 +282,16 @@ TEST(UnitTsp, SmallFloatRoundingMatchesTheLibraryFormulaEverywhere) {
   for (std::uint64_t bits = 0; bits <= 0xffffffffu; bits += 61) {
     const float x = std::bit_cast<float>(static_cast<std::uint32_t>(bits));
     const glm::vec4 v(x);
-    const glm::vec4 half = FormatPrecision::color(Format::Rgba16f, v);
+    const glm::vec4 half = FormatPrecision::color(Format::Rgba16f, v);  // (four lanes: each compared)
     const glm::vec4 small = FormatPrecision::color(Format::R11g11b10f, v);
-    const float want[3] = {small_float_by_library(x, 10, true), small_float_by_library(x, 6, false), small_float_by_library(x, 5, false)};
-    const float got[3] = {half.x, small.x, small.z};
-    for (int k = 0; k < 3; ++k) {
+    const glm::vec4 byte = FormatPrecision::color(Format::Rgba8, v);
+    const float want_half = small_float_by_library(x, 10, true);
+    // unorm8 by the library: clamp, nearbyint(x * 255) / 255.
+    const float want_byte = x > 0.0f ? (x >= 1.0f ? 1.0f : std::nearbyint(x * 255.0f) / 255.0f) : 0.0f;
+    const float want[10] = {want_half, want_half, want_half, want_half, small_float_by_library(x, 6, false), small_float_by_library(x, 5, false),
+                            want_byte, want_byte, want_byte, want_byte};
+    const float got[10] = {half.x, half.y, half.z, half.w, small.x, small.z, byte.x, byte.y, byte.z, byte.w};
+    for (int k = 0; k < 10; ++k) {
       differing += std::bit_cast<std::uint32_t>(got[k]) != std::bit_cast<std::uint32_t>(want[k]) ? 1 : 0;
       ++compared;
     }
