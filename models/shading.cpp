@@ -92,17 +92,27 @@ float small_float(float x, int mantissa, bool is_signed) {
 /// channels): clamped to [0, 1] (NaN to 0), then rounded to 255 steps by adding and subtracting
 /// 2^23 (round to nearest even, as nearbyint) below 255. Bit for bit unorm's value (test
 /// UnitTsp.SmallFloatRoundingMatchesTheLibraryFormulaEverywhere).
-glm::vec4 unorm8_4(glm::vec4 v) {
+glm::vec4 unorm8_4(const glm::vec4& v) {
   constexpr float kSteps = 255.0f;
   constexpr float kRoundingMagic = 8388608.0f;  // 2^23
-  float in[4] = {v.x, v.y, v.z, v.w};
+#if defined(__GNUC__)
+  // GCC's and Clang's generic vectors (any target: lowered to scalars where there is no SIMD).
+  using Float4 = float __attribute__((vector_size(16)));
+  const Float4 x = {v.x, v.y, v.z, v.w};
+  const Float4 zero = {0.0f, 0.0f, 0.0f, 0.0f}, one = {1.0f, 1.0f, 1.0f, 1.0f};
+  const Float4 positive = x > zero ? x : zero;  // NaN: 0
+  const Float4 clamped = positive < one ? positive : one;
+  const Float4 r = ((clamped * kSteps + kRoundingMagic) - kRoundingMagic) / kSteps;
+  return {r[0], r[1], r[2], r[3]};
+#else
   float out[4];
   for (int c = 0; c < 4; ++c) {
-    const float x = in[c];
+    const float x = v[c];
     const float clamped = x > 0.0f ? (x < 1.0f ? x : 1.0f) : 0.0f;  // NaN: 0
     out[c] = ((clamped * kSteps + kRoundingMagic) - kRoundingMagic) / kSteps;
   }
   return {out[0], out[1], out[2], out[3]};
+#endif
 }
 
 /// small_float(x, 10, true) of each channel of an rgba16f value (the additive light passes' target,
@@ -110,7 +120,7 @@ glm::vec4 unorm8_4(glm::vec4 v) {
 /// the four channels in one vector: the exponent field gives the rounding step, NaN becomes +0 and
 /// the sign is put back at the end. The same value as small_float channel by channel, bit for bit
 /// (test UnitTsp.SmallFloatRoundingMatchesTheLibraryFormulaEverywhere reads every lane).
-glm::vec4 half_float4(glm::vec4 v) {
+glm::vec4 half_float4(const glm::vec4& v) {
   constexpr int kMantissa = 10;
   constexpr int kMinExponent = -14;
   constexpr int kFloatBias = 127;
@@ -181,7 +191,7 @@ bool is_unorm(Format f) {
 
 }  // namespace
 
-glm::vec4 FormatPrecision::color(Format f, glm::vec4 v) {
+glm::vec4 FormatPrecision::color(Format f, const glm::vec4& v) {
   // The formats colour targets use most, one switch per value rather than one per channel
   // (additive light passes quantise every blended sample).
   switch (f) {

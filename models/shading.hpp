@@ -142,7 +142,7 @@ struct FormatPrecision {
   /// to their mantissa (fp16 10 bits, r11g11b10f 6/6/5 bits, unsigned) and saturate at their
   /// largest finite value; 32-bit float formats keep v. Channels the format lacks read back 0
   /// (alpha 1), Vulkan's "Conversion to RGBA" rule. Integer and depth formats keep v.
-  static glm::vec4 color(Format f, glm::vec4 v);
+  static glm::vec4 color(Format f, const glm::vec4& v);
   /// The surface a G-buffer target (or PLS variable) named `name` of format `f` keeps: `albedo`
   /// stores the base colour (rgb, then alpha where the format has a fourth channel), `normal` the
   /// normal (unorm formats as n/2 + 1/2, two-channel formats octahedral, float formats n; read
