@@ -418,11 +418,13 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   const bool builds_surface = reads_loaded_surface || p.hsr == HsrClass::PunchThrough ||
                               (pls_writes && outputs == 0 && !ctx_.pls->surface.empty());
 
-  // The quad uvs every surface of a scene triangle carries (SurfacePoint::quad_uv), computed as
-  // texture_addresses computes them.
+  // The quad uvs a stored surface of a scene triangle carries (SurfacePoint::quad_uv, read by the
+  // kernels that shade stored surfaces), computed as texture_addresses computes them; a surface
+  // shaded where it is made (forward) needs none.
+  const bool stores_surface = writes_kept_surface || (pls_writes && outputs == 0 && !ctx_.pls->surface.empty());
   std::optional<UvPlane> uv_plane;
   std::optional<QuadUv> quad_uv;
-  if (from_triangle && builds_surface) {
+  if (from_triangle && builds_surface && stores_surface) {
     const std::int64_t step = std::int64_t{1} << bits;
     uv_plane.emplace(p.setup, p.uv);
     quad_uv.emplace(*uv_plane, p.setup.a[1] * step, p.setup.b[1] * step, p.setup.a[2] * step, p.setup.b[2] * step);
@@ -510,7 +512,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       s.alpha = mat->base_color.w;
       s.material = p.material;
       s.triangle = p.id;
-      {
+      if (quad_uv) {
         const std::int64_t qx = px.x & ~std::int32_t{1}, qy = px.y & ~std::int32_t{1};
         const std::int64_t x0 = (qx << bits) + half, y0 = (qy << bits) + half;
         quad_uv->at(edge_value(p.setup, 1, x0, y0), edge_value(p.setup, 2, x0, y0), s.quad_uv);
