@@ -88,63 +88,6 @@ float small_float(float x, int mantissa, bool is_signed) {
   return std::copysign(q, x);
 }
 
-/// unorm(x, 8) of each channel of an rgba8 value, without branches (one vector for the four
-/// channels): clamped to [0, 1] (NaN to 0), then rounded to 255 steps by adding and subtracting
-/// 2^23 (round to nearest even, as nearbyint) below 255. Bit for bit unorm's value (test
-/// UnitTsp.SmallFloatRoundingMatchesTheLibraryFormulaEverywhere).
-glm::vec4 unorm8_4(const glm::vec4& v) {
-  constexpr float kSteps = 255.0f;
-  constexpr float kRoundingMagic = 8388608.0f;  // 2^23
-#if defined(__GNUC__)
-  // GCC's and Clang's generic vectors (any target: lowered to scalars where there is no SIMD).
-  using Float4 = float __attribute__((vector_size(16)));
-  const Float4 x = {v.x, v.y, v.z, v.w};
-  const Float4 zero = {0.0f, 0.0f, 0.0f, 0.0f}, one = {1.0f, 1.0f, 1.0f, 1.0f};
-  const Float4 positive = x > zero ? x : zero;  // NaN: 0
-  const Float4 clamped = positive < one ? positive : one;
-  const Float4 r = ((clamped * kSteps + kRoundingMagic) - kRoundingMagic) / kSteps;
-  return {r[0], r[1], r[2], r[3]};
-#else
-  float out[4];
-  for (int c = 0; c < 4; ++c) {
-    const float x = v[c];
-    const float clamped = x > 0.0f ? (x < 1.0f ? x : 1.0f) : 0.0f;  // NaN: 0
-    out[c] = ((clamped * kSteps + kRoundingMagic) - kRoundingMagic) / kSteps;
-  }
-  return {out[0], out[1], out[2], out[3]};
-#endif
-}
-
-/// small_float(x, 10, true) of each channel of an rgba16f value (the additive light passes' target,
-/// quantised at every blended sample), written without branches so that the compiler computes
-/// the four channels in one vector: the exponent field gives the rounding step, NaN becomes +0 and
-/// the sign is put back at the end. The same value as small_float channel by channel, bit for bit
-/// (test UnitTsp.SmallFloatRoundingMatchesTheLibraryFormulaEverywhere reads every lane).
-glm::vec4 half_float4(const glm::vec4& v) {
-  constexpr int kMantissa = 10;
-  constexpr int kMinExponent = -14;
-  constexpr int kFloatBias = 127;
-  constexpr float kRoundingMagic = 8388608.0f;  // 2^23
-  constexpr float kLargest = 65504.0f;          // (2 - 2^-10) 2^15
-  float in[4] = {v.x, v.y, v.z, v.w};
-  float out[4];
-  for (int c = 0; c < 4; ++c) {
-    const std::uint32_t bits = std::bit_cast<std::uint32_t>(in[c]);
-    const std::uint32_t magnitude = bits & 0x7fffffffu;
-    const float a = std::bit_cast<float>(magnitude);
-    const std::int32_t exponent = static_cast<std::int32_t>(magnitude >> 23) - kFloatBias;  // NaN, infinity: 128
-    const std::int32_t lead = exponent > kMinExponent ? exponent : kMinExponent;
-    const float step = std::bit_cast<float>(static_cast<std::uint32_t>(lead - kMantissa + kFloatBias) << 23);
-    const float per_step = std::bit_cast<float>(static_cast<std::uint32_t>(kMantissa - lead + kFloatBias) << 23);
-    const float rounded = (a * per_step + kRoundingMagic) - kRoundingMagic;
-    const float q = rounded * step;
-    const float saturated = q < kLargest ? q : kLargest;  // (infinity too)
-    const float signed_q = std::bit_cast<float>(std::bit_cast<std::uint32_t>(saturated) | (bits & 0x80000000u));
-    out[c] = a == a ? signed_q : 0.0f;  // NaN: 0
-  }
-  return {out[0], out[1], out[2], out[3]};
-}
-
 /// Octahedral encoding of a unit vector into [-1, 1]^2 and back (Cigolle et al. 2014, "A Survey
 /// of Efficient Representations for Independent Unit Vectors").
 glm::vec2 octahedral(glm::vec3 n) {
@@ -191,15 +134,7 @@ bool is_unorm(Format f) {
 
 }  // namespace
 
-glm::vec4 FormatPrecision::color(Format f, const glm::vec4& v) {
-  // The formats colour targets use most, one switch per value rather than one per channel
-  // (additive light passes quantise every blended sample).
-  switch (f) {
-    case Format::Rgba16f: return half_float4(v);
-    case Format::Rgba8: return unorm8_4(v);
-    case Format::Rgba32f: return v;
-    default: break;
-  }
+glm::vec4 FormatPrecision::other_color(Format f, const glm::vec4& v) {
   const int n = channels_of(f);
   if (n == 0) return v;
   glm::vec4 out(0.0f, 0.0f, 0.0f, 1.0f);

@@ -5,6 +5,7 @@
 // technique's business; lights beyond their radius contribute exactly zero, so any conservative
 // culling gives the same color.
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -134,6 +135,68 @@ struct ShadingModel {
   static glm::vec3 ambient(const SurfacePoint& s) { return s.albedo * kAmbient; }
 };
 
+namespace detail {
+
+/// unorm(x, 8) of each channel of an rgba8 value, without branches (one vector for the four
+/// channels): clamped to [0, 1] (NaN to 0), then rounded to 255 steps by adding and subtracting
+/// 2^23 (round to nearest even, as nearbyint) below 255. Bit for bit the value of unorm(x, 8) in
+/// models/shading.cpp (test UnitTsp.SmallFloatRoundingMatchesTheLibraryFormulaEverywhere).
+inline glm::vec4 unorm8_4(const glm::vec4& v) {
+  constexpr float kSteps = 255.0f;
+  constexpr float kRoundingMagic = 8388608.0f;  // 2^23
+#if defined(__GNUC__)
+  // GCC's and Clang's generic vectors (any target: lowered to scalars where there is no SIMD).
+  using Float4 = float __attribute__((vector_size(16)));
+  const Float4 x = {v.x, v.y, v.z, v.w};
+  const Float4 zero = {0.0f, 0.0f, 0.0f, 0.0f}, one = {1.0f, 1.0f, 1.0f, 1.0f};
+  const Float4 positive = x > zero ? x : zero;  // NaN: 0
+  const Float4 clamped = positive < one ? positive : one;
+  const Float4 r = ((clamped * kSteps + kRoundingMagic) - kRoundingMagic) / kSteps;
+  return {r[0], r[1], r[2], r[3]};
+#else
+  float out[4];
+  for (int c = 0; c < 4; ++c) {
+    const float x = v[c];
+    const float clamped = x > 0.0f ? (x < 1.0f ? x : 1.0f) : 0.0f;  // NaN: 0
+    out[c] = ((clamped * kSteps + kRoundingMagic) - kRoundingMagic) / kSteps;
+  }
+  return {out[0], out[1], out[2], out[3]};
+#endif
+}
+
+/// small_float(x, 10, true) of each channel of an rgba16f value (the additive light passes' target,
+/// quantised at every blended sample), written without branches so that the compiler computes
+/// the four channels in one vector: the exponent field gives the rounding step, NaN becomes +0 and
+/// the sign is put back at the end. The same value as small_float (models/shading.cpp) channel by
+/// channel, bit for bit (test UnitTsp.SmallFloatRoundingMatchesTheLibraryFormulaEverywhere reads
+/// every lane).
+inline glm::vec4 half_float4(const glm::vec4& v) {
+  constexpr int kMantissa = 10;
+  constexpr int kMinExponent = -14;
+  constexpr int kFloatBias = 127;
+  constexpr float kRoundingMagic = 8388608.0f;  // 2^23
+  constexpr float kLargest = 65504.0f;          // (2 - 2^-10) 2^15
+  float in[4] = {v.x, v.y, v.z, v.w};
+  float out[4];
+  for (int c = 0; c < 4; ++c) {
+    const std::uint32_t bits = std::bit_cast<std::uint32_t>(in[c]);
+    const std::uint32_t magnitude = bits & 0x7fffffffu;
+    const float a = std::bit_cast<float>(magnitude);
+    const std::int32_t exponent = static_cast<std::int32_t>(magnitude >> 23) - kFloatBias;  // NaN, infinity: 128
+    const std::int32_t lead = exponent > kMinExponent ? exponent : kMinExponent;
+    const float step = std::bit_cast<float>(static_cast<std::uint32_t>(lead - kMantissa + kFloatBias) << 23);
+    const float per_step = std::bit_cast<float>(static_cast<std::uint32_t>(kMantissa - lead + kFloatBias) << 23);
+    const float rounded = (a * per_step + kRoundingMagic) - kRoundingMagic;
+    const float q = rounded * step;
+    const float saturated = q < kLargest ? q : kLargest;  // (infinity too)
+    const float signed_q = std::bit_cast<float>(std::bit_cast<std::uint32_t>(saturated) | (bits & 0x80000000u));
+    out[c] = a == a ? signed_q : 0.0f;  // NaN: 0
+  }
+  return {out[0], out[1], out[2], out[3]};
+}
+
+}  // namespace detail
+
 /// What an attachment (or PLS variable) of a given format keeps of the values written to it: the
 /// formats' precision, applied at every write (blending reads back what was stored).
 struct FormatPrecision {
@@ -142,13 +205,26 @@ struct FormatPrecision {
   /// to their mantissa (fp16 10 bits, r11g11b10f 6/6/5 bits, unsigned) and saturate at their
   /// largest finite value; 32-bit float formats keep v. Channels the format lacks read back 0
   /// (alpha 1), Vulkan's "Conversion to RGBA" rule. Integer and depth formats keep v.
-  static glm::vec4 color(Format f, const glm::vec4& v);
+  /// Inline for the formats colour targets use most (additive light passes quantise every
+  /// blended sample): one switch per value, the four channels at once.
+  static glm::vec4 color(Format f, const glm::vec4& v) {
+    switch (f) {
+      case Format::Rgba16f: return detail::half_float4(v);
+      case Format::Rgba8: return detail::unorm8_4(v);
+      case Format::Rgba32f: return v;
+      default: return other_color(f, v);
+    }
+  }
   /// The surface a G-buffer target (or PLS variable) named `name` of format `f` keeps: `albedo`
   /// stores the base colour (rgb, then alpha where the format has a fourth channel), `normal` the
   /// normal (unorm formats as n/2 + 1/2, two-channel formats octahedral, float formats n; read
   /// back renormalised). The generators lay G-buffers out this way (workloads/techniques:
   /// albedo, normal, then targets holding nothing the model uses); other names keep the surface.
   static void surface(const std::string& name, Format f, SurfacePoint& s);
+
+ private:
+  /// color() of the other formats, channel by channel.
+  static glm::vec4 other_color(Format f, const glm::vec4& v);
 };
 
 }  // namespace tbdr
