@@ -347,7 +347,9 @@ class FrameSimulator {
     // The render's primitive records live in one buffer kept across the frame's passes: each pass
     // touches the pages its largest render needs, which earlier passes faulted in already.
     ctx.prims = std::move(prims_buffer_);
-    if (ctx.prims.capacity() == 0) ctx.prims.reserve(std::max<std::size_t>(kMinReservedPrimitives, scene_.triangle_count()));
+    if (ctx.prims.capacity() == 0) {
+      ctx.prims.reserve(std::clamp<std::size_t>(kReservedScenePasses * scene_.triangle_count(), kMinReservedPrimitives, kMaxReservedPrimitives));
+    }
     PassRenderer renderer(ctx, hw_, *ps, dram, cw, pool_);
     renderer.run();
     prims_buffer_ = std::move(ctx.prims);
@@ -433,11 +435,14 @@ class FrameSimulator {
   std::unique_ptr<TextureLayout> textures_;  ///< the frame's texture address space
   std::unique_ptr<RenderOutputUnit> rop_;    ///< gpu.mode=imr: the ROP caches, kept across the frame's passes
   std::set<std::string> surface_readers_;    ///< stored_surface_readers of the trace
-  /// The primitive buffer's first reservation is the scene's triangle count, at least this many:
-  /// address space only (pages are faulted in as records are written), so that a render of the
-  /// whole scene never copies its records while it grows (light volumes and clipped triangles
-  /// beyond that grow it by doubling). 64 K records: a light pass's volumes without regrowth.
+  /// The primitive buffer's first reservation: address space only (pages are faulted in as records
+  /// are written), so that a render never copies its records while the buffer grows. Three draws
+  /// of the scene (a depth prepass, the lit pass and its translucent geometry in one pass, as
+  /// forward_light_stack's single pass, plus its light volumes), at least 64 K records (a light
+  /// pass's volumes), at most 1 M (327 MB of addresses; a larger render grows by doubling).
+  static constexpr std::size_t kReservedScenePasses = 3;
   static constexpr std::size_t kMinReservedPrimitives = std::size_t{1} << 16;
+  static constexpr std::size_t kMaxReservedPrimitives = std::size_t{1} << 20;
   std::vector<Primitive> prims_buffer_;      ///< RenderContext::prims between passes (capacity kept)
   ThreadPool pool_;                          ///< the threads the passes' tiles render on
   FrameResult result_;
