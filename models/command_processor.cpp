@@ -344,12 +344,9 @@ class FrameSimulator {
     cw.read_bytes = book_buffer_reads(pass, dram).read_bytes;  // buffers read once per pass, at its start
     cw.depends_on_previous = reads_earlier_results(pass);
 
-    // The render's primitive records live in one buffer kept across the frame's passes: each pass
+    // The render's primitive records live in one store kept across the frame's passes: each pass
     // touches the pages its largest render needs, which earlier passes faulted in already.
     ctx.prims = std::move(prims_buffer_);
-    if (ctx.prims.capacity() == 0) {
-      ctx.prims.reserve(std::clamp<std::size_t>(kReservedScenePasses * scene_.triangle_count(), kMinReservedPrimitives, kMaxReservedPrimitives));
-    }
     PassRenderer renderer(ctx, hw_, *ps, dram, cw, pool_);
     renderer.run();
     prims_buffer_ = std::move(ctx.prims);
@@ -435,15 +432,7 @@ class FrameSimulator {
   std::unique_ptr<TextureLayout> textures_;  ///< the frame's texture address space
   std::unique_ptr<RenderOutputUnit> rop_;    ///< gpu.mode=imr: the ROP caches, kept across the frame's passes
   std::set<std::string> surface_readers_;    ///< stored_surface_readers of the trace
-  /// The primitive buffer's first reservation: address space only (pages are faulted in as records
-  /// are written), so that a render never copies its records while the buffer grows. Three draws
-  /// of the scene (a depth prepass, the lit pass and its translucent geometry in one pass, as
-  /// forward_light_stack's single pass, plus its light volumes), at least 64 K records (a light
-  /// pass's volumes), at most 1 M (327 MB of addresses; a larger render grows by doubling).
-  static constexpr std::size_t kReservedScenePasses = 3;
-  static constexpr std::size_t kMinReservedPrimitives = std::size_t{1} << 16;
-  static constexpr std::size_t kMaxReservedPrimitives = std::size_t{1} << 20;
-  std::vector<Primitive> prims_buffer_;      ///< RenderContext::prims between passes (capacity kept)
+  PrimitiveStore prims_buffer_;              ///< RenderContext::prims between passes (its chunks kept)
   ThreadPool pool_;                          ///< the threads the passes' tiles render on
   FrameResult result_;
 };

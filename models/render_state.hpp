@@ -3,10 +3,13 @@
 // produced (what the parameter buffer holds), and the frame's attachment images. Each unit owns
 // its own logic; these are the data that flow between them.
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <memory>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -87,6 +90,56 @@ struct Primitive {
   std::array<glm::vec3, 3> world{};   ///< original triangle, world space
   std::array<glm::vec3, 3> normal{};  ///< original triangle, world space
   std::array<glm::vec2, 3> uv{};      ///< original triangle
+};
+
+/// A render's primitive records (the parameter buffer's contents, functionally), indexed like a
+/// vector but stored in chunks of kChunkRecords that never move: growing copies nothing (a
+/// vector's doubling copied a render's records and held both copies, 160 + 320 MB for
+/// forward_multipass's 513 K-primitive pass), and a record's address stays valid. Chunks are
+/// allocated uninitialised and kept when the store is cleared, so a frame's passes reuse the
+/// pages its largest render faulted in, and the memory is that render's records.
+class PrimitiveStore {
+  static_assert(std::is_trivially_copyable_v<Primitive> && std::is_trivially_destructible_v<Primitive>,
+                "records are copied into uninitialised storage and never destroyed");
+
+ public:
+  static constexpr std::size_t kChunkBits = 14;  ///< 16 K records (5 MB) a chunk
+  static constexpr std::size_t kChunkRecords = std::size_t{1} << kChunkBits;
+
+  PrimitiveStore() = default;
+  /// Moves the chunks and records; the source is left empty.
+  PrimitiveStore(PrimitiveStore&& o) noexcept : chunks_(std::move(o.chunks_)), size_(std::exchange(o.size_, 0)) {}
+  PrimitiveStore& operator=(PrimitiveStore&& o) noexcept {
+    chunks_ = std::move(o.chunks_);
+    size_ = std::exchange(o.size_, 0);
+    return *this;
+  }
+
+  Primitive& operator[](std::size_t i) { return chunks_[i >> kChunkBits].get()[i & (kChunkRecords - 1)]; }
+  const Primitive& operator[](std::size_t i) const { return chunks_[i >> kChunkBits].get()[i & (kChunkRecords - 1)]; }
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  /// Appends a copy of `p`; returns the stored record.
+  Primitive& emplace_back(const Primitive& p) {
+    if (size_ == chunks_.size() * kChunkRecords) chunks_.push_back(Chunk(static_cast<Primitive*>(::operator new(kChunkRecords * sizeof(Primitive)))));
+    Primitive* slot = &(*this)[size_];
+    std::memcpy(static_cast<void*>(slot), &p, sizeof(Primitive));
+    ++size_;
+    return *slot;
+  }
+  void push_back(const Primitive& p) { emplace_back(p); }
+  void pop_back() { --size_; }
+  Primitive& back() { return (*this)[size_ - 1]; }
+  /// Forgets the records; keeps the chunks.
+  void clear() { size_ = 0; }
+
+ private:
+  struct Free {
+    void operator()(Primitive* p) const { ::operator delete(static_cast<void*>(p)); }
+  };
+  using Chunk = std::unique_ptr<Primitive, Free>;
+  std::vector<Chunk> chunks_;
+  std::size_t size_ = 0;
 };
 
 /// The identity of a primitive's three vertices (vertex re-use within a primitive block).
@@ -263,7 +316,7 @@ struct RenderContext : FrameInputs {
   RenderOutputUnit* rop = nullptr;            ///< imr: the depth and colour caches the ISP and TSP go through
   std::vector<DrawContext> draws;             ///< the pass's draws, resolved
   std::vector<std::vector<std::uint32_t>> object_lights;  ///< per object: lights touching it
-  std::vector<Primitive> prims;               ///< the render's primitives (parameter buffer contents)
+  PrimitiveStore prims;                       ///< the render's primitives (parameter buffer contents)
   std::vector<AttachmentImage*> color_targets;  ///< images the shaders' color outputs write, in order
   AttachmentImage* depth = nullptr;           ///< the pass's depth attachment image, or nullptr
   PlsState* pls = nullptr;                    ///< the pass's pixel local storage, or nullptr
