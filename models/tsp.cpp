@@ -415,13 +415,13 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   // Whether a scene triangle's fragments need their surface: for colours, for a cluster (the
   // depth), to store it (a G-buffer target, the PLS surfaces) and for the alpha test (the uv).
   // Without, a fragment counts the same (forward+ without images: its tile's lights).
-  const bool builds_surface = reads_loaded_surface || p.hsr == HsrClass::PunchThrough ||
-                              (pls_writes && outputs == 0 && !ctx_.pls->surface.empty());
+  const bool stores_pls_surface = pls_writes && outputs == 0 && !ctx_.pls->surface.empty();
+  const bool builds_surface = reads_loaded_surface || p.hsr == HsrClass::PunchThrough || stores_pls_surface;
 
   // The quad uvs a stored surface of a scene triangle carries (SurfacePoint::quad_uv, read by the
   // kernels that shade stored surfaces), computed as texture_addresses computes them; a surface
   // shaded where it is made (forward) needs none.
-  const bool stores_surface = writes_kept_surface || (pls_writes && outputs == 0 && !ctx_.pls->surface.empty());
+  const bool stores_surface = writes_kept_surface || stores_pls_surface;
   std::optional<UvPlane> uv_plane;
   std::optional<QuadUv> quad_uv;
   if (from_triangle && builds_surface && stores_surface) {
@@ -676,15 +676,12 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
           if (target->keeps_surface) target->surface.assign(target->sample_count, colour);
           target->surface_valid.assign(target->sample_count, 0);
         }
-        std::uint8_t* const valid = target->surface_valid.data() + pixel * static_cast<std::size_t>(S);
-        if (target->keeps_surface) {
-          const SurfacePoint stored = stored_surface(false, s);
-          for (int smp = 0; smp < S; ++smp) {
-            if (write_mask & (1u << smp)) target->surface.set(pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(smp), stored);
-          }
-        }
+        const std::size_t k0 = pixel * static_cast<std::size_t>(S);
+        const SurfacePoint stored = target->keeps_surface ? stored_surface(false, s) : SurfacePoint{};
         for (int smp = 0; smp < S; ++smp) {
-          if (write_mask & (1u << smp)) valid[smp] = 1;
+          if (!(write_mask & (1u << smp))) continue;
+          if (target->keeps_surface) target->surface.set(k0 + static_cast<std::size_t>(smp), stored);
+          target->surface_valid[k0 + static_cast<std::size_t>(smp)] = 1;
         }
         surface_stored = true;
       }

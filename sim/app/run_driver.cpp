@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <future>
 #include <iomanip>
+#include <optional>
 #include <ostream>
 #include <sstream>
 
@@ -70,47 +71,51 @@ std::vector<RunParam> trace_run_params(const Trace& trace, const std::string& tr
   return params;
 }
 
+namespace {
+
 /// The image of a G-buffer or visibility attachment: what its data stands for, from the surfaces
 /// the frame stored (the first G-buffer target a shader writes keeps them for its siblings;
 /// FormatPrecision::surface has applied each target's format). `albedo` shows the stored base
 /// colour, `normal` the normal as n/2 + 1/2, a visibility attachment its triangle ids (as
 /// triangle_id.png); sample 0 of each pixel, black where none was written. Other G-buffer targets
 /// hold nothing the model keeps: no image.
-template <class Save>
-void write_surface_image(const FrameImages& images, const std::string& name, const AttachmentImage& img, int w, int h, Save&& save) {
+std::optional<ImageRGB8> surface_image(const FrameImages& images, const std::string& name, const AttachmentImage& img) {
   const AttachmentImage* store = img.surface.empty() ? nullptr : &img;
   for (const auto& [other, o] : images.attachments) {
     if (!store && o.usage == img.usage && !o.surface.empty() && o.samples == img.samples) store = &o;
   }
-  if (!store) return;
+  const bool albedo = name == "albedo", normal = name == "normal", ids = img.usage == AttachmentUsage::Visibility;
+  if (!store || !(albedo || normal || ids)) return std::nullopt;
+  const int w = images.width, h = images.height;
   const std::size_t pixels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
   const std::size_t S = store->samples;
-  if (img.usage == AttachmentUsage::Visibility) {
-    std::vector<std::uint32_t> ids(pixels, 0);
+  auto written = [&](std::size_t p) { return store->surface_valid[p * S] != 0; };
+  if (ids) {
+    std::vector<std::uint32_t> id(pixels, 0);
     for (std::size_t p = 0; p < pixels; ++p) {
-      if (store->surface_valid[p * S]) ids[p] = store->surface.site(p * S).triangle + 1;
+      if (written(p)) id[p] = store->surface.site(p * S).triangle + 1;
     }
-    save("attachment_" + name + ".png", ids_to_image(ids, w, h, 0));
-    return;
+    return ids_to_image(id, w, h, 0);
   }
-  if (name == "albedo") {
+  if (albedo) {
     std::vector<glm::vec3> rgb(pixels, glm::vec3(0.0f));
     for (std::size_t p = 0; p < pixels; ++p) {
-      if (store->surface_valid[p * S]) rgb[p] = store->surface[p * S].albedo;  // linear colour: shown in sRGB
+      if (written(p)) rgb[p] = store->surface[p * S].albedo;  // linear colour: shown in sRGB
     }
-    save("attachment_" + name + ".png", color_to_image(rgb, w, h));
-  } else if (name == "normal") {
-    // A normal map's usual picture: n/2 + 1/2 as 8-bit unorm, not a colour (no sRGB curve).
-    ImageRGB8 out(w, h);
-    auto unorm8 = [](float v) { return static_cast<std::uint8_t>(std::lround(std::clamp(v * 0.5f + 0.5f, 0.0f, 1.0f) * 255.0f)); };
-    for (std::size_t p = 0; p < pixels; ++p) {
-      if (!store->surface_valid[p * S]) continue;
-      const glm::vec3 n = store->surface[p * S].normal;
-      out.set(static_cast<int>(p % static_cast<std::size_t>(w)), static_cast<int>(p / static_cast<std::size_t>(w)), Rgb8{unorm8(n.x), unorm8(n.y), unorm8(n.z)});
-    }
-    save("attachment_" + name + ".png", out);
+    return color_to_image(rgb, w, h);
   }
+  // A normal map's usual picture: n/2 + 1/2 as 8-bit unorm, not a colour (no sRGB curve).
+  ImageRGB8 out(w, h);
+  auto unorm8 = [](float v) { return static_cast<std::uint8_t>(std::lround(std::clamp(v * 0.5f + 0.5f, 0.0f, 1.0f) * 255.0f)); };
+  for (std::size_t p = 0; p < pixels; ++p) {
+    if (!written(p)) continue;
+    const glm::vec3 n = store->surface[p * S].normal;
+    out.set(static_cast<int>(p % static_cast<std::size_t>(w)), static_cast<int>(p / static_cast<std::size_t>(w)), Rgb8{unorm8(n.x), unorm8(n.y), unorm8(n.z)});
+  }
+  return out;
 }
+
+}  // namespace
 
 std::vector<std::string> write_frame_images(const FrameResult& frame, const std::string& dir) {
   namespace fs = std::filesystem;
@@ -130,7 +135,7 @@ std::vector<std::string> write_frame_images(const FrameResult& frame, const std:
     } else if (!img.color.empty() && img.samples == 1) {
       save("attachment_" + name + ".png", color_to_image(img.color, w, h));
     } else if (img.usage == AttachmentUsage::Gbuffer || img.usage == AttachmentUsage::Visibility) {
-      write_surface_image(frame.images, name, img, w, h, [&](const std::string& file, const ImageRGB8& image) { save(file, image); });
+      if (const auto image = surface_image(frame.images, name, img)) save("attachment_" + name + ".png", *image);
     }
   }
   if (auto it = frame.images.attachments.find(frame.final_color); it != frame.images.attachments.end()) {
