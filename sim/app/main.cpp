@@ -12,19 +12,21 @@ namespace {
 
 /// glibc's allocator settings for a simulation run (issue 15). A 1080p frame touches a few
 /// hundred MB in vectors that grow, are freed and are allocated again per pass and per render;
-/// with glibc's defaults each block over 128 KiB is a fresh mmap whose 4 KiB pages the kernel maps
-/// and zeroes one fault at a time, and freed memory goes back to the kernel: 23,000-84,000 page
-/// faults per 1080p run and a fifth of its CPU time in the kernel on the machines measured.
-/// hugetlb=1 backs the heap and the mmapped blocks with transparent huge pages where the kernel
-/// grants them on request (madvise mode): 512 times fewer faults. Blocks up to 32 MiB (glibc's
-/// largest mmap threshold) come from the heap and are kept for the next pass, and the heap is
-/// trimmed only past 256 MiB free; larger blocks (whole-frame arrays) are mapped and unmapped
-/// as before, so a run's peak stays that of its largest pass. Measured side by side (1 thread,
-/// atrium:3 1080p, 1024 lights; docs/architecture.md): plain_forward 23,400 -> 1,200 faults and
-/// 0.2 -> 0.03 s in the kernel; forward_multipass (256 lights) peak 202 -> 231 MB, where 4 GiB
-/// thresholds (no mapping, no trimming) grew it to 348 MB.
+/// with glibc's defaults each block over 128 KiB is a fresh mmap whose pages the kernel maps and
+/// zeroes again every time, and freed memory goes back to the kernel: 23,000-84,000 page faults
+/// per 1080p run and a fifth of its CPU time in the kernel on the machines measured. Blocks up to
+/// 32 MiB (glibc's largest mmap threshold) come from the heap and are kept for the next pass, and
+/// the heap is trimmed only past 256 MiB free, so a page is faulted in once per run; larger blocks
+/// (whole-frame arrays) are mapped and unmapped as before, so a run's peak stays that of its
+/// largest pass. Transparent huge pages (hugetlb=1, used until 2026-12) are not asked for: on the
+/// virtual machines measured, a fresh 2 MiB page costs about 1 ms to fault in (the host backs it
+/// again), against 0.4 ms for 512 small pages, and a run that touches a few hundred MB once spent
+/// 0.2-0.8 s more in the kernel with them. Measured side by side (1 thread, atrium:3 1080p,
+/// 1024 lights, kernel CPU seconds with / without huge pages): deferred with images 0.55-0.78 /
+/// 0.17-0.20, forward_multipass (256 lights) 0.33-0.51 / 0.08-0.11, light_prepass 0.06-0.21 /
+/// 0.03-0.04, user time the same within noise; docs/architecture.md.
 constexpr const char* kMallocTunables =
-    "glibc.malloc.hugetlb=1:glibc.malloc.mmap_threshold=33554432:glibc.malloc.trim_threshold=268435456";
+    "glibc.malloc.mmap_threshold=33554432:glibc.malloc.trim_threshold=268435456";
 /// Set in the environment of the re-executed process, so it runs once (and its children, which
 /// inherit GLIBC_TUNABLES, do not re-execute either).
 constexpr const char* kTunedMarker = "TBDRSIM_MALLOC_TUNED";
