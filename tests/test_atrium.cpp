@@ -257,5 +257,24 @@ TEST(AtriumCamera, ProjectionUsesTheGlDepthRange) {
   EXPECT_NEAR(f.z / f.w, 1.0f, 1e-5f);
 }
 
+TEST(Atrium, SharedSceneIsBuiltOncePerDetailAndTexelOption) {
+  // shared_scene builds the atrium once per process for each (detail, colour texels) and shares
+  // it afterwards: the same object for the same request ("atrium" is "atrium:3"), another for
+  // the other texel option, and each equal to what load_scene builds.
+  const std::shared_ptr<const Scene> bare = shared_scene("atrium:1", SceneLoadOptions{.colour_texels = false});
+  EXPECT_EQ(shared_scene("atrium:1", SceneLoadOptions{.colour_texels = false}).get(), bare.get());
+  const std::shared_ptr<const Scene> full = shared_scene("atrium:1");
+  EXPECT_NE(full.get(), bare.get());
+  EXPECT_EQ(shared_scene("atrium").get(), shared_scene("atrium:3").get());
+  const Scene built = load_scene("atrium:1");
+  EXPECT_EQ(full->content_hash, built.content_hash);
+  EXPECT_EQ(bare->content_hash, built.content_hash);
+  EXPECT_EQ(full->triangle_count(), built.triangle_count());
+  ASSERT_FALSE(full->base_color_texels.empty());
+  EXPECT_EQ(full->base_color_texels[0].rgba, built.base_color_texels[0].rgba);
+  EXPECT_TRUE(bare->base_color_texels[0].rgba.empty());
+  EXPECT_THROW(shared_scene("atrium:9"), InputError);  // the range is still checked
+}
+
 }  // namespace
 }  // namespace tbdr

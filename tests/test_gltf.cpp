@@ -194,6 +194,27 @@ TEST(GltfLoad, IndexedQuadCountsStrideAndFlatNormals) {
   EXPECT_TRUE(s.warnings.empty());
 }
 
+TEST(GltfLoad, SharedSceneLoadsAGltfFileAfreshEachTime) {
+  // shared_scene keeps only the procedural atrium; a file is read again on every call, so a
+  // file rewritten between two calls is seen as it is now (here: a quad, then a triangle).
+  TempDir dir;
+  GltfBuilder quad;
+  const int pos = quad.vec3(quad_positions);
+  const int idx = quad.indices16({0, 1, 2, 0, 2, 3});
+  quad.node({{"mesh", quad.mesh("Quad", {{"attributes", {{"POSITION", pos}}}, {"indices", idx}})}});
+  const std::string path = quad.write_gltf(dir, "shape");
+  const std::shared_ptr<const Scene> first = shared_scene(path);
+  EXPECT_EQ(first->triangle_count(), 2u);
+  GltfBuilder tri;
+  const int pos3 = tri.vec3(quad_positions);
+  const int idx3 = tri.indices16({0, 1, 2});
+  tri.node({{"mesh", tri.mesh("Tri", {{"attributes", {{"POSITION", pos3}}}, {"indices", idx3}})}});
+  EXPECT_EQ(tri.write_gltf(dir, "shape"), path);
+  const std::shared_ptr<const Scene> second = shared_scene(path);
+  EXPECT_NE(first.get(), second.get());
+  EXPECT_EQ(second->triangle_count(), 1u);
+}
+
 TEST(GltfLoad, IndexComponentTypesAndNonIndexed) {
   TempDir dir;
   GltfBuilder g;

@@ -60,10 +60,13 @@ void parse_resolution(const std::string& text, int& w, int& h) {
 
 }  // namespace
 
-TraceSetup trace_setup_from_options(const po::variables_map& vm, Scene& scene_storage) {
+/// The setup `tbdrsim trace` generates from; `scene_ptr` keeps the scene it points to (the
+/// generators read geometry, materials and texture sizes, never the colour texels).
+TraceSetup trace_setup_from_options(const po::variables_map& vm, std::shared_ptr<const Scene>& scene_ptr) {
   TraceSetup setup;
   setup.scene_spec = vm["scene"].as<std::string>();
-  scene_storage = load_scene(setup.scene_spec);
+  scene_ptr = shared_scene(setup.scene_spec, SceneLoadOptions{.colour_texels = false});
+  const Scene& scene_storage = *scene_ptr;
   setup.scene = &scene_storage;
   parse_resolution(vm["resolution"].as<std::string>(), setup.width, setup.height);
   setup.samples = vm["samples"].as<int>();
@@ -127,7 +130,7 @@ int cmd_trace(const std::vector<std::string>& args, std::ostream& out, std::ostr
     return 0;
   }
   if (!vm.count("out")) throw UsageError("tbdrsim trace: --out FILE is required");
-  Scene scene;
+  std::shared_ptr<const Scene> scene;
   const TraceSetup setup = trace_setup_from_options(vm, scene);
   const Trace trace = generate_trace(vm["technique"].as<std::string>(), setup);
   write_trace_file(trace, vm["out"].as<std::string>());

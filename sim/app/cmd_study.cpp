@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <future>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -471,28 +472,18 @@ void print_method_table(const StudyPlan& plan, const std::vector<StudyPoint>& po
   out << "  (overshading: lighting computed on surfaces or by kernels per visible pixel (views.sql), yes above 1.10 (translucent layers add about 5 %);\n"
       << "   blending: the image with the translucent glass equals plain forward's; MSAA: the generator produces a 4x trace)\n";
   // MSAA: does the technique's generator produce a 4x trace? Probed with a one-light 64x36 trace
-  // per technique, the probes on the worker pool.
-  std::vector<std::string> probed;
-  for (const auto& p : points) {
-    if (p.lights == plan.max_lights && p.config == 0) probed.push_back(p.technique);
-  }
-  std::vector<WorkerJob> probes;
-  for (const std::string& technique : probed) {
-    WorkerJob job;
-    job.function = [&plan, technique] {
-      const std::string probe = (fs::path(plan.dir) / "traces" / ("msaa_probe_" + technique + ".trace")).string();
-      std::ostringstream sink, errs;
-      const int rc = cli_main({"trace", "--technique", technique, "--lights", "1", "--resolution", "64x36", "--samples", "4", "--out", probe},
-                              sink, errs);
-      std::error_code ec;
-      fs::remove(probe, ec);
-      return rc;
-    };
-    probes.push_back(std::move(job));
-  }
+  // per technique on the default atrium, here: a few milliseconds each once this process has
+  // built that scene (shared_scene), where a worker process per probe built it again.
   std::set<std::string> msaa_techniques;
-  for (const WorkerEnd& end : run_worker_jobs(plan.jobs, std::move(probes))) {
-    if (end.ok()) msaa_techniques.insert(probed[end.id]);
+  for (const auto& p : points) {
+    if (p.lights != plan.max_lights || p.config != 0) continue;
+    const std::string probe = (fs::path(plan.dir) / "traces" / ("msaa_probe_" + p.technique + ".trace")).string();
+    std::ostringstream sink, errs;
+    const int rc = cli_main({"trace", "--technique", p.technique, "--lights", "1", "--resolution", "64x36", "--samples", "4", "--out", probe},
+                            sink, errs);
+    std::error_code ec;
+    fs::remove(probe, ec);
+    if (rc == 0) msaa_techniques.insert(p.technique);
   }
   std::optional<ImageRGB8> reference_color;  // plain forward's image, when there is one
   for (const auto& p : points) {
@@ -583,8 +574,16 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
     for (const auto& m : plan.modes) out << " " << m;
   }
   out << ", " << plan.jobs << " workers x " << plan.threads << (plan.threads == 1 ? " thread" : " threads") << std::endl;
+  // The atrium is built here once, as the trace generators (without colour texels) and the runs
+  // (with them where they write images) ask for it, so that every worker process forked below
+  // inherits it instead of building it again (shared_scene): 65 builds of about 70 ms each at
+  // the default study, 1.5-2 s of its wall time on two workers. A glTF scene is loaded by each.
   std::vector<StudyPoint> points;
   try {
+    if (parse_atrium_spec(plan.scene)) {  // (a bad spec throws here, and leaves nothing written)
+      shared_scene(plan.scene, SceneLoadOptions{.colour_texels = false});
+      if (plan.image_mode != "none") shared_scene(plan.scene, SceneLoadOptions{.colour_texels = true});
+    }
     points = generate_traces(plan);
   } catch (...) {
     if (!dir_existed) {
@@ -599,6 +598,11 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
   { ResultsDb db(plan.db_path); }  // create or migrate before the workers start
   const int failures = run_points(plan, points, out, err);
   if (failures > 0) err << "study: " << failures << " worker(s) reported failed runs (see above)\n";
+  // The plot scripts (python, about a second each) draw while this process writes the tables
+  // (about a second too: the database's queries and the blending column's image comparisons);
+  // both only read the database, which every run has written by now.
+  const fs::path plots = fs::path(plan.dir) / "plots";
+  std::future<int> plotted_later = std::async(std::launch::async, [&] { return write_plots(plan.db_path, plots, plan.jobs); });
   {
     const ResultsDb db(plan.db_path);
     StudyResults results(db, plan);
@@ -606,8 +610,7 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
     print_mode_table(plan, points, results, db, out);
     print_method_table(plan, points, results, out);
   }
-  const fs::path plots = fs::path(plan.dir) / "plots";
-  const int plotted = write_plots(plan.db_path, plots, plan.jobs);
+  const int plotted = plotted_later.get();
   close_results_db_cleanly(plan.db_path);  // the plot scripts read it: leave no -wal/-shm beside it
   out << "\nresults: " << plan.db_path << " (" << points.size() << " runs), traces in " << (fs::path(plan.dir) / "traces").string()
       << ", images and heat maps in " << (fs::path(plan.dir) / "images").string() << ", " << plotted << " plots in " << plots.string()

@@ -39,8 +39,8 @@ double thread_cpu_seconds() {
 
 /// The scene a trace references: the atrium at its detail, or the glTF path relative to the
 /// trace file first, then to the working directory.
-Scene load_trace_scene(const Trace& trace, const std::string& trace_path, const SceneLoadOptions& options) {
-  if (trace.scene.kind == SceneKind::Atrium) return load_scene("atrium:" + std::to_string(trace.scene.detail), options);
+std::shared_ptr<const Scene> load_trace_scene(const Trace& trace, const std::string& trace_path, const SceneLoadOptions& options) {
+  if (trace.scene.kind == SceneKind::Atrium) return shared_scene("atrium:" + std::to_string(trace.scene.detail), options);
   namespace fs = std::filesystem;
   const fs::path rel = fs::path(trace_path).parent_path() / trace.scene.path;
   const std::string path = fs::exists(rel) ? rel.string() : trace.scene.path;
@@ -48,7 +48,7 @@ Scene load_trace_scene(const Trace& trace, const std::string& trace_path, const 
     throw InputError(trace_path, trace.scene.line, "scene file '" + trace.scene.path + "' not found (looked in " +
                                                        rel.string() + " and the working directory)");
   }
-  return load_scene(path, options);
+  return shared_scene(path, options);
 }
 
 std::string stat_text(double v) {
@@ -230,7 +230,8 @@ RunOutcome run_one(const RunRequest& req) {
   // Colours (and the texels they sample) are computed only for the images that read them: the
   // statistics are the same either way (tests/test_speed_equivalence.cpp).
   const bool colour = !req.images_dir.empty();
-  const Scene scene = load_trace_scene(trace, req.trace_path, SceneLoadOptions{.colour_texels = colour});
+  const std::shared_ptr<const Scene> scene_ptr = load_trace_scene(trace, req.trace_path, SceneLoadOptions{.colour_texels = colour});
+  const Scene& scene = *scene_ptr;
   check_scene_references(trace, scene, req.trace_path);  // sub-mesh and material names, before any work
   outcome.load_seconds = seconds_since(t_load);
 

@@ -4,6 +4,9 @@
 #include <cctype>
 #include <charconv>
 #include <cstdio>
+#include <map>
+#include <mutex>
+#include <utility>
 
 #include "kernel/errors.hpp"
 #include "scene/atrium.hpp"
@@ -58,6 +61,19 @@ Scene load_scene(const std::string& spec, const SceneLoadOptions& options) {
   }
   if (ends_with_ci(spec, ".gltf") || ends_with_ci(spec, ".glb")) return load_gltf(spec);
   throw InputError(spec, "unknown scene: expected 'atrium', 'atrium:N' (N in 1..5) or a .gltf/.glb file");
+}
+
+std::shared_ptr<const Scene> shared_scene(const std::string& spec, const SceneLoadOptions& options) {
+  const auto atrium = parse_atrium_spec(spec);
+  if (!atrium) return std::make_shared<const Scene>(load_scene(spec, options));
+  const int detail = atrium->detail.value_or(default_atrium_detail);
+  // Built scenes by (detail, colour texels); kept for the process's life (a few per process).
+  static std::mutex mutex;
+  static std::map<std::pair<int, bool>, std::shared_ptr<const Scene>> built;
+  const std::lock_guard<std::mutex> lock(mutex);
+  std::shared_ptr<const Scene>& scene = built[{detail, options.colour_texels}];
+  if (!scene) scene = std::make_shared<const Scene>(make_atrium(detail, options.colour_texels));
+  return scene;
 }
 
 void print_scene_info(const Scene& scene, std::ostream& out) {

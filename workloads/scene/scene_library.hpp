@@ -1,6 +1,7 @@
 #pragma once
 // One entry point for every scene a run can name: the built-in atrium or a glTF file, and a
 // human-readable summary of a loaded scene (what `tbdrsim scene-info` prints).
+#include <memory>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -31,6 +32,12 @@ struct SceneLoadOptions {
 /// Loads a scene from a spec: "atrium" (detail 3), "atrium:N" (N in 1..5), or a path ending in
 /// .gltf or .glb. Throws InputError naming the spec (or the file) when it cannot.
 Scene load_scene(const std::string& spec, const SceneLoadOptions& options = {});
+
+/// load_scene, shared: the procedural atrium is built once per process for each detail and set
+/// of options, and later calls share it; a process forked after the first call (tbdrsim study's
+/// trace generators and runs) inherits it instead of building it again (about 70 ms of CPU for
+/// atrium:3). A glTF file is loaded afresh on every call (the file may change between calls).
+std::shared_ptr<const Scene> shared_scene(const std::string& spec, const SceneLoadOptions& options = {});
 
 /// Prints name, source, content hash, triangle/vertex/sub-mesh/instance counts, materials by alpha
 /// mode (count and triangles), bounds, textures (count and GPU bytes) and warnings.
