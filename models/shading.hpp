@@ -125,9 +125,14 @@ struct ShadingModel {
   /// Radiance leaving `s` towards `eye` from one light (0 outside its radius or cone). The test
   /// against the radius is inline: most candidate lights of a pixel are rejected by it.
   static glm::vec3 light_contribution(const SurfacePoint& s, glm::vec3 eye, const Light& light) {
-    const glm::vec3 d = light.position - s.position;
-    if (!(glm::dot(d, d) < light.radius * light.radius)) return glm::vec3(0.0f);
+    if (!reaches(light, s.position)) return glm::vec3(0.0f);
     return lit_contribution(s, eye, light);
+  }
+  /// Whether a point lies inside the light's radius: light_contribution is exactly 0 where not,
+  /// whatever the rest of the surface.
+  static bool reaches(const Light& light, const glm::vec3& position) {
+    const glm::vec3 d = light.position - position;
+    return glm::dot(d, d) < light.radius * light.radius;
   }
   /// light_contribution for a light whose sphere contains the surface point.
   static glm::vec3 lit_contribution(const SurfacePoint& s, glm::vec3 eye, const Light& light);

@@ -486,6 +486,15 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     }
   }
 
+  // A scene triangle's colour that only its lights read (additive blending into colour targets,
+  // no ambient term, no store, no alpha test) from a handful of selected lights tested one by
+  // one (a multi-pass renderer's pass): where none of them reaches the fragment's position, its
+  // colour is exactly 0 whatever its normal and albedo, and those (the normal's square root, the
+  // base colour texel) are not made.
+  bool colour_only_lit = colour && from_triangle && p.hsr != HsrClass::PunchThrough && blend == BlendMode::Add && !ctx_.pls &&
+                         sh.light_source == LightSource::All && d.lights.size() <= kDirectLights;
+  for (std::uint32_t o = 0; o < outputs && colour_only_lit; ++o) colour_only_lit = ctx_.color_targets[o]->usage == AttachmentUsage::Color;
+
   for (std::size_t i = 0; !counts_only && i < pixels.size(); ++i) {
     const ShadePixel& px = pixels[i];
     const std::size_t pixel = static_cast<std::size_t>(px.y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(px.x);
@@ -494,35 +503,41 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     // The surface this fragment shades.
     SurfacePoint s;
     bool have_surface = false;
+    bool out_of_reach = false;  // no light reaches it (colour_only_lit): only its position is made
     if (from_triangle && !builds_surface) {
       have_surface = true;  // (nothing below reads it: see builds_surface)
     } else if (from_triangle) {
       glm::vec3 b;
       s.position = triangle_position(p, px.x, px.y, &b);
-      glm::vec3 n = p.normal[0] * b.x + p.normal[1] * b.y + p.normal[2] * b.z;
-      const float len = glm::length(n);
-      n = len > 0.0f ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
-      if (!p.setup.front_facing) n = -n;
-      s.normal = n;
-      const glm::vec2 uv = p.uv[0] * b.x + p.uv[1] * b.y + p.uv[2] * b.z;
-      s.albedo = glm::vec3(mat->base_color);
-      // The base colour texture the fetches are charged for, sampled at the pixel (glTF: factor x texel).
-      if (colour && mat->base_color_texels >= 0)
-        s.albedo *= ctx_.scene->base_color_texels[static_cast<std::size_t>(mat->base_color_texels)].sample_linear_rgb(uv);
       s.alpha = mat->base_color.w;
       s.material = p.material;
       s.triangle = p.id;
-      if (quad_uv) {
-        const std::int64_t qx = px.x & ~std::int32_t{1}, qy = px.y & ~std::int32_t{1};
-        const std::int64_t x0 = (qx << bits) + half, y0 = (qy << bits) + half;
-        quad_uv->at(edge_value(p.setup, 1, x0, y0), edge_value(p.setup, 2, x0, y0), s.quad_uv);
-      }
       have_surface = true;
-      if (p.hsr == HsrClass::PunchThrough) {
-        const float a = s.alpha * (mask_tex ? mask_tex->sample(uv) : 1.0f);
-        if (a < mat->alpha_cutoff) {
-          stats.alpha_test_killed_samples += static_cast<std::uint64_t>(bit_count(write_mask));
-          write_mask = 0;
+      out_of_reach = colour_only_lit && std::none_of(d.lights.begin(), d.lights.end(), [&](std::uint32_t l) {
+                       return ShadingModel::reaches(lights[l], s.position);
+                     });
+      if (!out_of_reach) {
+        glm::vec3 n = p.normal[0] * b.x + p.normal[1] * b.y + p.normal[2] * b.z;
+        const float len = glm::length(n);
+        n = len > 0.0f ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
+        if (!p.setup.front_facing) n = -n;
+        s.normal = n;
+        const glm::vec2 uv = p.uv[0] * b.x + p.uv[1] * b.y + p.uv[2] * b.z;
+        s.albedo = glm::vec3(mat->base_color);
+        // The base colour texture the fetches are charged for, sampled at the pixel (glTF: factor x texel).
+        if (colour && mat->base_color_texels >= 0)
+          s.albedo *= ctx_.scene->base_color_texels[static_cast<std::size_t>(mat->base_color_texels)].sample_linear_rgb(uv);
+        if (quad_uv) {
+          const std::int64_t qx = px.x & ~std::int32_t{1}, qy = px.y & ~std::int32_t{1};
+          const std::int64_t x0 = (qx << bits) + half, y0 = (qy << bits) + half;
+          quad_uv->at(edge_value(p.setup, 1, x0, y0), edge_value(p.setup, 2, x0, y0), s.quad_uv);
+        }
+        if (p.hsr == HsrClass::PunchThrough) {
+          const float a = s.alpha * (mask_tex ? mask_tex->sample(uv) : 1.0f);
+          if (a < mat->alpha_cutoff) {
+            stats.alpha_test_killed_samples += static_cast<std::uint64_t>(bit_count(write_mask));
+            write_mask = 0;
+          }
         }
       }
     } else if (!reads_loaded_surface) {
@@ -588,7 +603,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     // Sum of the evaluated lights' contributions at the surface.
     auto lighting = [&]() {
       glm::vec3 c(0.0f);
-      if (!have_surface) return c;
+      if (!have_surface || out_of_reach) return c;  // (out of reach: the loop below would add exactly 0s)
       if (fl.all_selected && d.lights.size() <= kDirectLights) {
         // A few selected lights (a multi-pass renderer's pass): each tested at the surface, in
         // ascending order as below; those a bin or the batch's box would cut add exactly 0.
