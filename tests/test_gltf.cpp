@@ -150,6 +150,15 @@ class GltfBuilder {
 /// A unit quad in the z=0 plane, counter-clockwise seen from +z.
 const std::vector<float> quad_positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
 
+/// A document of one root node drawing the quad's corners with 16-bit `indices` (mesh `name`).
+GltfBuilder quad_corners(const std::string& name, const std::vector<std::uint16_t>& indices) {
+  GltfBuilder g;
+  const int pos = g.vec3(quad_positions);
+  const int idx = g.indices16(indices);
+  g.node({{"mesh", g.mesh(name, {{"attributes", {{"POSITION", pos}}}, {"indices", idx}})}});
+  return g;
+}
+
 std::string load_error(const std::string& path) {
   try {
     load_gltf(path);
@@ -198,18 +207,10 @@ TEST(GltfLoad, SharedSceneLoadsAGltfFileAfreshEachTime) {
   // shared_scene keeps only the procedural atrium; a file is read again on every call, so a
   // file rewritten between two calls is seen as it is now (here: a quad, then a triangle).
   TempDir dir;
-  GltfBuilder quad;
-  const int pos = quad.vec3(quad_positions);
-  const int idx = quad.indices16({0, 1, 2, 0, 2, 3});
-  quad.node({{"mesh", quad.mesh("Quad", {{"attributes", {{"POSITION", pos}}}, {"indices", idx}})}});
-  const std::string path = quad.write_gltf(dir, "shape");
+  const std::string path = quad_corners("Quad", {0, 1, 2, 0, 2, 3}).write_gltf(dir, "shape");
   const std::shared_ptr<const Scene> first = shared_scene(path);
   EXPECT_EQ(first->triangle_count(), 2u);
-  GltfBuilder tri;
-  const int pos3 = tri.vec3(quad_positions);
-  const int idx3 = tri.indices16({0, 1, 2});
-  tri.node({{"mesh", tri.mesh("Tri", {{"attributes", {{"POSITION", pos3}}}, {"indices", idx3}})}});
-  EXPECT_EQ(tri.write_gltf(dir, "shape"), path);
+  EXPECT_EQ(quad_corners("Tri", {0, 1, 2}).write_gltf(dir, "shape"), path);
   const std::shared_ptr<const Scene> second = shared_scene(path);
   EXPECT_NE(first.get(), second.get());
   EXPECT_EQ(second->triangle_count(), 1u);
@@ -309,10 +310,7 @@ TEST(GltfLoad, NodeHierarchyTrsAndMatrixFlattenedSharedMeshInstanced) {
 
 TEST(GltfLoad, GlbLoadsLikeGltfAndHashesTheFile) {
   TempDir dir;
-  GltfBuilder g;
-  const int pos = g.vec3(quad_positions);
-  const int idx = g.indices16({0, 1, 2, 0, 2, 3});
-  g.node({{"mesh", g.mesh("Quad", {{"attributes", {{"POSITION", pos}}}, {"indices", idx}})}});
+  GltfBuilder g = quad_corners("Quad", {0, 1, 2, 0, 2, 3});
   const std::string glb = g.write_glb(dir, "quad");
   const Scene s = load_scene(glb);
   EXPECT_EQ(s.triangle_count(), 2u);
