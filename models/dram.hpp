@@ -378,7 +378,7 @@ class Dram final : public Unit {
   void commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::int64_t n);
   void complete(std::uint32_t slot);
   std::int64_t ns_to_cycles(double ns) const;
-  std::int64_t cycle_ceil(Tick t) const { return clock_.cycles_at(clock_.next_edge(t)).count(); }
+  std::int64_t cycle_ceil(Tick t) const { return clock_.edge_index(t).count(); }
 
   std::string name_;
   EventQueue& eq_;

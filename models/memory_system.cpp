@@ -377,7 +377,7 @@ Tick MemorySystem::core_after(Tick base, Cycles n) {
   // and a handful of latencies: remember the last base's edge and the last answer.
   if (base != memo_base_) {
     memo_base_ = base;
-    memo_edge_ = core_.cycles_at(core_.next_edge(base)).count();
+    memo_edge_ = core_.edge_index(base).count();  // cycles_at(next_edge(base)) in one conversion
     memo_cycles_ = -1;
   }
   if (n.count() != memo_cycles_) {
