@@ -486,14 +486,39 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     }
   }
 
-  // A scene triangle's colour that only its lights read (additive blending into colour targets,
-  // no ambient term, no store, no alpha test) from a handful of selected lights tested one by
-  // one (a multi-pass renderer's pass): where none of them reaches the fragment's position, its
-  // colour is exactly 0 whatever its normal and albedo, and those (the normal's square root, the
-  // base colour texel) are not made.
-  bool colour_only_lit = colour && from_triangle && p.hsr != HsrClass::PunchThrough && blend == BlendMode::Add && !ctx_.pls &&
-                         sh.light_source == LightSource::All && d.lights.size() <= kDirectLights;
-  for (std::uint32_t o = 0; o < outputs && colour_only_lit; ++o) colour_only_lit = ctx_.color_targets[o]->usage == AttachmentUsage::Color;
+  // Fragments whose colour only their lights make (added to colour targets or to the PLS light
+  // accumulator: no ambient term, no alpha, no stored surface, no alpha test), lit by a handful
+  // of lights tested one by one: a multi-pass renderer's pass (its selected lights) or a light
+  // volume (its light). Where none of those lights reaches the fragment's position its colour is
+  // exactly 0 (light_contribution starts with ShadingModel::reaches) whatever the rest of its
+  // surface, and that is not made (a triangle's normal and base colour texel) or not read (a
+  // stored surface's look). Light volumes of deferred shading at 1080p: two thirds of their
+  // fragments lie behind the light's sphere.
+  bool adds_light_only = colour && (outputs == 0 || blend == BlendMode::Add);
+  for (std::uint32_t o = 0; o < outputs && adds_light_only; ++o) adds_light_only = ctx_.color_targets[o]->usage == AttachmentUsage::Color;
+  const auto proxy_light = static_cast<std::uint32_t>(std::max(p.proxy_light, 0));
+  std::span<const std::uint32_t> reach_lights;  // empty: no reach test
+  if (adds_light_only && from_triangle && p.hsr != HsrClass::PunchThrough && !ctx_.pls && outputs > 0 &&
+      sh.light_source == LightSource::All && d.lights.size() <= kDirectLights) {
+    reach_lights = d.lights;
+  } else if (adds_light_only && !from_triangle && sh.light_source == LightSource::Proxy && p.proxy_light >= 0) {
+    reach_lights = std::span<const std::uint32_t>(&proxy_light, 1);
+  }
+  const auto out_of_reach_at = [&](const glm::vec3& position) {
+    return !reach_lights.empty() &&
+           std::none_of(reach_lights.begin(), reach_lights.end(), [&](std::uint32_t l) { return ShadingModel::reaches(lights[l], position); });
+  };
+
+  // A stored surface, or only its position where none of reach_lights reaches it.
+  const auto read_stored_surface = [&](const SurfaceStore& store, std::size_t k, SurfacePoint& surface, bool& out_of_reach) {
+    const glm::vec3& position = store.site(k).position;
+    out_of_reach = out_of_reach_at(position);
+    if (out_of_reach) {
+      surface.position = position;
+    } else {
+      surface = store[k];
+    }
+  };
 
   for (std::size_t i = 0; !counts_only && i < pixels.size(); ++i) {
     const ShadePixel& px = pixels[i];
@@ -503,7 +528,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     // The surface this fragment shades.
     SurfacePoint s;
     bool have_surface = false;
-    bool out_of_reach = false;  // no light reaches it (colour_only_lit): only its position is made
+    bool out_of_reach = false;  // none of reach_lights reaches it: only its position is made or read
     if (from_triangle && !builds_surface) {
       have_surface = true;  // (nothing below reads it: see builds_surface)
     } else if (from_triangle) {
@@ -513,9 +538,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       s.material = p.material;
       s.triangle = p.id;
       have_surface = true;
-      out_of_reach = colour_only_lit && std::none_of(d.lights.begin(), d.lights.end(), [&](std::uint32_t l) {
-                       return ShadingModel::reaches(lights[l], s.position);
-                     });
+      out_of_reach = out_of_reach_at(s.position);
       if (!out_of_reach) {
         glm::vec3 n = p.normal[0] * b.x + p.normal[1] * b.y + p.normal[2] * b.z;
         const float len = glm::length(n);
@@ -545,12 +568,12 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     } else if (d.surface_source) {
       const std::size_t k = pixel * d.surface_source->samples;
       if (d.surface_source->surface_valid[k]) {
-        s = d.surface_source->surface[k];
+        read_stored_surface(d.surface_source->surface, k, s, out_of_reach);
         have_surface = true;
       }
     } else if (pls_reads && ctx_.pls->valid[pixel]) {
       if (ctx_.pls->surface.empty()) throw std::logic_error("Tsp::shade: a PLS surface is read but the pass keeps none");
-      s = ctx_.pls->surface[pixel];
+      read_stored_surface(ctx_.pls->surface, pixel, s, out_of_reach);
       have_surface = true;
     }
     if (alive) (*alive)[i] = write_mask;
