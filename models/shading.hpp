@@ -169,35 +169,55 @@ inline glm::vec4 unorm8_4(const glm::vec4& v) {
 #endif
 }
 
-/// small_float(x, 10, true) of each channel of an rgba16f value (the additive light passes' target,
-/// quantised at every blended sample), written without branches so that the compiler computes
-/// the four channels in one vector: the exponent field gives the rounding step, NaN becomes +0 and
-/// the sign is put back at the end. The same value as small_float (models/shading.cpp) channel by
-/// channel, bit for bit (test UnitTsp.SmallFloatRoundingMatchesTheLibraryFormulaEverywhere reads
-/// every lane).
-inline glm::vec4 half_float4(const glm::vec4& v) {
-  constexpr int kMantissa = 10;
-  constexpr int kMinExponent = -14;
-  constexpr int kFloatBias = 127;
+/// small_float(x, mantissa, true) (models/shading.cpp) of one channel without branches, so that
+/// the compiler computes four channels in one vector: the exponent field gives the rounding step,
+/// NaN becomes +0 and the sign is put back at the end. `largest` is the format's largest finite
+/// value, (2 - 2^-mantissa) 2^15. Bit for bit small_float (test
+/// UnitTsp.SmallFloatRoundingMatchesTheLibraryFormulaEverywhere reads every lane).
+inline float small_float_lane(float x, std::int32_t mantissa, float largest) {
+  constexpr std::int32_t kMinExponent = -14;
+  constexpr std::int32_t kFloatBias = 127;
   constexpr float kRoundingMagic = 8388608.0f;  // 2^23
-  constexpr float kLargest = 65504.0f;          // (2 - 2^-10) 2^15
-  float in[4] = {v.x, v.y, v.z, v.w};
+  const std::uint32_t bits = std::bit_cast<std::uint32_t>(x);
+  const std::uint32_t magnitude = bits & 0x7fffffffu;
+  const float a = std::bit_cast<float>(magnitude);
+  const std::int32_t exponent = static_cast<std::int32_t>(magnitude >> 23) - kFloatBias;  // NaN, infinity: 128
+  const std::int32_t lead = exponent > kMinExponent ? exponent : kMinExponent;
+  const float step = std::bit_cast<float>(static_cast<std::uint32_t>(lead - mantissa + kFloatBias) << 23);
+  const float per_step = std::bit_cast<float>(static_cast<std::uint32_t>(mantissa - lead + kFloatBias) << 23);
+  const float rounded = (a * per_step + kRoundingMagic) - kRoundingMagic;
+  const float q = rounded * step;
+  const float saturated = q < largest ? q : largest;  // (infinity too)
+  const float signed_q = std::bit_cast<float>(std::bit_cast<std::uint32_t>(saturated) | (bits & 0x80000000u));
+  return a == a ? signed_q : 0.0f;  // NaN: 0
+}
+
+/// An rgba16f value (the additive light passes' target, quantised at every blended sample):
+/// small_float(x, 10, true) of each channel.
+inline glm::vec4 half_float4(const glm::vec4& v) {
+  constexpr float kLargest = 65504.0f;  // (2 - 2^-10) 2^15
+  const float in[4] = {v.x, v.y, v.z, v.w};
+  float out[4];
+  for (int c = 0; c < 4; ++c) out[c] = small_float_lane(in[c], 10, kLargest);
+  return {out[0], out[1], out[2], out[3]};
+}
+
+/// An r11g11b10f value (the PLS light accumulator of deferred_tile_store, quantised at every
+/// light-volume fragment): small_float(x, 6, 6 and 5 mantissa bits, false) of red, green and blue
+/// (negatives to +0, as the unsigned formats clamp them), alpha 1 (a channel the format lacks).
+#if defined(__GNUC__)
+[[gnu::always_inline]]
+#endif
+inline glm::vec4 r11g11b10f4(const glm::vec4& v) {
+  constexpr std::int32_t kMantissa[4] = {6, 6, 5, 5};
+  constexpr float kLargest[4] = {65024.0f, 65024.0f, 64512.0f, 64512.0f};  // (2 - 2^-m) 2^15
+  const float in[4] = {v.x, v.y, v.z, v.w};
   float out[4];
   for (int c = 0; c < 4; ++c) {
-    const std::uint32_t bits = std::bit_cast<std::uint32_t>(in[c]);
-    const std::uint32_t magnitude = bits & 0x7fffffffu;
-    const float a = std::bit_cast<float>(magnitude);
-    const std::int32_t exponent = static_cast<std::int32_t>(magnitude >> 23) - kFloatBias;  // NaN, infinity: 128
-    const std::int32_t lead = exponent > kMinExponent ? exponent : kMinExponent;
-    const float step = std::bit_cast<float>(static_cast<std::uint32_t>(lead - kMantissa + kFloatBias) << 23);
-    const float per_step = std::bit_cast<float>(static_cast<std::uint32_t>(kMantissa - lead + kFloatBias) << 23);
-    const float rounded = (a * per_step + kRoundingMagic) - kRoundingMagic;
-    const float q = rounded * step;
-    const float saturated = q < kLargest ? q : kLargest;  // (infinity too)
-    const float signed_q = std::bit_cast<float>(std::bit_cast<std::uint32_t>(saturated) | (bits & 0x80000000u));
-    out[c] = a == a ? signed_q : 0.0f;  // NaN: 0
+    const float q = small_float_lane(in[c], kMantissa[c], kLargest[c]);
+    out[c] = in[c] < 0.0f ? 0.0f : q;
   }
-  return {out[0], out[1], out[2], out[3]};
+  return {out[0], out[1], out[2], 1.0f};
 }
 
 }  // namespace detail
@@ -210,12 +230,18 @@ struct FormatPrecision {
   /// to their mantissa (fp16 10 bits, r11g11b10f 6/6/5 bits, unsigned) and saturate at their
   /// largest finite value; 32-bit float formats keep v. Channels the format lacks read back 0
   /// (alpha 1), Vulkan's "Conversion to RGBA" rule. Integer and depth formats keep v.
-  /// Inline for the formats colour targets use most (additive light passes quantise every
-  /// blended sample): one switch per value, the four channels at once.
+  /// Inline for the formats colour targets and PLS accumulators use most (additive light passes
+  /// quantise every blended sample; GCC left the call out of line once it had three formats, and
+  /// the value then crossed memory: a store-forwarding stall per call): one switch per value, the
+  /// four channels at once.
+#if defined(__GNUC__)
+  [[gnu::always_inline]]
+#endif
   static glm::vec4 color(Format f, const glm::vec4& v) {
     switch (f) {
       case Format::Rgba16f: return detail::half_float4(v);
       case Format::Rgba8: return detail::unorm8_4(v);
+      case Format::R11g11b10f: return detail::r11g11b10f4(v);
       case Format::Rgba32f: return v;
       default: return other_color(f, v);
     }
