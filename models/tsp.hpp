@@ -98,6 +98,10 @@ class Tsp {
   std::vector<std::uint64_t>* texture_lines_out_;  ///< the current tile's texture lines (see bind_outputs)
   DramTraffic* dram_out_;                          ///< the shaders' image reads (see bind_outputs)
   std::vector<std::uint64_t> quad_seen_;  ///< scratch: quads launched in this batch
+  /// Scratch of a textured scene triangle's batch whose every fragment samples its base colour
+  /// (see Tsp::shade): each fragment's barycentrics and texel (ColorTexels::texel_at).
+  std::vector<glm::vec3> frag_bary_;
+  std::vector<const std::uint8_t*> frag_texel_;
   /// The colour loop's candidate lights for the current batch and screen bin, structure of arrays
   /// (the radius test runs over contiguous floats, several lights per instruction).
   struct NearLights {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "models/hw_config.hpp"
 #include "models/command_processor.hpp"
@@ -177,6 +178,35 @@ TEST(ImageTruth, VisibilityBufferKernelReadsTheTextureLinesFragmentShadingReads)
   EXPECT_EQ(v.dram.reads(DramClass::Textures), f.dram.reads(DramClass::Textures));
   EXPECT_EQ(dispatch.read_bytes[static_cast<std::size_t>(DramClass::Textures)], 0u);
   EXPECT_EQ(dispatch.texture_line_accesses, static_cast<std::uint64_t>(stat(f, "frame/tsp", "texture_line_accesses")));
+}
+
+TEST(ImageTruth, TheTexelTheShaderPrefetchesIsTheTexelItSamples) {
+  // Tsp::shade finds a batch's base colour texels first (ColorTexels::texel_at) and decodes them
+  // later (linear_rgb): the same value as sample_linear_rgb wherever texel_at names a texel, for
+  // uvs inside, on the edges of and outside [0, 1) (repeat wrapping); none where the uv is not
+  // finite (sampled black) or the texture holds no texels (sampled white).
+  ColorTexels t;
+  t.width = 5;
+  t.height = 3;
+  for (int i = 0; i < 15; ++i) t.rgba.insert(t.rgba.end(), {static_cast<std::uint8_t>(17 * i), static_cast<std::uint8_t>(255 - 9 * i), 77, 255});
+  int named = 0;
+  for (float u = -1.5f; u <= 2.5f; u += 0.0625f) {
+    for (float v = -1.0f; v <= 2.0f; v += 0.1f) {
+      const std::uint8_t* texel = t.texel_at({u, v});
+      ASSERT_NE(texel, nullptr);
+      EXPECT_EQ(ColorTexels::linear_rgb(texel), t.sample_linear_rgb({u, v})) << u << "," << v;
+      ++named;
+    }
+  }
+  EXPECT_GT(named, 1000);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(t.texel_at({nan, 0.5f}), nullptr);
+  EXPECT_EQ(t.sample_linear_rgb({nan, 0.5f}), glm::vec3(0.0f));
+  ColorTexels undecoded;
+  undecoded.width = 4;
+  undecoded.height = 4;
+  EXPECT_EQ(undecoded.texel_at({0.5f, 0.5f}), nullptr);
+  EXPECT_EQ(undecoded.sample_linear_rgb({0.5f, 0.5f}), glm::vec3(1.0f));
 }
 
 }  // namespace

@@ -29,24 +29,38 @@ float AlphaMask::sample(glm::vec2 uv) const {
   return static_cast<float>(alpha[static_cast<std::size_t>(y) * width + x]) * (1.0f / 255.0f);
 }
 
-glm::vec3 ColorTexels::sample_linear_rgb(glm::vec2 uv) const {
-  if (width <= 0 || height <= 0 || rgba.size() < static_cast<std::size_t>(width) * height * 4) return glm::vec3(1.0f);
-  if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return glm::vec3(0.0f);
+namespace {
+
+/// sRGB EOTF (IEC 61966-2-1) of the 256 codes.
+const std::array<float, 256> kSrgbToLinear = [] {
+  std::array<float, 256> t{};
+  for (int i = 0; i < 256; ++i) {
+    const float c = static_cast<float>(i) / 255.0f;
+    t[static_cast<std::size_t>(i)] = c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+  }
+  return t;
+}();
+
+}  // namespace
+
+const std::uint8_t* ColorTexels::texel_at(glm::vec2 uv) const {
+  if (width <= 0 || height <= 0 || rgba.size() < static_cast<std::size_t>(width) * height * 4) return nullptr;
+  if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return nullptr;
   const float fu = uv.x - std::floor(uv.x);
   const float fv = uv.y - std::floor(uv.y);
   const int x = std::clamp(static_cast<int>(fu * static_cast<float>(width)), 0, width - 1);
   const int y = std::clamp(static_cast<int>(fv * static_cast<float>(height)), 0, height - 1);
-  // sRGB EOTF (IEC 61966-2-1), one table for the 256 codes.
-  static const std::array<float, 256> kLinear = [] {
-    std::array<float, 256> t{};
-    for (int i = 0; i < 256; ++i) {
-      const float c = static_cast<float>(i) / 255.0f;
-      t[static_cast<std::size_t>(i)] = c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
-    }
-    return t;
-  }();
-  const std::uint8_t* p = &rgba[(static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)) * 4];
-  return {kLinear[p[0]], kLinear[p[1]], kLinear[p[2]]};
+  return &rgba[(static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)) * 4];
+}
+
+glm::vec3 ColorTexels::linear_rgb(const std::uint8_t* texel) {
+  return {kSrgbToLinear[texel[0]], kSrgbToLinear[texel[1]], kSrgbToLinear[texel[2]]};
+}
+
+glm::vec3 ColorTexels::sample_linear_rgb(glm::vec2 uv) const {
+  if (width <= 0 || height <= 0 || rgba.size() < static_cast<std::size_t>(width) * height * 4) return glm::vec3(1.0f);
+  const std::uint8_t* texel = texel_at(uv);
+  return texel != nullptr ? linear_rgb(texel) : glm::vec3(0.0f);  // a uv that is not finite: black
 }
 
 std::uint64_t TextureInfo::gpu_bytes() const {

@@ -38,6 +38,11 @@ struct ColorTexels {
   /// wrapping (AlphaMask::sample's convention), its sRGB colour decoded (glTF 2.0: "The base
   /// color texture MUST contain 8-bit values encoded with the sRGB opto-electronic transfer function").
   glm::vec3 sample_linear_rgb(glm::vec2 uv) const;
+  /// The RGBA8 texel sample_linear_rgb(uv) reads, or nullptr where it reads none (not decoded, uv
+  /// not finite): where not null, sample_linear_rgb(uv) == linear_rgb(texel_at(uv)).
+  const std::uint8_t* texel_at(glm::vec2 uv) const;
+  /// Linear RGB of an RGBA8 texel's sRGB codes.
+  static glm::vec3 linear_rgb(const std::uint8_t* texel);
 };
 
 /// A texture as the GPU would hold it: size and format read from the image header.
