@@ -445,7 +445,7 @@ FrameResult simulate_frame(const Trace& trace, const std::string& trace_path, co
     // Colours sample the base colour texels: a scene loaded without them (SceneLoadOptions)
     // would shade every textured surface untextured.
     for (const ColorTexels& t : scene.base_color_texels) {
-      if (t.width > 0 && t.height > 0 && t.rgba.empty()) {
+      if (t.width > 0 && t.height > 0 && !t.decoded()) {
         throw std::logic_error("simulate_frame: colours asked of a scene loaded without its colour texels");
       }
     }

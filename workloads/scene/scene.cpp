@@ -44,7 +44,7 @@ const std::array<float, 256> kSrgbToLinear = [] {
 }  // namespace
 
 const std::uint8_t* ColorTexels::texel_at(glm::vec2 uv) const {
-  if (width <= 0 || height <= 0 || rgba.size() < static_cast<std::size_t>(width) * height * 4) return nullptr;
+  if (!decoded()) return nullptr;
   if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return nullptr;
   const float fu = uv.x - std::floor(uv.x);
   const float fv = uv.y - std::floor(uv.y);
@@ -58,7 +58,7 @@ glm::vec3 ColorTexels::linear_rgb(const std::uint8_t* texel) {
 }
 
 glm::vec3 ColorTexels::sample_linear_rgb(glm::vec2 uv) const {
-  if (width <= 0 || height <= 0 || rgba.size() < static_cast<std::size_t>(width) * height * 4) return glm::vec3(1.0f);
+  if (!decoded()) return glm::vec3(1.0f);
   const std::uint8_t* texel = texel_at(uv);
   return texel != nullptr ? linear_rgb(texel) : glm::vec3(0.0f);  // a uv that is not finite: black
 }

@@ -38,6 +38,8 @@ struct ColorTexels {
   /// wrapping (AlphaMask::sample's convention), its sRGB colour decoded (glTF 2.0: "The base
   /// color texture MUST contain 8-bit values encoded with the sRGB opto-electronic transfer function").
   glm::vec3 sample_linear_rgb(glm::vec2 uv) const;
+  /// Whether all width x height texels are held (else only the size: SceneLoadOptions).
+  bool decoded() const { return width > 0 && height > 0 && rgba.size() >= static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 4; }
   /// The RGBA8 texel sample_linear_rgb(uv) reads, or nullptr where it reads none (not decoded, uv
   /// not finite): where not null, sample_linear_rgb(uv) == linear_rgb(texel_at(uv)).
   const std::uint8_t* texel_at(glm::vec2 uv) const;
