@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <ctime>
 #include <cstdint>
 #include <deque>
@@ -940,6 +941,66 @@ TEST(MemorySystemTest, HitAndMissLatencies) {
   EXPECT_EQ(m.dram().stats().reads.value(), 1u);
   EXPECT_EQ(m.texture_cache().stats().read_hits.value(), 1u);
   EXPECT_EQ(m.slc().stats().read_hits.value(), 1u);
+}
+
+/// The tick a texture-cache hit issued at `at` (a warm line, nothing else in flight) completes at,
+/// with the core at `core_mhz`.
+Tick texture_hit_done(double core_mhz, Tick at) {
+  const HwConfig hw = test_config({"gpu.core_clock_mhz=" + std::to_string(core_mhz)});
+  EventQueue eq;
+  MemorySystem m(hw, eq);
+  EXPECT_TRUE(m.issue(Client::Texture, 0x10000, 16, false, DramClass::Textures));  // warm the line
+  eq.run();
+  EXPECT_LT(eq.now(), at);
+  Tick done{-1};
+  eq.schedule(at, [&] { EXPECT_TRUE(m.issue(Client::Texture, 0x10000, 16, false, DramClass::Textures, [&] { done = eq.now(); })); });
+  eq.run();
+  return done;
+}
+
+TEST(MemorySystemTest, HitLatencyCountsCoreCyclesFromTheNextCoreEdge) {
+  // A hit issued between two core edges is served from the next edge on, hit_latency_cycles
+  // (4 for the texture cache) later: issued at tick 1e9 + 700 ps, it completes at
+  // tick_of(edge_index(t) + 4), at 600 MHz (a period of 5000/3 ps: edges fall between
+  // picoseconds) as at 300 MHz. Half the clock doubles the cycles' length: the same hit takes 4
+  // periods of 3,333.3 ps instead of 1,666.7 ps, plus the wait for the next edge (under a period).
+  const Tick at{1'000'000'700};
+  const std::int64_t hit_cycles = test_config().cache.texture.hit_latency_cycles;
+  ASSERT_EQ(hit_cycles, 4);
+  for (const double mhz : {600.0, 300.0}) {
+    const ClockDomain core = ClockDomain::from_mhz("core", mhz);
+    const Tick want = core.tick_of(core.edge_index(at) + Cycles{hit_cycles});
+    EXPECT_EQ(texture_hit_done(mhz, at), want) << mhz << " MHz";
+  }
+  // 600 MHz: 4 periods, 6,666.7 ps, plus the wait; 300 MHz: 13,333.3 ps plus its wait.
+  const std::int64_t fast = (texture_hit_done(600.0, at) - at).ps(), slow = (texture_hit_done(300.0, at) - at).ps();
+  std::printf("[ hit      ] 600 MHz %lld ps, 300 MHz %lld ps\n", static_cast<long long>(fast), static_cast<long long>(slow));
+  EXPECT_GE(fast, 6666);
+  EXPECT_LE(fast, 6666 + 1667);
+  EXPECT_GE(slow, 13333);
+  EXPECT_LE(slow, 13333 + 3334);
+  EXPECT_GT(slow, fast);
+}
+
+TEST(MemorySystemTest, MissLatencyGrowsWhenTheDramClockSlowsDown) {
+  // A cold texture read at a 1000 MHz DRAM clock takes the 103 ns of DRAM timings plus the SLC
+  // and L1 latencies (HitAndMissLatencies); at 400 MHz each ns-based timing is rounded up to
+  // whole 2.5 ns DRAM cycles from the next DRAM edge, and the burst takes longer on the bus: the
+  // same miss is slower, by less than the roundings (5 timings x 2.5 ns) plus a burst.
+  auto cold_read = [](const std::string& dram_mhz) {
+    const HwConfig hw = test_config({"dram.clock_mhz=" + dram_mhz});
+    EventQueue eq;
+    MemorySystem m(hw, eq);
+    Tick done{-1};
+    EXPECT_TRUE(m.issue(Client::Texture, 0x10000, 16, false, DramClass::Textures, [&] { done = eq.now(); }));
+    eq.run();
+    return done.ps();
+  };
+  const std::int64_t fast = cold_read("1000"), slow = cold_read("400");
+  std::printf("[ miss     ] DRAM 1000 MHz %lld ps, 400 MHz %lld ps\n", static_cast<long long>(fast), static_cast<long long>(slow));
+  EXPECT_EQ(fast, (103 + 20 + 4) * kNs);
+  EXPECT_GT(slow, fast);
+  EXPECT_LT(slow, fast + 5 * 2500 + 10 * kNs);
 }
 
 TEST(MemorySystemTest, RequestsToALineBeingFetchedWaitForIt) {
