@@ -97,6 +97,7 @@ void Isp::write_punch_depth(const PendingSample* begin, const PendingSample* end
     // A later translucent layer may have written a nearer depth meanwhile: keep the nearer one.
     if (pl.depth_test && !passes<float>(pl.depth_compare, s->z, depth[gi])) continue;
     depth[gi] = s->z;
+    widen_tile_depth(s->z);
     isp.depth_buffer_write_bytes += ds_bytes;
     if (ctx_.rop) ctx_.rop->depth(s->x, s->y, std::countr_zero(s->bit), true);
   }
@@ -157,6 +158,42 @@ void Isp::flush(const std::vector<std::uint32_t>& prims, bool mid_tile, IspStats
   if (mid_tile && resolves) ++isp.resolve_flushes;
 }
 
+void Isp::widen_tile_depth(float z) {
+  if (!tile_depth_known_) return;
+  // Written as negations so that a NaN makes the bounds NaN (no comparison then passes).
+  if (!(z >= tile_depth_.lo)) tile_depth_.lo = z;
+  if (!(z <= tile_depth_.hi)) tile_depth_.hi = z;
+}
+
+bool Isp::fails_depth_everywhere(const Primitive& p, const PixelRect& rect, std::uint32_t depth_outcomes) {
+  const bool fails_below = (depth_outcomes & 0x02u) == 0;  // an incoming depth less than the stored fails
+  const bool fails_above = (depth_outcomes & 0x10u) == 0;  // greater fails
+  if (!fails_below && !fails_above) return false;
+  if (!tile_depth_known_) {
+    const int S = ctx_.pattern.count;
+    const auto W = static_cast<std::size_t>(ctx_.viewport.width_px);
+    const float* depth = ctx_.depth->depth.data();
+    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    bool nan = false;
+    for (int y = rect.y0; y < rect.y1; ++y) {
+      const float* row = depth + (static_cast<std::size_t>(y) * W + static_cast<std::size_t>(rect.x0)) * static_cast<std::size_t>(S);
+      const std::size_t n = static_cast<std::size_t>(rect.width()) * static_cast<std::size_t>(S);
+      for (std::size_t i = 0; i < n; ++i) {
+        lo = std::min(lo, row[i]);
+        hi = std::max(hi, row[i]);
+        nan |= row[i] != row[i];
+      }
+    }
+    const float q = std::numeric_limits<float>::quiet_NaN();
+    tile_depth_ = nan ? SampleDepthBounds{q, q} : SampleDepthBounds{lo, hi};
+    tile_depth_known_ = true;
+  }
+  const SampleDepthBounds z = depth_bounds_in_rect(p.setup, rect, ctx_.pattern);
+  // Every covered sample's depth lies in [z.lo, z.hi] and every stored depth in the tile's
+  // bounds: strictly below them, each test's outcome is "less"; strictly above, "greater".
+  return (fails_below && z.hi < tile_depth_.lo) || (fails_above && z.lo > tile_depth_.hi);
+}
+
 void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& prims, IspStats& isp, TspStats& tsp) {
   const int S = ctx_.pattern.count;
   const int W = ctx_.viewport.width_px;
@@ -185,6 +222,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     queue_.clear();
   }
   ++isp.tiles_rendered;
+  tile_depth_known_ = false;
   const std::uint64_t ds_bytes = static_cast<std::uint64_t>(ctx_.hw->isp.depth_stencil_bytes_per_sample);
   const std::uint64_t tag_bytes = static_cast<std::uint64_t>(ctx_.hw->isp.tag_bits / 8);
   AttachmentImage* depth_img = ctx_.depth;
@@ -229,6 +267,24 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     std::size_t n_cand = 0;
     const int x0 = rect.x0, y0 = rect.y0;
 
+    if (defer && depth_on && !stencil_on && !open_verdicts && rop == nullptr && fails_depth_everywhere(p, rect, depth_outcomes)) {
+      // Every sample it covers fails the depth test for good (the tile's depth bounds say so):
+      // counted span by span, as the per-sample loop below would count them; nothing is pending.
+      std::uint64_t n = 0;
+      if (overdraw) {
+        rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float*) {
+          const auto k = static_cast<std::uint32_t>(std::popcount(mask));
+          overdraw[static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x)] += k;
+          n += k;
+        });
+      } else {
+        n = covered_samples(p.setup, rect, ctx_.pattern);
+      }
+      isp.samples_rasterised += n;
+      isp.depth_buffer_read_bytes += ds_bytes * n;
+      isp.depth_test_failed_samples += n;
+      continue;
+    }
     rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {
       const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
       const std::size_t lbase = (static_cast<std::size_t>(y - y0) * rw + static_cast<std::size_t>(x - x0)) * S;
@@ -342,7 +398,10 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
         pushed_.push_back({{list_pos, c.x, c.y, c.bit, c.z, unresolved}, c.li, n});
         stack[n++] = {list_pos, c.z, unresolved};
         // Opaque and translucent depth is known now; punch-through depth waits for the alpha test.
-        if (writes_depth_now) depth[global_index(c.x, c.y, c.bit)] = c.z;
+        if (writes_depth_now) {
+          depth[global_index(c.x, c.y, c.bit)] = c.z;
+          widen_tile_depth(c.z);
+        }
       }
       if (unresolved) unresolved_layers_ += kept;
       isp.tag_buffer_write_bytes += tag_bytes * kept;

@@ -125,6 +125,12 @@ class Isp {
   /// Merges consecutive samples of one pixel into ShadePixels (samples are in raster order).
   static void build_batch(const PendingSample* begin, const PendingSample* end, std::vector<ShadePixel>& batch);
 
+  /// tbdr: whether every sample `p` covers inside `rect` fails the depth test whose
+  /// passing_outcomes() are given, by the tile's depth bounds alone (found on first use).
+  bool fails_depth_everywhere(const Primitive& p, const PixelRect& rect, std::uint32_t depth_outcomes);
+  /// Keeps the tile's depth bounds (when known) around a depth just written.
+  void widen_tile_depth(float z);
+
   RenderContext& ctx_;
   Tsp& tsp_;
   int layers_per_sample_ = 1;           ///< isp.tag_buffers
@@ -142,6 +148,10 @@ class Isp {
   std::vector<std::uint32_t> alive_;
   std::deque<Queued> queue_;             ///< tbr forward pixel kill: primitives waiting to be shaded
   std::vector<std::uint32_t> kill_seq_;  ///< per tile sample: 1 + arrival of the latest opaque sample there
+  /// Bounds of the depth buffer over the current tile (valid while tile_depth_known_; NaN when it
+  /// holds a NaN): widened by every depth write, so always a superset of what the tile holds.
+  SampleDepthBounds tile_depth_{};
+  bool tile_depth_known_ = false;
 };
 
 }  // namespace tbdr

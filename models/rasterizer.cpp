@@ -1,6 +1,8 @@
 #include "models/rasterizer.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -176,6 +178,59 @@ bool covers_any_sample(const TriangleSetup& tri, const PixelRect& rect, const Sa
     }
   }
   return false;
+}
+
+std::uint64_t covered_samples(const TriangleSetup& tri, const PixelRect& rect, const SamplePattern& pattern) {
+  if (tri.empty) return 0;
+  assert(pattern.subpixel_bits == tri.subpixel_bits);
+  const PixelRect r = intersect(rect, tri.bbox);
+  if (r.empty()) return 0;
+  switch (pattern.count) {
+    case 1: return detail::count_rect_n<1>(tri, r, pattern);
+    case 2: return detail::count_rect_n<2>(tri, r, pattern);
+    case 4: return detail::count_rect_n<4>(tri, r, pattern);
+    case 8: return detail::count_rect_n<8>(tri, r, pattern);
+    case 16: return detail::count_rect_n<16>(tri, r, pattern);
+    default: assert(false && "unsupported sample count"); return 0;
+  }
+}
+
+SampleDepthBounds depth_bounds_in_rect(const TriangleSetup& tri, const PixelRect& rect, const SamplePattern& pattern) {
+  const PixelRect r = intersect(rect, tri.bbox);
+  if (r.empty()) return {tri.z[0], tri.z[0]};
+  const int bits = tri.subpixel_bits;
+  std::int64_t min_dx = pattern.dx[0], max_dx = pattern.dx[0], min_dy = pattern.dy[0], max_dy = pattern.dy[0];
+  for (int s = 1; s < pattern.count; ++s) {
+    min_dx = std::min<std::int64_t>(min_dx, pattern.dx[s]);
+    max_dx = std::max<std::int64_t>(max_dx, pattern.dx[s]);
+    min_dy = std::min<std::int64_t>(min_dy, pattern.dy[s]);
+    max_dy = std::max<std::int64_t>(max_dy, pattern.dy[s]);
+  }
+  // The plane is linear in the sample position: its extremes over the box of the rectangle's
+  // sample positions lie at the box's corners.
+  const std::int64_t xs[2] = {(std::int64_t{r.x0} << bits) + min_dx, (std::int64_t{r.x1 - 1} << bits) + max_dx};
+  const std::int64_t ys[2] = {(std::int64_t{r.y0} << bits) + min_dy, (std::int64_t{r.y1 - 1} << bits) + max_dy};
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, magnitude = std::abs(static_cast<double>(tri.z[0]));
+  double term1 = 0, term2 = 0;
+  for (const std::int64_t x : xs) {
+    for (const std::int64_t y : ys) {
+      const std::int64_t e1 = edge_value(tri, 1, x, y), e2 = edge_value(tri, 2, x, y);
+      const double z = depth_at_corner(tri, e1, e2);
+      lo = std::min(lo, z);
+      hi = std::max(hi, z);
+      term1 = std::max(term1, std::abs(static_cast<double>(e1) * tri.dz1));
+      term2 = std::max(term2, std::abs(static_cast<double>(e2) * tri.dz2));
+    }
+  }
+  if (!std::isfinite(lo) || !std::isfinite(hi)) {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    return {nan, nan};
+  }
+  // A sample's depth is z0 + E1*dz1 + E2*dz2 evaluated as corner + offset in double: a few
+  // roundings of at most 2^-53 of the terms' magnitude each. 1e-12 of it is far more.
+  magnitude += term1 + term2;
+  const double margin = 1e-12 * (1.0 + magnitude);
+  return {static_cast<float>(lo - margin), static_cast<float>(hi + margin)};
 }
 
 const char* to_string(TileTest t) {

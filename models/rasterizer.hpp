@@ -27,6 +27,7 @@
 //   whatever rectangle or traversal order reached it, and a sample on a vertex gets that vertex's
 //   z (the double error is far below half a float ulp).
 #include <array>
+#include <bit>
 #include <cassert>
 #include <cstdint>
 #include <limits>
@@ -198,63 +199,115 @@ inline void narrow_span(std::int64_t base, std::int64_t step, std::int64_t& lo, 
   }
 }
 
-template <int N, class Fn>
-void rasterize_rect_n(const TriangleSetup& t, const PixelRect& r, const SamplePattern& p, Fn& fn) {
-  const int bits = t.subpixel_bits;
+/// The edge functions of a triangle walked over a rectangle row by row: for each row, the span
+/// of pixels where each edge holds for at least one sample and, inside it, the span where every
+/// edge holds for every sample (exact integer arithmetic). rasterize_rect_n and count_rect_n read
+/// coverage only through it, so what one visits the other counts.
+template <int N>
+struct EdgeWalk {
   std::int64_t step_x[3], step_y[3], row[3], max_off[3], min_off[3];
   std::int64_t off[3][N];
-  double z_off[N];
-  for (int k = 0; k < 3; ++k) {
-    step_x[k] = t.a[k] << bits;
-    step_y[k] = t.b[k] << bits;
-    // Biased edge value at the top-left corner of pixel (r.x0, r.y0).
-    row[k] = t.a[k] * (std::int64_t{r.x0} << bits) + t.b[k] * (std::int64_t{r.y0} << bits) + t.c[k] + t.bias[k];
-    max_off[k] = std::numeric_limits<std::int64_t>::min();
-    min_off[k] = std::numeric_limits<std::int64_t>::max();
-    for (int s = 0; s < N; ++s) {
-      off[k][s] = t.a[k] * p.dx[s] + t.b[k] * p.dy[s];
-      if (off[k][s] > max_off[k]) max_off[k] = off[k][s];
-      if (off[k][s] < min_off[k]) min_off[k] = off[k][s];
+  std::int64_t width;
+
+  EdgeWalk(const TriangleSetup& t, const PixelRect& r, const SamplePattern& p) : width(r.x1 - r.x0) {
+    const int bits = t.subpixel_bits;
+    for (int k = 0; k < 3; ++k) {
+      step_x[k] = t.a[k] << bits;
+      step_y[k] = t.b[k] << bits;
+      // Biased edge value at the top-left corner of pixel (r.x0, r.y0).
+      row[k] = t.a[k] * (std::int64_t{r.x0} << bits) + t.b[k] * (std::int64_t{r.y0} << bits) + t.c[k] + t.bias[k];
+      max_off[k] = std::numeric_limits<std::int64_t>::min();
+      min_off[k] = std::numeric_limits<std::int64_t>::max();
+      for (int s = 0; s < N; ++s) {
+        off[k][s] = t.a[k] * p.dx[s] + t.b[k] * p.dy[s];
+        if (off[k][s] > max_off[k]) max_off[k] = off[k][s];
+        if (off[k][s] < min_off[k]) min_off[k] = off[k][s];
+      }
     }
   }
-  for (int s = 0; s < N; ++s) z_off[s] = depth_sample_offset(t, p.dx[s], p.dy[s]);
-  const std::int64_t width = r.x1 - r.x0;
-  const std::uint32_t full = N >= 32 ? ~0u : ((1u << N) - 1u);
-  float depth[N];
-  for (int py = r.y0; py < r.y1; ++py) {
-    // Pixels of this row where each edge holds for at least one sample (exact for 1x) ...
-    std::int64_t lo = 0, hi = width;
+  /// The current row's pixels [lo,hi) (offsets from the rectangle's x0) with at least one covered
+  /// sample (exact for 1x), and [full_lo,full_hi) inside it where every sample is covered (empty:
+  /// full_lo == full_hi == hi). False when the row has no covered sample.
+  bool span(std::int64_t& lo, std::int64_t& hi, std::int64_t& full_lo, std::int64_t& full_hi) const {
+    lo = 0;
+    hi = width;
     for (int k = 0; k < 3 && lo < hi; ++k) narrow_span(row[k] + max_off[k], step_x[k], lo, hi);
-    if (lo < hi) {
-      // ... and, inside that, where every edge holds for every sample (full coverage).
-      std::int64_t full_lo = lo, full_hi = hi;
-      if constexpr (N > 1) {
-        for (int k = 0; k < 3 && full_lo < full_hi; ++k) narrow_span(row[k] + min_off[k], step_x[k], full_lo, full_hi);
-        if (full_lo >= full_hi) full_lo = full_hi = hi;
-      }
-      std::int64_t e0 = row[0] + step_x[0] * lo, e1 = row[1] + step_x[1] * lo, e2 = row[2] + step_x[2] * lo;
-      for (std::int64_t n = lo; n < hi; ++n) {
-        const double z_corner = depth_at_corner(t, e1 - t.bias[1], e2 - t.bias[2]);
-        std::uint32_t mask = 0;
-        if (N == 1 || (n >= full_lo && n < full_hi)) {
-          mask = full;
-          for (int s = 0; s < N; ++s) depth[s] = static_cast<float>(z_corner + z_off[s]);
-        } else {
-          for (int s = 0; s < N; ++s) {
-            if (((e0 + off[0][s]) | (e1 + off[1][s]) | (e2 + off[2][s])) >= 0) {
-              mask |= 1u << s;
-              depth[s] = static_cast<float>(z_corner + z_off[s]);
-            }
-          }
-        }
-        if (mask != 0) fn(r.x0 + static_cast<int>(n), py, mask, static_cast<const float*>(depth));
-        e0 += step_x[0];
-        e1 += step_x[1];
-        e2 += step_x[2];
-      }
+    if (lo >= hi) return false;
+    full_lo = lo;
+    full_hi = hi;
+    if constexpr (N > 1) {
+      for (int k = 0; k < 3 && full_lo < full_hi; ++k) narrow_span(row[k] + min_off[k], step_x[k], full_lo, full_hi);
+      if (full_lo >= full_hi) full_lo = full_hi = hi;
     }
+    return true;
+  }
+  /// Biased edge value k at the corner of pixel n of the current row.
+  std::int64_t edge_at(int k, std::int64_t n) const { return row[k] + step_x[k] * n; }
+  /// Covered samples of a pixel whose corner edge values are e0, e1, e2.
+  std::uint32_t mask(std::int64_t e0, std::int64_t e1, std::int64_t e2) const {
+    std::uint32_t m = 0;
+    for (int s = 0; s < N; ++s) {
+      if (((e0 + off[0][s]) | (e1 + off[1][s]) | (e2 + off[2][s])) >= 0) m |= 1u << s;
+    }
+    return m;
+  }
+  void next_row() {
     for (int k = 0; k < 3; ++k) row[k] += step_y[k];
   }
+};
+
+template <int N, class Fn>
+void rasterize_rect_n(const TriangleSetup& t, const PixelRect& r, const SamplePattern& p, Fn& fn) {
+  EdgeWalk<N> walk(t, r, p);
+  double z_off[N];
+  for (int s = 0; s < N; ++s) z_off[s] = depth_sample_offset(t, p.dx[s], p.dy[s]);
+  const std::uint32_t full = N >= 32 ? ~0u : ((1u << N) - 1u);
+  float depth[N];
+  for (int py = r.y0; py < r.y1; ++py, walk.next_row()) {
+    std::int64_t lo, hi, full_lo, full_hi;
+    if (!walk.span(lo, hi, full_lo, full_hi)) continue;
+    std::int64_t e0 = walk.edge_at(0, lo), e1 = walk.edge_at(1, lo), e2 = walk.edge_at(2, lo);
+    for (std::int64_t n = lo; n < hi; ++n) {
+      const double z_corner = depth_at_corner(t, e1 - t.bias[1], e2 - t.bias[2]);
+      std::uint32_t mask = 0;
+      if (N == 1 || (n >= full_lo && n < full_hi)) {
+        mask = full;
+        for (int s = 0; s < N; ++s) depth[s] = static_cast<float>(z_corner + z_off[s]);
+      } else {
+        mask = walk.mask(e0, e1, e2);
+        for (std::uint32_t m = mask; m != 0; m &= m - 1) {
+          const int s = std::countr_zero(m);
+          depth[s] = static_cast<float>(z_corner + z_off[s]);
+        }
+      }
+      if (mask != 0) fn(r.x0 + static_cast<int>(n), py, mask, static_cast<const float*>(depth));
+      e0 += walk.step_x[0];
+      e1 += walk.step_x[1];
+      e2 += walk.step_x[2];
+    }
+  }
+}
+
+/// The samples rasterize_rect_n<N> would report, counted span by span (no depth, no visit).
+template <int N>
+std::uint64_t count_rect_n(const TriangleSetup& t, const PixelRect& r, const SamplePattern& p) {
+  EdgeWalk<N> walk(t, r, p);
+  std::uint64_t samples = 0;
+  for (int py = r.y0; py < r.y1; ++py, walk.next_row()) {
+    std::int64_t lo, hi, full_lo, full_hi;
+    if (!walk.span(lo, hi, full_lo, full_hi)) continue;
+    if constexpr (N == 1) {
+      samples += static_cast<std::uint64_t>(hi - lo);
+    } else {
+      samples += static_cast<std::uint64_t>(full_hi - full_lo) * N;
+      for (std::int64_t n = lo; n < hi; ++n) {
+        if (n == full_lo) n = full_hi;  // skip the fully covered pixels, counted above
+        if (n >= hi) break;
+        samples += static_cast<std::uint64_t>(std::popcount(walk.mask(walk.edge_at(0, n), walk.edge_at(1, n), walk.edge_at(2, n))));
+      }
+    }
+  }
+  return samples;
 }
 }  // namespace detail
 
@@ -278,6 +331,21 @@ void rasterize_in_rect(const TriangleSetup& tri, const PixelRect& rect, const Sa
     default: assert(false && "unsupported sample count"); break;
   }
 }
+
+/// The number of samples rasterize_in_rect(tri, rect, pattern, ...) would report (the sum of
+/// its masks' popcounts), found span by span without visiting pixels.
+std::uint64_t covered_samples(const TriangleSetup& tri, const PixelRect& rect, const SamplePattern& pattern);
+
+/// Bounds of the depth rasterize_in_rect reports for any sample inside `rect`: every reported
+/// depth d has lo <= d <= hi (the plane's extremes over the rectangle's sample positions, widened
+/// by far more than the double rounding of the per-sample formula, then rounded to float, which
+/// keeps the order). NaN bounds when the plane is not finite; only meaningful for a triangle
+/// that is not empty.
+struct SampleDepthBounds {
+  float lo = 0;
+  float hi = 0;
+};
+SampleDepthBounds depth_bounds_in_rect(const TriangleSetup& tri, const PixelRect& rect, const SamplePattern& pattern);
 
 /// Whether the triangle covers at least one sample of `pattern` inside `rect` (clipped to the
 /// viewport): exact w.r.t. sample coverage and the fill rule, i.e. true iff rasterize_in_rect

@@ -121,6 +121,42 @@ TEST(PipelineHsr, TranslucentWaitsAsALayerWithTwoTagBuffers) {
   EXPECT_EQ(one.images.attachments.at("color").color, two.images.attachments.at("color").color);
 }
 
+TEST(PipelineHsr, BlendedQuadsBehindTheStoredDepthFailEverySampleTheyCoverAndAreNeverShaded) {
+  // Light volumes' case: a first pass stores the depth of a wall (depth 3, whole frame); a second
+  // pass loads it and draws two blended quads with the depth test on and no depth write: one behind
+  // the wall (depth 5, columns [0,40)) and one in front of it (depth 2, columns [24,64)). In every
+  // tile the one behind lies wholly beyond the tile's stored depth, so the ISP counts its samples
+  // as failed without testing them one by one; the counts are those of the per-sample test.
+  Scene s = base_scene();
+  add_quad(s, "wall", 3, -32, 96, 0);
+  add_quad(s, "behind", 5, -32, 40, 2);
+  add_quad(s, "front", 2, 24, 96, 2);
+  for (const int samples : {1, 4}) {
+    Trace t = base_trace();
+    PassDesc first = base_pass();
+    first.name = "first";
+    first.attachments[1].transient = false;
+    first.attachments[1].store = StoreOp::Store;
+    first.draws = {draw_of("wall")};
+    PassDesc second = base_pass();
+    second.name = "second";
+    second.attachments[1].transient = false;
+    second.attachments[1].load = LoadOp::Load;
+    second.draws = {draw_of("behind", "blend"), draw_of("front", "blend")};
+    for (PassDesc* p : {&first, &second}) {
+      for (Attachment& a : p->attachments) a.samples = static_cast<std::uint32_t>(samples);
+    }
+    t.frame.samples = samples;
+    t.commands = {first, second};
+    const FrameResult f = simulate_frame(t, "synthetic.trace", s, resolve_config({}, {}).hw);
+    const double column = kSize * samples;  // samples in one pixel column
+    EXPECT_EQ(stat(f, "pass1.second/isp", "samples_rasterised"), 2 * 40 * column) << samples << "x";
+    EXPECT_EQ(stat(f, "pass1.second/isp", "depth_test_failed_samples"), 40 * column) << samples << "x";
+    EXPECT_EQ(stat(f, "pass1.second/isp", "translucent_samples"), 40 * column) << samples << "x";
+    EXPECT_EQ(stat(f, "pass1.second/tsp", "blended_samples"), 40 * column) << samples << "x";
+  }
+}
+
 TEST(PipelineWriteback, PlainForwardWritesColorOnceAndDepthNeverLeavesTheChip) {
   const Scene atrium = load_scene("atrium:1");
   TraceSetup setup;

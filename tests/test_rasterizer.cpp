@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -521,6 +522,51 @@ TEST(RasterTiles, CoversAnySampleAgreesWithRasterizer) {
     rasterize_in_rect(s, r, p, [&](int, int, std::uint32_t, const float*) { visited = true; });
     EXPECT_EQ(covers_any_sample(s, r, p), visited) << "trial " << trial;
   }
+}
+
+// covered_samples counts span by span what rasterize_in_rect visits pixel by pixel, and
+// depth_bounds_in_rect holds every depth it reports: the ISP counts a primitive whose every
+// sample fails the depth test without visiting it, so both must be exact (counts) and
+// conservative (bounds) for any triangle, rectangle and sample count.
+TEST(RasterRect, CoveredSamplesAndDepthBoundsAgreeWithTheVisit) {
+  const Viewport vp{64, 64, kBits};
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<std::int32_t> coord(-4 * kOne, 68 * kOne);
+  std::uniform_int_distribution<int> pos(-4, 68);
+  std::uniform_real_distribution<float> depth(0.0f, 1.0f);
+  std::uint64_t total = 0;
+  for (int samples : {1, 2, 4, 8, 16}) {
+    const SamplePattern p = standard_sample_pattern(samples, kBits);
+    for (int trial = 0; trial < 200; ++trial) {
+      ScreenTriangle t = make_tri(coord(rng), coord(rng), coord(rng), coord(rng), coord(rng), coord(rng), depth(rng),
+                                  depth(rng), depth(rng));
+      if (trial % 2) t.x_fixed[2] = t.x_fixed[0] + static_cast<std::int32_t>(rng() % 400) - 200;
+      const TriangleSetup s = setup_triangle(t, vp);
+      const int a = pos(rng), b = pos(rng), c = pos(rng), d = pos(rng);
+      const PixelRect r = trial % 5 == 0 ? PixelRect{0, 0, 64, 64}
+                                         : PixelRect{std::min(a, b), std::min(c, d), std::max(a, b) + 1, std::max(c, d) + 1};
+      std::uint64_t visited = 0;
+      const SampleDepthBounds bounds = depth_bounds_in_rect(s, r, p);
+      rasterize_in_rect(s, r, p, [&](int, int, std::uint32_t m, const float* z) {
+        visited += static_cast<std::uint64_t>(std::popcount(m));
+        for (int k = 0; k < samples; ++k) {
+          if (m >> k & 1u) {
+            ASSERT_LE(bounds.lo, z[k]) << samples << "x trial " << trial;
+            ASSERT_GE(bounds.hi, z[k]) << samples << "x trial " << trial;
+          }
+        }
+      });
+      ASSERT_EQ(covered_samples(s, r, p), visited) << samples << "x trial " << trial;
+      total += visited;
+    }
+  }
+  EXPECT_GT(total, 100000u);  // the trials cover real areas, not only misses
+  // The bounds are tight, not merely safe: a flat triangle's are its depth, to a float ulp.
+  const TriangleSetup flat = setup_triangle(make_tri(0, 0, 64 * kOne, 0, 0, 64 * kOne, 0.25f, 0.25f, 0.25f), vp);
+  const SampleDepthBounds b = depth_bounds_in_rect(flat, PixelRect{0, 0, 64, 64}, standard_sample_pattern(1, kBits));
+  EXPECT_LE(b.lo, 0.25f);
+  EXPECT_GE(b.hi, 0.25f);
+  EXPECT_LE(b.hi - b.lo, 2 * std::nextafter(0.25f, 1.0f) - 2 * 0.25f);
 }
 
 TEST(RasterSetup, DegenerateAndOffscreenTrianglesAreEmpty) {
