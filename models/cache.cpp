@@ -147,6 +147,13 @@ void Cache::update_derived_stats() {
   stats_.energy_pj.set(energy_pj());
 }
 
+void Cache::count_read_hits(std::uint64_t accesses, std::uint64_t bytes, DramClass cls) {
+  stats_.reads += accesses;
+  stats_.read_bytes += bytes;
+  stats_.read_hits += accesses;
+  class_stats_[static_cast<std::size_t>(cls)].read_hits += accesses;
+}
+
 double Cache::energy_pj() const {
   const std::uint64_t bytes = stats_.read_bytes.value() + stats_.write_bytes.value() + stats_.fill_bytes.value() +
                               stats_.writeback_bytes.value();

@@ -5,12 +5,7 @@
 namespace tbdr {
 
 void DmaStream::add(std::uint64_t addr, std::uint64_t bytes) {
-  while (bytes > 0) {
-    const std::uint64_t n = std::min<std::uint64_t>(bytes, kChunkBytes - (addr % kChunkBytes));
-    chunks_.push_back({addr, static_cast<std::uint32_t>(n)});
-    addr += n;
-    bytes -= n;
-  }
+  for_each_request(addr, bytes, [&](std::uint64_t a, std::uint32_t n) { chunks_.push_back({a, n}); });
 }
 
 void DmaStream::start(std::function<void()> done) {

@@ -3,6 +3,7 @@
 // The ranges are cut into requests at 4 KB boundaries (no AMBA AXI burst may cross a 4 KB address
 // boundary: Arm, AMBA AXI protocol specification), a bounded number of them in flight; when the
 // memory system pushes back the stream waits for its turn and retries.
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <utility>
@@ -25,6 +26,16 @@ class DmaStream {
   DmaStream(const DmaStream&) = delete;
   DmaStream& operator=(const DmaStream&) = delete;
 
+  /// Calls fn(addr, bytes) for each request the stream cuts [addr, addr + bytes) into.
+  template <typename Fn>
+  static void for_each_request(std::uint64_t addr, std::uint64_t bytes, Fn&& fn) {
+    while (bytes > 0) {
+      const std::uint64_t n = std::min<std::uint64_t>(bytes, kChunkBytes - (addr % kChunkBytes));
+      fn(addr, static_cast<std::uint32_t>(n));
+      addr += n;
+      bytes -= n;
+    }
+  }
   /// Appends [addr, addr + bytes) to the stream (before start()).
   void add(std::uint64_t addr, std::uint64_t bytes);
   /// Starts issuing; `done` runs as an event once the last request completed (at once if empty).

@@ -131,6 +131,20 @@ std::vector<ByteRange> FrameAddressMap::produced(std::size_t command, DramClass 
   return out;
 }
 
+std::uint64_t FrameAddressMap::produced_bytes(std::size_t command, DramClass k, int tile_index) const {
+  const int writer = source_[command][static_cast<std::size_t>(k)];
+  if (writer < 0) return 0;
+  const Written& w = written_[static_cast<std::size_t>(writer)][static_cast<std::size_t>(k)];
+  if (!w.per_tile) return w.all.bytes;
+  if (tile_index >= 0) {
+    const auto i = static_cast<std::size_t>(tile_index);
+    return i < w.tiles.size() ? w.tiles[i].bytes : 0;
+  }
+  std::uint64_t total = 0;
+  for (const ByteRange& r : w.tiles) total += r.bytes;
+  return total;
+}
+
 std::uint64_t FrameAddressMap::spill(std::size_t command, const TileWork& t, int tiles_x) const {
   return spill_base_[command] + static_cast<std::uint64_t>(t.tile_y * tiles_x + t.tile_x) * spill_stride_[command];
 }

@@ -40,10 +40,14 @@ class FrameAddressMap {
   /// (`tile_index` >= 0) come from the same tile's stores of a pass (or the dispatch's data from
   /// the tile's share on); a dispatch's reads (`tile_index` < 0) from all of it in order. Reads
   /// beyond what was written cycle over it again (light volumes re-reading a tile's G-buffer hit
-  /// in the caches as on hardware). Empty when nothing earlier wrote class `k` there: the reader
+  /// in the caches as on hardware; the timing model counts the laps after the first as texture
+  /// cache hits, `produced_bytes` giving a lap). Empty when nothing earlier wrote class `k` there: the reader
   /// then uses its own slot.
   std::vector<ByteRange> produced(std::size_t command, DramClass k, int tile_index, std::uint64_t bytes,
                                   std::uint64_t piece) const;
+  /// Bytes of class `k` an earlier command produced where `produced` reads a tile's (or a
+  /// dispatch's) data from: one lap of what it cycles over; 0 when nothing earlier wrote them.
+  std::uint64_t produced_bytes(std::size_t command, DramClass k, int tile_index) const;
 
  private:
   std::uint64_t pb_base_[2] = {0, 0};

@@ -112,6 +112,11 @@ class MemorySystem final : public Unit {
   /// Functional access: the same cache and DRAM state and statistics updates, no events.
   void access_functional(Client client, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls);
 
+  /// A read request of `client` that the caller knows hits the client's L1 and does not simulate
+  /// (a tile's re-read of data it has requested once): counted as issue() and the L1 would count
+  /// it (an accepted request, requested bytes, one read hit per line it touches, SRAM energy);
+  /// no event, no cache state change. The client must have an L1 (l1_of).
+  void count_l1_read_hit(Client client, std::uint64_t addr, std::uint32_t bytes, DramClass cls);
   /// Whether issue() would accept a request now.
   /// (Refused too while earlier refused requesters wait for their turn, unless it is theirs.)
   bool can_accept() const { return overflow_full_ == 0 && (ready_waiters_.empty() || serving_waiters_); }

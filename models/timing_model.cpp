@@ -523,15 +523,32 @@ class TimingSim final : public Unit {
     for (std::size_t c = 0; c < kDramClassCount; ++c) {
       const std::uint64_t bytes = t.image_read_bytes[c];
       if (bytes == 0) continue;
-      DmaStream* s = new_stream(Client::Texture, false, static_cast<DramClass>(c), outstanding);
-      // From where the producer stored the tile's data (re-reads cycle over it, so they can hit
-      // in the texture cache and the SLC), else from the tile's own slot.
-      const std::vector<ByteRange> from = map_.produced(render_command_, static_cast<DramClass>(c), tile_index(t), bytes, texture_line_bytes_);
+      const auto cls = static_cast<DramClass>(c);
+      DmaStream* s = new_stream(Client::Texture, false, cls, outstanding);
+      // From where the producer stored the tile's data (re-reads cycle over it), else from the
+      // tile's own slot.
+      const std::vector<ByteRange> from = map_.produced(render_command_, cls, tile_index(t), bytes, texture_line_bytes_);
       const std::uint64_t base = tile_address(t) + offset;
       if (from.empty()) {
         for (std::uint64_t off = 0; off < bytes; off += texture_line_bytes_) s->add(base + off, std::min(texture_line_bytes_, bytes - off));
       }
-      for (const ByteRange& r : from) s->add(r.offset, r.bytes);
+      // The first lap over the stored data streams through the texture cache; the re-reads after
+      // it (light volumes over the same pixels) hit there, as a tile's texture footprint is
+      // fetched once (fetch_textures): each counted as the request and L1 hits it would be,
+      // without simulating it; their filtering is the texture units' throughput (start_shading).
+      // Without an L1 every read goes to memory.
+      const bool reuse = mem_.l1_of(Client::Texture) != nullptr;
+      std::uint64_t lap = map_.produced_bytes(render_command_, cls, tile_index(t));
+      for (const ByteRange& r : from) {
+        if (!reuse || lap > 0) {
+          s->add(r.offset, r.bytes);
+          lap -= std::min(lap, r.bytes);
+          continue;
+        }
+        DmaStream::for_each_request(r.offset, r.bytes, [&](std::uint64_t a, std::uint32_t n) {
+          mem_.count_l1_read_hit(Client::Texture, a, n, cls);
+        });
+      }
       offset += bytes;
       ++tiles_[i].pending_shading;
       s->start([this, i] {
