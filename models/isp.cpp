@@ -285,74 +285,98 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
       isp.depth_test_failed_samples += n;
       continue;
     }
-    rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {
-      const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
-      const std::size_t lbase = (static_cast<std::size_t>(y - y0) * rw + static_cast<std::size_t>(x - x0)) * S;
-      for (std::uint32_t m = mask; m != 0; m &= m - 1) {
-        const int s = std::countr_zero(m);
-        if (overdraw) ++overdraw[pixel];
-        ++rasterised;
-        if (late_z) rasterised_.push_back({prim_index, x, y, 1u << s, z[s], false});
-        const std::size_t gi = pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(s);
-        if (rop && (depth_on || stencil_on)) rop->depth(x, y, s, false);
-        if (stencil_on) {
-          if (!passes<std::uint8_t>(pl.stencil_compare, ref, stencil[gi])) {
-            ++isp.stencil_test_failed_samples;
-            stencil[gi] = apply_stencil(pl.stencil_fail_op, stencil[gi], ref);
-            if (rop && pl.stencil_fail_op != StencilOp::Keep) rop->depth(x, y, s, true);
-            continue;
-          }
-        }
-        if (defer) {
-          // The depth test's verdict may change if a flush resolves punch-through depth first:
-          // the stencil ops that depend on it wait for the final verdict. With no unresolved
-          // punch-through layer in the tile, no flush can change the depth buffer: a failed
-          // test is final now (its stencil op applies at once; a re-test after a flush would
-          // read the depth again and fail again, counted in final_fails).
-          bool pass = true;
+    if (defer && !stencil_on && !open_verdicts && rop == nullptr && overdraw == nullptr) {
+      // The common deferred case (no stencil, no punch-through verdict open, no ROP, no overdraw
+      // image): the per-sample loop below with its branches on those taken out, the same counts
+      // and candidates (a failed depth test is final, so every candidate passes).
+      rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {
+        const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
+        const std::size_t lbase = (static_cast<std::size_t>(y - y0) * rw + static_cast<std::size_t>(x - x0)) * S;
+        rasterised += static_cast<std::uint64_t>(std::popcount(mask));
+        for (std::uint32_t m = mask; m != 0; m &= m - 1) {
+          const int s = std::countr_zero(m);
           if (depth_on) {
             ++depth_reads;
-            pass = passes_outcomes(depth_outcomes, z[s], depth[gi]);
-            if (!pass && !open_verdicts) {
+            if (!passes_outcomes(depth_outcomes, z[s], depth[pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(s)])) {
               ++final_fails;
-              if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
               continue;
             }
           }
           const auto li = static_cast<std::uint32_t>(lbase + static_cast<std::size_t>(s));
-          if (!conflict) {
-            const int n = stack_depth[li];
-            conflict = layered && pass && n >= L;
-            if (open_verdicts) {
-              // The verdict is open when a punch-through layer's depth, if its alpha test keeps
-              // the sample, would change it (either way: a greater test may pass only against it).
-              const Layer* stack = stacks + static_cast<std::size_t>(li) * static_cast<std::size_t>(L);
-              for (int k = 0; k < n && !conflict; ++k) {
-                conflict = stack[k].unresolved && passes_outcomes(depth_outcomes, z[s], stack[k].z) != pass;
-              }
+          conflict = conflict || (layered && stack_depth[li] >= L);
+          cand[n_cand++] = {li, x, y, 1u << s, z[s], true};
+        }
+      });
+    } else {
+      rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {
+        const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
+        const std::size_t lbase = (static_cast<std::size_t>(y - y0) * rw + static_cast<std::size_t>(x - x0)) * S;
+        for (std::uint32_t m = mask; m != 0; m &= m - 1) {
+          const int s = std::countr_zero(m);
+          if (overdraw) ++overdraw[pixel];
+          ++rasterised;
+          if (late_z) rasterised_.push_back({prim_index, x, y, 1u << s, z[s], false});
+          const std::size_t gi = pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(s);
+          if (rop && (depth_on || stencil_on)) rop->depth(x, y, s, false);
+          if (stencil_on) {
+            if (!passes<std::uint8_t>(pl.stencil_compare, ref, stencil[gi])) {
+              ++isp.stencil_test_failed_samples;
+              stencil[gi] = apply_stencil(pl.stencil_fail_op, stencil[gi], ref);
+              if (rop && pl.stencil_fail_op != StencilOp::Keep) rop->depth(x, y, s, true);
+              continue;
             }
           }
-          cand[n_cand++] = {li, x, y, 1u << s, z[s], pass};
-          continue;
-        }
-        if (depth_on) {
-          ++depth_reads;
-          if (!passes_outcomes(depth_outcomes, z[s], depth[gi])) {
-            ++isp.depth_test_failed_samples;
-            if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
-            if (rop && stencil_on && pl.stencil_depth_fail_op != StencilOp::Keep) rop->depth(x, y, s, true);
+          if (defer) {
+            // The depth test's verdict may change if a flush resolves punch-through depth first:
+            // the stencil ops that depend on it wait for the final verdict. With no unresolved
+            // punch-through layer in the tile, no flush can change the depth buffer: a failed
+            // test is final now (its stencil op applies at once; a re-test after a flush would
+            // read the depth again and fail again, counted in final_fails).
+            bool pass = true;
+            if (depth_on) {
+              ++depth_reads;
+              pass = passes_outcomes(depth_outcomes, z[s], depth[gi]);
+              if (!pass && !open_verdicts) {
+                ++final_fails;
+                if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
+                continue;
+              }
+            }
+            const auto li = static_cast<std::uint32_t>(lbase + static_cast<std::size_t>(s));
+            if (!conflict) {
+              const int n = stack_depth[li];
+              conflict = layered && pass && n >= L;
+              if (open_verdicts) {
+                // The verdict is open when a punch-through layer's depth, if its alpha test keeps
+                // the sample, would change it (either way: a greater test may pass only against it).
+                const Layer* stack = stacks + static_cast<std::size_t>(li) * static_cast<std::size_t>(L);
+                for (int k = 0; k < n && !conflict; ++k) {
+                  conflict = stack[k].unresolved && passes_outcomes(depth_outcomes, z[s], stack[k].z) != pass;
+                }
+              }
+            }
+            cand[n_cand++] = {li, x, y, 1u << s, z[s], pass};
             continue;
           }
+          if (depth_on) {
+            ++depth_reads;
+            if (!passes_outcomes(depth_outcomes, z[s], depth[gi])) {
+              ++isp.depth_test_failed_samples;
+              if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
+              if (rop && stencil_on && pl.stencil_depth_fail_op != StencilOp::Keep) rop->depth(x, y, s, true);
+              continue;
+            }
+          }
+          if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_pass_op, stencil[gi], ref);
+          pending_.push_back({prim_index, x, y, 1u << s, z[s], false});
+          if (early_write) {
+            depth[gi] = z[s];
+            isp.depth_buffer_write_bytes += ds_bytes;
+          }
+          if (rop && (early_write || (stencil_on && pl.stencil_pass_op != StencilOp::Keep))) rop->depth(x, y, s, true);
         }
-        if (stencil_on) stencil[gi] = apply_stencil(pl.stencil_pass_op, stencil[gi], ref);
-        pending_.push_back({prim_index, x, y, 1u << s, z[s], false});
-        if (early_write) {
-          depth[gi] = z[s];
-          isp.depth_buffer_write_bytes += ds_bytes;
-        }
-        if (rop && (early_write || (stencil_on && pl.stencil_pass_op != StencilOp::Keep))) rop->depth(x, y, s, true);
-      }
-    });
+      });
+    }
     isp.samples_rasterised += rasterised;
     isp.depth_buffer_read_bytes += ds_bytes * depth_reads;
     isp.depth_test_failed_samples += final_fails;
