@@ -19,7 +19,7 @@
 #                    prints both and the ratio of this build's CPU seconds to DIR's
 #   --techniques L   comma-separated subset (default: all 13)
 #   --multipass-lpp K  forward_multipass lights per pass (default 1, the technique's own default and
-#                    the study's: 1024 light-bounded passes, about 30 CPU s at 1080p; issue 15 bounds it at 60 s)
+#                    the study's: 1024 light-bounded passes, about 12 CPU s at 1080p (2026-12-04); issue 15 bounds it at 60 s)
 #   --threads T      threads of the second run of each repetition (default: nproc; 1: one run, as before)
 #   --record         rewrite this mode's rows of bench/speed_baseline.txt with the figures measured
 #                    (with --against: DIR's figures, i.e. DIR is the baseline)
