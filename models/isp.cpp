@@ -288,25 +288,31 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     if (defer && !stencil_on && !open_verdicts && rop == nullptr && overdraw == nullptr) {
       // The common deferred case (no stencil, no punch-through verdict open, no ROP, no overdraw
       // image): the per-sample loop below with its branches on those taken out, the same counts
-      // and candidates (a failed depth test is final, so every candidate passes).
-      rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {
-        const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
-        const std::size_t lbase = (static_cast<std::size_t>(y - y0) * rw + static_cast<std::size_t>(x - x0)) * S;
-        rasterised += static_cast<std::uint64_t>(std::popcount(mask));
-        for (std::uint32_t m = mask; m != 0; m &= m - 1) {
-          const int s = std::countr_zero(m);
-          if (depth_on) {
-            ++depth_reads;
-            if (!passes_outcomes(depth_outcomes, z[s], depth[pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(s)])) {
-              ++final_fails;
-              continue;
+      // and candidates. A failed depth test is final, so every candidate passes, and every
+      // rasterised sample read the depth: the reads and the fails follow from the counts.
+      auto visit = [&]<bool kDepthTest>() {
+        rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {
+          const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
+          const std::size_t lbase = (static_cast<std::size_t>(y - y0) * rw + static_cast<std::size_t>(x - x0)) * S;
+          rasterised += static_cast<std::uint64_t>(std::popcount(mask));
+          for (std::uint32_t m = mask; m != 0; m &= m - 1) {
+            const int s = std::countr_zero(m);
+            if constexpr (kDepthTest) {
+              if (!passes_outcomes(depth_outcomes, z[s], depth[pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(s)])) continue;
             }
+            const auto li = static_cast<std::uint32_t>(lbase + static_cast<std::size_t>(s));
+            conflict = conflict || (layered && stack_depth[li] >= L);
+            cand[n_cand++] = {li, x, y, 1u << s, z[s], true};
           }
-          const auto li = static_cast<std::uint32_t>(lbase + static_cast<std::size_t>(s));
-          conflict = conflict || (layered && stack_depth[li] >= L);
-          cand[n_cand++] = {li, x, y, 1u << s, z[s], true};
-        }
-      });
+        });
+      };
+      if (depth_on) {
+        visit.template operator()<true>();
+        depth_reads = rasterised;
+        final_fails = rasterised - n_cand;
+      } else {
+        visit.template operator()<false>();
+      }
     } else {
       rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {
         const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
