@@ -121,7 +121,7 @@ void MemorySystem::count_l1_read_hit(Client client, std::uint64_t addr, std::uin
   ++cs.reads;
   cs.read_bytes += bytes;
   requested_.read(cls, bytes);
-  for_each_line(addr, bytes, l1->line_bytes(), [&](std::uint64_t, std::uint32_t n) { l1->count_read_hits(1, n, cls); });
+  for_each_line(addr, bytes, l1->line_bytes(), [&](std::uint64_t, std::uint32_t n) { l1->count_read_hit(n, cls); });
 }
 
 void MemorySystem::notify_when_ready(EventCallback cb) {

@@ -532,13 +532,15 @@ class TimingSim final : public Unit {
       if (from.empty()) {
         for (std::uint64_t off = 0; off < bytes; off += texture_line_bytes_) s->add(base + off, std::min(texture_line_bytes_, bytes - off));
       }
-      // The first lap over the stored data streams through the texture cache; the re-reads after
-      // it (light volumes over the same pixels) hit there, as a tile's texture footprint is
-      // fetched once (fetch_textures): each counted as the request and L1 hits it would be,
-      // without simulating it; their filtering is the texture units' throughput (start_shading).
-      // Without an L1 every read goes to memory.
-      const bool reuse = mem_.l1_of(Client::Texture) != nullptr;
+      // The first lap over the stored data streams through the texture cache; when the lap fits
+      // in it, the re-reads after it (light volumes over the same pixels) hit there, as a tile's
+      // texture footprint is fetched once (fetch_textures): each counted as the request and L1
+      // hits it would be, without simulating it; their filtering is the texture units'
+      // throughput (start_shading). A lap larger than the cache, or no cache, and every read is
+      // simulated (cycling over more than an LRU cache holds, they miss).
       std::uint64_t lap = map_.produced_bytes(render_command_, cls, tile_index(t));
+      const Cache* l1 = mem_.l1_of(Client::Texture);
+      const bool reuse = l1 != nullptr && lap <= l1->size_bytes();
       for (const ByteRange& r : from) {
         if (!reuse || lap > 0) {
           s->add(r.offset, r.bytes);

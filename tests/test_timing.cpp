@@ -399,9 +399,13 @@ TEST(TimingCaches, ReReadsOfAStoredGbufferComeFromWhereItWasStoredAndHitTheCache
   // cache's G-buffer read hits grow by the re-reads' lines: (8 - 1) x 256 KiB / 64-byte lines =
   // 28,672 more at k = 8 than at k = 1 (the stores are line-aligned, so each re-read request is one
   // line); and 8 layers of reads and blending never finish sooner than one.
+  // A texture cache smaller than a tile's 4 KiB (2 KiB: 32 of the lap's 64 lines) cannot keep the
+  // lap: cycling over it, LRU evicts each line before its re-read, so the re-reads miss too and
+  // the misses grow with k (8 laps: about 8 x one lap's 4,096 misses, asserted above 4 x), and
+  // the frame is never faster than with the 16 KiB cache.
   Scene s = base_scene();
   add_quad(s, "wall", 3, -512, 1024, 0);
-  auto gbuffer_dram_reads = [&](int k) {
+  auto gbuffer_dram_reads = [&](int k, const std::vector<std::string>& sets) {
     Trace t = frame_of(256);
     t.shaders[0].tex_fetches = 0;
     t.shaders[0].color_outputs = 2;
@@ -424,21 +428,22 @@ TEST(TimingCaches, ReReadsOfAStoredGbufferComeFromWhereItWasStoredAndHitTheCache
       l.draws.push_back(d);
     }
     t.commands = {g, l};
-    const Timed r = run_timed(t, s, {});
+    const Timed r = run_timed(t, s, sets);
     EXPECT_EQ(resolve_config({}, {}).hw.cache.texture.line_bytes, 64);
-    double hits = -1;
+    double hits = -1, misses = -1;
     for (const StatRecord& m : r.timing.memory_stats) {
       if (m.scope == "mem/cache.texture.class.gbuffer" && m.name == "read_hits") hits = m.value;
+      if (m.scope == "mem/cache.texture.class.gbuffer" && m.name == "read_misses") misses = m.value;
     }
     struct Figures {
-      double dram, requested, hits, cycles;
+      double dram, requested, hits, misses, cycles;
     };
     return Figures{static_cast<double>(r.timing.dram.reads(DramClass::Gbuffer)),
-                   static_cast<double>(r.timing.requested.reads(DramClass::Gbuffer)), hits, r.timing.frame_cycles};
+                   static_cast<double>(r.timing.requested.reads(DramClass::Gbuffer)), hits, misses, r.timing.frame_cycles};
   };
   const double stored = 256.0 * 256.0 * 4.0;
-  const auto one = gbuffer_dram_reads(1);
-  const auto eight = gbuffer_dram_reads(8);
+  const auto one = gbuffer_dram_reads(1, {});
+  const auto eight = gbuffer_dram_reads(8, {});
   for (const auto& [k, f] : {std::pair{1, one}, std::pair{8, eight}}) {
     std::printf("[ caches   ] %d layers: G-buffer requested %.0f B, from DRAM %.0f B, texture-cache hits %.0f, %.0f cycles\n",
                 k, f.requested, f.dram, f.hits, f.cycles);
@@ -447,6 +452,13 @@ TEST(TimingCaches, ReReadsOfAStoredGbufferComeFromWhereItWasStoredAndHitTheCache
   }
   EXPECT_EQ(eight.hits - one.hits, 7 * stored / 64);
   EXPECT_GE(eight.cycles, one.cycles);
+  const std::vector<std::string> small_cache = {"cache.texture.size_bytes=2048"};
+  const auto small_one = gbuffer_dram_reads(1, small_cache);
+  const auto small_eight = gbuffer_dram_reads(8, small_cache);
+  std::printf("[ caches   ] 2 KiB texture cache: G-buffer misses %.0f (1 layer), %.0f (8 layers); %.0f cycles\n",
+              small_one.misses, small_eight.misses, small_eight.cycles);
+  EXPECT_GT(small_eight.misses, 4 * small_one.misses);
+  EXPECT_GE(small_eight.cycles, eight.cycles);
 }
 
 TEST(TimingCliff, FramebufferFetchReadsTheTileBuffer) {
