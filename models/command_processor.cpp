@@ -110,7 +110,15 @@ class FrameSimulator {
     textures_ = std::make_unique<TextureLayout>(&scene_, hw_, slots);
     result_.work.texture_bytes = textures_->total_bytes();
     result_.work.immediate = hw_.gpu.mode == GpuMode::Imr;
-    if (result_.work.immediate) rop_ = std::make_unique<RenderOutputUnit>(hw_, f.width, f.height);
+    if (result_.work.immediate) {
+      rop_ = std::make_unique<RenderOutputUnit>(hw_, f.width, f.height);
+      // Every image gets its place before the first pass runs: the framebuffer's size is known
+      // before any command is timed (FrameAddressMap).
+      for (const auto& cmd : trace_.commands) {
+        if (const auto* pass = std::get_if<PassDesc>(&cmd)) rop_->place_pass(*pass);
+      }
+      result_.work.framebuffer_bytes = rop_->framebuffer_bytes();
+    }
     surface_readers_ = stored_surface_readers(trace_);
     int pass_index = 0;
     std::uint64_t dispatches = 0;
@@ -122,7 +130,6 @@ class FrameSimulator {
       }
       // Barriers order work; in the functional model every command completes before the next.
     }
-    if (rop_) result_.work.framebuffer_bytes = rop_->framebuffer_bytes();
     // Frame totals: every unit's statistics summed over the passes (gauges: the largest level).
     if (pass_index > 0) result_.totals.render.collect("frame", result_.stats);
     if (dispatches > 0) collect_stats(result_.totals.compute, "frame/compute", result_.stats);

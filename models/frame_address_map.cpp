@@ -20,74 +20,72 @@ std::uint64_t sum(const std::array<std::uint64_t, kDramClassCount>& a) {
 
 }  // namespace
 
-FrameAddressMap::FrameAddressMap(const FrameWork& work, AddressSpace& space) {
-  std::uint64_t pb_bytes = kMinRegionBytes, vertex_bytes = kMinRegionBytes;
-  for (const auto& cmd : work.commands) {
-    const std::uint64_t cmd_bytes = sum(cmd.read_bytes) + sum(cmd.write_bytes);
-    std::uint64_t stride = kRegionAlignBytes, spill_stride = 0;
-    std::uint64_t max_tile = 1;
-    for (const auto& r : cmd.renders) {
-      std::uint64_t extent = r.binning.pb_write_bytes;
-      for (const auto& t : r.tiles) {
-        for (const auto& br : t.pb_reads) extent = std::max(extent, br.offset + br.bytes);
-        vertex_bytes += t.geometry.vertex_fetch_bytes + t.geometry.index_fetch_bytes;  // imr: per batch
-        stride = std::max({stride, sum(t.load_bytes) + sum(t.image_read_bytes), sum(t.store_bytes)});
-        spill_stride = std::max({spill_stride, t.spill_read_bytes, t.spill_write_bytes});
-        max_tile = std::max<std::uint64_t>(max_tile, static_cast<std::uint64_t>(t.tile_y * work.tiles_x + t.tile_x + 1));
-      }
-      pb_bytes = std::max(pb_bytes, extent);
-      vertex_bytes += r.binning.vertex_fetch_bytes + r.binning.index_fetch_bytes;
-    }
-    stride = (stride + kRegionAlignBytes - 1) / kRegionAlignBytes * kRegionAlignBytes;
-    fb_stride_.push_back(stride);
-    fb_base_.push_back(cmd.is_dispatch ? 0 : space.allocate("framebuffer." + cmd.name, stride * max_tile, DramClass::Color));
-    cmd_base_.push_back(space.allocate("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, kRegionAlignBytes), DramClass::Other));
-    spill_stride = (spill_stride + kRegionAlignBytes - 1) / kRegionAlignBytes * kRegionAlignBytes;
-    spill_stride_.push_back(spill_stride);
-    // Allocated only when the pass spills, so that passes that fit keep their addresses.
-    spill_base_.push_back(spill_stride == 0 ? 0 : space.allocate("tile_spill." + cmd.name, spill_stride * max_tile, DramClass::Spill));
-  }
-  // What each command wrote where, and whose data each command reads (the latest earlier writer
-  // of the class): addresses as the timing model issues them, tile stores class after class from
-  // the tile's slot, a dispatch's writes after its reads in its buffer area.
-  std::array<int, kDramClassCount> last_writer{};
-  last_writer.fill(-1);
-  written_.resize(work.commands.size());
-  for (std::size_t c = 0; c < work.commands.size(); ++c) {
-    const CommandWork& cmd = work.commands[c];
-    source_.push_back(last_writer);
-    auto& w = written_[c];
-    if (cmd.is_dispatch) {
-      std::uint64_t offset = sum(cmd.read_bytes);
-      for (std::size_t k = 0; k < kDramClassCount; ++k) {
-        if (cmd.write_bytes[k] == 0) continue;
-        w[k].all = {cmd_base_[c] + offset, cmd.write_bytes[k]};
-        offset += cmd.write_bytes[k];
-        last_writer[k] = static_cast<int>(c);
-      }
-      continue;
-    }
-    for (const auto& r : cmd.renders) {
-      for (const auto& t : r.tiles) {
-        const auto index = static_cast<std::size_t>(t.tile_y * work.tiles_x + t.tile_x);
-        std::uint64_t offset = 0;
-        for (std::size_t k = 0; k < kDramClassCount; ++k) {
-          if (t.store_bytes[k] == 0) continue;
-          auto& tiles = w[k].tiles;
-          if (tiles.size() <= index) tiles.resize(index + 1, ByteRange{0, 0});
-          tiles[index] = {tile(c, t, work.tiles_x) + offset, t.store_bytes[k]};  // the last render's stores
-          w[k].per_tile = true;
-          offset += t.store_bytes[k];
-          last_writer[k] = static_cast<int>(c);
-        }
-      }
-    }
-  }
-  if (work.texture_bytes > 0) texture_base_ = space.allocate("textures", work.texture_bytes, DramClass::Textures);
-  if (work.framebuffer_bytes > 0) rop_framebuffer_base_ = space.allocate("framebuffer.imr", work.framebuffer_bytes, DramClass::Color);
+FrameAddressMap::FrameAddressMap(const FrameWork& frame, std::uint64_t pb_bytes, AddressSpace& space)
+    : space_(space), tiles_x_(std::max(1, frame.tiles_x)) {
+  last_writer_.fill(-1);
+  if (frame.texture_bytes > 0) texture_base_ = space.allocate("textures", frame.texture_bytes, DramClass::Textures);
+  if (frame.framebuffer_bytes > 0) rop_framebuffer_base_ = space.allocate("framebuffer.imr", frame.framebuffer_bytes, DramClass::Color);
+  pb_bytes = std::max(pb_bytes, kMinRegionBytes);
   pb_base_[0] = space.allocate("parameter_buffer.0", pb_bytes, DramClass::ParameterBuffer);
   pb_base_[1] = space.allocate("parameter_buffer.1", pb_bytes, DramClass::ParameterBuffer);
-  vertex_base_ = space.allocate("vertex_and_index_buffers", vertex_bytes, DramClass::Vertices);
+}
+
+void FrameAddressMap::add_command(const CommandWork& cmd) {
+  const std::size_t c = fb_base_.size();
+  const std::uint64_t cmd_bytes = sum(cmd.read_bytes) + sum(cmd.write_bytes);
+  std::uint64_t stride = kRegionAlignBytes, spill_stride = 0, vertex_bytes = 0;
+  std::uint64_t max_tile = 1;
+  for (const auto& r : cmd.renders) {
+    for (const auto& t : r.tiles) {
+      vertex_bytes += t.geometry.vertex_fetch_bytes + t.geometry.index_fetch_bytes;  // imr: per batch
+      stride = std::max({stride, sum(t.load_bytes) + sum(t.image_read_bytes), sum(t.store_bytes)});
+      spill_stride = std::max({spill_stride, t.spill_read_bytes, t.spill_write_bytes});
+      max_tile = std::max<std::uint64_t>(max_tile, static_cast<std::uint64_t>(t.tile_y * tiles_x_ + t.tile_x + 1));
+    }
+    vertex_bytes += r.binning.vertex_fetch_bytes + r.binning.index_fetch_bytes;
+  }
+  stride = (stride + kRegionAlignBytes - 1) / kRegionAlignBytes * kRegionAlignBytes;
+  fb_stride_.push_back(stride);
+  fb_base_.push_back(cmd.is_dispatch ? 0 : space_.allocate("framebuffer." + cmd.name, stride * max_tile, DramClass::Color));
+  cmd_base_.push_back(space_.allocate("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, kRegionAlignBytes), DramClass::Other));
+  spill_stride = (spill_stride + kRegionAlignBytes - 1) / kRegionAlignBytes * kRegionAlignBytes;
+  spill_stride_.push_back(spill_stride);
+  // Allocated only when the pass spills, so that passes that fit keep their addresses.
+  spill_base_.push_back(spill_stride == 0 ? 0 : space_.allocate("tile_spill." + cmd.name, spill_stride * max_tile, DramClass::Spill));
+  // Allocated only when the command fetches geometry.
+  vertex_base_.push_back(vertex_bytes == 0 ? 0 : space_.allocate("vertices." + cmd.name, vertex_bytes, DramClass::Vertices));
+
+  // What the command wrote where, and whose data it reads (the latest earlier writer of the
+  // class): addresses as the timing model issues them, tile stores class after class from the
+  // tile's slot, a dispatch's writes after its reads in its buffer area.
+  source_.push_back(last_writer_);
+  written_.emplace_back();
+  auto& w = written_.back();
+  if (cmd.is_dispatch) {
+    std::uint64_t offset = sum(cmd.read_bytes);
+    for (std::size_t k = 0; k < kDramClassCount; ++k) {
+      if (cmd.write_bytes[k] == 0) continue;
+      w[k].all = {cmd_base_[c] + offset, cmd.write_bytes[k]};
+      offset += cmd.write_bytes[k];
+      last_writer_[k] = static_cast<int>(c);
+    }
+    return;
+  }
+  for (const auto& r : cmd.renders) {
+    for (const auto& t : r.tiles) {
+      const auto index = static_cast<std::size_t>(t.tile_y * tiles_x_ + t.tile_x);
+      std::uint64_t offset = 0;
+      for (std::size_t k = 0; k < kDramClassCount; ++k) {
+        if (t.store_bytes[k] == 0) continue;
+        auto& tiles = w[k].tiles;
+        if (tiles.size() <= index) tiles.resize(index + 1, ByteRange{0, 0});
+        tiles[index] = {tile(c, t) + offset, t.store_bytes[k]};  // the last render's stores
+        w[k].per_tile = true;
+        offset += t.store_bytes[k];
+        last_writer_[k] = static_cast<int>(c);
+      }
+    }
+  }
 }
 
 std::vector<ByteRange> FrameAddressMap::produced(std::size_t command, DramClass k, int tile_index, std::uint64_t bytes,
@@ -145,12 +143,12 @@ std::uint64_t FrameAddressMap::produced_bytes(std::size_t command, DramClass k, 
   return total;
 }
 
-std::uint64_t FrameAddressMap::spill(std::size_t command, const TileWork& t, int tiles_x) const {
-  return spill_base_[command] + static_cast<std::uint64_t>(t.tile_y * tiles_x + t.tile_x) * spill_stride_[command];
+std::uint64_t FrameAddressMap::spill(std::size_t command, const TileWork& t) const {
+  return spill_base_[command] + static_cast<std::uint64_t>(t.tile_y * tiles_x_ + t.tile_x) * spill_stride_[command];
 }
 
-std::uint64_t FrameAddressMap::tile(std::size_t command, const TileWork& t, int tiles_x) const {
-  return fb_base_[command] + static_cast<std::uint64_t>(t.tile_y * tiles_x + t.tile_x) * fb_stride_[command];
+std::uint64_t FrameAddressMap::tile(std::size_t command, const TileWork& t) const {
+  return fb_base_[command] + static_cast<std::uint64_t>(t.tile_y * tiles_x_ + t.tile_x) * fb_stride_[command];
 }
 
 }  // namespace tbdr

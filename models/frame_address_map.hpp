@@ -1,9 +1,13 @@
 #pragma once
-// Where the timing model places a frame's data in the simulated address space: two parameter
-// buffers (binning of one render overlaps the tiles of the previous one), the vertex and index
-// buffers, the textures, per command a framebuffer area (one fixed-size slot per tile) and a buffer
-// area (lights, light lists, compute buffers). Addresses decide cache sets and DRAM banks, so the
-// layout is a pure function of the frame's work: the same work always gets the same addresses.
+// Where the timing model places a frame's data in the simulated address space: first the frame's
+// regions known before any command runs (the textures, gpu.mode=imr's framebuffer, two parameter
+// buffers of tiling.pb_capacity_bytes: binning of one render overlaps the tiles of the previous
+// one), then per command, in trace order, its framebuffer area (one fixed-size slot per tile), its
+// buffer area (lights, light lists, compute buffers), its spill slots and its vertex and index
+// range. A command's regions depend only on its own work and the commands before it, so the
+// timing model can place each command as soon as it is complete, while later ones are still being
+// simulated. Addresses decide cache sets and DRAM banks, so the layout is a pure function of the
+// frame's work: the same work always gets the same addresses.
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -13,16 +17,23 @@
 
 namespace tbdr {
 
-/// The address map of one frame's regions (allocated once, before the frame runs).
+/// The address map of one frame's regions: the frame's own first, then each command's as it is added.
 class FrameAddressMap {
  public:
-  /// Allocates every region the frame's work touches in `space`.
-  FrameAddressMap(const FrameWork& work, AddressSpace& space);
+  /// Allocates the frame's regions in `space`: FrameWork::texture_bytes of textures,
+  /// FrameWork::framebuffer_bytes of imr framebuffer, two parameter buffers of `pb_bytes`.
+  FrameAddressMap(const FrameWork& frame, std::uint64_t pb_bytes, AddressSpace& space);
+  /// Allocates the regions of `cmd`, the next command of the frame (commands are added in trace
+  /// order, each complete: its renders, tiles and traffic final).
+  void add_command(const CommandWork& cmd);
+  /// Commands added so far.
+  std::size_t commands() const { return fb_base_.size(); }
 
   /// Base of parameter buffer `which` (0 or 1: binning job k uses buffer k % 2).
   std::uint64_t parameter_buffer(std::size_t which) const { return pb_base_[which % 2]; }
-  /// Base of the vertex and index buffers (renders stream them one after another).
-  std::uint64_t vertices() const { return vertex_base_; }
+  /// Base of a command's vertex and index range (its renders, or its imr batches, stream their
+  /// fetches one after another from there).
+  std::uint64_t vertices(std::size_t command) const { return vertex_base_[command]; }
   /// Base of the texture address space (FrameWork::texture_bytes; TileWork::texture_lines are offsets in it).
   std::uint64_t textures() const { return texture_base_; }
   /// Base of gpu.mode=imr's framebuffer (FramebufferAccess::offset is relative to it).
@@ -30,9 +41,9 @@ class FrameAddressMap {
   /// Base of a command's buffer area (a dispatch's reads and writes, a pass's once-read buffers).
   std::uint64_t buffers(std::size_t command) const { return cmd_base_[command]; }
   /// Base of one tile's framebuffer slot of a pass (loads and stores of all its classes follow each other).
-  std::uint64_t tile(std::size_t command, const TileWork& t, int tiles_x) const;
+  std::uint64_t tile(std::size_t command, const TileWork& t) const;
   /// Base of one tile's slot of tile-buffer bytes spilled to memory (pls.over_budget = spill).
-  std::uint64_t spill(std::size_t command, const TileWork& t, int tiles_x) const;
+  std::uint64_t spill(std::size_t command, const TileWork& t) const;
 
   /// Where `command` reads `bytes` of class `k` that an earlier command produced: the addresses
   /// that command wrote them to (the latest earlier command writing class `k`: a pass's tile
@@ -50,11 +61,12 @@ class FrameAddressMap {
   std::uint64_t produced_bytes(std::size_t command, DramClass k, int tile_index) const;
 
  private:
+  AddressSpace& space_;
+  int tiles_x_ = 1;
   std::uint64_t pb_base_[2] = {0, 0};
   std::uint64_t rop_framebuffer_base_ = 0;
-  std::uint64_t vertex_base_ = 0;
   std::uint64_t texture_base_ = 0;
-  std::vector<std::uint64_t> fb_base_, fb_stride_, cmd_base_, spill_base_, spill_stride_;
+  std::vector<std::uint64_t> fb_base_, fb_stride_, cmd_base_, spill_base_, spill_stride_, vertex_base_;
   /// What one command wrote of one class: per tile index (passes) or one range (dispatches).
   struct Written {
     std::vector<ByteRange> tiles;  ///< by tile index; bytes 0 where the tile stored none
@@ -63,6 +75,7 @@ class FrameAddressMap {
   };
   std::vector<std::array<Written, kDramClassCount>> written_;           ///< per command
   std::vector<std::array<int, kDramClassCount>> source_;                ///< per command: the writer it reads, or -1
+  std::array<int, kDramClassCount> last_writer_{};                      ///< per class: the latest command writing it, or -1
 };
 
 }  // namespace tbdr

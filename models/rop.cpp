@@ -75,6 +75,14 @@ void RenderOutputUnit::bind_pass(const PassDesc& pass, RopStats& stats) {
   next_primitive();
 }
 
+void RenderOutputUnit::place_pass(const PassDesc& pass) {
+  if (const Attachment* d = pass.depth_attachment()) place(*d);
+  for (const Attachment* a : pass.color_targets()) place(*a);
+  for (const Attachment& a : pass.attachments) {
+    if (a.load == LoadOp::Clear) place(a);  // (TileMemory::begin_tile clears these)
+  }
+}
+
 std::uint64_t RenderOutputUnit::address(const Image& img, int x, int y, int s) const {
   const auto block = static_cast<std::uint64_t>(y / kBlockPixels) * static_cast<std::uint64_t>(blocks_x_) +
                      static_cast<std::uint64_t>(x / kBlockPixels);

@@ -56,6 +56,10 @@ class RenderOutputUnit {
   /// places in the framebuffer address space (an image keeps its place across passes); its
   /// statistics go to `stats`.
   void bind_pass(const PassDesc& pass, RopStats& stats);
+  /// Places the images `pass` binds and clears, in the order bind_pass and its clears would,
+  /// without binding it. Called for every pass of a frame before the first runs, it fixes the
+  /// framebuffer's size (framebuffer_bytes) before any command is timed.
+  void place_pass(const PassDesc& pass);
   /// One depth/stencil test (write: the sample's depth or stencil changes) of sample `s` at (x, y).
   void depth(int x, int y, int s, bool write);
   /// A shader's colour output to the pass's colour target `target` at the samples `mask` of

@@ -56,7 +56,7 @@ class TimingSim final : public Unit {
         work_(work),
         core_(ClockDomain::from_mhz("core", hw.gpu.core_clock_mhz)),
         mem_(hw, eq_, "mem"),
-        map_(work, mem_.address_space()),
+        map_(work, static_cast<std::uint64_t>(hw.tiling.pb_capacity_bytes), mem_.address_space()),
         slots_(static_cast<std::uint64_t>(hw.usc.count * hw.usc.tasks_in_flight)) {
     binner_.name = "binning";
     binner_.unit = 0;
@@ -83,6 +83,7 @@ class TimingSim final : public Unit {
     // fragment job only.
     for (std::size_t c = 0; c < work_.commands.size(); ++c) {
       const auto& cmd = work_.commands[c];
+      map_.add_command(cmd);
       if (cmd.is_dispatch) {
         frag_jobs_.push_back({c, -1});
       } else {
@@ -224,7 +225,7 @@ class TimingSim final : public Unit {
         try_start_fragment();
       });
     };
-    *pending += stream_geometry(b, finish);
+    *pending += stream_geometry(b, j.command, finish);
     if (b.pb_write_bytes > 0) {
       DmaStream* s = new_stream(Client::Tiler, true, DramClass::ParameterBuffer);
       s->add(map_.parameter_buffer(k), b.pb_write_bytes);
@@ -245,16 +246,19 @@ class TimingSim final : public Unit {
                     reserve(usc_, command, start, static_cast<double>(b.vertex_alu_ops) / alu_rate_));
   }
 
-  /// Starts the vertex and index fetch of `b` (one sequential stream each, following the previous
-  /// geometry's); each calls `done` when finished. Returns how many streams were started.
-  int stream_geometry(const BinningWork& b, const std::function<void()>& done) {
+  /// Starts the vertex and index fetch of `b`, work of `command` (one sequential stream each,
+  /// following the command's previous geometry in its vertex range); each calls `done` when
+  /// finished. Returns how many streams were started.
+  int stream_geometry(const BinningWork& b, std::size_t command, const std::function<void()>& done) {
     if (b.vertex_fetch_bytes + b.index_fetch_bytes == 0) return 0;
+    if (vertex_cursor_.size() <= command) vertex_cursor_.resize(command + 1, 0);
+    std::uint64_t& cursor = vertex_cursor_[command];
     DmaStream* s = new_stream(Client::Geometry, false, DramClass::Vertices);
-    if (b.vertex_fetch_bytes) s->add(map_.vertices() + vertex_cursor_, b.vertex_fetch_bytes);
-    vertex_cursor_ += b.vertex_fetch_bytes;
+    if (b.vertex_fetch_bytes) s->add(map_.vertices(command) + cursor, b.vertex_fetch_bytes);
+    cursor += b.vertex_fetch_bytes;
     DmaStream* si = new_stream(Client::Geometry, false, DramClass::Indices);
-    if (b.index_fetch_bytes) si->add(map_.vertices() + vertex_cursor_, b.index_fetch_bytes);
-    vertex_cursor_ += b.index_fetch_bytes;
+    if (b.index_fetch_bytes) si->add(map_.vertices(command) + cursor, b.index_fetch_bytes);
+    cursor += b.index_fetch_bytes;
     s->start(done);
     si->start(done);
     return 2;
@@ -383,7 +387,7 @@ class TimingSim final : public Unit {
     dispatch_tiles();
   }
 
-  std::uint64_t tile_address(const TileWork& t) const { return map_.tile(render_command_, t, work_.tiles_x); }
+  std::uint64_t tile_address(const TileWork& t) const { return map_.tile(render_command_, t); }
   int tile_index(const TileWork& t) const { return t.tile_y * work_.tiles_x + t.tile_x; }
 
   void dispatch_tiles() {
@@ -410,7 +414,7 @@ class TimingSim final : public Unit {
         // imr: the batch's geometry is processed as it goes down the pipeline: the next batches'
         // geometry overlaps this one's rasterisation and shading (up to isp.tiles_in_flight).
         const Tick geometry_end = reserve_geometry(t.geometry, render_command_, eq_.now());
-        ts.pending_streams += 1 + stream_geometry(t.geometry, on_stream);
+        ts.pending_streams += 1 + stream_geometry(t.geometry, render_command_, on_stream);
         eq_.schedule(geometry_end, [on_stream] { on_stream(); });
       }
       if (!t.pb_reads.empty()) {
@@ -566,7 +570,7 @@ class TimingSim final : public Unit {
   /// flight, while the tile is resident (its slots held): the latency shows when tasks are few.
   void access_spill(std::size_t i) {
     const TileWork& t = render_->tiles[i];
-    const std::uint64_t base = map_.spill(render_command_, t, work_.tiles_x);
+    const std::uint64_t base = map_.spill(render_command_, t);
     const auto outstanding = static_cast<std::uint32_t>(std::max<std::uint64_t>(1, tiles_[i].slots));
     for (int write = 0; write < 2; ++write) {
       const std::uint64_t bytes = write ? t.spill_write_bytes : t.spill_read_bytes;
@@ -678,7 +682,7 @@ class TimingSim final : public Unit {
   std::size_t next_bin_ = 0, next_frag_ = 0;
   bool binning_busy_ = false, frag_busy_ = false;
   Tick end_tick_{0};
-  std::uint64_t vertex_cursor_ = 0;       ///< next vertex/index byte to stream (renders follow each other)
+  std::vector<std::uint64_t> vertex_cursor_;  ///< per command: next byte of its vertex range to stream
   std::uint64_t texture_line_bytes_ = 0;  ///< cache.texture.line_bytes
   // The render whose tiles are in flight.
   const RenderWork* render_ = nullptr;

@@ -211,7 +211,11 @@ TEST_F(StatsExport, TimelineHasEveryUnitsBusyIntervalsInsideTheirPass) {
     EXPECT_GE(from, q.real(0) - 1e-6) << unit << " " << pass;
     EXPECT_LE(to, q.real(1) + 1e-6) << unit << " " << pass;
     EXPECT_GT(busy, 0) << unit << " " << pass;
-    EXPECT_LE(busy, to - from + 1e-6) << unit << " " << pass;  // an interval holds at most its span of work
+    // An interval holds at most its span of work, up to the clock's rounding: ticks are whole
+    // picoseconds, so a reservation starting on a clock edge may begin up to 1 ps (0.0006 cycles
+    // at 600 MHz) before the cycle count its predecessor's booking ends at; merged intervals add
+    // those up over a handful of reservations.
+    EXPECT_LE(busy, to - from + 0.01) << unit << " " << pass;
     EXPECT_NEAR(e.at("ts").get<double>(), from * us_per_cycle, 1e-9);
     unit_busy[unit] += busy;
     pass_busy[{unit, pass}] += busy;
