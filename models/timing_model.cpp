@@ -13,6 +13,7 @@
 #include "models/memory_system.hpp"
 #include "models/task_slots.hpp"
 #include "models/tile_records.hpp"
+#include "models/work_feed.hpp"
 #include "kernel/errors.hpp"
 #include "kernel/event_queue.hpp"
 #include "kernel/run_loop.hpp"
@@ -51,12 +52,13 @@ struct TileState {
 /// The scheduler of the frame's work; a Unit so the run loop's watchdog can name it when stuck.
 class TimingSim final : public Unit {
  public:
-  TimingSim(const HwConfig& hw, const FrameWork& work)
+  TimingSim(const HwConfig& hw, WorkFeed& feed)
       : hw_(hw),
-        work_(work),
+        feed_(feed),
+        work_(feed.frame()),
         core_(ClockDomain::from_mhz("core", hw.gpu.core_clock_mhz)),
         mem_(hw, eq_, "mem"),
-        map_(work, static_cast<std::uint64_t>(hw.tiling.pb_capacity_bytes), mem_.address_space()),
+        map_(work_, static_cast<std::uint64_t>(hw.tiling.pb_capacity_bytes), mem_.address_space()),
         slots_(static_cast<std::uint64_t>(hw.usc.count * hw.usc.tasks_in_flight)) {
     binner_.name = "binning";
     binner_.unit = 0;
@@ -79,33 +81,15 @@ class TimingSim final : public Unit {
   }
 
   TimingResult run() {
-    // Jobs in command order: every render is a binning job and a fragment job; a dispatch is a
-    // fragment job only.
-    for (std::size_t c = 0; c < work_.commands.size(); ++c) {
-      const auto& cmd = work_.commands[c];
-      map_.add_command(cmd);
-      if (cmd.is_dispatch) {
-        frag_jobs_.push_back({c, -1});
-      } else {
-        for (std::size_t r = 0; r < cmd.renders.size(); ++r) {
-          bin_jobs_.push_back({c, static_cast<int>(r)});
-          frag_jobs_.push_back({c, static_cast<int>(r)});
-        }
-      }
-      result_.commands.push_back({cmd.name, -1, 0, 0, {}});
-    }
-    const std::size_t per_command = std::clamp(kFrameBusyIntervals / std::max<std::size_t>(1, work_.commands.size()),
-                                               kMinCommandBusyIntervals, kMaxCommandBusyIntervals);
-    busy_.assign(work_.commands.size(), std::vector<BusyIntervals>(kUnits, BusyIntervals(per_command)));
-    bin_done_.assign(bin_jobs_.size(), false);
-    frag_done_.assign(frag_jobs_.size(), false);
+    per_command_intervals_ = std::clamp(kFrameBusyIntervals / std::max<std::size_t>(1, feed_.expected_commands()),
+                                        kMinCommandBusyIntervals, kMaxCommandBusyIntervals);
     eq_.schedule(Tick{0}, [this] {
       try_start_binning();
       try_start_fragment();
     });
     RunLoop loop(eq_, {&mem_, this});
     loop.run();
-    if (next_frag_ < frag_jobs_.size() || frag_busy_) {
+    if (has_frag_job(next_frag_) || frag_busy_) {
       throw StallError("timing model stopped with work left: " + stall_reason());
     }
     result_.frame_time_ps = static_cast<double>(end_tick_.ps());
@@ -134,7 +118,8 @@ class TimingSim final : public Unit {
     mem_.collect(result_.memory_stats);
     result_.memory = mem_.stats();
     result_.events = eq_.events_executed();
-    for (const auto& cmd : work_.commands) {
+    for (const CommandWork* c : commands_) {
+      const CommandWork& cmd = *c;
       for (const auto& r : cmd.renders) {
         for (const auto& t : r.tiles) {
           result_.texture_line_accesses += t.texture_line_accesses;
@@ -150,6 +135,7 @@ class TimingSim final : public Unit {
   }
 
   std::string_view name() const override { return "gpu_scheduler"; }
+  /// (Jobs not yet taken from the feed are not pending: taking them is what starting them does.)
   bool has_pending_work() const override { return next_frag_ < frag_jobs_.size() || frag_busy_; }
   /// Jobs and tiles finished, plus the time itself while a unit is working off reserved work: a
   /// tile whose shading takes longer than the watchdog window (thousands of lights per pixel) is
@@ -172,6 +158,45 @@ class TimingSim final : public Unit {
     std::size_t command;
     int render;  ///< -1 for a dispatch
   };
+
+  /// Takes the next command from the feed (waiting until the functional run has completed it):
+  /// places its regions, adds its jobs. False when the frame has no more commands.
+  bool take_command() {
+    const CommandWork* cmd = feed_.wait_for(commands_.size());
+    if (cmd == nullptr) return false;
+    const std::size_t c = commands_.size();
+    commands_.push_back(cmd);
+    map_.add_command(*cmd);
+    // Jobs in command order: every render is a binning job and a fragment job; a dispatch is a
+    // fragment job only.
+    if (cmd->is_dispatch) {
+      frag_jobs_.push_back({c, -1});
+    } else {
+      for (std::size_t r = 0; r < cmd->renders.size(); ++r) {
+        bin_jobs_.push_back({c, static_cast<int>(r)});
+        frag_jobs_.push_back({c, static_cast<int>(r)});
+      }
+    }
+    bin_done_.resize(bin_jobs_.size(), false);
+    frag_done_.resize(frag_jobs_.size(), false);
+    result_.commands.push_back({cmd->name, -1, 0, 0, {}});
+    busy_.emplace_back(kUnits, BusyIntervals(per_command_intervals_));
+    return true;
+  }
+  /// Whether binning job `k` exists (taking commands from the feed until it does or none is left).
+  bool has_bin_job(std::size_t k) {
+    while (k >= bin_jobs_.size()) {
+      if (!take_command()) return false;
+    }
+    return true;
+  }
+  /// Whether fragment job `f` exists (as has_bin_job).
+  bool has_frag_job(std::size_t f) {
+    while (f >= frag_jobs_.size()) {
+      if (!take_command()) return false;
+    }
+    return true;
+  }
 
   double cycles_of(Tick t) const { return static_cast<double>(t.ps()) / core_.period_ps(); }
   Tick after_cycles(Tick start, double cycles) const {
@@ -197,13 +222,13 @@ class TimingSim final : public Unit {
 
   // ---- binning -------------------------------------------------------------------------------
   void try_start_binning() {
-    if (binning_busy_ || next_bin_ >= bin_jobs_.size()) return;
+    if (binning_busy_ || !has_bin_job(next_bin_)) return;
     const std::size_t k = next_bin_;
     // Two parameter buffers: job k reuses the buffer of job k-2, free once its tiles are done.
     // A partial render's successor needs the buffer the partial render just used: wait for it.
     if (k >= 2 && !frag_done_of_bin(k - 2)) return;
     const Job& j = bin_jobs_[k];
-    const RenderWork& rw = work_.commands[j.command].renders[static_cast<std::size_t>(j.render)];
+    const RenderWork& rw = commands_[j.command]->renders[static_cast<std::size_t>(j.render)];
     if (j.render > 0 && !frag_done_of_bin(k - 1)) return;
     binning_busy_ = true;
     ++next_bin_;
@@ -294,12 +319,12 @@ class TimingSim final : public Unit {
 
   // ---- fragment jobs (renders and dispatches) --------------------------------------------------
   void try_start_fragment() {
-    if (frag_busy_ || next_frag_ >= frag_jobs_.size()) return;
+    if (frag_busy_ || !has_frag_job(next_frag_)) return;
     const Job& j = frag_jobs_[next_frag_];
     if (j.render >= 0 && !bin_done_[bin_index_of(j)]) return;
     frag_busy_ = true;
     const std::size_t f = next_frag_++;
-    const CommandWork& cmd = work_.commands[j.command];
+    const CommandWork& cmd = *commands_[j.command];
     if (result_.commands[j.command].start_cycle < 0) result_.commands[j.command].start_cycle = cycles_of(eq_.now());
     if (j.render < 0) {
       start_dispatch(f, cmd);
@@ -657,7 +682,10 @@ class TimingSim final : public Unit {
   }
 
   const HwConfig& hw_;
-  const FrameWork& work_;
+  WorkFeed& feed_;
+  const FrameWork& work_;  ///< the frame's fields (its commands come from the feed: commands_)
+  std::vector<const CommandWork*> commands_;  ///< taken from the feed so far, in order
+  std::size_t per_command_intervals_ = 0;  ///< busy intervals kept per command and unit
   ClockDomain core_;
   EventQueue eq_;
   MemorySystem mem_;
@@ -698,7 +726,12 @@ class TimingSim final : public Unit {
 }  // namespace
 
 TimingResult run_timing(const HwConfig& hw, const FrameWork& work) {
-  TimingSim sim(hw, work);
+  WorkFeed feed(work);
+  return run_timing(hw, feed);
+}
+
+TimingResult run_timing(const HwConfig& hw, WorkFeed& feed) {
+  TimingSim sim(hw, feed);
   return sim.run();
 }
 

@@ -82,7 +82,12 @@ struct TimingResult {
   std::uint64_t texture_cache_misses = 0;
 };
 
+class WorkFeed;
+
 /// Runs the timing model over a frame's work.
 TimingResult run_timing(const HwConfig& hw, const FrameWork& work);
+/// Runs the timing model over a frame's work as `feed` hands it over (models/work_feed.hpp): on
+/// its own thread while the functional run publishes the commands, with the same result.
+TimingResult run_timing(const HwConfig& hw, WorkFeed& feed);
 
 }  // namespace tbdr
