@@ -119,6 +119,13 @@ class FrameSimulator {
       }
       result_.work.framebuffer_bytes = rop_->framebuffer_bytes();
     }
+    if (options_.feed) {
+      std::size_t commands = 0;  // every pass and dispatch makes one (barriers make none)
+      for (const auto& cmd : trace_.commands) {
+        commands += std::holds_alternative<PassDesc>(cmd) || std::holds_alternative<DispatchCmd>(cmd) ? 1 : 0;
+      }
+      options_.feed->begin(result_.work, commands);
+    }
     surface_readers_ = stored_surface_readers(trace_);
     int pass_index = 0;
     std::uint64_t dispatches = 0;
@@ -379,7 +386,11 @@ class FrameSimulator {
   /// model, its DRAM rows (under its work's name), its summary with its traffic, the frame's traffic.
   void finish_command(CommandWork cw, PassSummary summary, const DramTraffic& dram) {
     collect_dram(cw.name, dram, result_.stats);
-    result_.work.commands.push_back(std::move(cw));
+    if (options_.feed) {
+      options_.feed->publish(std::move(cw));
+    } else {
+      result_.work.commands.push_back(std::move(cw));
+    }
     summary.dram = dram;
     result_.passes.push_back(std::move(summary));
     result_.dram += dram;
@@ -457,6 +468,13 @@ FrameResult simulate_frame(const Trace& trace, const std::string& trace_path, co
       }
     }
   }
+  // The feed is closed however the simulation ends: a timing model waiting on it stops waiting.
+  struct CloseFeed {
+    WorkFeed* feed;
+    ~CloseFeed() {
+      if (feed) feed->close();
+    }
+  } close_feed{options.feed};
   FrameSimulator sim(trace, trace_path, scene, hw, options);
   return sim.run();
 }

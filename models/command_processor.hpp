@@ -16,6 +16,7 @@
 #include "models/rop.hpp"
 #include "models/tiler.hpp"
 #include "models/tsp.hpp"
+#include "models/work_feed.hpp"
 #include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
 #include "trace/trace.hpp"
@@ -89,6 +90,11 @@ struct FrameOptions {
   /// Threads the tiles of each render run on (models/pass_renderer.hpp); 0: the machine's
   /// (default_thread_count). Every figure and image is the same at any count.
   unsigned threads = 1;
+  /// When set, the frame's work goes to this feed (models/work_feed.hpp), each command as soon as
+  /// it is complete, for a timing model running meanwhile; FrameResult::work then holds only the
+  /// frame's fields (WorkFeed::take gives the whole work back). The feed is closed when the
+  /// simulation ends, also when it fails.
+  WorkFeed* feed = nullptr;
 };
 
 /// Replays `trace` on `scene` with the hardware `hw`. Input problems (an unsupported kernel or

@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <iterator>
 #include <mutex>
 #include <set>
@@ -32,6 +33,7 @@
 #include "kernel/thread_pool.hpp"
 #include "models/command_processor.hpp"
 #include "models/hw_config.hpp"
+#include "models/work_feed.hpp"
 #include "scene/scene_library.hpp"
 #include "techniques/technique.hpp"
 #include "trace/trace.hpp"
@@ -54,11 +56,23 @@ struct ThreadedRun {
   TimingResult timing;
 };
 
+/// With more than one thread the timing model runs beside the functional run, fed command by
+/// command (models/work_feed.hpp), as `tbdrsim run` does; with one, after it.
 ThreadedRun run(const Trace& t, const Scene& s, const HwConfig& hw, unsigned threads) {
   ThreadedRun r;
-  r.frame = simulate_frame(t, "t.trace", s, hw, FrameOptions{.colour = true, .threads = threads});
+  if (threads == 1) {
+    r.frame = simulate_frame(t, "t.trace", s, hw, FrameOptions{.colour = true, .threads = threads});
+    EnergyBreakdown energy;
+    time_frame(hw, r.frame, r.timing, energy);
+    return r;
+  }
+  WorkFeed feed;
+  std::future<TimingResult> timed = std::async(std::launch::async, [&] { return run_timing(hw, feed); });
+  r.frame = simulate_frame(t, "t.trace", s, hw, FrameOptions{.colour = true, .threads = threads, .feed = &feed});
+  r.timing = timed.get();
+  r.frame.work = feed.take();
   EnergyBreakdown energy;
-  time_frame(hw, r.frame, r.timing, energy);
+  book_timing(hw, r.frame, r.timing, energy);
   return r;
 }
 

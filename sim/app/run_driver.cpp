@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "kernel/errors.hpp"
+#include "models/work_feed.hpp"
 #include "app/image_output.hpp"
 #include "analysis/results_db.hpp"
 #include "trace/trace.hpp"
@@ -167,8 +168,7 @@ std::vector<std::string> write_frame_images(const FrameResult& frame, const std:
   return written;
 }
 
-void time_frame(const HwConfig& hw, FrameResult& frame, TimingResult& timing, EnergyBreakdown& energy) {
-  timing = run_timing(hw, frame.work);
+void book_timing(const HwConfig& hw, FrameResult& frame, const TimingResult& timing, EnergyBreakdown& energy) {
   auto& st = frame.stats;
   st.push_back({"frame/timing", "frame_cycles", timing.frame_cycles, "cycles", "Frame time in core clock cycles"});
   st.push_back({"frame/timing", "frame_time_ms", timing.frame_time_ps * 1e-9, "ms", "Frame time"});
@@ -198,6 +198,11 @@ void time_frame(const HwConfig& hw, FrameResult& frame, TimingResult& timing, En
   for (auto& r : timing.memory_stats) st.push_back(r);
   energy = compute_energy(hw, frame.totals, timing.memory, timing.frame_time_ps);
   energy.collect(st);
+}
+
+void time_frame(const HwConfig& hw, FrameResult& frame, TimingResult& timing, EnergyBreakdown& energy) {
+  timing = run_timing(hw, frame.work);
+  book_timing(hw, frame, timing, energy);
 }
 
 std::string write_tile_cycles_image(const FrameResult& frame, const TimingResult& timing, const std::string& dir) {
@@ -238,10 +243,36 @@ RunOutcome run_one(const RunRequest& req) {
   const auto t_sim = std::chrono::steady_clock::now();
   const double c_sim = cpu_seconds();
   outcome.threads = req.threads;
-  outcome.frame = simulate_frame(trace, req.trace_path, scene, req.config.hw,
-                                 FrameOptions{.colour = colour, .threads = req.threads});
+  // With more than one thread the timing model runs on its own thread beside the functional run,
+  // taking each command as soon as the functional run has completed it (models/work_feed.hpp):
+  // the same results, as it waits for whatever its schedule needs next.
+  const bool pipelined = req.threads > 1;
+  WorkFeed feed;
+  std::future<TimingResult> timed;
+  double timing_thread_cpu = 0;
+  if (pipelined) {
+    timed = std::async(std::launch::async, [&req, &feed, &timing_thread_cpu] {
+      const double c = thread_cpu_seconds();
+      TimingResult r = run_timing(req.config.hw, feed);
+      timing_thread_cpu = thread_cpu_seconds() - c;
+      return r;
+    });
+  }
+  try {
+    outcome.frame = simulate_frame(trace, req.trace_path, scene, req.config.hw,
+                                   FrameOptions{.colour = colour, .threads = req.threads, .feed = pipelined ? &feed : nullptr});
+  } catch (...) {
+    // The feed is closed: the timing model ends with what it was given; its result is dropped.
+    if (timed.valid()) {
+      try {
+        timed.get();
+      } catch (...) {
+      }
+    }
+    throw;
+  }
   outcome.wall_seconds = seconds_since(t_sim);
-  outcome.cpu_seconds = cpu_seconds() - c_sim;
+  const double c_functional = cpu_seconds() - c_sim;  // (pipelined: the timing thread's so far too)
   // Without images nothing reads the frame's pixels again (the statistics are taken): their
   // memory (stored surfaces, depth, per-pixel counters: about 500 MB for deferred at 3840x2160)
   // is given back before the timing model builds its streams (its DMA streams there: about
@@ -255,14 +286,33 @@ RunOutcome run_one(const RunRequest& req) {
   // With more than one thread, the frame's images are written while the timing model runs: the
   // images read FrameResult::images, the timing model FrameResult::work (and appends to stats).
   std::future<std::vector<std::string>> images;
+  double images_thread_cpu = 0;
   if (!req.images_dir.empty() && req.threads > 1) {
-    images = std::async(std::launch::async, [&outcome, &req] { return write_frame_images(outcome.frame, req.images_dir); });
+    images = std::async(std::launch::async, [&outcome, &req, &images_thread_cpu] {
+      const double c = thread_cpu_seconds();
+      std::vector<std::string> written = write_frame_images(outcome.frame, req.images_dir);
+      images_thread_cpu = thread_cpu_seconds() - c;
+      return written;
+    });
   }
-  const auto t_timing = std::chrono::steady_clock::now();
-  const double c_timing = thread_cpu_seconds();
-  time_frame(req.config.hw, outcome.frame, outcome.timing, outcome.energy);
-  outcome.timing_seconds = seconds_since(t_timing);
-  outcome.timing_cpu_seconds = thread_cpu_seconds() - c_timing;
+  if (pipelined) {
+    outcome.timing = timed.get();
+    outcome.frame.work = feed.take();
+    outcome.timing_seconds = seconds_since(t_sim);  // (it ran from the start, beside the functional run)
+    outcome.timing_cpu_seconds = timing_thread_cpu;
+    // The functional run's CPU: the process's since it started less the timing thread's and the
+    // image writer's (finished first: the main thread does nothing else meanwhile).
+    if (images.valid()) images.wait();
+    outcome.cpu_seconds = std::max(0.0, cpu_seconds() - c_sim - timing_thread_cpu - images_thread_cpu);
+  } else {
+    outcome.cpu_seconds = c_functional;
+    const auto t_timing = std::chrono::steady_clock::now();
+    const double c_timing = thread_cpu_seconds();
+    outcome.timing = run_timing(req.config.hw, outcome.frame.work);
+    outcome.timing_seconds = seconds_since(t_timing);
+    outcome.timing_cpu_seconds = thread_cpu_seconds() - c_timing;
+  }
+  book_timing(req.config.hw, outcome.frame, outcome.timing, outcome.energy);
   outcome.technique = trace.technique.empty() ? "custom" : trace.technique;
   outcome.scene = scene.source;
 

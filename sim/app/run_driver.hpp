@@ -64,5 +64,8 @@ std::string write_tile_cycles_image(const FrameResult& frame, const TimingResult
 /// Runs the timing and energy models on a functional frame and appends their statistics
 /// (frame/timing, <command>/timing, frame/unit.*, mem/*, frame/energy) to frame.stats.
 void time_frame(const HwConfig& hw, FrameResult& frame, TimingResult& timing, EnergyBreakdown& energy);
+/// time_frame's second half: appends the statistics of `timing` (the timing model's result on
+/// `frame`, e.g. run beside the functional run on a WorkFeed) to frame.stats and computes the energy.
+void book_timing(const HwConfig& hw, FrameResult& frame, const TimingResult& timing, EnergyBreakdown& energy);
 
 }  // namespace tbdr
