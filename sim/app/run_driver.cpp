@@ -341,9 +341,9 @@ RunOutcome run_one(const RunRequest& req) {
   for (auto& p : trace_run_params(trace, req.trace_path)) rec.params.push_back(std::move(p));
   rec.stats = outcome.frame.stats;
   rec.stats.push_back({"frame/host", "simulation_wall_seconds", outcome.wall_seconds, "s", "Host wall time of the functional simulation"});
-  rec.stats.push_back({"frame/host", "timing_wall_seconds", outcome.timing_seconds, "s", "Host wall time of the timing and energy models"});
-  rec.stats.push_back({"frame/host", "simulation_cpu_seconds", outcome.cpu_seconds, "s", "Host CPU time of the functional simulation"});
-  rec.stats.push_back({"frame/host", "timing_cpu_seconds", outcome.timing_cpu_seconds, "s", "Host CPU time of the timing and energy models"});
+  rec.stats.push_back({"frame/host", "timing_wall_seconds", outcome.timing_seconds, "s", "Host wall time of the timing model (with more than one thread it runs beside the functional simulation: from that one's start)"});
+  rec.stats.push_back({"frame/host", "simulation_cpu_seconds", outcome.cpu_seconds, "s", "Host CPU time of the functional simulation (its threads; not the timing model's or the image writer's)"});
+  rec.stats.push_back({"frame/host", "timing_cpu_seconds", outcome.timing_cpu_seconds, "s", "Host CPU time of the timing model"});
   rec.stats.push_back({"frame/host", "tile_render_wall_seconds", outcome.frame.host_tile_seconds, "s",
                        "Host wall time of the functional simulation's tile rendering (the part on --threads threads)"});
   rec.stats.push_back({"frame/host", "simulation_threads", static_cast<double>(outcome.threads), "threads",
