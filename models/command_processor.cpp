@@ -459,6 +459,13 @@ class FrameSimulator {
 
 FrameResult simulate_frame(const Trace& trace, const std::string& trace_path, const Scene& scene, const HwConfig& hw,
                            const FrameOptions& options) {
+  // The feed is closed however the simulation ends: a timing model waiting on it stops waiting.
+  struct CloseFeed {
+    WorkFeed* feed;
+    ~CloseFeed() {
+      if (feed) feed->close();
+    }
+  } close_feed{options.feed};
   if (options.colour) {
     // Colours sample the base colour texels: a scene loaded without them (SceneLoadOptions)
     // would shade every textured surface untextured.
@@ -468,13 +475,6 @@ FrameResult simulate_frame(const Trace& trace, const std::string& trace_path, co
       }
     }
   }
-  // The feed is closed however the simulation ends: a timing model waiting on it stops waiting.
-  struct CloseFeed {
-    WorkFeed* feed;
-    ~CloseFeed() {
-      if (feed) feed->close();
-    }
-  } close_feed{options.feed};
   FrameSimulator sim(trace, trace_path, scene, hw, options);
   return sim.run();
 }

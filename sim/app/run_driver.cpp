@@ -262,7 +262,9 @@ RunOutcome run_one(const RunRequest& req) {
     outcome.frame = simulate_frame(trace, req.trace_path, scene, req.config.hw,
                                    FrameOptions{.colour = colour, .threads = req.threads, .feed = pipelined ? &feed : nullptr});
   } catch (...) {
-    // The feed is closed: the timing model ends with what it was given; its result is dropped.
+    // The feed is closed (simulate_frame closes it; again here, whatever failed): the timing
+    // model ends with what it was given; its result is dropped.
+    feed.close();
     if (timed.valid()) {
       try {
         timed.get();
