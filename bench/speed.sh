@@ -8,7 +8,10 @@
 # tile rendering alone (tiles_x: the part on threads), and the serial share
 # measured in the 1-thread run (1 - tile_render_wall_seconds / the process's wall seconds: trace
 # and scene loading, geometry, binning, dispatches, the timing model, the database) with the
-# speed-up Amdahl's law then allows at 16 threads. The load average is printed before and after:
+# speed-up Amdahl's law then allows at 16 threads, and tail_T: in the T-thread run, where the
+# timing model runs beside the functional run (docs/architecture.md), the seconds it ran on after
+# the functional run ended (timing_wall_seconds - simulation_wall_seconds: what the functional run
+# does not hide). The load average is printed before and after:
 # other processes on the machine stretch wall times.
 #
 # Usage: bash bench/speed.sh [options] [build-dir]
@@ -70,9 +73,9 @@ H=${RES#*x}
 # thread_args BIN N: "--threads N" when BIN knows the option (an older build runs on one thread).
 thread_args() { "$1" run --help 2>/dev/null | grep -q -- '--threads' && echo "--threads $2" || true; }
 # measure BIN TRACE TAG [N]: one run (N threads, default 1); appends "cpu wall serial_share
-# tile_wall timing_share" to $TMP/TAG.times (serial_share: 1 - tile rendering's wall seconds / the
+# tile_wall timing_share tail" to $TMP/TAG.times (serial_share: 1 - tile rendering's wall seconds / the
 # run's wall seconds; tile_wall: those seconds; timing_share: the timing model's wall seconds / the
-# run's; - when the build does not record them).
+# run's; tail: timing_wall_seconds - simulation_wall_seconds; - when the build does not record them).
 measure() {
   local bin=$1 trace=$2 tag=$3 n=${4:-1} extra=()
   if [ "$IMAGES" = yes ]; then
@@ -83,12 +86,14 @@ measure() {
   # shellcheck disable=SC2046
   /usr/bin/time -f '%U %S %e' -o "$TMP/time.out" "$bin" run --trace "$trace" --db "$TMP/$tag.db" --quiet \
     $(thread_args "$bin" "$n") "${extra[@]}" > /dev/null
-  local tile timing
+  local tile timing sim
   tile=$(sqlite3 "$TMP/$tag.db" "SELECT value FROM stats WHERE scope = 'frame/host' AND name = 'tile_render_wall_seconds'" 2>/dev/null || true)
   timing=$(sqlite3 "$TMP/$tag.db" "SELECT value FROM stats WHERE scope = 'frame/host' AND name = 'timing_wall_seconds'" 2>/dev/null || true)
-  awk -v t="${tile:--1}" -v m="${timing:--1}" '{ w = $3; s = (t >= 0 && w > 0) ? 1 - t / w : -1; if (s < 0 && t >= 0) s = 0
-                           printf "%.3f %.3f %s %s %s\n", $1 + $2, w, (t >= 0 ? sprintf("%.3f", s) : "-"), (t >= 0 ? sprintf("%.3f", t) : "-"),
-                                  (m >= 0 && w > 0 ? sprintf("%.3f", m / w) : "-") }' \
+  sim=$(sqlite3 "$TMP/$tag.db" "SELECT value FROM stats WHERE scope = 'frame/host' AND name = 'simulation_wall_seconds'" 2>/dev/null || true)
+  awk -v t="${tile:--1}" -v m="${timing:--1}" -v f="${sim:--1}" '{ w = $3; s = (t >= 0 && w > 0) ? 1 - t / w : -1; if (s < 0 && t >= 0) s = 0
+                           tail = (m >= 0 && f >= 0) ? m - f : -1; if (tail < 0 && m >= 0 && f >= 0) tail = 0
+                           printf "%.3f %.3f %s %s %s %s\n", $1 + $2, w, (t >= 0 ? sprintf("%.3f", s) : "-"), (t >= 0 ? sprintf("%.3f", t) : "-"),
+                                  (m >= 0 && w > 0 ? sprintf("%.3f", m / w) : "-"), (tail >= 0 ? sprintf("%.3f", tail) : "-") }' \
     "$TMP/time.out" >> "$TMP/$tag.times"
 }
 # median COLUMN FILE
@@ -101,13 +106,14 @@ echo "build: $BUILD${AGAINST:+ (against $AGAINST, interleaved)}; host $(hostname
 if [ "$THREADS" -gt 1 ]; then
   echo "threads: 1 and $THREADS, interleaved run by run; tiles_x = tile rendering wall at 1 thread / at $THREADS threads;"
   echo "serial = 1 - tile rendering wall / run wall (1 thread); timing = the timing model's share of it (part of serial);"
-  echo "amdahl16 = 1 / (serial + (1 - serial) / 16), the speed-up the serial share allows at 16 threads"
+  echo "amdahl16 = 1 / (serial + (1 - serial) / 16), the speed-up the serial share allows at 16 threads;"
+  echo "tail_$THREADS = seconds the timing model ran on after the functional run ended ($THREADS threads: it runs beside it)"
 fi
 if [ -n "$AGAINST" ]; then
   printf '%-28s %9s %9s %9s %9s %8s %12s\n' technique cpu_s wall_s base_cpu base_wall ratio px*lights/s
 elif [ "$THREADS" -gt 1 ]; then
-  printf '%-28s %7s %7s %7s %7s %7s %7s %7s %7s %8s %11s %8s %6s\n' technique cpu_1 wall_1 "cpu_$THREADS" "wall_$THREADS" speedup tiles_x \
-    serial timing amdahl16 px*lights/s base_cpu ratio
+  printf '%-28s %7s %7s %7s %7s %7s %7s %7s %7s %8s %7s %11s %8s %6s\n' technique cpu_1 wall_1 "cpu_$THREADS" "wall_$THREADS" speedup tiles_x \
+    serial timing amdahl16 "tail_$THREADS" px*lights/s base_cpu ratio
 else
   printf '%-28s %9s %9s %12s %9s %8s\n' technique cpu_s wall_s px*lights/s base_cpu ratio
 fi
@@ -145,8 +151,9 @@ for t in "${TECH_LIST[@]}"; do
     amdahl=$(awk -v s="$serial" 'BEGIN { if (s == "-") print "-"; else printf "%.1f", 1 / (s + (1 - s) / 16) }')
     tiles=$(awk -v a="$(median 4 "$TMP/new.times")" -v b="$(median 4 "$TMP/par.times")" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
     timing=$(median 5 "$TMP/new.times")
-    printf '%-28s %7s %7s %7s %7s %7s %7s %7s %7s %8s %11s %8s %6s\n' "$t" "$cpu" "$wall" "$pcpu" "$pwall" "$speedup" "$tiles" "$serial" \
-      "$timing" "$amdahl" "$rate" "${bcpu:--}" "$ratio"
+    tail_t=$(median 6 "$TMP/par.times")
+    printf '%-28s %7s %7s %7s %7s %7s %7s %7s %7s %8s %7s %11s %8s %6s\n' "$t" "$cpu" "$wall" "$pcpu" "$pwall" "$speedup" "$tiles" "$serial" \
+      "$timing" "$amdahl" "$tail_t" "$rate" "${bcpu:--}" "$ratio"
     echo "$MODE $t $cpu $wall" >> "$TMP/record.txt"
   else
     bcpu=$(baseline_cpu "$t")
