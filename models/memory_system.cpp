@@ -224,6 +224,39 @@ void MemorySystem::l1_access(Cache& l1, std::uint64_t addr, std::uint32_t bytes,
   }
   // Read miss: the line was allocated; fetch all of it from the SLC.
   if constexpr (kTimed) {
+    if (caches_enabled_ && l1.line_bytes() == slc_->line_bytes()) {
+      // The L1 line is one SLC line: it is looked up there first. When it hits with its data's
+      // arrival known (no fill of it pending), the L1 line's arrival follows at once and no fill
+      // is tracked: the ticks the general path below gives (hit(), then resolve_fill() of the
+      // L1 fill), in fewer steps. The requests of a tile's parameter-buffer and texture reads
+      // that miss the L1 mostly take this path.
+      Cache& slc = *slc_;
+      const std::uint64_t line = l1.line_addr(addr);
+      const auto line_bytes = static_cast<std::uint32_t>(l1.line_bytes());
+      const CacheAccess s = slc.access(line, line_bytes, false, cls, Allocation::Allocate);
+      if (s.hit && slc.fill_of(s.slot) == Cache::kNoFill) {
+        const Tick now = eq_.now();
+        const Tick arrival{slc.arrival_ps(s.slot)};
+        const Cycles latency{static_cast<std::uint32_t>(slc.hit_latency_cycles())};
+        Tick due = now;
+        if (arrival > now) {  // being fetched, arrives at a known tick
+          ++stats_.merged_misses;
+          due = std::max(due, core_after(arrival, latency));
+        } else {
+          due = std::max(due, core_after(now, latency));
+        }
+        l1.set_arrival_ps(a.slot, due.ps());
+        resolve(w, core_after(due, Cycles{w.extra_cycles}));
+        return;
+      }
+      const std::uint32_t f = new_fill(&l1, a.slot);
+      l1.set_fill(a.slot, f);
+      attach(f, w);
+      fills_[f].parts = 1;  // guard while the SLC line is looked up
+      slc_after_lookup<true>(s, line, line_bytes, false, cls, Waiter{f, 0, WaiterKind::Fill});
+      resolve_fill(f, eq_.now());
+      return;
+    }
     const std::uint32_t f = new_fill(&l1, a.slot);
     l1.set_fill(a.slot, f);
     attach(f, w);
@@ -250,8 +283,13 @@ void MemorySystem::slc_access(Allocation alloc, std::uint64_t addr, std::uint32_
     dram_bypass<kTimed>(addr, bytes, is_write, cls, w);
     return;
   }
+  slc_after_lookup<kTimed>(slc_->access(addr, bytes, is_write, cls, alloc), addr, bytes, is_write, cls, w);
+}
+
+template <bool kTimed>
+void MemorySystem::slc_after_lookup(const CacheAccess& a, std::uint64_t addr, std::uint32_t bytes, bool is_write,
+                                    DramClass cls, Waiter w) {
   Cache& slc = *slc_;
-  const CacheAccess a = slc.access(addr, bytes, is_write, cls, alloc);
   if (a.writeback) dram_write_line<kTimed>(a.victim_addr, static_cast<std::uint32_t>(slc.line_bytes()), a.victim_cls);
   w.extra_cycles += static_cast<std::uint32_t>(slc.hit_latency_cycles());
   if (is_write) {

@@ -217,6 +217,9 @@ class MemorySystem final : public Unit {
   void slc_range(Allocation alloc, std::uint64_t addr, std::uint64_t bytes, bool is_write, DramClass cls, Waiter w);
   template <bool kTimed>
   void slc_access(Allocation alloc, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Waiter w);
+  // slc_access's work once the SLC answered `a` (its writeback, hit, fill or streaming miss).
+  template <bool kTimed>
+  void slc_after_lookup(const CacheAccess& a, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Waiter w);
   // Straight to DRAM (streaming miss or no caches), whole bursts.
   template <bool kTimed>
   void dram_bypass(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Waiter w);
