@@ -235,16 +235,7 @@ void MemorySystem::l1_access(Cache& l1, std::uint64_t addr, std::uint32_t bytes,
       const auto line_bytes = static_cast<std::uint32_t>(l1.line_bytes());
       const CacheAccess s = slc.access(line, line_bytes, false, cls, Allocation::Allocate);
       if (s.hit && slc.fill_of(s.slot) == Cache::kNoFill) {
-        const Tick now = eq_.now();
-        const Tick arrival{slc.arrival_ps(s.slot)};
-        const Cycles latency{static_cast<std::uint32_t>(slc.hit_latency_cycles())};
-        Tick due = now;
-        if (arrival > now) {  // being fetched, arrives at a known tick
-          ++stats_.merged_misses;
-          due = std::max(due, core_after(arrival, latency));
-        } else {
-          due = std::max(due, core_after(now, latency));
-        }
+        const Tick due = std::max(eq_.now(), known_arrival(slc, s.slot, static_cast<std::uint32_t>(slc.hit_latency_cycles())));
         l1.set_arrival_ps(a.slot, due.ps());
         resolve(w, core_after(due, Cycles{w.extra_cycles}));
         return;
@@ -453,13 +444,16 @@ void MemorySystem::hit(Cache& cache, std::uint32_t slot, Waiter w) {
     attach(f, w);
     return;
   }
+  resolve(w, known_arrival(cache, slot, w.extra_cycles));
+}
+
+Tick MemorySystem::known_arrival(const Cache& cache, std::uint32_t slot, std::uint32_t extra_cycles) {
   const Tick arrival{cache.arrival_ps(slot)};
   if (arrival > eq_.now()) {  // being fetched, arrives at a known tick
     ++stats_.merged_misses;
-    resolve(w, core_after(arrival, Cycles{w.extra_cycles}));
-  } else {
-    ready(w);
+    return core_after(arrival, Cycles{extra_cycles});
   }
+  return core_after(eq_.now(), Cycles{extra_cycles});
 }
 
 void MemorySystem::resolve(Waiter w, Tick arrival) {

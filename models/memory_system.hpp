@@ -245,6 +245,9 @@ class MemorySystem final : public Unit {
   void attach(std::uint32_t fill, Waiter w);  // data available when `fill` resolves
   // A line that hit in `cache` at `slot`: ready now, or when the fill still bringing it arrives.
   void hit(Cache& cache, std::uint32_t slot, Waiter w);
+  // When the data of a line that hit in `cache` at `slot` with no fill pending is there, plus
+  // `extra_cycles`: now, or its arrival tick if it is still on its way (a merged miss, counted).
+  Tick known_arrival(const Cache& cache, std::uint32_t slot, std::uint32_t extra_cycles);
   void resolve(Waiter w, Tick arrival);       // one part of the waiter arrives at `arrival`
   void resolve_txn(std::uint32_t txn, Tick arrival);
   void resolve_fill(std::uint32_t fill, Tick arrival);
