@@ -330,7 +330,7 @@ class FrameSimulator {
     result_.totals.compute += stats;
     PassSummary summary;
     summary.name = prefix;
-    finish_command(std::move(cw), std::move(summary), dram);
+    finish_command(prefix, &cw, std::move(summary), dram);
   }
 
   void run_pass(const PassDesc& pass, int index) {
@@ -362,6 +362,10 @@ class FrameSimulator {
     // touches the pages its largest render needs, which earlier passes faulted in already.
     ctx.prims = std::move(prims_buffer_);
     PassRenderer renderer(ctx, hw_, *ps, dram, cw, pool_);
+    // With a feed, a pass whose layout is known before its tiles render is handed to the timing
+    // model as it goes (each render when binned, each tile as merged); others when complete.
+    const bool live = options_.feed && renderer.layout_known_at_start();
+    if (live) renderer.publish_to(*options_.feed);
     renderer.run();
     prims_buffer_ = std::move(ctx.prims);
     prims_buffer_.clear();
@@ -379,17 +383,20 @@ class FrameSimulator {
     summary.primitives = ps->geometry.primitives_out.value();
     summary.shaded_samples = ps->tsp.shaded_samples.value();
     summary.partial_renders = ps->tiler.partial_renders.value();
-    finish_command(std::move(cw), std::move(summary), dram);
+    finish_command(prefix, live ? nullptr : &cw, std::move(summary), dram);
   }
 
   /// What every pass and dispatch ends with, after its unit statistics: its work for the timing
-  /// model, its DRAM rows (under its work's name), its summary with its traffic, the frame's traffic.
-  void finish_command(CommandWork cw, PassSummary summary, const DramTraffic& dram) {
-    collect_dram(cw.name, dram, result_.stats);
-    if (options_.feed) {
-      options_.feed->publish(std::move(cw));
+  /// model (`cw`, or nullptr when the feed holds it open: closed now), its DRAM rows (under its
+  /// work's name), its summary with its traffic, the frame's traffic.
+  void finish_command(const std::string& name, CommandWork* cw, PassSummary summary, const DramTraffic& dram) {
+    collect_dram(name, dram, result_.stats);
+    if (cw == nullptr) {
+      options_.feed->close_command();
+    } else if (options_.feed) {
+      options_.feed->publish(std::move(*cw));
     } else {
-      result_.work.commands.push_back(std::move(cw));
+      result_.work.commands.push_back(std::move(*cw));
     }
     summary.dram = dram;
     result_.passes.push_back(std::move(summary));

@@ -1,6 +1,8 @@
 #include "models/frame_address_map.hpp"
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 namespace tbdr {
 
@@ -21,7 +23,7 @@ std::uint64_t sum(const std::array<std::uint64_t, kDramClassCount>& a) {
 }  // namespace
 
 FrameAddressMap::FrameAddressMap(const FrameWork& frame, std::uint64_t pb_bytes, AddressSpace& space)
-    : space_(space), tiles_x_(std::max(1, frame.tiles_x)) {
+    : space_(space), tiles_x_(std::max(1, frame.tiles_x)), immediate_(frame.immediate) {
   last_writer_.fill(-1);
   if (frame.texture_bytes > 0) texture_base_ = space.allocate("textures", frame.texture_bytes, DramClass::Textures);
   if (frame.framebuffer_bytes > 0) rop_framebuffer_base_ = space.allocate("framebuffer.imr", frame.framebuffer_bytes, DramClass::Color);
@@ -30,36 +32,53 @@ FrameAddressMap::FrameAddressMap(const FrameWork& frame, std::uint64_t pb_bytes,
   pb_base_[1] = space.allocate("parameter_buffer.1", pb_bytes, DramClass::ParameterBuffer);
 }
 
-void FrameAddressMap::add_command(const CommandWork& cmd) {
-  const std::size_t c = fb_base_.size();
-  const std::uint64_t cmd_bytes = sum(cmd.read_bytes) + sum(cmd.write_bytes);
-  std::uint64_t stride = kRegionAlignBytes, spill_stride = 0, vertex_bytes = 0;
-  std::uint64_t max_tile = 1;
-  for (const auto& r : cmd.renders) {
-    for (const auto& t : r.tiles) {
-      vertex_bytes += t.geometry.vertex_fetch_bytes + t.geometry.index_fetch_bytes;  // imr: per batch
-      stride = std::max({stride, sum(t.load_bytes) + sum(t.image_read_bytes), sum(t.store_bytes)});
-      spill_stride = std::max({spill_stride, t.spill_read_bytes, t.spill_write_bytes});
-      max_tile = std::max<std::uint64_t>(max_tile, static_cast<std::uint64_t>(t.tile_y * tiles_x_ + t.tile_x + 1));
-    }
-    vertex_bytes += r.binning.vertex_fetch_bytes + r.binning.index_fetch_bytes;
-  }
-  stride = (stride + kRegionAlignBytes - 1) / kRegionAlignBytes * kRegionAlignBytes;
-  fb_stride_.push_back(stride);
-  fb_base_.push_back(cmd.is_dispatch ? 0 : space_.allocate("framebuffer." + cmd.name, stride * max_tile, DramClass::Color));
-  cmd_base_.push_back(space_.allocate("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, kRegionAlignBytes), DramClass::Other));
-  spill_stride = (spill_stride + kRegionAlignBytes - 1) / kRegionAlignBytes * kRegionAlignBytes;
-  spill_stride_.push_back(spill_stride);
-  // Allocated only when the pass spills, so that passes that fit keep their addresses.
-  spill_base_.push_back(spill_stride == 0 ? 0 : space_.allocate("tile_spill." + cmd.name, spill_stride * max_tile, DramClass::Spill));
-  // Allocated only when the command fetches geometry.
-  vertex_base_.push_back(vertex_bytes == 0 ? 0 : space_.allocate("vertices." + cmd.name, vertex_bytes, DramClass::Vertices));
+namespace {
+std::uint64_t whole_units(std::uint64_t bytes) { return (bytes + kRegionAlignBytes - 1) / kRegionAlignBytes * kRegionAlignBytes; }
+}  // namespace
 
-  // What the command wrote where, and whose data it reads (the latest earlier writer of the
-  // class): addresses as the timing model issues them, tile stores class after class from the
-  // tile's slot, a dispatch's writes after its reads in its buffer area.
+void FrameAddressMap::add_command(const CommandWork& cmd) {
+  if (open_) throw std::logic_error("FrameAddressMap::add_command: the previous command has not ended");
+  open_ = true;
+  const std::uint64_t cmd_bytes = sum(cmd.read_bytes) + sum(cmd.write_bytes);
+  const std::uint64_t slots = std::max<std::uint64_t>(1, cmd.tile_slots);
+  fb_stride_.push_back(whole_units(std::max<std::uint64_t>(cmd.tile_slot_bytes, 1)));
+  fb_base_.push_back(cmd.is_dispatch ? 0 : space_.allocate("framebuffer." + cmd.name, fb_stride_.back() * slots, DramClass::Color));
+  tile_slots_.push_back(slots);
+  partial_stride_.push_back(whole_units(std::max<std::uint64_t>(cmd.partial_slot_bytes, 1)));
+  partial_base_.push_back(0);  // allocated at the first partial render
+  cmd_base_.push_back(space_.allocate("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, kRegionAlignBytes), DramClass::Other));
+  spill_stride_.push_back(whole_units(cmd.spill_slot_bytes));
+  // Allocated only when the pass spills, so that passes that fit keep their addresses.
+  spill_base_.push_back(spill_stride_.back() == 0 ? 0
+                                                  : space_.allocate("tile_spill." + cmd.name, spill_stride_.back() * slots, DramClass::Spill));
+  vertex_base_.emplace_back();
+  names_.push_back(cmd.name);
+  // Whose data it reads: the latest earlier writer of each class.
   source_.push_back(last_writer_);
   written_.emplace_back();
+}
+
+void FrameAddressMap::add_render(std::size_t command, const RenderWork& r) {
+  std::uint64_t vertex_bytes = r.binning.vertex_fetch_bytes + r.binning.index_fetch_bytes;
+  if (immediate_) {
+    for (const auto& t : r.tiles) vertex_bytes += t.geometry.vertex_fetch_bytes + t.geometry.index_fetch_bytes;
+  }
+  if (r.partial && partial_base_.at(command) == 0) {
+    partial_base_[command] = space_.allocate("partial_render." + names_[command], partial_stride_[command] * tile_slots_[command], DramClass::Color);
+  }
+  auto& bases = vertex_base_.at(command);
+  // Allocated only when the render fetches geometry.
+  bases.push_back(vertex_bytes == 0 ? 0
+                                    : space_.allocate("vertices." + names_.at(command) + ".render" + std::to_string(bases.size()),
+                                                      vertex_bytes, DramClass::Vertices));
+}
+
+void FrameAddressMap::end_command(const CommandWork& cmd) {
+  if (!open_) throw std::logic_error("FrameAddressMap::end_command: no command is open");
+  open_ = false;
+  const std::size_t c = fb_base_.size() - 1;
+  // What the command wrote where: addresses as the timing model issues them, tile stores class
+  // after class from the tile's slot, a dispatch's writes after its reads in its buffer area.
   auto& w = written_.back();
   if (cmd.is_dispatch) {
     std::uint64_t offset = sum(cmd.read_bytes);
@@ -71,15 +90,21 @@ void FrameAddressMap::add_command(const CommandWork& cmd) {
     }
     return;
   }
-  for (const auto& r : cmd.renders) {
+  for (std::size_t ri = 0; ri < cmd.renders.size(); ++ri) {
+    const RenderWork& r = cmd.renders[ri];
     for (const auto& t : r.tiles) {
+      // A render after a partial render reloads from the partial slots; a partial render stores there.
+      if (sum(t.load_bytes) > tile_slot_bytes(c, ri > 0) || sum(t.store_bytes) > tile_slot_bytes(c, r.partial) ||
+          std::max(t.spill_read_bytes, t.spill_write_bytes) > spill_stride_[c]) {
+        throw std::logic_error("FrameAddressMap: a tile of " + cmd.name + " loads, stores or spills more than its slot holds");
+      }
       const auto index = static_cast<std::size_t>(t.tile_y * tiles_x_ + t.tile_x);
       std::uint64_t offset = 0;
       for (std::size_t k = 0; k < kDramClassCount; ++k) {
         if (t.store_bytes[k] == 0) continue;
         auto& tiles = w[k].tiles;
         if (tiles.size() <= index) tiles.resize(index + 1, ByteRange{0, 0});
-        tiles[index] = {tile(c, t) + offset, t.store_bytes[k]};  // the last render's stores
+        tiles[index] = {tile(c, t, r.partial) + offset, t.store_bytes[k]};  // the last render's stores
         w[k].per_tile = true;
         offset += t.store_bytes[k];
         last_writer_[k] = static_cast<int>(c);
@@ -147,8 +172,13 @@ std::uint64_t FrameAddressMap::spill(std::size_t command, const TileWork& t) con
   return spill_base_[command] + static_cast<std::uint64_t>(t.tile_y * tiles_x_ + t.tile_x) * spill_stride_[command];
 }
 
-std::uint64_t FrameAddressMap::tile(std::size_t command, const TileWork& t) const {
-  return fb_base_[command] + static_cast<std::uint64_t>(t.tile_y * tiles_x_ + t.tile_x) * fb_stride_[command];
+std::uint64_t FrameAddressMap::tile(std::size_t command, const TileWork& t, bool partial) const {
+  const auto index = static_cast<std::uint64_t>(t.tile_y * tiles_x_ + t.tile_x);
+  if (partial) {
+    if (partial_base_[command] == 0) throw std::logic_error("FrameAddressMap::tile: " + names_[command] + " has no partial render");
+    return partial_base_[command] + index * partial_stride_[command];
+  }
+  return fb_base_[command] + index * fb_stride_[command];
 }
 
 }  // namespace tbdr

@@ -2,14 +2,16 @@
 // Where the timing model places a frame's data in the simulated address space: first the frame's
 // regions known before any command runs (the textures, gpu.mode=imr's framebuffer, two parameter
 // buffers of tiling.pb_capacity_bytes: binning of one render overlaps the tiles of the previous
-// one), then per command, in trace order, its framebuffer area (one fixed-size slot per tile), its
-// buffer area (lights, light lists, compute buffers), its spill slots and its vertex and index
-// range. A command's regions depend only on its own work and the commands before it, so the
-// timing model can place each command as soon as it is complete, while later ones are still being
-// simulated. Addresses decide cache sets and DRAM banks, so the layout is a pure function of the
-// frame's work: the same work always gets the same addresses.
+// one), then per command, in trace order, when it starts: its framebuffer area (one slot per tile
+// of CommandWork::tile_slot_bytes), its buffer area (lights, light lists, compute buffers) and its
+// spill slots; then per render, when its binning is taken, its vertex and index range. A
+// command's regions depend only on what is known when it starts and on the commands before it, so
+// the timing model can place it while its tiles are still being simulated. Addresses decide cache
+// sets and DRAM banks, so the layout is a pure function of the frame's work: the same work always
+// gets the same addresses.
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "models/address_space.hpp"
@@ -23,25 +25,41 @@ class FrameAddressMap {
   /// Allocates the frame's regions in `space`: FrameWork::texture_bytes of textures,
   /// FrameWork::framebuffer_bytes of imr framebuffer, two parameter buffers of `pb_bytes`.
   FrameAddressMap(const FrameWork& frame, std::uint64_t pb_bytes, AddressSpace& space);
-  /// Allocates the regions of `cmd`, the next command of the frame (commands are added in trace
-  /// order, each complete: its renders, tiles and traffic final).
+  /// Allocates the regions of `cmd`, the next command of the frame, from what is known when it
+  /// starts (its name, slots, buffer bytes; a dispatch is complete). Commands are added in trace
+  /// order, each after the previous one ended (end_command).
   void add_command(const CommandWork& cmd);
+  /// Allocates the vertex and index range of render `r` of `command` (renders in order, each once
+  /// its binning is known; gpu.mode=imr's single render complete with its batches' geometry), and
+  /// at the pass's first partial render its partial renders' slots.
+  void add_render(std::size_t command, const RenderWork& r);
+  /// Records what the complete `cmd` (the latest command added) wrote where, for the commands
+  /// after it to read (produced); throws std::logic_error if a tile loaded or stored more than
+  /// its slot holds.
+  void end_command(const CommandWork& cmd);
   /// Commands added so far.
   std::size_t commands() const { return fb_base_.size(); }
 
   /// Base of parameter buffer `which` (0 or 1: binning job k uses buffer k % 2).
   std::uint64_t parameter_buffer(std::size_t which) const { return pb_base_[which % 2]; }
-  /// Base of a command's vertex and index range (its renders, or its imr batches, stream their
+  /// Base of render `r`'s vertex and index range (its binning, or its imr batches, stream their
   /// fetches one after another from there).
-  std::uint64_t vertices(std::size_t command) const { return vertex_base_[command]; }
+  std::uint64_t vertices(std::size_t command, std::size_t r) const { return vertex_base_[command][r]; }
   /// Base of the texture address space (FrameWork::texture_bytes; TileWork::texture_lines are offsets in it).
   std::uint64_t textures() const { return texture_base_; }
   /// Base of gpu.mode=imr's framebuffer (FramebufferAccess::offset is relative to it).
   std::uint64_t rop_framebuffer() const { return rop_framebuffer_base_; }
   /// Base of a command's buffer area (a dispatch's reads and writes, a pass's once-read buffers).
   std::uint64_t buffers(std::size_t command) const { return cmd_base_[command]; }
-  /// Base of one tile's framebuffer slot of a pass (loads and stores of all its classes follow each other).
-  std::uint64_t tile(std::size_t command, const TileWork& t) const;
+  /// Base of one tile's framebuffer slot of a pass (loads and stores of all its classes follow
+  /// each other): with `partial`, its slot for what partial renders store and the renders after
+  /// them reload (allocated by add_render at the pass's first partial render).
+  std::uint64_t tile(std::size_t command, const TileWork& t, bool partial = false) const;
+  /// Bytes of a pass's framebuffer slot (CommandWork::tile_slot_bytes or partial_slot_bytes
+  /// rounded up to whole units).
+  std::uint64_t tile_slot_bytes(std::size_t command, bool partial = false) const {
+    return partial ? partial_stride_[command] : fb_stride_[command];
+  }
   /// Base of one tile's slot of tile-buffer bytes spilled to memory (pls.over_budget = spill).
   std::uint64_t spill(std::size_t command, const TileWork& t) const;
 
@@ -66,7 +84,12 @@ class FrameAddressMap {
   std::uint64_t pb_base_[2] = {0, 0};
   std::uint64_t rop_framebuffer_base_ = 0;
   std::uint64_t texture_base_ = 0;
-  std::vector<std::uint64_t> fb_base_, fb_stride_, cmd_base_, spill_base_, spill_stride_, vertex_base_;
+  bool immediate_ = false;  ///< FrameWork::immediate: a render's batches carry its geometry
+  bool open_ = false;       ///< the latest command was added and has not ended
+  std::vector<std::uint64_t> fb_base_, fb_stride_, partial_base_, partial_stride_, cmd_base_, spill_base_, spill_stride_;
+  std::vector<std::vector<std::uint64_t>> vertex_base_;  ///< per command and render
+  std::vector<std::string> names_;                       ///< per command (its regions' names)
+  std::vector<std::uint64_t> tile_slots_;                ///< per command: its tiles' slots
   /// What one command wrote of one class: per tile index (passes) or one range (dispatches).
   struct Written {
     std::vector<ByteRange> tiles;  ///< by tile index; bytes 0 where the tile stored none

@@ -6,6 +6,7 @@
 // computed; the timing model only decides when each piece runs.
 #include <array>
 #include <cstdint>
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -93,7 +94,20 @@ struct CommandWork {
   std::string name;            ///< "pass0.main" / "dispatch1.tile_light_cull"
   bool is_dispatch = false;
   bool depends_on_previous = false;  ///< reads something an earlier command produced
-  std::vector<RenderWork> renders;   ///< passes
+  /// A pass's renders (a deque: a render published to the timing model stays where it is while
+  /// the functional run appends the next, models/work_feed.hpp).
+  std::deque<RenderWork> renders;
+  /// A pass's framebuffer layout, known when it starts (FrameAddressMap places it then): one
+  /// slot per tile of `tile_slot_bytes`, what a tile's load and store ops can move (the
+  /// attachments it loads or stores, TileMemory::tile_slot_bytes), for `tile_slots` tiles; and,
+  /// once it has a partial render, one slot per tile of `partial_slot_bytes` for what partial
+  /// renders store and the renders after them reload (every attachment).
+  std::uint64_t tile_slot_bytes = 0;
+  std::uint64_t partial_slot_bytes = 0;
+  std::uint64_t tile_slots = 0;
+  /// A spilling pass's spill slot per tile (pls.over_budget = spill): the most any tile render
+  /// spilled (its larger direction), known when the pass is complete; 0 when nothing spills.
+  std::uint64_t spill_slot_bytes = 0;
   std::array<std::uint64_t, kDramClassCount> read_bytes{};   ///< dispatch traffic; for passes, buffers read once at the start
   std::array<std::uint64_t, kDramClassCount> write_bytes{};  ///< dispatch traffic
   // dispatches

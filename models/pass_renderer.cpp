@@ -7,6 +7,7 @@
 
 #include "kernel/thread_pool.hpp"
 #include "models/rop.hpp"
+#include "models/work_feed.hpp"
 
 namespace tbdr {
 
@@ -45,7 +46,7 @@ struct PassRenderer::TileWorker {
 
 PassRenderer::PassRenderer(RenderContext& ctx, const HwConfig& frame_hw, PassStats& stats, DramTraffic& dram,
                            CommandWork& cw, ThreadPool& pool)
-    : hw_(pass_hw(frame_hw, ctx)), ctx_(bind(ctx, hw_)), stats_(stats), dram_(dram), cw_(cw), pool_(pool),
+    : hw_(pass_hw(frame_hw, ctx)), ctx_(bind(ctx, hw_)), stats_(stats), dram_(dram), cw_(&cw), pool_(pool),
       geometry_(hw_, ctx.scene, *ctx.lights, ctx.camera, ctx.viewport),
       tiler_(hw_, ctx.viewport, ctx.pattern),
       tile_memory_(ctx, stats.tile_memory),
@@ -53,6 +54,22 @@ PassRenderer::PassRenderer(RenderContext& ctx, const HwConfig& frame_hw, PassSta
       resumed_(static_cast<std::size_t>(tiler_.tile_count()), 0) {
   // After tile_memory_: it points ctx.pls at the pass's pixel local storage, which the TSPs read.
   for (unsigned w = 0; w < pool_.size(); ++w) workers_.push_back(std::make_unique<TileWorker>(ctx_));
+  // The pass's framebuffer layout, known before any tile renders (FrameAddressMap places it then).
+  // The first tile is never clipped more than another.
+  cw_->tile_slot_bytes = tile_memory_.tile_slot_bytes(tiler_.tile_rect(0));
+  cw_->partial_slot_bytes = tile_memory_.partial_slot_bytes(tiler_.tile_rect(0));
+  cw_->tile_slots = static_cast<std::uint64_t>(tiler_.tile_count());
+}
+
+bool PassRenderer::layout_known_at_start() const {
+  // A split render may leave the rest of the pass over budget: it spills then.
+  return !ctx_.rop && tile_memory_.spill_fraction() <= 0.0 && tile_memory_.split_draw() < 0;
+}
+
+void PassRenderer::publish_to(WorkFeed& feed) {
+  if (!layout_known_at_start()) throw std::logic_error("PassRenderer::publish_to: the pass's layout is known only at its end");
+  cw_ = &feed.open(std::move(*cw_));
+  feed_ = &feed;
 }
 
 PassRenderer::~PassRenderer() = default;
@@ -68,9 +85,16 @@ void PassRenderer::run() {
   }
   if (ctx_.rop) {
     render_batch(true);  // the last batch (also when empty: the pass's clears, resolves and the ROP flush)
-    cw_.renders.push_back(std::move(immediate_));
+    cw_->renders.push_back(std::move(immediate_));
   } else {
     render(false);
+  }
+  // A spilling pass's spill slot: the most any tile render spilled, known now that all did (a
+  // pass published as it goes spills nothing, and the feed's reader may be reading its fields).
+  if (feed_ == nullptr) {
+    for (const RenderWork& r : cw_->renders) {
+      for (const TileWork& t : r.tiles) cw_->spill_slot_bytes = std::max({cw_->spill_slot_bytes, t.spill_read_bytes, t.spill_write_bytes});
+    }
   }
 }
 
@@ -166,7 +190,7 @@ void PassRenderer::release_unwritten_surfaces(AttachmentImage* fresh) {
 }
 
 void PassRenderer::render(bool partial) {
-  RenderWork rw;
+  RenderWork& rw = cw_->renders.emplace_back();
   rw.partial = partial;
   rw.binning = binning_since_last_render();
   DramTraffic pb;
@@ -181,22 +205,32 @@ void PassRenderer::render(bool partial) {
     for (const PixelRect& r : tile_memory_.strips(tiler_.tile_rect(t))) jobs_.push_back({t, r});
   }
   AttachmentImage* const fresh = allocate_surfaces();
+  const std::size_t n = jobs_.size();
+  rw.tiles.reserve(n);  // tiles published to the feed must not move
+  if (feed_) feed_->publish_render(n);
   results_.clear();
-  results_.resize(jobs_.size());
+  results_.resize(n);
+  rendered_.assign(n, 0);
+  merged_ = 0;
   const auto start = std::chrono::steady_clock::now();
-  pool_.for_each(jobs_.size(), [&](std::size_t i, unsigned w) {
+  pool_.for_each(n, [&](std::size_t i, unsigned w) {
     const TileJob& j = jobs_[i];
     results_[i] = render_tile(*workers_[w], j.tile, j.rect, tiler_.tile_primitives(j.tile), partial);
+    // Merged in dispatch order as soon as every tile before it is: whichever thread finishes the
+    // tile a run of finished ones waited for merges (and publishes) them.
+    std::lock_guard lock(merge_mutex_);
+    rendered_[i] = 1;
+    for (; merged_ < n && rendered_[merged_] != 0; ++merged_) {
+      rw.tiles.push_back(merge(std::move(results_[merged_])));
+      if (feed_) feed_->publish_tile();
+    }
   });
   tile_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   release_unwritten_surfaces(fresh);
-  rw.tiles.reserve(results_.size());
-  for (TileResult& r : results_) rw.tiles.push_back(merge(std::move(r)));
   results_.clear();
   if (partial) {
     for (const TileJob& j : jobs_) resumed_[static_cast<std::size_t>(j.tile)] = 1;
   }
-  cw_.renders.push_back(std::move(rw));
   tiler_.reset();
   ctx_.prims.clear();
 }

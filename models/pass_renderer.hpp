@@ -11,6 +11,7 @@
 // tiles finish before binning resumes.
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "models/command_processor.hpp"
@@ -27,6 +28,7 @@
 namespace tbdr {
 
 class ThreadPool;
+class WorkFeed;
 
 /// Tile indices in the configured dispatch order (tiling.tile_order).
 std::vector<int> tile_order(int tiles_x, int tiles_y, TileOrder order);
@@ -42,6 +44,13 @@ class PassRenderer final : private PrimitiveSink {
   PassRenderer(const PassRenderer&) = delete;
   PassRenderer& operator=(const PassRenderer&) = delete;
 
+  /// Whether the pass's layout for the timing model (CommandWork's slots) is final before any
+  /// tile renders: not when a tile may spill (its spill slot is measured) nor for gpu.mode=imr.
+  bool layout_known_at_start() const;
+  /// Hands the pass's work to `feed` as it goes (layout_known_at_start() must hold): opens the
+  /// command there now, publishes each render when binned and each tile as merged; the caller
+  /// closes the command after run().
+  void publish_to(WorkFeed& feed);
   /// Geometry, binning and rendering of every draw; a partial render whenever the parameter
   /// buffer is full.
   void run();
@@ -100,7 +109,8 @@ class PassRenderer final : private PrimitiveSink {
   RenderContext& ctx_;
   PassStats& stats_;
   DramTraffic& dram_;
-  CommandWork& cw_;
+  CommandWork* cw_;           ///< the pass's work: the caller's, or the feed's open command
+  WorkFeed* feed_ = nullptr;  ///< where renders and tiles are published as they are made (publish_to)
   ThreadPool& pool_;
   GeometryUnit geometry_;
   Tiler tiler_;
@@ -110,6 +120,9 @@ class PassRenderer final : private PrimitiveSink {
   std::vector<std::uint8_t> resumed_;    ///< per tile: rendered before by a partial render
   std::vector<TileJob> jobs_;            ///< the current render's tiles, in dispatch order
   std::vector<TileResult> results_;      ///< their results, by job
+  std::vector<std::uint8_t> rendered_;   ///< by job: its result is ready to merge
+  std::size_t merged_ = 0;               ///< jobs merged so far (in dispatch order)
+  std::mutex merge_mutex_;               ///< held while a thread marks its job done and merges
   RenderWork immediate_;                 ///< imr: the pass's one render, a "tile" per batch
   std::vector<std::uint32_t> batch_indices_;  ///< imr: the current batch's primitive indices
   bool first_batch_ = true;              ///< imr: no batch rendered yet (it clears the attachments)

@@ -84,6 +84,12 @@ class TileMemory {
   /// reads and writes goes to DRAM, plus the read-back of the spilled writes.
   void spill(std::uint64_t tile_buffer_read_bytes, std::uint64_t tile_buffer_write_bytes, DramTraffic& dram,
              TileMemoryStats& stats) const;
+  /// What the load and store ops of a render of tile `rect` can move: the attachments the pass
+  /// loads or stores (not transient), compressed as writeback.compression_ratio says. The timing
+  /// model's framebuffer slot per tile, known before any tile renders.
+  std::uint64_t tile_slot_bytes(const PixelRect& rect) const;
+  /// What a partial render of tile `rect` stores and the render after it reloads: every attachment.
+  std::uint64_t partial_slot_bytes(const PixelRect& rect) const;
   /// Share of tile buffer accesses that go to memory (0 when the pass fits or tiles are split).
   double spill_fraction() const { return spill_fraction_; }
   /// pls.over_budget = split_render on a pass over budget: the index of the draw before which the

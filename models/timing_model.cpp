@@ -7,6 +7,7 @@
 #include <map>
 #include <tuple>
 #include <memory>
+#include <stdexcept>
 
 #include "models/dma_stream.hpp"
 #include "models/frame_address_map.hpp"
@@ -47,6 +48,7 @@ struct TileState {
   int pending_shading = 0;  ///< USC work and texture fetch still to finish
   Tick usc_end{0};          ///< when its ALU and filtering work is done
   std::uint64_t slots = 0;  ///< task slots it holds while resident on the USCs
+  const TileWork* work = nullptr;  ///< its work, once dispatched (from the feed)
 };
 
 /// The scheduler of the frame's work; a Unit so the run loop's watchdog can name it when stuck.
@@ -92,6 +94,7 @@ class TimingSim final : public Unit {
     if (has_frag_job(next_frag_) || frag_busy_) {
       throw StallError("timing model stopped with work left: " + stall_reason());
     }
+    if (!commands_.empty()) map_.end_command(*commands_.back());  // (checks its tiles fit their slots)
     result_.frame_time_ps = static_cast<double>(end_tick_.ps());
     result_.frame_cycles = static_cast<double>(core_.cycles_at(end_tick_).count());
     result_.units = {{binner_.name, binner_.busy_cycles, binner_.stalled_cycles},
@@ -159,41 +162,59 @@ class TimingSim final : public Unit {
     int render;  ///< -1 for a dispatch
   };
 
-  /// Takes the next command from the feed (waiting until the functional run has completed it):
-  /// places its regions, adds its jobs. False when the frame has no more commands.
-  bool take_command() {
-    const CommandWork* cmd = feed_.wait_for(commands_.size());
-    if (cmd == nullptr) return false;
-    const std::size_t c = commands_.size();
-    commands_.push_back(cmd);
-    map_.add_command(*cmd);
-    // Jobs in command order: every render is a binning job and a fragment job; a dispatch is a
-    // fragment job only.
-    if (cmd->is_dispatch) {
-      frag_jobs_.push_back({c, -1});
-    } else {
-      for (std::size_t r = 0; r < cmd->renders.size(); ++r) {
-        bin_jobs_.push_back({c, static_cast<int>(r)});
-        frag_jobs_.push_back({c, static_cast<int>(r)});
+  /// Takes the next piece of the frame from the feed, waiting until the functional run has
+  /// produced it: the current pass's next render (places its vertex range; adds its binning and
+  /// fragment jobs) or, when the pass has no more, the next command (ends the previous one in the
+  /// address map, places the new one; a dispatch adds its fragment job). False when the frame has
+  /// no more.
+  bool take_next() {
+    while (true) {
+      if (more_renders_) {
+        const std::size_t c = commands_.size() - 1;
+        const std::size_t r = renders_[c].size();
+        if (const RenderWork* rw = feed_.wait_render(c, r)) {
+          renders_[c].push_back(rw);
+          map_.add_render(c, *rw);
+          // Every render is a binning job and a fragment job.
+          bin_jobs_.push_back({c, static_cast<int>(r)});
+          frag_jobs_.push_back({c, static_cast<int>(r)});
+          bin_done_.push_back(false);
+          frag_done_.push_back(false);
+          return true;
+        }
+        more_renders_ = false;
       }
+      // The last command announced: nothing follows (no need to wait for the frame to end).
+      if (commands_.size() >= feed_.expected_commands()) return false;
+      const CommandWork* cmd = feed_.wait_for(commands_.size());
+      if (cmd == nullptr) return false;
+      // The previous command is complete once this one is opened: what it wrote is known.
+      if (!commands_.empty()) map_.end_command(*commands_.back());
+      const std::size_t c = commands_.size();
+      commands_.push_back(cmd);
+      renders_.emplace_back();
+      map_.add_command(*cmd);
+      result_.commands.push_back({cmd->name, -1, 0, 0, {}});
+      busy_.emplace_back(kUnits, BusyIntervals(per_command_intervals_));
+      if (cmd->is_dispatch) {  // a fragment job only
+        frag_jobs_.push_back({c, -1});
+        frag_done_.push_back(false);
+        return true;
+      }
+      more_renders_ = true;
     }
-    bin_done_.resize(bin_jobs_.size(), false);
-    frag_done_.resize(frag_jobs_.size(), false);
-    result_.commands.push_back({cmd->name, -1, 0, 0, {}});
-    busy_.emplace_back(kUnits, BusyIntervals(per_command_intervals_));
-    return true;
   }
-  /// Whether binning job `k` exists (taking commands from the feed until it does or none is left).
+  /// Whether binning job `k` exists (taking work from the feed until it does or none is left).
   bool has_bin_job(std::size_t k) {
     while (k >= bin_jobs_.size()) {
-      if (!take_command()) return false;
+      if (!take_next()) return false;
     }
     return true;
   }
   /// Whether fragment job `f` exists (as has_bin_job).
   bool has_frag_job(std::size_t f) {
     while (f >= frag_jobs_.size()) {
-      if (!take_command()) return false;
+      if (!take_next()) return false;
     }
     return true;
   }
@@ -228,7 +249,7 @@ class TimingSim final : public Unit {
     // A partial render's successor needs the buffer the partial render just used: wait for it.
     if (k >= 2 && !frag_done_of_bin(k - 2)) return;
     const Job& j = bin_jobs_[k];
-    const RenderWork& rw = commands_[j.command]->renders[static_cast<std::size_t>(j.render)];
+    const RenderWork& rw = *renders_[j.command][static_cast<std::size_t>(j.render)];
     if (j.render > 0 && !frag_done_of_bin(k - 1)) return;
     binning_busy_ = true;
     ++next_bin_;
@@ -250,7 +271,7 @@ class TimingSim final : public Unit {
         try_start_fragment();
       });
     };
-    *pending += stream_geometry(b, j.command, finish);
+    *pending += stream_geometry(b, j.command, static_cast<std::size_t>(j.render), finish);
     if (b.pb_write_bytes > 0) {
       DmaStream* s = new_stream(Client::Tiler, true, DramClass::ParameterBuffer);
       s->add(map_.parameter_buffer(k), b.pb_write_bytes);
@@ -271,18 +292,20 @@ class TimingSim final : public Unit {
                     reserve(usc_, command, start, static_cast<double>(b.vertex_alu_ops) / alu_rate_));
   }
 
-  /// Starts the vertex and index fetch of `b`, work of `command` (one sequential stream each,
-  /// following the command's previous geometry in its vertex range); each calls `done` when
-  /// finished. Returns how many streams were started.
-  int stream_geometry(const BinningWork& b, std::size_t command, const std::function<void()>& done) {
+  /// Starts the vertex and index fetch of `b`, work of render `render` of `command` (one
+  /// sequential stream each, following the render's previous geometry, imr's earlier batches, in
+  /// its vertex range); each calls `done` when finished. Returns how many streams were started.
+  int stream_geometry(const BinningWork& b, std::size_t command, std::size_t render, const std::function<void()>& done) {
     if (b.vertex_fetch_bytes + b.index_fetch_bytes == 0) return 0;
-    if (vertex_cursor_.size() <= command) vertex_cursor_.resize(command + 1, 0);
-    std::uint64_t& cursor = vertex_cursor_[command];
+    if (vertex_cursor_.size() <= command) vertex_cursor_.resize(command + 1);
+    if (vertex_cursor_[command].size() <= render) vertex_cursor_[command].resize(render + 1, 0);
+    std::uint64_t& cursor = vertex_cursor_[command][render];
+    const std::uint64_t base = map_.vertices(command, render);
     DmaStream* s = new_stream(Client::Geometry, false, DramClass::Vertices);
-    if (b.vertex_fetch_bytes) s->add(map_.vertices(command) + cursor, b.vertex_fetch_bytes);
+    if (b.vertex_fetch_bytes) s->add(base + cursor, b.vertex_fetch_bytes);
     cursor += b.vertex_fetch_bytes;
     DmaStream* si = new_stream(Client::Geometry, false, DramClass::Indices);
-    if (b.index_fetch_bytes) si->add(map_.vertices(command) + cursor, b.index_fetch_bytes);
+    if (b.index_fetch_bytes) si->add(base + cursor, b.index_fetch_bytes);
     cursor += b.index_fetch_bytes;
     s->start(done);
     si->start(done);
@@ -383,12 +406,12 @@ class TimingSim final : public Unit {
   }
 
   void start_render(std::size_t f, const CommandWork& cmd, std::size_t r) {
-    render_ = &cmd.renders[r];
+    render_ = renders_[frag_jobs_[f].command][r];
     render_job_ = f;
     render_command_ = frag_jobs_[f].command;
     render_index_ = r;
     render_pb_base_ = map_.parameter_buffer(bin_index_of(frag_jobs_[f]));
-    tiles_.assign(render_->tiles.size(), TileState{});
+    tiles_.assign(feed_.tile_count(frag_jobs_[f].command, r), TileState{});
     next_dispatch_ = 0;
     next_isp_ = 0;
     tiles_done_ = 0;
@@ -405,22 +428,31 @@ class TimingSim final : public Unit {
         s->start([] {});
       }
     }
-    if (render_->tiles.empty()) {
+    if (tiles_.empty()) {
       fragment_finished(f);
       return;
     }
     dispatch_tiles();
   }
 
-  std::uint64_t tile_address(const TileWork& t) const { return map_.tile(render_command_, t); }
+  /// Where a tile of the current render loads from (`store`: stores to): its pass's framebuffer
+  /// slot, or the partial renders' slot for what a partial render stores and the renders after
+  /// one reload (and read as images).
+  std::uint64_t tile_address(const TileWork& t, bool store = false) const {
+    return map_.tile(render_command_, t, in_partial_slot(store));
+  }
+  bool in_partial_slot(bool store) const { return store ? render_->partial : render_index_ > 0; }
   int tile_index(const TileWork& t) const { return t.tile_y * work_.tiles_x + t.tile_x; }
 
   void dispatch_tiles() {
     while (in_flight_ < static_cast<std::size_t>(hw_.isp.tiles_in_flight) && next_dispatch_ < tiles_.size()) {
       const std::size_t i = next_dispatch_++;
       ++in_flight_;
-      const TileWork& t = render_->tiles[i];
       TileState& ts = tiles_[i];
+      // The tile as the functional run merged it (waiting for it if it has not yet).
+      ts.work = feed_.wait_tile(render_command_, render_index_, i);
+      if (ts.work == nullptr) throw std::runtime_error("timing model: the functional run ended before " + result_.commands[render_command_].name + "'s tiles");
+      const TileWork& t = *ts.work;
       ts.fetch_start = eq_.now();
       if (fetches_in_flight_++ == 0) fetch_busy_since_ = eq_.now();
       ts.pending_streams = 1;
@@ -439,7 +471,7 @@ class TimingSim final : public Unit {
         // imr: the batch's geometry is processed as it goes down the pipeline: the next batches'
         // geometry overlaps this one's rasterisation and shading (up to isp.tiles_in_flight).
         const Tick geometry_end = reserve_geometry(t.geometry, render_command_, eq_.now());
-        ts.pending_streams += 1 + stream_geometry(t.geometry, render_command_, on_stream);
+        ts.pending_streams += 1 + stream_geometry(t.geometry, render_command_, render_index_, on_stream);
         eq_.schedule(geometry_end, [on_stream] { on_stream(); });
       }
       if (!t.pb_reads.empty()) {
@@ -474,7 +506,7 @@ class TimingSim final : public Unit {
   void advance_isp() {
     if (isp_busy_ || next_isp_ >= tiles_.size() || !tiles_[next_isp_].fetched) return;
     const std::size_t i = next_isp_++;
-    const TileWork& t = render_->tiles[i];
+    const TileWork& t = *tiles_[i].work;
     // Plus the shading the ISP waited for at punch-through depth resolves (models/isp.hpp).
     const double isp_cycles = std::max(static_cast<double>(t.primitives), static_cast<double>(t.samples) / raster_rate_) +
                               std::max(static_cast<double>(t.isp_wait_alu_ops) / alu_rate_, static_cast<double>(t.isp_wait_texels) / tex_rate_);
@@ -506,7 +538,7 @@ class TimingSim final : public Unit {
   void request_slots(std::size_t i) {
     const Tick resolved = eq_.now();
     TileState& ts = tiles_[i];
-    ts.slots = slots_.slots_for(tasks_of(render_->tiles[i]));
+    ts.slots = slots_.slots_for(tasks_of(*ts.work));
     slots_.acquire(ts.slots, [this, i, resolved] {
       isp_.stalled_cycles += cycles_of(eq_.now()) - cycles_of(resolved);
       isp_busy_ = false;
@@ -523,7 +555,7 @@ class TimingSim final : public Unit {
   /// the lines of its resident tasks in flight (up to texture.outstanding_requests): with few
   /// tasks the reads' latency is exposed, with many it hides behind the other tasks' work.
   void start_shading(std::size_t i) {
-    const TileWork& t = render_->tiles[i];
+    const TileWork& t = *tiles_[i].work;
     TileState& ts = tiles_[i];
     const Tick now = eq_.now();
     ts.usc_end = std::max({reserve(usc_, render_command_, now, static_cast<double>(t.alu_ops) / alu_rate_),
@@ -541,10 +573,11 @@ class TimingSim final : public Unit {
 
   /// Stored images the shaders read at their own pixels (a G-buffer under light volumes): their
   /// loads go through the texture cache and the SLC like texture fetches, one line per resident
-  /// task in flight, so their latency is exposed with few tasks and hidden with many. They
-  /// follow the tile's loads in its framebuffer slot.
+  /// task in flight, so their latency is exposed with few tasks and hidden with many. Data no
+  /// earlier command produced is read from the tile's framebuffer slot, after its loads, cycling
+  /// over the slot (the pass's own attachments in memory).
   void read_images(std::size_t i) {
-    const TileWork& t = render_->tiles[i];
+    const TileWork& t = *tiles_[i].work;
     std::uint64_t offset = 0;
     for (auto b : t.load_bytes) offset += b;
     const auto outstanding = static_cast<std::uint32_t>(std::clamp<std::uint64_t>(
@@ -557,9 +590,14 @@ class TimingSim final : public Unit {
       // From where the producer stored the tile's data (re-reads cycle over it), else from the
       // tile's own slot.
       const std::vector<ByteRange> from = map_.produced(render_command_, cls, tile_index(t), bytes, texture_line_bytes_);
-      const std::uint64_t base = tile_address(t) + offset;
       if (from.empty()) {
-        for (std::uint64_t off = 0; off < bytes; off += texture_line_bytes_) s->add(base + off, std::min(texture_line_bytes_, bytes - off));
+        const std::uint64_t slot = map_.tile_slot_bytes(render_command_, in_partial_slot(false));
+        for (std::uint64_t off = 0; off < bytes;) {
+          const std::uint64_t at = (offset + off) % slot;
+          const std::uint64_t n = std::min({texture_line_bytes_, bytes - off, slot - at});
+          s->add(tile_address(t) + at, n);
+          off += n;
+        }
       }
       // The first lap over the stored data streams through the texture cache; when the lap fits
       // in it, the re-reads after it (light volumes over the same pixels) hit there, as a tile's
@@ -594,7 +632,7 @@ class TimingSim final : public Unit {
   /// them back with their own loads and stores, through the SLC, one line per resident task in
   /// flight, while the tile is resident (its slots held): the latency shows when tasks are few.
   void access_spill(std::size_t i) {
-    const TileWork& t = render_->tiles[i];
+    const TileWork& t = *tiles_[i].work;
     const std::uint64_t base = map_.spill(render_command_, t);
     const auto outstanding = static_cast<std::uint32_t>(std::max<std::uint64_t>(1, tiles_[i].slots));
     for (int write = 0; write < 2; ++write) {
@@ -609,7 +647,7 @@ class TimingSim final : public Unit {
   }
 
   void fetch_textures(std::size_t i) {
-    const TileWork& t = render_->tiles[i];
+    const TileWork& t = *tiles_[i].work;
     // A task issues its texture reads together (a material's fetches do not depend on each other)
     // and waits for them: the lines in flight are the resident tasks' lines, a task's share of the
     // tile's per-quad line accesses (quads of one task share lines, so this is an upper bound).
@@ -643,7 +681,7 @@ class TimingSim final : public Unit {
     const std::size_t i = store_queue_.front();
     store_queue_.pop_front();
     store_busy_ = true;
-    const TileWork& t = render_->tiles[i];
+    const TileWork& t = *tiles_[i].work;
     std::uint64_t store = 0;
     for (auto b : t.store_bytes) store += b;
     const Tick pbe_end = reserve(pbe_, render_command_, eq_.now(), static_cast<double>(store) / hw_.writeback.bytes_per_clock);
@@ -662,7 +700,7 @@ class TimingSim final : public Unit {
     for (std::size_t c = 0; c < kDramClassCount; ++c) {
       if (t.store_bytes[c] == 0) continue;
       DmaStream* s = new_stream(Client::PixelBackEnd, true, static_cast<DramClass>(c));
-      s->add(tile_address(t) + offset, t.store_bytes[c]);
+      s->add(tile_address(t, true) + offset, t.store_bytes[c]);
       offset += t.store_bytes[c];
       ++*pending;
       s->start(finish);
@@ -672,7 +710,7 @@ class TimingSim final : public Unit {
   }
 
   void tile_done(std::size_t i) {
-    tile_records_.add(render_command_, render_->tiles[i], cycles_of(eq_.now()) - cycles_of(tiles_[i].fetch_start));
+    tile_records_.add(render_command_, *tiles_[i].work, cycles_of(eq_.now()) - cycles_of(tiles_[i].fetch_start));
     ++tiles_done_;
     if (tiles_done_ == tiles_.size()) {
       fragment_finished(render_job_);
@@ -685,6 +723,8 @@ class TimingSim final : public Unit {
   WorkFeed& feed_;
   const FrameWork& work_;  ///< the frame's fields (its commands come from the feed: commands_)
   std::vector<const CommandWork*> commands_;  ///< taken from the feed so far, in order
+  std::vector<std::vector<const RenderWork*>> renders_;  ///< per command: its renders taken so far
+  bool more_renders_ = false;  ///< the latest command is a pass that may have renders not taken yet
   std::size_t per_command_intervals_ = 0;  ///< busy intervals kept per command and unit
   ClockDomain core_;
   EventQueue eq_;
@@ -710,7 +750,7 @@ class TimingSim final : public Unit {
   std::size_t next_bin_ = 0, next_frag_ = 0;
   bool binning_busy_ = false, frag_busy_ = false;
   Tick end_tick_{0};
-  std::vector<std::uint64_t> vertex_cursor_;  ///< per command: next byte of its vertex range to stream
+  std::vector<std::vector<std::uint64_t>> vertex_cursor_;  ///< per command and render: next byte of its vertex range to stream
   std::uint64_t texture_line_bytes_ = 0;  ///< cache.texture.line_bytes
   // The render whose tiles are in flight.
   const RenderWork* render_ = nullptr;

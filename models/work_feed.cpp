@@ -5,18 +5,83 @@
 
 namespace tbdr {
 
+WorkFeed::Published WorkFeed::complete(const CommandWork& cmd) {
+  Published p;
+  p.complete = true;
+  for (const RenderWork& r : cmd.renders) {
+    p.renders.push_back(&r);
+    p.tiles.push_back(r.tiles.size());
+    p.published.push_back(r.tiles.size());
+  }
+  return p;
+}
+
 WorkFeed::WorkFeed(const FrameWork& work)
-    : work_(&work), begun_(true), closed_(true), published_(work.commands.size()), expected_(work.commands.size()) {}
+    : work_(&work), begun_(true), closed_(true), expected_(work.commands.size()) {
+  for (const CommandWork& c : work.commands) state_.push_back(complete(c));
+}
 
 void WorkFeed::begin(const FrameWork& frame, std::size_t commands) {
   std::lock_guard lock(mutex_);
   if (begun_ || closed_) throw std::logic_error("WorkFeed::begin: the feed has begun already");
   own_ = frame;
   own_.commands.clear();
-  // Reserved once: publishing never moves a command the consumer may be reading.
+  // Reserved once: opening a command never moves one the consumer may be reading.
   own_.commands.reserve(commands);
+  state_.reserve(commands);
   expected_ = commands;
   begun_ = true;
+  changed_.notify_all();
+}
+
+CommandWork& WorkFeed::open(CommandWork&& header) {
+  std::lock_guard lock(mutex_);
+  if (!begun_ || closed_ || work_ != &own_) throw std::logic_error("WorkFeed::open: the feed is not open");
+  if (own_.commands.size() == expected_) throw std::logic_error("WorkFeed::open: more commands than begin() announced");
+  if (!state_.empty() && !state_.back().complete) throw std::logic_error("WorkFeed::open: the previous command is open");
+  if (!header.renders.empty()) throw std::logic_error("WorkFeed::open: a command is opened before its renders");
+  own_.commands.push_back(std::move(header));
+  state_.emplace_back();
+  changed_.notify_all();
+  return own_.commands.back();
+}
+
+void WorkFeed::publish_render(std::size_t tiles) {
+  std::lock_guard lock(mutex_);
+  if (state_.empty() || state_.back().complete) throw std::logic_error("WorkFeed::publish_render: no command is open");
+  Published& p = state_.back();
+  if (!p.renders.empty() && !p.renders.back()->partial) {
+    throw std::logic_error("WorkFeed::publish_render: a render after the command's last (not partial) one");
+  }
+  const RenderWork& r = own_.commands.back().renders.back();
+  if (r.tiles.capacity() < tiles || !r.tiles.empty()) throw std::logic_error("WorkFeed::publish_render: no room reserved for its tiles");
+  p.renders.push_back(&r);
+  p.tiles.push_back(tiles);
+  p.published.push_back(0);
+  changed_.notify_all();
+}
+
+void WorkFeed::publish_tile() {
+  std::lock_guard lock(mutex_);
+  if (state_.empty() || state_.back().complete || state_.back().renders.empty()) {
+    throw std::logic_error("WorkFeed::publish_tile: no render is open");
+  }
+  Published& p = state_.back();
+  const std::size_t n = p.renders.back()->tiles.size();
+  if (n != p.published.back() + 1 || n > p.tiles.back()) throw std::logic_error("WorkFeed::publish_tile: not one more tile than published");
+  p.published.back() = n;
+  changed_.notify_all();
+}
+
+void WorkFeed::close_command() {
+  std::lock_guard lock(mutex_);
+  if (state_.empty() || state_.back().complete) throw std::logic_error("WorkFeed::close_command: no command is open");
+  Published& p = state_.back();
+  for (std::size_t r = 0; r < p.renders.size(); ++r) {
+    if (p.published[r] != p.tiles[r]) throw std::logic_error("WorkFeed::close_command: a render has tiles not published");
+  }
+  if (p.renders.size() != own_.commands.back().renders.size()) throw std::logic_error("WorkFeed::close_command: a render was not published");
+  p.complete = true;
   changed_.notify_all();
 }
 
@@ -24,8 +89,9 @@ void WorkFeed::publish(CommandWork&& cmd) {
   std::lock_guard lock(mutex_);
   if (!begun_ || closed_ || work_ != &own_) throw std::logic_error("WorkFeed::publish: the feed is not open");
   if (own_.commands.size() == expected_) throw std::logic_error("WorkFeed::publish: more commands than begin() announced");
+  if (!state_.empty() && !state_.back().complete) throw std::logic_error("WorkFeed::publish: the previous command is open");
   own_.commands.push_back(std::move(cmd));
-  ++published_;
+  state_.push_back(complete(own_.commands.back()));
   changed_.notify_all();
 }
 
@@ -53,15 +119,40 @@ std::size_t WorkFeed::expected_commands() {
 
 const CommandWork* WorkFeed::wait_for(std::size_t c) {
   std::unique_lock lock(mutex_);
-  changed_.wait(lock, [&] { return c < published_ || closed_; });
-  return c < published_ ? &work_->commands[c] : nullptr;
+  changed_.wait(lock, [&] { return c < state_.size() || closed_; });
+  return c < state_.size() ? &work_->commands[c] : nullptr;
+}
+
+const RenderWork* WorkFeed::wait_render(std::size_t c, std::size_t r) {
+  std::unique_lock lock(mutex_);
+  // No render follows a complete command's last, nor an open command's render that is not partial.
+  const auto known = [&] {
+    if (c >= state_.size()) return false;
+    const Published& p = state_[c];
+    return r < p.renders.size() || p.complete || (!p.renders.empty() && !p.renders.back()->partial);
+  };
+  changed_.wait(lock, [&] { return known() || closed_; });
+  return c < state_.size() && r < state_[c].renders.size() ? state_[c].renders[r] : nullptr;
+}
+
+std::size_t WorkFeed::tile_count(std::size_t c, std::size_t r) {
+  std::lock_guard lock(mutex_);
+  return state_.at(c).tiles.at(r);
+}
+
+const TileWork* WorkFeed::wait_tile(std::size_t c, std::size_t r, std::size_t i) {
+  std::unique_lock lock(mutex_);
+  const auto ready = [&] { return c < state_.size() && r < state_[c].renders.size() && i < state_[c].published[r]; };
+  changed_.wait(lock, [&] { return ready() || closed_; });
+  // The tiles' storage was reserved before the render was published: it does not move.
+  return ready() ? state_[c].renders[r]->tiles.data() + i : nullptr;
 }
 
 FrameWork WorkFeed::take() {
   std::lock_guard lock(mutex_);
   if (!closed_) throw std::logic_error("WorkFeed::take: the feed is still open");
   if (work_ != &own_) return *work_;
-  published_ = 0;
+  state_.clear();
   return std::move(own_);
 }
 

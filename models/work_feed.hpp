@@ -1,12 +1,17 @@
 #pragma once
-// How a frame's work reaches the timing model: command by command, as the functional run
-// completes each, so that the timing model can run on its own thread beside the functional run
-// (run_driver with more than one thread). The timing model waits for a command only when its
-// schedule needs it and reads it once complete, so its results are the same whether the work
-// was all there before it started or arrived while it ran.
+// How a frame's work reaches the timing model: as the functional run produces it, so that the
+// timing model can run on its own thread beside the functional run (run_driver with more than
+// one thread). A command is opened when it starts (what the timing model needs to place it: its
+// name, slots and buffers), then each of its renders when it is binned (its tile count known),
+// then each of that render's tiles in dispatch order as the functional run has merged it, then
+// the command is closed (complete); a command whose layout is known only at its end (a spilling
+// pass, gpu.mode=imr's batches, a dispatch) is published complete at once. The timing model waits
+// for a piece only when its schedule needs it and reads it once published, so its results are the
+// same whether the work was all there before it started or arrived while it ran.
 #include <condition_variable>
 #include <cstddef>
 #include <mutex>
+#include <vector>
 
 #include "models/frame_work.hpp"
 
@@ -15,7 +20,8 @@ namespace tbdr {
 /// A frame's work handed from its producer (the functional run) to its consumer (the timing model).
 class WorkFeed {
  public:
-  /// An open feed: the producer calls begin(), publish() per command, then close().
+  /// An open feed: the producer calls begin(), then per command open() ... close_command() or
+  /// publish(), then close().
   WorkFeed() = default;
   /// A closed feed of a frame whose work is complete (`work` must outlive the feed).
   explicit WorkFeed(const FrameWork& work);
@@ -25,7 +31,19 @@ class WorkFeed {
   // ---- producer ----
   /// The frame's fields (its commands are ignored) and the number of commands that will follow.
   void begin(const FrameWork& frame, std::size_t commands);
-  /// Appends the next command, complete. Throws std::logic_error past the number begin() gave.
+  /// Starts the next command from `header` (its fields but its renders final; no renders yet)
+  /// and returns where the producer appends its renders. Throws std::logic_error past the number
+  /// begin() gave or while the previous command is open.
+  CommandWork& open(CommandWork&& header);
+  /// The open command's latest render is binned: its binning and `partial` final (false: the
+  /// command's last render), room reserved for its `tiles` tiles (appended later, each followed
+  /// by publish_tile(); none may move).
+  void publish_render(std::size_t tiles);
+  /// The open command's latest render has one more tile, final.
+  void publish_tile();
+  /// The open command is complete (all its renders and tiles final).
+  void close_command();
+  /// Appends the next command, complete (open, every render and tile, close).
   void publish(CommandWork&& cmd);
   /// No more commands: after the last, or when the producer failed (the consumer stops waiting).
   void close();
@@ -36,22 +54,42 @@ class WorkFeed {
   const FrameWork& frame();
   /// How many commands the frame has (as begin() announced).
   std::size_t expected_commands();
-  /// Command `c` once it is published (the reference stays valid for the feed's life), or nullptr
-  /// when the feed was closed without it.
+  /// Command `c` once it is opened (its header fields; its renders through wait_render), or
+  /// nullptr when the feed was closed without it. The reference stays valid for the feed's life;
+  /// when command c + 1 is opened, command c is complete.
   const CommandWork* wait_for(std::size_t c);
+  /// Render `r` of command `c` (opened) once published, or nullptr when none follows: the
+  /// command was completed with fewer renders, or its latest render is not partial (a render
+  /// is partial exactly when another follows), or the feed closed without it.
+  const RenderWork* wait_render(std::size_t c, std::size_t r);
+  /// Tiles render `r` of command `c` has (as publish_render announced).
+  std::size_t tile_count(std::size_t c, std::size_t r);
+  /// Tile `i` of render `r` of command `c` once published, or nullptr when the feed was closed
+  /// without it.
+  const TileWork* wait_tile(std::size_t c, std::size_t r, std::size_t i);
 
   /// The whole frame's work (moved out of an open feed; a copy of a complete frame's), once the
   /// feed is closed and the consumer done with it.
   FrameWork take();
 
  private:
+  /// What of one command is published.
+  struct Published {
+    bool complete = false;
+    std::vector<const RenderWork*> renders;
+    std::vector<std::size_t> tiles;      ///< per render: announced
+    std::vector<std::size_t> published;  ///< per render: published so far
+  };
   void wait_begun(std::unique_lock<std::mutex>& lock);
+  /// Registers every render and tile of a complete command.
+  static Published complete(const CommandWork& cmd);
   std::mutex mutex_;
   std::condition_variable changed_;
   FrameWork own_;                      ///< an open feed's frame (its commands vector never reallocates)
   const FrameWork* work_ = &own_;      ///< the frame read: own_ or a complete frame's
+  std::vector<Published> state_;       ///< per command opened
   bool begun_ = false, closed_ = false;
-  std::size_t published_ = 0, expected_ = 0;
+  std::size_t expected_ = 0;
 };
 
 }  // namespace tbdr

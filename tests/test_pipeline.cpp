@@ -215,7 +215,7 @@ TEST(PipelinePartialRender, TheRestOfADrawAfterAPartialRenderIsTheNextRendersGeo
   // others none), and they add up to the back quad's 2 + the grid's 12800 triangles.
   const Scene s = partial_render_grid_scene();
   const FrameResult small = run(s, {draw_of("back"), draw_of("grid")}, {"tiling.pb_capacity_bytes=65536"});
-  const std::vector<RenderWork>& renders = small.work.commands.at(0).renders;
+  const auto& renders = small.work.commands.at(0).renders;
   ASSERT_GE(renders.size(), 3u);
   std::uint64_t in = 0, binned = 0;
   for (const RenderWork& r : renders) {

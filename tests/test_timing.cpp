@@ -145,7 +145,6 @@ TEST(TimingLatencyHiding, MoreResidentTasksHideTextureLatencyUntilTheBandwidthBo
     cycles.push_back(r.timing.frame_cycles);
   }
   // Never slower by more than the row-buffer conflicts more interleaved tile streams cause
-  for (double c : cycles) std::cerr << "LH " << c << "\n";
   // (measured: 1.8 % from 128 to 256 slots).
   for (std::size_t i = 1; i < cycles.size(); ++i)
     EXPECT_LE(cycles[i], cycles[i - 1] * 1.025) << "more resident tasks must not be slower (step " << i << ")";

@@ -1,6 +1,8 @@
 // The WorkFeed's contract (models/work_feed.hpp): the timing model waits for a command until the
-// functional run publishes it, reads it in place while later ones are published, and stops
-// waiting when the feed is closed, also when the functional run failed before any command.
+// functional run publishes it (or opens it, then each render and tile), reads it in place while
+// later ones are published, knows a pass has no more renders as soon as its render that is not
+// partial is published, and stops waiting when the feed is closed, also when the functional run
+// failed before any command.
 // (That the timing it gives is the same as on a complete frame: tests/test_threads.cpp.)
 #include <gtest/gtest.h>
 
@@ -12,9 +14,12 @@
 #include "models/hw_config.hpp"
 #include "models/timing_model.hpp"
 #include "models/work_feed.hpp"
+#include "unit_fixture.hpp"
 
 namespace tbdr {
 namespace {
+
+using namespace unit;
 
 CommandWork named(const std::string& name) {
   CommandWork c;
@@ -88,6 +93,98 @@ TEST(WorkFeed, TheTimingModelOfAFedFrameIsTheCompleteFramesOne) {
   EXPECT_EQ(fed.events, whole.events);
   ASSERT_EQ(fed.commands.size(), 2u);
   EXPECT_EQ(fed.commands[1].end_cycle, whole.commands[1].end_cycle);
+}
+
+/// A pass of two renders (a partial one, then the last) of 4 tiles each with loads, stores and
+/// texture lines, then a dispatch reading what the pass stored.
+FrameWork pass_and_dispatch() {
+  auto tile = [](int tx, int ty, std::uint64_t alu) {
+    TileWork t = tile_work(tx, ty, 40, 1024, alu, 512);
+    t.load_bytes[static_cast<std::size_t>(DramClass::Color)] = 4096;
+    t.store_bytes[static_cast<std::size_t>(DramClass::Color)] = 4096;
+    for (std::uint64_t l = 0; l < 16; ++l) t.texture_lines.push_back((static_cast<std::uint64_t>(ty * 2 + tx) * 8 + l) * 64);
+    return t;
+  };
+  std::vector<RenderWork> renders;
+  renders.push_back(render_work({tile(0, 0, 9000), tile(1, 0, 3000), tile(0, 1, 5000), tile(1, 1, 7000)}, binning_work(2000), true));
+  renders.push_back(render_work({tile(1, 1, 4000), tile(0, 1, 8000), tile(1, 0, 2000), tile(0, 0, 6000)}, binning_work(1000), false));
+  FrameWork f = frame_work({pass_work("pass0.main", std::move(renders)), named("dispatch1.after")});
+  f.commands[1].read_bytes[static_cast<std::size_t>(DramClass::Color)] = 16384;
+  f.texture_bytes = 1 << 20;
+  return f;
+}
+
+TEST(WorkFeed, APassFedRenderByRenderAndTileByTileTimesAsTheCompleteFrame) {
+  const FrameWork frame = pass_and_dispatch();
+  const HwConfig hw = resolve_config({}, {}).hw;
+  const TimingResult whole = run_timing(hw, frame);
+
+  WorkFeed feed;
+  std::future<TimingResult> timed = std::async(std::launch::async, [&] { return run_timing(hw, feed); });
+  feed.begin(frame, 2);
+  CommandWork header = frame.commands[0];
+  header.renders.clear();
+  CommandWork& live = feed.open(std::move(header));
+  for (const RenderWork& r : frame.commands[0].renders) {
+    RenderWork& rw = live.renders.emplace_back();
+    rw.binning = r.binning;
+    rw.partial = r.partial;
+    rw.tiles.reserve(r.tiles.size());
+    feed.publish_render(r.tiles.size());
+    for (const TileWork& t : r.tiles) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));  // the timing model waits for tiles meanwhile
+      rw.tiles.push_back(t);
+      feed.publish_tile();
+    }
+  }
+  feed.close_command();
+  feed.publish(CommandWork(frame.commands[1]));
+  feed.close();
+  const TimingResult fed = timed.get();
+  EXPECT_GT(whole.frame_cycles, 0.0);
+  EXPECT_EQ(fed.frame_cycles, whole.frame_cycles);
+  EXPECT_EQ(fed.events, whole.events);
+  EXPECT_EQ(fed.dram.total_read(), whole.dram.total_read());
+  ASSERT_EQ(fed.commands.size(), 2u);
+  EXPECT_EQ(fed.commands[0].binning_end_cycle, whole.commands[0].binning_end_cycle);
+  EXPECT_EQ(fed.commands[1].end_cycle, whole.commands[1].end_cycle);
+  ASSERT_EQ(fed.tiles.size(), whole.tiles.size());
+}
+
+TEST(WorkFeed, ARenderThatIsNotPartialIsItsPassLastBeforeThePassIsClosed) {
+  WorkFeed feed;
+  FrameWork frame;
+  feed.begin(frame, 1);
+  CommandWork& live = feed.open(CommandWork{});
+  live.renders.emplace_back().partial = true;
+  feed.publish_render(0);
+  live.renders.emplace_back().partial = false;
+  feed.publish_render(0);
+  // The consumer learns there is no third render without waiting for close_command (this thread
+  // would wait forever otherwise).
+  EXPECT_NE(feed.wait_render(0, 1), nullptr);
+  EXPECT_EQ(feed.wait_render(0, 2), nullptr);
+  live.renders.emplace_back();
+  EXPECT_THROW(feed.publish_render(0), std::logic_error) << "no render follows the last";
+}
+
+TEST(WorkFeed, TheProducerMustKeepItsTilesInPlaceAndPublishThemAll) {
+  WorkFeed feed;
+  FrameWork frame;
+  feed.begin(frame, 2);
+  CommandWork& live = feed.open(CommandWork{});
+  EXPECT_THROW(feed.open(CommandWork{}), std::logic_error) << "the previous command is open";
+  RenderWork& rw = live.renders.emplace_back();
+  EXPECT_THROW(feed.publish_render(3), std::logic_error) << "no room reserved: its tiles could move";
+  rw.tiles.reserve(3);
+  feed.publish_render(3);
+  EXPECT_THROW(feed.publish_tile(), std::logic_error) << "no tile appended";
+  rw.tiles.emplace_back();
+  feed.publish_tile();
+  EXPECT_EQ(feed.wait_tile(0, 0, 0), rw.tiles.data());
+  EXPECT_THROW(feed.close_command(), std::logic_error) << "two tiles not published";
+  feed.close();
+  EXPECT_EQ(feed.wait_tile(0, 0, 1), nullptr) << "a closed feed ends the wait";
 }
 
 }  // namespace

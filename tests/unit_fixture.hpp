@@ -620,10 +620,25 @@ inline BinningWork binning_work(std::uint64_t primitives_in) {
   return b;
 }
 /// A pass made of renders (several: partial renders).
+/// Its framebuffer slots (final and partial renders') hold the most any of its tiles loads or
+/// stores, its spill slot the most any tile spills.
 inline CommandWork pass_work(const std::string& name, std::vector<RenderWork> renders) {
   CommandWork c;
   c.name = name;
-  c.renders = std::move(renders);
+  c.renders.assign(std::make_move_iterator(renders.begin()), std::make_move_iterator(renders.end()));
+  c.tile_slots = (kViewportPx / kTilePx) * (kViewportPx / kTilePx);
+  for (const RenderWork& r : c.renders) {
+    for (const TileWork& t : r.tiles) {
+      std::uint64_t load = 0, store = 0;
+      for (std::size_t k = 0; k < kDramClassCount; ++k) {
+        load += t.load_bytes[k];
+        store += t.store_bytes[k];
+      }
+      c.tile_slot_bytes = std::max({c.tile_slot_bytes, load, store});
+      c.partial_slot_bytes = c.tile_slot_bytes;
+      c.spill_slot_bytes = std::max({c.spill_slot_bytes, t.spill_read_bytes, t.spill_write_bytes});
+    }
+  }
   return c;
 }
 /// A dispatch of `alu_ops` ALU operations and `texels` texels (no memory traffic).
