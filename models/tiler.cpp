@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace tbdr {
 
@@ -117,6 +118,22 @@ BinResult Tiler::bin(std::uint32_t index, const Primitive& p, const VertexKeys& 
 
 void Tiler::finish_render(TilerStats& stats, DramTraffic& dram) {
   close_block();
+  // The layout: region headers, then the control streams tile after tile, then the primitive blocks.
+  const auto header = static_cast<std::uint64_t>(hw_.tiling.region_header_bytes);
+  const auto entry = static_cast<std::uint64_t>(hw_.tiling.control_stream_entry_bytes);
+  ctrl_offsets_.resize(tiles_.size());
+  std::uint64_t ctrl = header * tiles_.size();
+  for (std::size_t i = 0; i < tiles_.size(); ++i) {
+    ctrl_offsets_[i] = ctrl;
+    ctrl += tiles_[i].blocks.size() * entry;
+  }
+  data_base_ = ctrl;
+  block_offsets_.resize(block_sizes_.size());
+  std::uint64_t o = 0;
+  for (std::size_t b = 0; b < block_sizes_.size(); ++b) {
+    block_offsets_[b] = o;
+    o += block_sizes_[b];
+  }
   const std::uint64_t ctrl_bytes = ctrl_blocks_ * static_cast<std::uint64_t>(hw_.tiling.control_stream_block_bytes);
   const std::uint64_t headers = static_cast<std::uint64_t>(hw_.tiling.region_header_bytes) * tiles_.size();
   stats.primitive_blocks += block_sizes_.size();
@@ -139,32 +156,23 @@ std::uint64_t Tiler::tile_read_bytes(int t) const {
 }
 
 std::vector<ByteRange> Tiler::tile_read_ranges(int t) const {
+  if (ctrl_offsets_.size() != tiles_.size() || block_offsets_.size() != block_sizes_.size()) {
+    throw std::logic_error("Tiler::tile_read_ranges: the render is not finished (finish_render)");
+  }
   std::vector<ByteRange> out;
   const auto header = static_cast<std::uint64_t>(hw_.tiling.region_header_bytes);
   const auto entry = static_cast<std::uint64_t>(hw_.tiling.control_stream_entry_bytes);
   out.push_back({header * static_cast<std::uint64_t>(t), header});
-  // Control streams laid out tile after tile, after the region headers.
-  std::uint64_t ctrl = header * tiles_.size();
-  for (int i = 0; i < t; ++i) ctrl += tiles_[static_cast<std::size_t>(i)].blocks.size() * entry;
   const auto& tb = tiles_[static_cast<std::size_t>(t)];
-  if (!tb.blocks.empty()) out.push_back({ctrl, tb.blocks.size() * entry});
-  // Primitive blocks after all control streams.
-  std::uint64_t data_base = header * tiles_.size();
-  for (const auto& other : tiles_) data_base += other.blocks.size() * entry;
-  if (block_offsets_.size() != block_sizes_.size()) {
-    block_offsets_.assign(block_sizes_.size(), 0);
-    std::uint64_t o = 0;
-    for (std::size_t b = 0; b < block_sizes_.size(); ++b) {
-      block_offsets_[b] = o;
-      o += block_sizes_[b];
-    }
-  }
-  for (std::uint32_t b : tb.blocks) out.push_back({data_base + block_offsets_[b], block_sizes_[b]});
+  if (!tb.blocks.empty()) out.push_back({ctrl_offsets_[static_cast<std::size_t>(t)], tb.blocks.size() * entry});
+  for (std::uint32_t b : tb.blocks) out.push_back({data_base_ + block_offsets_[b], block_sizes_[b]});
   return out;
 }
 
 void Tiler::reset() {
   block_offsets_.clear();
+  ctrl_offsets_.clear();
+  data_base_ = 0;
   for (auto& tb : tiles_) {
     tb.prims.clear();
     tb.blocks.clear();

@@ -95,7 +95,11 @@ class Tiler {
   Viewport viewport_;
   std::vector<TileBin> tiles_;
   std::vector<std::uint64_t> block_sizes_;  ///< bytes of each closed block
-  mutable std::vector<std::uint64_t> block_offsets_;  ///< cumulative offsets (built on first use)
+  // The parameter buffer's layout, built by finish_render before the tiles read it (from
+  // several threads: tile_read_ranges only reads).
+  std::vector<std::uint64_t> block_offsets_;  ///< each closed block's offset in the primitive data
+  std::vector<std::uint64_t> ctrl_offsets_;   ///< each tile's control stream offset
+  std::uint64_t data_base_ = 0;               ///< where the primitive blocks start
   // The open primitive block.
   std::vector<std::uint64_t> open_keys_;
   std::uint32_t open_prims_ = 0;
