@@ -243,11 +243,15 @@ class TimingSim final : public Unit {
 
   // ---- binning -------------------------------------------------------------------------------
   void try_start_binning() {
-    if (binning_busy_ || !has_bin_job(next_bin_)) return;
+    if (binning_busy_) return;
     const std::size_t k = next_bin_;
     // Two parameter buffers: job k reuses the buffer of job k-2, free once its tiles are done.
-    // A partial render's successor needs the buffer the partial render just used: wait for it.
+    // Checked before asking for job k: with the timing model beside the functional run, the
+    // functional run may not have binned it yet, and the answer is not needed before the buffer
+    // is free (the same schedule either way; the timing model goes on with the tiles meanwhile).
     if (k >= 2 && !frag_done_of_bin(k - 2)) return;
+    if (!has_bin_job(k)) return;
+    // A partial render's successor needs the buffer the partial render just used: wait for it.
     const Job& j = bin_jobs_[k];
     const RenderWork& rw = *renders_[j.command][static_cast<std::size_t>(j.render)];
     if (j.render > 0 && !frag_done_of_bin(k - 1)) return;
