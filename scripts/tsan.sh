@@ -8,14 +8,10 @@
 # about 15 minutes on 2 cores; run it after changing anything threads share.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/sanitizer_build.sh  # san_find_clang
 build=${TBDRSIM_TSAN_BUILD:-build-tsan}
-cxx=$(command -v clang++-14 || command -v clang++ || true)
-cc=$(command -v clang-14 || command -v clang || true)
-if [ -z "$cxx" ] || [ -z "$cc" ]; then
-  echo "tsan.sh: clang not found (bash scripts/install_deps.sh installs it)" >&2
-  exit 2
-fi
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_C_COMPILER="$cc" \
+san_find_clang tsan.sh
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER="$san_cxx" -DCMAKE_C_COMPILER="$san_cc" \
   -DCMAKE_CXX_FLAGS="-O1 -g -fno-omit-frame-pointer -fsanitize=thread" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread" >/dev/null
 start=$(date +%s)
 cmake --build "$build" -j2 --target tbdrsim tbdrsim_tests
