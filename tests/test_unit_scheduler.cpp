@@ -6,6 +6,7 @@
 // service time below is exact.
 #include <gtest/gtest.h>
 
+#include <stdexcept>
 #include <vector>
 
 #include "unit_fixture.hpp"
@@ -148,6 +149,47 @@ TEST(UnitScheduler, ADispatchTakesItsOpsOverTheUscRate) {
   // 256000 ops / 128 = 2000 cycles; 32000 texels / 8 = 4000 cycles: the larger bounds it.
   EXPECT_EQ(run_schedule(frame_work({dispatch_work("d", 256000)})).frame_cycles, 2000.0);
   EXPECT_EQ(run_schedule(frame_work({dispatch_work("d", 256000, 32000)})).frame_cycles, 4000.0);
+}
+
+TEST(UnitScheduler, ARenderAfterAPartialRenderReloadsWhatItStoredFromDram) {
+  // A pass of two renders over the 4 tiles of a 64x64 frame: the partial render stores 4 KiB of
+  // colour per tile (everything on chip leaves it: 16 KiB), the render after it reloads the same
+  // 4 KiB per tile from the partial renders' slots and stores its result (16 KiB). Tile stores
+  // stream past the SLC (the pixel back end's misses do not allocate, docs/memory-model.md), so
+  // every reload comes from DRAM: 16 KiB read, 32 KiB written. At 8 KiB per tile every figure
+  // doubles, and the frame takes longer. (Each tile's reload fits the slot the partial render
+  // stored it to; a larger one throws: FrameAddressMap::end_command.)
+  auto run = [](std::uint64_t bytes) {
+    std::vector<TileWork> stored, reloaded;
+    for (int t = 0; t < 4; ++t) {
+      TileWork a = tile_work(t % 2, t / 2, 1, 32, 1000);
+      a.store_bytes[static_cast<std::size_t>(DramClass::Color)] = bytes;
+      stored.push_back(a);
+      TileWork b = tile_work(t % 2, t / 2, 1, 32, 1000);
+      b.load_bytes[static_cast<std::size_t>(DramClass::Color)] = bytes;
+      b.store_bytes[static_cast<std::size_t>(DramClass::Color)] = bytes;
+      reloaded.push_back(b);
+    }
+    return run_schedule(frame_work({pass_work("p", {render_work(stored, {}, true), render_work(reloaded)})}));
+  };
+  const TimingResult four = run(4096), eight = run(8192);
+  EXPECT_EQ(four.requested.reads(DramClass::Color), 4u * 4096u);
+  EXPECT_EQ(four.dram.reads(DramClass::Color), 4u * 4096u);
+  EXPECT_EQ(four.dram.writes(DramClass::Color), 8u * 4096u);
+  EXPECT_EQ(eight.dram.reads(DramClass::Color), 2 * four.dram.reads(DramClass::Color));
+  EXPECT_EQ(eight.dram.writes(DramClass::Color), 2 * four.dram.writes(DramClass::Color));
+  EXPECT_GT(eight.frame_cycles, four.frame_cycles);
+}
+
+TEST(UnitScheduler, ATileThatStoresMoreThanItsSlotHoldsIsRefused) {
+  // The slot comes from the pass's attachments before its tiles render (the functional run's
+  // TileMemory::tile_slot_bytes); a tile storing past it would write into its neighbour's slot.
+  TileWork t = tile_work(0, 0, 1, 32, 1000);
+  t.store_bytes[static_cast<std::size_t>(DramClass::Color)] = 4096;
+  CommandWork pass = pass_work("p", {render_work({t})});
+  EXPECT_NO_THROW(run_schedule(frame_work({pass})));
+  pass.tile_slot_bytes = 2048;
+  EXPECT_THROW(run_schedule(frame_work({pass})), std::logic_error);
 }
 
 TEST(UnitScheduler, FrameTimeIsCyclesAtTheCoreClock) {
