@@ -187,20 +187,11 @@ std::uint64_t TileMemory::attachment_bytes(const Attachment& a, const PixelRect&
   return pixels * a.bytes_per_pixel();
 }
 
-std::uint64_t TileMemory::tile_slot_bytes(const PixelRect& r) const {
+std::uint64_t TileMemory::slot_bytes(const PixelRect& r, bool every_attachment) const {
   const double ratio = ctx_.hw->writeback.compression_ratio;
   std::uint64_t total = 0;
   for (const Attachment& a : ctx_.pass->attachments) {
-    if (a.transient || (a.load != LoadOp::Load && a.store != StoreOp::Store)) continue;
-    total += static_cast<std::uint64_t>(std::ceil(static_cast<double>(attachment_bytes(a, r)) * ratio));
-  }
-  return total;
-}
-
-std::uint64_t TileMemory::partial_slot_bytes(const PixelRect& r) const {
-  const double ratio = ctx_.hw->writeback.compression_ratio;
-  std::uint64_t total = 0;
-  for (const Attachment& a : ctx_.pass->attachments) {
+    if (!every_attachment && (a.transient || (a.load != LoadOp::Load && a.store != StoreOp::Store))) continue;
     total += static_cast<std::uint64_t>(std::ceil(static_cast<double>(attachment_bytes(a, r)) * ratio));
   }
   return total;

@@ -87,9 +87,9 @@ class TileMemory {
   /// What the load and store ops of a render of tile `rect` can move: the attachments the pass
   /// loads or stores (not transient), compressed as writeback.compression_ratio says. The timing
   /// model's framebuffer slot per tile, known before any tile renders.
-  std::uint64_t tile_slot_bytes(const PixelRect& rect) const;
+  std::uint64_t tile_slot_bytes(const PixelRect& rect) const { return slot_bytes(rect, false); }
   /// What a partial render of tile `rect` stores and the render after it reloads: every attachment.
-  std::uint64_t partial_slot_bytes(const PixelRect& rect) const;
+  std::uint64_t partial_slot_bytes(const PixelRect& rect) const { return slot_bytes(rect, true); }
   /// Share of tile buffer accesses that go to memory (0 when the pass fits or tiles are split).
   double spill_fraction() const { return spill_fraction_; }
   /// pls.over_budget = split_render on a pass over budget: the index of the draw before which the
@@ -102,6 +102,8 @@ class TileMemory {
 
  private:
   std::uint64_t attachment_bytes(const Attachment& a, const PixelRect& r) const;
+  /// Compressed bytes of the attachments a tile's load and store ops move (or of every one).
+  std::uint64_t slot_bytes(const PixelRect& r, bool every_attachment) const;
   /// Bytes per pixel the pass keeps on chip: its colour-like attachments not in memory, or its PLS.
   std::uint32_t onchip_bytes_per_pixel() const;
   /// Sets spill_fraction_ (policy spill) or split_ (smaller_tiles) for the current need.

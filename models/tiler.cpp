@@ -135,7 +135,7 @@ void Tiler::finish_render(TilerStats& stats, DramTraffic& dram) {
     o += block_sizes_[b];
   }
   const std::uint64_t ctrl_bytes = ctrl_blocks_ * static_cast<std::uint64_t>(hw_.tiling.control_stream_block_bytes);
-  const std::uint64_t headers = static_cast<std::uint64_t>(hw_.tiling.region_header_bytes) * tiles_.size();
+  const std::uint64_t headers = header * tiles_.size();
   stats.primitive_blocks += block_sizes_.size();
   stats.pb_vertices += block_vertices_total_;
   stats.pb_primitive_block_bytes += closed_block_bytes_;
