@@ -303,6 +303,32 @@ std::size_t launched_quads(std::span<const ShadePixel> pixels, std::vector<std::
   const auto key = [](std::int32_t qx, std::int32_t qy) {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(qy)) << 32) | static_cast<std::uint32_t>(qx);
   };
+  // A batch within a box of at most 64 x 64 quads (a tile's batch: 32-pixel tiles span 16 x 16):
+  // one bit per quad of the box, a row of quads per word, read back row by row and bit by bit,
+  // which is ascending key order whatever the pixels' order. Any other batch: the merge below.
+  constexpr std::int32_t kBoxQuads = 64;
+  if (!pixels.empty()) {
+    std::int32_t x_lo = pixels[0].x, x_hi = x_lo, y_lo = pixels[0].y, y_hi = y_lo;
+    for (const ShadePixel& px : pixels) {
+      x_lo = std::min(x_lo, px.x);
+      x_hi = std::max(x_hi, px.x);
+      y_lo = std::min(y_lo, px.y);
+      y_hi = std::max(y_hi, px.y);
+    }
+    const std::int32_t qx0 = x_lo >> 1, qy0 = y_lo >> 1;
+    // (Negative coordinates keep the merge: their keys do not sort as their quads' rows.)
+    if (x_lo >= 0 && y_lo >= 0 && (x_hi >> 1) - qx0 < kBoxQuads && (y_hi >> 1) - qy0 < kBoxQuads) {
+      std::array<std::uint64_t, kBoxQuads> rows;
+      const auto n_rows = static_cast<std::size_t>((y_hi >> 1) - qy0 + 1);
+      std::fill_n(rows.begin(), n_rows, std::uint64_t{0});
+      for (const ShadePixel& px : pixels) rows[static_cast<std::size_t>((px.y >> 1) - qy0)] |= std::uint64_t{1} << ((px.x >> 1) - qx0);
+      for (std::size_t r = 0; r < n_rows; ++r) {
+        const auto qy = qy0 + static_cast<std::int32_t>(r);
+        for (std::uint64_t m = rows[r]; m != 0; m &= m - 1) quads.push_back(key(qx0 + std::countr_zero(m), qy));
+      }
+      return quads.size();
+    }
+  }
   // Pixels come sorted by row then column: a quad row is at most two pixel rows, each ascending
   // in x, so one merge of the two yields its quads in order, each once.
   const std::size_t n = pixels.size();

@@ -61,8 +61,9 @@ struct ShadePixel {
 inline constexpr const char* kPlsAccumulatorName = "light_accum";
 
 /// The 2x2 quads (aligned to even coordinates) that `pixels` launch, written to `quads` as
-/// (row << 32 | column) quad keys, ascending, each once; returns their number. Linear for pixels
-/// sorted by row then column (Tsp::shade's contract), a sort otherwise.
+/// (row << 32 | column) quad keys, ascending, each once; returns their number. Linear: a bitmap
+/// for a batch within 64 x 64 quads (a tile's), else a merge of pixels sorted by row then column
+/// (Tsp::shade's contract), a sort otherwise.
 std::size_t launched_quads(std::span<const ShadePixel> pixels, std::vector<std::uint64_t>& quads);
 
 /// The fragment shading stage.

@@ -74,8 +74,10 @@ TEST(UnitTsp, QuadsAreAlignedToEvenPixels) {
   EXPECT_EQ(rig.tsp_stats.shader_invocations.value(), 4u + 4u + 9u);
 }
 
-// launched_quads merges the two pixel rows of each quad row in one pass (the pixels' order) and
-// must give what sorting every pixel's quad and dropping repeats gives, in the same order.
+// launched_quads marks a bitmap of quads (batches within 64 x 64 quads, any pixel order) or merges
+// the two pixel rows of each quad row in one pass (wider batches, the pixels' order; a sort when
+// unordered) and must give what sorting every pixel's quad and dropping repeats gives, in the
+// same order, on every path.
 TEST(UnitTsp, LaunchedQuadsEqualSortedUniqueQuadsOfThePixels) {
   const auto by_sort = [](const std::vector<ShadePixel>& px) {
     std::vector<std::uint64_t> q;
@@ -107,6 +109,22 @@ TEST(UnitTsp, LaunchedQuadsEqualSortedUniqueQuadsOfThePixels) {
     std::reverse(px.begin(), px.end());
     EXPECT_EQ(launched_quads(px, got), by_sort(px).size());
     EXPECT_EQ(got, by_sort(px));
+    // Wider than 64 quads (the merge, then reversed: the sort), and exactly 64 quads wide and
+    // tall (the bitmap's last bit and row).
+    for (const int span : {129, 128}) {
+      std::vector<ShadePixel> wide;
+      for (int y = y0; y < y0 + span; y += 7) {
+        for (int x = 0; x < span; ++x) {
+          if (next() % 5 == 0 || x == span - 1 || y == y0) wide.push_back({x, y, 1u});
+        }
+      }
+      wide.push_back({span - 1, y0 + span - 1, 1u});
+      EXPECT_EQ(launched_quads(wide, got), by_sort(wide).size());
+      EXPECT_EQ(got, by_sort(wide));
+      std::reverse(wide.begin(), wide.end());
+      EXPECT_EQ(launched_quads(wide, got), by_sort(wide).size());
+      EXPECT_EQ(got, by_sort(wide));
+    }
   }
 }
 
