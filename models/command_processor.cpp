@@ -94,7 +94,8 @@ class FrameSimulator {
     frustum_ = ViewFrustum::from(trace_.camera, f.width, f.height);
     light_bins_ = LightScreenBins::build(trace_.lights, camera_, viewport_);
     inputs_ = FrameInputs{.hw = &hw_, .scene = &scene_, .lights = &trace_.lights, .camera = camera_,
-                          .viewport = viewport_, .frustum = &frustum_, .light_bins = &light_bins_, .colour = options_.colour};
+                          .viewport = viewport_, .frustum = &frustum_, .light_bins = &light_bins_, .colour = options_.colour,
+                          .reference_loops = options_.reference_loops};
     result_.images.width = f.width;
     result_.images.height = f.height;
     result_.images.counters.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height), options_.colour);

@@ -87,6 +87,8 @@ struct FrameOptions {
   /// Compute the colour images (FrameInputs::colour); false when no image is read. With it the
   /// scene must hold its colour texels (SceneLoadOptions::colour_texels).
   bool colour = true;
+  /// FrameInputs::reference_loops: the ISP's general loop everywhere (tests compare it with the lean one).
+  bool reference_loops = false;
   /// Threads the tiles of each render run on (models/pass_renderer.hpp); 0: the machine's
   /// (default_thread_count). Every figure and image is the same at any count.
   unsigned threads = 1;

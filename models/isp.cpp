@@ -285,16 +285,18 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
       isp.depth_test_failed_samples += n;
       continue;
     }
-    if (defer && !stencil_on && !open_verdicts && rop == nullptr && overdraw == nullptr) {
-      // The common deferred case (no stencil, no punch-through verdict open, no ROP, no overdraw
-      // image): the per-sample loop below with its branches on those taken out, the same counts
-      // and candidates. A failed depth test is final, so every candidate passes, and every
-      // rasterised sample read the depth: the reads and the fails follow from the counts.
-      auto visit = [&]<bool kDepthTest>() {
+    if (defer && !stencil_on && !open_verdicts && rop == nullptr && !ctx_.reference_loops) {
+      // The common deferred case (no stencil, no punch-through verdict open, no ROP): the
+      // per-sample loop below with its branches on those taken out, the same counts, overdraw
+      // counters and candidates. A failed depth test is final, so every candidate passes, and
+      // every rasterised sample read the depth: the reads and the fails follow from the counts.
+      auto visit = [&]<bool kDepthTest, bool kOverdraw>() {
         rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {
           const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
           const std::size_t lbase = (static_cast<std::size_t>(y - y0) * rw + static_cast<std::size_t>(x - x0)) * S;
-          rasterised += static_cast<std::uint64_t>(std::popcount(mask));
+          const auto covered = static_cast<std::uint32_t>(std::popcount(mask));
+          rasterised += covered;
+          if constexpr (kOverdraw) overdraw[pixel] += covered;
           for (std::uint32_t m = mask; m != 0; m &= m - 1) {
             const int s = std::countr_zero(m);
             if constexpr (kDepthTest) {
@@ -307,11 +309,17 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
         });
       };
       if (depth_on) {
-        visit.template operator()<true>();
+        if (overdraw) {
+          visit.template operator()<true, true>();
+        } else {
+          visit.template operator()<true, false>();
+        }
         depth_reads = rasterised;
         final_fails = rasterised - n_cand;
+      } else if (overdraw) {
+        visit.template operator()<false, true>();
       } else {
-        visit.template operator()<false>();
+        visit.template operator()<false, false>();
       }
     } else {
       rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {

@@ -304,6 +304,10 @@ struct FrameInputs {
   /// the same work (lights, texture footprints, alpha tests, surfaces) and skip the colour
   /// arithmetic nothing reads; every statistic is the same either way.
   bool colour = true;
+  /// Run the ISP's general per-sample loop everywhere, also where its lean loop for the common
+  /// deferred case applies (Isp::render_tile): the reference the tests compare the lean loop
+  /// with (tests/test_speed_equivalence.cpp). Every figure and image is the same either way.
+  bool reference_loops = false;
 };
 
 /// Everything the fragment units (ISP, TSP, tile memory) read while rendering one pass's tiles:

@@ -28,9 +28,11 @@ struct ColourRun {
   TimingResult timing;
 };
 
-ColourRun run(const Trace& t, const Scene& s, const HwConfig& hw, bool colour) {
+/// With colours the ISP runs its general loop (FrameOptions::reference_loops) unless `lean`:
+/// the runs without colours, which take the lean loop where it applies, are compared with it.
+ColourRun run(const Trace& t, const Scene& s, const HwConfig& hw, bool colour, bool lean = false) {
   ColourRun r;
-  r.frame = simulate_frame(t, "t.trace", s, hw, FrameOptions{.colour = colour});
+  r.frame = simulate_frame(t, "t.trace", s, hw, FrameOptions{.colour = colour, .reference_loops = colour && !lean});
   EnergyBreakdown energy;
   time_frame(hw, r.frame, r.timing, energy);
   return r;
@@ -107,6 +109,35 @@ TEST_P(SpeedEquivalence, EveryStatisticAndTileRowIsTheSameWithoutColours) {
   EXPECT_EQ(colour_sum(without.frame), 0.0) << technique;
 }
 
+// With colours the ISP's lean loop (Isp::render_tile) counts the overdraw image as well: the
+// same rows, colour images and per-pixel counters as the general loop. A lean loop that missed
+// the overdraw count, or counted a pixel once instead of per covered sample (MSAA 4x below),
+// fails here.
+void expect_lean_loop_matches_general(const Trace& t, const Scene& scene, const std::string& what) {
+  const HwConfig hw = resolve_config({}, {}).hw;
+  const ColourRun general = run(t, scene, hw, true);
+  const ColourRun lean = run(t, scene, hw, true, true);
+  expect_same_rows(general, lean, what + " lean loop");
+  const PixelCounters& a = general.frame.images.counters;
+  const PixelCounters& b = lean.frame.images.counters;
+  EXPECT_TRUE(a.rasterised_samples == b.rasterised_samples) << what << ": overdraw counters differ";
+  EXPECT_TRUE(a.shaded == b.shaded && a.lights_evaluated == b.lights_evaluated && a.triangle_id == b.triangle_id) << what;
+  std::uint64_t overdraw = 0;
+  for (const std::uint32_t v : b.rasterised_samples) overdraw += v;
+  EXPECT_EQ(overdraw, static_cast<std::uint64_t>(lean.frame.totals.render.isp.samples_rasterised.value())) << what;
+  ASSERT_EQ(general.frame.images.attachments.size(), lean.frame.images.attachments.size()) << what;
+  for (const auto& [name, img] : general.frame.images.attachments) {
+    const AttachmentImage& other = lean.frame.images.attachments.at(name);
+    EXPECT_TRUE(img.color == other.color) << what << " " << name;
+    EXPECT_TRUE(img.depth == other.depth) << what << " " << name;
+  }
+  EXPECT_EQ(colour_sum(general.frame), colour_sum(lean.frame)) << what;
+}
+
+TEST_P(SpeedEquivalence, TheLeanLoopGivesTheGeneralLoopsImagesAndCounters) {
+  expect_lean_loop_matches_general(small_trace(GetParam()), *scene_, GetParam());
+}
+
 INSTANTIATE_TEST_SUITE_P(Techniques, SpeedEquivalence, testing_support::every_technique(),
                          testing_support::technique_test_name);
 
@@ -144,6 +175,7 @@ TEST_F(SpeedEquivalence, MultisampledRunsCountTheSameWithoutColours) {
     const Trace t = msaa4_trace(technique);
     const HwConfig hw = resolve_config({}, {}).hw;
     expect_same_rows(run(t, *scene_, hw, true), run(t, scene_without_texels(), hw, false), std::string(technique) + " 4x");
+    expect_lean_loop_matches_general(t, *scene_, std::string(technique) + " 4x");
   }
 }
 
