@@ -5,7 +5,7 @@ set -euo pipefail
 packages=(
   cmake g++ make pkg-config
   libboost-program-options-dev libglm-dev libtinygltf-dev libsqlite3-dev
-  libgtest-dev libstb-dev zlib1g-dev nlohmann-json3-dev sqlite3
+  libgtest-dev libstb-dev libdeflate-dev nlohmann-json3-dev sqlite3
   python3 python3-pandas python3-matplotlib
   clang-14 libclang-rt-14-dev  # scripts/fuzz.sh and scripts/sanitize.sh (CI runs both): clang, libFuzzer, ASan, UBSan
 )

@@ -1,7 +1,7 @@
 #pragma once
 // Image output for `tbdrsim run --images DIR`: the final color image, a depth image, a triangle-id
 // image and heat maps with a legend (color bar, tick labels, title, unit, mean and max), written as
-// 8-bit RGB PNG files (zlib at its fastest level, adaptive row filters).
+// 8-bit RGB PNG files (libdeflate at its fastest level, adaptive row filters).
 //
 // Color conversion (exact, so that 8-bit images of different techniques can be compared):
 //   c  = clamp(linear, 0, 1)                      (NaN -> 0), per channel, alpha ignored
