@@ -9,6 +9,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "models/clipper.hpp"
+#include "kernel/thread_pool.hpp"
 
 namespace tbdr {
 
@@ -213,49 +214,86 @@ const std::vector<glm::vec3>& GeometryUnit::icosphere(std::uint32_t subdivisions
   return it->second;
 }
 
-void GeometryUnit::emit_triangle(const Emit& e, const glm::vec4 clip[3], const glm::vec3 world[3],
-                                 const glm::vec3 normal[3], const glm::vec2 uv[3], const std::uint64_t keys[3],
-                                 DrawOutput& out, GeometryStats& stats) const {
+void GeometryUnit::setup_triangles(const Emit& e, const glm::vec4 clip[3], const glm::vec3 world[3],
+                                   const glm::vec3 normal[3], const glm::vec2 uv[3], const std::uint64_t keys[3],
+                                   std::vector<SetUp>& out, SetupCounts& pending) const {
   ClipStats cs;
   thread_local std::vector<ScreenTriangle> screen;
   screen.clear();
   const ClipTriangle ct{clip[0], clip[1], clip[2]};
   clip_and_cull(ct, e.clip, cs, screen);
-  stats.primitives_in += cs.in;
-  stats.primitives_culled_frustum += cs.culled_frustum;
-  stats.primitives_culled_backface += cs.culled_backface;
-  stats.primitives_culled_zero_area += cs.culled_zero_area;
-  stats.primitives_clipped += cs.clipped;
+  pending.in += static_cast<std::uint32_t>(cs.in);
+  pending.culled_frustum += static_cast<std::uint32_t>(cs.culled_frustum);
+  pending.culled_backface += static_cast<std::uint32_t>(cs.culled_backface);
+  pending.culled_zero_area += static_cast<std::uint32_t>(cs.culled_zero_area);
+  pending.clipped += static_cast<std::uint32_t>(cs.clipped);
   for (const ScreenTriangle& st : screen) {
-    Primitive p;
+    SetUp& u = out.emplace_back();
+    Primitive& p = u.prim;
     p.setup = setup_triangle(st, viewport_, e.scissor);
     if (p.setup.empty) {  // covers no pixel of the viewport inside the scissor
-      ++stats.primitives_culled_scissor;
+      ++pending.culled_scissor;
+      out.pop_back();
       continue;
     }
+    u.before = pending;
+    pending = SetupCounts{};
     p.draw = e.draw;
     p.object = e.object;
     p.material = e.material;
     p.proxy_light = e.proxy_light;
     p.hsr = e.hsr;
     p.varyings = e.varyings;
-    VertexKeys vertex_keys;
+    u.made_by_clipping = 0;
     for (int i = 0; i < 3; ++i) {
       p.world[i] = world[i];
       p.normal[i] = normal[i];
       p.uv[i] = uv[i];
-      // A vertex made by clipping is new; an original vertex keeps its identity for block re-use.
+      // A vertex made by clipping is new (its identity is given at delivery); an original vertex
+      // keeps its identity for block re-use.
       const glm::vec3 b = st.bary[i];
       int orig = -1;
       for (int k = 0; k < 3; ++k) {
         if (b[k] == 1.0f) orig = k;
       }
-      vertex_keys[i] = orig >= 0 ? keys[orig] : (0x8000000000000000ull | (out.delivered * 3 + i));
+      if (orig >= 0) {
+        u.keys[i] = keys[orig];
+      } else {
+        u.made_by_clipping |= static_cast<std::uint8_t>(1u << i);
+      }
     }
-    out.sink.accept(p, vertex_keys);
-    ++out.delivered;
-    ++stats.primitives_out;
   }
+}
+
+void GeometryUnit::SetupCounts::add_to(GeometryStats& stats) const {
+  stats.primitives_in += in;
+  stats.primitives_culled_frustum += culled_frustum;
+  stats.primitives_culled_backface += culled_backface;
+  stats.primitives_culled_zero_area += culled_zero_area;
+  stats.primitives_clipped += clipped;
+  stats.primitives_culled_scissor += culled_scissor;
+}
+
+void GeometryUnit::deliver(const SetUp& u, DrawOutput& out, GeometryStats& stats) const {
+  u.before.add_to(stats);
+  VertexKeys vertex_keys = u.keys;
+  for (int i = 0; i < 3; ++i) {
+    if ((u.made_by_clipping >> i) & 1u) vertex_keys[i] = 0x8000000000000000ull | (out.delivered * 3 + static_cast<std::uint64_t>(i));
+  }
+  out.sink.accept(u.prim, vertex_keys);
+  ++out.delivered;
+  ++stats.primitives_out;
+}
+
+void GeometryUnit::emit_triangle(const Emit& e, const glm::vec4 clip[3], const glm::vec3 world[3],
+                                 const glm::vec3 normal[3], const glm::vec2 uv[3], const std::uint64_t keys[3],
+                                 DrawOutput& out, GeometryStats& stats) const {
+  thread_local std::vector<SetUp> set_up;
+  set_up.clear();
+  SetupCounts pending;
+  setup_triangles(e, clip, world, normal, uv, keys, set_up, pending);
+  for (const SetUp& u : set_up) deliver(u, out, stats);
+  pending.add_to(stats);
 }
 
 namespace {
@@ -312,8 +350,6 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
                               DramTraffic& dram) const {
   const DrawCmd& cmd = *draw.cmd;
   const bool wants_object_lists = draw.shader->light_source == LightSource::ObjectList;
-  std::vector<glm::vec4> clip;
-  std::vector<glm::vec3> world, normal;
   // The instances this draw submits; translucent ones back to front, as an application sorts them.
   std::vector<std::pair<float, std::size_t>> selected;
   for (std::size_t ii = 0; ii < scene_->instances.size(); ++ii) {
@@ -344,13 +380,27 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
     selected.push_back({key, ii});
   }
   std::stable_sort(selected.begin(), selected.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  for (const auto& [depth_key, ii] : selected) {
+
+  // What the geometry unit makes of one instance before the tiler takes it: independent of every
+  // other instance, so a window of them is set up on the pool's threads, each into its own
+  // InstanceSetup, and delivered after in submission order (the same primitives, keys, objects
+  // and statistics at any thread count).
+  struct InstanceSetup {
+    std::vector<SetUp> prims;
+    std::vector<std::uint32_t> touching;  ///< lights touching its bounds (object light lists)
+    GeometryStats stats;                  ///< vertex work, counted before its triangles
+    SetupCounts tail;                     ///< triangles culled after its last delivered one
+    std::uint64_t vertex_bytes = 0, index_bytes = 0;
+  };
+  const std::uint32_t object_base = static_cast<std::uint32_t>(object_lights.size());
+  auto set_up_instance = [&](std::size_t k, InstanceSetup& o) {
+    const std::size_t ii = selected[k].second;
     const Instance& inst = scene_->instances[ii];
     const SubMesh& sm = scene_->submeshes[inst.submesh];
     const Material& mat = scene_->materials[sm.material];
     Emit e;
     e.draw = draw_index;
-    e.object = static_cast<std::uint32_t>(object_lights.size());
+    e.object = object_base + static_cast<std::uint32_t>(k);
     e.material = sm.material;
     e.hsr = hsr_class_of(*draw.pipeline, *draw.shader, *draw.cmd, scene_, sm.material);
     e.varyings = draw.shader->varyings;
@@ -359,6 +409,8 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
     e.scissor = scissor_of(cmd, viewport_);
 
     // Transform every vertex of the instance once (what the vertex shader computes).
+    thread_local std::vector<glm::vec4> clip;
+    thread_local std::vector<glm::vec3> world, normal;
     const glm::mat4 mvp = camera_.view_proj * inst.world;
     const glm::mat3 nrm = glm::transpose(glm::inverse(glm::mat3(inst.world)));
     const std::size_t nv = sm.positions.size();
@@ -377,13 +429,11 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
       lo = glm::min(lo, world[v]);
       hi = glm::max(hi, world[v]);
     }
-    std::vector<std::uint32_t> touching;
     if (wants_object_lists) {
       for (std::uint32_t l : draw.lights) {
-        if (sphere_touches_box(lights_[l], lo, hi)) touching.push_back(l);
+        if (sphere_touches_box(lights_[l], lo, hi)) o.touching.push_back(l);
       }
     }
-    object_lights.push_back(std::move(touching));
 
     // Vertex fetch and shading: indices through the post-transform cache.
     VertexCacheFifo cache(static_cast<std::size_t>(hw_.geometry.vertex_cache_entries));
@@ -391,16 +441,15 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
     for (std::uint32_t idx : sm.indices) {
       if (sm.index_bytes == 0 || cache.access(idx)) ++shaded;
     }
-    const std::uint64_t index_bytes = std::uint64_t{sm.index_bytes} * sm.indices.size();
-    const std::uint64_t vertex_bytes = shaded * sm.vertex_stride_bytes;
-    stats.vertices_shaded += shaded;
-    stats.vertex_alu_ops += shaded * static_cast<std::uint64_t>(hw_.geometry.vertex_shader_alu_ops);
-    stats.vertex_fetch_bytes += vertex_bytes;
-    stats.index_fetch_bytes += index_bytes;
-    dram.read(DramClass::Vertices, vertex_bytes);
-    dram.read(DramClass::Indices, index_bytes);
+    o.index_bytes = std::uint64_t{sm.index_bytes} * sm.indices.size();
+    o.vertex_bytes = shaded * sm.vertex_stride_bytes;
+    o.stats.vertices_shaded += shaded;
+    o.stats.vertex_alu_ops += shaded * static_cast<std::uint64_t>(hw_.geometry.vertex_shader_alu_ops);
+    o.stats.vertex_fetch_bytes += o.vertex_bytes;
+    o.stats.index_fetch_bytes += o.index_bytes;
 
     const std::uint64_t key_base = std::uint64_t{e.object} << 32;
+    o.prims.reserve(sm.indices.size() / 3);
     for (std::size_t t = 0; t + 2 < sm.indices.size(); t += 3) {
       const std::uint32_t i0 = sm.indices[t], i1 = sm.indices[t + 1], i2 = sm.indices[t + 2];
       const glm::vec4 c[3] = {clip[i0], clip[i1], clip[i2]};
@@ -408,8 +457,35 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
       const glm::vec3 n[3] = {normal[i0], normal[i1], normal[i2]};
       const glm::vec2 uv[3] = {sm.uvs[i0], sm.uvs[i1], sm.uvs[i2]};
       const std::uint64_t keys[3] = {key_base | i0, key_base | i1, key_base | i2};
-      emit_triangle(e, c, w, n, uv, keys, out, stats);
+      setup_triangles(e, c, w, n, uv, keys, o.prims, o.tail);
     }
+  };
+
+  std::vector<InstanceSetup> window;
+  for (std::size_t first = 0; first < selected.size();) {
+    // A window of instances holding about kSetupWindowTriangles triangles (at least one
+    // instance): enough work to share between threads, few enough records to hold at once.
+    std::size_t last = first, triangles = 0;
+    while (last < selected.size() && (last == first || triangles < kSetupWindowTriangles)) {
+      triangles += scene_->submeshes[scene_->instances[selected[last].second].submesh].indices.size() / 3;
+      ++last;
+    }
+    window.clear();
+    window.resize(last - first);
+    if (pool_ != nullptr && pool_->size() > 1 && window.size() > 1) {
+      pool_->for_each(window.size(), [&](std::size_t k, unsigned) { set_up_instance(first + k, window[k]); });
+    } else {
+      for (std::size_t k = 0; k < window.size(); ++k) set_up_instance(first + k, window[k]);
+    }
+    for (InstanceSetup& o : window) {
+      object_lights.push_back(std::move(o.touching));
+      stats += o.stats;
+      dram.read(DramClass::Vertices, o.vertex_bytes);
+      dram.read(DramClass::Indices, o.index_bytes);
+      for (const SetUp& u : o.prims) deliver(u, out, stats);
+      o.tail.add_to(stats);
+    }
+    first = last;
   }
 }
 

@@ -15,6 +15,8 @@
 
 namespace tbdr {
 
+class ThreadPool;
+
 /// The conservative screen rectangle of a light's sphere (empty when wholly behind the near
 /// plane; the whole viewport when it crosses the near plane).
 PixelRect light_screen_rect(const Light& light, const CameraXform& camera, const Viewport& viewport);
@@ -55,6 +57,12 @@ class GeometryUnit {
   void run_draw(const DrawContext& draw, std::uint32_t draw_index, PrimitiveSink& out,
                 std::vector<std::vector<std::uint32_t>>& object_lights, GeometryStats& stats, DramTraffic& dram) const;
 
+  /// Sets a scene draw's instances up (vertex shading, clipping, culling, triangle setup) on
+  /// `pool`'s threads, a window of them at a time, and delivers their primitives in submission
+  /// order: the same primitives and statistics at any thread count. nullptr (the default): on the
+  /// caller's thread. The pool must be idle while run_draw runs (binning is between renders).
+  void use_pool(ThreadPool* pool) { pool_ = pool; }
+
   /// Triangles of the icosphere used as a light proxy at this subdivision level (unit radius,
   /// circumscribing the unit sphere).
   static const std::vector<glm::vec3>& icosphere(std::uint32_t subdivisions);
@@ -62,6 +70,31 @@ class GeometryUnit {
  private:
   struct Emit;
   struct DrawOutput;
+  /// The geometry counts of triangles set up but not yet counted in GeometryStats: they are
+  /// counted when the next set-up triangle is delivered (or the instance ends), so a partial
+  /// render that fires inside the sink sees the counts a one-at-a-time pipeline would.
+  struct SetupCounts {
+    std::uint32_t in = 0, culled_frustum = 0, culled_backface = 0, culled_zero_area = 0, clipped = 0,
+                  culled_scissor = 0;
+    void add_to(GeometryStats& stats) const;
+  };
+  /// A triangle set up for the tiler, not yet delivered: its record and its vertices' identities
+  /// (those made by clipping get theirs at delivery, numbered by the draw's delivered count).
+  struct SetUp {
+    Primitive prim;
+    VertexKeys keys{};
+    SetupCounts before;                 ///< counts of the triangles set up since the previous one
+    std::uint8_t made_by_clipping = 0;  ///< bit i: vertex i was made by clipping
+  };
+  /// Triangles per window of a draw's instances set up together (draw_scene): about 2.5 MB of
+  /// records held at once (312 bytes each), and many windows per atrium draw for the threads.
+  static constexpr std::size_t kSetupWindowTriangles = 8192;
+  /// Clips, culls and sets up one triangle (its pieces after clipping) into `out`.
+  void setup_triangles(const Emit& e, const glm::vec4 clip[3], const glm::vec3 world[3], const glm::vec3 normal[3],
+                       const glm::vec2 uv[3], const std::uint64_t keys[3], std::vector<SetUp>& out,
+                       SetupCounts& pending) const;
+  /// Hands a set-up triangle to the draw's sink.
+  void deliver(const SetUp& u, DrawOutput& out, GeometryStats& stats) const;
   void emit_triangle(const Emit& e, const glm::vec4 clip[3], const glm::vec3 world[3], const glm::vec3 normal[3],
                      const glm::vec2 uv[3], const std::uint64_t keys[3], DrawOutput& out, GeometryStats& stats) const;
   void draw_scene(const DrawContext& draw, std::uint32_t draw_index, DrawOutput& out,
@@ -79,6 +112,7 @@ class GeometryUnit {
   /// Draws run one after another (binning is serial), so filling it lazily needs no lock.
   mutable std::vector<Bounds> instance_bounds_;
   const std::vector<Light>& lights_;
+  ThreadPool* pool_ = nullptr;  ///< use_pool
   CameraXform camera_;
   Viewport viewport_;
 };

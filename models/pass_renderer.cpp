@@ -54,6 +54,7 @@ PassRenderer::PassRenderer(RenderContext& ctx, const HwConfig& frame_hw, PassSta
       resumed_(static_cast<std::size_t>(tiler_.tile_count()), 0) {
   // After tile_memory_: it points ctx.pls at the pass's pixel local storage, which the TSPs read.
   for (unsigned w = 0; w < pool_.size(); ++w) workers_.push_back(std::make_unique<TileWorker>(ctx_));
+  geometry_.use_pool(&pool_);  // binning runs between renders, while the pool is idle
   // The pass's framebuffer layout, known before any tile renders (FrameAddressMap places it then).
   // The first tile is never clipped more than another.
   cw_->tile_slot_bytes = tile_memory_.tile_slot_bytes(tiler_.tile_rect(0));
