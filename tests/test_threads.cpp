@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cstddef>
 #include <cmath>
 #include <cstring>
@@ -24,6 +25,12 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#if defined(__linux__)
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
 
 #include "analysis/results_db.hpp"
 #include "analysis/sql.hpp"
@@ -410,6 +417,34 @@ TEST(ThreadPool, RethrowsTheLowestFailingItemsException) {
     EXPECT_EQ(sum.load(), 4950u);  // 0 + 1 + ... + 99 = 99 x 100 / 2
   }
 }
+
+#if defined(__linux__)
+// Helpers asked to step back run at that niceness (their own threads only); the caller's thread
+// keeps its own: with the timing model beside the frame, the caller and the timing thread keep
+// their cores (models/command_processor.cpp, kHelperNicenessBesideTiming).
+TEST(ThreadPool, HelpersRunAtTheNicenessAskedTheCallerAtItsOwn) {
+  const auto thread_nice = [] {
+    errno = 0;
+    return getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)));
+  };
+  const int own = thread_nice();
+  if (own + 5 > 19) GTEST_SKIP() << "already at niceness " << own;
+  ThreadPool pool(3, 5);
+  std::mutex m;
+  std::vector<std::pair<unsigned, int>> seen;
+  // Enough items that every helper takes some (each waits until all three have started one).
+  std::atomic<int> started{0};
+  pool.for_each(3, [&](std::size_t, unsigned w) {
+    ++started;
+    while (started.load() < 3) std::this_thread::yield();
+    std::lock_guard<std::mutex> lock(m);
+    seen.push_back({w, thread_nice()});
+  });
+  ASSERT_EQ(seen.size(), 3u);
+  for (const auto& [w, nice] : seen) EXPECT_EQ(nice, w == 0 ? own : own + 5) << "worker " << w;
+  EXPECT_EQ(thread_nice(), own);
+}
+#endif
 
 }  // namespace
 }  // namespace tbdr

@@ -4,6 +4,9 @@
 
 #if defined(__linux__)
 #include <sched.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 #endif
 
 namespace tbdr {
@@ -19,7 +22,7 @@ unsigned default_thread_count() {
   return std::max(1u, std::thread::hardware_concurrency());
 }
 
-ThreadPool::ThreadPool(unsigned threads) {
+ThreadPool::ThreadPool(unsigned threads, int helper_niceness) : helper_niceness_(helper_niceness) {
   const unsigned n = std::max(1u, threads);
   threads_.reserve(n - 1);
   for (unsigned w = 1; w < n; ++w) threads_.emplace_back([this, w] { helper(w); });
@@ -55,6 +58,11 @@ void ThreadPool::work(unsigned worker) {
 }
 
 void ThreadPool::helper(unsigned worker) {
+#if defined(__linux__)
+  // Linux applies nice to one thread when given its thread id (a helper's priority only; the
+  // thread ends with the pool). Failing (a sandbox refusing it) changes no result: ignored.
+  if (helper_niceness_ > 0) (void)setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), helper_niceness_);
+#endif
   std::size_t seen = 0;
   for (;;) {
     {

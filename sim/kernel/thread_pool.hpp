@@ -24,7 +24,11 @@ unsigned default_thread_count();
 class ThreadPool {
  public:
   /// A pool of `threads` workers (clamped to at least 1): the caller's thread and threads - 1 more.
-  explicit ThreadPool(unsigned threads);
+  /// `helper_niceness` > 0 lowers the helpers' scheduling priority by that much (Linux nice, per
+  /// thread; elsewhere ignored), so that threads outside the pool that the run waits on (the
+  /// timing model beside the functional run) and the caller's thread keep their cores when the
+  /// threads outnumber them, and the helpers take what those leave idle.
+  explicit ThreadPool(unsigned threads, int helper_niceness = 0);
   ~ThreadPool();
   ThreadPool(const ThreadPool&) = delete;
   ThreadPool& operator=(const ThreadPool&) = delete;
@@ -43,6 +47,8 @@ class ThreadPool {
   void work(unsigned worker);
   /// A helper thread's loop: waits for a job, works on it, reports its end.
   void helper(unsigned worker);
+
+  int helper_niceness_ = 0;
 
   std::vector<std::thread> threads_;
   std::mutex mutex_;
