@@ -146,10 +146,13 @@ class FrameSimulator {
       if (const auto* pass = std::get_if<PassDesc>(&cmd)) {
         run_pass(*pass, pass_index++);
       } else if (const auto* d = std::get_if<DispatchCmd>(&cmd)) {
+        finish_pending_pass();
         run_dispatch_cmd(*d, static_cast<int>(dispatches++));
       }
-      // Barriers order work; in the functional model every command completes before the next.
+      // Barriers order work; in the functional model every command completes before the next
+      // (a pass's tiles, binned ahead of the next pass's, before that pass's tiles).
     }
+    finish_pending_pass();
     // Frame totals: every unit's statistics summed over the passes (gauges: the largest level).
     if (pass_index > 0) result_.totals.render.collect("frame", result_.stats);
     if (dispatches > 0) collect_stats(result_.totals.compute, "frame/compute", result_.stats);
@@ -242,6 +245,23 @@ class FrameSimulator {
     }
   }
 
+  static constexpr const char* kNoStoredSurface =
+      "the G-buffer or visibility attachment this draw reads holds no surface: no shader wrote it";
+
+  /// The G-buffer and visibility attachments of `pass` that `cmd` fetches (earlier draws of the
+  /// pass write them): their surfaces are stored as they shade, so their stores exist from now.
+  void allocate_fetched_surfaces(const PassDesc& pass, const DrawCmd& cmd) {
+    for (const auto& n : cmd.fetch) {
+      const Attachment* a = pass.find_attachment(n);
+      if (!a || is_depth_format(a->format)) continue;
+      AttachmentImage& img = result_.images.attachments.at(n);
+      if (img.surface_valid.empty() && (img.usage == AttachmentUsage::Gbuffer || img.usage == AttachmentUsage::Visibility)) {
+        if (img.keeps_surface) img.surface.assign(img.sample_count, options_.colour);
+        img.surface_valid.assign(img.sample_count, 0);
+      }
+    }
+  }
+
   /// Where a draw's shader finds its surface, its light lists and what it samples from DRAM.
   void resolve_draw_inputs(const PassDesc& pass, const DrawCmd& cmd, DrawContext& d) {
     auto surfaces_of = [&](const std::string& n) -> const AttachmentImage* {
@@ -254,13 +274,8 @@ class FrameSimulator {
       const Attachment* a = pass.find_attachment(n);
       if (!a || is_depth_format(a->format)) continue;
       d.fetch_bytes += a->bytes_per_pixel();
-      // An attachment of this pass that earlier draws write: its surfaces are stored as they shade.
-      AttachmentImage& img = result_.images.attachments.at(n);
-      if (img.surface_valid.empty() && (img.usage == AttachmentUsage::Gbuffer || img.usage == AttachmentUsage::Visibility)) {
-        if (img.keeps_surface) img.surface.assign(img.sample_count, options_.colour);
-        img.surface_valid.assign(img.sample_count, 0);
-      }
     }
+    allocate_fetched_surfaces(pass, cmd);
     if (cmd.geometry != GeometryKind::Scene) {
       for (const auto& n : cmd.fetch) {
         if (!d.surface_source) d.surface_source = surfaces_of(n);
@@ -269,7 +284,7 @@ class FrameSimulator {
         if (!d.surface_source) d.surface_source = surfaces_of(n);
       }
       if (d.surface_source && d.surface_source->surface_valid.empty()) {
-        throw InputError(path_, cmd.line, "the G-buffer or visibility attachment this draw reads holds no surface: no shader wrote it");
+        throw InputError(path_, cmd.line, kNoStoredSurface);
       }
     }
     auto find_grid = [&](BufferContent content) -> std::string {
@@ -346,11 +361,29 @@ class FrameSimulator {
     finish_command(prefix, &cw, std::move(summary), dram);
   }
 
-  void run_pass(const PassDesc& pass, int index) {
-    const std::string prefix = "pass" + std::to_string(index) + "." + pass.name;
-    auto ps = std::make_unique<PassStats>();
+  /// A pass being replayed: what its renderer works with, kept from its binning to its end.
+  struct PassRun {
+    const PassDesc* pass = nullptr;
+    std::string prefix;
+    std::unique_ptr<PassStats> ps = std::make_unique<PassStats>();
     DramTraffic dram;
     RenderContext ctx;
+    CommandWork cw;
+    std::unique_ptr<PassRenderer> renderer;
+    bool live = false;  ///< published to the feed as it goes
+  };
+
+  /// Replays a pass: its set-up and binning now; its last render's tiles after the next pass is
+  /// binned, when it can be (bin-ahead below), else now. A pass reads what earlier passes wrote
+  /// only in its tiles (loads, stored surfaces, PLS) and its binning none of it, so the results
+  /// are those of passes replayed one after another; with the timing model beside the frame
+  /// (FrameOptions::feed) it gets the next pass's binning while this one's tiles render, as the
+  /// hardware bins the next render into its second parameter buffer meanwhile.
+  void run_pass(const PassDesc& pass, int index) {
+    auto run = std::make_unique<PassRun>();
+    run->pass = &pass;
+    run->prefix = "pass" + std::to_string(index) + "." + pass.name;
+    RenderContext& ctx = run->ctx;
     static_cast<FrameInputs&>(ctx) = inputs_;
     ctx.pass = &pass;
     ctx.images = &result_.images;
@@ -358,54 +391,112 @@ class FrameSimulator {
     ctx.framebuffer_in_dram = hw_.gpu.mode == GpuMode::Imr;
     if (rop_) {
       ctx.rop = rop_.get();
-      rop_->bind_pass(pass, ps->rop);
+      rop_->bind_pass(pass, run->ps->rop);
     }
     prepare_attachments(pass, ctx);
     resolve_draws(pass, ctx);
     count_geometry_passes(pass);
-    ctx.dram = &dram;
+    ctx.dram = &run->dram;
     ctx.frame_prim_base = prim_base_;
     ctx.textures = textures_.get();
-    CommandWork cw;
-    cw.name = prefix;
-    cw.read_bytes = book_buffer_reads(pass, dram).read_bytes;  // buffers read once per pass, at its start
+    CommandWork& cw = run->cw;
+    cw.name = run->prefix;
+    cw.read_bytes = book_buffer_reads(pass, run->dram).read_bytes;  // buffers read once per pass, at its start
     cw.depends_on_previous = reads_earlier_results(pass);
 
-    // The render's primitive records live in one store kept across the frame's passes: each pass
-    // touches the pages its largest render needs, which earlier passes faulted in already.
-    ctx.prims = std::move(prims_buffer_);
-    PassRenderer renderer(ctx, hw_, *ps, dram, cw, pool_);
+    // The render's primitive records live in stores kept across the frame's passes (two: a pass
+    // binned ahead and the one before it): each pass touches the pages its largest render needs,
+    // which earlier passes faulted in already.
+    ctx.prims = take_prims_buffer();
+    run->renderer = std::make_unique<PassRenderer>(ctx, hw_, *run->ps, run->dram, cw, pool_);
+    PassRenderer& renderer = *run->renderer;
     // With a feed, a pass whose layout is known before its tiles render is handed to the timing
     // model as it goes (each render when binned, each tile as merged); others when complete.
-    const bool live = options_.feed && renderer.layout_known_at_start();
-    if (live) renderer.publish_to(*options_.feed);
-    renderer.run();
-    prims_buffer_ = std::move(ctx.prims);
-    prims_buffer_.clear();
-    result_.host_tile_seconds += renderer.tile_seconds();
+    const bool known_layout = renderer.layout_known_at_start();
+    run->live = options_.feed && known_layout;
+    if (run->live) renderer.publish_to(*options_.feed);
+    // Tiles of this pass render only after the pass before it ended.
+    renderer.before_tiles([this, r = run.get()] {
+      finish_pending_pass();
+      recheck_stored_surfaces(*r);
+    });
+    renderer.bin();
     prim_base_ = ctx.frame_prim_base;
+    // What it stores is defined for the passes after it (their loads read it in their tiles).
     for (const auto& a : pass.attachments) {
       AttachmentImage& img = result_.images.attachments.at(a.name);
       img.defined = a.store == StoreOp::Store && !a.transient;
       if (img.defined && a.usage == AttachmentUsage::Color) result_.final_color = a.name;
     }
-    ps->collect(prefix, result_.stats);
-    result_.totals.render += *ps;
+    finish_pending_pass();  // the pass before it: binned before this one, rendered now
+    recheck_stored_surfaces(*run);
+    renderer.before_tiles(nullptr);
+    // Bin-ahead: the next pass is binned before this one's last render's tiles, when this pass's
+    // layout is known now (a spilling pass is published complete at its end, after the next
+    // pass would have opened) and it has no imr batches. Any command but a pass finishes it first.
+    if (known_layout && !rop_) {
+      pending_ = std::move(run);
+    } else {
+      end_pass(*run);
+    }
+  }
+
+  /// Renders the tiles of the pass binned ahead (if any) and ends it.
+  void finish_pending_pass() {
+    if (!pending_) return;
+    std::unique_ptr<PassRun> run = std::move(pending_);
+    end_pass(*run);
+  }
+
+  /// A pass binned before the pass before it ended read that pass's stored surfaces before its
+  /// tiles wrote them: what resolve_draws would have found after it. A G-buffer target the pass
+  /// fetches gets its surface store if the pass before released it (no tile wrote one), and a
+  /// draw that reads a stored surface no shader wrote is refused, as resolve_draw_inputs does.
+  void recheck_stored_surfaces(PassRun& run) {
+    for (const DrawCmd& cmd : run.pass->draws) allocate_fetched_surfaces(*run.pass, cmd);
+    for (const DrawContext& d : run.ctx.draws) {
+      if (d.surface_source && d.surface_source->surface_valid.empty()) {
+        throw InputError(path_, d.cmd->line, kNoStoredSurface);
+      }
+    }
+  }
+
+  /// The last render's tiles, the pass's statistics and its command.
+  void end_pass(PassRun& run) {
+    run.renderer->finish();
+    give_back_prims_buffer(std::move(run.ctx.prims));
+    result_.host_tile_seconds += run.renderer->tile_seconds();
+    run.ps->collect(run.prefix, result_.stats);
+    result_.totals.render += *run.ps;
     PassSummary summary;
-    summary.name = pass.name;
-    summary.primitives = ps->geometry.primitives_out.value();
-    summary.shaded_samples = ps->tsp.shaded_samples.value();
-    summary.partial_renders = ps->tiler.partial_renders.value();
-    finish_command(prefix, live ? nullptr : &cw, std::move(summary), dram);
+    summary.name = run.pass->name;
+    summary.primitives = run.ps->geometry.primitives_out.value();
+    summary.shaded_samples = run.ps->tsp.shaded_samples.value();
+    summary.partial_renders = run.ps->tiler.partial_renders.value();
+    const std::size_t feed_command = run.live ? run.renderer->feed_command() : 0;
+    run.renderer.reset();
+    finish_command(run.prefix, run.live ? nullptr : &run.cw, std::move(summary), run.dram, feed_command);
+  }
+
+  PrimitiveStore take_prims_buffer() {
+    if (prims_buffers_.empty()) return {};
+    PrimitiveStore p = std::move(prims_buffers_.back());
+    prims_buffers_.pop_back();
+    return p;
+  }
+  void give_back_prims_buffer(PrimitiveStore&& p) {
+    p.clear();
+    prims_buffers_.push_back(std::move(p));
   }
 
   /// What every pass and dispatch ends with, after its unit statistics: its work for the timing
   /// model (`cw`, or nullptr when the feed holds it open: closed now), its DRAM rows (under its
   /// work's name), its summary with its traffic, the frame's traffic.
-  void finish_command(const std::string& name, CommandWork* cw, PassSummary summary, const DramTraffic& dram) {
+  void finish_command(const std::string& name, CommandWork* cw, PassSummary summary, const DramTraffic& dram,
+                      std::size_t feed_command = 0) {
     collect_dram(name, dram, result_.stats);
     if (cw == nullptr) {
-      options_.feed->close_command();
+      options_.feed->close_command(feed_command);
     } else if (options_.feed) {
       options_.feed->publish(std::move(*cw));
     } else {
@@ -470,7 +561,8 @@ class FrameSimulator {
   std::unique_ptr<TextureLayout> textures_;  ///< the frame's texture address space
   std::unique_ptr<RenderOutputUnit> rop_;    ///< gpu.mode=imr: the ROP caches, kept across the frame's passes
   std::set<std::string> surface_readers_;    ///< stored_surface_readers of the trace
-  PrimitiveStore prims_buffer_;              ///< RenderContext::prims between passes (its chunks kept)
+  std::vector<PrimitiveStore> prims_buffers_;  ///< RenderContext::prims between passes (their chunks kept)
+  std::unique_ptr<PassRun> pending_;           ///< a pass binned, its last render's tiles not rendered yet
   ThreadPool pool_;                          ///< the threads the passes' tiles render on
   FrameResult result_;
 };

@@ -37,8 +37,6 @@ std::uint64_t whole_units(std::uint64_t bytes) { return (bytes + kRegionAlignByt
 }  // namespace
 
 void FrameAddressMap::add_command(const CommandWork& cmd) {
-  if (open_) throw std::logic_error("FrameAddressMap::add_command: the previous command has not ended");
-  open_ = true;
   const std::uint64_t cmd_bytes = sum(cmd.read_bytes) + sum(cmd.write_bytes);
   const std::uint64_t slots = std::max<std::uint64_t>(1, cmd.tile_slots);
   fb_stride_.push_back(whole_units(std::max<std::uint64_t>(cmd.tile_slot_bytes, 1)));
@@ -74,12 +72,24 @@ void FrameAddressMap::add_render(std::size_t command, const RenderWork& r) {
 }
 
 void FrameAddressMap::end_command(const CommandWork& cmd) {
-  if (!open_) throw std::logic_error("FrameAddressMap::end_command: no command is open");
-  open_ = false;
-  const std::size_t c = fb_base_.size() - 1;
+  if (ended_ >= fb_base_.size()) throw std::logic_error("FrameAddressMap::end_command: no command is open");
+  const std::size_t c = ended_;
+  if (names_[c] != cmd.name) throw std::logic_error("FrameAddressMap::end_command: " + cmd.name + " ends before " + names_[c]);
+  record_writes(c, cmd);
+  ++ended_;
+  // The commands added after it took the latest writers known then: what this one wrote is
+  // newer (the sources they would have taken had they been added after it ended).
+  for (std::size_t later = c + 1; later < source_.size(); ++later) {
+    for (std::size_t k = 0; k < kDramClassCount; ++k) {
+      if (last_writer_[k] == static_cast<int>(c)) source_[later][k] = static_cast<int>(c);
+    }
+  }
+}
+
+void FrameAddressMap::record_writes(std::size_t c, const CommandWork& cmd) {
   // What the command wrote where: addresses as the timing model issues them, tile stores class
   // after class from the tile's slot, a dispatch's writes after its reads in its buffer area.
-  auto& w = written_.back();
+  auto& w = written_[c];
   if (cmd.is_dispatch) {
     std::uint64_t offset = sum(cmd.read_bytes);
     for (std::size_t k = 0; k < kDramClassCount; ++k) {

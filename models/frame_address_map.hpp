@@ -27,16 +27,19 @@ class FrameAddressMap {
   FrameAddressMap(const FrameWork& frame, std::uint64_t pb_bytes, AddressSpace& space);
   /// Allocates the regions of `cmd`, the next command of the frame, from what is known when it
   /// starts (its name, slots, buffer bytes; a dispatch is complete). Commands are added in trace
-  /// order, each after the previous one ended (end_command).
+  /// order; a command may be added before the ones before it ended (the timing model bins a pass
+  /// while the previous one still renders): what those write becomes its source when they end.
   void add_command(const CommandWork& cmd);
   /// Allocates the vertex and index range of render `r` of `command` (renders in order, each once
   /// its binning is known; gpu.mode=imr's single render complete with its batches' geometry), and
   /// at the pass's first partial render its partial renders' slots.
   void add_render(std::size_t command, const RenderWork& r);
-  /// Records what the complete `cmd` (the latest command added) wrote where, for the commands
-  /// after it to read (produced); throws std::logic_error if a tile loaded or stored more than
-  /// its slot holds.
+  /// Records what the complete `cmd` (the earliest command added that has not ended: commands
+  /// end in order) wrote where, for the commands after it to read (produced), also those added
+  /// already; throws std::logic_error if a tile loaded or stored more than its slot holds.
   void end_command(const CommandWork& cmd);
+  /// Commands ended so far (the next to end is this index).
+  std::size_t ended() const { return ended_; }
   /// Commands added so far.
   std::size_t commands() const { return fb_base_.size(); }
 
@@ -79,13 +82,16 @@ class FrameAddressMap {
   std::uint64_t produced_bytes(std::size_t command, DramClass k, int tile_index) const;
 
  private:
+  /// end_command's record of command `c`'s writes (written_, last_writer_).
+  void record_writes(std::size_t c, const CommandWork& cmd);
+
   AddressSpace& space_;
   int tiles_x_ = 1;
   std::uint64_t pb_base_[2] = {0, 0};
   std::uint64_t rop_framebuffer_base_ = 0;
   std::uint64_t texture_base_ = 0;
   bool immediate_ = false;  ///< FrameWork::immediate: a render's batches carry its geometry
-  bool open_ = false;       ///< the latest command was added and has not ended
+  std::size_t ended_ = 0;   ///< commands ended (end_command), in order
   std::vector<std::uint64_t> fb_base_, fb_stride_, partial_base_, partial_stride_, cmd_base_, spill_base_, spill_stride_;
   std::vector<std::vector<std::uint64_t>> vertex_base_;  ///< per command and render
   std::vector<std::string> names_;                       ///< per command (its regions' names)

@@ -71,11 +71,17 @@ void PassRenderer::publish_to(WorkFeed& feed) {
   if (!layout_known_at_start()) throw std::logic_error("PassRenderer::publish_to: the pass's layout is known only at its end");
   cw_ = &feed.open(std::move(*cw_));
   feed_ = &feed;
+  feed_command_ = feed.last_opened();
 }
 
 PassRenderer::~PassRenderer() = default;
 
 void PassRenderer::run() {
+  bin();
+  finish();
+}
+
+void PassRenderer::bin() {
   for (std::uint32_t i = 0; i < ctx_.draws.size(); ++i) {
     if (!ctx_.rop && static_cast<int>(i) == tile_memory_.split_draw()) {
       // pls.over_budget = split_render: the driver ends the render at this subpass boundary.
@@ -88,8 +94,12 @@ void PassRenderer::run() {
     render_batch(true);  // the last batch (also when empty: the pass's clears, resolves and the ROP flush)
     cw_->renders.push_back(std::move(immediate_));
   } else {
-    render(false);
+    prepare_render(false);
   }
+}
+
+void PassRenderer::finish() {
+  if (!ctx_.rop) render_tiles(false);
   // A spilling pass's spill slot: the most any tile render spilled, known now that all did (a
   // pass published as it goes spills nothing, and the feed's reader may be reading its fields).
   if (feed_ == nullptr) {
@@ -191,6 +201,11 @@ void PassRenderer::release_unwritten_surfaces(AttachmentImage* fresh) {
 }
 
 void PassRenderer::render(bool partial) {
+  prepare_render(partial);
+  render_tiles(partial);
+}
+
+void PassRenderer::prepare_render(bool partial) {
   RenderWork& rw = cw_->renders.emplace_back();
   rw.partial = partial;
   rw.binning = binning_since_last_render();
@@ -205,10 +220,24 @@ void PassRenderer::render(bool partial) {
     if (partial && tiler_.tile_primitives(t).empty()) continue;  // untouched: nothing to render yet
     for (const PixelRect& r : tile_memory_.strips(tiler_.tile_rect(t))) jobs_.push_back({t, r});
   }
-  AttachmentImage* const fresh = allocate_surfaces();
+  // Before the next pass is set up: its draws may read the surfaces this one stores.
+  fresh_ = allocate_surfaces();
+  rw.tiles.reserve(jobs_.size());  // tiles published to the feed must not move
+  if (feed_) feed_->publish_render(feed_command_, jobs_.size());
+}
+
+void PassRenderer::render_tiles(bool partial) {
+  if (before_tiles_) {
+    const std::function<void()> fn = std::move(before_tiles_);
+    before_tiles_ = nullptr;
+    fn();
+  }
+  RenderWork& rw = cw_->renders.back();
+  // The pass before it, ended by before_tiles, may have released the store its tiles did not
+  // write: this pass's shaders store into a new one then, as when it ended before this one began.
+  AttachmentImage* const fresh = fresh_ != nullptr ? fresh_ : allocate_surfaces();
+  fresh_ = nullptr;
   const std::size_t n = jobs_.size();
-  rw.tiles.reserve(n);  // tiles published to the feed must not move
-  if (feed_) feed_->publish_render(n);
   results_.clear();
   results_.resize(n);
   rendered_.assign(n, 0);
@@ -223,7 +252,7 @@ void PassRenderer::render(bool partial) {
     rendered_[i] = 1;
     for (; merged_ < n && rendered_[merged_] != 0; ++merged_) {
       rw.tiles.push_back(merge(std::move(results_[merged_])));
-      if (feed_) feed_->publish_tile();
+      if (feed_) feed_->publish_tile(feed_command_);
     }
   });
   tile_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

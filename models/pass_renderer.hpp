@@ -10,6 +10,7 @@
 // TileWork lists and images are the same at any thread count. A partial render is a barrier: its
 // tiles finish before binning resumes.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -49,11 +50,23 @@ class PassRenderer final : private PrimitiveSink {
   bool layout_known_at_start() const;
   /// Hands the pass's work to `feed` as it goes (layout_known_at_start() must hold): opens the
   /// command there now, publishes each render when binned and each tile as merged; the caller
-  /// closes the command after run().
+  /// closes the command (feed_command()) after finish().
   void publish_to(WorkFeed& feed);
+  /// The command's index in the feed (publish_to).
+  std::size_t feed_command() const { return feed_command_; }
   /// Geometry, binning and rendering of every draw; a partial render whenever the parameter
-  /// buffer is full.
+  /// buffer is full: bin() then finish().
   void run();
+  /// Geometry and binning of every draw, partial renders included (their tiles render as they
+  /// come), up to the pass's last render, binned and published but not rendered (gpu.mode=imr:
+  /// everything). What a pass reads of earlier passes is read by its tiles only, so the frame
+  /// bins the next pass before the tiles of this one (models/command_processor.cpp).
+  void bin();
+  /// Renders the last render's tiles (after bin()).
+  void finish();
+  /// Runs `fn` once, before the next tiles of this pass render (the frame finishes the pass
+  /// before it there, when this one was binned ahead of it).
+  void before_tiles(std::function<void()> fn) { before_tiles_ = std::move(fn); }
   /// Host wall seconds the renders' tile loops took (the parallel part; bench/speed.sh reads it).
   double tile_seconds() const { return tile_seconds_; }
 
@@ -88,8 +101,13 @@ class PassRenderer final : private PrimitiveSink {
   static RenderContext& bind(RenderContext& ctx, const HwConfig& hw);
   /// The binning work since the previous render.
   BinningWork binning_since_last_render();
-  /// Renders every tile the binned primitives touch (all tiles for the last render of the pass).
+  /// Renders every tile the binned primitives touch (all tiles for the last render of the pass):
+  /// prepare_render then render_tiles.
   void render(bool partial);
+  /// Ends a render's binning: its RenderWork and parameter buffer bytes, its tile jobs; publishes it.
+  void prepare_render(bool partial);
+  /// Renders the prepared render's tiles (before_tiles first).
+  void render_tiles(bool partial);
   /// One tile (or strip of a tile) on worker `w`: loads, ISP and TSP, stores; what it cost.
   /// imr renders a pass as batches over the whole frame: the tile memory's begin (clears) only
   /// with the first (`begin`), its end (resolves) and the ROP flush only with the last (`end`).
@@ -111,6 +129,9 @@ class PassRenderer final : private PrimitiveSink {
   DramTraffic& dram_;
   CommandWork* cw_;           ///< the pass's work: the caller's, or the feed's open command
   WorkFeed* feed_ = nullptr;  ///< where renders and tiles are published as they are made (publish_to)
+  std::size_t feed_command_ = 0;  ///< the pass's command in feed_
+  std::function<void()> before_tiles_;  ///< before_tiles
+  AttachmentImage* fresh_ = nullptr;     ///< what the prepared render's allocate_surfaces allocated
   ThreadPool& pool_;
   GeometryUnit geometry_;
   Tiler tiler_;

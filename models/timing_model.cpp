@@ -94,7 +94,7 @@ class TimingSim final : public Unit {
     if (has_frag_job(next_frag_) || frag_busy_) {
       throw StallError("timing model stopped with work left: " + stall_reason());
     }
-    if (!commands_.empty()) map_.end_command(*commands_.back());  // (checks its tiles fit their slots)
+    end_commands_before(commands_.size());  // (checks their tiles fit their slots)
     result_.frame_time_ps = static_cast<double>(end_tick_.ps());
     result_.frame_cycles = static_cast<double>(core_.cycles_at(end_tick_).count());
     result_.units = {{binner_.name, binner_.busy_cycles, binner_.stalled_cycles},
@@ -188,8 +188,8 @@ class TimingSim final : public Unit {
       if (commands_.size() >= feed_.expected_commands()) return false;
       const CommandWork* cmd = feed_.wait_for(commands_.size());
       if (cmd == nullptr) return false;
-      // The previous command is complete once this one is opened: what it wrote is known.
-      if (!commands_.empty()) map_.end_command(*commands_.back());
+      // (The previous command may still be rendering: it ends in the address map when the
+      // first fragment job after it starts, end_commands_before.)
       const std::size_t c = commands_.size();
       commands_.push_back(cmd);
       renders_.emplace_back();
@@ -203,6 +203,11 @@ class TimingSim final : public Unit {
       }
       more_renders_ = true;
     }
+  }
+  /// Ends in the address map every command before `c` not ended yet (in order): what each wrote
+  /// becomes readable by the commands after it (FrameAddressMap::end_command).
+  void end_commands_before(std::size_t c) {
+    while (map_.ended() < c) map_.end_command(*commands_[map_.ended()]);
   }
   /// Whether binning job `k` exists (taking work from the feed until it does or none is left).
   bool has_bin_job(std::size_t k) {
@@ -351,6 +356,9 @@ class TimingSim final : public Unit {
     if (j.render >= 0 && !bin_done_[bin_index_of(j)]) return;
     frag_busy_ = true;
     const std::size_t f = next_frag_++;
+    // Fragment jobs run in order: every command before this one has finished rendering, so what
+    // it wrote is known (its tiles all published) before this one reads any of it.
+    end_commands_before(j.command);
     const CommandWork& cmd = *commands_[j.command];
     if (result_.commands[j.command].start_cycle < 0) result_.commands[j.command].start_cycle = cycles_of(eq_.now());
     if (j.render < 0) {

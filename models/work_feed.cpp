@@ -1,6 +1,7 @@
 #include "models/work_feed.hpp"
 
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace tbdr {
@@ -38,7 +39,15 @@ CommandWork& WorkFeed::open(CommandWork&& header) {
   std::lock_guard lock(mutex_);
   if (!begun_ || closed_ || work_ != &own_) throw std::logic_error("WorkFeed::open: the feed is not open");
   if (own_.commands.size() == expected_) throw std::logic_error("WorkFeed::open: more commands than begin() announced");
-  if (!state_.empty() && !state_.back().complete) throw std::logic_error("WorkFeed::open: the previous command is open");
+  // An earlier command may still be open only if it is the previous one and all its renders are
+  // binned (its latest is not partial): its tiles are what is left of it.
+  for (std::size_t c = 0; c < state_.size(); ++c) {
+    const Published& p = state_[c];
+    if (p.complete) continue;
+    if (c + 1 != state_.size() || p.renders.empty() || p.renders.back()->partial) {
+      throw std::logic_error("WorkFeed::open: the previous command is open with renders to come");
+    }
+  }
   if (!header.renders.empty()) throw std::logic_error("WorkFeed::open: a command is opened before its renders");
   own_.commands.push_back(std::move(header));
   state_.emplace_back();
@@ -46,14 +55,24 @@ CommandWork& WorkFeed::open(CommandWork&& header) {
   return own_.commands.back();
 }
 
-void WorkFeed::publish_render(std::size_t tiles) {
+std::size_t WorkFeed::last_opened() const {
   std::lock_guard lock(mutex_);
-  if (state_.empty() || state_.back().complete) throw std::logic_error("WorkFeed::publish_render: no command is open");
-  Published& p = state_.back();
+  if (state_.empty()) throw std::logic_error("WorkFeed::last_opened: no command yet");
+  return state_.size() - 1;
+}
+
+WorkFeed::Published& WorkFeed::open_state(std::size_t c, const char* what) {
+  if (c >= state_.size() || state_[c].complete) throw std::logic_error(std::string("WorkFeed::") + what + ": the command is not open");
+  return state_[c];
+}
+
+void WorkFeed::publish_render(std::size_t c, std::size_t tiles) {
+  std::lock_guard lock(mutex_);
+  Published& p = open_state(c, "publish_render");
   if (!p.renders.empty() && !p.renders.back()->partial) {
     throw std::logic_error("WorkFeed::publish_render: a render after the command's last (not partial) one");
   }
-  const RenderWork& r = own_.commands.back().renders.back();
+  const RenderWork& r = own_.commands[c].renders.back();
   if (r.tiles.capacity() < tiles || !r.tiles.empty()) throw std::logic_error("WorkFeed::publish_render: no room reserved for its tiles");
   p.renders.push_back(&r);
   p.tiles.push_back(tiles);
@@ -61,26 +80,24 @@ void WorkFeed::publish_render(std::size_t tiles) {
   changed_.notify_all();
 }
 
-void WorkFeed::publish_tile() {
+void WorkFeed::publish_tile(std::size_t c) {
   std::lock_guard lock(mutex_);
-  if (state_.empty() || state_.back().complete || state_.back().renders.empty()) {
-    throw std::logic_error("WorkFeed::publish_tile: no render is open");
-  }
-  Published& p = state_.back();
+  Published& p = open_state(c, "publish_tile");
+  if (p.renders.empty()) throw std::logic_error("WorkFeed::publish_tile: no render is open");
   const std::size_t n = p.renders.back()->tiles.size();
   if (n != p.published.back() + 1 || n > p.tiles.back()) throw std::logic_error("WorkFeed::publish_tile: not one more tile than published");
   p.published.back() = n;
   changed_.notify_all();
 }
 
-void WorkFeed::close_command() {
+void WorkFeed::close_command(std::size_t c) {
   std::lock_guard lock(mutex_);
-  if (state_.empty() || state_.back().complete) throw std::logic_error("WorkFeed::close_command: no command is open");
-  Published& p = state_.back();
+  Published& p = open_state(c, "close_command");
+  if (c > 0 && !state_[c - 1].complete) throw std::logic_error("WorkFeed::close_command: the previous command is open");
   for (std::size_t r = 0; r < p.renders.size(); ++r) {
     if (p.published[r] != p.tiles[r]) throw std::logic_error("WorkFeed::close_command: a render has tiles not published");
   }
-  if (p.renders.size() != own_.commands.back().renders.size()) throw std::logic_error("WorkFeed::close_command: a render was not published");
+  if (p.renders.size() != own_.commands[c].renders.size()) throw std::logic_error("WorkFeed::close_command: a render was not published");
   p.complete = true;
   changed_.notify_all();
 }

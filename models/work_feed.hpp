@@ -5,7 +5,10 @@
 // name, slots and buffers), then each of its renders when it is binned (its tile count known),
 // then each of that render's tiles in dispatch order as the functional run has merged it, then
 // the command is closed (complete); a command whose layout is known only at its end (a spilling
-// pass, gpu.mode=imr's batches, a dispatch) is published complete at once. The timing model waits
+// pass, gpu.mode=imr's batches, a dispatch) is published complete at once. The next command may
+// be opened (and its renders binned) while the previous one's last render still renders: the
+// functional run bins a pass before the tiles of the one before it (the hardware's two parameter
+// buffers: geometry of the next render overlaps the fragment work of this one). The timing model waits
 // for a piece only when its schedule needs it and reads it once published, so its results are the
 // same whether the work was all there before it started or arrived while it ran.
 #include <condition_variable>
@@ -32,18 +35,22 @@ class WorkFeed {
   /// The frame's fields (its commands are ignored) and the number of commands that will follow.
   void begin(const FrameWork& frame, std::size_t commands);
   /// Starts the next command from `header` (its fields but its renders final; no renders yet)
-  /// and returns where the producer appends its renders. Throws std::logic_error past the number
-  /// begin() gave or while the previous command is open.
+  /// and returns where the producer appends its renders (its index: last_opened()). Throws
+  /// std::logic_error past the number begin() gave, or while an earlier command is open with
+  /// renders to come (its latest render partial or none yet) or another one is open beside it.
   CommandWork& open(CommandWork&& header);
-  /// The open command's latest render is binned: its binning and `partial` final (false: the
+  /// Index of the command open() opened last.
+  std::size_t last_opened() const;
+  /// Open command `c`'s latest render is binned: its binning and `partial` final (false: the
   /// command's last render), room reserved for its `tiles` tiles (appended later, each followed
-  /// by publish_tile(); none may move).
-  void publish_render(std::size_t tiles);
-  /// The open command's latest render has one more tile, final.
-  void publish_tile();
-  /// The open command is complete (all its renders and tiles final).
-  void close_command();
-  /// Appends the next command, complete (open, every render and tile, close).
+  /// by publish_tile(c); none may move).
+  void publish_render(std::size_t c, std::size_t tiles);
+  /// Open command `c`'s latest render has one more tile, final.
+  void publish_tile(std::size_t c);
+  /// Open command `c` is complete (all its renders and tiles final).
+  void close_command(std::size_t c);
+  /// Appends the next command, complete (open, every render and tile, close); every earlier one
+  /// must be complete.
   void publish(CommandWork&& cmd);
   /// No more commands: after the last, or when the producer failed (the consumer stops waiting).
   void close();
@@ -56,7 +63,8 @@ class WorkFeed {
   std::size_t expected_commands();
   /// Command `c` once it is opened (its header fields; its renders through wait_render), or
   /// nullptr when the feed was closed without it. The reference stays valid for the feed's life;
-  /// when command c + 1 is opened, command c is complete.
+  /// when command c + 1 is opened, command c's renders are all published (its tiles may still
+  /// come: wait_tile).
   const CommandWork* wait_for(std::size_t c);
   /// Render `r` of command `c` (opened) once published, or nullptr when none follows: the
   /// command was completed with fewer renders, or its latest render is not partial (a render
@@ -81,9 +89,11 @@ class WorkFeed {
     std::vector<std::size_t> published;  ///< per render: published so far
   };
   void wait_begun(std::unique_lock<std::mutex>& lock);
+  /// Open command `c`'s state (throws std::logic_error naming `what` if it is not open).
+  Published& open_state(std::size_t c, const char* what);
   /// Registers every render and tile of a complete command.
   static Published complete(const CommandWork& cmd);
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
   std::condition_variable changed_;
   FrameWork own_;                      ///< an open feed's frame (its commands vector never reallocates)
   const FrameWork* work_ = &own_;      ///< the frame read: own_ or a complete frame's

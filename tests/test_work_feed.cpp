@@ -135,14 +135,14 @@ TEST(WorkFeed, APassFedRenderByRenderAndTileByTileTimesAsTheCompleteFrame) {
     rw.binning = r.binning;
     rw.partial = r.partial;
     rw.tiles.reserve(r.tiles.size());
-    feed.publish_render(r.tiles.size());
+    feed.publish_render(0, r.tiles.size());
     for (const TileWork& t : r.tiles) {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));  // the timing model waits for tiles meanwhile
       rw.tiles.push_back(t);
-      feed.publish_tile();
+      feed.publish_tile(0);
     }
   }
-  feed.close_command();
+  feed.close_command(0);
   feed.publish(CommandWork(frame.commands[1]));
   feed.close();
   const TimingResult fed = timed.get();
@@ -151,21 +151,79 @@ TEST(WorkFeed, APassFedRenderByRenderAndTileByTileTimesAsTheCompleteFrame) {
   EXPECT_EQ(fed.tiles.size(), whole.tiles.size());
 }
 
+// The functional run bins a pass before the tiles of the pass before it (command_processor.cpp):
+// the next pass is opened and its renders published while the previous one's last render still
+// renders. The timing model reads the next pass's binning meanwhile and times the frame as the
+// complete one.
+TEST(WorkFeed, APassOpenedWhileThePreviousOnesTilesStillComeTimesAsTheCompleteFrame) {
+  FrameWork frame = pass_and_dispatch();
+  CommandWork second = frame.commands[0];
+  second.name = "pass1.next";
+  for (RenderWork& r : second.renders) {
+    for (TileWork& t : r.tiles) t.load_bytes[static_cast<std::size_t>(DramClass::Color)] = 0;
+  }
+  frame.commands.insert(frame.commands.begin() + 1, second);
+  const HwConfig hw = resolve_config({}, {}).hw;
+  const TimingResult whole = run_timing(hw, frame);
+
+  WorkFeed feed;
+  std::future<TimingResult> timed = std::async(std::launch::async, [&] { return run_timing(hw, feed); });
+  feed.begin(frame, 3);
+  auto open = [&](std::size_t c) -> CommandWork& {
+    CommandWork header = frame.commands[c];
+    header.renders.clear();
+    return feed.open(std::move(header));
+  };
+  auto bin = [&](CommandWork& live, std::size_t c, std::size_t r) -> RenderWork& {
+    const RenderWork& src = frame.commands[c].renders[r];
+    RenderWork& rw = live.renders.emplace_back();
+    rw.binning = src.binning;
+    rw.partial = src.partial;
+    rw.tiles.reserve(src.tiles.size());
+    feed.publish_render(c, src.tiles.size());
+    return rw;
+  };
+  auto tiles = [&](RenderWork& rw, std::size_t c, std::size_t r) {
+    for (const TileWork& t : frame.commands[c].renders[r].tiles) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      rw.tiles.push_back(t);
+      feed.publish_tile(c);
+    }
+  };
+  CommandWork& first = open(0);
+  tiles(bin(first, 0, 0), 0, 0);  // the partial render: binned and rendered before the last is binned
+  RenderWork& last = bin(first, 0, 1);
+  EXPECT_THROW(feed.publish(CommandWork(frame.commands[2])), std::logic_error) << "a complete command after an open one";
+  CommandWork& next = open(1);  // binned ahead: pass 0's last render has not rendered yet
+  RenderWork& next0 = bin(next, 1, 0);
+  EXPECT_THROW(open(2), std::logic_error) << "two commands open already";
+  EXPECT_THROW(feed.close_command(1), std::logic_error) << "closed before the command before it";
+  EXPECT_NE(feed.wait_render(1, 0), nullptr) << "the consumer has the next pass's binning now";
+  tiles(last, 0, 1);
+  feed.close_command(0);
+  tiles(next0, 1, 0);
+  tiles(bin(next, 1, 1), 1, 1);
+  feed.close_command(1);
+  feed.publish(CommandWork(frame.commands[2]));
+  feed.close();
+  expect_same_timing(timed.get(), whole);
+}
+
 TEST(WorkFeed, ARenderThatIsNotPartialIsItsPassLastBeforeThePassIsClosed) {
   WorkFeed feed;
   FrameWork frame;
   feed.begin(frame, 1);
   CommandWork& live = feed.open(CommandWork{});
   live.renders.emplace_back().partial = true;
-  feed.publish_render(0);
+  feed.publish_render(0, 0);
   live.renders.emplace_back().partial = false;
-  feed.publish_render(0);
+  feed.publish_render(0, 0);
   // The consumer learns there is no third render without waiting for close_command (this thread
   // would wait forever otherwise).
   EXPECT_NE(feed.wait_render(0, 1), nullptr);
   EXPECT_EQ(feed.wait_render(0, 2), nullptr);
   live.renders.emplace_back();
-  EXPECT_THROW(feed.publish_render(0), std::logic_error) << "no render follows the last";
+  EXPECT_THROW(feed.publish_render(0, 0), std::logic_error) << "no render follows the last";
 }
 
 TEST(WorkFeed, TheProducerMustKeepItsTilesInPlaceAndPublishThemAll) {
@@ -173,16 +231,17 @@ TEST(WorkFeed, TheProducerMustKeepItsTilesInPlaceAndPublishThemAll) {
   FrameWork frame;
   feed.begin(frame, 2);
   CommandWork& live = feed.open(CommandWork{});
-  EXPECT_THROW(feed.open(CommandWork{}), std::logic_error) << "the previous command is open";
+  EXPECT_THROW(feed.open(CommandWork{}), std::logic_error) << "the previous command is open with renders to come";
   RenderWork& rw = live.renders.emplace_back();
-  EXPECT_THROW(feed.publish_render(3), std::logic_error) << "no room reserved: its tiles could move";
+  EXPECT_THROW(feed.publish_render(0, 3), std::logic_error) << "no room reserved: its tiles could move";
   rw.tiles.reserve(3);
-  feed.publish_render(3);
-  EXPECT_THROW(feed.publish_tile(), std::logic_error) << "no tile appended";
+  feed.publish_render(0, 3);
+  EXPECT_THROW(feed.publish_tile(0), std::logic_error) << "no tile appended";
+  EXPECT_THROW(feed.publish_tile(1), std::logic_error) << "no command 1 is open";
   rw.tiles.emplace_back();
-  feed.publish_tile();
+  feed.publish_tile(0);
   EXPECT_EQ(feed.wait_tile(0, 0, 0), rw.tiles.data());
-  EXPECT_THROW(feed.close_command(), std::logic_error) << "two tiles not published";
+  EXPECT_THROW(feed.close_command(0), std::logic_error) << "two tiles not published";
   feed.close();
   EXPECT_EQ(feed.wait_tile(0, 0, 1), nullptr) << "a closed feed ends the wait";
 }
