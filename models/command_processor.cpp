@@ -417,8 +417,7 @@ class FrameSimulator {
     if (run->live) renderer.publish_to(*options_.feed);
     // Tiles of this pass render only after the pass before it ended.
     renderer.before_tiles([this, r = run.get()] {
-      finish_pending_pass();
-      recheck_stored_surfaces(*r);
+      if (finish_pending_pass()) recheck_stored_surfaces(*r);
     });
     renderer.bin();
     prim_base_ = ctx.frame_prim_base;
@@ -428,8 +427,8 @@ class FrameSimulator {
       img.defined = a.store == StoreOp::Store && !a.transient;
       if (img.defined && a.usage == AttachmentUsage::Color) result_.final_color = a.name;
     }
-    finish_pending_pass();  // the pass before it: binned before this one, rendered now
-    recheck_stored_surfaces(*run);
+    // The pass before it: binned before this one, rendered now.
+    if (finish_pending_pass()) recheck_stored_surfaces(*run);
     renderer.before_tiles(nullptr);
     // Bin-ahead: the next pass is binned before this one's last render's tiles, when this pass's
     // layout is known now (a spilling pass is published complete at its end, after the next
@@ -441,11 +440,12 @@ class FrameSimulator {
     }
   }
 
-  /// Renders the tiles of the pass binned ahead (if any) and ends it.
-  void finish_pending_pass() {
-    if (!pending_) return;
+  /// Renders the tiles of the pass binned ahead (if any) and ends it; whether there was one.
+  bool finish_pending_pass() {
+    if (!pending_) return false;
     std::unique_ptr<PassRun> run = std::move(pending_);
     end_pass(*run);
+    return true;
   }
 
   /// A pass binned before the pass before it ended read that pass's stored surfaces before its

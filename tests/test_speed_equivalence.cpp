@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <map>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "app/run_driver.hpp"
@@ -164,6 +165,33 @@ TEST_F(SpeedEquivalence, GbufferSurfacesAreStoredOnlyWhereSomethingReadsThem) {
       }
       EXPECT_GE(written, 1u) << c.technique << ": no attachment holds the G-buffer's written marks";
       EXPECT_EQ(stored, colour || c.kept_without_colours ? written : 0u) << c.technique << (colour ? " with" : " without") << " colours";
+    }
+  }
+}
+
+// The lighting pass of deferred is set up and binned before the G-buffer pass's tiles render
+// (bin-ahead, models/command_processor.cpp): it finds the G-buffer's surface store allocated then.
+// When no G-buffer tile writes a surface (every depth test fails), the store is released after
+// those tiles, and the lighting pass is refused as it is when it is set up after them.
+TEST_F(SpeedEquivalence, ALightingPassBinnedAheadOfAGbufferNoShaderWroteIsRefused) {
+  Trace t = small_trace("deferred");
+  const PassDesc* gbuffer = nullptr;
+  for (const auto& cmd : t.commands) {
+    if (const auto* p = std::get_if<PassDesc>(&cmd); p && gbuffer == nullptr) gbuffer = p;
+  }
+  ASSERT_NE(gbuffer, nullptr);
+  for (const DrawCmd& d : gbuffer->draws) {
+    for (PipelineState& pl : t.pipelines) {
+      if (pl.name == d.pipeline) pl.depth_compare = CompareOp::Never;
+    }
+  }
+  const HwConfig hw = resolve_config({}, {}).hw;
+  for (const unsigned threads : {1u, 2u}) {
+    try {
+      simulate_frame(t, "t.trace", *scene_, hw, FrameOptions{.threads = threads});
+      ADD_FAILURE() << "a lighting pass reading a G-buffer no shader wrote ran at " << threads << " threads";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("no shader wrote it"), std::string::npos) << e.what();
     }
   }
 }
