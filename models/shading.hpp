@@ -246,6 +246,14 @@ struct FormatPrecision {
       default: return other_color(f, v);
     }
   }
+  /// Whether format `f` stores all four channels of a colour with FormatPrecision::color's
+  /// rounding: every value such a target holds (its clear, 0, and what color() wrote) is a fixed
+  /// point of color(f, .), so adding 0 to it changes nothing (but a -0 in fp16, which would become
+  /// +0: an equal value; formats lacking a channel read it back as 0 or 1, which a cleared value
+  /// need not be). Test UnitTsp.AddingZeroKeepsWhatAFourChannelTargetHolds.
+  static bool keeps_every_channel(Format f) {
+    return f == Format::Rgba8 || f == Format::Rgb10a2 || f == Format::Rgba16f || f == Format::Rgba32f;
+  }
   /// The surface a G-buffer target (or PLS variable) named `name` of format `f` keeps: `albedo`
   /// stores the base colour (rgb, then alpha where the format has a fourth channel), `normal` the
   /// normal (unorm formats as n/2 + 1/2, two-channel formats octahedral, float formats n; read

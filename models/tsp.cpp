@@ -729,9 +729,15 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         ctx_.pls->overflow[pixel] = 0;
       } else if (sh.light_source == LightSource::Proxy) {
         if (have_surface && colour) {
-          glm::vec3& acc = ctx_.pls->accum[pixel];
-          acc += lighting();
-          if (pls_accum_format) acc = glm::vec3(FormatPrecision::color(*pls_accum_format, glm::vec4(acc, 1.0f)));
+          // Adding 0 keeps the accumulator as it is: it only ever holds 0 or what its format keeps,
+          // each channel a fixed point of FormatPrecision::color (most light-volume fragments lie
+          // out of their light's reach).
+          const glm::vec3 add = lighting();
+          if (add != glm::vec3(0.0f)) {
+            glm::vec3& acc = ctx_.pls->accum[pixel];
+            acc += add;
+            if (pls_accum_format) acc = glm::vec3(FormatPrecision::color(*pls_accum_format, glm::vec4(acc, 1.0f)));
+          }
         }
       } else if (p.proxy_light >= 0) {
         ctx_.pls->push_light(pixel, static_cast<std::uint32_t>(p.proxy_light));
@@ -754,11 +760,14 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       stats.blended_samples += written;
       stats.tile_buffer_read_bytes += written * out_bytes_per_sample;
     }
+    // An additive fragment that adds exactly 0 (out of its lights' reach, facing away) leaves a
+    // target that keeps every channel as it is: dst + 0 is dst, which the format already holds.
+    const bool adds_zero = blend == BlendMode::Add && lit == glm::vec3(0.0f);
     bool surface_stored = false;
     for (std::uint32_t o = 0; o < outputs; ++o) {
       AttachmentImage* target = ctx_.color_targets[o];
       if (target->usage == AttachmentUsage::Color) {
-        if (!colour) continue;
+        if (!colour || (adds_zero && FormatPrecision::keeps_every_channel(target->format))) continue;
         glm::vec4* dst = target->color.data() + pixel * static_cast<std::size_t>(S);
         const Format format = target->format;
         for (int smp = 0; smp < S; ++smp) {

@@ -336,6 +336,37 @@ TEST(UnitTsp, FormatPrecisionOfEachFormat) {
   EXPECT_EQ(FormatPrecision::color(Format::Rgba32f, v), v);
 }
 
+// Tsp::shade leaves an additive target alone where a fragment adds exactly 0, for the formats
+// FormatPrecision::keeps_every_channel names: sound only if every value such a target holds (its
+// clear, 0, and whatever color() wrote) is a fixed point of color(). Checked on every 61st float
+// bit pattern in each lane (zeros, denormals, NaN, infinities) for those formats; a format lacking
+// a channel is refused, as its cleared 0 reads back as alpha 1.
+TEST(UnitTsp, AddingZeroKeepsWhatAFourChannelTargetHolds) {
+  const Format kept[] = {Format::Rgba8, Format::Rgb10a2, Format::Rgba16f, Format::Rgba32f};
+  std::uint64_t moved = 0;
+  for (const Format f : kept) {
+    ASSERT_TRUE(FormatPrecision::keeps_every_channel(f));
+    EXPECT_EQ(FormatPrecision::color(f, glm::vec4(0.0f)), glm::vec4(0.0f));  // the clear
+    for (std::uint64_t bits = 0; bits <= 0xffffffffu; bits += 61 * 7) {
+      const float x = std::bit_cast<float>(static_cast<std::uint32_t>(bits));
+      const glm::vec4 held = FormatPrecision::color(f, glm::vec4(x, -x, x * 0.5f, x * 3.0f));
+      const glm::vec4 again = FormatPrecision::color(f, held + glm::vec4(0.0f));
+      for (int c = 0; c < 4; ++c) {
+        if (std::isnan(held[c]) && std::isnan(again[c])) continue;  // (rgba32f keeps a NaN)
+        // (-0 + 0 is +0: an fp16 target that held -0 would read +0 had the 0 been added; equal
+        // values, the same in every image. Every other value bit for bit.)
+        const bool same = held[c] == 0.0f ? again[c] == 0.0f : std::bit_cast<std::uint32_t>(held[c]) == std::bit_cast<std::uint32_t>(again[c]);
+        moved += same ? 0 : 1;
+      }
+    }
+  }
+  EXPECT_EQ(moved, 0u);
+  for (const Format f : {Format::R11g11b10f, Format::R8, Format::Rg16f, Format::R32f}) {
+    EXPECT_FALSE(FormatPrecision::keeps_every_channel(f));
+    EXPECT_NE(FormatPrecision::color(f, glm::vec4(0.0f)), glm::vec4(0.0f));  // why: alpha reads 1
+  }
+}
+
 TEST(UnitTsp, GbufferTargetsKeepTheSurfaceAtTheirPrecision) {
   // G-buffer targets albedo rgba8 and normal rgb10a2: the stored surface's albedo 0.3 becomes
   // round(76.5) = 76 (even) / 255; the normal (0, 0, 1) stored as n/2 + 1/2 = (0.5, 0.5, 1) in
