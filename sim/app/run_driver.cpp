@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cmath>
 #include <ctime>
 #include <time.h>
@@ -351,6 +352,12 @@ RunOutcome run_one(const RunRequest& req) {
                        "Host wall time of the functional simulation's tile rendering (the part on --threads threads)"});
   rec.stats.push_back({"frame/host", "simulation_threads", static_cast<double>(outcome.threads), "threads",
                        "Threads the functional simulation rendered tiles on (--threads; no other figure depends on it)"});
+  // Whether glibc's allocator hands out transparent huge pages in this process (sim/app/main.cpp
+  // asks for them unless TBDRSIM_HUGE_PAGES=0): host timings of runs with and without differ.
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  const bool huge_pages = tunables != nullptr && std::string(tunables).find("glibc.malloc.hugetlb=1") != std::string::npos;
+  rec.stats.push_back({"frame/host", "allocator_huge_pages", huge_pages ? 1.0 : 0.0, "flag",
+                       "1 where the allocator asked for transparent huge pages (glibc.malloc.hugetlb=1; TBDRSIM_HUGE_PAGES=0 leaves them out)"});
   rec.tiles = outcome.timing.tiles;
   ResultsDb db(req.db_path);
   outcome.run_id = db.write_run(rec);

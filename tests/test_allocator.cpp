@@ -1,0 +1,68 @@
+// The allocator settings `main` re-executes the program with (sim/app/main.cpp): transparent huge
+// pages unless TBDRSIM_HUGE_PAGES=0, a user's own GLIBC_TUNABLES kept as given. Checked through
+// what a run books (frame/host allocator_huge_pages) when the binary is started with a chosen
+// environment.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "atrium_trace_setup.hpp"
+#include "db_query.hpp"
+#include "scene/scene_library.hpp"
+#include "scratch_dir.hpp"
+#include "techniques/technique.hpp"
+#include "trace/trace.hpp"
+
+namespace tbdr {
+namespace {
+
+namespace fs = std::filesystem;
+testing_scratch::ScratchCleanup scratch_cleanup{"allocator"};
+
+/// Runs `tbdrsim run --trace T --db D` with exactly the environment `env` (PATH aside); returns
+/// the run's allocator_huge_pages figure (NaN and a failure when it did not run).
+double huge_pages_flag(const std::string& trace, const fs::path& db, std::vector<std::string> env) {
+  std::vector<std::string> args = {TBDRSIM_BINARY, "run", "--trace", trace, "--db", db.string(), "--threads", "1"};
+  env.push_back("PATH=/usr/bin:/bin");
+  std::vector<char*> argv, envp;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  for (auto& e : env) envp.push_back(e.data());
+  envp.push_back(nullptr);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const fs::path log = db.string() + ".log";
+    FILE* f = std::freopen(log.c_str(), "w", stdout);
+    (void)f;
+    execve(argv[0], argv.data(), envp.data());
+    _exit(127);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << db;
+  return testing_support::query_number(db.string(), "SELECT value FROM stats WHERE scope = 'frame/host' AND name = 'allocator_huge_pages'");
+}
+
+TEST(Allocator, HugePagesUnlessTurnedOffAndAUsersTunablesKept) {
+#if defined(__SANITIZE_ADDRESS__) || !defined(__GLIBC__)
+  GTEST_SKIP() << "the sanitizers' allocator (or a libc other than glibc): no re-execution";
+#else
+  const fs::path dir = testing_scratch::scratch_dir("allocator", "runs");
+  const Scene scene = load_scene("atrium:1");
+  const std::string trace = (dir / "pf.trace").string();
+  write_trace_file(generate_trace("plain_forward", testing_support::atrium_entrance_setup(scene, 4, 64, 32)), trace);
+  EXPECT_EQ(huge_pages_flag(trace, dir / "default.db", {}), 1.0);
+  EXPECT_EQ(huge_pages_flag(trace, dir / "off.db", {"TBDRSIM_HUGE_PAGES=0"}), 0.0);
+  EXPECT_EQ(huge_pages_flag(trace, dir / "on.db", {"TBDRSIM_HUGE_PAGES=1"}), 1.0);
+  // A user's own tunables are not touched (no huge pages added to them).
+  EXPECT_EQ(huge_pages_flag(trace, dir / "user.db", {"GLIBC_TUNABLES=glibc.malloc.trim_threshold=1048576"}), 0.0);
+#endif
+}
+
+}  // namespace
+}  // namespace tbdr
