@@ -3,10 +3,10 @@
 // what a run books (frame/host allocator_huge_pages) when the binary is started with a chosen
 // environment.
 #include <gtest/gtest.h>
+#include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -34,11 +34,11 @@ double huge_pages_flag(const std::string& trace, const fs::path& db, std::vector
   argv.push_back(nullptr);
   for (auto& e : env) envp.push_back(e.data());
   envp.push_back(nullptr);
+  const std::string log = db.string() + ".log";  // (made before the fork: the child only execs)
   const pid_t pid = fork();
   if (pid == 0) {
-    const fs::path log = db.string() + ".log";
-    FILE* f = std::freopen(log.c_str(), "w", stdout);
-    (void)f;
+    const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(fd, 1);
     execve(argv[0], argv.data(), envp.data());
     _exit(127);
   }

@@ -367,6 +367,51 @@ TEST(UnitTsp, AddingZeroKeepsWhatAFourChannelTargetHolds) {
   }
 }
 
+// An additive pass's fragment out of its light's reach adds exactly 0: the TSP leaves the target
+// as it is instead of writing dst + 0 back (host speed), but the hardware still blends it, so
+// every count is the one of a fragment its light reaches. Pixel (5, 7) of UL lies at world
+// (5.5, -7.5, -1), normal +z. Light 0 sits 1 unit in front of it (radius 3: it reaches and faces
+// it); light 1 is 150 units away with radius 1. The target holds 128/255 before (an rgba8 value).
+// Per pass: 1 shaded and blended sample, 4 B written and 4 B read (rgba8), 1 light evaluated.
+TEST(UnitTsp, AnAdditiveFragmentOutOfReachCountsAsOneInReachAndKeepsItsPixel) {
+  RenderSpec spec;
+  spec.attachments = {make_attachment("color", Format::Rgba8), make_attachment("depth", Format::D24s8)};
+  spec.attachments[1].usage = AttachmentUsage::Depth;
+  spec.lights.resize(2);
+  spec.lights[0].position = glm::vec3(5.5f, -7.5f, 0.0f);
+  spec.lights[0].radius = 3.0f;
+  spec.lights[1].position = glm::vec3(100.0f, 100.0f, 50.0f);
+  spec.lights[1].radius = 1.0f;
+  RenderRig rig(spec);
+  PipelineState add;
+  add.blend = BlendMode::Add;
+  rig.add_draw(make_shader(1, 1, LightSource::All), add, {1});  // the far light's pass
+  rig.add_draw(make_shader(1, 1, LightSource::All), add, {0});  // the near light's pass
+  ScreenTri t = kUpperLeft;
+  t.material = 0;
+  const std::uint32_t far = rig.add_triangle(t);
+  t.draw = 1;
+  const std::uint32_t near = rig.add_triangle(t);
+  const std::size_t px = 7 * kViewportPx + 5;
+  glm::vec4& dst = rig.images.attachments.at("color").color[px];
+  const glm::vec4 before(128.0f / 255.0f, 64.0f / 255.0f, 0.0f, 1.0f);
+  dst = before;
+  rig.shade(far, {{5, 7, 1u}});
+  EXPECT_EQ(dst, before);  // bit for bit: nothing added
+  EXPECT_EQ(rig.tsp_stats.blended_samples.value(), 1u);
+  EXPECT_EQ(rig.tsp_stats.shaded_samples.value(), 1u);
+  EXPECT_EQ(rig.tsp_stats.tile_buffer_write_bytes.value(), 4u);
+  EXPECT_EQ(rig.tsp_stats.tile_buffer_read_bytes.value(), 4u);
+  EXPECT_EQ(rig.tsp_stats.light_evaluations.value(), 1u);
+  rig.shade(near, {{5, 7, 1u}});
+  EXPECT_GT(dst.x, before.x);  // the near light adds (n.l = 1, attenuation (1 - 1/9)^2)
+  EXPECT_EQ(rig.tsp_stats.blended_samples.value(), 2u);
+  EXPECT_EQ(rig.tsp_stats.shaded_samples.value(), 2u);
+  EXPECT_EQ(rig.tsp_stats.tile_buffer_write_bytes.value(), 8u);
+  EXPECT_EQ(rig.tsp_stats.tile_buffer_read_bytes.value(), 8u);
+  EXPECT_EQ(rig.tsp_stats.light_evaluations.value(), 2u);
+}
+
 TEST(UnitTsp, GbufferTargetsKeepTheSurfaceAtTheirPrecision) {
   // G-buffer targets albedo rgba8 and normal rgb10a2: the stored surface's albedo 0.3 becomes
   // round(76.5) = 76 (even) / 255; the normal (0, 0, 1) stored as n/2 + 1/2 = (0.5, 0.5, 1) in

@@ -6,33 +6,32 @@
 #include <string>
 #include <vector>
 
+#include "app/allocator_tunables.hpp"
 #include "app/cli.hpp"
 
 namespace {
 
-/// glibc's allocator settings for a simulation run (issue 15). A 1080p frame touches a few
-/// hundred MB in vectors that grow, are freed and are allocated again per pass and per render;
-/// with glibc's defaults each block over 128 KiB is a fresh mmap whose pages the kernel maps and
-/// zeroes again every time, and freed memory goes back to the kernel: 23,000-84,000 page faults
-/// per 1080p run and a fifth of its CPU time in the kernel on the machines measured. Blocks up to
-/// 32 MiB (glibc's largest mmap threshold) come from the heap and are kept for the next pass, and
-/// the heap is trimmed only past 256 MiB free, so a page is faulted in once per run; larger blocks
-/// (whole-frame arrays) are mapped and unmapped as before, so a run's peak stays that of its
-/// largest pass.
-constexpr const char* kMallocTunables =
-    "glibc.malloc.mmap_threshold=33554432:glibc.malloc.trim_threshold=268435456";
-/// Transparent huge pages for malloc's blocks (where the kernel grants them on request): 2 MiB
-/// pages, 512 times fewer faults and TLB misses over whole-frame arrays. Measured side by side on
-/// 2026-12-05 (kernel 6.18, 1 thread, atrium:3 1080p, 1024 lights, deferred with images): 82,100
-/// -> 1,200-2,000 page faults, 3.1-4.1 -> 2.8 user s, 0.54-0.60 -> 0.40-0.52 kernel s; the study
-/// 36.9-38.6 -> 31.3-33.5 s wall (1.2 M -> 0.21 M faults), peak memory +1 %. On the virtual
-/// machine measured until 2026-12-03 a fresh 2 MiB page took about 1 ms to fault in against
-/// 0.4 ms for 512 small ones, and the same deferred run spent 0.55-0.78 s in the kernel with huge
-/// pages against 0.17-0.20 s without: where that holds, TBDRSIM_HUGE_PAGES=0 leaves them out
-/// (docs/architecture.md, "The allocator").
-constexpr const char* kHugePageTunable = ":glibc.malloc.hugetlb=1";
-/// The environment variable that turns huge pages off ("0").
-constexpr const char* kHugePagesVariable = "TBDRSIM_HUGE_PAGES";
+// glibc's allocator settings for a simulation run (issue 15). A 1080p frame touches a few
+// hundred MB in vectors that grow, are freed and are allocated again per pass and per render;
+// with glibc's defaults each block over 128 KiB is a fresh mmap whose pages the kernel maps and
+// zeroes again every time, and freed memory goes back to the kernel: 23,000-84,000 page faults
+// per 1080p run and a fifth of its CPU time in the kernel on the machines measured. Blocks up to
+// 32 MiB (glibc's largest mmap threshold) come from the heap and are kept for the next pass, and
+// the heap is trimmed only past 256 MiB free, so a page is faulted in once per run; larger blocks
+// (whole-frame arrays) are mapped and unmapped as before, so a run's peak stays that of its
+// largest pass.
+//
+// Transparent huge pages for malloc's blocks (where the kernel grants them on request): 2 MiB
+// pages, 512 times fewer faults and TLB misses over whole-frame arrays. Measured side by side on
+// 2026-12-05 (kernel 6.18, 1 thread, atrium:3 1080p, 1024 lights, deferred with images): 82,100
+// -> 1,200-2,000 page faults, 3.1-4.1 -> 2.8 user s, 0.54-0.60 -> 0.40-0.52 kernel s; the study
+// 36.9-38.6 -> 31.3-33.5 s wall (1.2 M -> 0.21 M faults), peak memory +1 %. On the virtual
+// machine measured until 2026-12-03 a fresh 2 MiB page took about 1 ms to fault in against
+// 0.4 ms for 512 small ones, and the same deferred run spent 0.55-0.78 s in the kernel with huge
+// pages against 0.17-0.20 s without: where that holds, TBDRSIM_HUGE_PAGES=0 leaves them out
+// (docs/architecture.md, "The allocator"). Both settings: tbdr::malloc_tunables
+// (app/allocator_tunables.hpp).
+
 /// Set in the environment of the re-executed process, so it runs once (and its children, which
 /// inherit GLIBC_TUNABLES, do not re-execute either).
 constexpr const char* kTunedMarker = "TBDRSIM_MALLOC_TUNED";
@@ -46,8 +45,7 @@ void reexec_with_malloc_tunables(char** argv) {
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
   if (std::getenv("GLIBC_TUNABLES") != nullptr || std::getenv(kTunedMarker) != nullptr) return;
   if (const char* preload = std::getenv("LD_PRELOAD"); preload != nullptr && *preload != '\0') return;
-  const char* huge = std::getenv(kHugePagesVariable);
-  const std::string tunables = std::string(kMallocTunables) + (huge != nullptr && std::string(huge) == "0" ? "" : kHugePageTunable);
+  const std::string tunables = tbdr::malloc_tunables();
   if (setenv("GLIBC_TUNABLES", tunables.c_str(), 1) != 0 || setenv(kTunedMarker, "1", 1) != 0) return;
   execv("/proc/self/exe", argv);
   unsetenv("GLIBC_TUNABLES");  // exec failed: run here, untuned

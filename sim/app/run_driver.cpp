@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdlib>
 #include <cmath>
 #include <ctime>
 #include <time.h>
@@ -15,6 +14,7 @@
 
 #include "kernel/errors.hpp"
 #include "models/work_feed.hpp"
+#include "app/allocator_tunables.hpp"
 #include "app/image_output.hpp"
 #include "analysis/results_db.hpp"
 #include "trace/trace.hpp"
@@ -354,9 +354,7 @@ RunOutcome run_one(const RunRequest& req) {
                        "Threads the functional simulation rendered tiles on (--threads; no other figure depends on it)"});
   // Whether glibc's allocator hands out transparent huge pages in this process (sim/app/main.cpp
   // asks for them unless TBDRSIM_HUGE_PAGES=0): host timings of runs with and without differ.
-  const char* tunables = std::getenv("GLIBC_TUNABLES");
-  const bool huge_pages = tunables != nullptr && std::string(tunables).find("glibc.malloc.hugetlb=1") != std::string::npos;
-  rec.stats.push_back({"frame/host", "allocator_huge_pages", huge_pages ? 1.0 : 0.0, "flag",
+  rec.stats.push_back({"frame/host", "allocator_huge_pages", allocator_huge_pages() ? 1.0 : 0.0, "flag",
                        "1 where the allocator asked for transparent huge pages (glibc.malloc.hugetlb=1; TBDRSIM_HUGE_PAGES=0 leaves them out)"});
   rec.tiles = outcome.timing.tiles;
   ResultsDb db(req.db_path);
