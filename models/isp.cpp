@@ -117,44 +117,63 @@ void Isp::rop_color_outputs(std::uint32_t prim_index, bool punch) {
 
 void Isp::flush(const std::vector<std::uint32_t>& prims, bool mid_tile, IspStats& isp, TspStats& tsp) {
   const auto L = static_cast<std::size_t>(layers_per_sample_);
-  flush_samples_.clear();
   unresolved_layers_ = 0;  // every layer leaves the stacks
   bool resolves = false;
+  std::uint64_t flushed = 0;
   // Shade primitive by primitive, in submission order (a sample's layers were pushed in that
   // order, so each sample's layers are shaded bottom first); raster order within each: the order
-  // the layers were pushed in, less those a later opaque sample hid.
-  for (const PushedLayer& pl : pushed_) {
-    if (pl.slot >= depth_of_[pl.li] || layers_[pl.li * L + pl.slot].list_pos != pl.sample.tag) continue;
-    flush_samples_.push_back(pl.sample);
-    flush_samples_.back().tag = prims[pl.sample.tag];
-    resolves = resolves || pl.sample.unresolved;
-  }
-  for (const PushedLayer& pl : pushed_) depth_of_[pl.li] = 0;
-  pushed_.clear();
-  if (flush_samples_.empty()) return;
-  if (mid_tile) {
-    ++isp.tag_flushes;
-    isp.tag_flushed_samples += flush_samples_.size();
-  }
-  isp.tag_buffer_read_bytes += flush_samples_.size() * static_cast<std::uint64_t>(ctx_.hw->isp.tag_bits / 8);
-  std::size_t i = 0;
-  while (i < flush_samples_.size()) {
-    std::size_t j = i;
-    while (j < flush_samples_.size() && flush_samples_[j].tag == flush_samples_[i].tag) ++j;
-    build_batch(flush_samples_.data() + i, flush_samples_.data() + j, batch_);
-    const bool punch = ctx_.prims[flush_samples_[i].tag].hsr == HsrClass::PunchThrough;
+  // the layers were pushed in, less those a later opaque sample hid. A primitive's pending
+  // samples are merged into its batch of pixels as they are found (consecutive samples of one
+  // pixel share a ShadePixel); the batch is shaded when the next primitive's first sample comes.
+  // (Shading reads none of the stacks: the pending test of a later layer is not disturbed.)
+  batch_.clear();
+  flush_samples_.clear();  // the current primitive's samples, kept for a punch-through's depth writes
+  std::uint32_t group_tag = kNoTag;
+  bool group_punch = false, group_unresolved = false;
+  const auto shade_group = [&] {
     // A mid-tile flush waits for the alpha test of the unresolved punch-through layers (their
     // shaders; the layers beneath need not finish first: only the color writes are ordered).
-    const bool waited = mid_tile && punch && flush_samples_[i].unresolved;
+    const bool waited = mid_tile && group_punch && group_unresolved;
     const std::uint64_t alu0 = tsp.fragment_alu_ops.value(), texels0 = tsp.texels_filtered.value();
-    tsp_.shade(flush_samples_[i].tag, batch_, punch ? &alive_ : nullptr, tsp);
+    tsp_.shade(group_tag, batch_, group_punch ? &alive_ : nullptr, tsp);
     if (waited) {
       isp.resolve_wait_alu_ops += tsp.fragment_alu_ops.value() - alu0;
       isp.resolve_wait_texels += tsp.texels_filtered.value() - texels0;
     }
-    if (punch) write_punch_depth(flush_samples_.data() + i, flush_samples_.data() + j, isp);
-    i = j;
+    if (group_punch) write_punch_depth(flush_samples_.data(), flush_samples_.data() + flush_samples_.size(), isp);
+  };
+  for (const PushedLayer& pl : pushed_) {
+    if (pl.slot >= depth_of_[pl.li] || layers_[pl.li * L + pl.slot].list_pos != pl.sample.tag) continue;
+    const std::uint32_t tag = prims[pl.sample.tag];
+    if (tag != group_tag) {
+      if (!batch_.empty()) shade_group();
+      batch_.clear();
+      flush_samples_.clear();
+      group_tag = tag;
+      group_punch = ctx_.prims[tag].hsr == HsrClass::PunchThrough;
+      group_unresolved = pl.sample.unresolved;
+    }
+    ++flushed;
+    resolves = resolves || pl.sample.unresolved;
+    if (!batch_.empty() && batch_.back().x == pl.sample.x && batch_.back().y == pl.sample.y) {
+      batch_.back().mask |= pl.sample.bit;
+    } else {
+      batch_.push_back({pl.sample.x, pl.sample.y, pl.sample.bit});
+    }
+    if (group_punch) {
+      flush_samples_.push_back(pl.sample);
+      flush_samples_.back().tag = tag;
+    }
   }
+  if (!batch_.empty()) shade_group();
+  for (const PushedLayer& pl : pushed_) depth_of_[pl.li] = 0;
+  pushed_.clear();
+  if (flushed == 0) return;
+  if (mid_tile) {
+    ++isp.tag_flushes;
+    isp.tag_flushed_samples += flushed;
+  }
+  isp.tag_buffer_read_bytes += flushed * static_cast<std::uint64_t>(ctx_.hw->isp.tag_bits / 8);
   if (mid_tile && resolves) ++isp.resolve_flushes;
 }
 
@@ -308,18 +327,40 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
           }
         });
       };
+      // One sample per pixel: the same visit a row's run at a time (the depth test reads the
+      // run's stored depths in a row; no coverage mask to walk).
+      auto visit_spans = [&]<bool kDepthTest, bool kOverdraw>() {
+        rasterize_spans_1x(p.setup, rect, ctx_.pattern, [&](int y, int xa, int xb, const float* z) TBDR_ISP_INLINE_VISITOR {
+          const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(xa);
+          const auto n = static_cast<std::uint32_t>(xb - xa);
+          rasterised += n;
+          if constexpr (kOverdraw) {
+            for (std::uint32_t i = 0; i < n; ++i) overdraw[row + i] += 1;
+          }
+          const auto li0 = static_cast<std::uint32_t>((y - y0) * rw + (xa - x0));
+          for (std::uint32_t i = 0; i < n; ++i) {
+            if constexpr (kDepthTest) {
+              if (!passes_outcomes(depth_outcomes, z[i], depth[row + i])) continue;
+            }
+            const std::uint32_t li = li0 + i;
+            if (layered) conflict = conflict || stack_depth[li] >= L;
+            cand[n_cand++] = {li, xa + static_cast<std::int32_t>(i), y, 1u, z[i], true};
+          }
+        });
+      };
+      const bool spans = S == 1;
       if (depth_on) {
         if (overdraw) {
-          visit.template operator()<true, true>();
+          spans ? visit_spans.template operator()<true, true>() : visit.template operator()<true, true>();
         } else {
-          visit.template operator()<true, false>();
+          spans ? visit_spans.template operator()<true, false>() : visit.template operator()<true, false>();
         }
         depth_reads = rasterised;
         final_fails = rasterised - n_cand;
       } else if (overdraw) {
-        visit.template operator()<false, true>();
+        spans ? visit_spans.template operator()<false, true>() : visit.template operator()<false, true>();
       } else {
-        visit.template operator()<false, false>();
+        spans ? visit_spans.template operator()<false, false>() : visit.template operator()<false, false>();
       }
     } else {
       rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {

@@ -143,7 +143,7 @@ class Isp {
   std::vector<PendingSample> pending_;
   std::vector<PendingSample> rasterised_;  ///< isp.early_z=0: every sample the primitive covers
   std::vector<PushedLayer> pushed_;  ///< the layers pushed since the tile's last flush
-  std::vector<PendingSample> flush_samples_;
+  std::vector<PendingSample> flush_samples_;  ///< flush: the punch-through primitive being shaded, its samples
   std::vector<ShadePixel> batch_;
   std::vector<std::uint32_t> alive_;
   std::deque<Queued> queue_;             ///< tbr forward pixel kill: primitives waiting to be shaded

@@ -26,6 +26,7 @@
 //   offset, rounded once to float (depth_at_sample): the same sample always gets the same depth
 //   whatever rectangle or traversal order reached it, and a sample on a vertex gets that vertex's
 //   z (the double error is far below half a float ulp).
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cassert>
@@ -329,6 +330,41 @@ void rasterize_in_rect(const TriangleSetup& tri, const PixelRect& rect, const Sa
     case 8: detail::rasterize_rect_n<8>(tri, r, pattern, fn); break;
     case 16: detail::rasterize_rect_n<16>(tri, r, pattern, fn); break;
     default: assert(false && "unsupported sample count"); break;
+  }
+}
+
+/// Longest run of pixels rasterize_spans_1x reports at once (its depth buffer on the stack).
+inline constexpr int kSpanPixels = 64;
+
+/// One sample per pixel, row by row: calls fn(int y, int x_begin, int x_end, const float* depth)
+/// for the covered pixels [x_begin, x_end) of each row of `rect` (clipped to the triangle's box),
+/// depth[i] being pixel x_begin + i's depth: the pixels, depths and order rasterize_in_rect
+/// reports one by one (the same edge walk and depth formula), a row's run in pieces of at most
+/// kSpanPixels. For loops that read a row's pixels together (the ISP's depth test). Requires
+/// pattern.count == 1.
+template <class Fn>
+void rasterize_spans_1x(const TriangleSetup& tri, const PixelRect& rect, const SamplePattern& pattern, Fn&& fn) {
+  if (tri.empty) return;
+  assert(pattern.count == 1 && pattern.subpixel_bits == tri.subpixel_bits);
+  const PixelRect r = intersect(rect, tri.bbox);
+  if (r.empty()) return;
+  detail::EdgeWalk<1> walk(tri, r, pattern);
+  const double z_off = depth_sample_offset(tri, pattern.dx[0], pattern.dy[0]);
+  float depth[kSpanPixels];
+  for (int py = r.y0; py < r.y1; ++py, walk.next_row()) {
+    std::int64_t lo, hi, full_lo, full_hi;
+    if (!walk.span(lo, hi, full_lo, full_hi)) continue;
+    for (std::int64_t a = lo; a < hi; a += kSpanPixels) {
+      const std::int64_t n = std::min<std::int64_t>(hi - a, kSpanPixels);
+      // Exact integer edge values, so pixel k's are those rasterize_rect_n reaches by stepping.
+      std::int64_t e1 = walk.edge_at(1, a) - tri.bias[1], e2 = walk.edge_at(2, a) - tri.bias[2];
+      for (std::int64_t k = 0; k < n; ++k) {
+        depth[k] = static_cast<float>(depth_at_corner(tri, e1, e2) + z_off);
+        e1 += walk.step_x[1];
+        e2 += walk.step_x[2];
+      }
+      fn(py, r.x0 + static_cast<int>(a), r.x0 + static_cast<int>(a + n), static_cast<const float*>(depth));
+    }
   }
 }
 

@@ -321,7 +321,20 @@ std::size_t launched_quads(std::span<const ShadePixel> pixels, std::vector<std::
       std::array<std::uint64_t, kBoxQuads> rows;
       const auto n_rows = static_cast<std::size_t>((y_hi >> 1) - qy0 + 1);
       std::fill_n(rows.begin(), n_rows, std::uint64_t{0});
-      for (const ShadePixel& px : pixels) rows[static_cast<std::size_t>((px.y >> 1) - qy0)] |= std::uint64_t{1} << ((px.x >> 1) - qx0);
+      // A quad row's bits gather in a register while its pixels come one after another (they
+      // mostly do: rows in order), not through memory pixel by pixel.
+      std::size_t row = static_cast<std::size_t>((pixels[0].y >> 1) - qy0);
+      std::uint64_t bits = 0;
+      for (const ShadePixel& px : pixels) {
+        const auto r = static_cast<std::size_t>((px.y >> 1) - qy0);
+        if (r != row) {
+          rows[row] |= bits;
+          bits = 0;
+          row = r;
+        }
+        bits |= std::uint64_t{1} << ((px.x >> 1) - qx0);
+      }
+      rows[row] |= bits;
       for (std::size_t r = 0; r < n_rows; ++r) {
         const auto qy = qy0 + static_cast<std::int32_t>(r);
         for (std::uint64_t m = rows[r]; m != 0; m &= m - 1) quads.push_back(key(qx0 + std::countr_zero(m), qy));
