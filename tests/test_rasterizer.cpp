@@ -569,6 +569,46 @@ TEST(RasterRect, CoveredSamplesAndDepthBoundsAgreeWithTheVisit) {
   EXPECT_LE(b.hi - b.lo, 2 * std::nextafter(0.25f, 1.0f) - 2 * 0.25f);
 }
 
+// rasterize_spans_1x reports a row's covered run at once (the ISP's 1x depth-test loop reads it):
+// the same pixels, in the same order, with bit-identical depths as rasterize_in_rect's visit one
+// by one, runs longer than kSpanPixels in pieces; rectangles up to 200 pixels wide make pieces.
+TEST(RasterRect, SpansAreTheVisitsPixelsAndDepths) {
+  const Viewport vp{200, 96, kBits};
+  std::mt19937 rng(23);
+  std::uniform_int_distribution<std::int32_t> cx(-8 * kOne, 208 * kOne), cy(-8 * kOne, 104 * kOne);
+  std::uniform_int_distribution<int> px(-4, 204), py(-4, 100);
+  std::uniform_real_distribution<float> depth(0.0f, 1.0f);
+  const SamplePattern p = standard_sample_pattern(1, kBits);
+  struct Visit {
+    int x, y;
+    std::uint32_t z_bits;
+    bool operator==(const Visit&) const = default;
+  };
+  std::uint64_t total = 0, pieces_at_limit = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const ScreenTriangle t = make_tri(cx(rng), cy(rng), cx(rng), cy(rng), cx(rng), cy(rng), depth(rng), depth(rng), depth(rng));
+    const TriangleSetup s = setup_triangle(t, vp);
+    const int a = px(rng), b = px(rng), c = py(rng), d = py(rng);
+    const PixelRect r = trial % 3 == 0 ? PixelRect{0, 0, 200, 96}
+                                       : PixelRect{std::min(a, b), std::min(c, d), std::max(a, b) + 1, std::max(c, d) + 1};
+    std::vector<Visit> one_by_one, by_span;
+    rasterize_in_rect(s, r, p, [&](int x, int y, std::uint32_t m, const float* z) {
+      ASSERT_EQ(m, 1u);
+      one_by_one.push_back({x, y, std::bit_cast<std::uint32_t>(z[0])});
+    });
+    rasterize_spans_1x(s, r, p, [&](int y, int x0, int x1, const float* z) {
+      ASSERT_LT(x0, x1);
+      ASSERT_LE(x1 - x0, kSpanPixels);
+      if (x1 - x0 == kSpanPixels) ++pieces_at_limit;
+      for (int x = x0; x < x1; ++x) by_span.push_back({x, y, std::bit_cast<std::uint32_t>(z[x - x0])});
+    });
+    ASSERT_EQ(by_span, one_by_one) << "trial " << trial;
+    total += one_by_one.size();
+  }
+  EXPECT_GT(total, 100000u);       // real areas, not only misses
+  EXPECT_GT(pieces_at_limit, 50u);  // runs longer than kSpanPixels were cut
+}
+
 TEST(RasterSetup, DegenerateAndOffscreenTrianglesAreEmpty) {
   const Viewport vp{32, 32, kBits};
   EXPECT_TRUE(setup_triangle(make_tri(0, 0, 10 * kOne, 10 * kOne, 20 * kOne, 20 * kOne), vp).empty);
