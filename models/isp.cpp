@@ -69,15 +69,17 @@ std::uint8_t apply_stencil(StencilOp op, std::uint8_t v, std::uint8_t ref) {
 
 Isp::Isp(RenderContext& ctx, Tsp& tsp) : ctx_(ctx), tsp_(tsp) {}
 
+void Isp::add_to_batch(const PendingSample& s, std::vector<ShadePixel>& batch) {
+  if (!batch.empty() && batch.back().x == s.x && batch.back().y == s.y) {
+    batch.back().mask |= s.bit;
+  } else {
+    batch.push_back({s.x, s.y, s.bit});
+  }
+}
+
 void Isp::build_batch(const PendingSample* begin, const PendingSample* end, std::vector<ShadePixel>& batch) {
   batch.clear();
-  for (const PendingSample* s = begin; s != end; ++s) {
-    if (!batch.empty() && batch.back().x == s->x && batch.back().y == s->y) {
-      batch.back().mask |= s->bit;
-    } else {
-      batch.push_back({s->x, s->y, s->bit});
-    }
-  }
+  for (const PendingSample* s = begin; s != end; ++s) add_to_batch(*s, batch);
 }
 
 void Isp::write_punch_depth(const PendingSample* begin, const PendingSample* end, IspStats& isp) {
@@ -155,11 +157,7 @@ void Isp::flush(const std::vector<std::uint32_t>& prims, bool mid_tile, IspStats
     }
     ++flushed;
     resolves = resolves || pl.sample.unresolved;
-    if (!batch_.empty() && batch_.back().x == pl.sample.x && batch_.back().y == pl.sample.y) {
-      batch_.back().mask |= pl.sample.bit;
-    } else {
-      batch_.push_back({pl.sample.x, pl.sample.y, pl.sample.bit});
-    }
+    add_to_batch(pl.sample, batch_);
     if (group_punch) {
       flush_samples_.push_back(pl.sample);
       flush_samples_.back().tag = tag;

@@ -122,6 +122,8 @@ class Isp {
   void shade_queued(const PixelRect& rect, IspStats& isp, TspStats& tsp);
   /// Tile sample index of a pending sample.
   std::size_t tile_sample(const PixelRect& rect, const PendingSample& ps) const;
+  /// Appends a sample to a batch: to its last pixel when it is the same pixel, else as a new one.
+  static void add_to_batch(const PendingSample& s, std::vector<ShadePixel>& batch);
   /// Merges consecutive samples of one pixel into ShadePixels (samples are in raster order).
   static void build_batch(const PendingSample* begin, const PendingSample* end, std::vector<ShadePixel>& batch);
 
