@@ -1,7 +1,8 @@
 // The allocator settings `main` re-executes the program with (sim/app/main.cpp): transparent huge
-// pages unless TBDRSIM_HUGE_PAGES=0, a user's own GLIBC_TUNABLES kept as given. Checked through
-// what a run books (frame/host allocator_huge_pages) when the binary is started with a chosen
-// environment.
+// pages unless the host takes freed memory back (free page reporting), or as TBDRSIM_HUGE_PAGES=1
+// / 0 says; a user's own GLIBC_TUNABLES kept as given. Checked through what a run books
+// (frame/host allocator_huge_pages, host_free_page_reporting) when the binary is started with a
+// chosen environment.
 #include <gtest/gtest.h>
 #include <fcntl.h>
 #include <sys/wait.h>
@@ -15,6 +16,7 @@
 #include "db_query.hpp"
 #include "scene/scene_library.hpp"
 #include "scratch_dir.hpp"
+#include "app/allocator_tunables.hpp"
 #include "techniques/technique.hpp"
 #include "trace/trace.hpp"
 
@@ -48,7 +50,7 @@ double huge_pages_flag(const std::string& trace, const fs::path& db, std::vector
   return testing_support::query_number(db.string(), "SELECT value FROM stats WHERE scope = 'frame/host' AND name = 'allocator_huge_pages'");
 }
 
-TEST(Allocator, HugePagesUnlessTurnedOffAndAUsersTunablesKept) {
+TEST(Allocator, HugePagesUnlessTheHostTakesFreedMemoryBackOrTheVariableSaysAndAUsersTunablesKept) {
 #if defined(__SANITIZE_ADDRESS__) || !defined(__GLIBC__)
   GTEST_SKIP() << "the sanitizers' allocator (or a libc other than glibc): no re-execution";
 #else
@@ -56,7 +58,12 @@ TEST(Allocator, HugePagesUnlessTurnedOffAndAUsersTunablesKept) {
   const Scene scene = load_scene("atrium:1");
   const std::string trace = (dir / "pf.trace").string();
   write_trace_file(generate_trace("plain_forward", testing_support::atrium_entrance_setup(scene, 4, 64, 32)), trace);
-  EXPECT_EQ(huge_pages_flag(trace, dir / "default.db", {}), 1.0);
+  // Unset: huge pages unless the host takes freed memory back, as the run books it.
+  const double by_host = huge_pages_flag(trace, dir / "default.db", {});
+  const double reporting = testing_support::query_number(
+      (dir / "default.db").string(), "SELECT value FROM stats WHERE scope = 'frame/host' AND name = 'host_free_page_reporting'");
+  EXPECT_EQ(reporting, host_reports_free_pages() ? 1.0 : 0.0);
+  EXPECT_EQ(by_host, reporting == 1.0 ? 0.0 : 1.0);
   EXPECT_EQ(huge_pages_flag(trace, dir / "off.db", {"TBDRSIM_HUGE_PAGES=0"}), 0.0);
   EXPECT_EQ(huge_pages_flag(trace, dir / "on.db", {"TBDRSIM_HUGE_PAGES=1"}), 1.0);
   // A user's own tunables are not touched (no huge pages added to them).

@@ -24,13 +24,13 @@ namespace {
 // Transparent huge pages for malloc's blocks (where the kernel grants them on request): 2 MiB
 // pages, 512 times fewer faults and TLB misses over whole-frame arrays. Measured side by side on
 // 2026-12-05 (kernel 6.18, 1 thread, atrium:3 1080p, 1024 lights, deferred with images): 82,100
-// -> 1,200-2,000 page faults, 3.1-4.1 -> 2.8 user s, 0.54-0.60 -> 0.40-0.52 kernel s; the study
-// 36.9-38.6 -> 31.3-33.5 s wall (1.2 M -> 0.21 M faults), peak memory +1 %. On the virtual
-// machine measured until 2026-12-03 a fresh 2 MiB page took about 1 ms to fault in against
-// 0.4 ms for 512 small ones, and the same deferred run spent 0.55-0.78 s in the kernel with huge
-// pages against 0.17-0.20 s without: where that holds, TBDRSIM_HUGE_PAGES=0 leaves them out
-// (docs/architecture.md, "The allocator"). Both settings: tbdr::malloc_tunables
-// (app/allocator_tunables.hpp).
+// -> 1,200-2,000 page faults, 3.1-4.1 -> 2.8 user s, the study 36.9-38.6 -> 31.3-33.5 s wall.
+// Not on a virtual machine whose host takes freed memory back (free page reporting): there every
+// fresh huge page is backed again by the host (2.9 ms per 2 MiB measured 2026-12-06; 1 ms on the
+// one measured until 2026-12-03), and the same run spent 0.56-0.78 s in the kernel with them
+// against 0.14 s without, the study 30.4 against 28.4 s (tbdr::host_reports_free_pages).
+// TBDRSIM_HUGE_PAGES=1 or 0 decides instead (docs/architecture.md, "The allocator"). Both
+// settings: tbdr::malloc_tunables (app/allocator_tunables.hpp).
 
 /// Set in the environment of the re-executed process, so it runs once (and its children, which
 /// inherit GLIBC_TUNABLES, do not re-execute either).

@@ -353,9 +353,14 @@ RunOutcome run_one(const RunRequest& req) {
   rec.stats.push_back({"frame/host", "simulation_threads", static_cast<double>(outcome.threads), "threads",
                        "Threads the functional simulation rendered tiles on (--threads; no other figure depends on it)"});
   // Whether glibc's allocator hands out transparent huge pages in this process (sim/app/main.cpp
-  // asks for them unless TBDRSIM_HUGE_PAGES=0): host timings of runs with and without differ.
+  // asks for them unless the host takes freed memory back or TBDRSIM_HUGE_PAGES=0): host timings
+  // of runs with and without differ.
   rec.stats.push_back({"frame/host", "allocator_huge_pages", allocator_huge_pages() ? 1.0 : 0.0, "flag",
-                       "1 where the allocator asked for transparent huge pages (glibc.malloc.hugetlb=1; TBDRSIM_HUGE_PAGES=0 leaves them out)"});
+                       "1 where the allocator asked for transparent huge pages (glibc.malloc.hugetlb=1: TBDRSIM_HUGE_PAGES=1, "
+                       "or unset on a host that does not take freed memory back)"});
+  rec.stats.push_back({"frame/host", "host_free_page_reporting", host_reports_free_pages() ? 1.0 : 0.0, "flag",
+                       "1 on a virtual machine that reports freed memory to its host (virtio-balloon free page reporting): "
+                       "fresh huge pages are slow there, so none are asked for by default"});
   rec.tiles = outcome.timing.tiles;
   ResultsDb db(req.db_path);
   outcome.run_id = db.write_run(rec);
