@@ -374,16 +374,11 @@ void Dram::open_row(Channel& ch, Entry& e, std::int64_t n) {
   account_activate(ch, o, e.cls);
 }
 
-std::int64_t Dram::next_column_cycle(const Channel& ch, const std::vector<Entry>& q, std::int64_t n, Tick now) const {
+std::int64_t Dram::next_column_cycle(const Channel& ch, const std::vector<Entry>& q, std::uint64_t hit_banks, std::int64_t n,
+                                     Tick now) const {
   if (q.empty()) return kNever;
   const std::int64_t bus_ready = bus_ready_cycle(ch, n, now, q.front().is_write);
-  // When a row hit can go depends only on its bank: collect the banks with an arrived row hit,
-  // then take the earliest of theirs.
-  std::uint64_t hit_banks = 0;
-  for (const Entry& e : q) {
-    if (e.arrival > now) break;
-    if (ch.banks[e.bank].open_row == static_cast<std::int64_t>(e.row)) hit_banks |= std::uint64_t{1} << e.bank;
-  }
+  // When a row hit can go depends only on its bank: the earliest of the banks holding one.
   std::int64_t next = kNever;
   for (; hit_banks != 0; hit_banks &= hit_banks - 1) {
     const auto bank = static_cast<std::uint32_t>(__builtin_ctzll(hit_banks));
@@ -499,6 +494,7 @@ void Dram::wakeup(std::uint32_t c) {
     // before the data bus frees).
     const std::int64_t bus_ready = bus_ready_cycle(ch, n, now, q->front().is_write);
     std::uint64_t wanted = 0;
+    std::uint64_t wanted_twice = 0;  // banks with more than one arrived row hit
     std::fill(first_need_.begin(), first_need_.end(), -1);
     int issue = -1;
     std::uint64_t not_ready = 0;  // banks whose row hits cannot take their column command now
@@ -508,6 +504,7 @@ void Dram::wakeup(std::uint32_t c) {
       const Bank& b = ch.banks[e.bank];
       if (b.open_row == static_cast<std::int64_t>(e.row)) {
         const std::uint64_t bit = std::uint64_t{1} << e.bank;
+        wanted_twice |= wanted & bit;
         wanted |= bit;
         if (issue < 0 && (not_ready & bit) == 0) {
           if (std::max({b.col_ready, bus_ready, ccd_ready_cycle(ch, e.bank)}) <= n) {
@@ -531,9 +528,16 @@ void Dram::wakeup(std::uint32_t c) {
       if (prep < 0 || i < prep) prep = i;
     }
     const bool oldest_needs_row = first_need_[q->front().bank] == 0;
+    // The banks holding an arrived row hit once this cycle's decisions are made (what a second
+    // pass over the queue would find): the prepared request's bank gains one (the request itself;
+    // any other hit it had was to the row now closed), the issued request's bank loses it if it
+    // was the only one there.
+    std::uint64_t hits_after = wanted;
     if (prep >= 0) {
-      open_row(ch, (*q)[static_cast<std::size_t>(prep)], n);
+      Entry& e = (*q)[static_cast<std::size_t>(prep)];
+      open_row(ch, e, n);
       if (prep == 0) ch.oldest_bypassed = 0;
+      hits_after |= std::uint64_t{1} << e.bank;
     }
     if (issue >= 0) {
       if (issue == 0) {
@@ -541,12 +545,16 @@ void Dram::wakeup(std::uint32_t c) {
       } else if (oldest_needs_row && prep != 0) {
         ++ch.oldest_bypassed;
       }
+      const std::uint64_t bit = std::uint64_t{1} << (*q)[static_cast<std::size_t>(issue)].bank;
+      if ((wanted_twice & bit) == 0 && (prep < 0 || (*q)[static_cast<std::size_t>(prep)].bank != (*q)[static_cast<std::size_t>(issue)].bank)) {
+        hits_after &= ~bit;
+      }
       commit(c, *q, static_cast<std::size_t>(issue), n);
       freed = true;
     }
     // One row and one column decision per DRAM cycle: come back next cycle if another row can be
     // opened, else when the first row hit can take its column command.
-    next = eligible > 1 ? n + 1 : next_column_cycle(ch, *q, n, now);
+    next = eligible > 1 ? n + 1 : next_column_cycle(ch, *q, hits_after, n, now);
     // The other queue's turn (this one emptied or a watermark was crossed): look again next cycle.
     bool draining = ch.draining;
     if (active_queue(ch, now, draining) != q) next = n + 1;

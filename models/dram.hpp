@@ -350,8 +350,10 @@ class Dram final : public Unit {
   std::vector<Entry>* active_queue(Channel& ch, Tick now, bool& draining) const;
   // Opens the row of `e` at cycle n (precharge if another row is open, then activate).
   void open_row(Channel& ch, Entry& e, std::int64_t n);
-  // First cycle after n at which an arrived row hit of `q` could take its column command.
-  std::int64_t next_column_cycle(const Channel& ch, const std::vector<Entry>& q, std::int64_t n, Tick now) const;
+  // First cycle after n at which an arrived row hit of `q` could take its column command, given
+  // `hit_banks`, the banks that hold one (wakeup knows them from its own pass over the queue).
+  std::int64_t next_column_cycle(const Channel& ch, const std::vector<Entry>& q, std::uint64_t hit_banks, std::int64_t n,
+                                 Tick now) const;
   // First cycle at which the data of a column command issued then would start no more than one
   // DRAM cycle before the channel's data bus frees.
   // With a direction switch: a read command waits tWTR after the last write data; write data
