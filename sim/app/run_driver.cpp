@@ -6,6 +6,7 @@
 #include <ctime>
 #include <time.h>
 #include <filesystem>
+#include <functional>
 #include <future>
 #include <iomanip>
 #include <optional>
@@ -13,6 +14,7 @@
 #include <sstream>
 
 #include "kernel/errors.hpp"
+#include "kernel/thread_pool.hpp"
 #include "models/work_feed.hpp"
 #include "app/allocator_tunables.hpp"
 #include "app/image_output.hpp"
@@ -119,53 +121,88 @@ std::optional<ImageRGB8> surface_image(const FrameImages& images, const std::str
 
 }  // namespace
 
-std::vector<std::string> write_frame_images(const FrameResult& frame, const std::string& dir) {
+std::vector<std::string> write_frame_images(const FrameResult& frame, const std::string& dir, unsigned threads,
+                                            double* cpu_seconds) {
   namespace fs = std::filesystem;
-  std::vector<std::string> written;
   const int w = frame.images.width, h = frame.images.height;
   const std::size_t pixels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
   auto out = [&](const std::string& name) { return (fs::path(dir) / name).string(); };
-  auto save = [&](const std::string& name, const ImageRGB8& img) {
-    write_png(out(name), img);
-    written.push_back(out(name));
+  // Every image is made and encoded on its own, from the frame only: the jobs run on `threads`
+  // threads (PNG compression is most of an image's cost) and their files are listed in this order.
+  struct Job {
+    std::string file;
+    std::function<std::optional<ImageRGB8>()> make;  ///< nothing: no image to write
   };
-  for (const auto& [name, img] : frame.images.attachments) {
+  std::vector<Job> jobs;
+  for (const auto& [name, img_ref] : frame.images.attachments) {
+    const AttachmentImage& img = img_ref;
+    const std::string attachment = name;
     if (img.usage == AttachmentUsage::Depth) {
-      std::vector<float> d(pixels);
-      for (std::size_t p = 0; p < pixels; ++p) d[p] = img.depth[p * img.samples];
-      save("depth_" + name + ".png", depth_to_image(d, w, h));
+      jobs.push_back({"depth_" + name + ".png", [&img, pixels, w, h]() -> std::optional<ImageRGB8> {
+                        std::vector<float> d(pixels);
+                        for (std::size_t p = 0; p < pixels; ++p) d[p] = img.depth[p * img.samples];
+                        return depth_to_image(d, w, h);
+                      }});
     } else if (!img.color.empty() && img.samples == 1) {
-      save("attachment_" + name + ".png", color_to_image(img.color, w, h));
+      jobs.push_back({"attachment_" + name + ".png", [&img, w, h]() -> std::optional<ImageRGB8> { return color_to_image(img.color, w, h); }});
     } else if (img.usage == AttachmentUsage::Gbuffer || img.usage == AttachmentUsage::Visibility) {
-      if (const auto image = surface_image(frame.images, name, img)) save("attachment_" + name + ".png", *image);
+      jobs.push_back({"attachment_" + name + ".png", [&frame, attachment, &img] { return surface_image(frame.images, attachment, img); }});
     }
   }
+  const std::size_t attachment_jobs = jobs.size();
+  // The final colour: its attachment's file copied when that was written above (not encoded twice).
+  std::optional<std::string> color_copied_from;
   if (auto it = frame.images.attachments.find(frame.final_color); it != frame.images.attachments.end()) {
-    const std::string encoded = out("attachment_" + frame.final_color + ".png");
     if (!it->second.color.empty() && it->second.samples == 1) {
-      // The same image as its attachment file, written above: copied, not encoded twice.
-      std::error_code ec;
-      fs::copy_file(encoded, out("color.png"), fs::copy_options::overwrite_existing, ec);
-      if (ec) throw InputError(out("color.png"), "cannot write PNG image (" + ec.message() + ")");
-      written.push_back(out("color.png"));
+      color_copied_from = out("attachment_" + frame.final_color + ".png");
     } else {
-      save("color.png", color_to_image(it->second.color, w, h));
+      const AttachmentImage& img = it->second;
+      jobs.push_back({"color.png", [&img, w, h]() -> std::optional<ImageRGB8> { return color_to_image(img.color, w, h); }});
     }
   } else if (auto ib = frame.images.image_buffers.find(frame.final_color); ib != frame.images.image_buffers.end()) {
-    save("color.png", color_to_image(ib->second.color, w, h));
+    const auto& color = ib->second.color;
+    jobs.push_back({"color.png", [&color, w, h]() -> std::optional<ImageRGB8> { return color_to_image(color, w, h); }});
   }
-  save("triangle_id.png", ids_to_image(frame.images.counters.triangle_id, w, h, 0));
-  auto heat = [&](const std::vector<std::uint32_t>& v, const std::string& file, const std::string& title,
-                  const std::string& unit) {
-    std::vector<double> d(v.begin(), v.end());
-    HeatmapSpec spec;
-    spec.title = title;
-    spec.unit = unit;
-    save(file, heatmap_to_image(d, w, h, spec));
+  jobs.push_back({"triangle_id.png", [&frame, w, h]() -> std::optional<ImageRGB8> { return ids_to_image(frame.images.counters.triangle_id, w, h, 0); }});
+  auto heat = [&](const std::vector<std::uint32_t>& v, const std::string& file, const std::string& title, const std::string& unit) {
+    jobs.push_back({file, [&v, title, unit, w, h]() -> std::optional<ImageRGB8> {
+                      std::vector<double> d(v.begin(), v.end());
+                      HeatmapSpec spec;
+                      spec.title = title;
+                      spec.unit = unit;
+                      return heatmap_to_image(d, w, h, spec);
+                    }});
   };
   heat(frame.images.counters.rasterised_samples, "heat_overdraw.png", "Overdraw", "samples rasterised per pixel");
   heat(frame.images.counters.shaded, "heat_shaded.png", "Shading", "shader invocations per pixel");
   heat(frame.images.counters.lights_evaluated, "heat_lights.png", "Lights evaluated", "lights per pixel");
+
+  std::vector<char> made(jobs.size(), 0);
+  std::vector<double> cpu(jobs.size(), 0.0);
+  ThreadPool pool(std::max(1u, std::min<unsigned>(threads, static_cast<unsigned>(jobs.size()))));
+  pool.for_each(jobs.size(), [&](std::size_t i, unsigned) {
+    const double c = thread_cpu_seconds();
+    if (const std::optional<ImageRGB8> image = jobs[i].make()) {
+      write_png(out(jobs[i].file), *image);
+      made[i] = 1;
+    }
+    cpu[i] = thread_cpu_seconds() - c;
+  });
+  // The files in the order they are listed: the attachments, the final colour, the rest.
+  std::vector<std::string> written;
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    if (i == attachment_jobs && color_copied_from) {
+      std::error_code ec;
+      fs::copy_file(*color_copied_from, out("color.png"), fs::copy_options::overwrite_existing, ec);
+      if (ec) throw InputError(out("color.png"), "cannot write PNG image (" + ec.message() + ")");
+      written.push_back(out("color.png"));
+    }
+    if (made[i]) written.push_back(out(jobs[i].file));
+  }
+  if (cpu_seconds != nullptr) {
+    *cpu_seconds = 0;
+    for (double c : cpu) *cpu_seconds += c;
+  }
   return written;
 }
 
@@ -293,10 +330,7 @@ RunOutcome run_one(const RunRequest& req) {
   double images_thread_cpu = 0;
   if (!req.images_dir.empty() && req.threads > 1) {
     images = std::async(std::launch::async, [&outcome, &req, &images_thread_cpu] {
-      const double c = thread_cpu_seconds();
-      std::vector<std::string> written = write_frame_images(outcome.frame, req.images_dir);
-      images_thread_cpu = thread_cpu_seconds() - c;
-      return written;
+      return write_frame_images(outcome.frame, req.images_dir, req.threads, &images_thread_cpu);
     });
   }
   if (pipelined) {
@@ -321,7 +355,7 @@ RunOutcome run_one(const RunRequest& req) {
   outcome.scene = scene.source;
 
   if (!req.images_dir.empty()) {
-    outcome.images_written = images.valid() ? images.get() : write_frame_images(outcome.frame, req.images_dir);
+    outcome.images_written = images.valid() ? images.get() : write_frame_images(outcome.frame, req.images_dir, req.threads);
     outcome.images_written.push_back(write_tile_cycles_image(outcome.frame, outcome.timing, req.images_dir));
   }
 

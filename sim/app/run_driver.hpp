@@ -56,8 +56,11 @@ RunOutcome run_one(const RunRequest& request);
 /// Prints the figures a user looks at first.
 void print_run_summary(const RunOutcome& outcome, std::ostream& out);
 
-/// Writes the frame's images (final color, depth, triangle ids, heat maps) into `dir`.
-std::vector<std::string> write_frame_images(const FrameResult& frame, const std::string& dir);
+/// Writes the frame's images (final color, depth, triangle ids, heat maps) into `dir`, encoding
+/// them on `threads` threads (the same files at any count), and returns their paths in a fixed
+/// order. `cpu_seconds`, when given, receives the CPU seconds the encoding took on all threads.
+std::vector<std::string> write_frame_images(const FrameResult& frame, const std::string& dir, unsigned threads = 1,
+                                            double* cpu_seconds = nullptr);
 /// Writes the heat map of cycles per tile (summed over the frame's passes).
 std::string write_tile_cycles_image(const FrameResult& frame, const TimingResult& timing, const std::string& dir);
 
