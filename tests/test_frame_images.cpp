@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "app/image_output.hpp"
@@ -96,6 +98,41 @@ TEST_F(FrameImages, VisibilityAttachmentShowsItsTriangleIds) {
       EXPECT_EQ(ids.at(x, y), expected) << x << "," << y;
     }
   }
+}
+
+// The images are encoded as independent jobs on the run's threads: at 1 and 3 threads the same
+// files, byte for byte, listed in the same order (the attachments, color.png, the ids and the
+// heat maps), and the encoding's CPU seconds reported.
+TEST_F(FrameImages, SameFilesAndListAtAnyThreadCount) {
+  FrameResult f;
+  const auto one = write("deferred", f);
+  const auto three = std::filesystem::temp_directory_path() / "tbdrsim_test_frame_images_deferred_3";
+  std::filesystem::remove_all(three);
+  std::filesystem::create_directories(three);
+  double cpu1 = -1, cpu3 = -1;
+  const std::vector<std::string> list1 = write_frame_images(f, one.string(), 1, &cpu1);
+  const std::vector<std::string> list3 = write_frame_images(f, three.string(), 3, &cpu3);
+  ASSERT_EQ(list1.size(), list3.size());
+  ASSERT_GE(list1.size(), 8u);  // albedo, color, normal attachments, color.png, depth, ids, 3 heat maps
+  auto read = [](const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  for (std::size_t i = 0; i < list1.size(); ++i) {
+    const auto name = std::filesystem::path(list1[i]).filename();
+    EXPECT_EQ(name, std::filesystem::path(list3[i]).filename()) << i;
+    const std::string a = read(list1[i]), b = read(list3[i]);
+    EXPECT_FALSE(a.empty()) << name;
+    EXPECT_EQ(a, b) << name;
+  }
+  const auto color = std::find_if(list1.begin(), list1.end(), [](const std::string& p) { return p.ends_with("/color.png"); });
+  ASSERT_NE(color, list1.end());
+  EXPECT_TRUE(std::filesystem::path(*(color - 1)).filename().string().starts_with("attachment_") ||
+              std::filesystem::path(*(color - 1)).filename().string().starts_with("depth_"));
+  EXPECT_EQ(std::filesystem::path(*(color + 1)).filename(), "triangle_id.png");
+  EXPECT_GT(cpu1, 0.0);
+  EXPECT_GT(cpu3, 0.0);
+  std::filesystem::remove_all(three);
 }
 
 }  // namespace
