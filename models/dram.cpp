@@ -387,6 +387,15 @@ std::int64_t Dram::next_column_cycle(const Channel& ch, const std::vector<Entry>
   return next == kNever ? kNever : std::max(next, n + 1);
 }
 
+std::uint64_t Dram::arrived_hit_banks(const Channel& ch, const std::vector<Entry>& q, Tick now) const {
+  std::uint64_t banks = 0;
+  for (const Entry& e : q) {
+    if (e.arrival > now) break;
+    if (ch.banks[e.bank].open_row == static_cast<std::int64_t>(e.row)) banks |= std::uint64_t{1} << e.bank;
+  }
+  return banks;
+}
+
 void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::int64_t n) {
   Channel& ch = channels_[c];
   const Tick now = eq_.now();
@@ -554,6 +563,9 @@ void Dram::wakeup(std::uint32_t c) {
     }
     // One row and one column decision per DRAM cycle: come back next cycle if another row can be
     // opened, else when the first row hit can take its column command.
+    if (verify_scheduler_ && arrived_hit_banks(ch, *q, now) != hits_after) {
+      throw std::logic_error("Dram::wakeup: the banks with a row hit after this cycle's decisions differ from a pass over the queue");
+    }
     next = eligible > 1 ? n + 1 : next_column_cycle(ch, *q, hits_after, n, now);
     // The other queue's turn (this one emptied or a watermark was crossed): look again next cycle.
     bool draining = ch.draining;

@@ -202,6 +202,10 @@ class Dram final : public Unit {
   bool enqueue(DramRequest&& req);
   /// Whether enqueue() would accept a request for `addr` now.
   bool can_accept(std::uint64_t addr, bool is_write) const;
+  /// Tests: each scheduler step also finds the banks holding an arrived row hit by a second pass
+  /// over the queue after its decisions, and throws std::logic_error where that differs from
+  /// what the step derived from its single pass (Dram::wakeup).
+  void set_verify_scheduler(bool on) { verify_scheduler_ = on; }
   /// Called (after the scheduler step that freed it) whenever a queue slot frees on a channel.
   void set_space_callback(std::function<void(std::uint32_t channel)> cb) { space_cb_ = std::move(cb); }
   /// Called, for requests with report_when_scheduled, at the moment their column command is
@@ -354,6 +358,8 @@ class Dram final : public Unit {
   // `hit_banks`, the banks that hold one (wakeup knows them from its own pass over the queue).
   std::int64_t next_column_cycle(const Channel& ch, const std::vector<Entry>& q, std::uint64_t hit_banks, std::int64_t n,
                                  Tick now) const;
+  // The banks holding an arrived row hit of `q` now, by a pass over it (set_verify_scheduler).
+  std::uint64_t arrived_hit_banks(const Channel& ch, const std::vector<Entry>& q, Tick now) const;
   // First cycle at which the data of a column command issued then would start no more than one
   // DRAM cycle before the channel's data bus frees.
   // With a direction switch: a read command waits tWTR after the last write data; write data
@@ -414,6 +420,7 @@ class Dram final : public Unit {
   Tick last_completion_{0};
   std::uint64_t timed_bytes_ = 0;
   std::uint64_t timed_reads_ = 0;
+  bool verify_scheduler_ = false;  // set_verify_scheduler
   std::function<void(std::uint32_t)> space_cb_;
   std::function<void(std::uint64_t, const DramSchedule&)> schedule_cb_;
   std::vector<int> first_need_;  // scratch of wakeup(): per bank, the oldest request needing a row
