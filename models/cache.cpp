@@ -50,34 +50,30 @@ CacheAccess Cache::access(std::uint64_t addr, std::uint32_t bytes, bool is_write
     stats_.read_bytes += bytes;
   }
 
-  // One pass over the set: the hit, if any, else the least recently used way, the first of
-  // equals (empty ways have stamp 0 and are taken first). (Most timed accesses miss: the vertex
-  // cache's parameter-buffer reads and the SLC's lookups behind the L1s; one pass reads each way
-  // once.)
+  // The hit, if any (most accesses hit: their ways' stamps are not read).
+  for (std::uint32_t w = 0; w < ways_; ++w) {
+    if (tags[w] != line) continue;
+    const std::uint32_t slot = base + w;
+    stamps_[slot] = stamp;
+    if (is_write) {
+      dirty_[slot] = 1;
+      cls_[slot] = cls;
+      ++stats_.write_hits;
+      ++cs.write_hits;
+    } else {
+      ++stats_.read_hits;
+      ++cs.read_hits;
+    }
+    r.hit = true;
+    r.slot = slot;
+    return r;
+  }
+  // A miss: the least recently used way, the first of equals (empty ways have stamp 0 and are
+  // taken first).
   const std::uint64_t* stamps = stamps_.data() + base;
   std::uint32_t lru = 0;
-  std::uint64_t lru_stamp = UINT64_MAX;
-  for (std::uint32_t w = 0; w < ways_; ++w) {
-    if (tags[w] == line) {
-      const std::uint32_t slot = base + w;
-      stamps_[slot] = stamp;
-      if (is_write) {
-        dirty_[slot] = 1;
-        cls_[slot] = cls;
-        ++stats_.write_hits;
-        ++cs.write_hits;
-      } else {
-        ++stats_.read_hits;
-        ++cs.read_hits;
-      }
-      r.hit = true;
-      r.slot = slot;
-      return r;
-    }
-    if (stamps[w] < lru_stamp) {
-      lru = w;
-      lru_stamp = stamps[w];
-    }
+  for (std::uint32_t w = 1; w < ways_; ++w) {
+    if (stamps[w] < stamps[lru]) lru = w;
   }
 
   if (is_write) {
