@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,30 @@ TEST(Allocator, HugePagesUnlessTheHostTakesFreedMemoryBackOrTheVariableSaysAndAU
   // A user's own tunables are not touched (no huge pages added to them).
   EXPECT_EQ(huge_pages_flag(trace, dir / "user.db", {"GLIBC_TUNABLES=glibc.malloc.trim_threshold=1048576"}), 0.0);
 #endif
+}
+
+// Free page reporting is read from the balloon devices' feature bits (bit 5,
+// VIRTIO_BALLOON_F_REPORTING): set on the Firecracker VM measured 2026-12-06
+// ("0110010100..."), clear where the device lacks it, and no device (bare metal) or an
+// unreadable or short feature string means no reporting.
+TEST(Allocator, FreePageReportingIsTheBalloonsFeatureBitFive) {
+  const fs::path dir = testing_scratch::scratch_dir("allocator", "balloon");
+  auto device = [&](const std::string& name, const std::string& bits) {
+    fs::create_directories(dir / name);
+    std::ofstream(dir / name / "features") << bits << "\n";
+  };
+  EXPECT_FALSE(host_reports_free_pages((dir / "none").string()));  // no such folder
+  fs::create_directories(dir / "empty");
+  EXPECT_FALSE(host_reports_free_pages((dir / "empty").string()));
+  device("clear/virtio0", "0110000100000000000000000000000010000000");
+  EXPECT_FALSE(host_reports_free_pages((dir / "clear").string()));
+  device("short/virtio0", "01100");
+  EXPECT_FALSE(host_reports_free_pages((dir / "short").string()));
+  device("set/virtio0", "0110010100000000000000000000000010000000");
+  EXPECT_TRUE(host_reports_free_pages((dir / "set").string()));
+  device("second/virtio0", "0000000");
+  device("second/virtio3", "0000010");
+  EXPECT_TRUE(host_reports_free_pages((dir / "second").string()));  // any device with the bit
 }
 
 }  // namespace

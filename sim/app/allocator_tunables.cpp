@@ -8,15 +8,14 @@ namespace tbdr {
 namespace {
 /// VIRTIO_BALLOON_F_REPORTING: the balloon device takes free page reports (Virtio 1.2, 5.5.3).
 constexpr std::size_t kFreePageReportingBit = 5;
-/// Where Linux lists the virtio balloon devices; each has a `features` file, one '0' or '1' per
-/// feature bit, bit 0 first.
-constexpr const char* kBalloonDevices = "/sys/bus/virtio/drivers/virtio_balloon";
 }  // namespace
 
-bool host_reports_free_pages() {
+// Each balloon device listed there has a `features` file: one '0' or '1' per feature bit, bit 0
+// first (Linux's virtio sysfs attribute).
+bool host_reports_free_pages(const std::string& balloon_devices) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  for (fs::directory_iterator it(kBalloonDevices, ec), end; !ec && it != end; it.increment(ec)) {
+  for (fs::directory_iterator it(balloon_devices, ec), end; !ec && it != end; it.increment(ec)) {
     std::ifstream f(it->path() / "features");
     std::string bits;
     if (f && std::getline(f, bits) && bits.size() > kFreePageReportingBit && bits[kFreePageReportingBit] == '1') return true;

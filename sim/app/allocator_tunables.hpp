@@ -26,8 +26,9 @@ inline constexpr const char* kHugePagesVariable = "TBDRSIM_HUGE_PAGES";
 /// spent 0.56-0.78 s in the kernel with huge pages against 0.14-0.17 s without (small pages come
 /// back from the guest's own recently freed ones); the study took 30.4 s against 28.4 s. Reads
 /// the balloon device's feature bits in sysfs; false where there is none (bare metal, other
-/// hypervisors).
-bool host_reports_free_pages();
+/// hypervisors). `balloon_devices`: where Linux lists the balloon devices (tests point it at a
+/// folder of their own).
+bool host_reports_free_pages(const std::string& balloon_devices = "/sys/bus/virtio/drivers/virtio_balloon");
 
 /// The GLIBC_TUNABLES tbdrsim starts with: the heap's thresholds, plus huge pages where
 /// TBDRSIM_HUGE_PAGES=1, or where it is unset and the host does not take freed memory back.
