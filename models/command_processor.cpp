@@ -419,6 +419,10 @@ class FrameSimulator {
     renderer.before_tiles([this, r = run.get()] {
       if (finish_pending_pass()) recheck_stored_surfaces(*r);
     });
+    // The pass binned before it renders its tiles on the pool's helpers while this one is binned
+    // here (the hardware bins into its second parameter buffer meanwhile); a partial render of
+    // this pass ends that pass first (before_tiles), and so does everything after the binning.
+    if (pending_ && !rop_) pending_->renderer->start_finish();
     renderer.bin();
     prim_base_ = ctx.frame_prim_base;
     // What it stores is defined for the passes after it (their loads read it in their tiles).

@@ -472,7 +472,8 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
     }
     window.clear();
     window.resize(last - first);
-    if (pool_ != nullptr && pool_->size() > 1 && window.size() > 1) {
+    // (Not while the pool runs the pass before's tiles: binning beside them sets up alone.)
+    if (pool_ != nullptr && pool_->size() > 1 && window.size() > 1 && !pool_->started()) {
       pool_->for_each(window.size(), [&](std::size_t k, unsigned) { set_up_instance(first + k, window[k]); });
     } else {
       for (std::size_t k = 0; k < window.size(); ++k) set_up_instance(first + k, window[k]);

@@ -98,8 +98,15 @@ void PassRenderer::bin() {
   }
 }
 
+void PassRenderer::start_finish() {
+  if (!ctx_.rop) start_tiles(false);
+}
+
 void PassRenderer::finish() {
-  if (!ctx_.rop) render_tiles(false);
+  if (!ctx_.rop) {
+    if (!tiles_started_) start_tiles(false);
+    join_tiles();
+  }
   // A spilling pass's spill slot: the most any tile render spilled, known now that all did (a
   // pass published as it goes spills nothing, and the feed's reader may be reading its fields).
   if (feed_ == nullptr) {
@@ -227,6 +234,11 @@ void PassRenderer::prepare_render(bool partial) {
 }
 
 void PassRenderer::render_tiles(bool partial) {
+  start_tiles(partial);
+  join_tiles();
+}
+
+void PassRenderer::start_tiles(bool partial) {
   if (before_tiles_) {
     const std::function<void()> fn = std::move(before_tiles_);
     before_tiles_ = nullptr;
@@ -235,15 +247,17 @@ void PassRenderer::render_tiles(bool partial) {
   RenderWork& rw = cw_->renders.back();
   // The pass before it, ended by before_tiles, may have released the store its tiles did not
   // write: this pass's shaders store into a new one then, as when it ended before this one began.
-  AttachmentImage* const fresh = fresh_ != nullptr ? fresh_ : allocate_surfaces();
+  running_fresh_ = fresh_ != nullptr ? fresh_ : allocate_surfaces();
   fresh_ = nullptr;
+  running_partial_ = partial;
+  tiles_started_ = true;
   const std::size_t n = jobs_.size();
   results_.clear();
   results_.resize(n);
   rendered_.assign(n, 0);
   merged_ = 0;
-  const auto start = std::chrono::steady_clock::now();
-  pool_.for_each(n, [&](std::size_t i, unsigned w) {
+  tiles_start_ = std::chrono::steady_clock::now();
+  pool_.start(n, [this, &rw, partial, n](std::size_t i, unsigned w) {
     const TileJob& j = jobs_[i];
     results_[i] = render_tile(*workers_[w], j.tile, j.rect, tiler_.tile_primitives(j.tile), partial);
     // Merged in dispatch order as soon as every tile before it is: whichever thread finishes the
@@ -255,10 +269,16 @@ void PassRenderer::render_tiles(bool partial) {
       if (feed_) feed_->publish_tile(feed_command_);
     }
   });
-  tile_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  release_unwritten_surfaces(fresh);
+}
+
+void PassRenderer::join_tiles() {
+  pool_.join();
+  tiles_started_ = false;
+  tile_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - tiles_start_).count();
+  release_unwritten_surfaces(running_fresh_);
+  running_fresh_ = nullptr;
   results_.clear();
-  if (partial) {
+  if (running_partial_) {
     for (const TileJob& j : jobs_) resumed_[static_cast<std::size_t>(j.tile)] = 1;
   }
   tiler_.reset();

@@ -9,6 +9,7 @@
 // statistic and traffic deltas, merged into the pass in tile dispatch order, so statistics,
 // TileWork lists and images are the same at any thread count. A partial render is a barrier: its
 // tiles finish before binning resumes.
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -64,6 +65,9 @@ class PassRenderer final : private PrimitiveSink {
   void bin();
   /// Renders the last render's tiles (after bin()).
   void finish();
+  /// Starts the last render's tiles on the pool's helpers and returns (finish() then joins
+  /// them): the caller may bin the next pass meanwhile, with no other job on the pool.
+  void start_finish();
   /// Runs `fn` once, before the next tiles of this pass render (the frame finishes the pass
   /// before it there, when this one was binned ahead of it).
   void before_tiles(std::function<void()> fn) { before_tiles_ = std::move(fn); }
@@ -108,6 +112,9 @@ class PassRenderer final : private PrimitiveSink {
   void prepare_render(bool partial);
   /// Renders the prepared render's tiles (before_tiles first).
   void render_tiles(bool partial);
+  /// render_tiles in two halves: the tiles posted to the pool, then joined and the render ended.
+  void start_tiles(bool partial);
+  void join_tiles();
   /// One tile (or strip of a tile) on worker `w`: loads, ISP and TSP, stores; what it cost.
   /// imr renders a pass as batches over the whole frame: the tile memory's begin (clears) only
   /// with the first (`begin`), its end (resolves) and the ROP flush only with the last (`end`).
@@ -131,6 +138,11 @@ class PassRenderer final : private PrimitiveSink {
   WorkFeed* feed_ = nullptr;  ///< where renders and tiles are published as they are made (publish_to)
   std::size_t feed_command_ = 0;  ///< the pass's command in feed_
   std::function<void()> before_tiles_;  ///< before_tiles
+  // The render whose tiles start_tiles posted (until join_tiles).
+  bool tiles_started_ = false;
+  bool running_partial_ = false;
+  AttachmentImage* running_fresh_ = nullptr;  ///< its surface store, released if no tile wrote it
+  std::chrono::steady_clock::time_point tiles_start_;
   AttachmentImage* fresh_ = nullptr;     ///< what the prepared render's allocate_surfaces allocated
   ThreadPool& pool_;
   GeometryUnit geometry_;

@@ -9,6 +9,7 @@
 // pool's own contract (items in order, each once, the lowest item's exception).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstddef>
@@ -415,6 +416,40 @@ TEST(ThreadPool, RethrowsTheLowestFailingItemsException) {
     std::atomic<std::size_t> sum{0};
     pool.for_each(100, [&](std::size_t i, unsigned) { sum += i; });
     EXPECT_EQ(sum.load(), 4950u);  // 0 + 1 + ... + 99 = 99 x 100 / 2
+  }
+}
+
+// start() posts a job and returns; the caller works on something else (as the frame bins the
+// next pass beside the last one's tiles), then join() runs what is left and waits: every item
+// once, at any thread count (with one thread, all of them in join()); a second start() before
+// the join is refused; an item's exception comes out of join(); the pool takes jobs again after.
+TEST(ThreadPool, StartReturnsAtOnceAndJoinRunsTheRest) {
+  for (const unsigned threads : {1u, 2u, 7u}) {
+    ThreadPool pool(threads);
+    constexpr std::size_t kItems = 300;
+    std::vector<std::atomic<int>> runs(kItems);
+    std::atomic<std::size_t> before_join{0};
+    pool.start(kItems, [&](std::size_t i, unsigned) { runs[i].fetch_add(1); });
+    EXPECT_TRUE(pool.started());
+    EXPECT_THROW(pool.start(1, [](std::size_t, unsigned) {}), std::logic_error);
+    // The caller's own work meanwhile.
+    std::size_t caller_sum = 0;
+    for (std::size_t i = 0; i < 1000; ++i) caller_sum += i;
+    before_join = static_cast<std::size_t>(std::count_if(runs.begin(), runs.end(), [](const std::atomic<int>& r) { return r.load() > 0; }));
+    if (threads == 1) {
+      EXPECT_EQ(before_join.load(), 0u);  // no helper: nothing runs before join()
+    }
+    pool.join();
+    EXPECT_FALSE(pool.started());
+    EXPECT_EQ(caller_sum, 499500u);  // 0 + ... + 999
+    for (std::size_t i = 0; i < kItems; ++i) EXPECT_EQ(runs[i].load(), 1) << "item " << i << " at " << threads << " threads";
+    pool.start(50, [](std::size_t i, unsigned) {
+      if (i == 30) throw std::runtime_error("item 30");
+    });
+    EXPECT_THROW(pool.join(), std::runtime_error);
+    std::atomic<std::size_t> sum{0};
+    pool.for_each(100, [&](std::size_t i, unsigned) { sum += i; });
+    EXPECT_EQ(sum.load(), 4950u);
   }
 }
 

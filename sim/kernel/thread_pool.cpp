@@ -1,6 +1,7 @@
 #include "kernel/thread_pool.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 #if defined(__linux__)
 #include <sched.h>
@@ -80,12 +81,11 @@ void ThreadPool::helper(unsigned worker) {
   }
 }
 
-void ThreadPool::for_each(std::size_t count, const std::function<void(std::size_t, unsigned)>& fn) {
-  if (count == 0) return;
+void ThreadPool::launch(std::size_t count, const std::function<void(std::size_t, unsigned)>* fn) {
   bool helpers = false;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    fn_ = &fn;
+    fn_ = fn;
     count_ = count;
     next_ = 0;
     error_ = nullptr;
@@ -96,6 +96,9 @@ void ThreadPool::for_each(std::size_t count, const std::function<void(std::size_
     if (helpers) ++job_;
   }
   if (helpers) start_.notify_all();
+}
+
+void ThreadPool::join() {
   work(0);
   std::exception_ptr error;
   {
@@ -105,7 +108,22 @@ void ThreadPool::for_each(std::size_t count, const std::function<void(std::size_
     error = error_;
     error_ = nullptr;
   }
+  started_ = false;
+  owned_fn_ = nullptr;
   if (error) std::rethrow_exception(error);
+}
+
+void ThreadPool::for_each(std::size_t count, const std::function<void(std::size_t, unsigned)>& fn) {
+  if (count == 0) return;
+  launch(count, &fn);
+  join();
+}
+
+void ThreadPool::start(std::size_t count, std::function<void(std::size_t, unsigned)> fn) {
+  if (started_) throw std::logic_error("ThreadPool::start: the job started before awaits its join()");
+  started_ = true;
+  owned_fn_ = std::move(fn);
+  launch(count, &owned_fn_);
 }
 
 }  // namespace tbdr

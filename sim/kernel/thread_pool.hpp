@@ -42,7 +42,18 @@ class ThreadPool {
   /// count: every item below it has started). Not reentrant: fn must not call for_each.
   void for_each(std::size_t count, const std::function<void(std::size_t item, unsigned worker)>& fn);
 
+  /// for_each in two halves: start() posts the job to the helpers and returns at once (the
+  /// caller may do other work meanwhile, but must not post another job); join() then works on
+  /// the items left, waits for the helpers and rethrows as for_each does. With no helpers (one
+  /// thread) every item runs in join(). `fn` is kept until join() returns.
+  void start(std::size_t count, std::function<void(std::size_t item, unsigned worker)> fn);
+  void join();
+  /// Whether a job start() posted awaits its join().
+  bool started() const { return started_; }
+
  private:
+  /// Posts the job: sets it up and wakes the helpers (not for a single item: the caller runs it).
+  void launch(std::size_t count, const std::function<void(std::size_t, unsigned)>* fn);
   /// Takes and runs items of the current job until none is left.
   void work(unsigned worker);
   /// A helper thread's loop: waits for a job, works on it, reports its end.
@@ -62,6 +73,8 @@ class ThreadPool {
   bool stop_ = false;
   std::size_t error_item_ = 0;      ///< the lowest item that threw
   std::exception_ptr error_;
+  std::function<void(std::size_t, unsigned)> owned_fn_;  ///< start()'s job
+  bool started_ = false;                                  ///< start() awaiting join()
 };
 
 }  // namespace tbdr
