@@ -538,25 +538,24 @@ void Dram::wakeup(std::uint32_t c) {
     }
     const bool oldest_needs_row = first_need_[q->front().bank] == 0;
     // The banks holding an arrived row hit once this cycle's decisions are made (what a second
-    // pass over the queue would find): the prepared request's bank gains one (the request itself;
-    // any other hit it had was to the row now closed), the issued request's bank loses it if it
-    // was the only one there.
+    // pass over the queue would find): the issued request's bank loses its hit if it was the
+    // only one there, then the prepared request's bank gains one (the request itself; any other
+    // hit it had was to the row now closed).
     std::uint64_t hits_after = wanted;
+    if (issue >= 0) {
+      const std::uint64_t bit = std::uint64_t{1} << (*q)[static_cast<std::size_t>(issue)].bank;
+      if ((wanted_twice & bit) == 0) hits_after &= ~bit;
+    }
     if (prep >= 0) {
-      Entry& e = (*q)[static_cast<std::size_t>(prep)];
-      open_row(ch, e, n);
+      hits_after |= std::uint64_t{1} << (*q)[static_cast<std::size_t>(prep)].bank;
+      open_row(ch, (*q)[static_cast<std::size_t>(prep)], n);
       if (prep == 0) ch.oldest_bypassed = 0;
-      hits_after |= std::uint64_t{1} << e.bank;
     }
     if (issue >= 0) {
       if (issue == 0) {
         ch.oldest_bypassed = 0;
       } else if (oldest_needs_row && prep != 0) {
         ++ch.oldest_bypassed;
-      }
-      const std::uint64_t bit = std::uint64_t{1} << (*q)[static_cast<std::size_t>(issue)].bank;
-      if ((wanted_twice & bit) == 0 && (prep < 0 || (*q)[static_cast<std::size_t>(prep)].bank != (*q)[static_cast<std::size_t>(issue)].bank)) {
-        hits_after &= ~bit;
       }
       commit(c, *q, static_cast<std::size_t>(issue), n);
       freed = true;
