@@ -221,6 +221,21 @@ TEST(ImageOutputHeatmap, GradientGetsLegendAndEndColors) {
   EXPECT_EQ(load_with_stb(path), img);
 }
 
+TEST(ImageOutputHeatmap, CountsGiveTheSameImageAsTheirValuesAsDoubles) {
+  // The frame's counters are mapped as stored (no copy as doubles): every pixel and the legend
+  // (min / mean / max, ticks) must be the image the same values as doubles give.
+  const int w = 96, h = 30;
+  std::vector<std::uint32_t> counts(static_cast<std::size_t>(w) * h);
+  for (std::size_t i = 0; i < counts.size(); ++i) counts[i] = static_cast<std::uint32_t>((i * 7919u) % 37u + (i % w) / 8u);
+  const std::vector<double> values(counts.begin(), counts.end());
+  for (const bool log_scale : {false, true}) {
+    HeatmapSpec spec{"Lights evaluated", "lights per pixel", log_scale, std::nullopt, std::nullopt};
+    const ImageRGB8 from_counts = heatmap_to_image(counts, w, h, spec);
+    EXPECT_EQ(from_counts, heatmap_to_image(values, w, h, spec)) << "log_scale " << log_scale;
+    EXPECT_GT(from_counts.height, h);  // the legend is there
+  }
+}
+
 TEST(ImageOutputHeatmap, MaxValueClampsAndLogScaleMapsEnds) {
   const std::vector<double> values = {0, 1, 10, 100, 1000, 5000};
   HeatmapSpec spec{"Lights", "lights per pixel", true, 1000.0, std::nullopt};

@@ -590,14 +590,20 @@ struct ValueStats {
   double min = 0;
   double max = 0;
   double mean = 0;
+  bool no_data = false;  // some value is not finite (drawn in kNoDataColor)
 };
 
-ValueStats value_stats(const std::vector<double>& values) {
+template <typename T>
+ValueStats value_stats(const std::vector<T>& values) {
   ValueStats st;
   double sum = 0;
   bool first = true;
-  for (double v : values) {
-    if (!std::isfinite(v)) continue;
+  for (const T raw : values) {
+    const auto v = static_cast<double>(raw);
+    if (!std::isfinite(v)) {
+      st.no_data = true;
+      continue;
+    }
     ++st.count;
     sum += v;
     if (first || v < st.min) st.min = v;
@@ -608,10 +614,22 @@ ValueStats value_stats(const std::vector<double>& values) {
   return st;
 }
 
-Legend heatmap_legend(const std::vector<double>& values, const HeatmapSpec& spec, int bar_width,
+/// The range a heat map's colours span: the spec's bounds, else from 0 (or the minimum when
+/// negative) to the maximum of the finite values.
+HeatmapRange range_of(const ValueStats& st, const HeatmapSpec& spec) {
+  HeatmapRange r;
+  r.lo = spec.min_value ? *spec.min_value : std::min(0.0, st.min);
+  r.hi = spec.max_value ? *spec.max_value : st.max;
+  if (!std::isfinite(r.lo)) r.lo = 0;
+  if (!std::isfinite(r.hi)) r.hi = r.lo + 1;
+  if (!(r.hi > r.lo)) r.hi = r.lo + 1;
+  return r;
+}
+
+/// The legend of a heat map whose values have the statistics `st` and whose colours span `range`
+/// (both from one pass over the values: a 1080p map has 2 M of them).
+Legend heatmap_legend(const ValueStats& st, const HeatmapRange& range, const HeatmapSpec& spec, int bar_width,
                       int text_scale, const std::string& per_what) {
-  const ValueStats st = value_stats(values);
-  const HeatmapRange range = heatmap_range(values, spec);
   Legend legend;
   std::string title = spec.title.empty() ? std::string("Heat map") : spec.title;
   if (!spec.unit.empty()) title += " (" + spec.unit + ")";
@@ -654,10 +672,7 @@ Legend heatmap_legend(const std::vector<double>& values, const HeatmapSpec& spec
       }
     }
   }
-  bool no_data = false;
-  for (double v : values)
-    if (!std::isfinite(v)) no_data = true;
-  if (no_data) legend.swatches.push_back({kNoDataColor, "no data"});
+  if (st.no_data) legend.swatches.push_back({kNoDataColor, "no data"});
   return legend;
 }
 
@@ -746,14 +761,7 @@ ImageRGB8 ids_to_image(const std::vector<std::uint32_t>& ids, int w, int h, std:
 // Heat maps
 
 HeatmapRange heatmap_range(const std::vector<double>& values, const HeatmapSpec& spec) {
-  const ValueStats st = value_stats(values);
-  HeatmapRange r;
-  r.lo = spec.min_value ? *spec.min_value : std::min(0.0, st.min);
-  r.hi = spec.max_value ? *spec.max_value : st.max;
-  if (!std::isfinite(r.lo)) r.lo = 0;
-  if (!std::isfinite(r.hi)) r.hi = r.lo + 1;
-  if (!(r.hi > r.lo)) r.hi = r.lo + 1;
-  return r;
+  return range_of(value_stats(values), spec);
 }
 
 double heatmap_position(double v, const HeatmapRange& range, bool log_scale) {
@@ -766,16 +774,21 @@ double heatmap_position(double v, const HeatmapRange& range, bool log_scale) {
   return std::clamp(t, 0.0, 1.0);
 }
 
-ImageRGB8 heatmap_to_image(const std::vector<double>& values, int w, int h, const HeatmapSpec& spec) {
+namespace {
+
+/// heatmap_to_image for values of type T (double, or counts read as they are stored).
+template <typename T>
+ImageRGB8 values_heatmap(const std::vector<T>& values, int w, int h, const HeatmapSpec& spec) {
   check_size(values.size(), w, h, "heatmap_to_image");
-  const HeatmapRange range = heatmap_range(values, spec);
+  const ValueStats st = value_stats(values);
+  const HeatmapRange range = range_of(st, spec);
   ImageRGB8 image(w, h);
   // Neighbouring pixels mostly hold the same count: the colour of the previous value is reused
   // (the same colour the mapping gives, without the colormap's interpolation per pixel).
   double last_v = std::numeric_limits<double>::quiet_NaN();
   Rgb8 last_c = kNoDataColor;
   for (std::size_t i = 0; i < values.size(); ++i) {
-    const double v = values[i];
+    const auto v = static_cast<double>(values[i]);
     if (!(v == last_v)) {
       last_c = std::isfinite(v) ? colormap_color(heatmap_position(v, range, spec.log_scale)) : kNoDataColor;
       last_v = v;
@@ -786,9 +799,19 @@ ImageRGB8 heatmap_to_image(const std::vector<double>& values, int w, int h, cons
     image.rgb[3 * i + 2] = c.b;
   }
   const int s = legend_text_scale(w);
-  const Legend legend = heatmap_legend(values, spec, w - 16 * s, s,
+  const Legend legend = heatmap_legend(st, range, spec, w - 16 * s, s,
                                        "(per pixel, " + std::to_string(w) + "x" + std::to_string(h) + ")");
   return append_legend(image, legend);
+}
+
+}  // namespace
+
+ImageRGB8 heatmap_to_image(const std::vector<double>& values, int w, int h, const HeatmapSpec& spec) {
+  return values_heatmap(values, w, h, spec);
+}
+
+ImageRGB8 heatmap_to_image(const std::vector<std::uint32_t>& counts, int w, int h, const HeatmapSpec& spec) {
+  return values_heatmap(counts, w, h, spec);
 }
 
 std::vector<double> expand_tiles_to_pixels(const std::vector<double>& values_per_tile, int tiles_x,
@@ -813,7 +836,8 @@ ImageRGB8 heatmap_tiles_to_image(const std::vector<double>& values_per_tile, int
                                  int tile_w, int tile_h, int w, int h, const HeatmapSpec& spec) {
   const std::vector<double> pixels =
       expand_tiles_to_pixels(values_per_tile, tiles_x, tiles_y, tile_w, tile_h, w, h);
-  const HeatmapRange range = heatmap_range(values_per_tile, spec);
+  const ValueStats st = value_stats(values_per_tile);
+  const HeatmapRange range = range_of(st, spec);
   ImageRGB8 image(w, h);
   const bool borders = tile_w >= 4 && tile_h >= 4;
   double last_v = std::numeric_limits<double>::quiet_NaN();  // a tile's value repeats along its row
@@ -831,7 +855,7 @@ ImageRGB8 heatmap_tiles_to_image(const std::vector<double>& values_per_tile, int
     }
   }
   const int s = legend_text_scale(w);
-  const Legend legend = heatmap_legend(values_per_tile, spec, w - 16 * s, s,
+  const Legend legend = heatmap_legend(st, range, spec, w - 16 * s, s,
                                        "(per tile, " + std::to_string(tiles_x) + "x" + std::to_string(tiles_y) +
                                            " tiles of " + std::to_string(tile_w) + "x" + std::to_string(tile_h) + ")");
   return append_legend(image, legend);

@@ -108,6 +108,9 @@ double heatmap_position(double v, const HeatmapRange& range, bool log_scale);
 /// of the values, and a color bar with tick labels. Non-finite values are kNoDataColor and are
 /// left out of the statistics. Throws std::invalid_argument when values.size() != w * h.
 ImageRGB8 heatmap_to_image(const std::vector<double>& values, int w, int h, const HeatmapSpec& spec);
+/// The same map of per-pixel counts (the frame's counters), read as they are stored: the same
+/// image as heatmap_to_image of the counts as doubles, without a 2 M-value copy at 1080p.
+ImageRGB8 heatmap_to_image(const std::vector<std::uint32_t>& counts, int w, int h, const HeatmapSpec& spec);
 
 /// Expands one value per tile (row-major, tiles_x * tiles_y) to one value per pixel of a w x h
 /// frame; tile (tx, ty) covers pixels [tx*tile_w, (tx+1)*tile_w) x [ty*tile_h, (ty+1)*tile_h).

@@ -166,11 +166,10 @@ std::vector<std::string> write_frame_images(const FrameResult& frame, const std:
   jobs.push_back({"triangle_id.png", [&frame, w, h]() -> std::optional<ImageRGB8> { return ids_to_image(frame.images.counters.triangle_id, w, h, 0); }});
   auto heat = [&](const std::vector<std::uint32_t>& v, const std::string& file, const std::string& title, const std::string& unit) {
     jobs.push_back({file, [&v, title, unit, w, h]() -> std::optional<ImageRGB8> {
-                      std::vector<double> d(v.begin(), v.end());
                       HeatmapSpec spec;
                       spec.title = title;
                       spec.unit = unit;
-                      return heatmap_to_image(d, w, h, spec);
+                      return heatmap_to_image(v, w, h, spec);
                     }});
   };
   heat(frame.images.counters.rasterised_samples, "heat_overdraw.png", "Overdraw", "samples rasterised per pixel");
