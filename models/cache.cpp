@@ -1,6 +1,7 @@
 #include "models/cache.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <stdexcept>
 
 #include "kernel/bits.hpp"
@@ -34,7 +35,53 @@ Cache::Cache(std::string scope, const CacheParams& p, double pj_per_byte, bool w
   arrival_ps_.assign(lines, 0);
 }
 
+namespace {
+
+/// The way of a set (its `ways` tags) holding `line`, or `ways` when none does. W: the ways known
+/// when compiled (the configurations' 4, 8 and 16: a fixed count the compiler unrolls into
+/// compares without a branch per way), 0: `ways` read at run time.
+template <std::uint32_t W>
+inline std::uint32_t way_holding(const std::uint64_t* tags, std::uint64_t line, std::uint32_t ways) {
+  if constexpr (W == 0) {
+    for (std::uint32_t w = 0; w < ways; ++w) {
+      if (tags[w] == line) return w;
+    }
+    return ways;
+  } else {
+    std::uint32_t found = 0;  // bit w: way w holds the line (at most one does)
+    for (std::uint32_t w = 0; w < W; ++w) found |= static_cast<std::uint32_t>(tags[w] == line) << w;
+    return found != 0 ? static_cast<std::uint32_t>(std::countr_zero(found)) : W;
+  }
+}
+
+/// The least recently used way of a set (its `ways` stamps): the first of the smallest stamps
+/// (empty ways have stamp 0 and are taken first). W as for way_holding.
+template <std::uint32_t W>
+inline std::uint32_t least_recent_way(const std::uint64_t* stamps, std::uint32_t ways) {
+  const std::uint32_t n = W == 0 ? ways : W;
+  std::uint32_t lru = 0;
+  std::uint64_t oldest = stamps[0];
+  for (std::uint32_t w = 1; w < n; ++w) {
+    const bool older = stamps[w] < oldest;  // strictly: the first of equals stays
+    lru = older ? w : lru;
+    oldest = older ? stamps[w] : oldest;
+  }
+  return lru;
+}
+
+}  // namespace
+
 CacheAccess Cache::access(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Allocation alloc) {
+  switch (ways_) {
+    case 4: return access_in<4>(addr, bytes, is_write, cls, alloc);
+    case 8: return access_in<8>(addr, bytes, is_write, cls, alloc);
+    case 16: return access_in<16>(addr, bytes, is_write, cls, alloc);
+    default: return access_in<0>(addr, bytes, is_write, cls, alloc);
+  }
+}
+
+template <std::uint32_t W>
+CacheAccess Cache::access_in(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Allocation alloc) {
   const std::uint64_t line = addr >> line_shift_;
   const std::uint32_t base = set_of(line) * ways_;
   const std::uint64_t* tags = tags_.data() + base;
@@ -50,9 +97,8 @@ CacheAccess Cache::access(std::uint64_t addr, std::uint32_t bytes, bool is_write
     stats_.read_bytes += bytes;
   }
 
-  // The hit, if any (most accesses hit: their ways' stamps are not read).
-  for (std::uint32_t w = 0; w < ways_; ++w) {
-    if (tags[w] != line) continue;
+  // The hit, if any (a hit does not read the ways' stamps).
+  if (const std::uint32_t w = way_holding<W>(tags, line, ways_); w != ways_) {
     const std::uint32_t slot = base + w;
     stamps_[slot] = stamp;
     if (is_write) {
@@ -70,11 +116,7 @@ CacheAccess Cache::access(std::uint64_t addr, std::uint32_t bytes, bool is_write
   }
   // A miss: the least recently used way, the first of equals (empty ways have stamp 0 and are
   // taken first).
-  const std::uint64_t* stamps = stamps_.data() + base;
-  std::uint32_t lru = 0;
-  for (std::uint32_t w = 1; w < ways_; ++w) {
-    if (stamps[w] < stamps[lru]) lru = w;
-  }
+  const std::uint32_t lru = least_recent_way<W>(stamps_.data() + base, ways_);
 
   if (is_write) {
     ++stats_.write_misses;
@@ -119,19 +161,14 @@ CacheAccess Cache::access(std::uint64_t addr, std::uint32_t bytes, bool is_write
 bool Cache::probe(std::uint64_t addr) const {
   const std::uint64_t line = addr >> line_shift_;
   const std::uint32_t base = set_of(line) * ways_;
-  for (std::uint32_t w = 0; w < ways_; ++w) {
-    if (tags_[base + w] == line) return true;
-  }
-  return false;
+  return way_holding<0>(tags_.data() + base, line, ways_) != ways_;
 }
 
 bool Cache::is_dirty(std::uint64_t addr) const {
   const std::uint64_t line = addr >> line_shift_;
   const std::uint32_t base = set_of(line) * ways_;
-  for (std::uint32_t w = 0; w < ways_; ++w) {
-    if (tags_[base + w] == line) return dirty_[base + w] != 0;
-  }
-  return false;
+  const std::uint32_t w = way_holding<0>(tags_.data() + base, line, ways_);
+  return w != ways_ && dirty_[base + w] != 0;
 }
 
 void Cache::invalidate_all() {

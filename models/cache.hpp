@@ -134,6 +134,9 @@ class Cache {
 
  private:
   static constexpr std::uint64_t kInvalid = UINT64_MAX;
+  /// access() for a cache of W ways (0: any number, read from ways_).
+  template <std::uint32_t W>
+  CacheAccess access_in(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Allocation alloc);
   std::uint32_t set_of(std::uint64_t line) const {
     return static_cast<std::uint32_t>(sets_pow2_ ? (line & set_mask_) : (line % sets_));
   }
