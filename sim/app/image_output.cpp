@@ -814,28 +814,40 @@ ImageRGB8 heatmap_to_image(const std::vector<std::uint32_t>& counts, int w, int 
   return values_heatmap(counts, w, h, spec);
 }
 
+namespace {
+
+/// Checks a tile grid and frame for the per-tile maps (`what` names the caller in the message).
+void check_tile_grid(const std::vector<double>& values_per_tile, int tiles_x, int tiles_y, int tile_w, int tile_h, int w,
+                     int h, const char* what) {
+  check_size(values_per_tile.size(), tiles_x, tiles_y, what);
+  if (tile_w <= 0 || tile_h <= 0 || w <= 0 || h <= 0)
+    throw std::invalid_argument(std::string(what) + ": tile and frame sizes must be positive");
+}
+
+/// The value of the tile covering pixel (x, y), NaN past the grid.
+double tile_value_at(const std::vector<double>& values_per_tile, int tiles_x, int tiles_y, int tile_w, int tile_h, int x,
+                     int y) {
+  const int tx = x / tile_w, ty = y / tile_h;
+  if (tx >= tiles_x || ty >= tiles_y) return std::numeric_limits<double>::quiet_NaN();
+  return values_per_tile[static_cast<std::size_t>(ty) * static_cast<std::size_t>(tiles_x) + static_cast<std::size_t>(tx)];
+}
+
+}  // namespace
+
 std::vector<double> expand_tiles_to_pixels(const std::vector<double>& values_per_tile, int tiles_x,
                                            int tiles_y, int tile_w, int tile_h, int w, int h) {
-  check_size(values_per_tile.size(), tiles_x, tiles_y, "expand_tiles_to_pixels");
-  if (tile_w <= 0 || tile_h <= 0 || w <= 0 || h <= 0)
-    throw std::invalid_argument("expand_tiles_to_pixels: tile and frame sizes must be positive");
-  std::vector<double> out(static_cast<std::size_t>(w) * h, std::numeric_limits<double>::quiet_NaN());
+  check_tile_grid(values_per_tile, tiles_x, tiles_y, tile_w, tile_h, w, h, "expand_tiles_to_pixels");
+  std::vector<double> out(static_cast<std::size_t>(w) * h);
   for (int y = 0; y < h; ++y) {
-    const int ty = y / tile_h;
-    if (ty >= tiles_y) continue;
-    for (int x = 0; x < w; ++x) {
-      const int tx = x / tile_w;
-      if (tx >= tiles_x) continue;
-      out[static_cast<std::size_t>(y) * w + x] = values_per_tile[static_cast<std::size_t>(ty) * tiles_x + tx];
-    }
+    for (int x = 0; x < w; ++x) out[static_cast<std::size_t>(y) * w + x] = tile_value_at(values_per_tile, tiles_x, tiles_y, tile_w, tile_h, x, y);
   }
   return out;
 }
 
 ImageRGB8 heatmap_tiles_to_image(const std::vector<double>& values_per_tile, int tiles_x, int tiles_y,
                                  int tile_w, int tile_h, int w, int h, const HeatmapSpec& spec) {
-  const std::vector<double> pixels =
-      expand_tiles_to_pixels(values_per_tile, tiles_x, tiles_y, tile_w, tile_h, w, h);
+  // Each pixel's tile value is looked up as it is drawn (no frame-sized copy of the values).
+  check_tile_grid(values_per_tile, tiles_x, tiles_y, tile_w, tile_h, w, h, "expand_tiles_to_pixels");
   const ValueStats st = value_stats(values_per_tile);
   const HeatmapRange range = range_of(st, spec);
   ImageRGB8 image(w, h);
@@ -844,7 +856,7 @@ ImageRGB8 heatmap_tiles_to_image(const std::vector<double>& values_per_tile, int
   Rgb8 last_c = kNoDataColor;
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
-      const double v = pixels[static_cast<std::size_t>(y) * w + x];
+      const double v = tile_value_at(values_per_tile, tiles_x, tiles_y, tile_w, tile_h, x, y);
       if (!(v == last_v)) {
         last_c = std::isfinite(v) ? colormap_color(heatmap_position(v, range, spec.log_scale)) : kNoDataColor;
         last_v = v;
