@@ -267,6 +267,26 @@ TEST(CacheTest, EveryAssociativityMatchesAReferenceTrueLru) {
   }
 }
 
+TEST(CacheTest, MoreWaysHoldAConflictingLoopThatFewerThrash) {
+  // Response to associativity at a fixed capacity (16 KiB, 64 B lines): a loop over k lines that
+  // all fall in one set (addresses k * capacity) hits on every access after the first round when
+  // the set has k or more ways, and never under true LRU when it has fewer (each access evicts
+  // the line needed next). Loop of 6 lines, 10 rounds = 60 accesses, 6 cold misses:
+  //   ways 1, 2, 4: 0 hits; ways 8, 16: 54 hits (9 rounds x 6). Never fewer hits with more ways.
+  const std::int64_t capacity = 16 * 1024;
+  std::uint64_t previous_hits = 0;
+  for (const int ways : {1, 2, 4, 8, 16}) {
+    Cache c("t", CacheParams{capacity, ways, 64, 1});
+    for (int round = 0; round < 10; ++round)
+      for (std::uint64_t k = 0; k < 6; ++k) c.access(k * static_cast<std::uint64_t>(capacity), 4, false, DramClass::Other);
+    const std::uint64_t hits = c.stats().read_hits.value();
+    EXPECT_EQ(hits, ways >= 6 ? 54u : 0u) << ways << " ways";
+    EXPECT_EQ(c.stats().read_misses.value(), 60u - hits) << ways << " ways";
+    EXPECT_GE(hits, previous_hits) << ways << " ways";
+    previous_hits = hits;
+  }
+}
+
 TEST(CacheTest, DirtyWritebackAndFlush) {
   Cache c("t", tiny_cache());
   CacheAccess r = c.access(A, 16, true, DramClass::Color);  // write miss: allocate, no fetch
