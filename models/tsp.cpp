@@ -489,14 +489,67 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   std::optional<std::pair<glm::vec3, glm::vec3>> bounds;  // the batch's surface box, when the colour loop needs it
   near_.bin = nullptr;  // gathered for another batch
 
+  // What a written fragment does to the colour targets (usage Color) of the batch: `src` blended
+  // into each of its written samples as the target's format keeps it. An additive fragment that
+  // adds exactly 0 (out of its lights' reach, facing away) leaves a target that keeps every
+  // channel as it is: dst + 0 is dst, which the format already holds.
+  const auto blend_into_colour_targets = [&](std::size_t pixel, std::uint32_t write_mask, const glm::vec4& src) {
+    const bool adds_zero = blend == BlendMode::Add && glm::vec3(src) == glm::vec3(0.0f);
+    for (std::uint32_t o = 0; o < outputs; ++o) {
+      AttachmentImage* target = ctx_.color_targets[o];
+      if (target->usage != AttachmentUsage::Color) continue;
+      if (adds_zero && FormatPrecision::keeps_every_channel(target->format)) continue;
+      glm::vec4* dst = target->color.data() + pixel * static_cast<std::size_t>(S);
+      const Format format = target->format;
+      for (int smp = 0; smp < S; ++smp) {
+        if (!(write_mask & (1u << smp))) continue;
+        switch (blend) {
+          case BlendMode::Off: dst[smp] = FormatPrecision::color(format, src); break;
+          case BlendMode::Add: dst[smp] = FormatPrecision::color(format, dst[smp] + glm::vec4(glm::vec3(src), 0.0f)); break;
+          case BlendMode::Alpha:
+            dst[smp] = FormatPrecision::color(format, glm::vec4(glm::vec3(src) * src.w + glm::vec3(dst[smp]) * (1.0f - src.w),
+                                                                src.w + dst[smp].w * (1.0f - src.w)));
+            break;
+        }
+      }
+    }
+  };
+
+  // A light's contribution added to the pixel's PLS light accumulator. Adding 0 keeps the
+  // accumulator as it is: it only ever holds 0 or what its format keeps, each channel a fixed
+  // point of FormatPrecision::color (most light-volume fragments lie out of their light's reach).
+  const auto accumulate_in_pls = [&](std::size_t pixel, const glm::vec3& add) {
+    if (add == glm::vec3(0.0f)) return;
+    glm::vec3& acc = ctx_.pls->accum[pixel];
+    acc += add;
+    if (pls_accum_format) acc = glm::vec3(FormatPrecision::color(*pls_accum_format, glm::vec4(acc, 1.0f)));
+  };
+
   // Fragments that only count (a light volume or a full-screen pass without colours): no
   // surface is built or read and every fragment evaluates the same number of lights; a light
   // volume may push its light on the pixel's PLS light stack. The loop below would do exactly
   // this for them, fragment by fragment; here the per-fragment state is only what the counts,
-  // the light stacks and the image counters need.
+  // the light stacks and the image counters need. With colours, a light volume adding its light
+  // to colour targets over a stored surface (deferred shading's, light pre-pass's light buffer;
+  // no PLS) takes this path too: each fragment reads the stored surface's position, and where
+  // the light reaches it the rest of the surface, and adds the light's contribution, as the
+  // general loop's reach test (adds_light_only, below) and colour outputs do (deferred at 1080p:
+  // 22 M such fragments, two thirds out of reach; 13 % less CPU with images).
   const bool fixed_lights = sh.light_source == LightSource::None || sh.light_source == LightSource::All ||
                             sh.light_source == LightSource::ObjectList || sh.light_source == LightSource::Proxy;
-  const bool counts_only = !from_triangle && !reads_loaded_surface && !colour && fixed_lights;
+  bool colour_outputs_only = outputs > 0;
+  for (std::uint32_t o = 0; o < outputs; ++o) colour_outputs_only = colour_outputs_only && ctx_.color_targets[o]->usage == AttachmentUsage::Color;
+  const bool volume_adds_light = colour && !from_triangle && sh.light_source == LightSource::Proxy && p.proxy_light >= 0 &&
+                                 d.surface_source != nullptr && !ctx_.pls && blend == BlendMode::Add && colour_outputs_only;
+  // The same into the PLS light accumulator over the PLS surface (deferred_tile_store: no colour
+  // outputs), quantised to the accumulator's format where it adds something.
+  const bool volume_accumulates = colour && !from_triangle && sh.light_source == LightSource::Proxy && p.proxy_light >= 0 &&
+                                  outputs == 0 && pls_reads && pls_writes && d.surface_source == nullptr;
+  // A light volume that only pushes its light on the PLS light stack (forward_light_stack) reads
+  // no surface and makes no colour, with colours or without.
+  const bool volume_pushes_only = outputs == 0 && !pls_reads && sh.light_source != LightSource::Proxy && d.surface_source == nullptr;
+  const bool counts_only = !from_triangle && fixed_lights &&
+                           ((!reads_loaded_surface && !colour) || volume_adds_light || volume_accumulates || volume_pushes_only);
   if (counts_only) {
     std::uint64_t count = 0;
     switch (sh.light_source) {
@@ -505,6 +558,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       case LightSource::Proxy: count = p.proxy_light >= 0 ? 1 : 0; break;
       default: break;
     }
+    const Light* volume_light = volume_adds_light || volume_accumulates ? &lights[static_cast<std::size_t>(p.proxy_light)] : nullptr;
     std::uint32_t* const shaded = ctx_.images->counters.shaded.data();
     std::uint64_t written = 0;
     for (std::size_t i = 0; i < pixels.size(); ++i) {
@@ -524,9 +578,23 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         if (pls_writes && sh.light_source != LightSource::Proxy && p.proxy_light >= 0) {
           ctx_.pls->push_light(pixel, static_cast<std::uint32_t>(p.proxy_light));
         }
+        if (volume_accumulates && ctx_.pls->valid[pixel]) {
+          if (ctx_.pls->surface.empty()) throw std::logic_error("Tsp::shade: a PLS surface is read but the pass keeps none");
+          if (ShadingModel::reaches(*volume_light, ctx_.pls->surface.site(pixel).position)) {
+            accumulate_in_pls(pixel, ShadingModel::lit_contribution(ctx_.pls->surface[pixel], eye, *volume_light));
+          }
+        }
         continue;
       }
       written += static_cast<std::uint64_t>(bit_count(write_mask));
+      if (volume_light) {
+        glm::vec3 lit(0.0f);
+        const std::size_t k = pixel * d.surface_source->samples;
+        if (d.surface_source->surface_valid[k] && ShadingModel::reaches(*volume_light, d.surface_source->surface.site(k).position)) {
+          lit = ShadingModel::lit_contribution(d.surface_source->surface[k], eye, *volume_light);
+        }
+        blend_into_colour_targets(pixel, write_mask, glm::vec4(lit, 0.0f));
+      }
       // Writing a color output makes the pixel's PLS undefined (EXT_shader_pixel_local_storage).
       if (ctx_.pls) {
         ctx_.pls->valid[pixel] = 0;
@@ -741,17 +809,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         ctx_.pls->stack_count[pixel] = 0;
         ctx_.pls->overflow[pixel] = 0;
       } else if (sh.light_source == LightSource::Proxy) {
-        if (have_surface && colour) {
-          // Adding 0 keeps the accumulator as it is: it only ever holds 0 or what its format keeps,
-          // each channel a fixed point of FormatPrecision::color (most light-volume fragments lie
-          // out of their light's reach).
-          const glm::vec3 add = lighting();
-          if (add != glm::vec3(0.0f)) {
-            glm::vec3& acc = ctx_.pls->accum[pixel];
-            acc += add;
-            if (pls_accum_format) acc = glm::vec3(FormatPrecision::color(*pls_accum_format, glm::vec4(acc, 1.0f)));
-          }
-        }
+        if (have_surface && colour) accumulate_in_pls(pixel, lighting());
       } else if (p.proxy_light >= 0) {
         ctx_.pls->push_light(pixel, static_cast<std::uint32_t>(p.proxy_light));
       }
@@ -773,28 +831,11 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       stats.blended_samples += written;
       stats.tile_buffer_read_bytes += written * out_bytes_per_sample;
     }
-    // An additive fragment that adds exactly 0 (out of its lights' reach, facing away) leaves a
-    // target that keeps every channel as it is: dst + 0 is dst, which the format already holds.
-    const bool adds_zero = blend == BlendMode::Add && lit == glm::vec3(0.0f);
+    if (colour) blend_into_colour_targets(pixel, write_mask, src);
     bool surface_stored = false;
     for (std::uint32_t o = 0; o < outputs; ++o) {
       AttachmentImage* target = ctx_.color_targets[o];
-      if (target->usage == AttachmentUsage::Color) {
-        if (!colour || (adds_zero && FormatPrecision::keeps_every_channel(target->format))) continue;
-        glm::vec4* dst = target->color.data() + pixel * static_cast<std::size_t>(S);
-        const Format format = target->format;
-        for (int smp = 0; smp < S; ++smp) {
-          if (!(write_mask & (1u << smp))) continue;
-          switch (blend) {
-            case BlendMode::Off: dst[smp] = FormatPrecision::color(format, src); break;
-            case BlendMode::Add: dst[smp] = FormatPrecision::color(format, dst[smp] + glm::vec4(glm::vec3(src), 0.0f)); break;
-            case BlendMode::Alpha:
-              dst[smp] = FormatPrecision::color(format, glm::vec4(glm::vec3(src) * src.w + glm::vec3(dst[smp]) * (1.0f - src.w),
-                                                                  src.w + dst[smp].w * (1.0f - src.w)));
-              break;
-          }
-        }
-      } else if (!surface_stored && have_surface) {
+      if (target->usage != AttachmentUsage::Color && !surface_stored && have_surface) {
         // G-buffer / visibility: the first such target keeps the surface the data stands for
         // (PassRenderer::allocate_surfaces made its arrays; only its marks when no command reads it).
         if (target->surface_valid.empty()) {  // (a TSP driven alone; PassRenderer::allocate_surfaces makes them before tiles run)
