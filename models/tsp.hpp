@@ -66,6 +66,17 @@ inline constexpr const char* kPlsAccumulatorName = "light_accum";
 /// (Tsp::shade's contract), a sort otherwise.
 std::size_t launched_quads(std::span<const ShadePixel> pixels, std::vector<std::uint64_t>& quads);
 
+/// Whether any of the lights `reach` (indices into `lights`) may reach a point of scene triangle
+/// `p` interpolated at barycentrics inside it, as the TSP interpolates a fragment's position
+/// (p.world weighted in float): true whenever ShadingModel::reaches holds at such a point. False
+/// only when the triangle's world box, widened by 1e-5 of its largest coordinate (ten times the
+/// rounding of the interpolation: float weights in [0, 1] summing to 1 within a few ulp, three
+/// products and two sums), lies beyond every light's radius^2 with the colour loop's margin
+/// (kReachMargin, for the distance's own rounding). (A non-finite vertex makes every interpolated
+/// position NaN or infinite, reached by no light: either answer is exact.) The TSP leaves the
+/// colour of such a triangle's fragments out (forward_multipass: most of a pass's fragments).
+bool may_reach_triangle(const Primitive& p, std::span<const std::uint32_t> reach, const std::vector<Light>& lights);
+
 /// The fragment shading stage.
 class Tsp {
  public:
