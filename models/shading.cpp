@@ -142,13 +142,18 @@ glm::vec4 FormatPrecision::other_color(Format f, const glm::vec4& v) {
   return out;
 }
 
-void FormatPrecision::surface(const std::string& name, Format f, SurfacePoint& s) {
+void FormatPrecision::surface(Attribute a, Format f, SurfacePoint& s) {
+  if (a == Attribute::Other) return;
   const int n = channels_of(f);
   if (n == 0) return;
-  if (name == "albedo") {
+  if (a == Attribute::Albedo && f == Format::Rgba8) {  // the G-buffers' usual albedo: four channels at once, bit for bit unorm
+    const glm::vec4 q = detail::unorm8_4(glm::vec4(s.albedo, s.alpha));
+    s.albedo = glm::vec3(q);
+    s.alpha = q.w;
+  } else if (a == Attribute::Albedo) {
     for (int c = 0; c < std::min(n, 3); ++c) s.albedo[c] = channel(f, c, s.albedo[c]);
     if (n == 4) s.alpha = channel(f, 3, s.alpha);
-  } else if (name == "normal") {
+  } else {  // Attribute::Normal
     glm::vec3 q = s.normal;
     if (n >= 3) {
       const bool unsigned_range = is_unorm(f) || f == Format::R11g11b10f;

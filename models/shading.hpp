@@ -259,7 +259,15 @@ struct FormatPrecision {
   /// normal (unorm formats as n/2 + 1/2, two-channel formats octahedral, float formats n; read
   /// back renormalised). The generators lay G-buffers out this way (workloads/techniques:
   /// albedo, normal, then targets holding nothing the model uses); other names keep the surface.
-  static void surface(const std::string& name, Format f, SurfacePoint& s);
+  static void surface(const std::string& name, Format f, SurfacePoint& s) { surface(attribute_of(name), f, s); }
+  /// What a target (or PLS variable) of that name keeps of the surface, found once per pass (the
+  /// TSP quantises every stored fragment).
+  enum class Attribute : std::uint8_t { Albedo, Normal, Other };
+  static Attribute attribute_of(const std::string& name) {
+    return name == "albedo" ? Attribute::Albedo : name == "normal" ? Attribute::Normal : Attribute::Other;
+  }
+  /// surface() of a target holding attribute `a`.
+  static void surface(Attribute a, Format f, SurfacePoint& s);
 
  private:
   /// color() of the other formats, channel by channel.

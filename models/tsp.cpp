@@ -463,11 +463,11 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   if (formats_pass_ != ctx_.pass) {
     formats_pass_ = ctx_.pass;
     target_formats_.clear();
-    for (const Attachment* a : ctx_.pass->color_targets()) target_formats_.push_back({&a->name, a->format});
+    for (const Attachment* a : ctx_.pass->color_targets()) target_formats_.push_back({FormatPrecision::attribute_of(a->name), a->format});
     pls_formats_.clear();
     pls_accum_format_.reset();
     for (const PlsVariable& v : ctx_.pass->pls) {
-      pls_formats_.push_back({&v.name, v.format});
+      pls_formats_.push_back({FormatPrecision::attribute_of(v.name), v.format});
       if (v.name == kPlsAccumulatorName) pls_accum_format_ = v.format;
     }
   }
@@ -476,10 +476,10 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     // The formats keep the looks (normal, albedo, alpha), which a store keeps only with colours.
     if (!colour) return q;
     if (pls) {
-      for (const auto& [name, format] : pls_formats_) FormatPrecision::surface(*name, format, q);
+      for (const auto& [attribute, format] : pls_formats_) FormatPrecision::surface(attribute, format, q);
     } else {
       for (std::uint32_t o = 0; o < outputs && o < target_formats_.size(); ++o) {
-        if (ctx_.color_targets[o]->usage != AttachmentUsage::Color) FormatPrecision::surface(*target_formats_[o].first, target_formats_[o].second, q);
+        if (ctx_.color_targets[o]->usage != AttachmentUsage::Color) FormatPrecision::surface(target_formats_[o].first, target_formats_[o].second, q);
       }
     }
     return q;

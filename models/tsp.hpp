@@ -124,10 +124,10 @@ class Tsp {
     const std::vector<std::uint32_t>* bin = nullptr;  ///< the screen bin they were gathered from
   };
   NearLights near_;
-  /// The current pass's colour targets and PLS variables (name, format), for FormatPrecision.
+  /// The current pass's colour targets and PLS variables (the surface attribute their name holds, format), for FormatPrecision.
   const PassDesc* formats_pass_ = nullptr;
-  std::vector<std::pair<const std::string*, Format>> target_formats_;
-  std::vector<std::pair<const std::string*, Format>> pls_formats_;
+  std::vector<std::pair<FormatPrecision::Attribute, Format>> target_formats_;
+  std::vector<std::pair<FormatPrecision::Attribute, Format>> pls_formats_;
   std::optional<Format> pls_accum_format_;
   std::array<QuadFootprint, 2> footprints_;  ///< scratch: the current and the previous quad's texture lines
   /// Texture lines recently appended to the tile's list (direct mapped; valid for the epoch).
