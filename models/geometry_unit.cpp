@@ -227,42 +227,116 @@ void GeometryUnit::setup_triangles(const Emit& e, const glm::vec4 clip[3], const
   pending.culled_backface += static_cast<std::uint32_t>(cs.culled_backface);
   pending.culled_zero_area += static_cast<std::uint32_t>(cs.culled_zero_area);
   pending.clipped += static_cast<std::uint32_t>(cs.clipped);
-  for (const ScreenTriangle& st : screen) {
-    SetUp& u = out.emplace_back();
-    Primitive& p = u.prim;
-    p.setup = setup_triangle(st, viewport_, e.scissor);
-    if (p.setup.empty) {  // covers no pixel of the viewport inside the scissor
-      ++pending.culled_scissor;
-      out.pop_back();
-      continue;
+  for (const ScreenTriangle& st : screen) set_up_screen_triangle(e, st, world, normal, uv, keys, out, pending);
+}
+
+void GeometryUnit::set_up_screen_triangle(const Emit& e, const ScreenTriangle& st, const glm::vec3 world[3],
+                                          const glm::vec3 normal[3], const glm::vec2 uv[3], const std::uint64_t keys[3],
+                                          std::vector<SetUp>& out, SetupCounts& pending) const {
+  SetUp& u = out.emplace_back();
+  Primitive& p = u.prim;
+  p.setup = setup_triangle(st, viewport_, e.scissor);
+  if (p.setup.empty) {  // covers no pixel of the viewport inside the scissor
+    ++pending.culled_scissor;
+    out.pop_back();
+    return;
+  }
+  u.before = pending;
+  pending = SetupCounts{};
+  p.draw = e.draw;
+  p.object = e.object;
+  p.material = e.material;
+  p.proxy_light = e.proxy_light;
+  p.hsr = e.hsr;
+  p.varyings = e.varyings;
+  u.made_by_clipping = 0;
+  for (int i = 0; i < 3; ++i) {
+    p.world[i] = world[i];
+    p.normal[i] = normal[i];
+    p.uv[i] = uv[i];
+    // A vertex made by clipping is new (its identity is given at delivery); an original vertex
+    // keeps its identity for block re-use.
+    const glm::vec3 b = st.bary[i];
+    int orig = -1;
+    for (int k = 0; k < 3; ++k) {
+      if (b[k] == 1.0f) orig = k;
     }
-    u.before = pending;
-    pending = SetupCounts{};
-    p.draw = e.draw;
-    p.object = e.object;
-    p.material = e.material;
-    p.proxy_light = e.proxy_light;
-    p.hsr = e.hsr;
-    p.varyings = e.varyings;
-    u.made_by_clipping = 0;
-    for (int i = 0; i < 3; ++i) {
-      p.world[i] = world[i];
-      p.normal[i] = normal[i];
-      p.uv[i] = uv[i];
-      // A vertex made by clipping is new (its identity is given at delivery); an original vertex
-      // keeps its identity for block re-use.
-      const glm::vec3 b = st.bary[i];
-      int orig = -1;
-      for (int k = 0; k < 3; ++k) {
-        if (b[k] == 1.0f) orig = k;
-      }
-      if (orig >= 0) {
-        u.keys[i] = keys[orig];
-      } else {
-        u.made_by_clipping |= static_cast<std::uint8_t>(1u << i);
-      }
+    if (orig >= 0) {
+      u.keys[i] = keys[orig];
+    } else {
+      u.made_by_clipping |= static_cast<std::uint8_t>(1u << i);
     }
   }
+}
+
+GeometryUnit::SetupCounts& GeometryUnit::SetupCounts::operator+=(const SetupCounts& o) {
+  in += o.in;
+  culled_frustum += o.culled_frustum;
+  culled_backface += o.culled_backface;
+  culled_zero_area += o.culled_zero_area;
+  clipped += o.clipped;
+  culled_scissor += o.culled_scissor;
+  return *this;
+}
+
+bool GeometryUnit::clip_instance(std::size_t ii, FaceCull cull, ClippedInstance& c) const {
+  const Instance& inst = scene_->instances[ii];
+  const SubMesh& sm = scene_->submeshes[inst.submesh];
+  c.valid = true;
+  c.cull = cull;
+  // Transform every vertex of the instance once (what the vertex shader computes).
+  thread_local std::vector<glm::vec4> clip;
+  const glm::mat4 mvp = camera_.view_proj * inst.world;
+  const glm::mat3 nrm = glm::transpose(glm::inverse(glm::mat3(inst.world)));
+  const std::size_t nv = sm.positions.size();
+  clip.resize(nv);
+  c.world.resize(nv);
+  c.normal.resize(nv);
+  glm::vec3 lo(1e30f), hi(-1e30f);
+  // A captured sub-mesh carries the clip positions its application's vertex shader wrote
+  // (SubMesh::clip_positions): they are taken as they are, with no instance or camera transform.
+  const bool captured_clip = sm.clip_positions.size() == nv;
+  for (std::size_t v = 0; v < nv; ++v) {
+    const glm::vec4 p(sm.positions[v], 1.0f);
+    clip[v] = captured_clip ? sm.clip_positions[v] : mvp * p;
+    c.world[v] = glm::vec3(inst.world * p);
+    c.normal[v] = glm::normalize(nrm * sm.normals[v]);
+    lo = glm::min(lo, c.world[v]);
+    hi = glm::max(hi, c.world[v]);
+  }
+  c.lo = lo;
+  c.hi = hi;
+
+  // Vertex fetch and shading: indices through the post-transform cache.
+  VertexCacheFifo cache(static_cast<std::size_t>(hw_.geometry.vertex_cache_entries));
+  c.shaded = 0;
+  for (std::uint32_t idx : sm.indices) {
+    if (sm.index_bytes == 0 || cache.access(idx)) ++c.shaded;
+  }
+
+  // Clipping and culling: the screen triangles kept, each with the counts since the one before.
+  ClipConfig config;
+  config.viewport = viewport_;
+  config.cull = cull;
+  c.pieces.clear();
+  c.tail = SetupCounts{};
+  thread_local std::vector<ScreenTriangle> screen;
+  for (std::size_t t = 0; t + 2 < sm.indices.size(); t += 3) {
+    const ClipTriangle ct{clip[sm.indices[t]], clip[sm.indices[t + 1]], clip[sm.indices[t + 2]]};
+    ClipStats cs;
+    screen.clear();
+    clip_and_cull(ct, config, cs, screen);
+    c.tail.in += static_cast<std::uint32_t>(cs.in);
+    c.tail.culled_frustum += static_cast<std::uint32_t>(cs.culled_frustum);
+    c.tail.culled_backface += static_cast<std::uint32_t>(cs.culled_backface);
+    c.tail.culled_zero_area += static_cast<std::uint32_t>(cs.culled_zero_area);
+    c.tail.clipped += static_cast<std::uint32_t>(cs.clipped);
+    for (const ScreenTriangle& st : screen) {
+      c.pieces.push_back({st, static_cast<std::uint32_t>(t), c.tail});
+      c.tail = SetupCounts{};
+    }
+  }
+  return true;
 }
 
 void GeometryUnit::SetupCounts::add_to(GeometryStats& stats) const {
@@ -392,6 +466,7 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
     SetupCounts tail;                     ///< triangles culled after its last delivered one
     std::uint64_t vertex_bytes = 0, index_bytes = 0;
   };
+  if (cmd.cull && clipped_.size() != scene_->instances.size()) clipped_.resize(scene_->instances.size());
   const std::uint32_t object_base = static_cast<std::uint32_t>(object_lights.size());
   auto set_up_instance = [&](std::size_t k, InstanceSetup& o) {
     const std::size_t ii = selected[k].second;
@@ -408,57 +483,54 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
     e.clip.cull = mat.double_sided ? FaceCull::None : face_cull_of(draw.pipeline->cull);
     e.scissor = scissor_of(cmd, viewport_);
 
-    // Transform every vertex of the instance once (what the vertex shader computes).
-    thread_local std::vector<glm::vec4> clip;
-    thread_local std::vector<glm::vec3> world, normal;
-    const glm::mat4 mvp = camera_.view_proj * inst.world;
-    const glm::mat3 nrm = glm::transpose(glm::inverse(glm::mat3(inst.world)));
-    const std::size_t nv = sm.positions.size();
-    clip.resize(nv);
-    world.resize(nv);
-    normal.resize(nv);
-    glm::vec3 lo(1e30f), hi(-1e30f);
-    // A captured sub-mesh carries the clip positions its application's vertex shader wrote
-    // (SubMesh::clip_positions): they are taken as they are, with no instance or camera transform.
-    const bool captured_clip = sm.clip_positions.size() == nv;
-    for (std::size_t v = 0; v < nv; ++v) {
-      const glm::vec4 p(sm.positions[v], 1.0f);
-      clip[v] = captured_clip ? sm.clip_positions[v] : mvp * p;
-      world[v] = glm::vec3(inst.world * p);
-      normal[v] = glm::normalize(nrm * sm.normals[v]);
-      lo = glm::min(lo, world[v]);
-      hi = glm::max(hi, world[v]);
+    // What vertex shading and clipping make of it: kept from an earlier draw with a cull box,
+    // else made now (and kept, for a draw with a cull box, within the budget).
+    thread_local ClippedInstance scratch;
+    const ClippedInstance* ci = nullptr;
+    if (cmd.cull && clipped_[ii].valid && clipped_[ii].cull == e.clip.cull) {
+      ci = &clipped_[ii];
+    } else {
+      clip_instance(ii, e.clip.cull, scratch);
+      ci = &scratch;
+      if (cmd.cull && !clipped_[ii].valid) {
+        const std::size_t bytes = scratch.pieces.size() * sizeof(ClippedInstance::Piece) +
+                                  (scratch.world.size() + scratch.normal.size()) * sizeof(glm::vec3);
+        if (clipped_bytes_.fetch_add(bytes) + bytes <= kClippedInstanceBudgetBytes) {
+          clipped_[ii] = std::move(scratch);
+          scratch = ClippedInstance{};
+          ci = &clipped_[ii];
+        } else {
+          clipped_bytes_.fetch_sub(bytes);
+        }
+      }
     }
     if (wants_object_lists) {
       for (std::uint32_t l : draw.lights) {
-        if (sphere_touches_box(lights_[l], lo, hi)) o.touching.push_back(l);
+        if (sphere_touches_box(lights_[l], ci->lo, ci->hi)) o.touching.push_back(l);
       }
     }
-
-    // Vertex fetch and shading: indices through the post-transform cache.
-    VertexCacheFifo cache(static_cast<std::size_t>(hw_.geometry.vertex_cache_entries));
-    std::uint64_t shaded = 0;
-    for (std::uint32_t idx : sm.indices) {
-      if (sm.index_bytes == 0 || cache.access(idx)) ++shaded;
-    }
     o.index_bytes = std::uint64_t{sm.index_bytes} * sm.indices.size();
-    o.vertex_bytes = shaded * sm.vertex_stride_bytes;
-    o.stats.vertices_shaded += shaded;
-    o.stats.vertex_alu_ops += shaded * static_cast<std::uint64_t>(hw_.geometry.vertex_shader_alu_ops);
+    o.vertex_bytes = ci->shaded * sm.vertex_stride_bytes;
+    o.stats.vertices_shaded += ci->shaded;
+    o.stats.vertex_alu_ops += ci->shaded * static_cast<std::uint64_t>(hw_.geometry.vertex_shader_alu_ops);
     o.stats.vertex_fetch_bytes += o.vertex_bytes;
     o.stats.index_fetch_bytes += o.index_bytes;
 
+    // Set-up of the screen triangles (the draw's scissor), with the clipping counts of the
+    // triangles before each, in order.
     const std::uint64_t key_base = std::uint64_t{e.object} << 32;
-    o.prims.reserve(sm.indices.size() / 3);
-    for (std::size_t t = 0; t + 2 < sm.indices.size(); t += 3) {
-      const std::uint32_t i0 = sm.indices[t], i1 = sm.indices[t + 1], i2 = sm.indices[t + 2];
-      const glm::vec4 c[3] = {clip[i0], clip[i1], clip[i2]};
-      const glm::vec3 w[3] = {world[i0], world[i1], world[i2]};
-      const glm::vec3 n[3] = {normal[i0], normal[i1], normal[i2]};
+    o.prims.reserve(ci->pieces.size());
+    for (const ClippedInstance::Piece& piece : ci->pieces) {
+      o.tail += piece.before;
+      const std::uint32_t i0 = sm.indices[piece.first_index], i1 = sm.indices[piece.first_index + 1],
+                          i2 = sm.indices[piece.first_index + 2];
+      const glm::vec3 w[3] = {ci->world[i0], ci->world[i1], ci->world[i2]};
+      const glm::vec3 n[3] = {ci->normal[i0], ci->normal[i1], ci->normal[i2]};
       const glm::vec2 uv[3] = {sm.uvs[i0], sm.uvs[i1], sm.uvs[i2]};
       const std::uint64_t keys[3] = {key_base | i0, key_base | i1, key_base | i2};
-      setup_triangles(e, c, w, n, uv, keys, o.prims, o.tail);
+      set_up_screen_triangle(e, piece.screen, w, n, uv, keys, o.prims, o.tail);
     }
+    o.tail += ci->tail;
   };
 
   std::vector<InstanceSetup> window;

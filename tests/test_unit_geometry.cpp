@@ -235,5 +235,67 @@ TEST(UnitGeometry, ObjectListsHoldTheLightsTouchingTheInstanceBounds) {
   EXPECT_EQ(rig.object_lights[1], (std::vector<std::uint32_t>{2}));
 }
 
+TEST(UnitGeometry, ADrawWithACullBoxSetsUpWhatAFreshUnitSetsUp) {
+  // A draw with a cull box keeps what vertex shading and clipping made of each instance, and the
+  // next such draw only sets the kept screen triangles up under its own scissor: the same
+  // primitives, vertex identities and counts as a geometry unit that never drew before. The mesh
+  // has a front and a back face, a triangle beyond the frustum, one the near plane cuts in two
+  // (both pieces reach the left half) and a small one in the right half; the second draw's
+  // scissor keeps the left half of the 64x64 viewport only.
+  const Scene s = scene_of({make_mesh("m", {{-0.5f, -0.5f, 0}, {0.5f, -0.5f, 0}, {0, 0.5f, 0},
+                                            {-0.5f, -0.5f, 0}, {0, 0.5f, 0}, {0.5f, -0.5f, 0},
+                                            {1.5f, 0, 0}, {2.5f, 0, 0}, {2, 0.5f, 0},
+                                            {-0.3f, -0.5f, 0}, {0.5f, -0.5f, 0}, {0.1f, 0.5f, -3},
+                                            {0.6f, -0.2f, 0}, {0.9f, -0.2f, 0}, {0.75f, 0.2f, 0}},
+                                     {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14})});
+  DrawCmd whole = draw_of("m");
+  whole.cull = CullBox{glm::vec3(-10.0f), glm::vec3(10.0f)};
+  DrawCmd left = whole;
+  left.scissor = ScissorRect{0, 0, 32, 64};
+  GeometryRig twice(spec_of(s)), fresh(spec_of(s));
+  twice.run(whole, make_shader(1), culling(CullMode::Back));
+  const std::size_t first = twice.prims.size();
+  const GeometryStats after_first = twice.stats;
+  twice.run(left, make_shader(1), culling(CullMode::Back));
+  fresh.run(left, make_shader(1), culling(CullMode::Back));
+  // The first draw: 5 triangles in, 1 beyond the frustum, 1 back face, 1 clipped into 2: 4 out.
+  EXPECT_EQ(first, 4u);
+  EXPECT_EQ(after_first.primitives_out.value(), 4u);
+  // The second: the same counts as the fresh unit's, primitive by primitive the same records.
+  EXPECT_EQ(twice.stats.primitives_in.value() - after_first.primitives_in.value(), fresh.stats.primitives_in.value());
+  EXPECT_EQ(twice.stats.primitives_culled_frustum.value() - after_first.primitives_culled_frustum.value(),
+            fresh.stats.primitives_culled_frustum.value());
+  EXPECT_EQ(twice.stats.primitives_culled_backface.value() - after_first.primitives_culled_backface.value(),
+            fresh.stats.primitives_culled_backface.value());
+  EXPECT_EQ(twice.stats.primitives_clipped.value() - after_first.primitives_clipped.value(), fresh.stats.primitives_clipped.value());
+  EXPECT_EQ(twice.stats.primitives_culled_scissor.value() - after_first.primitives_culled_scissor.value(),
+            fresh.stats.primitives_culled_scissor.value());
+  EXPECT_EQ(twice.stats.vertices_shaded.value() - after_first.vertices_shaded.value(), fresh.stats.vertices_shaded.value());
+  EXPECT_EQ(fresh.stats.primitives_culled_scissor.value(), 1u);  // the small one, right of x = 32 px
+  EXPECT_EQ(fresh.stats.primitives_clipped.value(), 1u);
+  ASSERT_EQ(twice.prims.size() - first, fresh.prims.size());
+  ASSERT_EQ(fresh.prims.size(), 3u);
+  for (std::size_t i = 0; i < fresh.prims.size(); ++i) {
+    const Primitive& a = twice.prims[first + i];
+    const Primitive& b = fresh.prims[i];
+    EXPECT_EQ(a.setup.bbox, b.setup.bbox) << i;
+    EXPECT_EQ(a.setup.front_facing, b.setup.front_facing) << i;
+    for (int v = 0; v < 3; ++v) {
+      EXPECT_EQ(a.world[v], b.world[v]) << i;
+      EXPECT_EQ(a.normal[v], b.normal[v]) << i;
+      EXPECT_EQ(a.uv[v], b.uv[v]) << i;
+      // The same vertex (index, or made by clipping), whatever the object number.
+      EXPECT_EQ(twice.out.keys[first + i][v] & 0x80000000ffffffffull, fresh.out.keys[i][v] & 0x80000000ffffffffull) << i;
+    }
+  }
+  // A draw culling the other faces makes its own (the kept instance is of the back-face mode).
+  GeometryRig front(spec_of(s));
+  twice.run(left, make_shader(1), culling(CullMode::Front));
+  front.run(left, make_shader(1), culling(CullMode::Front));
+  EXPECT_EQ(twice.prims.size() - first - 3, front.prims.size());
+  EXPECT_EQ(front.prims.size(), 1u);  // the back face; the front one, both near-plane pieces and the small one culled
+  EXPECT_EQ(front.stats.primitives_culled_backface.value(), 3u);
+}
+
 }  // namespace
 }  // namespace tbdr
