@@ -17,12 +17,15 @@
 # Usage: bash bench/speed.sh [options] [build-dir]
 #   -n N             repetitions per technique (median taken; default 3)
 #   --quick          960x540 instead of 1920x1080 (for iteration; compared with the quick baseline)
-#   --images         also write the images (--images DIR) and print the cost of writing them
+#   --images         every run also writes the images (--images DIR)
+#   --image-cost     per technique, runs without and with images side by side (interleaved, 1 thread)
+#                    and prints the CPU seconds of each, their ratio and whether it is within the
+#                    1.20 that issue 15 allows a run with images
 #   --against DIR    a second build measured side by side (interleaved run by run, same load):
 #                    prints both and the ratio of this build's CPU seconds to DIR's
 #   --techniques L   comma-separated subset (default: all 13)
 #   --multipass-lpp K  forward_multipass lights per pass (default 1, the technique's own default and
-#                    the study's: 1024 light-bounded passes, about 12 CPU s at 1080p (2026-12-04); issue 15 bounds it at 60 s)
+#                    the study's: 1024 light-bounded passes, about 10-11 CPU s at 1080p (2026-12-06); issue 15 bounds it at 60 s)
 #   --threads T      threads of the second run of each repetition (default: nproc; 1: one run, as before)
 #   --record         rewrite this mode's rows of bench/speed_baseline.txt with the figures measured
 #                    (with --against: DIR's figures, i.e. DIR is the baseline)
@@ -35,6 +38,7 @@ REPS=3
 MODE=full
 RES=1920x1080
 IMAGES=no
+IMAGE_COST=no
 AGAINST=
 RECORD=no
 LPP=1
@@ -46,12 +50,13 @@ while [ $# -gt 0 ]; do
     -n) REPS=$2; shift 2 ;;
     --quick) MODE=quick; RES=960x540; shift ;;
     --images) IMAGES=yes; shift ;;
+    --image-cost) IMAGE_COST=yes; shift ;;
     --against) AGAINST=$2; shift 2 ;;
     --techniques) TECHS=$2; shift 2 ;;
     --multipass-lpp) LPP=$2; shift 2 ;;
     --record) RECORD=yes; shift ;;
     --threads) THREADS=$2; shift 2 ;;
-    -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,32p' "$0"; exit 0 ;;
     -*) echo "speed.sh: unknown option $1" >&2; exit 2 ;;
     *) BUILD=$1; shift ;;
   esac
@@ -59,6 +64,11 @@ done
 bench_positive_int speed.sh -n "$REPS"
 bench_positive_int speed.sh --threads "$THREADS"
 [ -n "$AGAINST" ] && THREADS=1  # side by side: both builds on one thread
+if [ "$IMAGE_COST" = yes ]; then
+  [ -z "$AGAINST" ] && [ "$RECORD" = no ] || { echo "speed.sh: --image-cost goes with neither --against nor --record" >&2; exit 2; }
+  THREADS=1  # both runs on one thread
+  IMAGES=no  # (each repetition runs both)
+fi
 for b in "$BUILD" $AGAINST; do
   [ -x "$b/tbdrsim" ] || { echo "speed.sh: no tbdrsim in '$b' (build it first)" >&2; exit 2; }
 done
@@ -109,7 +119,10 @@ if [ "$THREADS" -gt 1 ]; then
   echo "amdahl16 = 1 / (serial + (1 - serial) / 16), the speed-up the serial share allows at 16 threads;"
   echo "tail_$THREADS = seconds the timing model ran on after the functional run ended ($THREADS threads: it runs beside it)"
 fi
-if [ -n "$AGAINST" ]; then
+if [ "$IMAGE_COST" = yes ]; then
+  echo "image cost: CPU s of one run without and with --images (interleaved), ratio = with / without; issue 15 allows 1.20"
+  printf '%-28s %9s %9s %8s %8s\n' technique cpu_s cpu_img ratio within
+elif [ -n "$AGAINST" ]; then
   printf '%-28s %9s %9s %9s %9s %8s %12s\n' technique cpu_s wall_s base_cpu base_wall ratio px*lights/s
 elif [ "$THREADS" -gt 1 ]; then
   printf '%-28s %7s %7s %7s %7s %7s %7s %7s %7s %8s %7s %11s %8s %6s\n' technique cpu_1 wall_1 "cpu_$THREADS" "wall_$THREADS" speedup tiles_x \
@@ -127,15 +140,26 @@ for t in "${TECH_LIST[@]}"; do
   : > "$TMP/new.times"
   : > "$TMP/old.times"
   : > "$TMP/par.times"
+  : > "$TMP/img.times"
   for _ in $(seq 1 "$REPS"); do
     measure "$BUILD/tbdrsim" "$TMP/$t.trace" new 1
+    if [ "$IMAGE_COST" = yes ]; then
+      IMAGES=yes
+      measure "$BUILD/tbdrsim" "$TMP/$t.trace" img 1
+      IMAGES=no
+    fi
     [ "$THREADS" -gt 1 ] && [ -z "$AGAINST" ] && measure "$BUILD/tbdrsim" "$TMP/$t.trace" par "$THREADS"
     [ -n "$AGAINST" ] && measure "$AGAINST/tbdrsim" "$TMP/$t.trace" old 1
   done
   cpu=$(median 1 "$TMP/new.times")
   wall=$(median 2 "$TMP/new.times")
   rate=$(awk -v w="$W" -v h="$H" -v l="$LIGHTS" -v c="$cpu" 'BEGIN { printf "%.3g", (c > 0 ? w * h * l / c : 0) }')
-  if [ -n "$AGAINST" ]; then
+  if [ "$IMAGE_COST" = yes ]; then
+    icpu=$(median 1 "$TMP/img.times")
+    ratio=$(awk -v a="$icpu" -v b="$cpu" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
+    within=$(awk -v r="$ratio" 'BEGIN { print (r <= 1.20 ? "yes" : "no") }')
+    printf '%-28s %9s %9s %8s %8s\n' "$t" "$cpu" "$icpu" "$ratio" "$within"
+  elif [ -n "$AGAINST" ]; then
     bcpu=$(median 1 "$TMP/old.times")
     bwall=$(median 2 "$TMP/old.times")
     ratio=$(awk -v a="$cpu" -v b="$bcpu" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
