@@ -222,11 +222,7 @@ void GeometryUnit::setup_triangles(const Emit& e, const glm::vec4 clip[3], const
   screen.clear();
   const ClipTriangle ct{clip[0], clip[1], clip[2]};
   clip_and_cull(ct, e.clip, cs, screen);
-  pending.in += static_cast<std::uint32_t>(cs.in);
-  pending.culled_frustum += static_cast<std::uint32_t>(cs.culled_frustum);
-  pending.culled_backface += static_cast<std::uint32_t>(cs.culled_backface);
-  pending.culled_zero_area += static_cast<std::uint32_t>(cs.culled_zero_area);
-  pending.clipped += static_cast<std::uint32_t>(cs.clipped);
+  pending.add_clipping(cs);
   for (const ScreenTriangle& st : screen) set_up_screen_triangle(e, st, world, normal, uv, keys, out, pending);
 }
 
@@ -267,6 +263,14 @@ void GeometryUnit::set_up_screen_triangle(const Emit& e, const ScreenTriangle& s
       u.made_by_clipping |= static_cast<std::uint8_t>(1u << i);
     }
   }
+}
+
+void GeometryUnit::SetupCounts::add_clipping(const ClipStats& cs) {
+  in += static_cast<std::uint32_t>(cs.in);
+  culled_frustum += static_cast<std::uint32_t>(cs.culled_frustum);
+  culled_backface += static_cast<std::uint32_t>(cs.culled_backface);
+  culled_zero_area += static_cast<std::uint32_t>(cs.culled_zero_area);
+  clipped += static_cast<std::uint32_t>(cs.clipped);
 }
 
 GeometryUnit::SetupCounts& GeometryUnit::SetupCounts::operator+=(const SetupCounts& o) {
@@ -326,11 +330,7 @@ bool GeometryUnit::clip_instance(std::size_t ii, FaceCull cull, ClippedInstance&
     ClipStats cs;
     screen.clear();
     clip_and_cull(ct, config, cs, screen);
-    c.tail.in += static_cast<std::uint32_t>(cs.in);
-    c.tail.culled_frustum += static_cast<std::uint32_t>(cs.culled_frustum);
-    c.tail.culled_backface += static_cast<std::uint32_t>(cs.culled_backface);
-    c.tail.culled_zero_area += static_cast<std::uint32_t>(cs.culled_zero_area);
-    c.tail.clipped += static_cast<std::uint32_t>(cs.clipped);
+    c.tail.add_clipping(cs);
     for (const ScreenTriangle& st : screen) {
       c.pieces.push_back({st, static_cast<std::uint32_t>(t), c.tail});
       c.tail = SetupCounts{};

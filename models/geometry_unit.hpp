@@ -80,6 +80,8 @@ class GeometryUnit {
                   culled_scissor = 0;
     void add_to(GeometryStats& stats) const;
     SetupCounts& operator+=(const SetupCounts& o);
+    /// Adds the clipper's counts of one triangle (in, culled, clipped).
+    void add_clipping(const ClipStats& cs);
   };
   /// A triangle set up for the tiler, not yet delivered: its record and its vertices' identities
   /// (those made by clipping get theirs at delivery, numbered by the draw's delivered count).
