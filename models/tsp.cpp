@@ -816,7 +816,20 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
         // batch's surfaces (lights beyond their radius add exactly 0: the sum is unchanged).
         if (!bounds) {
           bounds.emplace();
-          if (!surface_bounds(p, d, pixels, bounds->first, bounds->second)) bounds->first = bounds->second = s.position;
+          if (texels_first) {
+            // The fragments' barycentrics are at hand (the texel prefetch made them): the box of
+            // their positions, exactly as surface_bounds makes it (triangle_position's values,
+            // the same folds from the same start).
+            glm::vec3 lo(std::numeric_limits<float>::infinity()), hi = -lo;
+            for (std::size_t j = 0; j < pixels.size(); ++j) {
+              const glm::vec3 q = position_at(p, frag_bary_[j]);
+              lo = glm::min(lo, q);
+              hi = glm::max(hi, q);
+            }
+            *bounds = {lo, hi};
+          } else if (!surface_bounds(p, d, pixels, bounds->first, bounds->second)) {
+            bounds->first = bounds->second = s.position;
+          }
         }
         const std::vector<std::uint32_t>& bin = ctx_.light_bins->at(px.x, px.y);
         if (near_.bin != &bin) gather_near_lights(bin, d, bounds->first, bounds->second);
