@@ -105,13 +105,12 @@ void put_chunk(std::vector<std::uint8_t>& out, const char type[4], const std::ui
 /// byte first), choosing per row the filter with the smallest sum of absolute signed residuals
 /// (the heuristic of the PNG spec 12.8 that libpng and stb_image_write use). The row and the one
 /// above are copied behind bpp zero bytes (and the first row's "above" is zeros, as the spec
-/// defines it), so that the loops have no edge tests and the compiler vectorises them. The costs
-/// are summed in one pass and only the chosen filter's residuals are made.
+/// defines it), so that the loops have no edge tests and the compiler vectorises them.
 void filter_row(const std::uint8_t* row, const std::uint8_t* above, std::size_t n, std::uint8_t* dst,
-                std::array<std::vector<std::uint8_t>, 2>& scratch) {
+                std::array<std::vector<std::uint8_t>, 7>& scratch) {
   constexpr std::size_t bpp = 3;
-  std::vector<std::uint8_t>& cur = scratch[0];
-  std::vector<std::uint8_t>& prev = scratch[1];
+  std::vector<std::uint8_t>& cur = scratch[5];
+  std::vector<std::uint8_t>& prev = scratch[6];
   cur.assign(n + bpp, 0);
   prev.assign(n + bpp, 0);
   std::memcpy(cur.data() + bpp, row, n);
@@ -124,35 +123,27 @@ void filter_row(const std::uint8_t* row, const std::uint8_t* above, std::size_t 
     const int p = pa_ + pb_ - pc_, pa = std::abs(p - pa_), pb = std::abs(p - pb_), pc = std::abs(p - pc_);
     return pa <= pb && pa <= pc ? pa_ : (pb <= pc ? pb_ : pc_);
   };
-  // The five filters' costs in one pass over the row (no residuals stored): the sum of each
-  // residual's absolute value as a signed byte. 32-bit sums vectorise in twice the lanes of 64-bit
-  // ones; a row's sum is at most 128 x n, within range for rows of up to 16 M bytes (write_png
-  // refuses longer rows).
-  const auto cost_of = [](int residual) { return std::abs(static_cast<int>(static_cast<std::int8_t>(static_cast<std::uint8_t>(residual)))); };
-  std::int32_t c_none = 0, c_sub = 0, c_up = 0, c_avg = 0, c_paeth = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const int xi = x[i], ai = a[i], bi = b[i], ci = c[i];
-    c_none += cost_of(xi);
-    c_sub += cost_of(xi - ai);
-    c_up += cost_of(xi - bi);
-    c_avg += cost_of(xi - (ai + bi) / 2);
-    c_paeth += cost_of(xi - paeth(ai, bi, ci));
-  }
-  const std::array<std::int32_t, 5> cost = {c_none, c_sub, c_up, c_avg, c_paeth};
-  const int best = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());  // the first of equals
-  dst[0] = static_cast<std::uint8_t>(best);
-  // Then the chosen filter's residuals, one loop per filter (predictor known at compile time).
-  std::uint8_t* out = dst + 1;
-  auto residuals = [&](auto predict) {
-    for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<std::uint8_t>(x[i] - predict(int{a[i]}, int{b[i]}, int{c[i]}));
+  // One loop per filter (predictor known at compile time); the residual cost in the same loop.
+  auto run = [&](std::vector<std::uint8_t>& r, auto predict) {
+    r.resize(n);
+    std::uint8_t* out = r.data();
+    // 32-bit sums vectorise in twice the lanes of 64-bit ones; a row's sum is at most 128 x n,
+    // within range for rows of up to 16 M bytes (write_png refuses longer rows).
+    std::int32_t cost = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto v = static_cast<std::uint8_t>(x[i] - predict(int{a[i]}, int{b[i]}, int{c[i]}));
+      out[i] = v;
+      cost += std::abs(static_cast<int>(static_cast<std::int8_t>(v)));
+    }
+    return cost;
   };
-  switch (best) {
-    case 0: std::memcpy(out, x, n); break;
-    case 1: residuals([](int l, int, int) { return l; }); break;
-    case 2: residuals([](int, int u, int) { return u; }); break;
-    case 3: residuals([](int l, int u, int) { return (l + u) / 2; }); break;
-    default: residuals(paeth); break;
-  }
+  const std::array<std::int32_t, 5> cost = {
+      run(scratch[0], [](int, int, int) { return 0; }), run(scratch[1], [](int l, int, int) { return l; }),
+      run(scratch[2], [](int, int u, int) { return u; }), run(scratch[3], [](int l, int u, int) { return (l + u) / 2; }),
+      run(scratch[4], paeth)};
+  const int best = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+  dst[0] = static_cast<std::uint8_t>(best);
+  std::memcpy(dst + 1, scratch[static_cast<std::size_t>(best)].data(), n);
 }
 
 }  // namespace
@@ -165,7 +156,7 @@ void write_png(const std::string& path, const ImageRGB8& image) {
   const auto h = static_cast<std::size_t>(image.height);
   if (n > kMaxPngRowBytes) throw std::invalid_argument("write_png: image for " + path + " is wider than a row's filter costs can sum");
   std::vector<std::uint8_t> filtered((n + 1) * h);
-  std::array<std::vector<std::uint8_t>, 2> scratch;  // the row and the one above, behind bpp zeros
+  std::array<std::vector<std::uint8_t>, 7> scratch;
   for (std::size_t y = 0; y < h; ++y) {
     filter_row(image.rgb.data() + y * n, y > 0 ? image.rgb.data() + (y - 1) * n : nullptr, n, filtered.data() + y * (n + 1),
                scratch);
