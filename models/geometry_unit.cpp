@@ -283,7 +283,7 @@ GeometryUnit::SetupCounts& GeometryUnit::SetupCounts::operator+=(const SetupCoun
   return *this;
 }
 
-bool GeometryUnit::clip_instance(std::size_t ii, FaceCull cull, ClippedInstance& c) const {
+void GeometryUnit::clip_instance(std::size_t ii, FaceCull cull, ClippedInstance& c) const {
   const Instance& inst = scene_->instances[ii];
   const SubMesh& sm = scene_->submeshes[inst.submesh];
   c.valid = true;
@@ -336,7 +336,6 @@ bool GeometryUnit::clip_instance(std::size_t ii, FaceCull cull, ClippedInstance&
       c.tail = SetupCounts{};
     }
   }
-  return true;
 }
 
 void GeometryUnit::SetupCounts::add_to(GeometryStats& stats) const {

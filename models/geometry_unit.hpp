@@ -128,8 +128,8 @@ class GeometryUnit {
   /// Bytes of ClippedInstance kept at most (a few % of a large scene's run; instances past it are
   /// processed in full at every draw): 30 MB at atrium:3.
   static constexpr std::size_t kClippedInstanceBudgetBytes = std::size_t{256} << 20;
-  /// Fills `c` for instance `ii` under `cull` (false, and `c` left invalid, past the budget).
-  bool clip_instance(std::size_t ii, FaceCull cull, ClippedInstance& c) const;
+  /// Fills `c` for instance `ii` under `cull` (whether it is kept is the caller's budget call).
+  void clip_instance(std::size_t ii, FaceCull cull, ClippedInstance& c) const;
   /// Hands a set-up triangle to the draw's sink.
   void deliver(const SetUp& u, DrawOutput& out, GeometryStats& stats) const;
   void emit_triangle(const Emit& e, const glm::vec4 clip[3], const glm::vec3 world[3], const glm::vec3 normal[3],

@@ -254,19 +254,18 @@ struct FormatPrecision {
   static bool keeps_every_channel(Format f) {
     return f == Format::Rgba8 || f == Format::Rgb10a2 || f == Format::Rgba16f || f == Format::Rgba32f;
   }
-  /// The surface a G-buffer target (or PLS variable) named `name` of format `f` keeps: `albedo`
-  /// stores the base colour (rgb, then alpha where the format has a fourth channel), `normal` the
-  /// normal (unorm formats as n/2 + 1/2, two-channel formats octahedral, float formats n; read
-  /// back renormalised). The generators lay G-buffers out this way (workloads/techniques:
-  /// albedo, normal, then targets holding nothing the model uses); other names keep the surface.
-  static void surface(const std::string& name, Format f, SurfacePoint& s) { surface(attribute_of(name), f, s); }
-  /// What a target (or PLS variable) of that name keeps of the surface, found once per pass (the
-  /// TSP quantises every stored fragment).
+  /// What a G-buffer target (or PLS variable) keeps of the surface, from its name: found once per
+  /// pass (the TSP quantises every stored fragment).
   enum class Attribute : std::uint8_t { Albedo, Normal, Other };
   static Attribute attribute_of(const std::string& name) {
     return name == "albedo" ? Attribute::Albedo : name == "normal" ? Attribute::Normal : Attribute::Other;
   }
-  /// surface() of a target holding attribute `a`.
+  /// The surface a target holding attribute `a` (named "albedo", "normal" or other: attribute_of)
+  /// of format `f` keeps: `albedo` stores the base colour (rgb, then alpha where the format has a
+  /// fourth channel), `normal` the normal (unorm formats as n/2 + 1/2, two-channel formats
+  /// octahedral, float formats n; read back renormalised). The generators lay G-buffers out this
+  /// way (workloads/techniques: albedo, normal, then targets holding nothing the model uses);
+  /// other names keep the surface.
   static void surface(Attribute a, Format f, SurfacePoint& s);
 
  private:

@@ -590,14 +590,12 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   // 22 M such fragments, two thirds out of reach; 13 % less CPU with images).
   const bool fixed_lights = sh.light_source == LightSource::None || sh.light_source == LightSource::All ||
                             sh.light_source == LightSource::ObjectList || sh.light_source == LightSource::Proxy;
-  bool colour_outputs_only = outputs > 0;
-  for (std::uint32_t o = 0; o < outputs; ++o) colour_outputs_only = colour_outputs_only && ctx_.color_targets[o]->usage == AttachmentUsage::Color;
-  const bool volume_adds_light = colour && !from_triangle && sh.light_source == LightSource::Proxy && p.proxy_light >= 0 &&
-                                 d.surface_source != nullptr && !ctx_.pls && blend == BlendMode::Add && colour_outputs_only;
+  // (A light volume with a reach test is one whose colour only its light makes: adds_light_only.)
+  const bool volume_reach_test = !from_triangle && !reach_lights.empty();
+  const bool volume_adds_light = volume_reach_test && outputs > 0 && d.surface_source != nullptr && !ctx_.pls;
   // The same into the PLS light accumulator over the PLS surface (deferred_tile_store: no colour
   // outputs), quantised to the accumulator's format where it adds something.
-  const bool volume_accumulates = colour && !from_triangle && sh.light_source == LightSource::Proxy && p.proxy_light >= 0 &&
-                                  outputs == 0 && pls_reads && pls_writes && d.surface_source == nullptr;
+  const bool volume_accumulates = volume_reach_test && outputs == 0 && pls_reads && pls_writes && d.surface_source == nullptr;
   // A light volume that only pushes its light on the PLS light stack (forward_light_stack) reads
   // no surface and makes no colour, with colours or without.
   const bool volume_pushes_only = outputs == 0 && !pls_reads && sh.light_source != LightSource::Proxy && d.surface_source == nullptr;
