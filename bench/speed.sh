@@ -11,7 +11,8 @@
 # speed-up Amdahl's law then allows at 16 threads, and tail_T: in the T-thread run, where the
 # timing model runs beside the functional run (docs/architecture.md), the seconds it ran on after
 # the functional run ended (timing_wall_seconds - simulation_wall_seconds: what the functional run
-# does not hide). The load average is printed before and after:
+# does not hide), and wait_T: the seconds the timing model waited there for work the functional
+# run had not produced yet (timing_wait_seconds). The load average is printed before and after:
 # other processes on the machine stretch wall times.
 #
 # Usage: bash bench/speed.sh [options] [build-dir]
@@ -83,9 +84,10 @@ H=${RES#*x}
 # thread_args BIN N: "--threads N" when BIN knows the option (an older build runs on one thread).
 thread_args() { "$1" run --help 2>/dev/null | grep -q -- '--threads' && echo "--threads $2" || true; }
 # measure BIN TRACE TAG [N]: one run (N threads, default 1); appends "cpu wall serial_share
-# tile_wall timing_share tail" to $TMP/TAG.times (serial_share: 1 - tile rendering's wall seconds / the
+# tile_wall timing_share tail wait" to $TMP/TAG.times (serial_share: 1 - tile rendering's wall seconds / the
 # run's wall seconds; tile_wall: those seconds; timing_share: the timing model's wall seconds / the
-# run's; tail: timing_wall_seconds - simulation_wall_seconds; - when the build does not record them).
+# run's; tail: timing_wall_seconds - simulation_wall_seconds; wait: timing_wait_seconds; - when the
+# build does not record them).
 measure() {
   local bin=$1 trace=$2 tag=$3 n=${4:-1} extra=()
   if [ "$IMAGES" = yes ]; then
@@ -96,14 +98,16 @@ measure() {
   # shellcheck disable=SC2046
   /usr/bin/time -f '%U %S %e' -o "$TMP/time.out" "$bin" run --trace "$trace" --db "$TMP/$tag.db" --quiet \
     $(thread_args "$bin" "$n") "${extra[@]}" > /dev/null
-  local tile timing sim
+  local tile timing sim wait
   tile=$(sqlite3 "$TMP/$tag.db" "SELECT value FROM stats WHERE scope = 'frame/host' AND name = 'tile_render_wall_seconds'" 2>/dev/null || true)
   timing=$(sqlite3 "$TMP/$tag.db" "SELECT value FROM stats WHERE scope = 'frame/host' AND name = 'timing_wall_seconds'" 2>/dev/null || true)
   sim=$(sqlite3 "$TMP/$tag.db" "SELECT value FROM stats WHERE scope = 'frame/host' AND name = 'simulation_wall_seconds'" 2>/dev/null || true)
-  awk -v t="${tile:--1}" -v m="${timing:--1}" -v f="${sim:--1}" '{ w = $3; s = (t >= 0 && w > 0) ? 1 - t / w : -1; if (s < 0 && t >= 0) s = 0
+  wait=$(sqlite3 "$TMP/$tag.db" "SELECT value FROM stats WHERE scope = 'frame/host' AND name = 'timing_wait_seconds'" 2>/dev/null || true)
+  awk -v t="${tile:--1}" -v m="${timing:--1}" -v f="${sim:--1}" -v q="${wait:--1}" '{ w = $3; s = (t >= 0 && w > 0) ? 1 - t / w : -1; if (s < 0 && t >= 0) s = 0
                            tail = (m >= 0 && f >= 0) ? m - f : -1; if (tail < 0 && m >= 0 && f >= 0) tail = 0
-                           printf "%.3f %.3f %s %s %s %s\n", $1 + $2, w, (t >= 0 ? sprintf("%.3f", s) : "-"), (t >= 0 ? sprintf("%.3f", t) : "-"),
-                                  (m >= 0 && w > 0 ? sprintf("%.3f", m / w) : "-"), (tail >= 0 ? sprintf("%.3f", tail) : "-") }' \
+                           printf "%.3f %.3f %s %s %s %s %s\n", $1 + $2, w, (t >= 0 ? sprintf("%.3f", s) : "-"), (t >= 0 ? sprintf("%.3f", t) : "-"),
+                                  (m >= 0 && w > 0 ? sprintf("%.3f", m / w) : "-"), (tail >= 0 ? sprintf("%.3f", tail) : "-"),
+                                  (q >= 0 ? sprintf("%.3f", q) : "-") }' \
     "$TMP/time.out" >> "$TMP/$tag.times"
 }
 # median COLUMN FILE
@@ -117,7 +121,8 @@ if [ "$THREADS" -gt 1 ]; then
   echo "threads: 1 and $THREADS, interleaved run by run; tiles_x = tile rendering wall at 1 thread / at $THREADS threads;"
   echo "serial = 1 - tile rendering wall / run wall (1 thread); timing = the timing model's share of it (part of serial);"
   echo "amdahl16 = 1 / (serial + (1 - serial) / 16), the speed-up the serial share allows at 16 threads;"
-  echo "tail_$THREADS = seconds the timing model ran on after the functional run ended ($THREADS threads: it runs beside it)"
+  echo "tail_$THREADS = seconds the timing model ran on after the functional run ended ($THREADS threads: it runs beside it);"
+  echo "wait_$THREADS = seconds it waited for work the functional run had not produced yet"
 fi
 if [ "$IMAGE_COST" = yes ]; then
   echo "image cost: CPU s of one run without and with --images (interleaved), ratio = with / without; issue 15 allows 1.20"
@@ -125,8 +130,8 @@ if [ "$IMAGE_COST" = yes ]; then
 elif [ -n "$AGAINST" ]; then
   printf '%-28s %9s %9s %9s %9s %8s %12s\n' technique cpu_s wall_s base_cpu base_wall ratio px*lights/s
 elif [ "$THREADS" -gt 1 ]; then
-  printf '%-28s %7s %7s %7s %7s %7s %7s %7s %7s %8s %7s %11s %8s %6s\n' technique cpu_1 wall_1 "cpu_$THREADS" "wall_$THREADS" speedup tiles_x \
-    serial timing amdahl16 "tail_$THREADS" px*lights/s base_cpu ratio
+  printf '%-28s %7s %7s %7s %7s %7s %7s %7s %7s %8s %7s %7s %11s %8s %6s\n' technique cpu_1 wall_1 "cpu_$THREADS" "wall_$THREADS" speedup tiles_x \
+    serial timing amdahl16 "tail_$THREADS" "wait_$THREADS" px*lights/s base_cpu ratio
 else
   printf '%-28s %9s %9s %12s %9s %8s\n' technique cpu_s wall_s px*lights/s base_cpu ratio
 fi
@@ -176,8 +181,9 @@ for t in "${TECH_LIST[@]}"; do
     tiles=$(awk -v a="$(median 4 "$TMP/new.times")" -v b="$(median 4 "$TMP/par.times")" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
     timing=$(median 5 "$TMP/new.times")
     tail_t=$(median 6 "$TMP/par.times")
-    printf '%-28s %7s %7s %7s %7s %7s %7s %7s %7s %8s %7s %11s %8s %6s\n' "$t" "$cpu" "$wall" "$pcpu" "$pwall" "$speedup" "$tiles" "$serial" \
-      "$timing" "$amdahl" "$tail_t" "$rate" "${bcpu:--}" "$ratio"
+    wait_t=$(median 7 "$TMP/par.times")
+    printf '%-28s %7s %7s %7s %7s %7s %7s %7s %7s %8s %7s %7s %11s %8s %6s\n' "$t" "$cpu" "$wall" "$pcpu" "$pwall" "$speedup" "$tiles" "$serial" \
+      "$timing" "$amdahl" "$tail_t" "$wait_t" "$rate" "${bcpu:--}" "$ratio"
     echo "$MODE $t $cpu $wall" >> "$TMP/record.txt"
   else
     bcpu=$(baseline_cpu "$t")

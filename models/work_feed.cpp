@@ -1,5 +1,6 @@
 #include "models/work_feed.hpp"
 
+#include <chrono>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -118,8 +119,21 @@ void WorkFeed::close() {
   changed_.notify_all();
 }
 
+template <class Ready>
+void WorkFeed::wait_until(std::unique_lock<std::mutex>& lock, Ready ready) {
+  if (ready() || closed_) return;
+  const auto from = std::chrono::steady_clock::now();
+  changed_.wait(lock, [&] { return ready() || closed_; });
+  wait_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - from).count();
+}
+
 void WorkFeed::wait_begun(std::unique_lock<std::mutex>& lock) {
-  changed_.wait(lock, [this] { return begun_ || closed_; });
+  wait_until(lock, [this] { return begun_; });
+}
+
+double WorkFeed::consumer_wait_seconds() const {
+  std::lock_guard lock(mutex_);
+  return wait_seconds_;
 }
 
 const FrameWork& WorkFeed::frame() {
@@ -136,7 +150,7 @@ std::size_t WorkFeed::expected_commands() {
 
 const CommandWork* WorkFeed::wait_for(std::size_t c) {
   std::unique_lock lock(mutex_);
-  changed_.wait(lock, [&] { return c < state_.size() || closed_; });
+  wait_until(lock, [&] { return c < state_.size(); });
   return c < state_.size() ? &work_->commands[c] : nullptr;
 }
 
@@ -148,7 +162,7 @@ const RenderWork* WorkFeed::wait_render(std::size_t c, std::size_t r) {
     const Published& p = state_[c];
     return r < p.renders.size() || p.complete || (!p.renders.empty() && !p.renders.back()->partial);
   };
-  changed_.wait(lock, [&] { return known() || closed_; });
+  wait_until(lock, known);
   return c < state_.size() && r < state_[c].renders.size() ? state_[c].renders[r] : nullptr;
 }
 
@@ -160,7 +174,7 @@ std::size_t WorkFeed::tile_count(std::size_t c, std::size_t r) {
 const TileWork* WorkFeed::wait_tile(std::size_t c, std::size_t r, std::size_t i) {
   std::unique_lock lock(mutex_);
   const auto ready = [&] { return c < state_.size() && r < state_[c].renders.size() && i < state_[c].published[r]; };
-  changed_.wait(lock, [&] { return ready() || closed_; });
+  wait_until(lock, ready);
   // The tiles' storage was reserved before the render was published: it does not move.
   return ready() ? state_[c].renders[r]->tiles.data() + i : nullptr;
 }

@@ -79,6 +79,11 @@ class WorkFeed {
   /// The whole frame's work (moved out of an open feed; a copy of a complete frame's), once the
   /// feed is closed and the consumer done with it.
   FrameWork take();
+  /// Host wall seconds the consumer has spent blocked in frame(), expected_commands() and the
+  /// wait_* calls, waiting for a piece not yet published (0 for a complete frame's feed): the
+  /// part of the timing model's wall time in which the functional run, not the timing model,
+  /// was behind.
+  double consumer_wait_seconds() const;
 
  private:
   /// What of one command is published.
@@ -89,6 +94,10 @@ class WorkFeed {
     std::vector<std::size_t> published;  ///< per render: published so far
   };
   void wait_begun(std::unique_lock<std::mutex>& lock);
+  /// Blocks on changed_ until `ready()` (or the feed closes), adding the time blocked, if any, to
+  /// wait_seconds_.
+  template <class Ready>
+  void wait_until(std::unique_lock<std::mutex>& lock, Ready ready);
   /// Open command `c`'s state (throws std::logic_error naming `what` if it is not open).
   Published& open_state(std::size_t c, const char* what);
   /// Registers every render and tile of a complete command.
@@ -100,6 +109,7 @@ class WorkFeed {
   std::vector<Published> state_;       ///< per command opened
   bool begun_ = false, closed_ = false;
   std::size_t expected_ = 0;
+  double wait_seconds_ = 0;            ///< consumer_wait_seconds (under mutex_)
 };
 
 }  // namespace tbdr

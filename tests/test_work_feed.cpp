@@ -6,6 +6,7 @@
 // (That the timing it gives is the same as on a complete frame: tests/test_threads.cpp.)
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <future>
 #include <stdexcept>
@@ -68,6 +69,44 @@ TEST(WorkFeed, TheConsumerWaitsForEachCommandAndStopsWhenClosed) {
   ASSERT_EQ(back.commands.size(), 3u);
   EXPECT_EQ(back.commands[1].name, "b");
   EXPECT_EQ(back.tiles_x, 7);
+}
+
+TEST(WorkFeed, OnlyTheTimeTheConsumerIsBlockedCountsAsWaiting) {
+  // A complete frame's feed and an open one whose pieces are all published before they are asked
+  // for: nothing waited, exactly 0.
+  FrameWork frame;
+  frame.tiles_x = 1;
+  frame.commands = {named("dispatch0.a")};
+  WorkFeed complete(frame);
+  EXPECT_EQ(complete.expected_commands(), 1u);
+  ASSERT_NE(complete.wait_for(0), nullptr);
+  EXPECT_EQ(complete.consumer_wait_seconds(), 0.0);
+  WorkFeed ahead;
+  ahead.begin(frame, 1);
+  ahead.publish(named("a"));
+  ahead.close();
+  ASSERT_NE(ahead.wait_for(0), nullptr);
+  EXPECT_EQ(ahead.wait_for(1), nullptr);
+  EXPECT_EQ(ahead.consumer_wait_seconds(), 0.0);
+
+  // The consumer asks first and blocks until the producer publishes, 200 ms after it said it was
+  // about to ask: that time counts (more than 0), and no more than the call lasted.
+  WorkFeed feed;
+  feed.begin(frame, 1);
+  std::atomic<bool> asking{false};
+  std::future<double> call_seconds = std::async(std::launch::async, [&feed, &asking] {
+    const auto from = std::chrono::steady_clock::now();
+    asking = true;
+    EXPECT_NE(feed.wait_for(0), nullptr);
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - from).count();
+  });
+  while (!asking) std::this_thread::yield();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  feed.publish(named("a"));
+  feed.close();
+  const double call = call_seconds.get();
+  EXPECT_GT(feed.consumer_wait_seconds(), 0.0);
+  EXPECT_LE(feed.consumer_wait_seconds(), call);
 }
 
 TEST(WorkFeed, TheTimingModelStopsWhenTheFunctionalRunFailsBeforeAnyCommand) {

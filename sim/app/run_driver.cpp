@@ -337,6 +337,7 @@ RunOutcome run_one(const RunRequest& req) {
     outcome.frame.work = feed.take();
     outcome.timing_seconds = seconds_since(t_sim);  // (it ran from the start, beside the functional run)
     outcome.timing_cpu_seconds = timing_thread_cpu;
+    outcome.timing_wait_seconds = feed.consumer_wait_seconds();
     // The functional run's CPU: the process's since it started less the timing thread's and the
     // image writer's (finished first: the main thread does nothing else meanwhile).
     if (images.valid()) images.wait();
@@ -381,6 +382,9 @@ RunOutcome run_one(const RunRequest& req) {
   rec.stats.push_back({"frame/host", "timing_wall_seconds", outcome.timing_seconds, "s", "Host wall time of the timing model (with more than one thread it runs beside the functional simulation: from that one's start)"});
   rec.stats.push_back({"frame/host", "simulation_cpu_seconds", outcome.cpu_seconds, "s", "Host CPU time of the functional simulation (its threads; not the timing model's or the image writer's)"});
   rec.stats.push_back({"frame/host", "timing_cpu_seconds", outcome.timing_cpu_seconds, "s", "Host CPU time of the timing model"});
+  rec.stats.push_back({"frame/host", "timing_wait_seconds", outcome.timing_wait_seconds, "s",
+                       "Host wall time the timing model waited for work the functional simulation had not yet produced "
+                       "(with more than one thread; 0 with one, where it starts after that one ends)"});
   rec.stats.push_back({"frame/host", "tile_render_wall_seconds", outcome.frame.host_tile_seconds, "s",
                        "Host wall time of the functional simulation's tile rendering (the part on --threads threads)"});
   rec.stats.push_back({"frame/host", "simulation_threads", static_cast<double>(outcome.threads), "threads",
