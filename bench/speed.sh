@@ -23,7 +23,10 @@
 #                    and prints the CPU seconds of each, their ratio and whether it is within the
 #                    1.20 that issue 15 allows a run with images
 #   --against DIR    a second build measured side by side (interleaved run by run, same load):
-#                    prints both and the ratio of this build's CPU seconds to DIR's
+#                    prints both and the ratio of this build's CPU seconds to DIR's. Each build
+#                    replays the trace its own `tbdrsim trace` writes for the same technique, scene,
+#                    camera, resolution and lights (an older release cannot read a newer trace
+#                    format); the line says when the two traces differ
 #   --techniques L   comma-separated subset (default: all 13)
 #   --multipass-lpp K  forward_multipass lights per pass (default 1, the technique's own default and
 #                    the study's: 1024 light-bounded passes, about 10-11 CPU s at 1080p (2026-12-06); issue 15 bounds it at 60 s)
@@ -142,6 +145,12 @@ for t in "${TECH_LIST[@]}"; do
   [ "$t" = forward_multipass ] && opt=(--option "lights_per_pass=$LPP")
   "$BUILD/tbdrsim" trace --technique "$t" --scene atrium:3 --lights "$LIGHTS" --camera entrance --resolution "$RES" \
     "${opt[@]}" --out "$TMP/$t.trace" > /dev/null
+  against_trace="$TMP/$t.trace"
+  if [ -n "$AGAINST" ]; then
+    against_trace="$TMP/$t.against.trace"
+    "$AGAINST/tbdrsim" trace --technique "$t" --scene atrium:3 --lights "$LIGHTS" --camera entrance --resolution "$RES" \
+      "${opt[@]}" --out "$against_trace" > /dev/null
+  fi
   : > "$TMP/new.times"
   : > "$TMP/old.times"
   : > "$TMP/par.times"
@@ -154,7 +163,7 @@ for t in "${TECH_LIST[@]}"; do
       IMAGES=no
     fi
     [ "$THREADS" -gt 1 ] && [ -z "$AGAINST" ] && measure "$BUILD/tbdrsim" "$TMP/$t.trace" par "$THREADS"
-    [ -n "$AGAINST" ] && measure "$AGAINST/tbdrsim" "$TMP/$t.trace" old 1
+    [ -n "$AGAINST" ] && measure "$AGAINST/tbdrsim" "$against_trace" old 1
   done
   cpu=$(median 1 "$TMP/new.times")
   wall=$(median 2 "$TMP/new.times")
@@ -168,7 +177,9 @@ for t in "${TECH_LIST[@]}"; do
     bcpu=$(median 1 "$TMP/old.times")
     bwall=$(median 2 "$TMP/old.times")
     ratio=$(awk -v a="$cpu" -v b="$bcpu" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
-    printf '%-28s %9s %9s %9s %9s %8s %12s\n' "$t" "$cpu" "$wall" "$bcpu" "$bwall" "$ratio" "$rate"
+    same=""
+    cmp -s "$TMP/$t.trace" "$against_trace" || same=" (traces differ: each build's own)"
+    printf '%-28s %9s %9s %9s %9s %8s %12s%s\n' "$t" "$cpu" "$wall" "$bcpu" "$bwall" "$ratio" "$rate" "$same"
     echo "$MODE $t $bcpu $bwall" >> "$TMP/record.txt"
   elif [ "$THREADS" -gt 1 ]; then
     bcpu=$(baseline_cpu "$t")
@@ -201,7 +212,8 @@ if [ "$RECORD" = yes ]; then
     else
       echo "# bench/speed.sh baseline: mode technique cpu_seconds wall_seconds (median of N runs)"
     fi
-    echo "# $MODE: recorded $(date -u +%Y-%m-%dT%H:%MZ) on $(hostname) ($(nproc) cores, shared, noisy), $RES, median of $REPS"
+    recorded=$("${AGAINST:-$BUILD}/tbdrsim" --version 2>/dev/null | head -1 || true)
+    echo "# $MODE: recorded $(date -u +%Y-%m-%dT%H:%MZ) on $(hostname) ($(nproc) cores, shared, noisy), $RES, median of $REPS: ${recorded:-unknown build}${AGAINST:+, measured side by side with $("$BUILD/tbdrsim" --version 2>/dev/null | head -1 || echo "$BUILD"), each replaying its own trace}"
     cat "$TMP/record.txt"
   } > "$BASELINE.new"
   mv "$BASELINE.new" "$BASELINE"
