@@ -319,7 +319,10 @@ void Tsp::texture_addresses(const Primitive& p, std::uint32_t tex_fetches, std::
   stats.texture_line_accesses += accesses * tex_fetches;
 }
 
-std::size_t launched_quads(std::span<const ShadePixel> pixels, std::vector<std::uint64_t>& quads) {
+namespace {
+/// launched_quads, with the keys written (kKeys) or only counted where the bitmap holds them.
+template <bool kKeys>
+std::size_t launched_quads_in(std::span<const ShadePixel> pixels, std::vector<std::uint64_t>& quads) {
   quads.clear();
   const auto key = [](std::int32_t qx, std::int32_t qy) {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(qy)) << 32) | static_cast<std::uint32_t>(qx);
@@ -356,6 +359,11 @@ std::size_t launched_quads(std::span<const ShadePixel> pixels, std::vector<std::
         bits |= std::uint64_t{1} << ((px.x >> 1) - qx0);
       }
       rows[row] |= bits;
+      if constexpr (!kKeys) {
+        std::size_t n = 0;
+        for (std::size_t r = 0; r < n_rows; ++r) n += static_cast<std::size_t>(std::popcount(rows[r]));
+        return n;
+      }
       for (std::size_t r = 0; r < n_rows; ++r) {
         const auto qy = qy0 + static_cast<std::int32_t>(r);
         for (std::uint64_t m = rows[r]; m != 0; m &= m - 1) quads.push_back(key(qx0 + std::countr_zero(m), qy));
@@ -402,6 +410,15 @@ std::size_t launched_quads(std::span<const ShadePixel> pixels, std::vector<std::
   }
   return quads.size();
 }
+}  // namespace
+
+std::size_t launched_quads(std::span<const ShadePixel> pixels, std::vector<std::uint64_t>& quads) {
+  return launched_quads_in<true>(pixels, quads);
+}
+
+std::size_t launched_quad_count(std::span<const ShadePixel> pixels, std::vector<std::uint64_t>& scratch) {
+  return launched_quads_in<false>(pixels, scratch);
+}
 
 void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, std::vector<std::uint32_t>* alive,
                 TspStats& stats) {
@@ -419,8 +436,13 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   const bool colour = ctx_.colour;
   const bool image_counters = ctx_.images->counters.images();
 
+  const bool from_triangle = p.material != kNoMaterial && ctx_.scene != nullptr;
+  // Texture addresses of scene triangles (other primitives read attachments or on-chip data).
+  const bool texture_footprint = from_triangle && sh.tex_fetches > 0 && ctx_.textures && texture_lines_out_;
   // Quads: 2x2 pixel blocks aligned to even coordinates; every lane of a launched quad runs.
-  const auto quads = static_cast<std::uint64_t>(launched_quads(pixels, quad_seen_));
+  // Their keys only when the texture footprint walks them.
+  const auto quads = static_cast<std::uint64_t>(texture_footprint ? launched_quads(pixels, quad_seen_)
+                                                                   : launched_quad_count(pixels, quad_seen_));
   const std::uint64_t helpers = quads * 4 - pixels.size();
   stats.shader_invocations += pixels.size();
   stats.shaded_quads += quads;
@@ -432,7 +454,6 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   // bilinear fetch is one, whatever the 4 texels it reads.
   stats.texels_filtered += quads * 4 * fetches * static_cast<std::uint64_t>(hw.texture.filtered_texels_per_fetch);
 
-  const bool from_triangle = p.material != kNoMaterial && ctx_.scene != nullptr;
   const Material* mat = from_triangle ? &ctx_.scene->materials[p.material] : nullptr;
   const AlphaMask* mask_tex =
       (mat && mat->alpha_mask >= 0) ? &ctx_.scene->alpha_masks[static_cast<std::size_t>(mat->alpha_mask)] : nullptr;
@@ -485,10 +506,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     return q;
   };
 
-  // Texture addresses of scene triangles (other primitives read attachments or on-chip data).
-  if (from_triangle && sh.tex_fetches > 0 && ctx_.textures && texture_lines_out_) {
-    texture_addresses(p, sh.tex_fetches, static_cast<std::size_t>(quads), stats);
-  }
+  if (texture_footprint) texture_addresses(p, sh.tex_fetches, static_cast<std::size_t>(quads), stats);
   // Whether a scene triangle's fragments need their surface: for colours, for a cluster (the
   // depth), to store it (a G-buffer target, the PLS surfaces) and for the alpha test (the uv).
   // Without, a fragment counts the same (forward+ without images: its tile's lights).

@@ -65,6 +65,9 @@ inline constexpr const char* kPlsAccumulatorName = "light_accum";
 /// for a batch within 64 x 64 quads (a tile's), else a merge of pixels sorted by row then column
 /// (Tsp::shade's contract), a sort otherwise.
 std::size_t launched_quads(std::span<const ShadePixel> pixels, std::vector<std::uint64_t>& quads);
+/// How many quads launched_quads would write, without writing their keys where its bitmap holds
+/// them (a tile's batch); otherwise it writes them into `scratch`.
+std::size_t launched_quad_count(std::span<const ShadePixel> pixels, std::vector<std::uint64_t>& scratch);
 
 /// Whether any of the lights `reach` (indices into `lights`) may reach a point of scene triangle
 /// `p` interpolated at barycentrics inside it, as the TSP interpolates a fragment's position

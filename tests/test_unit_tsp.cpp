@@ -79,7 +79,8 @@ TEST(UnitTsp, QuadsAreAlignedToEvenPixels) {
 // launched_quads marks a bitmap of quads (batches within 64 x 64 quads, any pixel order) or merges
 // the two pixel rows of each quad row in one pass (wider batches, the pixels' order; a sort when
 // unordered) and must give what sorting every pixel's quad and dropping repeats gives, in the
-// same order, on every path.
+// same order, on every path; launched_quad_count (the count alone, from the bitmap's rows) the
+// same number.
 TEST(UnitTsp, LaunchedQuadsEqualSortedUniqueQuadsOfThePixels) {
   const auto by_sort = [](const std::vector<ShadePixel>& px) {
     std::vector<std::uint64_t> q;
@@ -88,13 +89,15 @@ TEST(UnitTsp, LaunchedQuadsEqualSortedUniqueQuadsOfThePixels) {
     q.erase(std::unique(q.begin(), q.end()), q.end());
     return q;
   };
-  std::vector<std::uint64_t> got;
+  std::vector<std::uint64_t> got, scratch;
   // Hand-counted: a 3x3 block at (1,1) touches quads x 0..1, y 0..1 = 4 quads.
   EXPECT_EQ(launched_quads(block(1, 1, 3, 3), got), 4u);
+  EXPECT_EQ(launched_quad_count(block(1, 1, 3, 3), scratch), 4u);
   EXPECT_EQ(got, by_sort(block(1, 1, 3, 3)));
   // The upper-left half of a tile (rows of falling length; odd and even first rows) and random
   // sparse pixel sets in raster order, then the same sets shuffled (the sorting fallback).
   EXPECT_EQ(launched_quads(upper_left_pixels(), got), by_sort(upper_left_pixels()).size());
+  EXPECT_EQ(launched_quad_count(upper_left_pixels(), scratch), by_sort(upper_left_pixels()).size());
   EXPECT_EQ(got, by_sort(upper_left_pixels()));
   std::uint32_t state = 12345u;
   const auto next = [&] { return state = state * 1664525u + 1013904223u; };
@@ -107,9 +110,11 @@ TEST(UnitTsp, LaunchedQuadsEqualSortedUniqueQuadsOfThePixels) {
       }
     }
     EXPECT_EQ(launched_quads(px, got), by_sort(px).size());
+    EXPECT_EQ(launched_quad_count(px, scratch), by_sort(px).size());
     EXPECT_EQ(got, by_sort(px));
     std::reverse(px.begin(), px.end());
     EXPECT_EQ(launched_quads(px, got), by_sort(px).size());
+    EXPECT_EQ(launched_quad_count(px, scratch), by_sort(px).size());
     EXPECT_EQ(got, by_sort(px));
     // Wider than 64 quads (the merge, then reversed: the sort), and exactly 64 quads wide and
     // tall (the bitmap's last bit and row).
@@ -122,9 +127,11 @@ TEST(UnitTsp, LaunchedQuadsEqualSortedUniqueQuadsOfThePixels) {
       }
       wide.push_back({span - 1, y0 + span - 1, 1u});
       EXPECT_EQ(launched_quads(wide, got), by_sort(wide).size());
+      EXPECT_EQ(launched_quad_count(wide, scratch), by_sort(wide).size());
       EXPECT_EQ(got, by_sort(wide));
       std::reverse(wide.begin(), wide.end());
       EXPECT_EQ(launched_quads(wide, got), by_sort(wide).size());
+      EXPECT_EQ(launched_quad_count(wide, scratch), by_sort(wide).size());
       EXPECT_EQ(got, by_sort(wide));
     }
   }
