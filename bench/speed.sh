@@ -13,7 +13,10 @@
 # the functional run ended (timing_wall_seconds - simulation_wall_seconds: what the functional run
 # does not hide), and wait_T: the seconds the timing model waited there for work the functional
 # run had not produced yet (timing_wait_seconds). The load average is printed before and after:
-# other processes on the machine stretch wall times.
+# other processes on the machine stretch wall times. In the full mode (without --against) it ends
+# with issue 15's per-run targets judged on the figures measured: how many techniques hold
+# 1 thread <= 1.0 CPU s, forward_multipass <= 60 s, the speed-up >= 1.8x (with --threads) and
+# images <= 1.20x (with --image-cost), naming those that do not.
 #
 # Usage: bash bench/speed.sh [options] [build-dir]
 #   -n N             repetitions per technique (median taken; default 3)
@@ -60,7 +63,7 @@ while [ $# -gt 0 ]; do
     --multipass-lpp) LPP=$2; shift 2 ;;
     --record) RECORD=yes; shift ;;
     --threads) THREADS=$2; shift 2 ;;
-    -h|--help) sed -n '2,32p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,36p' "$0"; exit 0 ;;
     -*) echo "speed.sh: unknown option $1" >&2; exit 2 ;;
     *) BUILD=$1; shift ;;
   esac
@@ -139,6 +142,7 @@ else
   printf '%-28s %9s %9s %12s %9s %8s\n' technique cpu_s wall_s px*lights/s base_cpu ratio
 fi
 : > "$TMP/record.txt"
+: > "$TMP/verdict.txt"  # "technique figure value" lines for the verdicts on issue 15's targets
 total=0
 for t in "${TECH_LIST[@]}"; do
   opt=()
@@ -173,6 +177,8 @@ for t in "${TECH_LIST[@]}"; do
     ratio=$(awk -v a="$icpu" -v b="$cpu" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
     within=$(awk -v r="$ratio" 'BEGIN { print (r <= 1.20 ? "yes" : "no") }')
     printf '%-28s %9s %9s %8s %8s\n' "$t" "$cpu" "$icpu" "$ratio" "$within"
+    echo "$t cpu $cpu" >> "$TMP/verdict.txt"
+    echo "$t images $ratio" >> "$TMP/verdict.txt"
   elif [ -n "$AGAINST" ]; then
     bcpu=$(median 1 "$TMP/old.times")
     bwall=$(median 2 "$TMP/old.times")
@@ -195,16 +201,38 @@ for t in "${TECH_LIST[@]}"; do
     wait_t=$(median 7 "$TMP/par.times")
     printf '%-28s %7s %7s %7s %7s %7s %7s %7s %7s %8s %7s %7s %11s %8s %6s\n' "$t" "$cpu" "$wall" "$pcpu" "$pwall" "$speedup" "$tiles" "$serial" \
       "$timing" "$amdahl" "$tail_t" "$wait_t" "$rate" "${bcpu:--}" "$ratio"
+    echo "$t cpu $cpu" >> "$TMP/verdict.txt"
+    echo "$t speedup $speedup" >> "$TMP/verdict.txt"
     echo "$MODE $t $cpu $wall" >> "$TMP/record.txt"
   else
     bcpu=$(baseline_cpu "$t")
     ratio=$(awk -v a="$cpu" -v b="$bcpu" 'BEGIN { if (b > 0) printf "%.2f", a / b; else print "-" }')
     printf '%-28s %9s %9s %12s %9s %8s\n' "$t" "$cpu" "$wall" "$rate" "${bcpu:--}" "$ratio"
     echo "$MODE $t $cpu $wall" >> "$TMP/record.txt"
+    echo "$t cpu $cpu" >> "$TMP/verdict.txt"
   fi
   total=$(awk -v a="$total" -v b="$cpu" 'BEGIN { print a + b }')
 done
 echo "sum of medians: $total CPU s (1 thread); load at the end $(cut -d' ' -f1-3 /proc/loadavg)"
+# Issue 15's per-run targets, judged on the figures above: only where they are defined (the full
+# mode's frame, 1024 lights, forward_multipass at one light per pass; this build alone).
+if [ "$MODE" = full ] && [ -z "$AGAINST" ]; then
+  echo "issue 15 targets, on these figures (medians of $REPS; a shared host: re-measure near a bound):"
+  awk -v lpp="$LPP" -v threads="$THREADS" '
+    $2 == "cpu" && $1 != "forward_multipass" { n1++; if ($3 <= 1.0) ok1++; else over1 = over1 " " $1 " " $3 }
+    $2 == "cpu" && $1 == "forward_multipass" { fmp = $3 }
+    $2 == "speedup" { n2++; if ($3 >= 1.8) ok2++; else if ($3 > best2) { best2 = $3; bestt = $1 } }
+    $2 == "images" { n3++; if ($3 <= 1.20) ok3++; else over3 = over3 " " $1 " " $3 "x" }
+    END {
+      if (n1) printf "  1 thread <= 1.0 CPU s (all but forward_multipass): %d of %d hold%s\n", ok1, n1, (over1 != "" ? "; over:" over1 : "")
+      if (fmp != "" && lpp == 1) printf "  forward_multipass (1 light per pass) <= 60 CPU s: %s (%s)\n", (fmp <= 60 ? "holds" : "does not hold"), fmp
+      if (n2) printf "  %d threads >= 1.8x wall (issue 15 asks it at 2 threads on 2 cores): %d of %d hold%s\n", threads, ok2, n2,
+                     (ok2 < n2 ? sprintf("; best of the rest %s %.2fx", bestt, best2) : "")
+      else print "  threads >= 1.8x: not measured (--threads 1)"
+      if (n3) printf "  images <= 1.20x the CPU of a run without: %d of %d hold%s\n", ok3, n3, (over3 != "" ? "; over:" over3 : "")
+      else print "  images <= 1.20x: not measured (--image-cost)"
+    }' "$TMP/verdict.txt"
+fi
 if [ "$RECORD" = yes ]; then
   {
     if [ -f "$BASELINE" ]; then
