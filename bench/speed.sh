@@ -63,7 +63,7 @@ while [ $# -gt 0 ]; do
     --multipass-lpp) LPP=$2; shift 2 ;;
     --record) RECORD=yes; shift ;;
     --threads) THREADS=$2; shift 2 ;;
-    -h|--help) sed -n '2,36p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,38p' "$0"; exit 0 ;;
     -*) echo "speed.sh: unknown option $1" >&2; exit 2 ;;
     *) BUILD=$1; shift ;;
   esac
