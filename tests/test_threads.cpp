@@ -320,6 +320,12 @@ TEST(ThreadEquivalenceDatabase, RunsWriteTheSameRowsAndImagesAtEveryThreadCount)
     EXPECT_EQ(testing_support::query_number(req.db_path, "SELECT value FROM stats WHERE run_id = " + std::to_string(o.run_id) +
                                                              " AND scope = 'frame/host' AND name = 'simulation_threads'"),
               static_cast<double>(n));
+    // The host CPU of writing them is recorded at every count (on the caller's thread at 1, beside
+    // the timing model at more): time the run spent, so more than nothing.
+    EXPECT_GT(testing_support::query_number(req.db_path, "SELECT value FROM stats WHERE run_id = " + std::to_string(o.run_id) +
+                                                             " AND scope = 'frame/host' AND name = 'image_cpu_seconds'"),
+              0.0)
+        << n << " threads";
     std::vector<std::string> files;
     for (const std::string& p : o.images_written) {
       std::ifstream in(p, std::ios::binary);
@@ -329,6 +335,17 @@ TEST(ThreadEquivalenceDatabase, RunsWriteTheSameRowsAndImagesAtEveryThreadCount)
   }
   ASSERT_GT(rows[0].size(), 100u);
   ASSERT_GT(images[0].size(), 3u);
+  {  // Without images nothing is written, and no image CPU is recorded.
+    RunRequest req;
+    req.config = resolve_config({}, {});
+    req.trace_path = trace_path;
+    req.db_path = (dir / "runs.db").string();
+    const RunOutcome o = run_one(req);
+    EXPECT_TRUE(o.images_written.empty());
+    EXPECT_EQ(testing_support::query_number(req.db_path, "SELECT value FROM stats WHERE run_id = " + std::to_string(o.run_id) +
+                                                             " AND scope = 'frame/host' AND name = 'image_cpu_seconds'"),
+              0.0);
+  }
   for (std::size_t k = 1; k < rows.size(); ++k) {
     EXPECT_TRUE(rows[k] == rows[0]) << kThreadCounts[k] << " threads: database rows differ";
     EXPECT_TRUE(images[k] == images[0]) << kThreadCounts[k] << " threads: images differ";

@@ -355,7 +355,9 @@ RunOutcome run_one(const RunRequest& req) {
   outcome.scene = scene.source;
 
   if (!req.images_dir.empty()) {
-    outcome.images_written = images.valid() ? images.get() : write_frame_images(outcome.frame, req.images_dir, req.threads);
+    outcome.images_written =
+        images.valid() ? images.get() : write_frame_images(outcome.frame, req.images_dir, req.threads, &images_thread_cpu);
+    outcome.image_cpu_seconds = images_thread_cpu;
     outcome.images_written.push_back(write_tile_cycles_image(outcome.frame, outcome.timing, req.images_dir));
   }
 
@@ -385,6 +387,9 @@ RunOutcome run_one(const RunRequest& req) {
   rec.stats.push_back({"frame/host", "timing_wait_seconds", outcome.timing_wait_seconds, "s",
                        "Host wall time the timing model waited for work the functional simulation had not yet produced "
                        "(with more than one thread; 0 with one, where it starts after that one ends)"});
+  rec.stats.push_back({"frame/host", "image_cpu_seconds", outcome.image_cpu_seconds, "s",
+                       "Host CPU time of writing the frame's images (colour conversion, heat maps, PNG encoding; all its "
+                       "threads; 0 without --images). The colours themselves are computed in the functional simulation"});
   rec.stats.push_back({"frame/host", "tile_render_wall_seconds", outcome.frame.host_tile_seconds, "s",
                        "Host wall time of the functional simulation's tile rendering (the part on --threads threads)"});
   rec.stats.push_back({"frame/host", "simulation_threads", static_cast<double>(outcome.threads), "threads",
