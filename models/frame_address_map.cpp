@@ -37,14 +37,14 @@ std::uint64_t whole_units(std::uint64_t bytes) { return (bytes + kRegionAlignByt
 }  // namespace
 
 void FrameAddressMap::add_command(const CommandWork& cmd) {
-  const std::uint64_t cmd_bytes = sum(cmd.read_bytes) + sum(cmd.write_bytes);
   const std::uint64_t slots = std::max<std::uint64_t>(1, cmd.tile_slots);
   fb_stride_.push_back(whole_units(std::max<std::uint64_t>(cmd.tile_slot_bytes, 1)));
   fb_base_.push_back(cmd.is_dispatch ? 0 : space_.allocate("framebuffer." + cmd.name, fb_stride_.back() * slots, DramClass::Color));
   tile_slots_.push_back(slots);
   partial_stride_.push_back(whole_units(std::max<std::uint64_t>(cmd.partial_slot_bytes, 1)));
   partial_base_.push_back(0);  // allocated at the first partial render
-  cmd_base_.push_back(space_.allocate("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, kRegionAlignBytes), DramClass::Other));
+  cmd_base_.push_back(0);  // place_buffers
+  buffers_placed_.push_back(false);
   spill_stride_.push_back(whole_units(cmd.spill_slot_bytes));
   // Allocated only when the pass spills, so that passes that fit keep their addresses.
   spill_base_.push_back(spill_stride_.back() == 0 ? 0
@@ -54,6 +54,18 @@ void FrameAddressMap::add_command(const CommandWork& cmd) {
   // Whose data it reads: the latest earlier writer of each class.
   source_.push_back(last_writer_);
   written_.emplace_back();
+}
+
+void FrameAddressMap::place_buffers(std::size_t command, const CommandWork& cmd) {
+  if (buffers_placed_.at(command)) return;
+  const std::uint64_t cmd_bytes = sum(cmd.read_bytes) + sum(cmd.write_bytes);
+  cmd_base_[command] = space_.allocate("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, kRegionAlignBytes), DramClass::Other);
+  buffers_placed_[command] = true;
+}
+
+std::uint64_t FrameAddressMap::buffers(std::size_t command) const {
+  if (!buffers_placed_.at(command)) throw std::logic_error("FrameAddressMap::buffers: the command's buffer area is not placed yet");
+  return cmd_base_[command];
 }
 
 void FrameAddressMap::add_render(std::size_t command, const RenderWork& r) {
@@ -91,6 +103,9 @@ void FrameAddressMap::record_writes(std::size_t c, const CommandWork& cmd) {
   // after class from the tile's slot, a dispatch's writes after its reads in its buffer area.
   auto& w = written_[c];
   if (cmd.is_dispatch) {
+    if (sum(cmd.write_bytes) > 0 && !buffers_placed_[c]) {
+      throw std::logic_error("FrameAddressMap::end_command: " + cmd.name + " ends before its buffer area was placed");
+    }
     std::uint64_t offset = sum(cmd.read_bytes);
     for (std::size_t k = 0; k < kDramClassCount; ++k) {
       if (cmd.write_bytes[k] == 0) continue;

@@ -2,13 +2,17 @@
 // Where the timing model places a frame's data in the simulated address space: first the frame's
 // regions known before any command runs (the textures, gpu.mode=imr's framebuffer, two parameter
 // buffers of tiling.pb_capacity_bytes: binning of one render overlaps the tiles of the previous
-// one), then per command, in trace order, when it starts: its framebuffer area (one slot per tile
-// of CommandWork::tile_slot_bytes), its buffer area (lights, light lists, compute buffers) and its
-// spill slots; then per render, when its binning is taken, its vertex and index range. A
-// command's regions depend only on what is known when it starts and on the commands before it, so
-// the timing model can place it while its tiles are still being simulated. Addresses decide cache
-// sets and DRAM banks, so the layout is a pure function of the frame's work: the same work always
-// gets the same addresses.
+// one), then per command, in trace order, when the timing model takes it: its framebuffer area
+// (one slot per tile of CommandWork::tile_slot_bytes) and its spill slots; per render, when its
+// binning is taken, its vertex and index range; and a command's buffer area (lights, light lists,
+// compute buffers: its read and write bytes) when its first fragment job starts. A dispatch knows
+// its bytes only once it has run, and so does a pass reading what one wrote (its light lists), so
+// the regions of the commands after them cannot wait for those bytes: the timing model bins the
+// pass after a dispatch while the pass before it still renders. A command's regions depend only on
+// what is known when they are placed and on the regions placed before, so the timing model can
+// place them while earlier tiles are still being simulated. Addresses decide cache sets and DRAM
+// banks, so the layout is a pure function of the frame's work and the timing model's schedule: the
+// same work always gets the same addresses.
 #include <array>
 #include <cstdint>
 #include <string>
@@ -26,10 +30,13 @@ class FrameAddressMap {
   /// FrameWork::framebuffer_bytes of imr framebuffer, two parameter buffers of `pb_bytes`.
   FrameAddressMap(const FrameWork& frame, std::uint64_t pb_bytes, AddressSpace& space);
   /// Allocates the regions of `cmd`, the next command of the frame, from what is known when it
-  /// starts (its name, slots, buffer bytes; a dispatch is complete). Commands are added in trace
+  /// is opened (its name, slots; not its bytes: place_buffers). Commands are added in trace
   /// order; a command may be added before the ones before it ended (the timing model bins a pass
   /// while the previous one still renders): what those write becomes its source when they end.
   void add_command(const CommandWork& cmd);
+  /// Allocates the buffer area of added command `command` (`cmd`, with its read and write bytes
+  /// final) when its first fragment job starts; once (later calls do nothing).
+  void place_buffers(std::size_t command, const CommandWork& cmd);
   /// Allocates the vertex and index range of render `r` of `command` (renders in order, each once
   /// its binning is known; gpu.mode=imr's single render complete with its batches' geometry), and
   /// at the pass's first partial render its partial renders' slots.
@@ -52,8 +59,9 @@ class FrameAddressMap {
   std::uint64_t textures() const { return texture_base_; }
   /// Base of gpu.mode=imr's framebuffer (FramebufferAccess::offset is relative to it).
   std::uint64_t rop_framebuffer() const { return rop_framebuffer_base_; }
-  /// Base of a command's buffer area (a dispatch's reads and writes, a pass's once-read buffers).
-  std::uint64_t buffers(std::size_t command) const { return cmd_base_[command]; }
+  /// Base of a command's buffer area (a dispatch's reads and writes, a pass's once-read buffers);
+  /// throws std::logic_error before place_buffers.
+  std::uint64_t buffers(std::size_t command) const;
   /// Base of one tile's framebuffer slot of a pass (loads and stores of all its classes follow
   /// each other): with `partial`, its slot for what partial renders store and the renders after
   /// them reload (allocated by add_render at the pass's first partial render).
@@ -93,6 +101,7 @@ class FrameAddressMap {
   bool immediate_ = false;  ///< FrameWork::immediate: a render's batches carry its geometry
   std::size_t ended_ = 0;   ///< commands ended (end_command), in order
   std::vector<std::uint64_t> fb_base_, fb_stride_, partial_base_, partial_stride_, cmd_base_, spill_base_, spill_stride_;
+  std::vector<bool> buffers_placed_;  ///< per command: place_buffers ran
   std::vector<std::vector<std::uint64_t>> vertex_base_;  ///< per command and render
   std::vector<std::string> names_;                       ///< per command (its regions' names)
   std::vector<std::uint64_t> tile_slots_;                ///< per command: its tiles' slots

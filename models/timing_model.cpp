@@ -359,7 +359,12 @@ class TimingSim final : public Unit {
     // Fragment jobs run in order: every command before this one has finished rendering, so what
     // it wrote is known (its tiles all published) before this one reads any of it.
     end_commands_before(j.command);
+    // A dispatch may be opened before it has run (the functional run bins the pass after it
+    // first): its content is needed now.
+    if (j.render < 0) feed_.wait_complete(j.command);
     const CommandWork& cmd = *commands_[j.command];
+    // Its buffer area, from its bytes, known by now (FrameAddressMap::place_buffers).
+    if (j.render <= 0) map_.place_buffers(j.command, cmd);
     if (result_.commands[j.command].start_cycle < 0) result_.commands[j.command].start_cycle = cycles_of(eq_.now());
     if (j.render < 0) {
       start_dispatch(f, cmd);

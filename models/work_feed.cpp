@@ -40,14 +40,19 @@ CommandWork& WorkFeed::open(CommandWork&& header) {
   std::lock_guard lock(mutex_);
   if (!begun_ || closed_ || work_ != &own_) throw std::logic_error("WorkFeed::open: the feed is not open");
   if (own_.commands.size() == expected_) throw std::logic_error("WorkFeed::open: more commands than begin() announced");
-  // An earlier command may still be open only if it is the previous one and all its renders are
-  // binned (its latest is not partial): its tiles are what is left of it.
+  // Earlier commands may still be open only with no renders to come: a pass whose renders are all
+  // binned (its latest is not partial: its tiles are what is left of it), or a dispatch (opened
+  // before it runs: its content is what is left of it). The last pass binned ahead and the
+  // dispatches after it are what may be open beside the new command.
+  bool open_pass = false;
   for (std::size_t c = 0; c < state_.size(); ++c) {
     const Published& p = state_[c];
     if (p.complete) continue;
-    if (c + 1 != state_.size() || p.renders.empty() || p.renders.back()->partial) {
-      throw std::logic_error("WorkFeed::open: the previous command is open with renders to come");
+    if (own_.commands[c].is_dispatch) continue;
+    if (open_pass || p.renders.empty() || p.renders.back()->partial) {
+      throw std::logic_error("WorkFeed::open: an earlier command is open with renders to come");
     }
+    open_pass = true;
   }
   if (!header.renders.empty()) throw std::logic_error("WorkFeed::open: a command is opened before its renders");
   own_.commands.push_back(std::move(header));
@@ -152,6 +157,11 @@ const CommandWork* WorkFeed::wait_for(std::size_t c) {
   std::unique_lock lock(mutex_);
   wait_until(lock, [&] { return c < state_.size(); });
   return c < state_.size() ? &work_->commands[c] : nullptr;
+}
+
+void WorkFeed::wait_complete(std::size_t c) {
+  std::unique_lock lock(mutex_);
+  wait_until(lock, [&] { return c < state_.size() && state_[c].complete; });
 }
 
 const RenderWork* WorkFeed::wait_render(std::size_t c, std::size_t r) {

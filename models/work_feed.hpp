@@ -5,10 +5,12 @@
 // name, slots and buffers), then each of its renders when it is binned (its tile count known),
 // then each of that render's tiles in dispatch order as the functional run has merged it, then
 // the command is closed (complete); a command whose layout is known only at its end (a spilling
-// pass, gpu.mode=imr's batches, a dispatch) is published complete at once. The next command may
-// be opened (and its renders binned) while the previous one's last render still renders: the
-// functional run bins a pass before the tiles of the one before it (the hardware's two parameter
-// buffers: geometry of the next render overlaps the fragment work of this one). The timing model waits
+// pass, gpu.mode=imr's batches) is published complete at once, and so is a dispatch unless a pass
+// is binned past it (below: it is opened with its header before it runs and closed once it has).
+// The next command may be opened (and its renders binned) while the previous one's last render
+// still renders: the functional run bins a pass before the tiles of the one before it (the
+// hardware's two parameter buffers: geometry of the next render overlaps the fragment work of this
+// one), also past the dispatches between them, which run after those tiles. The timing model waits
 // for a piece only when its schedule needs it and reads it once published, so its results are the
 // same whether the work was all there before it started or arrived while it ran.
 #include <condition_variable>
@@ -34,10 +36,11 @@ class WorkFeed {
   // ---- producer ----
   /// The frame's fields (its commands are ignored) and the number of commands that will follow.
   void begin(const FrameWork& frame, std::size_t commands);
-  /// Starts the next command from `header` (its fields but its renders final; no renders yet)
-  /// and returns where the producer appends its renders (its index: last_opened()). Throws
-  /// std::logic_error past the number begin() gave, or while an earlier command is open with
-  /// renders to come (its latest render partial or none yet) or another one is open beside it.
+  /// Starts the next command from `header` (its fields but its renders final; no renders yet;
+  /// a dispatch's content, filled before close_command, excepted) and returns where the producer
+  /// appends its renders (its index: last_opened()). Throws std::logic_error past the number
+  /// begin() gave, or while an earlier pass is open with renders to come (its latest render
+  /// partial or none yet) or two earlier passes are open (open dispatches may be any number).
   CommandWork& open(CommandWork&& header);
   /// Index of the command open() opened last.
   std::size_t last_opened() const;
@@ -66,6 +69,9 @@ class WorkFeed {
   /// when command c + 1 is opened, command c's renders are all published (its tiles may still
   /// come: wait_tile).
   const CommandWork* wait_for(std::size_t c);
+  /// Waits until command `c` (opened) is complete, or the feed closed without it: a dispatch
+  /// is opened with its header before it runs and completed after (its content read then).
+  void wait_complete(std::size_t c);
   /// Render `r` of command `c` (opened) once published, or nullptr when none follows: the
   /// command was completed with fewer renders, or its latest render is not partial (a render
   /// is partial exactly when another follows), or the feed closed without it.

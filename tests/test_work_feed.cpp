@@ -248,6 +248,102 @@ TEST(WorkFeed, APassOpenedWhileThePreviousOnesTilesStillComeTimesAsTheCompleteFr
   expect_same_timing(timed.get(), whole);
 }
 
+// A pass binned past a dispatch (command_processor.cpp: a pass, a dispatch reading it, a pass):
+// the dispatch is opened with its header before the pass before it renders and filled and closed
+// after, and the pass after it is opened and binned before either. The timing model takes the
+// pass after the dispatch (its binning) while the first pass's tiles still come, waits for the
+// dispatch's content only when its fragment job starts, and times the frame as the complete one.
+TEST(WorkFeed, APassBinnedPastAnOpenDispatchTimesAsTheCompleteFrame) {
+  FrameWork frame = pass_and_dispatch();  // pass0.main, dispatch1.after
+  CommandWork last = frame.commands[0];
+  last.name = "pass2.after_dispatch";
+  last.read_bytes[static_cast<std::size_t>(DramClass::LightLists)] = 8192;  // what the dispatch wrote: filled late
+  frame.commands[1].write_bytes[static_cast<std::size_t>(DramClass::LightLists)] = 8192;
+  frame.commands.push_back(last);
+  const HwConfig hw = resolve_config({}, {}).hw;
+  const TimingResult whole = run_timing(hw, frame);
+
+  WorkFeed feed;
+  std::future<TimingResult> timed = std::async(std::launch::async, [&] { return run_timing(hw, feed); });
+  feed.begin(frame, 3);
+  auto open_pass = [&](std::size_t c) -> CommandWork& {
+    CommandWork header = frame.commands[c];
+    header.renders.clear();
+    return feed.open(std::move(header));
+  };
+  auto bin = [&](CommandWork& live, std::size_t c, std::size_t r) -> RenderWork& {
+    const RenderWork& src = frame.commands[c].renders[r];
+    RenderWork& rw = live.renders.emplace_back();
+    rw.binning = src.binning;
+    rw.partial = src.partial;
+    rw.tiles.reserve(src.tiles.size());
+    feed.publish_render(c, src.tiles.size());
+    return rw;
+  };
+  auto tiles = [&](RenderWork& rw, std::size_t c, std::size_t r) {
+    for (const TileWork& t : frame.commands[c].renders[r].tiles) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      rw.tiles.push_back(t);
+      feed.publish_tile(c);
+    }
+  };
+  CommandWork& first = open_pass(0);
+  tiles(bin(first, 0, 0), 0, 0);
+  RenderWork& first_last = bin(first, 0, 1);
+  // The dispatch's header only: its name and kind.
+  CommandWork dispatch_header;
+  dispatch_header.name = frame.commands[1].name;
+  dispatch_header.is_dispatch = true;
+  dispatch_header.depends_on_previous = frame.commands[1].depends_on_previous;
+  CommandWork& dispatch = feed.open(std::move(dispatch_header));
+  // The pass after it, opened and binned (its partial render too) before the first pass's tiles.
+  CommandWork header = frame.commands[2];
+  header.renders.clear();
+  header.read_bytes = {};
+  CommandWork& after = feed.open(std::move(header));
+  RenderWork& after0 = bin(after, 2, 0);
+  EXPECT_THROW(feed.close_command(1), std::logic_error) << "the dispatch closed before the pass before it";
+  tiles(first_last, 0, 1);
+  feed.close_command(0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the timing model waits for the dispatch's content meanwhile
+  // The dispatch has run: its content, and what the pass after it reads of it, then the dispatch closed.
+  const CommandWork& ran = frame.commands[1];
+  dispatch.compute_alu_ops = ran.compute_alu_ops;
+  dispatch.read_bytes = ran.read_bytes;
+  dispatch.write_bytes = ran.write_bytes;
+  after.read_bytes = frame.commands[2].read_bytes;
+  feed.close_command(1);
+  tiles(after0, 2, 0);
+  tiles(bin(after, 2, 1), 2, 1);
+  feed.close_command(2);
+  feed.close();
+  expect_same_timing(timed.get(), whole);
+}
+
+TEST(WorkFeed, OpenDispatchesMayStandBetweenTheLastPassBinnedAheadAndTheNext) {
+  WorkFeed feed;
+  FrameWork frame;
+  feed.begin(frame, 5);
+  CommandWork& pass = feed.open(CommandWork{});
+  pass.renders.emplace_back().partial = false;
+  feed.publish_render(0, 0);
+  CommandWork d;
+  d.is_dispatch = true;
+  feed.open(CommandWork(d));
+  feed.open(CommandWork(d));  // any number of open dispatches
+  CommandWork& next = feed.open(CommandWork{});  // a pass beyond them
+  EXPECT_THROW(feed.open(CommandWork(d)), std::logic_error) << "the pass just opened has renders to come";
+  next.renders.emplace_back().partial = false;
+  feed.publish_render(3, 0);
+  EXPECT_THROW(feed.open(CommandWork{}), std::logic_error) << "two passes open already";
+  EXPECT_THROW(feed.close_command(2), std::logic_error) << "closed before the commands before it";
+  feed.close_command(0);
+  feed.close_command(1);
+  feed.close_command(2);
+  feed.close_command(3);
+  feed.close();
+}
+
 TEST(WorkFeed, ARenderThatIsNotPartialIsItsPassLastBeforeThePassIsClosed) {
   WorkFeed feed;
   FrameWork frame;
