@@ -142,10 +142,24 @@ class FrameSimulator {
     surface_readers_ = stored_surface_readers(trace_);
     int pass_index = 0;
     std::uint64_t dispatches = 0;
-    for (const auto& cmd : trace_.commands) {
-      if (const auto* pass = std::get_if<PassDesc>(&cmd)) {
+    const auto& commands = trace_.commands;
+    for (std::size_t i = 0; i < commands.size(); ++i) {
+      if (const auto* pass = std::get_if<PassDesc>(&commands[i])) {
         run_pass(*pass, pass_index++);
-      } else if (const auto* d = std::get_if<DispatchCmd>(&cmd)) {
+      } else if (const auto* d = std::get_if<DispatchCmd>(&commands[i])) {
+        // Bin-ahead past dispatches: the pass after them is set up and binned before the pass
+        // binned ahead renders its tiles, then those tiles, the dispatches and the rest of its
+        // set-up run (run_pass with `past`), as the hardware bins it into its second parameter
+        // buffer while the earlier work runs.
+        if (const std::size_t next = pass_after_dispatches(i); next != 0) {
+          std::vector<PastDispatch> past;
+          for (std::size_t k = i; k < next; ++k) {
+            if (const auto* dk = std::get_if<DispatchCmd>(&commands[k])) past.push_back({dk, static_cast<int>(dispatches++)});
+          }
+          run_pass(std::get<PassDesc>(commands[next]), pass_index++, past);
+          i = next;
+          continue;
+        }
         finish_pending_pass();
         run_dispatch_cmd(*d, static_cast<int>(dispatches++));
       }
@@ -175,7 +189,11 @@ class FrameSimulator {
   }
 
  private:
-  void prepare_attachments(const PassDesc& pass, RenderContext& ctx) {
+  /// Creates the pass's attachments not made yet (an image buffer a dispatch wrote under its
+  /// name is its content), checks them, and points the context at its targets. With
+  /// `check_loads_later` (a pass set up before the dispatches ahead of it ran) the check that a
+  /// loaded attachment was stored waits for check_loaded_attachments.
+  void prepare_attachments(const PassDesc& pass, RenderContext& ctx, bool check_loads_later = false) {
     int samples = -1;
     for (const auto& a : pass.attachments) {
       if (pass.is_resolve_target(a)) {
@@ -209,15 +227,24 @@ class FrameSimulator {
       } else if (it->second.format != a.format || it->second.samples != a.samples) {
         throw InputError(path_, a.line, "attachment '" + a.name + "' was declared earlier with another format or sample count");
       }
-      if (a.load == LoadOp::Load && !a.transient && !it->second.defined) {
-        throw InputError(path_, a.line, "attachment '" + a.name + "' is loaded but no earlier pass stored it");
-      }
     }
+    if (!check_loads_later) check_loaded_attachments(pass);
     for (const Attachment* a : pass.color_targets()) ctx.color_targets.push_back(&result_.images.attachments.at(a->name));
     if (const Attachment* d = pass.depth_attachment()) ctx.depth = &result_.images.attachments.at(d->name);
   }
 
-  void resolve_draws(const PassDesc& pass, RenderContext& ctx) {
+  /// Refuses a pass loading an attachment no earlier command stored.
+  void check_loaded_attachments(const PassDesc& pass) const {
+    for (const auto& a : pass.attachments) {
+      if (a.load == LoadOp::Load && !a.transient && !result_.images.attachments.at(a.name).defined) {
+        throw InputError(path_, a.line, "attachment '" + a.name + "' is loaded but no earlier pass stored it");
+      }
+    }
+  }
+
+  /// The pass's draws: pipeline, shader, inputs (resolve_draw_inputs; with `grids_later`, the
+  /// light grids wait for resolve_light_grids), selected lights.
+  void resolve_draws(const PassDesc& pass, RenderContext& ctx, bool grids_later = false) {
     const auto n_lights = static_cast<std::uint32_t>(trace_.lights.size());
     for (std::size_t i = 0; i < pass.draws.size(); ++i) {
       const DrawCmd& cmd = pass.draws[i];
@@ -228,7 +255,7 @@ class FrameSimulator {
       if (!d.pipeline) throw InputError(path_, cmd.line, "unknown pipeline '" + cmd.pipeline + "'");
       d.shader = trace_.find_shader(d.pipeline->shader);
       if (!d.shader) throw InputError(path_, d.pipeline->line, "unknown shader '" + d.pipeline->shader + "'");
-      resolve_draw_inputs(pass, cmd, d);
+      resolve_draw_inputs(pass, cmd, d, grids_later);
       if (d.shader->color_outputs > ctx.color_targets.size()) {
         throw InputError(path_, cmd.line, "shader '" + d.shader->name + "' writes " + std::to_string(d.shader->color_outputs) +
                                               " color outputs but pass '" + pass.name + "' has " +
@@ -263,7 +290,7 @@ class FrameSimulator {
   }
 
   /// Where a draw's shader finds its surface, its light lists and what it samples from DRAM.
-  void resolve_draw_inputs(const PassDesc& pass, const DrawCmd& cmd, DrawContext& d) {
+  void resolve_draw_inputs(const PassDesc& pass, const DrawCmd& cmd, DrawContext& d, bool grids_later = false) {
     auto surfaces_of = [&](const std::string& n) -> const AttachmentImage* {
       auto it = result_.images.attachments.find(n);
       if (it == result_.images.attachments.end()) return nullptr;
@@ -287,6 +314,24 @@ class FrameSimulator {
         throw InputError(path_, cmd.line, kNoStoredSurface);
       }
     }
+    if (!grids_later) resolve_light_grids(cmd, d);
+    if (d.shader->light_source == LightSource::PlsStack && pass.pls.empty()) {
+      throw InputError(path_, cmd.line, "light_source=pls_stack needs pixel local storage in pass '" + pass.name + "'");
+    }
+    // Stored images sampled at the shaded pixel: booked per invocation (texture reads).
+    for (const auto& n : cmd.reads) {
+      auto it = result_.images.attachments.find(n);
+      if (it == result_.images.attachments.end()) continue;
+      const AttachmentImage& img = it->second;
+      const std::uint32_t bps = is_depth_format(img.format) ? static_cast<std::uint32_t>(hw_.isp.depth_stencil_bytes_per_sample)
+                                                             : bytes_per_sample(img.format);
+      d.per_pixel_reads.push_back({traffic_class_of(img.usage), bps * img.samples});
+    }
+  }
+
+  /// The tile or cluster light grid a draw's shader reads its light lists from (a dispatch
+  /// before the pass wrote it).
+  void resolve_light_grids(const DrawCmd& cmd, DrawContext& d) const {
     auto find_grid = [&](BufferContent content) -> std::string {
       for (const auto& n : cmd.reads) {
         const BufferDesc* b = trace_.find_buffer(n);
@@ -308,22 +353,32 @@ class FrameSimulator {
       }
       d.cluster_grid = it->second.get();
     }
-    if (d.shader->light_source == LightSource::PlsStack && pass.pls.empty()) {
-      throw InputError(path_, cmd.line, "light_source=pls_stack needs pixel local storage in pass '" + pass.name + "'");
-    }
-    // Stored images sampled at the shaded pixel: booked per invocation (texture reads).
-    for (const auto& n : cmd.reads) {
-      auto it = result_.images.attachments.find(n);
-      if (it == result_.images.attachments.end()) continue;
-      const AttachmentImage& img = it->second;
-      const std::uint32_t bps = is_depth_format(img.format) ? static_cast<std::uint32_t>(hw_.isp.depth_stencil_bytes_per_sample)
-                                                             : bytes_per_sample(img.format);
-      d.per_pixel_reads.push_back({traffic_class_of(img.usage), bps * img.samples});
-    }
   }
 
+  static std::string dispatch_name(const DispatchCmd& d, int index) {
+    return "dispatch" + std::to_string(index) + "." + to_string(d.kernel);
+  }
+
+  /// A dispatch that has run: its work for the timing model, summary and traffic, not yet handed on.
+  struct DispatchRun {
+    CommandWork cw;
+    PassSummary summary;
+    DramTraffic dram;
+  };
+
+  /// Runs a dispatch now and hands its work on.
   void run_dispatch_cmd(const DispatchCmd& d, int index) {
-    const std::string prefix = "dispatch" + std::to_string(index) + "." + to_string(d.kernel);
+    DispatchRun run = run_dispatch_work(d, index, nullptr);
+    finish_command(run.cw.name, &run.cw, std::move(run.summary), run.dram);
+  }
+
+  /// Runs a dispatch: its statistics and image, its work for the timing model. The attachment
+  /// named after the image it wrote is dropped (a later pass that loads it starts from what the
+  /// dispatch wrote), unless it is one of `binned_past`'s, the pass set up before it ran, which
+  /// holds it: that pass resets it (reset_replaced_attachments), and `replaced` gets its name.
+  DispatchRun run_dispatch_work(const DispatchCmd& d, int index, const PassDesc* binned_past,
+                                std::vector<std::string>* replaced = nullptr) {
+    const std::string prefix = dispatch_name(d, index);
     ComputeStats stats;
     DramTraffic dram;
     ComputeContext cc;
@@ -352,13 +407,65 @@ class FrameSimulator {
     cw.texture_line_accesses = stats.compute_texture_line_accesses.value();
     if (!image.empty()) {
       result_.final_color = image;
-      result_.images.attachments.erase(image);  // a later pass that loads it starts from what the dispatch wrote
+      if (binned_past && binned_past->find_attachment(image)) {
+        replaced->push_back(image);
+      } else {
+        result_.images.attachments.erase(image);  // a later pass that loads it starts from what the dispatch wrote
+      }
     }
     collect_stats(stats, prefix + "/compute", result_.stats);
     result_.totals.compute += stats;
-    PassSummary summary;
-    summary.name = prefix;
-    finish_command(prefix, &cw, std::move(summary), dram);
+    DispatchRun run;
+    run.summary.name = prefix;
+    run.cw = std::move(cw);
+    run.dram = dram;
+    return run;
+  }
+
+  /// A dispatch after the pass binned ahead, before the pass set up past it (run_pass).
+  struct PastDispatch {
+    const DispatchCmd* cmd;
+    int index;  ///< its dispatch index (its name)
+  };
+
+  /// The index of the pass that the dispatches from trace command `i` on (with barriers between
+  /// them) lead to, when it can be set up and binned before they run, or 0: a pass binned ahead
+  /// is pending, and setting the next pass up early changes nothing those dispatches read and
+  /// points at nothing they replace. Early set-up makes the pass's attachments that do not exist
+  /// yet (a dispatch must not read one), points its draws at the attachments they read or fetch
+  /// (a dispatch must not replace one by an image, unless it is the pass's own: that one is reset
+  /// in place) and gives the G-buffers they fetch their surface stores (a dispatch must not read
+  /// one).
+  std::size_t pass_after_dispatches(std::size_t i) const {
+    if (!pending_ || rop_) return 0;
+    const auto& commands = trace_.commands;
+    std::vector<const DispatchCmd*> dispatches;
+    std::size_t k = i;
+    for (; k < commands.size(); ++k) {
+      if (const auto* d = std::get_if<DispatchCmd>(&commands[k])) {
+        dispatches.push_back(d);
+      } else if (!std::holds_alternative<BarrierCmd>(commands[k])) {
+        break;
+      }
+    }
+    if (k == commands.size() || !std::holds_alternative<PassDesc>(commands[k])) return 0;
+    const PassDesc& next = std::get<PassDesc>(commands[k]);
+    const auto& attachments = result_.images.attachments;
+    auto names = [](const std::vector<std::string>& list, const std::string& n) { return std::find(list.begin(), list.end(), n) != list.end(); };
+    for (const DispatchCmd* d : dispatches) {
+      for (const auto& a : next.attachments) {
+        if (!attachments.contains(a.name) && names(d->reads, a.name)) return 0;
+      }
+      for (const auto& dc : next.draws) {
+        for (const auto& n : dc.reads) {
+          if (attachments.contains(n) && names(d->writes, n) && !next.find_attachment(n)) return 0;
+        }
+        for (const auto& n : dc.fetch) {
+          if (names(d->reads, n) || (names(d->writes, n) && !next.find_attachment(n))) return 0;
+        }
+      }
+    }
+    return k;
   }
 
   /// A pass being replayed: what its renderer works with, kept from its binning to its end.
@@ -379,7 +486,15 @@ class FrameSimulator {
   /// are those of passes replayed one after another; with the timing model beside the frame
   /// (FrameOptions::feed) it gets the next pass's binning while this one's tiles render, as the
   /// hardware bins the next render into its second parameter buffer meanwhile.
-  void run_pass(const PassDesc& pass, int index) {
+  ///
+  /// With `past` (pass_after_dispatches: the dispatches between the pass binned ahead and this
+  /// one, not run yet) it is binned before them too, and what it reads of them waits for its
+  /// catch-up (catch_up_past, before its first tile): the pending pass's tiles, the dispatches,
+  /// then the rest of its set-up (the images they wrote as its attachments, the load checks, the
+  /// light grids, the once-read buffers at the bytes they wrote, the stored-surface checks). With
+  /// the feed, each dispatch is opened with its header before this pass, and closed once run.
+  void run_pass(const PassDesc& pass, int index, const std::vector<PastDispatch>& past = {}) {
+    const bool early = !past.empty();
     auto run = std::make_unique<PassRun>();
     run->pass = &pass;
     run->prefix = "pass" + std::to_string(index) + "." + pass.name;
@@ -393,16 +508,31 @@ class FrameSimulator {
       ctx.rop = rop_.get();
       rop_->bind_pass(pass, run->ps->rop);
     }
-    prepare_attachments(pass, ctx);
-    resolve_draws(pass, ctx);
+    prepare_attachments(pass, ctx, early);
+    resolve_draws(pass, ctx, early);
     count_geometry_passes(pass);
     ctx.dram = &run->dram;
     ctx.frame_prim_base = prim_base_;
     ctx.textures = textures_.get();
     CommandWork& cw = run->cw;
     cw.name = run->prefix;
-    cw.read_bytes = book_buffer_reads(pass, run->dram).read_bytes;  // buffers read once per pass, at its start
+    if (!early) cw.read_bytes = book_buffer_reads(pass, run->dram).read_bytes;  // buffers read once per pass, at its start
     cw.depends_on_previous = reads_earlier_results(pass);
+
+    // The dispatches before it, opened in the feed in trace order before it (their content
+    // follows once they have run).
+    std::vector<std::size_t> past_feed;
+    std::vector<CommandWork*> past_open;
+    if (early && options_.feed) {
+      for (const PastDispatch& pd : past) {
+        CommandWork header;
+        header.name = dispatch_name(*pd.cmd, pd.index);
+        header.is_dispatch = true;
+        header.depends_on_previous = true;  // (as run_dispatch_work's)
+        past_open.push_back(&options_.feed->open(std::move(header)));
+        past_feed.push_back(options_.feed->last_opened());
+      }
+    }
 
     // The render's primitive records live in stores kept across the frame's passes (two: a pass
     // binned ahead and the one before it): each pass touches the pages its largest render needs,
@@ -415,24 +545,35 @@ class FrameSimulator {
     const bool known_layout = renderer.layout_known_at_start();
     run->live = options_.feed && known_layout;
     if (run->live) renderer.publish_to(*options_.feed);
-    // Tiles of this pass render only after the pass before it ended.
-    renderer.before_tiles([this, r = run.get()] {
-      if (finish_pending_pass()) recheck_stored_surfaces(*r);
-    });
+    // Tiles of this pass render only after the pass before it (and the dispatches past which it
+    // was binned) ended.
+    bool caught_up = false;
+    auto catch_up = [&, r = run.get()] {
+      if (caught_up) return;
+      caught_up = true;
+      if (!early) {
+        if (finish_pending_pass()) recheck_stored_surfaces(*r);
+        return;
+      }
+      catch_up_past(*r, past, past_open, past_feed);
+    };
+    renderer.before_tiles(catch_up);
     // The pass binned before it renders its tiles on the pool's helpers while this one is binned
     // here (the hardware bins into its second parameter buffer meanwhile); a partial render of
     // this pass ends that pass first (before_tiles), and so does everything after the binning.
     if (pending_ && !rop_) pending_->renderer->start_finish();
     renderer.bin();
     prim_base_ = ctx.frame_prim_base;
-    // What it stores is defined for the passes after it (their loads read it in their tiles).
+    // The pass before it (and the dispatches before it): binned before this one, rendered now
+    // (or already, by a partial render of this one).
+    if (early) catch_up();
+    // What it stores is defined for the commands after it (their loads read it in their tiles).
     for (const auto& a : pass.attachments) {
       AttachmentImage& img = result_.images.attachments.at(a.name);
       img.defined = a.store == StoreOp::Store && !a.transient;
       if (img.defined && a.usage == AttachmentUsage::Color) result_.final_color = a.name;
     }
-    // The pass before it: binned before this one, rendered now.
-    if (finish_pending_pass()) recheck_stored_surfaces(*run);
+    if (!early) catch_up();
     renderer.before_tiles(nullptr);
     // Bin-ahead: the next pass is binned before this one's last render's tiles, when this pass's
     // layout is known now (a spilling pass is published complete at its end, after the next
@@ -442,6 +583,48 @@ class FrameSimulator {
     } else {
       end_pass(*run);
     }
+  }
+
+  /// A pass set up and binned before the dispatches past it ran (run_pass with `past`), before
+  /// its first tile: the pending pass's tiles, the dispatches (each handed on as it ends, the last
+  /// after this pass's header is complete: the timing model reads that after the last
+  /// dispatch), then the rest of its set-up, as run_pass makes it for a pass set up after them.
+  void catch_up_past(PassRun& run, const std::vector<PastDispatch>& past, const std::vector<CommandWork*>& open,
+                     const std::vector<std::size_t>& feed_index) {
+    if (finish_pending_pass()) recheck_stored_surfaces(run);
+    std::vector<std::string> replaced;
+    for (std::size_t k = 0; k < past.size(); ++k) {
+      DispatchRun d = run_dispatch_work(*past[k].cmd, past[k].index, run.pass, &replaced);
+      const bool last = k + 1 == past.size();
+      if (last) complete_set_up(run, replaced);
+      if (open.empty()) {
+        finish_command(d.cw.name, &d.cw, std::move(d.summary), d.dram);
+      } else {
+        open[k]->take_dispatch_content(std::move(d.cw));
+        finish_command(open[k]->name, nullptr, std::move(d.summary), d.dram, feed_index[k]);
+      }
+    }
+  }
+
+  /// The set-up of a pass binned before the dispatches past it ran, after they ran: the
+  /// attachments named after the images they wrote reset to those images (as prepare_attachments
+  /// makes an attachment from an image buffer), the load checks, the light grids, the buffers
+  /// read once at the bytes written, the stored-surface checks.
+  void complete_set_up(PassRun& run, const std::vector<std::string>& replaced) {
+    const PassDesc& pass = *run.pass;
+    const std::size_t pixels = static_cast<std::size_t>(viewport_.width_px) * static_cast<std::size_t>(viewport_.height_px);
+    for (const auto& name : replaced) {
+      const Attachment& a = *pass.find_attachment(name);
+      AttachmentImage img = AttachmentImage::cleared(a, pixels, options_.colour);
+      img.keeps_surface = options_.colour || surface_readers_.contains(a.name);
+      img.color = result_.images.image_buffers.at(name).color;
+      img.defined = true;
+      result_.images.attachments.at(name) = std::move(img);  // in place: the pass's context points at it
+    }
+    check_loaded_attachments(pass);
+    for (DrawContext& d : run.ctx.draws) resolve_light_grids(*d.cmd, d);
+    run.renderer->work().read_bytes = book_buffer_reads(pass, run.dram).read_bytes;
+    recheck_stored_surfaces(run);
   }
 
   /// Renders the tiles of the pass binned ahead (if any) and ends it; whether there was one.

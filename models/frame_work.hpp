@@ -119,6 +119,20 @@ struct CommandWork {
   /// another in dispatch order. Their bytes are not in read_bytes: they go through the texture cache.
   std::vector<std::uint64_t> texture_lines;
   std::uint64_t texture_line_accesses = 0;  ///< distinct lines per quad and fetch, summed (before merging)
+
+  /// A dispatch opened with its header (name, is_dispatch, depends_on_previous) before it ran
+  /// takes what it computed from `ran`, the same dispatch run: its traffic and work (a
+  /// dispatch has no renders and no slots; the header is left alone: a reader may be reading it
+  /// meanwhile, models/work_feed.hpp).
+  void take_dispatch_content(CommandWork&& ran) {
+    read_bytes = ran.read_bytes;
+    write_bytes = ran.write_bytes;
+    compute_alu_ops = ran.compute_alu_ops;
+    compute_threads = ran.compute_threads;
+    compute_texels = ran.compute_texels;
+    texture_lines = std::move(ran.texture_lines);
+    texture_line_accesses = ran.texture_line_accesses;
+  }
 };
 
 /// The whole frame's work.

@@ -55,6 +55,9 @@ class PassRenderer final : private PrimitiveSink {
   void publish_to(WorkFeed& feed);
   /// The command's index in the feed (publish_to).
   std::size_t feed_command() const { return feed_command_; }
+  /// The pass's work: the caller's, or the feed's open command (publish_to). Its header's
+  /// read_bytes may be set until the timing model takes the pass's first render to render.
+  CommandWork& work() { return *cw_; }
   /// Geometry, binning and rendering of every draw; a partial render whenever the parameter
   /// buffer is full: bin() then finish().
   void run();
