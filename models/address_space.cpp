@@ -24,6 +24,15 @@ AddressSpace::AddressSpace(std::uint64_t page_bytes, std::uint64_t base) : page_
 
 std::uint64_t AddressSpace::allocate(std::string name, std::uint64_t size_bytes, DramClass cls,
                                      std::uint64_t align_bytes) {
+  return place(std::move(name), size_bytes, cls, align_bytes, top_, kHighBase);
+}
+
+std::uint64_t AddressSpace::allocate_high(std::string name, std::uint64_t size_bytes, DramClass cls) {
+  return place(std::move(name), size_bytes, cls, 0, high_top_, UINT64_MAX);
+}
+
+std::uint64_t AddressSpace::place(std::string name, std::uint64_t size_bytes, DramClass cls, std::uint64_t align_bytes,
+                                  std::uint64_t& cursor, std::uint64_t limit) {
   if (name.empty()) throw std::invalid_argument("address space: a region needs a name");
   if (by_name_.count(name) != 0) throw std::invalid_argument("address space: region '" + name + "' already allocated");
   if (align_bytes != 0 && !is_pow2(align_bytes)) {
@@ -32,21 +41,27 @@ std::uint64_t AddressSpace::allocate(std::string name, std::uint64_t size_bytes,
   const std::uint64_t align = std::max(page_bytes_, align_bytes);
   AddressRegion r;
   r.name = std::move(name);
-  r.base = round_up(top_, align);
+  r.base = round_up(cursor, align);
   r.size_bytes = size_bytes;
   r.reserved_bytes = round_up(std::max<std::uint64_t>(size_bytes, 1), page_bytes_);
   r.cls = cls;
-  if (r.base > UINT64_MAX - r.reserved_bytes) throw std::overflow_error("address space: allocation overflows 64 bits");
-  top_ = r.base + r.reserved_bytes;
+  if (r.base > limit - r.reserved_bytes || r.base > UINT64_MAX - r.reserved_bytes) {
+    throw std::overflow_error("address space: allocation of '" + r.name + "' overflows its range");
+  }
+  cursor = r.base + r.reserved_bytes;
   reserved_ += r.reserved_bytes;
-  by_name_.emplace(r.name, regions_.size());
-  regions_.push_back(std::move(r));
-  return regions_.back().base;
+  const std::uint64_t base = r.base;
+  by_name_.emplace(r.name, base);
+  // In address order: a low region goes before the high range's.
+  const auto at = std::upper_bound(regions_.begin(), regions_.end(), base,
+                                   [](std::uint64_t a, const AddressRegion& x) { return a < x.base; });
+  regions_.insert(at, std::move(r));
+  return base;
 }
 
 const AddressRegion* AddressSpace::find(std::string_view name) const {
   const auto it = by_name_.find(std::string(name));
-  return it == by_name_.end() ? nullptr : &regions_[it->second];
+  return it == by_name_.end() ? nullptr : region_at(it->second);
 }
 
 const AddressRegion& AddressSpace::region(std::string_view name) const {
@@ -56,7 +71,7 @@ const AddressRegion& AddressSpace::region(std::string_view name) const {
 }
 
 const AddressRegion* AddressSpace::region_at(std::uint64_t addr) const {
-  // Regions are allocated at increasing addresses: the last one whose base <= addr is the candidate.
+  // Regions are kept in address order: the last one whose base <= addr is the candidate.
   auto it = std::upper_bound(regions_.begin(), regions_.end(), addr,
                              [](std::uint64_t a, const AddressRegion& r) { return a < r.base; });
   if (it == regions_.begin()) return nullptr;
@@ -73,6 +88,7 @@ void AddressSpace::clear() {
   regions_.clear();
   by_name_.clear();
   top_ = base_;
+  high_top_ = kHighBase;
   reserved_ = 0;
 }
 

@@ -38,10 +38,22 @@ class AddressSpace {
   /// `base` rounded up to a page, and address 0 is never handed out (base defaults to one page).
   explicit AddressSpace(std::uint64_t page_bytes = kDefaultPageBytes, std::uint64_t base = kDefaultPageBytes);
 
+  /// Where the high range starts (allocate_high): 2^40 bytes (1 TiB), above any frame's other
+  /// regions (its largest, 8K framebuffers and parameter buffers, take a few GiB; allocate
+  /// refuses to reach it). Addresses only pick cache sets and DRAM channels, banks and rows, so
+  /// a second range costs nothing but lets two sequences of allocations each keep their order.
+  static constexpr std::uint64_t kHighBase = std::uint64_t{1} << 40;
+
   /// Allocates `size_bytes` (rounded up to whole pages, at least one page) aligned to
   /// max(page, align_bytes) (align_bytes: 0 or a power of two). Returns the base address.
-  /// Throws std::invalid_argument on an empty or duplicate name or a bad alignment.
+  /// Throws std::invalid_argument on an empty or duplicate name or a bad alignment, and
+  /// std::overflow_error when the region would reach the high range.
   std::uint64_t allocate(std::string name, std::uint64_t size_bytes, DramClass cls, std::uint64_t align_bytes = 0);
+  /// As allocate, in the high range from kHighBase up: regions whose order of allocation is
+  /// not the low range's (FrameAddressMap: the commands' buffer areas, placed as each command's
+  /// first fragment job starts, while the low range's regions are placed as the timing model
+  /// takes the commands), so that neither range's layout depends on how the two interleave.
+  std::uint64_t allocate_high(std::string name, std::uint64_t size_bytes, DramClass cls);
 
   /// The region with that name, or nullptr.
   const AddressRegion* find(std::string_view name) const;
@@ -54,10 +66,10 @@ class AddressSpace {
   /// Traffic class of the region containing `addr`; DramClass::Other outside every region.
   DramClass class_at(std::uint64_t addr) const;
 
-  /// Regions in allocation (= address) order.
+  /// Regions in address order (each range's in allocation order, the low range's first).
   const std::vector<AddressRegion>& regions() const { return regions_; }
   std::uint64_t page_bytes() const { return page_bytes_; }
-  /// First address after the last region (the next allocation starts at or after it).
+  /// First address after the low range's last region (its next allocation starts at or after it).
   std::uint64_t top() const { return top_; }
   /// Sum of reserved bytes of every region.
   std::uint64_t reserved_bytes() const { return reserved_; }
@@ -65,12 +77,17 @@ class AddressSpace {
   void clear();
 
  private:
+  /// Allocates from `cursor` (top_ or high_top_), below `limit`.
+  std::uint64_t place(std::string name, std::uint64_t size_bytes, DramClass cls, std::uint64_t align_bytes, std::uint64_t& cursor,
+                      std::uint64_t limit);
+
   std::uint64_t page_bytes_;
   std::uint64_t base_;
   std::uint64_t top_;
+  std::uint64_t high_top_ = kHighBase;
   std::uint64_t reserved_ = 0;
-  std::vector<AddressRegion> regions_;
-  std::unordered_map<std::string, std::size_t> by_name_;
+  std::vector<AddressRegion> regions_;                     ///< by base
+  std::unordered_map<std::string, std::uint64_t> by_name_;  ///< base of each region
 };
 
 }  // namespace tbdr

@@ -59,7 +59,10 @@ void FrameAddressMap::add_command(const CommandWork& cmd) {
 void FrameAddressMap::place_buffers(std::size_t command, const CommandWork& cmd) {
   if (buffers_placed_.at(command)) return;
   const std::uint64_t cmd_bytes = sum(cmd.read_bytes) + sum(cmd.write_bytes);
-  cmd_base_[command] = space_.allocate("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, kRegionAlignBytes), DramClass::Other);
+  // In the high range, in command order (first fragment jobs start in command order), while the
+  // other regions are placed as commands are taken: neither order depends on how the two
+  // interleave, which the schedule (and so every swept parameter) decides.
+  cmd_base_[command] = space_.allocate_high("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, kRegionAlignBytes), DramClass::Other);
   buffers_placed_[command] = true;
 }
 

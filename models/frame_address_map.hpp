@@ -4,15 +4,17 @@
 // buffers of tiling.pb_capacity_bytes: binning of one render overlaps the tiles of the previous
 // one), then per command, in trace order, when the timing model takes it: its framebuffer area
 // (one slot per tile of CommandWork::tile_slot_bytes) and its spill slots; per render, when its
-// binning is taken, its vertex and index range; and a command's buffer area (lights, light lists,
-// compute buffers: its read and write bytes) when its first fragment job starts. A dispatch knows
+// binning is taken, its vertex and index range; and, in the address space's high range
+// (AddressSpace::allocate_high), a command's buffer area (lights, light lists, compute buffers:
+// its read and write bytes) when its first fragment job starts. A dispatch knows
 // its bytes only once it has run, and so does a pass reading what one wrote (its light lists), so
 // the regions of the commands after them cannot wait for those bytes: the timing model bins the
 // pass after a dispatch while the pass before it still renders. A command's regions depend only on
 // what is known when they are placed and on the regions placed before, so the timing model can
-// place them while earlier tiles are still being simulated. Addresses decide cache sets and DRAM
-// banks, so the layout is a pure function of the frame's work and the timing model's schedule: the
-// same work always gets the same addresses.
+// place them while earlier tiles are still being simulated. Each range is placed in command order,
+// so how the timing model's schedule interleaves the two (which every swept parameter changes)
+// moves no address. Addresses decide cache sets and DRAM banks, so the layout is a pure function
+// of the frame's work: the same work always gets the same addresses.
 #include <array>
 #include <cstdint>
 #include <string>

@@ -171,6 +171,39 @@ TEST(AddressSpaceTest, DeterministicAndClearable) {
   EXPECT_EQ(first, build(a));
 }
 
+// The high range keeps its own order: however its allocations interleave with the low range's,
+// each range's bases are the same (FrameAddressMap places command buffer areas there as their
+// first fragment jobs start, the other regions as commands are taken), and lookups see both.
+TEST(AddressSpaceTest, TheHighRangeKeepsItsOwnOrderHoweverTheRangesInterleave) {
+  AddressSpace a, b;
+  // a: low, high, low, high; b: high, high, low, low.
+  const std::uint64_t a_low0 = a.allocate("fb.0", 5000, DramClass::Color);
+  const std::uint64_t a_high0 = a.allocate_high("buffers.0", 100, DramClass::Other);
+  const std::uint64_t a_low1 = a.allocate("fb.1", 100, DramClass::Color);
+  const std::uint64_t a_high1 = a.allocate_high("buffers.1", 9000, DramClass::LightLists);
+  const std::uint64_t b_high0 = b.allocate_high("buffers.0", 100, DramClass::Other);
+  const std::uint64_t b_high1 = b.allocate_high("buffers.1", 9000, DramClass::LightLists);
+  const std::uint64_t b_low0 = b.allocate("fb.0", 5000, DramClass::Color);
+  const std::uint64_t b_low1 = b.allocate("fb.1", 100, DramClass::Color);
+  EXPECT_EQ(a_low0, b_low0);
+  EXPECT_EQ(a_low1, b_low1);
+  EXPECT_EQ(a_high0, b_high0);
+  EXPECT_EQ(a_high1, b_high1);
+  EXPECT_EQ(a_low1, 4096u + 8192u);  // after fb.0's two pages, as if no high region were there
+  EXPECT_EQ(a_high0, AddressSpace::kHighBase);
+  EXPECT_EQ(a_high1, AddressSpace::kHighBase + 4096u);
+  EXPECT_EQ(a.top(), 4096u + 8192u + 4096u);  // the low range's
+  // Lookups in address order across both ranges.
+  ASSERT_EQ(a.regions().size(), 4u);
+  for (std::size_t i = 1; i < a.regions().size(); ++i) EXPECT_LT(a.regions()[i - 1].base, a.regions()[i].base);
+  EXPECT_EQ(a.class_at(a_high1 + 8999), DramClass::LightLists);
+  EXPECT_EQ(a.region_at(a_low1)->name, "fb.1");
+  EXPECT_EQ(a.base_of("buffers.0"), AddressSpace::kHighBase);
+  EXPECT_EQ(a.region_at(AddressSpace::kHighBase - 1), nullptr);
+  // The low range may not grow into the high one.
+  EXPECT_THROW(a.allocate("huge", AddressSpace::kHighBase, DramClass::Other), std::overflow_error);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Cache
 
