@@ -190,6 +190,51 @@ TEST(WorkFeed, APassFedRenderByRenderAndTileByTileTimesAsTheCompleteFrame) {
   EXPECT_EQ(fed.tiles.size(), whole.tiles.size());
 }
 
+/// A producer replaying `frame`'s commands into a feed piece by piece, as the functional run
+/// does, with the timing model reading the feed on its own thread; the timing of the complete
+/// frame beside it.
+struct Replay {
+  explicit Replay(const FrameWork& f) : frame(f), whole(run_timing(hw, f)) {
+    timed = std::async(std::launch::async, [this] { return run_timing(hw, feed); });
+    feed.begin(frame, frame.commands.size());
+  }
+  /// Closes the feed; the fed timing must be the complete frame's.
+  void expect_same_as_complete() {
+    feed.close();
+    expect_same_timing(timed.get(), whole);
+  }
+  const FrameWork& frame;
+  const HwConfig hw = resolve_config({}, {}).hw;
+  const TimingResult whole;
+  WorkFeed feed;
+  std::future<TimingResult> timed;
+  /// Opens pass `c` with its header (no renders).
+  CommandWork& open(std::size_t c) {
+    CommandWork header = frame.commands[c];
+    header.renders.clear();
+    return feed.open(std::move(header));
+  }
+  /// Publishes render `r` of open command `c` (`live`), binned, its tiles to come.
+  RenderWork& bin(CommandWork& live, std::size_t c, std::size_t r) {
+    const RenderWork& src = frame.commands[c].renders[r];
+    RenderWork& rw = live.renders.emplace_back();
+    rw.binning = src.binning;
+    rw.partial = src.partial;
+    rw.tiles.reserve(src.tiles.size());
+    feed.publish_render(c, src.tiles.size());
+    return rw;
+  }
+  /// Publishes the tiles of render `r` of command `c` into `rw` one by one (the timing model
+  /// waits for them meanwhile).
+  void tiles(RenderWork& rw, std::size_t c, std::size_t r) {
+    for (const TileWork& t : frame.commands[c].renders[r].tiles) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      rw.tiles.push_back(t);
+      feed.publish_tile(c);
+    }
+  }
+};
+
 // The functional run bins a pass before the tiles of the pass before it (command_processor.cpp):
 // the next pass is opened and its renders published while the previous one's last render still
 // renders. The timing model reads the next pass's binning meanwhile and times the frame as the
@@ -202,50 +247,24 @@ TEST(WorkFeed, APassOpenedWhileThePreviousOnesTilesStillComeTimesAsTheCompleteFr
     for (TileWork& t : r.tiles) t.load_bytes[static_cast<std::size_t>(DramClass::Color)] = 0;
   }
   frame.commands.insert(frame.commands.begin() + 1, second);
-  const HwConfig hw = resolve_config({}, {}).hw;
-  const TimingResult whole = run_timing(hw, frame);
-
-  WorkFeed feed;
-  std::future<TimingResult> timed = std::async(std::launch::async, [&] { return run_timing(hw, feed); });
-  feed.begin(frame, 3);
-  auto open = [&](std::size_t c) -> CommandWork& {
-    CommandWork header = frame.commands[c];
-    header.renders.clear();
-    return feed.open(std::move(header));
-  };
-  auto bin = [&](CommandWork& live, std::size_t c, std::size_t r) -> RenderWork& {
-    const RenderWork& src = frame.commands[c].renders[r];
-    RenderWork& rw = live.renders.emplace_back();
-    rw.binning = src.binning;
-    rw.partial = src.partial;
-    rw.tiles.reserve(src.tiles.size());
-    feed.publish_render(c, src.tiles.size());
-    return rw;
-  };
-  auto tiles = [&](RenderWork& rw, std::size_t c, std::size_t r) {
-    for (const TileWork& t : frame.commands[c].renders[r].tiles) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
-      rw.tiles.push_back(t);
-      feed.publish_tile(c);
-    }
-  };
-  CommandWork& first = open(0);
-  tiles(bin(first, 0, 0), 0, 0);  // the partial render: binned and rendered before the last is binned
-  RenderWork& last = bin(first, 0, 1);
+  Replay replay(frame);
+  WorkFeed& feed = replay.feed;
+  CommandWork& first = replay.open(0);
+  replay.tiles(replay.bin(first, 0, 0), 0, 0);  // the partial render: binned and rendered before the last is binned
+  RenderWork& last = replay.bin(first, 0, 1);
   EXPECT_THROW(feed.publish(CommandWork(frame.commands[2])), std::logic_error) << "a complete command after an open one";
-  CommandWork& next = open(1);  // binned ahead: pass 0's last render has not rendered yet
-  RenderWork& next0 = bin(next, 1, 0);
-  EXPECT_THROW(open(2), std::logic_error) << "two commands open already";
+  CommandWork& next = replay.open(1);  // binned ahead: pass 0's last render has not rendered yet
+  RenderWork& next0 = replay.bin(next, 1, 0);
+  EXPECT_THROW(replay.open(2), std::logic_error) << "pass 1 is open with renders to come";
   EXPECT_THROW(feed.close_command(1), std::logic_error) << "closed before the command before it";
   EXPECT_NE(feed.wait_render(1, 0), nullptr) << "the consumer has the next pass's binning now";
-  tiles(last, 0, 1);
+  replay.tiles(last, 0, 1);
   feed.close_command(0);
-  tiles(next0, 1, 0);
-  tiles(bin(next, 1, 1), 1, 1);
+  replay.tiles(next0, 1, 0);
+  replay.tiles(replay.bin(next, 1, 1), 1, 1);
   feed.close_command(1);
   feed.publish(CommandWork(frame.commands[2]));
-  feed.close();
-  expect_same_timing(timed.get(), whole);
+  replay.expect_same_as_complete();
 }
 
 // A pass binned past a dispatch (command_processor.cpp: a pass, a dispatch reading it, a pass):
@@ -260,36 +279,11 @@ TEST(WorkFeed, APassBinnedPastAnOpenDispatchTimesAsTheCompleteFrame) {
   last.read_bytes[static_cast<std::size_t>(DramClass::LightLists)] = 8192;  // what the dispatch wrote: filled late
   frame.commands[1].write_bytes[static_cast<std::size_t>(DramClass::LightLists)] = 8192;
   frame.commands.push_back(last);
-  const HwConfig hw = resolve_config({}, {}).hw;
-  const TimingResult whole = run_timing(hw, frame);
-
-  WorkFeed feed;
-  std::future<TimingResult> timed = std::async(std::launch::async, [&] { return run_timing(hw, feed); });
-  feed.begin(frame, 3);
-  auto open_pass = [&](std::size_t c) -> CommandWork& {
-    CommandWork header = frame.commands[c];
-    header.renders.clear();
-    return feed.open(std::move(header));
-  };
-  auto bin = [&](CommandWork& live, std::size_t c, std::size_t r) -> RenderWork& {
-    const RenderWork& src = frame.commands[c].renders[r];
-    RenderWork& rw = live.renders.emplace_back();
-    rw.binning = src.binning;
-    rw.partial = src.partial;
-    rw.tiles.reserve(src.tiles.size());
-    feed.publish_render(c, src.tiles.size());
-    return rw;
-  };
-  auto tiles = [&](RenderWork& rw, std::size_t c, std::size_t r) {
-    for (const TileWork& t : frame.commands[c].renders[r].tiles) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
-      rw.tiles.push_back(t);
-      feed.publish_tile(c);
-    }
-  };
-  CommandWork& first = open_pass(0);
-  tiles(bin(first, 0, 0), 0, 0);
-  RenderWork& first_last = bin(first, 0, 1);
+  Replay replay(frame);
+  WorkFeed& feed = replay.feed;
+  CommandWork& first = replay.open(0);
+  replay.tiles(replay.bin(first, 0, 0), 0, 0);
+  RenderWork& first_last = replay.bin(first, 0, 1);
   // The dispatch's header only: its name and kind.
   CommandWork dispatch_header;
   dispatch_header.name = frame.commands[1].name;
@@ -301,9 +295,9 @@ TEST(WorkFeed, APassBinnedPastAnOpenDispatchTimesAsTheCompleteFrame) {
   header.renders.clear();
   header.read_bytes = {};
   CommandWork& after = feed.open(std::move(header));
-  RenderWork& after0 = bin(after, 2, 0);
+  RenderWork& after0 = replay.bin(after, 2, 0);
   EXPECT_THROW(feed.close_command(1), std::logic_error) << "the dispatch closed before the pass before it";
-  tiles(first_last, 0, 1);
+  replay.tiles(first_last, 0, 1);
   feed.close_command(0);
   std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the timing model waits for the dispatch's content meanwhile
   // The dispatch has run: its content, and what the pass after it reads of it, then the dispatch closed.
@@ -313,11 +307,10 @@ TEST(WorkFeed, APassBinnedPastAnOpenDispatchTimesAsTheCompleteFrame) {
   dispatch.write_bytes = ran.write_bytes;
   after.read_bytes = frame.commands[2].read_bytes;
   feed.close_command(1);
-  tiles(after0, 2, 0);
-  tiles(bin(after, 2, 1), 2, 1);
+  replay.tiles(after0, 2, 0);
+  replay.tiles(replay.bin(after, 2, 1), 2, 1);
   feed.close_command(2);
-  feed.close();
-  expect_same_timing(timed.get(), whole);
+  replay.expect_same_as_complete();
 }
 
 TEST(WorkFeed, OpenDispatchesMayStandBetweenTheLastPassBinnedAheadAndTheNext) {
