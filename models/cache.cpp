@@ -193,6 +193,13 @@ void Cache::count_read_hit(std::uint32_t bytes, DramClass cls) {
   ++class_stats_[static_cast<std::size_t>(cls)].read_hits;
 }
 
+void Cache::count_read_hits(std::uint64_t lines, std::uint64_t bytes, DramClass cls) {
+  stats_.reads += lines;
+  stats_.read_bytes += bytes;
+  stats_.read_hits += lines;
+  class_stats_[static_cast<std::size_t>(cls)].read_hits += lines;
+}
+
 double Cache::energy_pj() const {
   const std::uint64_t bytes = stats_.read_bytes.value() + stats_.write_bytes.value() + stats_.fill_bytes.value() +
                               stats_.writeback_bytes.value();

@@ -90,6 +90,8 @@ class Cache {
   /// line it knows is present (a tile re-reading data it requested once): statistics and SRAM
   /// energy as access() would count it, without a lookup (no LRU or content change).
   void count_read_hit(std::uint32_t bytes, DramClass cls);
+  /// count_read_hit for `lines` line reads of `bytes` in all, at once.
+  void count_read_hits(std::uint64_t lines, std::uint64_t bytes, DramClass cls);
   /// True if the line holding `addr` is present; changes nothing.
   bool probe(std::uint64_t addr) const;
   /// True if the line holding `addr` is present and dirty; changes nothing.

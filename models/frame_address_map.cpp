@@ -141,44 +141,33 @@ void FrameAddressMap::record_writes(std::size_t c, const CommandWork& cmd) {
   }
 }
 
+std::span<const ByteRange> FrameAddressMap::sources(std::size_t command, DramClass k, int tile_index, std::uint64_t bytes,
+                                                    std::uint64_t piece, std::uint64_t& start) const {
+  start = 0;
+  const int writer = source_[command][static_cast<std::size_t>(k)];
+  if (writer < 0 || bytes == 0 || piece == 0) return {};
+  const Written& w = written_[static_cast<std::size_t>(writer)][static_cast<std::size_t>(k)];
+  if (!w.per_tile) {
+    if (w.all.bytes == 0) return {};
+    if (tile_index >= 0) start = (static_cast<std::uint64_t>(tile_index) * bytes) % w.all.bytes;
+    return {&w.all, 1};
+  }
+  if (tile_index >= 0) {
+    const auto i = static_cast<std::size_t>(tile_index);
+    if (i >= w.tiles.size() || w.tiles[i].bytes == 0) return {};
+    return {&w.tiles[i], 1};
+  }
+  sources_.clear();
+  for (const ByteRange& r : w.tiles) {
+    if (r.bytes > 0) sources_.push_back(r);
+  }
+  return sources_;
+}
+
 std::vector<ByteRange> FrameAddressMap::produced(std::size_t command, DramClass k, int tile_index, std::uint64_t bytes,
                                                 std::uint64_t piece) const {
   std::vector<ByteRange> out;
-  const int writer = source_[command][static_cast<std::size_t>(k)];
-  if (writer < 0 || bytes == 0 || piece == 0) return out;
-  const Written& w = written_[static_cast<std::size_t>(writer)][static_cast<std::size_t>(k)];
-  // The ranges to cycle over, and where in them to start.
-  std::vector<ByteRange> src;
-  std::uint64_t start = 0;
-  if (!w.per_tile) {
-    if (w.all.bytes == 0) return out;
-    src.push_back(w.all);
-    if (tile_index >= 0) start = (static_cast<std::uint64_t>(tile_index) * bytes) % w.all.bytes;
-  } else if (tile_index >= 0) {
-    const auto i = static_cast<std::size_t>(tile_index);
-    if (i >= w.tiles.size() || w.tiles[i].bytes == 0) return out;
-    src.push_back(w.tiles[i]);
-  } else {
-    for (const ByteRange& r : w.tiles) {
-      if (r.bytes > 0) src.push_back(r);
-    }
-    if (src.empty()) return out;
-  }
-  // Walk the ranges from `start`, piece by piece, until `bytes` are covered.
-  std::size_t ri = 0;
-  std::uint64_t in = start;
-  while (ri < src.size() && in >= src[ri].bytes) in -= src[ri++].bytes;
-  for (std::uint64_t done = 0; done < bytes;) {
-    const ByteRange& r = src[ri];
-    const std::uint64_t n = std::min({piece, r.bytes - in, bytes - done});
-    out.push_back({r.offset + in, n});
-    done += n;
-    in += n;
-    if (in == r.bytes) {
-      in = 0;
-      ri = (ri + 1) % src.size();
-    }
-  }
+  for_each_produced(command, k, tile_index, bytes, piece, [&](std::uint64_t offset, std::uint64_t n) { out.push_back({offset, n}); });
   return out;
 }
 

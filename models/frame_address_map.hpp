@@ -15,7 +15,9 @@
 // so how the timing model's schedule interleaves the two (which every swept parameter changes)
 // moves no address. Addresses decide cache sets and DRAM banks, so the layout is a pure function
 // of the frame's work: the same work always gets the same addresses.
+#include <algorithm>
 #include <array>
+#include <span>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -87,6 +89,29 @@ class FrameAddressMap {
   /// then uses its own slot.
   std::vector<ByteRange> produced(std::size_t command, DramClass k, int tile_index, std::uint64_t bytes,
                                   std::uint64_t piece) const;
+  /// produced()'s pieces handed to fn(offset, bytes) one by one, in order, without the list.
+  template <class Fn>
+  void for_each_produced(std::size_t command, DramClass k, int tile_index, std::uint64_t bytes, std::uint64_t piece,
+                         Fn&& fn) const {
+    std::uint64_t start = 0;
+    const std::span<const ByteRange> src = sources(command, k, tile_index, bytes, piece, start);
+    if (src.empty()) return;
+    // Walk the ranges from `start`, piece by piece, until `bytes` are covered.
+    std::size_t ri = 0;
+    std::uint64_t in = start;
+    while (ri < src.size() && in >= src[ri].bytes) in -= src[ri++].bytes;
+    for (std::uint64_t done = 0; done < bytes;) {
+      const ByteRange& r = src[ri];
+      const std::uint64_t n = std::min({piece, r.bytes - in, bytes - done});
+      fn(r.offset + in, n);
+      done += n;
+      in += n;
+      if (in == r.bytes) {
+        in = 0;
+        ri = (ri + 1) % src.size();
+      }
+    }
+  }
   /// Bytes of class `k` an earlier command produced where `produced` reads a tile's (or a
   /// dispatch's) data from: one lap of what it cycles over; 0 when nothing earlier wrote them.
   std::uint64_t produced_bytes(std::size_t command, DramClass k, int tile_index) const;
@@ -94,6 +119,10 @@ class FrameAddressMap {
  private:
   /// end_command's record of command `c`'s writes (written_, last_writer_).
   void record_writes(std::size_t c, const CommandWork& cmd);
+  /// The ranges produced() cycles over for a read of `bytes` in pieces of `piece` (empty: none)
+  /// and where in them it starts; a dispatch's read of a pass's tiles is gathered in sources_.
+  std::span<const ByteRange> sources(std::size_t command, DramClass k, int tile_index, std::uint64_t bytes, std::uint64_t piece,
+                                     std::uint64_t& start) const;
 
   AddressSpace& space_;
   int tiles_x_ = 1;
@@ -104,6 +133,7 @@ class FrameAddressMap {
   std::size_t ended_ = 0;   ///< commands ended (end_command), in order
   std::vector<std::uint64_t> fb_base_, fb_stride_, partial_base_, partial_stride_, cmd_base_, spill_base_, spill_stride_;
   std::vector<bool> buffers_placed_;  ///< per command: place_buffers ran
+  mutable std::vector<ByteRange> sources_;  ///< sources()'s gathering of a pass's tile ranges
   std::vector<std::vector<std::uint64_t>> vertex_base_;  ///< per command and render
   std::vector<std::string> names_;                       ///< per command (its regions' names)
   std::vector<std::uint64_t> tile_slots_;                ///< per command: its tiles' slots

@@ -146,7 +146,7 @@ void Isp::flush(const std::vector<std::uint32_t>& prims, bool mid_tile, IspStats
     if (group_punch) write_punch_depth(flush_samples_.data(), flush_samples_.data() + flush_samples_.size(), isp);
   };
   for (const PushedLayer& pl : pushed_) {
-    if (pl.slot >= depth_of_[pl.li] || layers_[pl.li * L + pl.slot].list_pos != pl.sample.tag) continue;
+    if (layers_hidden_ && (pl.slot >= depth_of_[pl.li] || layers_[pl.li * L + pl.slot].list_pos != pl.sample.tag)) continue;
     const std::uint32_t tag = prims[pl.sample.tag];
     if (tag != group_tag) {
       if (!batch_.empty()) shade_group();
@@ -167,6 +167,7 @@ void Isp::flush(const std::vector<std::uint32_t>& prims, bool mid_tile, IspStats
   if (!batch_.empty()) shade_group();
   for (const PushedLayer& pl : pushed_) depth_of_[pl.li] = 0;
   pushed_.clear();
+  layers_hidden_ = false;
   if (flushed == 0) return;
   if (mid_tile) {
     ++isp.tag_flushes;
@@ -235,6 +236,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
     depth_of_.assign(tile_samples, 0);
     layers_.resize(tile_samples * static_cast<std::size_t>(L));
     pushed_.clear();
+    layers_hidden_ = false;
     unresolved_layers_ = 0;
     // A primitive has at most one candidate per tile sample: written without growth checks.
     if (candidates_.size() < tile_samples) candidates_.resize(tile_samples);
@@ -484,6 +486,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
         std::uint8_t& n = depth_of_[c.li];
         if (!layered) {
           isp.hsr_removed_samples += n;  // every layer beneath is hidden: never shaded
+          layers_hidden_ = layers_hidden_ || n != 0;
           n = 0;
         }
         pushed_.push_back({{list_pos, c.x, c.y, c.bit, c.z, unresolved}, c.li, n});

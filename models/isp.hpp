@@ -145,6 +145,9 @@ class Isp {
   std::vector<PendingSample> pending_;
   std::vector<PendingSample> rasterised_;  ///< isp.early_z=0: every sample the primitive covers
   std::vector<PushedLayer> pushed_;  ///< the layers pushed since the tile's last flush
+  /// Whether an opaque sample emptied a non-empty stack since the tile's last flush: only then
+  /// may a layer in pushed_ no longer be pending (a light-volume pass: never).
+  bool layers_hidden_ = false;
   std::vector<PendingSample> flush_samples_;  ///< flush: the punch-through primitive being shaded, its samples
   std::vector<ShadePixel> batch_;
   std::vector<std::uint32_t> alive_;

@@ -124,6 +124,16 @@ void MemorySystem::count_l1_read_hit(Client client, std::uint64_t addr, std::uin
   for_each_line(addr, bytes, l1->line_bytes(), [&](std::uint64_t, std::uint32_t n) { l1->count_read_hit(n, cls); });
 }
 
+void MemorySystem::count_l1_read_hits(Client client, const L1Hits& hits, DramClass cls) {
+  Cache* l1 = l1_of(client);
+  if (l1 == nullptr) throw std::logic_error("memory system: count_l1_read_hits for a client without an L1");
+  MemoryClientStats& cs = client_stats_[static_cast<std::size_t>(client)];
+  cs.reads += hits.requests;
+  cs.read_bytes += hits.bytes;
+  requested_.read(cls, hits.bytes);
+  l1->count_read_hits(hits.lines, hits.bytes, cls);
+}
+
 void MemorySystem::notify_when_ready(EventCallback cb) {
   // Requesters refused earlier are served first, in the order they asked (fair admission: a unit
   // whose completions keep it issuing cannot starve one that is waiting).

@@ -117,6 +117,19 @@ class MemorySystem final : public Unit {
   /// it (an accepted request, requested bytes, one read hit per line it touches, SRAM energy);
   /// no event, no cache state change. The client must have an L1 (l1_of).
   void count_l1_read_hit(Client client, std::uint64_t addr, std::uint32_t bytes, DramClass cls);
+  /// Requests known to hit an L1, tallied to be counted at once (count_l1_read_hits): the same
+  /// figures as count_l1_read_hit per request.
+  struct L1Hits {
+    std::uint64_t requests = 0, lines = 0, bytes = 0;
+    /// One request of `bytes` at `addr`, touching lines of `line_bytes` (a power of two).
+    void add(std::uint64_t addr, std::uint32_t bytes_, std::uint64_t line_bytes) {
+      ++requests;
+      bytes += bytes_;
+      lines += bytes_ == 0 ? 1 : (addr + bytes_ - 1) / line_bytes - addr / line_bytes + 1;
+    }
+  };
+  /// count_l1_read_hit for every request of `hits` (of `client`, class `cls`).
+  void count_l1_read_hits(Client client, const L1Hits& hits, DramClass cls);
   /// Whether issue() would accept a request now.
   /// (Refused too while earlier refused requesters wait for their turn, unless it is theirs.)
   bool can_accept() const { return overflow_full_ == 0 && (ready_waiters_.empty() || serving_waiters_); }

@@ -604,18 +604,6 @@ class TimingSim final : public Unit {
       if (bytes == 0) continue;
       const auto cls = static_cast<DramClass>(c);
       DmaStream* s = new_stream(Client::Texture, false, cls, outstanding);
-      // From where the producer stored the tile's data (re-reads cycle over it), else from the
-      // tile's own slot.
-      const std::vector<ByteRange> from = map_.produced(render_command_, cls, tile_index(t), bytes, texture_line_bytes_);
-      if (from.empty()) {
-        const std::uint64_t slot = map_.tile_slot_bytes(render_command_, in_partial_slot(false));
-        for (std::uint64_t off = 0; off < bytes;) {
-          const std::uint64_t at = (offset + off) % slot;
-          const std::uint64_t n = std::min({texture_line_bytes_, bytes - off, slot - at});
-          s->add(tile_address(t) + at, n);
-          off += n;
-        }
-      }
       // The first lap over the stored data streams through the texture cache; when the lap fits
       // in it, the re-reads after it (light volumes over the same pixels) hit there, as a tile's
       // texture footprint is fetched once (fetch_textures): each counted as the request and L1
@@ -625,15 +613,28 @@ class TimingSim final : public Unit {
       std::uint64_t lap = map_.produced_bytes(render_command_, cls, tile_index(t));
       const Cache* l1 = mem_.l1_of(Client::Texture);
       const bool reuse = l1 != nullptr && lap <= l1->size_bytes();
-      for (const ByteRange& r : from) {
+      MemorySystem::L1Hits hits;
+      bool produced = false;
+      // From where the producer stored the tile's data (re-reads cycle over it), else from the
+      // tile's own slot.
+      map_.for_each_produced(render_command_, cls, tile_index(t), bytes, texture_line_bytes_, [&](std::uint64_t at, std::uint64_t n) {
+        produced = true;
         if (!reuse || lap > 0) {
-          s->add(r.offset, r.bytes);
-          lap -= std::min(lap, r.bytes);
-          continue;
+          s->add(at, n);
+          lap -= std::min(lap, n);
+          return;
         }
-        DmaStream::for_each_request(r.offset, r.bytes, [&](std::uint64_t a, std::uint32_t n) {
-          mem_.count_l1_read_hit(Client::Texture, a, n, cls);
-        });
+        DmaStream::for_each_request(at, n, [&](std::uint64_t a, std::uint32_t m) { hits.add(a, m, l1->line_bytes()); });
+      });
+      if (hits.requests > 0) mem_.count_l1_read_hits(Client::Texture, hits, cls);
+      if (!produced) {
+        const std::uint64_t slot = map_.tile_slot_bytes(render_command_, in_partial_slot(false));
+        for (std::uint64_t off = 0; off < bytes;) {
+          const std::uint64_t at = (offset + off) % slot;
+          const std::uint64_t n = std::min({texture_line_bytes_, bytes - off, slot - at});
+          s->add(tile_address(t) + at, n);
+          off += n;
+        }
       }
       offset += bytes;
       ++tiles_[i].pending_shading;
