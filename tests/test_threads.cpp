@@ -242,9 +242,10 @@ TEST_F(ThreadEquivalence, MultisampledRunsAreTheSameAtEveryThreadCount) {
 
 // A parameter buffer of 64 KiB overflows: each pass is several renders, each a barrier (its
 // tiles finish, are merged, and reload what the previous render stored, before binning goes on).
-// forward_plus's forward pass is binned past the light culling dispatch (command_processor.cpp):
-// its first partial render catches up (the prepass's tiles, the dispatch, the light grid it
-// reads) before its tiles.
+// forward_plus's forward pass is binned past the light culling dispatch at 2 and 7 threads
+// (command_processor.cpp; at 1 thread it is set up after the dispatch, in trace order): its first
+// partial render catches up (the prepass's tiles, the dispatch, the light grid it reads) before
+// its tiles, with the same results as the order of the trace.
 TEST_F(ThreadEquivalence, PartialRendersAreTheSameAtEveryThreadCount) {
   for (const char* technique : {"plain_forward", "deferred", "forward_plus"}) {
     const TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 200, 120);
