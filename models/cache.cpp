@@ -186,13 +186,6 @@ void Cache::update_derived_stats() {
   stats_.energy_pj.set(energy_pj());
 }
 
-void Cache::count_read_hit(std::uint32_t bytes, DramClass cls) {
-  ++stats_.reads;
-  stats_.read_bytes += bytes;
-  ++stats_.read_hits;
-  ++class_stats_[static_cast<std::size_t>(cls)].read_hits;
-}
-
 void Cache::count_read_hits(std::uint64_t lines, std::uint64_t bytes, DramClass cls) {
   stats_.reads += lines;
   stats_.read_bytes += bytes;

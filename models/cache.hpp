@@ -86,11 +86,10 @@ class Cache {
   /// One access of `bytes` (within one line) at `addr`; updates LRU, dirty bits and statistics.
   CacheAccess access(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls,
                      Allocation alloc = Allocation::Allocate);
-  /// Counts a read hit of `bytes` (within one line) of class `cls` that the caller serves from a
-  /// line it knows is present (a tile re-reading data it requested once): statistics and SRAM
-  /// energy as access() would count it, without a lookup (no LRU or content change).
-  void count_read_hit(std::uint32_t bytes, DramClass cls);
-  /// count_read_hit for `lines` line reads of `bytes` in all, at once.
+  /// Counts `lines` read hits (each within one line), `bytes` in all, of class `cls` that the
+  /// caller serves from lines it knows are present (a tile re-reading data it requested once):
+  /// statistics and SRAM energy as access() would count them, without a lookup (no LRU or
+  /// content change).
   void count_read_hits(std::uint64_t lines, std::uint64_t bytes, DramClass cls);
   /// True if the line holding `addr` is present; changes nothing.
   bool probe(std::uint64_t addr) const;

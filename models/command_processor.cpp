@@ -355,8 +355,14 @@ class FrameSimulator {
     }
   }
 
-  static std::string dispatch_name(const DispatchCmd& d, int index) {
-    return "dispatch" + std::to_string(index) + "." + to_string(d.kernel);
+  /// What the timing model knows of a dispatch before it runs: its name and kind (its content
+  /// follows once it has run).
+  static CommandWork dispatch_header(const DispatchCmd& d, int index) {
+    CommandWork cw;
+    cw.name = "dispatch" + std::to_string(index) + "." + to_string(d.kernel);
+    cw.is_dispatch = true;
+    cw.depends_on_previous = true;  // a dispatch follows a barrier on what it reads
+    return cw;
   }
 
   /// A dispatch that has run: its work for the timing model, summary and traffic, not yet handed on.
@@ -378,7 +384,8 @@ class FrameSimulator {
   /// holds it: that pass resets it (reset_replaced_attachments), and `replaced` gets its name.
   DispatchRun run_dispatch_work(const DispatchCmd& d, int index, const PassDesc* binned_past,
                                 std::vector<std::string>* replaced = nullptr) {
-    const std::string prefix = dispatch_name(d, index);
+    CommandWork cw = dispatch_header(d, index);
+    const std::string prefix = cw.name;
     ComputeStats stats;
     DramTraffic dram;
     ComputeContext cc;
@@ -392,10 +399,6 @@ class FrameSimulator {
     cc.pool = &pool_;
     std::string image;
     run_dispatch(cc, d, stats, dram, image);
-    CommandWork cw;
-    cw.name = prefix;
-    cw.is_dispatch = true;
-    cw.depends_on_previous = true;  // a dispatch follows a barrier on what it reads
     cw.compute_alu_ops = stats.compute_alu_ops.value();
     cw.compute_threads = stats.threads.value();
     cw.compute_texels = stats.compute_texture_fetches.value() * static_cast<std::uint64_t>(hw_.texture.filtered_texels_per_fetch);
@@ -529,11 +532,7 @@ class FrameSimulator {
     std::vector<CommandWork*> past_open;
     if (early && options_.feed) {
       for (const PastDispatch& pd : past) {
-        CommandWork header;
-        header.name = dispatch_name(*pd.cmd, pd.index);
-        header.is_dispatch = true;
-        header.depends_on_previous = true;  // (as run_dispatch_work's)
-        past_open.push_back(&options_.feed->open(std::move(header)));
+        past_open.push_back(&options_.feed->open(dispatch_header(*pd.cmd, pd.index)));
         past_feed.push_back(options_.feed->last_opened());
       }
     }

@@ -114,16 +114,6 @@ void MemorySystem::access_functional(Client client, std::uint64_t addr, std::uin
   access<false>(client, addr, bytes, is_write, cls, 0);
 }
 
-void MemorySystem::count_l1_read_hit(Client client, std::uint64_t addr, std::uint32_t bytes, DramClass cls) {
-  Cache* l1 = l1_of(client);
-  if (l1 == nullptr) throw std::logic_error("memory system: count_l1_read_hit for a client without an L1");
-  MemoryClientStats& cs = client_stats_[static_cast<std::size_t>(client)];
-  ++cs.reads;
-  cs.read_bytes += bytes;
-  requested_.read(cls, bytes);
-  for_each_line(addr, bytes, l1->line_bytes(), [&](std::uint64_t, std::uint32_t n) { l1->count_read_hit(n, cls); });
-}
-
 void MemorySystem::count_l1_read_hits(Client client, const L1Hits& hits, DramClass cls) {
   Cache* l1 = l1_of(client);
   if (l1 == nullptr) throw std::logic_error("memory system: count_l1_read_hits for a client without an L1");

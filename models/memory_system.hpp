@@ -112,13 +112,10 @@ class MemorySystem final : public Unit {
   /// Functional access: the same cache and DRAM state and statistics updates, no events.
   void access_functional(Client client, std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls);
 
-  /// A read request of `client` that the caller knows hits the client's L1 and does not simulate
-  /// (a tile's re-read of data it has requested once): counted as issue() and the L1 would count
-  /// it (an accepted request, requested bytes, one read hit per line it touches, SRAM energy);
-  /// no event, no cache state change. The client must have an L1 (l1_of).
-  void count_l1_read_hit(Client client, std::uint64_t addr, std::uint32_t bytes, DramClass cls);
-  /// Requests known to hit an L1, tallied to be counted at once (count_l1_read_hits): the same
-  /// figures as count_l1_read_hit per request.
+  /// Read requests of a client that the caller knows hit the client's L1 and does not simulate
+  /// (a tile's re-reads of data it has requested once), tallied to be counted at once
+  /// (count_l1_read_hits) as issue() and the L1 would count them: accepted requests, requested
+  /// bytes, one read hit per line each touches, SRAM energy; no event, no cache state change.
   struct L1Hits {
     std::uint64_t requests = 0, lines = 0, bytes = 0;
     /// One request of `bytes` at `addr`, touching lines of `line_bytes` (a power of two).
@@ -128,7 +125,7 @@ class MemorySystem final : public Unit {
       lines += bytes_ == 0 ? 1 : (addr + bytes_ - 1) / line_bytes - addr / line_bytes + 1;
     }
   };
-  /// count_l1_read_hit for every request of `hits` (of `client`, class `cls`).
+  /// Counts every request of `hits` (of `client`, class `cls`); the client must have an L1 (l1_of).
   void count_l1_read_hits(Client client, const L1Hits& hits, DramClass cls);
   /// Whether issue() would accept a request now.
   /// (Refused too while earlier refused requesters wait for their turn, unless it is theirs.)

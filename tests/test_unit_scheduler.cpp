@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "models/address_space.hpp"
+#include "models/frame_address_map.hpp"
 #include "unit_fixture.hpp"
 
 namespace tbdr {
@@ -197,6 +199,68 @@ TEST(UnitScheduler, FrameTimeIsCyclesAtTheCoreClock) {
   const TimingResult r = run_schedule(one_render({tile_work(0, 0, 1, 32, 128000)}), {"gpu.core_clock_mhz=500"});
   EXPECT_EQ(r.frame_cycles, 1001.0);
   EXPECT_EQ(r.frame_time_ps, 2002000.0);
+}
+
+// The timing model places a command's buffer area when its first fragment job starts, and the
+// other regions when it takes the commands (models/frame_address_map.hpp): how the two interleave
+// depends on the schedule, which every swept parameter changes (with a faster binning engine the
+// pass after a dispatch is taken before the dispatch starts). The addresses must not: the buffer
+// areas live in their own range, each range in command order. Two interleavings of one frame
+// (a pass, a dispatch, a pass reading what the dispatch wrote) give the same addresses.
+TEST(UnitScheduler, AddressesDoNotDependOnHowTheScheduleInterleavesPlacements) {
+  TileWork t = tile_work(0, 0, 1, 32, 1000);
+  t.store_bytes[static_cast<std::size_t>(DramClass::Gbuffer)] = 4096;
+  BinningWork b = binning_work(100);
+  b.vertex_fetch_bytes = 6000;
+  CommandWork first = pass_work("pass0.first", {render_work({t}, b)});
+  CommandWork dispatch = dispatch_work("dispatch1.between", 1000);
+  dispatch.read_bytes[static_cast<std::size_t>(DramClass::Gbuffer)] = 4096;
+  dispatch.write_bytes[static_cast<std::size_t>(DramClass::LightLists)] = 10000;
+  CommandWork last = pass_work("pass2.last", {render_work({t}, b)});
+  last.read_bytes[static_cast<std::size_t>(DramClass::LightLists)] = 10000;
+  const FrameWork frame = frame_work({first, dispatch, last});
+
+  struct Layout {
+    std::vector<std::uint64_t> buffers, vertices, tiles;
+  };
+  // `early`: the last pass is taken (its slots, its vertex range) before the dispatch starts.
+  auto layout = [&](bool early) {
+    AddressSpace space;
+    FrameAddressMap map(frame, 65536, space);
+    map.add_command(first);
+    map.add_render(0, first.renders[0]);
+    map.place_buffers(0, first);
+    map.add_command(dispatch);
+    if (!early) map.place_buffers(1, dispatch);
+    map.add_command(last);
+    map.add_render(2, last.renders[0]);
+    if (early) map.place_buffers(1, dispatch);
+    map.end_command(first);
+    map.end_command(dispatch);
+    map.place_buffers(2, last);
+    Layout l;
+    for (std::size_t c = 0; c < 3; ++c) {
+      l.buffers.push_back(map.buffers(c));
+      l.tiles.push_back(c == 1 ? 0 : map.tile(c, t));
+    }
+    l.vertices = {map.vertices(0, 0), map.vertices(2, 0)};
+    return l;
+  };
+  const Layout early = layout(true), late = layout(false);
+  EXPECT_EQ(early.buffers, late.buffers);
+  EXPECT_EQ(early.vertices, late.vertices);
+  EXPECT_EQ(early.tiles, late.tiles);
+  // Buffer areas in the high range, one after another in command order; the rest below it.
+  EXPECT_EQ(early.buffers[0], AddressSpace::kHighBase);
+  EXPECT_LT(early.buffers[0], early.buffers[1]);
+  EXPECT_LT(early.buffers[1], early.buffers[2]);
+  EXPECT_LT(early.vertices[1], AddressSpace::kHighBase);
+  EXPECT_LT(early.tiles[2], AddressSpace::kHighBase);
+  // Before its first fragment job a command has no buffer area.
+  AddressSpace space;
+  FrameAddressMap map(frame, 65536, space);
+  map.add_command(first);
+  EXPECT_THROW(map.buffers(0), std::logic_error);
 }
 
 }  // namespace
