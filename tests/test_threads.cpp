@@ -260,6 +260,52 @@ TEST_F(ThreadEquivalence, PartialRendersAreTheSameAtEveryThreadCount) {
   }
 }
 
+// Binning past the dispatches (2 threads) keeps the dispatch's cost where the physics puts it.
+// tiled_deferred's shading dispatch made ALU-bound: 4000 ALU operations per pixel over 200x120 =
+// 24,000 pixels is 96 M operations, at usc.count x 16 lanes x 2 ops per cycle 1.5 M cycles with 2
+// USCs and 0.75 M with 4, far above its G-buffer and colour traffic (about 0.3 MB). Twice the USCs
+// halve the dispatch (ratio 0.5; within 0.45-0.55 for the traffic and the tail around it). The
+// pass after it was binned while the earlier work ran (its binning starts before the dispatch)
+// and renders after the dispatch (it ends after it).
+TEST_F(ThreadEquivalence, TwiceTheUscsHalveAnAluBoundDispatchBinnedPast) {
+  const TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 200, 120);
+  Trace t = generate_trace("tiled_deferred", setup);
+  std::string shader;
+  for (const TraceCommand& c : t.commands) {
+    if (const auto* d = std::get_if<DispatchCmd>(&c); d && d->params.contains("shader")) shader = d->params.at("shader");
+  }
+  ASSERT_FALSE(shader.empty());
+  for (ShaderDesc& sh : t.shaders) {
+    if (sh.name == shader) sh.alu_ops = 4000;
+  }
+  auto dispatch_cycles = [&](int uscs, double* pass_start, double* pass_end, double* dispatch_start, double* dispatch_end) {
+    const HwConfig hw = resolve_config({}, {"usc.count=" + std::to_string(uscs)}).hw;
+    const ThreadedRun r = run(t, *scene_, hw, 2);
+    for (std::size_t c = 0; c < r.timing.commands.size(); ++c) {
+      const CommandTime& ct = r.timing.commands[c];
+      if (ct.name.rfind("dispatch", 0) == 0) {
+        *dispatch_start = ct.start_cycle;
+        *dispatch_end = ct.end_cycle;
+        *pass_start = r.timing.commands.at(c + 1).start_cycle;
+        *pass_end = r.timing.commands.at(c + 1).end_cycle;
+        return ct.end_cycle - ct.start_cycle;
+      }
+    }
+    ADD_FAILURE() << "no dispatch";
+    return 0.0;
+  };
+  double pass_start[2], pass_end[2], d_start[2], d_end[2];
+  const double two = dispatch_cycles(2, &pass_start[0], &pass_end[0], &d_start[0], &d_end[0]);
+  const double four = dispatch_cycles(4, &pass_start[1], &pass_end[1], &d_start[1], &d_end[1]);
+  ASSERT_GT(two, 0.0);
+  EXPECT_GE(four / two, 0.45) << two << " -> " << four;
+  EXPECT_LE(four / two, 0.55) << two << " -> " << four;
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_LT(pass_start[k], d_start[k]) << "the translucent pass is binned while the earlier work runs";
+    EXPECT_GT(pass_end[k], d_end[k]) << "and renders after the dispatch";
+  }
+}
+
 // Passes over the tile memory budget: rendered as strips (smaller_tiles), spilled (spill), or
 // split at a subpass boundary (split_render), with deferred's 4 G-buffer targets in 64 bits.
 TEST_F(ThreadEquivalence, OverBudgetPassesAreTheSameAtEveryThreadCount) {
