@@ -532,22 +532,53 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
     o.tail += ci->tail;
   };
 
-  std::vector<InstanceSetup> window;
-  for (std::size_t first = 0; first < selected.size();) {
-    // A window of instances holding about kSetupWindowTriangles triangles (at least one
-    // instance): enough work to share between threads, few enough records to hold at once.
+  // Windows of instances holding about kSetupWindowTriangles triangles each (at least one
+  // instance): enough work to share between threads, few enough records to hold at once.
+  auto window_end = [&](std::size_t first) {
     std::size_t last = first, triangles = 0;
     while (last < selected.size() && (last == first || triangles < kSetupWindowTriangles)) {
       triangles += scene_->submeshes[scene_->instances[selected[last].second].submesh].indices.size() / 3;
       ++last;
     }
-    window.clear();
-    window.resize(last - first);
-    // (Not while the pool runs the pass before's tiles: binning beside them sets up alone.)
-    if (pool_ != nullptr && pool_->size() > 1 && window.size() > 1 && !pool_->started()) {
-      pool_->for_each(window.size(), [&](std::size_t k, unsigned) { set_up_instance(first + k, window[k]); });
+    return last;
+  };
+  // The pool's helpers, when it has some and they are free (not while the pool runs the pass
+  // before's tiles: binning beside them sets up alone).
+  auto pool_free = [&] { return pool_ != nullptr && pool_->size() > 1 && !pool_->started(); };
+  std::vector<InstanceSetup> window, next;
+  auto set_up_window = [&](std::size_t from, std::vector<InstanceSetup>& w) {
+    if (pool_free() && w.size() > 1) {
+      pool_->for_each(w.size(), [&](std::size_t k, unsigned) { set_up_instance(from + k, w[k]); });
     } else {
-      for (std::size_t k = 0; k < window.size(); ++k) set_up_instance(first + k, window[k]);
+      for (std::size_t k = 0; k < w.size(); ++k) set_up_instance(from + k, w[k]);
+    }
+  };
+  // A posted window is waited for before anything it refers to goes (an exception unwinding).
+  struct PostedGuard {
+    const GeometryUnit& unit;
+    ~PostedGuard() {
+      try {
+        unit.settle();
+      } catch (...) {
+      }
+    }
+  } posted_guard{*this};
+
+  std::size_t first = 0, last = window_end(0);
+  window.resize(last - first);
+  set_up_window(first, window);
+  while (first < selected.size()) {
+    // The next window is set up on the helpers while this thread delivers this one (the tiler's
+    // binning is serial: the two overlap), and this thread sets up what is left of it after.
+    const std::size_t next_first = last, next_last = window_end(next_first);
+    next.clear();
+    next.resize(next_last - next_first);
+    const bool posted = !next.empty() && pool_free();
+    if (posted) {
+      pool_->start(next.size(), [&next, &set_up_instance, next_first](std::size_t k, unsigned) {
+        set_up_instance(next_first + k, next[k]);
+      });
+      set_up_posted_ = true;
     }
     for (InstanceSetup& o : window) {
       object_lights.push_back(std::move(o.touching));
@@ -557,8 +588,21 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
       for (const SetUp& u : o.prims) deliver(u, out, stats);
       o.tail.add_to(stats);
     }
-    first = last;
+    if (posted) {
+      settle();  // (already waited for when a partial render inside delivery settled it)
+    } else {
+      set_up_window(next_first, next);
+    }
+    std::swap(window, next);
+    first = next_first;
+    last = next_last;
   }
+}
+
+void GeometryUnit::settle() const {
+  if (!set_up_posted_) return;
+  set_up_posted_ = false;
+  pool_->join();
 }
 
 void GeometryUnit::draw_generated(const DrawContext& draw, std::uint32_t draw_index, DrawOutput& out,

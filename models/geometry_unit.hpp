@@ -61,9 +61,13 @@ class GeometryUnit {
 
   /// Sets a scene draw's instances up (vertex shading, clipping, culling, triangle setup) on
   /// `pool`'s threads, a window of them at a time, and delivers their primitives in submission
-  /// order: the same primitives and statistics at any thread count. nullptr (the default): on the
-  /// caller's thread. The pool must be idle while run_draw runs (binning is between renders).
+  /// order: the same primitives and statistics at any thread count. While the caller's thread
+  /// delivers a window to the sink, the next window is being set up on the pool's helpers (the
+  /// pool's job until settle()). nullptr (the default): all on the caller's thread.
   void use_pool(ThreadPool* pool) { pool_ = pool; }
+  /// Waits for the window being set up on the pool, if any: a sink calls it inside accept()
+  /// before it uses the pool itself (a partial render); the pool is free after.
+  void settle() const;
 
   /// Triangles of the icosphere used as a light proxy at this subdivision level (unit radius,
   /// circumscribing the unit sphere).
@@ -155,6 +159,7 @@ class GeometryUnit {
   mutable std::atomic<std::size_t> clipped_bytes_{0};
   const std::vector<Light>& lights_;
   ThreadPool* pool_ = nullptr;  ///< use_pool
+  mutable bool set_up_posted_ = false;  ///< the pool's job is a window's set-up (settle())
   CameraXform camera_;
   Viewport viewport_;
 };

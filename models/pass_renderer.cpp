@@ -54,7 +54,7 @@ PassRenderer::PassRenderer(RenderContext& ctx, const HwConfig& frame_hw, PassSta
       resumed_(static_cast<std::size_t>(tiler_.tile_count()), 0) {
   // After tile_memory_: it points ctx.pls at the pass's pixel local storage, which the TSPs read.
   for (unsigned w = 0; w < pool_.size(); ++w) workers_.push_back(std::make_unique<TileWorker>(ctx_));
-  geometry_.use_pool(&pool_);  // binning runs between renders, while the pool is idle
+  geometry_.use_pool(&pool_);  // binning sets up on the pool when it is free (not while tiles render)
   // The pass's framebuffer layout, known before any tile renders (FrameAddressMap places it then).
   // The first tile is never clipped more than another.
   cw_->tile_slot_bytes = tile_memory_.tile_slot_bytes(tiler_.tile_rect(0));
@@ -131,6 +131,7 @@ void PassRenderer::accept(const Primitive& p, const VertexKeys& keys) {
   const Primitive held = ctx_.prims.back();
   ctx_.prims.pop_back();
   ++stats_.tiler.partial_renders;
+  geometry_.settle();  // the next window's set-up leaves the pool to the tiles
   render(true);
   ctx_.prims.push_back(held);
   tiler_.bin(0, ctx_.prims.back(), keys, stats_.tiler);  // binned: it touched a tile, and the buffer is empty

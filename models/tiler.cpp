@@ -15,7 +15,50 @@ Tiler::Tiler(const HwConfig& hw, const Viewport& viewport, const SamplePattern& 
       tiles_x_((viewport.width_px + tile_w_ - 1) / tile_w_),
       tiles_y_((viewport.height_px + tile_h_ - 1) / tile_h_),
       viewport_(viewport),
-      tiles_(static_cast<std::size_t>(tiles_x_) * static_cast<std::size_t>(tiles_y_)) {}
+      tiles_(static_cast<std::size_t>(tiles_x_) * static_cast<std::size_t>(tiles_y_)),
+      open_keys_(static_cast<std::uint32_t>(hw.tiling.prim_block_max_vertices)) {}
+
+Tiler::BlockVertices::BlockVertices(std::uint32_t max_vertices) {
+  // At most half full (a block holds at most max_vertices keys): short probe runs.
+  std::size_t slots = 8;
+  shift_ = 61;
+  while (slots < 2 * static_cast<std::size_t>(max_vertices)) {
+    slots *= 2;
+    --shift_;
+  }
+  keys_.assign(slots, 0);
+  stamps_.assign(slots, 0);
+}
+
+std::size_t Tiler::BlockVertices::slot_of(std::uint64_t key) const {
+  return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_);  // Fibonacci hashing
+}
+
+bool Tiler::BlockVertices::contains(std::uint64_t key) const {
+  const std::size_t mask = keys_.size() - 1;
+  for (std::size_t i = slot_of(key);; i = (i + 1) & mask) {
+    if (stamps_[i] != stamp_) return false;
+    if (keys_[i] == key) return true;
+  }
+}
+
+void Tiler::BlockVertices::insert(std::uint64_t key) {
+  if (2 * (static_cast<std::size_t>(size_) + 1) > keys_.size()) throw std::logic_error("Tiler: more vertices in a block than its maximum");
+  const std::size_t mask = keys_.size() - 1;
+  std::size_t i = slot_of(key);
+  while (stamps_[i] == stamp_) i = (i + 1) & mask;
+  keys_[i] = key;
+  stamps_[i] = stamp_;
+  ++size_;
+}
+
+void Tiler::BlockVertices::clear() {
+  size_ = 0;
+  if (++stamp_ == 0) {  // wrapped: no slot may keep a stamp from 2^32 blocks ago
+    std::fill(stamps_.begin(), stamps_.end(), 0u);
+    stamp_ = 1;
+  }
+}
 
 PixelRect Tiler::tile_rect(int t) const {
   const int tx = t % tiles_x_, ty = t / tiles_x_;
@@ -33,7 +76,7 @@ std::uint64_t Tiler::block_bytes(std::uint32_t vertices, std::uint32_t prims, st
 
 std::uint64_t Tiler::allocated_with(std::uint64_t extra_block_bytes, std::uint64_t extra_ctrl_blocks) const {
   const auto page = static_cast<std::uint64_t>(hw_.tiling.pb_page_bytes);
-  const std::uint64_t open_bytes = open_ ? block_bytes(static_cast<std::uint32_t>(open_keys_.size()), open_prims_, open_varyings_) : 0;
+  const std::uint64_t open_bytes = open_ ? block_bytes(open_keys_.size(), open_prims_, open_varyings_) : 0;
   const std::uint64_t data = closed_block_bytes_ + open_bytes + extra_block_bytes;
   const std::uint64_t ctrl = (ctrl_blocks_ + extra_ctrl_blocks) * static_cast<std::uint64_t>(hw_.tiling.control_stream_block_bytes);
   const std::uint64_t headers = static_cast<std::uint64_t>(hw_.tiling.region_header_bytes) * tiles_.size();
@@ -45,7 +88,7 @@ std::uint64_t Tiler::allocated_bytes() const { return allocated_with(0, 0); }
 
 void Tiler::close_block() {
   if (!open_) return;
-  block_sizes_.push_back(block_bytes(static_cast<std::uint32_t>(open_keys_.size()), open_prims_, open_varyings_));
+  block_sizes_.push_back(block_bytes(open_keys_.size(), open_prims_, open_varyings_));
   closed_block_bytes_ += block_sizes_.back();
   block_vertices_total_ += open_keys_.size();
   open_ = false;
@@ -64,13 +107,13 @@ BinResult Tiler::bin(std::uint32_t index, const Primitive& p, const VertexKeys& 
   std::uint64_t keys[3];
   for (int i = 0; i < 3; ++i) {
     keys[i] = vertex_keys[i];
-    bool seen = std::find(open_keys_.begin(), open_keys_.end(), keys[i]) != open_keys_.end();
+    bool seen = open_keys_.contains(keys[i]);
     for (int j = 0; j < i && !seen; ++j) seen = keys[j] == keys[i];
     if (!seen) ++new_keys;
   }
   const bool fits = open_ && open_draw_ == p.draw &&
                     open_prims_ < static_cast<std::uint32_t>(hw_.tiling.prim_block_max_primitives) &&
-                    open_keys_.size() + new_keys <= static_cast<std::size_t>(hw_.tiling.prim_block_max_vertices);
+                    static_cast<std::size_t>(open_keys_.size()) + new_keys <= static_cast<std::size_t>(hw_.tiling.prim_block_max_vertices);
   const std::uint32_t block_id = static_cast<std::uint32_t>(block_sizes_.size()) + (open_ && !fits ? 1u : 0u);
 
   // Control stream growth.
@@ -85,9 +128,9 @@ BinResult Tiler::bin(std::uint32_t index, const Primitive& p, const VertexKeys& 
     }
   }
   // Capacity check with the primitive's vertex data included (a new block adds its header).
-  const std::uint64_t vertex_bytes = block_bytes(fits ? static_cast<std::uint32_t>(open_keys_.size()) + new_keys : 3,
+  const std::uint64_t vertex_bytes = block_bytes(fits ? open_keys_.size() + new_keys : 3,
                                                  fits ? open_prims_ + 1 : 1, p.varyings) -
-                                     (fits ? block_bytes(static_cast<std::uint32_t>(open_keys_.size()), open_prims_, p.varyings) : 0);
+                                     (fits ? block_bytes(open_keys_.size(), open_prims_, p.varyings) : 0);
   const auto capacity = static_cast<std::uint64_t>(hw_.tiling.pb_capacity_bytes);
   if (binned_ > 0 && allocated_with(vertex_bytes, extra_ctrl) > capacity) return BinResult::Full;
 
@@ -98,7 +141,7 @@ BinResult Tiler::bin(std::uint32_t index, const Primitive& p, const VertexKeys& 
     open_varyings_ = p.varyings;
   }
   for (int i = 0; i < 3; ++i) {
-    if (std::find(open_keys_.begin(), open_keys_.end(), keys[i]) == open_keys_.end()) open_keys_.push_back(keys[i]);
+    if (!open_keys_.contains(keys[i])) open_keys_.insert(keys[i]);
   }
   ++open_prims_;
   for (int t : touched_) {
