@@ -347,13 +347,14 @@ void GeometryUnit::SetupCounts::add_to(GeometryStats& stats) const {
   stats.primitives_culled_scissor += culled_scissor;
 }
 
-void GeometryUnit::deliver(const SetUp& u, DrawOutput& out, GeometryStats& stats) const {
+void GeometryUnit::deliver(const SetUp& u, DrawOutput& out, GeometryStats& stats,
+                           std::optional<std::span<const int>> tiles) const {
   u.before.add_to(stats);
   VertexKeys vertex_keys = u.keys;
   for (int i = 0; i < 3; ++i) {
     if ((u.made_by_clipping >> i) & 1u) vertex_keys[i] = 0x8000000000000000ull | (out.delivered * 3 + static_cast<std::uint64_t>(i));
   }
-  out.sink.accept(u.prim, vertex_keys);
+  out.sink.accept(u.prim, vertex_keys, tiles);
   ++out.delivered;
   ++stats.primitives_out;
 }
@@ -460,6 +461,10 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
   // and statistics at any thread count).
   struct InstanceSetup {
     std::vector<SetUp> prims;
+    /// The tiles each of prims touches, when the sink lists them ahead (binning's tile test on
+    /// the set-up threads): prims[i]'s are tiles[tiles_end[i - 1] .. tiles_end[i]).
+    std::vector<int> tiles;
+    std::vector<std::uint32_t> tiles_end;
     std::vector<std::uint32_t> touching;  ///< lights touching its bounds (object light lists)
     GeometryStats stats;                  ///< vertex work, counted before its triangles
     SetupCounts tail;                     ///< triangles culled after its last delivered one
@@ -530,6 +535,11 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
       set_up_screen_triangle(e, piece.screen, w, n, uv, keys, o.prims, o.tail);
     }
     o.tail += ci->tail;
+    // The tiler's tile test, here on the set-up threads rather than in the serial binning.
+    for (const SetUp& u : o.prims) {
+      if (!out.sink.tiles_touched(u.prim, o.tiles)) break;
+      o.tiles_end.push_back(static_cast<std::uint32_t>(o.tiles.size()));
+    }
   };
 
   // Windows of instances holding about kSetupWindowTriangles triangles each (at least one
@@ -585,7 +595,15 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
       stats += o.stats;
       dram.read(DramClass::Vertices, o.vertex_bytes);
       dram.read(DramClass::Indices, o.index_bytes);
-      for (const SetUp& u : o.prims) deliver(u, out, stats);
+      const bool listed = o.tiles_end.size() == o.prims.size();
+      for (std::size_t i = 0; i < o.prims.size(); ++i) {
+        if (!listed) {
+          deliver(o.prims[i], out, stats);
+          continue;
+        }
+        const std::uint32_t from = i == 0 ? 0 : o.tiles_end[i - 1];
+        deliver(o.prims[i], out, stats, std::span<const int>(o.tiles).subspan(from, o.tiles_end[i] - from));
+      }
       o.tail.add_to(stats);
     }
     if (posted) {

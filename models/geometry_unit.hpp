@@ -4,6 +4,8 @@
 // culling and the viewport transform to fixed point. It turns one draw into primitives.
 #include <atomic>
 #include <cstdint>
+#include <optional>
+#include <span>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -134,8 +136,10 @@ class GeometryUnit {
   static constexpr std::size_t kClippedInstanceBudgetBytes = std::size_t{256} << 20;
   /// Fills `c` for instance `ii` under `cull` (whether it is kept is the caller's budget call).
   void clip_instance(std::size_t ii, FaceCull cull, ClippedInstance& c) const;
-  /// Hands a set-up triangle to the draw's sink.
-  void deliver(const SetUp& u, DrawOutput& out, GeometryStats& stats) const;
+  /// Hands a set-up triangle to the draw's sink, with the tiles it touches when the sink listed
+  /// them ahead (PrimitiveSink::tiles_touched).
+  void deliver(const SetUp& u, DrawOutput& out, GeometryStats& stats,
+               std::optional<std::span<const int>> tiles = std::nullopt) const;
   void emit_triangle(const Emit& e, const glm::vec4 clip[3], const glm::vec3 world[3], const glm::vec3 normal[3],
                      const glm::vec2 uv[3], const std::uint64_t keys[3], DrawOutput& out, GeometryStats& stats) const;
   void draw_scene(const DrawContext& draw, std::uint32_t draw_index, DrawOutput& out,

@@ -116,14 +116,20 @@ void PassRenderer::finish() {
   }
 }
 
-void PassRenderer::accept(const Primitive& p, const VertexKeys& keys) {
+bool PassRenderer::tiles_touched(const Primitive& p, std::vector<int>& tiles) const {
+  if (ctx_.rop) return false;
+  tiler_.touched_tiles(p, tiles);
+  return true;
+}
+
+void PassRenderer::accept(const Primitive& p, const VertexKeys& keys, std::optional<std::span<const int>> tiles) {
   Primitive& taken = ctx_.prims.emplace_back(p);
   taken.id = ctx_.frame_prim_base++;
   if (ctx_.rop) {
     if (ctx_.prims.size() >= static_cast<std::size_t>(hw_.imr.primitives_per_batch)) render_batch(false);
     return;
   }
-  switch (tiler_.bin(static_cast<std::uint32_t>(ctx_.prims.size() - 1), taken, keys, stats_.tiler)) {
+  switch (tiler_.bin(static_cast<std::uint32_t>(ctx_.prims.size() - 1), taken, keys, stats_.tiler, tiles)) {
     case BinResult::Binned: return;
     case BinResult::NoSample: ctx_.prims.pop_back(); return;  // touches no tile: no tile reads it
     case BinResult::Full: break;
@@ -134,7 +140,7 @@ void PassRenderer::accept(const Primitive& p, const VertexKeys& keys) {
   geometry_.settle();  // the next window's set-up leaves the pool to the tiles
   render(true);
   ctx_.prims.push_back(held);
-  tiler_.bin(0, ctx_.prims.back(), keys, stats_.tiler);  // binned: it touched a tile, and the buffer is empty
+  tiler_.bin(0, ctx_.prims.back(), keys, stats_.tiler, tiles);  // binned: it touched a tile, and the buffer is empty
 }
 
 /// imr: no binning. The draws' primitives go down the pipeline in submission order, in batches

@@ -99,7 +99,9 @@ class PassRenderer final : private PrimitiveSink {
 
   /// Takes a primitive from the geometry unit: tbdr bins it (dropped when it touches no tile; a
   /// partial render first when the parameter buffer is full), imr adds it to the current batch.
-  void accept(const Primitive& p, const VertexKeys& keys) override;
+  void accept(const Primitive& p, const VertexKeys& keys, std::optional<std::span<const int>> tiles) override;
+  /// tbdr: the tiler's tile test (Tiler::touched_tiles); imr bins nothing.
+  bool tiles_touched(const Primitive& p, std::vector<int>& tiles) const override;
   /// imr: renders the batch of primitives taken since the last (`last`: the pass's last batch).
   void render_batch(bool last);
   /// imr has no binning: the whole frame is one "tile" and nothing goes through a parameter buffer.

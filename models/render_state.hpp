@@ -7,6 +7,8 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
+#include <span>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -152,14 +154,20 @@ using VertexKeys = std::array<std::uint64_t, 3>;
 class PrimitiveSink {
  public:
   virtual ~PrimitiveSink() = default;
-  virtual void accept(const Primitive& p, const VertexKeys& keys) = 0;
+  /// Takes a primitive. `tiles`: the tiles it touches as tiles_touched() listed them when the
+  /// geometry unit asked ahead, else nothing.
+  virtual void accept(const Primitive& p, const VertexKeys& keys, std::optional<std::span<const int>> tiles) = 0;
+  /// Binning's tile test ahead of accept(), on the threads that set primitives up: appends the
+  /// tiles `p` touches to `tiles` and returns true, or returns false when the sink does not bin
+  /// into tiles. Called on any thread, concurrently: it must only read.
+  virtual bool tiles_touched(const Primitive& /*p*/, std::vector<int>& /*tiles*/) const { return false; }
 };
 
 /// A sink that keeps what it is given (tests, and any caller that wants a draw's primitives).
 struct PrimitiveList final : PrimitiveSink {
   std::vector<Primitive> prims;
   std::vector<VertexKeys> keys;  ///< per primitive
-  void accept(const Primitive& p, const VertexKeys& k) override {
+  void accept(const Primitive& p, const VertexKeys& k, std::optional<std::span<const int>> /*tiles*/) override {
     prims.push_back(p);
     keys.push_back(k);
   }

@@ -96,11 +96,19 @@ void Tiler::close_block() {
   open_prims_ = 0;
 }
 
-BinResult Tiler::bin(std::uint32_t index, const Primitive& p, const VertexKeys& vertex_keys, TilerStats& stats) {
-  touched_.clear();
-  for_each_overlapped_tile(p.setup, tile_w_, tile_h_, test_, pattern_,
-                           [&](int tx, int ty) { touched_.push_back(ty * tiles_x_ + tx); });
-  if (touched_.empty()) return BinResult::NoSample;  // covers no sample: dropped, nothing written
+void Tiler::touched_tiles(const Primitive& p, std::vector<int>& out) const {
+  for_each_overlapped_tile(p.setup, tile_w_, tile_h_, test_, pattern_, [&](int tx, int ty) { out.push_back(ty * tiles_x_ + tx); });
+}
+
+BinResult Tiler::bin(std::uint32_t index, const Primitive& p, const VertexKeys& vertex_keys, TilerStats& stats,
+                     std::optional<std::span<const int>> tiles) {
+  if (!tiles) {
+    touched_.clear();
+    touched_tiles(p, touched_);
+    tiles = touched_;
+  }
+  const std::span<const int> touched = *tiles;
+  if (touched.empty()) return BinResult::NoSample;  // covers no sample: dropped, nothing written
 
   // Which primitive block the primitive joins.
   std::uint32_t new_keys = 0;
@@ -121,7 +129,7 @@ BinResult Tiler::bin(std::uint32_t index, const Primitive& p, const VertexKeys& 
   const auto cblock = static_cast<std::uint64_t>(hw_.tiling.control_stream_block_bytes);
   auto blocks_for = [&](std::uint64_t entries) { return (entries * entry + cblock - 1) / cblock; };
   std::uint64_t extra_ctrl = 0;
-  for (int t : touched_) {
+  for (int t : touched) {
     const auto& tb = tiles_[static_cast<std::size_t>(t)];
     if (tb.blocks.empty() || tb.blocks.back() != block_id) {
       extra_ctrl += blocks_for(tb.blocks.size() + 1) - blocks_for(tb.blocks.size());
@@ -144,7 +152,7 @@ BinResult Tiler::bin(std::uint32_t index, const Primitive& p, const VertexKeys& 
     if (!open_keys_.contains(keys[i])) open_keys_.insert(keys[i]);
   }
   ++open_prims_;
-  for (int t : touched_) {
+  for (int t : touched) {
     auto& tb = tiles_[static_cast<std::size_t>(t)];
     tb.prims.push_back(index);
     if (tb.blocks.empty() || tb.blocks.back() != block_id) {
@@ -155,7 +163,7 @@ BinResult Tiler::bin(std::uint32_t index, const Primitive& p, const VertexKeys& 
   }
   ++binned_;
   ++stats.primitives_binned;
-  stats.tile_references += touched_.size();
+  stats.tile_references += touched.size();
   return BinResult::Binned;
 }
 

@@ -6,6 +6,8 @@
 // primitive would not fit in the configured capacity, bin() refuses it and the caller runs a
 // partial render.
 #include <cstdint>
+#include <optional>
+#include <span>
 #include <vector>
 
 #include "models/frame_work.hpp"
@@ -60,7 +62,12 @@ class Tiler {
   /// Full, binning nothing, when the page-rounded parameter buffer would exceed its capacity:
   /// the caller renders what is binned (a partial render), calls reset(), and bins the primitive
   /// again. NoSample: the primitive touches no tile (the caller need not keep it).
-  BinResult bin(std::uint32_t index, const Primitive& p, const VertexKeys& keys, TilerStats& stats);
+  /// `tiles`: what touched_tiles() gives for `p`, when the caller looked it up ahead.
+  BinResult bin(std::uint32_t index, const Primitive& p, const VertexKeys& keys, TilerStats& stats,
+                std::optional<std::span<const int>> tiles = std::nullopt);
+  /// Appends the tiles `p` touches (tile indices, row by row) to `out`: the tiling engine's tile
+  /// test (tiling.binning). Only reads: callable on several threads at once.
+  void touched_tiles(const Primitive& p, std::vector<int>& out) const;
   /// Closes the open primitive block and books the render's parameter buffer writes and region
   /// headers (call once per render, before the tiles are rendered).
   void finish_render(TilerStats& stats, DramTraffic& dram);
