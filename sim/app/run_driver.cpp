@@ -380,6 +380,8 @@ RunOutcome run_one(const RunRequest& req) {
   }
   for (auto& p : trace_run_params(trace, req.trace_path)) rec.params.push_back(std::move(p));
   rec.stats = outcome.frame.stats;
+  rec.stats.push_back({"frame/host", "load_wall_seconds", outcome.load_seconds, "s",
+                       "Host wall time of reading the trace and loading (or generating) its scene, before the simulation"});
   rec.stats.push_back({"frame/host", "simulation_wall_seconds", outcome.wall_seconds, "s", "Host wall time of the functional simulation"});
   rec.stats.push_back({"frame/host", "timing_wall_seconds", outcome.timing_seconds, "s", "Host wall time of the timing model (with more than one thread it runs beside the functional simulation: from that one's start)"});
   rec.stats.push_back({"frame/host", "simulation_cpu_seconds", outcome.cpu_seconds, "s", "Host CPU time of the functional simulation (its threads; not the timing model's or the image writer's)"});
