@@ -4,8 +4,15 @@
 // shading behind the post-transform cache and fetch bytes are derived by hand.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
+#include <optional>
+#include <span>
 #include <vector>
 
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "kernel/thread_pool.hpp"
 #include "unit_fixture.hpp"
 
 namespace tbdr {
@@ -295,6 +302,118 @@ TEST(UnitGeometry, ADrawWithACullBoxSetsUpWhatAFreshUnitSetsUp) {
   EXPECT_EQ(twice.prims.size() - first - 3, front.prims.size());
   EXPECT_EQ(front.prims.size(), 1u);  // the back face; the front one, both near-plane pieces and the small one culled
   EXPECT_EQ(front.stats.primitives_culled_backface.value(), 3u);
+}
+
+/// A sink recording what it is given, whose tile test is a function of the primitive (its
+/// bounding box's corner pixels) it checks again in accept(): what it is handed is what it listed
+/// for that primitive. With a pool, every `period`-th primitive it takes the pool for a job of its
+/// own inside accept(), as a partial render does, after GeometryUnit::settle.
+class PoolTakingSink final : public PrimitiveSink {
+ public:
+  PoolTakingSink(const GeometryUnit& unit, ThreadPool* pool, std::size_t period) : unit_(unit), pool_(pool), period_(period) {}
+  void accept(const Primitive& p, const VertexKeys& k, std::optional<std::span<const int>> tiles) override {
+    prims.push_back(p);
+    keys.push_back(k);
+    std::vector<int> expected;
+    tiles_touched(p, expected);
+    if (!tiles) ++unlisted;
+    if (tiles && !std::equal(tiles->begin(), tiles->end(), expected.begin(), expected.end())) ++mislisted;
+    if (pool_ != nullptr && prims.size() % period_ == 0) {
+      unit_.settle();
+      std::atomic<int> ran{0};
+      pool_->for_each(4, [&](std::size_t, unsigned) { ++ran; });
+      own_jobs_items += static_cast<std::size_t>(ran.load());
+    }
+  }
+  bool tiles_touched(const Primitive& p, std::vector<int>& tiles) const override {
+    tiles.push_back(p.setup.bbox.x0 + 1000 * p.setup.bbox.y0);
+    tiles.push_back(p.setup.bbox.x1 + 1000 * p.setup.bbox.y1);
+    return true;
+  }
+  std::vector<Primitive> prims;
+  std::vector<VertexKeys> keys;
+  std::size_t unlisted = 0, mislisted = 0, own_jobs_items = 0;
+
+ private:
+  const GeometryUnit& unit_;
+  ThreadPool* pool_;
+  std::size_t period_;
+};
+
+TEST(UnitGeometry, WindowsSetUpOnThePoolWhileDeliveringGiveWhatOneThreadGives) {
+  // 48 instances of a 1024-triangle grid: about 6 windows of kSetupWindowTriangles (8192), each
+  // next one set up on the helpers while the caller delivers the one before. The sink takes the
+  // pool inside accept() every 1000 primitives (as a partial render does, after settle()): the
+  // primitives, their vertex identities, the tiles handed with them and the counts are those of a
+  // unit without a pool.
+  SubMesh grid;
+  std::vector<glm::vec3> pos;
+  std::vector<std::uint32_t> idx;
+  constexpr int kCells = 16;  // 16 x 32 cells of 2 triangles each: 1024 triangles
+  for (int y = 0; y <= 2 * kCells; ++y) {
+    for (int x = 0; x <= kCells; ++x) pos.push_back({-0.9f + 0.05f * x, -0.9f + 0.05f * y, 0.0f});
+  }
+  for (int y = 0; y < 2 * kCells; ++y) {
+    for (int x = 0; x < kCells; ++x) {
+      const auto v = static_cast<std::uint32_t>(y * (kCells + 1) + x);
+      idx.insert(idx.end(), {v, v + 1, v + kCells + 2, v, v + kCells + 2, v + kCells + 1});
+    }
+  }
+  Scene scene;
+  scene.materials.push_back(Material{});
+  scene.submeshes.push_back(make_mesh("grid", pos, idx));
+  for (int i = 0; i < 48; ++i) {
+    const glm::mat4 shift = glm::translate(glm::mat4(1.0f), glm::vec3(0.02f * static_cast<float>(i % 8), 0.01f * static_cast<float>(i / 8), 0.0f));
+    scene.instances.push_back({0, shift, "grid"});
+  }
+  const HwConfig hw = make_hw({});
+  const std::vector<Light> lights;
+  const CameraXform camera{};
+  const Viewport viewport = make_viewport(kViewportPx, kViewportPx, static_cast<int>(hw.geometry.subpixel_bits));
+  DrawStore store;
+  const DrawContext draw = store.add(DrawCmd{}, make_shader(1), PipelineState{}, {}, 0);
+
+  struct Run {
+    GeometryStats stats;
+    std::vector<Primitive> prims;
+    std::vector<VertexKeys> keys;
+    std::size_t unlisted = 0, mislisted = 0, own_jobs_items = 0;
+  };
+  auto run = [&](ThreadPool* pool) {
+    GeometryUnit unit(hw, &scene, lights, camera, viewport);
+    unit.use_pool(pool);
+    PoolTakingSink sink(unit, pool, 1000);
+    std::vector<std::vector<std::uint32_t>> object_lights;
+    DramTraffic dram;
+    Run r;
+    unit.run_draw(draw, 0, sink, object_lights, r.stats, dram);
+    r.prims = std::move(sink.prims);
+    r.keys = std::move(sink.keys);
+    r.unlisted = sink.unlisted;
+    r.mislisted = sink.mislisted;
+    r.own_jobs_items = sink.own_jobs_items;
+    return r;
+  };
+  const Run alone = run(nullptr);
+  ThreadPool pool(3);
+  const Run pooled = run(&pool);
+  ASSERT_EQ(alone.stats.primitives_in.value(), 48u * 1024u);
+  ASSERT_EQ(alone.prims.size(), 48u * 1024u);  // all in view, none culled (no face culling)
+  ASSERT_EQ(pooled.prims.size(), alone.prims.size());
+  EXPECT_EQ(pooled.stats.primitives_out.value(), alone.stats.primitives_out.value());
+  EXPECT_EQ(pooled.stats.vertices_shaded.value(), alone.stats.vertices_shaded.value());
+  for (std::size_t i = 0; i < alone.prims.size(); ++i) {
+    ASSERT_EQ(pooled.prims[i].setup.bbox, alone.prims[i].setup.bbox) << i;
+    ASSERT_EQ(pooled.prims[i].object, alone.prims[i].object) << i;
+    ASSERT_EQ(pooled.keys[i], alone.keys[i]) << i;
+  }
+  // Every scene triangle came with the tiles the sink listed for it, on either path.
+  EXPECT_EQ(alone.unlisted, 0u);
+  EXPECT_EQ(pooled.unlisted, 0u);
+  EXPECT_EQ(alone.mislisted, 0u);
+  EXPECT_EQ(pooled.mislisted, 0u);
+  // 49 jobs of 4 items ran on the pool inside accept() (49152 / 1000).
+  EXPECT_EQ(pooled.own_jobs_items, 49u * 4u);
 }
 
 }  // namespace

@@ -114,6 +114,7 @@ void ThreadPool::join() {
 }
 
 void ThreadPool::for_each(std::size_t count, const std::function<void(std::size_t, unsigned)>& fn) {
+  if (started_) throw std::logic_error("ThreadPool::for_each: the job started before awaits its join()");
   if (count == 0) return;
   launch(count, &fn);
   join();
