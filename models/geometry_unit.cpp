@@ -455,24 +455,9 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
   }
   std::stable_sort(selected.begin(), selected.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
 
-  // What the geometry unit makes of one instance before the tiler takes it: independent of every
-  // other instance, so a window of them is set up on the pool's threads, each into its own
-  // InstanceSetup, and delivered after in submission order (the same primitives, keys, objects
-  // and statistics at any thread count).
-  struct InstanceSetup {
-    std::vector<SetUp> prims;
-    /// The tiles each of prims touches, when the sink lists them ahead (binning's tile test on
-    /// the set-up threads): prims[i]'s are tiles[tiles_end[i - 1] .. tiles_end[i]).
-    std::vector<int> tiles;
-    std::vector<std::uint32_t> tiles_end;
-    std::vector<std::uint32_t> touching;  ///< lights touching its bounds (object light lists)
-    GeometryStats stats;                  ///< vertex work, counted before its triangles
-    SetupCounts tail;                     ///< triangles culled after its last delivered one
-    std::uint64_t vertex_bytes = 0, index_bytes = 0;
-  };
   if (cmd.cull && clipped_.size() != scene_->instances.size()) clipped_.resize(scene_->instances.size());
   const std::uint32_t object_base = static_cast<std::uint32_t>(object_lights.size());
-  auto set_up_instance = [&](std::size_t k, InstanceSetup& o) {
+  auto set_up_instance = [&](std::size_t k, ItemSetup& o) {
     const std::size_t ii = selected[k].second;
     const Instance& inst = scene_->instances[ii];
     const SubMesh& sm = scene_->submeshes[inst.submesh];
@@ -535,11 +520,6 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
       set_up_screen_triangle(e, piece.screen, w, n, uv, keys, o.prims, o.tail);
     }
     o.tail += ci->tail;
-    // The tiler's tile test, here on the set-up threads rather than in the serial binning.
-    for (const SetUp& u : o.prims) {
-      if (!out.sink.tiles_touched(u.prim, o.tiles)) break;
-      o.tiles_end.push_back(static_cast<std::uint32_t>(o.tiles.size()));
-    }
   };
 
   // Windows of instances holding about kSetupWindowTriangles triangles each (at least one
@@ -552,15 +532,31 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
     }
     return last;
   };
+  set_up_and_deliver(selected.size(), window_end, set_up_instance, out, object_lights, stats, dram);
+}
+
+template <class WindowEnd, class SetUpItem>
+void GeometryUnit::set_up_and_deliver(std::size_t count, WindowEnd window_end, SetUpItem set_up_item, DrawOutput& out,
+                                      std::vector<std::vector<std::uint32_t>>& object_lights, GeometryStats& stats,
+                                      DramTraffic& dram) const {
+  // An item set up, then the tiler's tile test of its triangles, here on the set-up threads
+  // rather than in the serial binning.
+  auto set_up = [&](std::size_t k, ItemSetup& o) {
+    set_up_item(k, o);
+    for (const SetUp& u : o.prims) {
+      if (!out.sink.tiles_touched(u.prim, o.tiles)) break;
+      o.tiles_end.push_back(static_cast<std::uint32_t>(o.tiles.size()));
+    }
+  };
   // The pool's helpers, when it has some and they are free (not while the pool runs the pass
   // before's tiles: binning beside them sets up alone).
   auto pool_free = [&] { return pool_ != nullptr && pool_->size() > 1 && !pool_->started(); };
-  std::vector<InstanceSetup> window, next;
-  auto set_up_window = [&](std::size_t from, std::vector<InstanceSetup>& w) {
+  std::vector<ItemSetup> window, next;
+  auto set_up_window = [&](std::size_t from, std::vector<ItemSetup>& w) {
     if (pool_free() && w.size() > 1) {
-      pool_->for_each(w.size(), [&](std::size_t k, unsigned) { set_up_instance(from + k, w[k]); });
+      pool_->for_each(w.size(), [&](std::size_t k, unsigned) { set_up(from + k, w[k]); });
     } else {
-      for (std::size_t k = 0; k < w.size(); ++k) set_up_instance(from + k, w[k]);
+      for (std::size_t k = 0; k < w.size(); ++k) set_up(from + k, w[k]);
     }
   };
   // A posted window is waited for before anything it refers to goes (an exception unwinding).
@@ -577,20 +573,18 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
   std::size_t first = 0, last = window_end(0);
   window.resize(last - first);
   set_up_window(first, window);
-  while (first < selected.size()) {
+  while (first < count) {
     // The next window is set up on the helpers while this thread delivers this one (the tiler's
     // binning is serial: the two overlap), and this thread sets up what is left of it after.
-    const std::size_t next_first = last, next_last = window_end(next_first);
+    const std::size_t next_first = last, next_last = next_first < count ? window_end(next_first) : next_first;
     next.clear();
     next.resize(next_last - next_first);
     const bool posted = !next.empty() && pool_free();
     if (posted) {
-      pool_->start(next.size(), [&next, &set_up_instance, next_first](std::size_t k, unsigned) {
-        set_up_instance(next_first + k, next[k]);
-      });
+      pool_->start(next.size(), [&next, &set_up, next_first](std::size_t k, unsigned) { set_up(next_first + k, next[k]); });
       set_up_posted_ = true;
     }
-    for (InstanceSetup& o : window) {
+    for (ItemSetup& o : window) {
       object_lights.push_back(std::move(o.touching));
       stats += o.stats;
       dram.read(DramClass::Vertices, o.vertex_bytes);
@@ -658,26 +652,47 @@ void GeometryUnit::draw_generated(const DrawContext& draw, std::uint32_t draw_in
     return;
   }
 
+  if (cmd.geometry == GeometryKind::LightSpheres) {
+    // One icosphere per selected light, each set up on its own (as a scene instance is) into an
+    // ItemSetup: windows of them on the pool, delivered in light order.
+    const auto& ico = icosphere(cmd.subdivisions);
+    const std::uint32_t object_base = static_cast<std::uint32_t>(object_lights.size());
+    auto set_up_light = [&](std::size_t k, ItemSetup& o) {
+      const std::uint32_t l = draw.lights[k];
+      const Light& light = lights_[l];
+      Emit le = e;
+      le.object = object_base + static_cast<std::uint32_t>(k);
+      le.proxy_light = static_cast<std::int32_t>(l);
+      o.touching = {l};
+      o.stats.vertices_shaded += ico.size();
+      o.stats.vertex_alu_ops += ico.size() * static_cast<std::uint64_t>(hw_.geometry.vertex_shader_alu_ops);
+      o.stats.vertex_fetch_bytes += ico.size() * kPositionBytes;
+      o.vertex_bytes = ico.size() * kPositionBytes;
+      const std::uint64_t base = std::uint64_t{le.object} << 32;
+      for (std::size_t t = 0; t + 2 < ico.size(); t += 3) {
+        glm::vec4 c[3];
+        glm::vec3 w[3];
+        for (int v = 0; v < 3; ++v) {
+          w[v] = light.position + ico[t + v] * light.radius;
+          c[v] = camera_.view_proj * glm::vec4(w[v], 1.0f);
+        }
+        const std::uint64_t keys[3] = {base | t, base | (t + 1), base | (t + 2)};
+        setup_triangles(le, c, w, zero3, zero2, keys, o.prims, o.tail);
+      }
+    };
+    // Windows of about kSetupWindowTriangles triangles (80 a sphere at subdivision 1: 102 lights).
+    const std::size_t per_window = std::max<std::size_t>(1, kSetupWindowTriangles / std::max<std::size_t>(1, ico.size() / 3));
+    auto window_end = [&](std::size_t first) { return std::min(draw.lights.size(), first + per_window); };
+    set_up_and_deliver(draw.lights.size(), window_end, set_up_light, out, object_lights, stats, dram);
+    return;
+  }
   for (std::uint32_t l : draw.lights) {
     const Light& light = lights_[l];
     e.object = static_cast<std::uint32_t>(object_lights.size());
     object_lights.push_back({l});
     e.proxy_light = static_cast<std::int32_t>(l);
     const std::uint64_t base = std::uint64_t{e.object} << 32;
-    if (cmd.geometry == GeometryKind::LightSpheres) {
-      const auto& ico = icosphere(cmd.subdivisions);
-      account(ico.size());
-      for (std::size_t t = 0; t + 2 < ico.size(); t += 3) {
-        glm::vec4 c[3];
-        glm::vec3 w[3];
-        for (int k = 0; k < 3; ++k) {
-          w[k] = light.position + ico[t + k] * light.radius;
-          c[k] = camera_.view_proj * glm::vec4(w[k], 1.0f);
-        }
-        const std::uint64_t keys[3] = {base | t, base | (t + 1), base | (t + 2)};
-        emit_triangle(e, c, w, zero3, zero2, keys, out, stats);
-      }
-    } else {  // LightQuads: a screen-aligned quad bounding the sphere's projection, at its nearest depth
+    {  // LightQuads: a screen-aligned quad bounding the sphere's projection, at its nearest depth
       const PixelRect r = light_screen_rect(light, camera_, viewport_);
       if (r.empty()) continue;
       const glm::vec3 cv = glm::vec3(camera_.view * glm::vec4(light.position, 1.0f));

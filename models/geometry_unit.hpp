@@ -136,6 +136,28 @@ class GeometryUnit {
   static constexpr std::size_t kClippedInstanceBudgetBytes = std::size_t{256} << 20;
   /// Fills `c` for instance `ii` under `cull` (whether it is kept is the caller's budget call).
   void clip_instance(std::size_t ii, FaceCull cull, ClippedInstance& c) const;
+  /// What set-up makes of one item of a draw (a scene instance, a light's proxy sphere) before
+  /// the tiler takes it: independent of every other item, so items are set up on the pool's
+  /// threads, each into its own ItemSetup, and delivered after in submission order (the same
+  /// primitives, keys, objects and statistics at any thread count).
+  struct ItemSetup {
+    std::vector<SetUp> prims;
+    /// The tiles each of prims touches, when the sink lists them ahead (binning's tile test on
+    /// the set-up threads): prims[i]'s are tiles[tiles_end[i - 1] .. tiles_end[i]).
+    std::vector<int> tiles;
+    std::vector<std::uint32_t> tiles_end;
+    std::vector<std::uint32_t> touching;  ///< its object's light list (delivered as the object's)
+    GeometryStats stats;                  ///< vertex work, counted before its triangles
+    SetupCounts tail;                     ///< triangles culled after its last delivered one
+    std::uint64_t vertex_bytes = 0, index_bytes = 0;
+  };
+  /// Sets `count` items of a draw up with set_up_item(k, ItemSetup&) and delivers them in order,
+  /// in windows (`window_end(first)`: the end of the window starting at item `first`): on the
+  /// pool when it is free, the next window set up on its helpers while this thread delivers the
+  /// one before (see settle), with the sink's tile test beside each item's set-up.
+  template <class WindowEnd, class SetUpItem>
+  void set_up_and_deliver(std::size_t count, WindowEnd window_end, SetUpItem set_up_item, DrawOutput& out,
+                          std::vector<std::vector<std::uint32_t>>& object_lights, GeometryStats& stats, DramTraffic& dram) const;
   /// Hands a set-up triangle to the draw's sink, with the tiles it touches when the sink listed
   /// them ahead (PrimitiveSink::tiles_touched).
   void deliver(const SetUp& u, DrawOutput& out, GeometryStats& stats,
