@@ -142,6 +142,25 @@ TEST(UnitTiler, ANewDrawOrTheVertexLimitStartsANewBlock) {
   EXPECT_EQ(rig.stats.pb_primitive_block_bytes.value(), 290u);
 }
 
+TEST(UnitTiler, AFanSharesItsCentreVertexInBlocksOfAtMost64Vertices) {
+  // 100 triangles of one draw, triangle i with the vertices {1000, i + 1, i + 2} (a fan around
+  // vertex 1000): a block takes triangles while its distinct vertices stay within 64, 62 of them
+  // (2 + 62 = 64 vertices); the other 38 go to a second block (2 + 38 = 40): 104 vertices in 2
+  // blocks. Each triangle covers tiles 0, 1 and 2: 300 tile references. Looking the tiles up
+  // ahead (Tiler::touched_tiles, as the geometry unit's set-up threads do) bins the same.
+  for (const bool listed : {false, true}) {
+    TilerRig rig;
+    for (std::uint32_t i = 0; i < 100; ++i) ASSERT_TRUE(rig.bin(keyed(upper_left_64(), {1000, i + 1, i + 2}, 0), listed)) << i;
+    rig.finish_render();
+    expect_counters(rig.stats, {{&TilerStats::primitives_binned, 100},
+                                {&TilerStats::primitive_blocks, 2},
+                                {&TilerStats::pb_vertices, 104},
+                                {&TilerStats::tile_references, 300}});
+    EXPECT_EQ(rig.tiler().tile_primitives(rig.tile(1, 1)).size(), 0u) << listed;
+    EXPECT_EQ(rig.tiler().tile_primitives(rig.tile(1, 0)).size(), 100u) << listed;
+  }
+}
+
 TEST(UnitTiler, CompressionShrinksOnlyTheVertexData) {
   // pb_compression_ratio 0.5: the quad's block is 16 + ceil(168 x 0.5) + 6 = 106 B.
   TilerRig rig({"tiling.pb_compression_ratio=0.5"});

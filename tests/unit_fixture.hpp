@@ -15,6 +15,8 @@
 #include <initializer_list>
 #include <map>
 #include <memory>
+#include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -348,12 +350,16 @@ class TilerRig {
   TilerRig& operator=(const TilerRig&) = delete;
 
   /// Bins the triangle as the next primitive of the render; false when the parameter buffer is
-  /// full (nothing binned: a partial render is due).
-  bool bin(const ScreenTri& t) {
+  /// full (nothing binned: a partial render is due). `tiles_listed_ahead`: its tiles looked up
+  /// first (Tiler::touched_tiles, as the geometry unit's set-up threads do) and handed to bin().
+  bool bin(const ScreenTri& t, bool tiles_listed_ahead = false) {
     const Primitive p = make_primitive(t, viewport, serial_);
     const VertexKeys keys = make_vertex_keys(t, serial_++);
     const auto index = static_cast<std::uint32_t>(binned_);
-    const bool ok = tiler_->bin(index, p, keys, stats) != BinResult::Full;
+    std::vector<int> tiles;
+    if (tiles_listed_ahead) tiler_->touched_tiles(p, tiles);
+    const bool ok = tiler_->bin(index, p, keys, stats,
+                                tiles_listed_ahead ? std::optional<std::span<const int>>(tiles) : std::nullopt) != BinResult::Full;
     if (ok) ++binned_;
     return ok;
   }
