@@ -632,12 +632,14 @@ void GeometryUnit::draw_generated(const DrawContext& draw, std::uint32_t draw_in
   const glm::vec3 zero3[3] = {};
   const glm::vec2 zero2[3] = {};
 
-  auto account = [&](std::uint64_t vertices) {
-    stats.vertices_shaded += vertices;
-    stats.vertex_alu_ops += vertices * static_cast<std::uint64_t>(hw_.geometry.vertex_shader_alu_ops);
-    stats.vertex_fetch_bytes += vertices * kPositionBytes;
-    dram.read(DramClass::Vertices, vertices * kPositionBytes);
+  // The vertex work of `vertices` generated vertices, counted into `into`; their fetch bytes.
+  auto vertex_work = [&](std::uint64_t vertices, GeometryStats& into) {
+    into.vertices_shaded += vertices;
+    into.vertex_alu_ops += vertices * static_cast<std::uint64_t>(hw_.geometry.vertex_shader_alu_ops);
+    into.vertex_fetch_bytes += vertices * kPositionBytes;
+    return vertices * kPositionBytes;
   };
+  auto account = [&](std::uint64_t vertices) { dram.read(DramClass::Vertices, vertex_work(vertices, stats)); };
 
   if (cmd.geometry == GeometryKind::Fullscreen) {
     // One triangle covering the viewport, at depth 0.5 (z_ndc = 0); shaders read what lies beneath.
@@ -664,10 +666,7 @@ void GeometryUnit::draw_generated(const DrawContext& draw, std::uint32_t draw_in
       le.object = object_base + static_cast<std::uint32_t>(k);
       le.proxy_light = static_cast<std::int32_t>(l);
       o.touching = {l};
-      o.stats.vertices_shaded += ico.size();
-      o.stats.vertex_alu_ops += ico.size() * static_cast<std::uint64_t>(hw_.geometry.vertex_shader_alu_ops);
-      o.stats.vertex_fetch_bytes += ico.size() * kPositionBytes;
-      o.vertex_bytes = ico.size() * kPositionBytes;
+      o.vertex_bytes = vertex_work(ico.size(), o.stats);
       const std::uint64_t base = std::uint64_t{le.object} << 32;
       for (std::size_t t = 0; t + 2 < ico.size(); t += 3) {
         glm::vec4 c[3];
@@ -686,32 +685,31 @@ void GeometryUnit::draw_generated(const DrawContext& draw, std::uint32_t draw_in
     set_up_and_deliver(draw.lights.size(), window_end, set_up_light, out, object_lights, stats, dram);
     return;
   }
+  // LightQuads: per light a screen-aligned quad bounding the sphere's projection, at its nearest depth.
   for (std::uint32_t l : draw.lights) {
     const Light& light = lights_[l];
     e.object = static_cast<std::uint32_t>(object_lights.size());
     object_lights.push_back({l});
     e.proxy_light = static_cast<std::int32_t>(l);
     const std::uint64_t base = std::uint64_t{e.object} << 32;
-    {  // LightQuads: a screen-aligned quad bounding the sphere's projection, at its nearest depth
-      const PixelRect r = light_screen_rect(light, camera_, viewport_);
-      if (r.empty()) continue;
-      const glm::vec3 cv = glm::vec3(camera_.view * glm::vec4(light.position, 1.0f));
-      const float z_near_view = std::min(cv.z + light.radius, -camera_.near_plane * 1.0001f);
-      const glm::vec4 zc = camera_.proj * glm::vec4(0.0f, 0.0f, z_near_view, 1.0f);
-      const float w = zc.w;
-      auto ndc_x = [&](int px) { return (2.0f * static_cast<float>(px) / static_cast<float>(viewport_.width_px) - 1.0f) * w; };
-      auto ndc_y = [&](int py) { return (1.0f - 2.0f * static_cast<float>(py) / static_cast<float>(viewport_.height_px)) * w; };
-      const glm::vec4 q[4] = {{ndc_x(r.x0), ndc_y(r.y1), zc.z, w}, {ndc_x(r.x1), ndc_y(r.y1), zc.z, w},
-                              {ndc_x(r.x1), ndc_y(r.y0), zc.z, w}, {ndc_x(r.x0), ndc_y(r.y0), zc.z, w}};
-      account(4);
-      e.clip.cull = FaceCull::None;
-      const glm::vec4 a[3] = {q[0], q[1], q[2]};
-      const glm::vec4 b[3] = {q[0], q[2], q[3]};
-      const std::uint64_t ka[3] = {base, base | 1, base | 2};
-      const std::uint64_t kb[3] = {base, base | 2, base | 3};
-      emit_triangle(e, a, zero3, zero3, zero2, ka, out, stats);
-      emit_triangle(e, b, zero3, zero3, zero2, kb, out, stats);
-    }
+    const PixelRect r = light_screen_rect(light, camera_, viewport_);
+    if (r.empty()) continue;
+    const glm::vec3 cv = glm::vec3(camera_.view * glm::vec4(light.position, 1.0f));
+    const float z_near_view = std::min(cv.z + light.radius, -camera_.near_plane * 1.0001f);
+    const glm::vec4 zc = camera_.proj * glm::vec4(0.0f, 0.0f, z_near_view, 1.0f);
+    const float w = zc.w;
+    auto ndc_x = [&](int px) { return (2.0f * static_cast<float>(px) / static_cast<float>(viewport_.width_px) - 1.0f) * w; };
+    auto ndc_y = [&](int py) { return (1.0f - 2.0f * static_cast<float>(py) / static_cast<float>(viewport_.height_px)) * w; };
+    const glm::vec4 q[4] = {{ndc_x(r.x0), ndc_y(r.y1), zc.z, w}, {ndc_x(r.x1), ndc_y(r.y1), zc.z, w},
+                            {ndc_x(r.x1), ndc_y(r.y0), zc.z, w}, {ndc_x(r.x0), ndc_y(r.y0), zc.z, w}};
+    account(4);
+    e.clip.cull = FaceCull::None;
+    const glm::vec4 a[3] = {q[0], q[1], q[2]};
+    const glm::vec4 b[3] = {q[0], q[2], q[3]};
+    const std::uint64_t ka[3] = {base, base | 1, base | 2};
+    const std::uint64_t kb[3] = {base, base | 2, base | 3};
+    emit_triangle(e, a, zero3, zero3, zero2, ka, out, stats);
+    emit_triangle(e, b, zero3, zero3, zero2, kb, out, stats);
   }
 }
 

@@ -341,8 +341,6 @@ RunOutcome run_one(const RunRequest& req) {
     const double c = thread_cpu_seconds();
     db.emplace(req.db_path);
     db_open_cpu = thread_cpu_seconds() - c;
-  }
-  if (pipelined) {
     outcome.timing = timed.get();
     outcome.frame.work = feed.take();
     outcome.timing_seconds = seconds_since(t_sim);  // (it ran from the start, beside the functional run)
