@@ -7,6 +7,8 @@
 // overflow: a barrier between the tiles of one render and the binning of the next), strips and
 // spills of passes over the tile memory budget, and in the tbr (early and late Z) and imr modes; plus the thread
 // pool's own contract (items in order, each once, the lowest item's exception).
+#include <cstdio>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -258,6 +260,47 @@ TEST_F(ThreadEquivalence, PartialRendersAreTheSameAtEveryThreadCount) {
       EXPECT_GT(stat(serial.frame, "pass1.forward/tiler", "partial_renders"), 0);
     }
   }
+}
+
+// A smaller parameter buffer costs more, run at 2 threads (binning's set-up and tile test on the
+// pool, a partial render settling the set-up it interrupts). deferred at 200x120, 32 lights, its
+// G-buffer pass binned into 1 MiB (no partial render), 128, 96 and 64 KiB (the least allowed):
+// the partial renders grow as the buffer shrinks (measured 0 / 1 / 2 / 3). Each stores the depth
+// and G-buffer of the tiles it touched and the next render reloads them: the attachments' DRAM
+// bytes (depth/stencil, G-buffer, colour) grow by exactly the partial renders' store and reload
+// bytes (measured +576,000 / +454,656 / +319,488 B), while the parameter buffer's shrink a little
+// (a partial render's tiles read only what was binned since the last one). The frame is never
+// faster (measured 127,706 / 147,449 / 178,627 / 187,975 cycles).
+TEST_F(ThreadEquivalence, ASmallerParameterBufferMeansMorePartialRendersAndNeverAFasterFrame) {
+  const TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 200, 120);
+  const Trace t = generate_trace("deferred", setup);
+  struct Point {
+    double partial = 0, stored = 0, attachments = 0, cycles = 0;
+  };
+  std::vector<Point> points;
+  for (const char* capacity : {"1048576", "131072", "98304", "65536"}) {
+    const HwConfig hw = resolve_config({}, {std::string("tiling.pb_capacity_bytes=") + capacity}).hw;
+    const ThreadedRun r = run(t, *scene_, hw, 2);
+    Point p;
+    p.partial = stat(r.frame, "frame/tiler", "partial_renders");
+    p.stored = stat(r.frame, "frame/tile_memory", "partial_render_store_bytes") +
+               stat(r.frame, "frame/tile_memory", "partial_render_reload_bytes");
+    for (const DramClass c : {DramClass::DepthStencil, DramClass::Gbuffer, DramClass::Color}) {
+      p.attachments += static_cast<double>(r.frame.dram.reads(c) + r.frame.dram.writes(c));
+    }
+    p.cycles = r.timing.frame_cycles;
+    points.push_back(p);
+  }
+  EXPECT_EQ(points[0].partial, 0.0);
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    const Point& a = points[i - 1];
+    const Point& b = points[i];
+    EXPECT_GT(b.partial, a.partial) << i;
+    EXPECT_GT(b.stored, a.stored) << i;
+    EXPECT_EQ(b.attachments - a.attachments, b.stored - a.stored) << i;
+    EXPECT_GE(b.cycles, a.cycles) << i;
+  }
+  EXPECT_GT(points.back().cycles, points.front().cycles);
 }
 
 // Binning past the dispatches (2 threads) keeps the dispatch's cost where the physics puts it.
