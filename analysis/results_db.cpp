@@ -5,6 +5,7 @@
 #include <chrono>
 #include <ctime>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -91,6 +92,22 @@ CREATE TABLE sweep_claims(
     // so that `report --by KEY` and v_param lookups by key do not scan every run's parameters.
     R"sql(
 CREATE INDEX run_params_by_key ON run_params(key, run_id);
+)sql",
+    // v5: a statistic is described per scope kind and name (stat_scope_kind): one name means
+    // different things in different units (a cache's fill_bytes, the ROP's; the DRAM's read_bytes
+    // as requested and as served), and v1-v4 kept one description per name, the first unit's. Their
+    // rows stay under the empty kind, the description of last resort for the runs written then.
+    R"sql(
+CREATE TABLE stat_defs_by_kind(
+  scope_kind TEXT NOT NULL,
+  name TEXT NOT NULL,
+  unit TEXT NOT NULL,
+  description TEXT NOT NULL,
+  PRIMARY KEY(scope_kind, name)
+);
+INSERT INTO stat_defs_by_kind(scope_kind, name, unit, description) SELECT '', name, unit, description FROM stat_defs;
+DROP TABLE stat_defs;
+ALTER TABLE stat_defs_by_kind RENAME TO stat_defs;
 )sql",
 };
 static_assert(sizeof(kMigrations) / sizeof(kMigrations[0]) == ResultsDb::kSchemaVersion);
@@ -219,15 +236,24 @@ std::int64_t ResultsDb::write_run(const RunRecord& run) {
     }
   }
   {
-    SqlStatement def(conn_,
-                     "INSERT INTO stat_defs(name, unit, description) VALUES(?,?,?) "
-                     "ON CONFLICT(name) DO UPDATE SET unit = excluded.unit, description = excluded.description");
+    // Before v5 (tests write older schemas) a statistic was described by its name alone.
+    const bool by_kind = schema_version() >= 5;
+    SqlStatement def(conn_, by_kind ? "INSERT INTO stat_defs(scope_kind, name, unit, description) VALUES(?,?,?,?) "
+                                      "ON CONFLICT(scope_kind, name) DO UPDATE SET unit = excluded.unit, description = excluded.description"
+                                    : "INSERT INTO stat_defs(name, unit, description) VALUES(?,?,?) "
+                                      "ON CONFLICT(name) DO UPDATE SET unit = excluded.unit, description = excluded.description");
     SqlStatement s(conn_, "INSERT INTO stats(run_id, scope, name, value, unit) VALUES(?,?,?,?,?)");
-    std::set<std::string> defined;
+    std::set<std::pair<std::string, std::string>> defined;
     for (const auto& st : run.stats) {
-      if (defined.insert(st.name).second) {
-        def.bind(1, st.name).bind(2, st.unit).bind(3, st.description);
+      std::string kind = by_kind ? stat_scope_kind(st.scope) : std::string();
+      if (!defined.contains({kind, st.name})) {
+        if (by_kind) {
+          def.bind(1, kind).bind(2, st.name).bind(3, st.unit).bind(4, st.description);
+        } else {
+          def.bind(1, st.name).bind(2, st.unit).bind(3, st.description);
+        }
         def.run();
+        defined.insert({std::move(kind), st.name});
       }
       s.bind(1, id).bind(2, st.scope).bind(3, st.name).bind(4, st.value).bind(5, st.unit);
       s.run();
@@ -245,6 +271,39 @@ std::int64_t ResultsDb::write_run(const RunRecord& run) {
   }
   tx->commit();
   return id;
+}
+
+std::vector<StatRecord> ResultsDb::run_stats(std::int64_t run_id) const {
+  // Every description of the database, by (scope kind, name): a few thousand rows at most.
+  std::map<std::pair<std::string, std::string>, std::string> described;
+  {
+    SqlStatement d(conn_, schema_version() >= 5 ? "SELECT scope_kind, name, description FROM stat_defs"
+                                                : "SELECT '', name, description FROM stat_defs");
+    while (d.step()) described.emplace(std::pair{d.text(0), d.text(1)}, d.text(2));
+  }
+  auto description = [&](const std::string& scope, const std::string& name) -> std::string {
+    if (auto it = described.find({stat_scope_kind(scope), name}); it != described.end()) return it->second;
+    if (auto it = described.find({std::string(), name}); it != described.end()) return it->second;  // written before v5
+    return {};
+  };
+  std::vector<StatRecord> out;
+  SqlStatement s(conn_, "SELECT scope, name, value, unit FROM stats WHERE run_id = ? ORDER BY rowid");
+  s.bind(1, run_id);
+  while (s.step()) {
+    StatRecord r{s.text(0), s.text(1), s.real(2), s.text(3), {}};
+    r.description = description(r.scope, r.name);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+std::string stat_scope_kind(std::string_view scope) {
+  const std::size_t slash = scope.find('/');
+  const std::string_view head = scope.substr(0, slash);
+  const std::size_t digit = head.find_first_of("0123456789");
+  std::string kind(head.substr(0, digit));
+  if (slash != std::string_view::npos) kind.append(scope.substr(slash));
+  return kind;
 }
 
 void close_results_db_cleanly(const std::string& path) {

@@ -4,6 +4,7 @@
 // through its connection with the SQL helper (analysis/sql.hpp).
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "analysis/sql.hpp"
@@ -44,7 +45,7 @@ struct RunRecord {
 /// with an InputError naming the file.
 class ResultsDb {
  public:
-  static constexpr int kSchemaVersion = 4;
+  static constexpr int kSchemaVersion = 5;
   static constexpr int kApplicationId = 0x54424452;  ///< "TBDR"
 
   /// Opens (creating if absent) and migrates up to `target_version` (tests use older versions).
@@ -65,6 +66,10 @@ class ResultsDb {
   /// Writes the whole run (runs, run_params, stat_defs, stats, tile_stats) in one transaction and
   /// returns its id.
   std::int64_t write_run(const RunRecord& run);
+  /// A run's statistics in the order written, each with its unit and the description declared for
+  /// its scope kind and name (stat_scope_kind; for runs written before schema v5, the one
+  /// description its name had then).
+  std::vector<StatRecord> run_stats(std::int64_t run_id) const;
 
  private:
   /// InputError unless the file is empty or a tbdrsim database (its application id).
@@ -86,6 +91,15 @@ void check_results_db_target(const std::string& path);
 /// .db file alone then copies every run). Commands call it after a reader that may not do this
 /// (a read-only connection, such as the plot scripts', leaves them). Nothing when the file is absent.
 void close_results_db_cleanly(const std::string& path);
+
+/// What kind of scope a statistic is collected under, which with its name says what it means (the
+/// results database describes statistics per kind and name): the scope with the index and name of
+/// its command dropped ("pass3.lighting/rop" -> "pass/rop", "dispatch2.cull/compute" ->
+/// "dispatch/compute"); the frame's and the memory system's scopes as they are ("frame/rop",
+/// "mem/cache.slc"). One name can mean different things in different units: a cache's
+/// fill_bytes and the ROP's, the DRAM's read_bytes as the units requested them ("frame/dram") and as
+/// the devices served them ("mem/dram").
+std::string stat_scope_kind(std::string_view scope);
 
 /// Current UTC time as ISO 8601 ("2026-11-22T10:00:00Z").
 std::string utc_now_iso8601();

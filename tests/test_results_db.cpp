@@ -96,13 +96,7 @@ std::optional<RunRecord> read_run(const ResultsDb& db, std::int64_t id) {
     s.bind(1, id);
     while (s.step()) r.params.push_back({s.text(0), s.text(1), s.text(2)});
   }
-  {
-    SqlStatement s(db.sql(),
-                   "SELECT s.scope, s.name, s.value, s.unit, coalesce(d.description, '') FROM stats s "
-                   "LEFT JOIN stat_defs d ON d.name = s.name WHERE s.run_id = ? ORDER BY s.rowid");
-    s.bind(1, id);
-    while (s.step()) r.stats.push_back({s.text(0), s.text(1), s.real(2), s.text(3), s.text(4)});
-  }
+  r.stats = db.run_stats(id);
   if (db.schema_version() >= 2) {
     SqlStatement s(db.sql(),
                    "SELECT pass, tile_x, tile_y, cycles, samples, dram_bytes FROM tile_stats WHERE run_id = ? "
@@ -168,8 +162,42 @@ TEST(ResultsDb, MigratesAnOlderSchemaKeepingRuns) {
   EXPECT_EQ(count(path, "SELECT count(*) FROM sqlite_master WHERE name = 'run_params_by_key'"), 1);
   ASSERT_EQ(run_ids(now).size(), 1u);
   EXPECT_EQ(read_run(now, run_ids(now)[0])->config_hash, "hash-old");
+  // The run written at v1 keeps its descriptions (by name, as they were written).
+  const RunRecord old = make_run("old");
+  const std::vector<StatRecord> old_stats = now.run_stats(run_ids(now)[0]);
+  ASSERT_EQ(old_stats.size(), old.stats.size());
+  for (std::size_t i = 0; i < old_stats.size(); ++i) EXPECT_EQ(old_stats[i].description, old.stats[i].description);
   now.write_run(make_run("new"));
   EXPECT_EQ(run_ids(now).size(), 2u);
+}
+
+// One name can mean different things in different units (a cache's fill_bytes, the ROP's): each
+// is described as its own unit declares it, per scope kind, and a pass's statistics share their
+// descriptions with every other pass's.
+TEST(ResultsDb, DescribesAStatisticByItsScopeKindAndName) {
+  EXPECT_EQ(stat_scope_kind("pass3.lighting/rop"), "pass/rop");
+  EXPECT_EQ(stat_scope_kind("pass12.final/dram.color"), "pass/dram.color");
+  EXPECT_EQ(stat_scope_kind("dispatch2.cull/compute"), "dispatch/compute");
+  EXPECT_EQ(stat_scope_kind("frame/rop"), "frame/rop");
+  EXPECT_EQ(stat_scope_kind("mem/cache.slc.class.color"), "mem/cache.slc.class.color");
+  EXPECT_EQ(stat_scope_kind("mem"), "mem");
+  const auto path = fresh_db("kinds.db");
+  ResultsDb db(path);
+  RunRecord r = make_run("kinds", 1, 0);
+  r.stats = {{"pass0.a/rop", "fill_bytes", 1, "bytes", "ROP fills"},
+             {"mem/cache.slc", "fill_bytes", 2, "bytes", "SLC fills"},
+             {"frame/dram", "read_bytes", 3, "bytes", "requested"},
+             {"mem/dram", "read_bytes", 4, "bytes", "served"},
+             {"pass1.b/rop", "fill_bytes", 5, "bytes", "ROP fills"}};
+  const auto id = db.write_run(r);
+  const std::vector<StatRecord> back = db.run_stats(id);
+  ASSERT_EQ(back.size(), r.stats.size());
+  for (std::size_t i = 0; i < back.size(); ++i) {
+    EXPECT_EQ(back[i].scope, r.stats[i].scope);
+    EXPECT_EQ(back[i].description, r.stats[i].description) << r.stats[i].scope << "/" << r.stats[i].name;
+  }
+  // Four descriptions: the two passes' ROP share one.
+  EXPECT_EQ(count(path, "SELECT count(*) FROM stat_defs"), 4);
 }
 
 TEST(ResultsDb, RefusesNewerSchemaAndForeignFiles) {

@@ -15,6 +15,9 @@
 #include "analysis/sql.hpp"
 #include "app/cli.hpp"
 #include "db_query.hpp"
+#include "models/cache.hpp"
+#include "models/dram.hpp"
+#include "models/rop.hpp"
 #include "scratch_dir.hpp"
 
 namespace tbdr {
@@ -101,6 +104,35 @@ TEST_F(StatsExport, JsonStatsMatchTheDatabaseWithUnitsAndDescriptions) {
     EXPECT_FALSE(derived.at(m).at("unit").get<std::string>().empty()) << m;
     EXPECT_FALSE(derived.at(m).at("description").get<std::string>().empty()) << m;
   }
+}
+
+/// The description `S` declares for its statistic `name` (empty when it declares none).
+template <class S>
+std::string declared(const std::string& name) {
+  for (const StatDef& d : stat_defs<S>()) {
+    if (name == d.name) return d.description;
+  }
+  return {};
+}
+
+// A name that several units declare carries, in the file, the description its own unit declares:
+// fill_bytes is the caches' and the ROP's, read_bytes the DRAM's as the units requested it
+// (frame/dram) and as the devices served it (mem/dram). Before schema v5 each name had one
+// description, the first unit's: the SLC's fill_bytes read "Bytes the ROP caches fetched".
+TEST_F(StatsExport, EveryStatisticCarriesItsOwnUnitsDescription) {
+  const json j = json::parse(file_text(*dir_ / "s.json"));
+  auto description = [&](const char* scope, const char* name) {
+    return j.at("stats").at(scope).at(name).at("description").get<std::string>();
+  };
+  const std::string cache_fills = declared<CacheStats>("fill_bytes"), rop_fills = declared<RopStats>("fill_bytes");
+  ASSERT_FALSE(cache_fills.empty());
+  ASSERT_NE(cache_fills, rop_fills);
+  EXPECT_EQ(description("mem/cache.slc", "fill_bytes"), cache_fills);
+  EXPECT_EQ(description("mem/cache.texture", "fill_bytes"), cache_fills);
+  EXPECT_EQ(description("frame/rop", "fill_bytes"), rop_fills);
+  EXPECT_EQ(description("pass0.gbuffer/rop", "fill_bytes"), rop_fills);
+  EXPECT_EQ(description("mem/dram", "read_bytes"), declared<DramStats>("read_bytes"));
+  EXPECT_NE(description("frame/dram", "read_bytes"), declared<DramStats>("read_bytes"));
 }
 
 TEST_F(StatsExport, TextStatsFollowGem5Layout) {

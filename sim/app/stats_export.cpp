@@ -107,11 +107,8 @@ struct Figure {
 
 std::vector<Figure> run_figures(const ResultsDb& db, std::int64_t run_id) {
   std::vector<Figure> figures;
-  {
-    SqlStatement q(db.sql(),
-                   "SELECT s.scope, s.name, s.value, s.unit, coalesce(d.description, '') FROM stats s "
-                   "LEFT JOIN stat_defs d ON d.name = s.name WHERE s.run_id = ? ORDER BY s.rowid", run_id);
-    while (q.step()) figures.push_back({q.text(0), q.text(1), q.real(2), q.text(3), q.text(4)});
+  for (StatRecord& r : db.run_stats(run_id)) {
+    figures.push_back({std::move(r.scope), std::move(r.name), r.value, std::move(r.unit), std::move(r.description)});
   }
   {
     // The derived figures (names without a dot: the raw statistics are in v_metric as unit.name too).

@@ -107,8 +107,8 @@ MergeShardResult copy_shard_runs(const SqlConnection& db, const std::string& sha
     ++res.copied;
   }
   db.exec(
-      "INSERT INTO main.stat_defs(name, unit, description) SELECT name, unit, description FROM shard.stat_defs "
-      "WHERE true ON CONFLICT(name) DO NOTHING");
+      "INSERT INTO main.stat_defs(scope_kind, name, unit, description) SELECT scope_kind, name, unit, description "
+      "FROM shard.stat_defs WHERE true ON CONFLICT(scope_kind, name) DO NOTHING");
   return res;
 }
 
