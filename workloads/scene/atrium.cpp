@@ -248,8 +248,17 @@ AlphaMask cloth_mask(int w, int h) {
     holes.push_back({0.1f + 0.8f * hash01(i * 3 + 1), 0.1f + 0.7f * hash01(i * 3 + 2),
                      0.012f + 0.03f * hash01(i * 3 + 3)});
   }
+  std::vector<const Hole*> row_holes;
   for (int y = 0; y < h; ++y) {
     const float v = (static_cast<float>(y) + 0.5f) / static_cast<float>(h);
+    // The holes this row crosses: where dv * dv >= r * r, du * du + dv * dv < r * r fails for every
+    // du (adding a square never rounds below dv * dv), so the others are skipped exactly.
+    row_holes.clear();
+    for (const Hole& hole : holes) {
+      const float dv = (v - hole.v) * static_cast<float>(h);
+      const float r = hole.r * static_cast<float>(w);
+      if (dv * dv < r * r) row_holes.push_back(&hole);
+    }
     for (int x = 0; x < w; ++x) {
       const float u = (static_cast<float>(x) + 0.5f) / static_cast<float>(w);
       bool opaque = true;
@@ -267,10 +276,10 @@ AlphaMask cloth_mask(int w, int h) {
         const float gu = u * 10.0f - std::floor(u * 10.0f) - 0.5f;
         const float gv = (v - 0.025f) * static_cast<float>(h) / static_cast<float>(w) * 10.0f;
         if (gu * gu + gv * gv < 0.06f) opaque = false;
-        for (const Hole& hole : holes) {
-          const float du = (u - hole.u) * static_cast<float>(w);
-          const float dv = (v - hole.v) * static_cast<float>(h);
-          const float r = hole.r * static_cast<float>(w);
+        for (const Hole* hole : row_holes) {
+          const float du = (u - hole->u) * static_cast<float>(w);
+          const float dv = (v - hole->v) * static_cast<float>(h);
+          const float r = hole->r * static_cast<float>(w);
           if (du * du + dv * dv < r * r) opaque = false;
         }
       }
