@@ -268,13 +268,18 @@ void PassRenderer::start_tiles(bool partial) {
     const TileJob& j = jobs_[i];
     results_[i] = render_tile(*workers_[w], j.tile, j.rect, tiler_.tile_primitives(j.tile), partial);
     // Merged in dispatch order as soon as every tile before it is: whichever thread finishes the
-    // tile a run of finished ones waited for merges (and publishes) them.
-    std::lock_guard lock(merge_mutex_);
-    rendered_[i] = 1;
-    for (; merged_ < n && rendered_[merged_] != 0; ++merged_) {
-      rw.tiles.push_back(merge(std::move(results_[merged_])));
-      if (feed_) feed_->publish_tile(feed_command_);
+    // tile a run of finished ones waited for merges them, and publishes them once it holds no
+    // lock: publishing wakes the timing model, which may preempt this thread on its core, and a
+    // lock held then would stall the other threads until the timing model yields the core.
+    std::size_t ready = 0;
+    {
+      std::lock_guard lock(merge_mutex_);
+      rendered_[i] = 1;
+      const std::size_t before = merged_;
+      for (; merged_ < n && rendered_[merged_] != 0; ++merged_) rw.tiles.push_back(merge(std::move(results_[merged_])));
+      if (merged_ > before) ready = merged_;
     }
+    if (feed_ && ready > 0) feed_->publish_tiles(feed_command_, ready);
   });
 }
 

@@ -86,13 +86,15 @@ void WorkFeed::publish_render(std::size_t c, std::size_t tiles) {
   changed_.notify_all();
 }
 
-void WorkFeed::publish_tile(std::size_t c) {
-  std::lock_guard lock(mutex_);
-  Published& p = open_state(c, "publish_tile");
-  if (p.renders.empty()) throw std::logic_error("WorkFeed::publish_tile: no render is open");
-  const std::size_t n = p.renders.back()->tiles.size();
-  if (n != p.published.back() + 1 || n > p.tiles.back()) throw std::logic_error("WorkFeed::publish_tile: not one more tile than published");
-  p.published.back() = n;
+void WorkFeed::publish_tiles(std::size_t c, std::size_t ready) {
+  {
+    std::lock_guard lock(mutex_);
+    Published& p = open_state(c, "publish_tiles");
+    if (p.renders.empty()) throw std::logic_error("WorkFeed::publish_tiles: no render is open");
+    if (ready > p.tiles.back()) throw std::logic_error("WorkFeed::publish_tiles: more tiles than the render announced");
+    if (ready <= p.published.back()) return;
+    p.published.back() = ready;
+  }
   changed_.notify_all();
 }
 

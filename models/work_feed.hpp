@@ -46,10 +46,13 @@ class WorkFeed {
   std::size_t last_opened() const;
   /// Open command `c`'s latest render is binned: its binning and `partial` final (false: the
   /// command's last render), room reserved for its `tiles` tiles (appended later, each followed
-  /// by publish_tile(c); none may move).
+  /// by publish_tiles; none may move).
   void publish_render(std::size_t c, std::size_t tiles);
-  /// Open command `c`'s latest render has one more tile, final.
-  void publish_tile(std::size_t c);
+  /// Open command `c`'s latest render has its first `ready` tiles appended and final. Threads
+  /// that append tiles in turn may report them out of turn: a count below the one published
+  /// changes nothing. The consumer is woken after the feed's lock is released (a woken consumer
+  /// that preempts the producer finds the lock free).
+  void publish_tiles(std::size_t c, std::size_t ready);
   /// Open command `c` is complete (all its renders and tiles final).
   void close_command(std::size_t c);
   /// Appends the next command, complete (open, every render and tile, close); every earlier one

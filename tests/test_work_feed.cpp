@@ -178,7 +178,7 @@ TEST(WorkFeed, APassFedRenderByRenderAndTileByTileTimesAsTheCompleteFrame) {
     for (const TileWork& t : r.tiles) {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));  // the timing model waits for tiles meanwhile
       rw.tiles.push_back(t);
-      feed.publish_tile(0);
+      feed.publish_tiles(0, rw.tiles.size());
     }
   }
   feed.close_command(0);
@@ -230,7 +230,7 @@ struct Replay {
     for (const TileWork& t : frame.commands[c].renders[r].tiles) {
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
       rw.tiles.push_back(t);
-      feed.publish_tile(c);
+      feed.publish_tiles(c, rw.tiles.size());
     }
   }
 };
@@ -364,14 +364,17 @@ TEST(WorkFeed, TheProducerMustKeepItsTilesInPlaceAndPublishThemAll) {
   EXPECT_THROW(feed.publish_render(0, 3), std::logic_error) << "no room reserved: its tiles could move";
   rw.tiles.reserve(3);
   feed.publish_render(0, 3);
-  EXPECT_THROW(feed.publish_tile(0), std::logic_error) << "no tile appended";
-  EXPECT_THROW(feed.publish_tile(1), std::logic_error) << "no command 1 is open";
+  EXPECT_THROW(feed.publish_tiles(0, 4), std::logic_error) << "more tiles than announced";
+  EXPECT_THROW(feed.publish_tiles(1, 1), std::logic_error) << "no command 1 is open";
   rw.tiles.emplace_back();
-  feed.publish_tile(0);
+  rw.tiles.emplace_back();
+  feed.publish_tiles(0, 2);
+  feed.publish_tiles(0, 1);  // a thread reporting out of turn: the count stays 2
   EXPECT_EQ(feed.wait_tile(0, 0, 0), rw.tiles.data());
-  EXPECT_THROW(feed.close_command(0), std::logic_error) << "two tiles not published";
+  EXPECT_EQ(feed.wait_tile(0, 0, 1), rw.tiles.data() + 1);
+  EXPECT_THROW(feed.close_command(0), std::logic_error) << "a tile not published";
   feed.close();
-  EXPECT_EQ(feed.wait_tile(0, 0, 1), nullptr) << "a closed feed ends the wait";
+  EXPECT_EQ(feed.wait_tile(0, 0, 2), nullptr) << "a closed feed ends the wait";
 }
 
 }  // namespace
