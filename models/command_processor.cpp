@@ -74,12 +74,15 @@ std::set<std::string> stored_surface_readers(const Trace& trace) {
 /// (FrameOptions::feed): at --threads N there are N + 1 busy threads on N cores, and the timing
 /// model, whose schedule waits for the functional run's pieces, and the caller's thread (geometry,
 /// binning, the serial steps) are the critical path; the helpers take what they leave idle.
-/// nice 5 gives a helper a quarter of a core against a nice-0 thread (CFS weights 335 / 1024).
-/// Measured at 1080p, 1024 lights, 2 threads on 2 cores, wall seconds, 4 runs interleaved (nice 0
-/// / 5 / 10): deferred 0.98-1.01 / 0.89-0.96 / 0.86-0.90, plain_forward 0.44-0.46 / 0.40-0.42 /
-/// 0.41-0.45, light_prepass 1.37-1.39 / 1.33-1.38 / 1.34-1.39. 5 rather than more, so that the
-/// helpers still get a fair part of a core shared with other users' processes.
-constexpr int kHelperNicenessBesideTiming = 5;
+/// nice 10 gives a helper a tenth of a core against a nice-0 thread (CFS weights 110 / 1024).
+/// Measured at 1080p, 1024 lights, 2 threads on 2 cores, wall seconds, median of 5 interleaved
+/// (nice 5 / 10 / 19), once tiles were published outside the merge lock (before, a helper preempted
+/// while holding it stalled the caller's thread, and nice 5 measured best): plain_forward 0.24 /
+/// 0.22 / 0.22, forward_plus 0.34 / 0.33 / 0.32, light_prepass 0.86 / 0.85 / 0.85,
+/// visibility_buffer 0.46 / 0.45 / 0.45, forward_light_stack 0.56 / 0.57 / 0.57, the other seven
+/// equal. 10 rather than more, so that the helpers still get a part of a core shared with other
+/// users' processes.
+constexpr int kHelperNicenessBesideTiming = 10;
 
 class FrameSimulator {
  public:
