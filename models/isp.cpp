@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <span>
 
+#include "kernel/bits.hpp"
 #include "models/rop.hpp"
 
 namespace tbdr {
@@ -69,14 +70,6 @@ std::uint8_t apply_stencil(StencilOp op, std::uint8_t v, std::uint8_t ref) {
 }  // namespace
 
 Isp::Isp(RenderContext& ctx, Tsp& tsp) : ctx_(ctx), tsp_(tsp) {}
-
-void Isp::add_to_batch(const PendingSample& s, std::vector<ShadePixel>& batch) {
-  if (!batch.empty() && batch.back().x == s.x && batch.back().y == s.y) {
-    batch.back().mask |= s.bit;
-  } else {
-    batch.push_back({s.x, s.y, s.bit});
-  }
-}
 
 void Isp::build_batch(const PendingSample* begin, const PendingSample* end, std::vector<ShadePixel>& batch) {
   batch.clear();
@@ -306,7 +299,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
       std::uint64_t n = 0;
       if (overdraw) {
         rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float*) {
-          const auto k = static_cast<std::uint32_t>(std::popcount(mask));
+          const auto k = bit_count(mask);
           overdraw[static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x)] += k;
           n += k;
         });
@@ -327,7 +320,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
         rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {
           const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
           const std::size_t lbase = (static_cast<std::size_t>(y - y0) * rw + static_cast<std::size_t>(x - x0)) * S;
-          const auto covered = static_cast<std::uint32_t>(std::popcount(mask));
+          const auto covered = bit_count(mask);
           rasterised += covered;
           if constexpr (kOverdraw) overdraw[pixel] += covered;
           for (std::uint32_t m = mask; m != 0; m &= m - 1) {

@@ -361,7 +361,7 @@ std::size_t launched_quads_in(std::span<const ShadePixel> pixels, std::vector<st
       rows[row] |= bits;
       if constexpr (!kKeys) {
         std::size_t n = 0;
-        for (std::size_t r = 0; r < n_rows; ++r) n += static_cast<std::size_t>(std::popcount(rows[r]));
+        for (std::size_t r = 0; r < n_rows; ++r) n += bit_count(rows[r]);
         return n;
       }
       for (std::size_t r = 0; r < n_rows; ++r) {
