@@ -136,8 +136,8 @@ void MemorySystem::schedule_waiters() {
   waiters_scheduled_ = true;
   eq_.schedule(eq_.now(), Priority::Default, [this] {
     waiters_scheduled_ = false;
-    std::vector<EventCallback> ws = std::move(ready_waiters_);
-    ready_waiters_.clear();
+    serving_.swap(ready_waiters_);  // (ready_waiters_ takes serving_'s emptied storage)
+    std::vector<EventCallback>& ws = serving_;
     serving_waiters_ = true;
     for (std::size_t i = 0; i < ws.size(); ++i) {
       if (overflow_full_ != 0) {  // full again: the rest keep their place, ahead of newcomers
@@ -147,6 +147,7 @@ void MemorySystem::schedule_waiters() {
       }
       ws[i]();
     }
+    ws.clear();
     serving_waiters_ = false;
     if (overflow_full_ == 0) schedule_waiters();
   });

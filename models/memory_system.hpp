@@ -17,7 +17,6 @@
 // See docs/memory-model.md.
 #include <array>
 #include <cstdint>
-#include <deque>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -29,6 +28,7 @@
 #include "models/hw_config.hpp"
 #include "trace/traffic.hpp"
 #include "kernel/event_queue.hpp"
+#include "kernel/ring_queue.hpp"
 #include "kernel/run_loop.hpp"
 #include "kernel/slot_pool.hpp"
 #include "kernel/stats.hpp"
@@ -292,12 +292,15 @@ class MemorySystem final : public Unit {
   SlotPool<Fill> fills_;
 
   // DRAM requests refused by a full DRAM queue, per channel and direction, in order.
-  std::vector<std::array<std::deque<DramRequest>, 2>> overflow_;
+  std::vector<std::array<RingQueue<DramRequest>, 2>> overflow_;
   std::vector<std::array<std::size_t, 2>> overflow_lines_;  // lines held per queue
   std::uint64_t overflow_count_ = 0;  // requests in all overflow queues
   std::uint32_t overflow_full_ = 0;   // overflow queues holding their cap of lines or more
   std::size_t overflow_cap_;
   std::vector<EventCallback> ready_waiters_;  // refused requesters, in order
+  // The waiters being served (schedule_waiters): swapped with ready_waiters_, so that neither
+  // gives its storage up (a refused stream's wait would otherwise allocate it again each time).
+  std::vector<EventCallback> serving_;
   bool waiters_scheduled_ = false;            // an event will serve them
   bool serving_waiters_ = false;              // that event is running: they may issue
   void schedule_waiters();

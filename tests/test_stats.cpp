@@ -1,6 +1,8 @@
 // Statistics sets: declared once, combined as values (kernel/stats.hpp).
 #include <gtest/gtest.h>
 
+#include <memory>
+
 #include "kernel/stats.hpp"
 
 namespace tbdr {
@@ -68,6 +70,7 @@ TEST(Stats, CollectWritesOneRowPerStatisticUnderTheScope) {
 }  // namespace
 }  // namespace tbdr
 
+#include "kernel/ring_queue.hpp"
 #include "kernel/slot_pool.hpp"
 
 namespace tbdr {
@@ -88,6 +91,28 @@ TEST(SlotPool, ReusesTheMostRecentlyReleasedSlot) {
   EXPECT_EQ(pool.acquire(), a);
   EXPECT_EQ(pool.acquire(), 3u);  // no free slot: a new one
   EXPECT_EQ(pool.capacity(), 4u);
+}
+
+// Elements leave in the order they came, across the ring's wrap and its growth (8 slots, then 16).
+TEST(RingQueue, KeepsOrderAcrossWrapAndGrowth) {
+  RingQueue<std::unique_ptr<int>> q;  // (a move-only element)
+  int next_in = 0, next_out = 0;
+  auto push = [&] { q.push_back(std::make_unique<int>(next_in++)); };
+  auto pop = [&] {
+    ASSERT_FALSE(q.empty());
+    EXPECT_EQ(*q.front(), next_out++);
+    q.pop_front();
+  };
+  for (int i = 0; i < 6; ++i) push();
+  for (int i = 0; i < 5; ++i) pop();  // head at slot 5 of 8
+  for (int i = 0; i < 7; ++i) push();  // 8 held: wrapped around the end of the ring
+  EXPECT_EQ(q.size(), 8u);
+  push();  // full: grows to 16, elements moved in order
+  push();
+  EXPECT_EQ(q.size(), 10u);
+  while (!q.empty()) pop();
+  EXPECT_EQ(next_out, next_in);
+  EXPECT_EQ(next_out, 15);
 }
 
 }  // namespace
