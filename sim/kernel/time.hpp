@@ -111,8 +111,11 @@ class ClockDomain {
   /// For reports only: the (generally non-integer) period in picoseconds.
   double period_ps() const { return static_cast<double>(kPsPerSecond) / static_cast<double>(hz_); }
 
+  // The conversions are always inlined: the timing model converts at every cache and DRAM step,
+  // and GCC left cycles_at and tick_of as calls there (1-2 % of the timing model's CPU).
+
   /// The tick at which cycle n starts: ceil(n * 1e12 / f). n must be >= 0.
-  Tick tick_of(Cycles n) const {
+  [[gnu::always_inline]] Tick tick_of(Cycles n) const {
     if (n.count() < 0) throw_negative("cycle index");
     const auto cycles = static_cast<std::uint64_t>(n.count());
     if (magic_) {
@@ -142,7 +145,7 @@ class ClockDomain {
   }
 
   /// Whole cycles elapsed at tick t (the index of the cycle in progress): floor(t * f / 1e12).
-  Cycles cycles_at(Tick t) const {
+  [[gnu::always_inline]] Cycles cycles_at(Tick t) const {
     if (t.ps() < 0) throw_negative("tick");
     const auto ps = static_cast<std::uint64_t>(t.ps());
     if (magic_) {  // as below, dividing by reciprocal multiplication (ps < 2^63, r*den < 2^62)
@@ -160,20 +163,20 @@ class ClockDomain {
   /// The index of the first cycle boundary at or after t: cycles_at(next_edge(t)), computed with
   /// one conversion. tick_of is strictly increasing, so it is the least n with tick_of(n) >= t,
   /// i.e. with n*num/den > t - 1: floor((t - 1)*den/num) + 1 = cycles_at(t - 1) + 1 (0 for t = 0).
-  Cycles edge_index(Tick t) const {
+  [[gnu::always_inline]] Cycles edge_index(Tick t) const {
     if (t.ps() < 0) throw_negative("tick");
     return t.ps() == 0 ? Cycles{0} : cycles_at(Tick{t.ps() - 1}) + Cycles{1};
   }
 
   /// The first cycle boundary at or after t (t itself when t is an edge).
-  Tick next_edge(Tick t) const { return tick_of(edge_index(t)); }
+  [[gnu::always_inline]] Tick next_edge(Tick t) const { return tick_of(edge_index(t)); }
 
   /// The first cycle boundary strictly after t.
-  Tick edge_after(Tick t) const { return tick_of(cycles_at(t) + Cycles{1}); }
+  [[gnu::always_inline]] Tick edge_after(Tick t) const { return tick_of(cycles_at(t) + Cycles{1}); }
 
   /// The edge n cycles after the current-or-next edge of t: when a unit acting at `now` is done
   /// after a latency of n cycles. after(now, Cycles{0}) == next_edge(now).
-  Tick after(Tick now, Cycles n) const { return tick_of(edge_index(now) + n); }
+  [[gnu::always_inline]] Tick after(Tick now, Cycles n) const { return tick_of(edge_index(now) + n); }
 
  private:
   __extension__ typedef unsigned __int128 U128;
