@@ -113,11 +113,14 @@ BinResult Tiler::bin(std::uint32_t index, const Primitive& p, const VertexKeys& 
   // Which primitive block the primitive joins.
   std::uint32_t new_keys = 0;
   std::uint64_t keys[3];
+  bool distinct[3];  // not an earlier vertex of this primitive
+  bool fresh[3];     // nor one of the open block's
   for (int i = 0; i < 3; ++i) {
     keys[i] = vertex_keys[i];
-    bool seen = open_keys_.contains(keys[i]);
-    for (int j = 0; j < i && !seen; ++j) seen = keys[j] == keys[i];
-    if (!seen) ++new_keys;
+    distinct[i] = true;
+    for (int j = 0; j < i; ++j) distinct[i] = distinct[i] && keys[j] != keys[i];
+    fresh[i] = distinct[i] && !open_keys_.contains(keys[i]);
+    if (fresh[i]) ++new_keys;
   }
   const bool fits = open_ && open_draw_ == p.draw &&
                     open_prims_ < static_cast<std::uint32_t>(hw_.tiling.prim_block_max_primitives) &&
@@ -148,8 +151,10 @@ BinResult Tiler::bin(std::uint32_t index, const Primitive& p, const VertexKeys& 
     open_draw_ = p.draw;
     open_varyings_ = p.varyings;
   }
+  // The block's new vertices: the fresh ones when it joins the open block, else (a new block,
+  // empty) each distinct one.
   for (int i = 0; i < 3; ++i) {
-    if (!open_keys_.contains(keys[i])) open_keys_.insert(keys[i]);
+    if (fits ? fresh[i] : distinct[i]) open_keys_.insert(keys[i]);
   }
   ++open_prims_;
   for (int t : touched) {
