@@ -1,13 +1,18 @@
-// The allocator settings `main` re-executes the program with (sim/app/main.cpp): transparent huge
-// pages unless the host takes freed memory back (free page reporting), or as TBDRSIM_HUGE_PAGES=1
-// / 0 says; a user's own GLIBC_TUNABLES kept as given. Checked through what a run books
+// The allocator settings `main` sets (sim/app/main.cpp): the heap's thresholds in process, and
+// transparent huge pages (re-executing the program with them) unless the host takes freed memory
+// back (free page reporting), or as TBDRSIM_HUGE_PAGES=1 / 0 says; a user's own GLIBC_TUNABLES
+// kept as given. Checked through what a run books
 // (frame/host allocator_huge_pages, host_free_page_reporting) when the binary is started with a
 // chosen environment.
 #include <gtest/gtest.h>
 #include <fcntl.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -69,6 +74,28 @@ TEST(Allocator, HugePagesUnlessTheHostTakesFreedMemoryBackOrTheVariableSaysAndAU
   EXPECT_EQ(huge_pages_flag(trace, dir / "on.db", {"TBDRSIM_HUGE_PAGES=1"}), 1.0);
   // A user's own tunables are not touched (no huge pages added to them).
   EXPECT_EQ(huge_pages_flag(trace, dir / "user.db", {"GLIBC_TUNABLES=glibc.malloc.trim_threshold=1048576"}), 0.0);
+#endif
+}
+
+// The heap's thresholds set in the running process (what `main` does unless it re-executes for
+// huge pages): a 20 MiB block, over glibc's default mmap threshold of 128 KiB, comes from the
+// heap; a 40 MiB block, over the 32 MiB set, is still mapped on its own (mallinfo2's hblks counts
+// the mapped blocks).
+TEST(Allocator, HeapThresholdsSetInProcessKeepBlocksUpTo32MiBInTheHeap) {
+#if defined(__SANITIZE_ADDRESS__) || !defined(__GLIBC__)
+  GTEST_SKIP() << "the sanitizers' allocator (or a libc other than glibc)";
+#else
+  ASSERT_TRUE(set_heap_thresholds());
+  static void* volatile sink = nullptr;  // (the blocks are used: the compiler keeps the calls)
+  const std::size_t mapped_before = mallinfo2().hblks;
+  sink = std::malloc(std::size_t{20} << 20);
+  const std::size_t mapped_with_20 = mallinfo2().hblks;
+  std::free(sink);
+  sink = std::malloc(std::size_t{40} << 20);
+  const std::size_t mapped_with_40 = mallinfo2().hblks;
+  std::free(sink);
+  EXPECT_EQ(mapped_with_20, mapped_before);
+  EXPECT_EQ(mapped_with_40, mapped_before + 1);
 #endif
 }
 

@@ -3,6 +3,10 @@
 #include <filesystem>
 #include <fstream>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 namespace tbdr {
 
 namespace {
@@ -23,11 +27,22 @@ bool host_reports_free_pages(const std::string& balloon_devices) {
   return false;
 }
 
-std::string malloc_tunables() {
+bool huge_pages_wanted() {
   const char* choice = std::getenv(kHugePagesVariable);
   const std::string c = choice != nullptr ? choice : "";
-  const bool huge = c == "1" || (c != "0" && !host_reports_free_pages());
-  return std::string(kMallocTunables) + (huge ? std::string(":") + kHugePageTunable : std::string());
+  return c == "1" || (c != "0" && !host_reports_free_pages());
+}
+
+std::string malloc_tunables() {
+  return std::string(kMallocTunables) + (huge_pages_wanted() ? std::string(":") + kHugePageTunable : std::string());
+}
+
+bool set_heap_thresholds() {
+#if defined(__GLIBC__)
+  return mallopt(M_MMAP_THRESHOLD, kMmapThresholdBytes) == 1 && mallopt(M_TRIM_THRESHOLD, kTrimThresholdBytes) == 1;
+#else
+  return false;
+#endif
 }
 
 }  // namespace tbdr

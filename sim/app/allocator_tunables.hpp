@@ -1,15 +1,20 @@
 #pragma once
-// The glibc allocator settings tbdrsim runs with: `main` (sim/app/main.cpp) re-executes the
-// program once with them in GLIBC_TUNABLES; a run records which it had (run_driver.cpp). Host
-// speed only: no figure depends on them. Why each, with measurements: main.cpp and
-// docs/architecture.md, "The allocator".
+// The glibc allocator settings tbdrsim runs with: `main` (sim/app/main.cpp) sets the heap's
+// thresholds in the running process (mallopt) or, where huge pages are wanted, which only
+// GLIBC_TUNABLES can ask for, re-executes the program once with them all in GLIBC_TUNABLES; a run
+// records which it had (run_driver.cpp). Host speed only: no figure depends on them. Why each,
+// with measurements: main.cpp and docs/architecture.md, "The allocator".
 #include <cstdlib>
 #include <string>
 
 namespace tbdr {
 
-/// The heap's thresholds: blocks up to 32 MiB from the heap, trimmed only past 256 MiB free.
+/// The heap's thresholds: blocks up to 32 MiB (glibc's largest mmap threshold on 64-bit hosts)
+/// from the heap, trimmed only past 256 MiB free; as mallopt values and as tunables.
+inline constexpr int kMmapThresholdBytes = 32 << 20;
+inline constexpr int kTrimThresholdBytes = 256 << 20;
 inline constexpr const char* kMallocTunables = "glibc.malloc.mmap_threshold=33554432:glibc.malloc.trim_threshold=268435456";
+static_assert(kMmapThresholdBytes == 33554432 && kTrimThresholdBytes == 268435456, "kMallocTunables says the same");
 /// The tunable asking for transparent huge pages for malloc's blocks.
 inline constexpr const char* kHugePageTunable = "glibc.malloc.hugetlb=1";
 /// The environment variable that decides huge pages: "0" leaves them out, "1" asks for them,
@@ -30,9 +35,18 @@ inline constexpr const char* kHugePagesVariable = "TBDRSIM_HUGE_PAGES";
 /// folder of their own).
 bool host_reports_free_pages(const std::string& balloon_devices = "/sys/bus/virtio/drivers/virtio_balloon");
 
-/// The GLIBC_TUNABLES tbdrsim starts with: the heap's thresholds, plus huge pages where
-/// TBDRSIM_HUGE_PAGES=1, or where it is unset and the host does not take freed memory back.
+/// Whether tbdrsim asks for huge pages: TBDRSIM_HUGE_PAGES=1, or unset (or anything but "0")
+/// where the host does not take freed memory back.
+bool huge_pages_wanted();
+
+/// The GLIBC_TUNABLES tbdrsim starts with when it wants huge pages: the heap's thresholds and
+/// huge pages (without huge pages, only the thresholds).
 std::string malloc_tunables();
+
+/// Sets the heap's thresholds in the running process (mallopt: the same settings as the
+/// tunables, without starting the program again); false where the allocator refused them or is
+/// not glibc's.
+bool set_heap_thresholds();
 
 /// Whether this process's allocator asks for huge pages (its GLIBC_TUNABLES has them).
 inline bool allocator_huge_pages() {
