@@ -316,12 +316,17 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
       // per-sample loop below with its branches on those taken out, the same counts, overdraw
       // counters and candidates. A failed depth test is final, so every candidate passes, and
       // every rasterised sample read the depth: the reads and the fails follow from the counts.
+      // (Each visit counts into locals of its own, written back once: the tile's counters are
+      // captured by reference, and the visitor would otherwise load and store them per sample.)
       auto visit = [&]<bool kDepthTest, bool kOverdraw>() {
+        std::uint64_t counted = 0;
+        bool full_stack = false;
+        Candidate* out = cand + n_cand;
         rasterize_in_rect(p.setup, rect, ctx_.pattern, [&](int x, int y, std::uint32_t mask, const float* z) TBDR_ISP_INLINE_VISITOR {
           const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
           const std::size_t lbase = (static_cast<std::size_t>(y - y0) * rw + static_cast<std::size_t>(x - x0)) * S;
           const auto covered = bit_count(mask);
-          rasterised += covered;
+          counted += covered;
           if constexpr (kOverdraw) overdraw[pixel] += covered;
           for (std::uint32_t m = mask; m != 0; m &= m - 1) {
             const int s = std::countr_zero(m);
@@ -329,18 +334,24 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
               if (!passes_outcomes(depth_outcomes, z[s], depth[pixel * static_cast<std::size_t>(S) + static_cast<std::size_t>(s)])) continue;
             }
             const auto li = static_cast<std::uint32_t>(lbase + static_cast<std::size_t>(s));
-            conflict = conflict || (layered && stack_depth[li] >= L);
-            cand[n_cand++] = {li, x, y, 1u << s, z[s], true};
+            full_stack = full_stack || (layered && stack_depth[li] >= L);
+            *out++ = {li, x, y, 1u << s, z[s], true};
           }
         });
+        rasterised += counted;
+        conflict = conflict || full_stack;
+        n_cand = static_cast<std::size_t>(out - cand);
       };
       // One sample per pixel: the same visit a row's run at a time (the depth test reads the
       // run's stored depths in a row; no coverage mask to walk).
       auto visit_spans = [&]<bool kDepthTest, bool kOverdraw>() {
+        std::uint64_t counted = 0;
+        bool full_stack = false;
+        Candidate* out = cand + n_cand;
         rasterize_spans_1x(p.setup, rect, ctx_.pattern, [&](int y, int xa, int xb, const float* z) TBDR_ISP_INLINE_VISITOR {
           const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(xa);
           const auto n = static_cast<std::uint32_t>(xb - xa);
-          rasterised += n;
+          counted += n;
           if constexpr (kOverdraw) {
             for (std::uint32_t i = 0; i < n; ++i) overdraw[row + i] += 1;
           }
@@ -350,10 +361,13 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
               if (!passes_outcomes(depth_outcomes, z[i], depth[row + i])) continue;
             }
             const std::uint32_t li = li0 + i;
-            if (layered) conflict = conflict || stack_depth[li] >= L;
-            cand[n_cand++] = {li, xa + static_cast<std::int32_t>(i), y, 1u, z[i], true};
+            if (layered) full_stack = full_stack || stack_depth[li] >= L;
+            *out++ = {li, xa + static_cast<std::int32_t>(i), y, 1u, z[i], true};
           }
         });
+        rasterised += counted;
+        conflict = conflict || full_stack;
+        n_cand = static_cast<std::size_t>(out - cand);
       };
       const bool spans = S == 1;
       if (depth_on) {
