@@ -42,7 +42,7 @@ bench_scratch
 readonly GIB_KIB=1048576
 
 echo "tbdrsim memory: peak resident set of one run without images, $THREADS thread(s); limit 1 GiB = $GIB_KIB KiB"
-echo "build: $BUILD; host $(hostname), $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "build: $BUILD ($("$BUILD/tbdrsim" --version 2>/dev/null | sed "s/^tbdrsim //")); host $(hostname), $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
 printf '%-10s %-28s %-22s %12s %9s %s\n' case technique setup peak_KiB cpu_s within_1GiB
 
 # row CASE TECHNIQUE SCENE RESOLUTION [trace options...]: generate, run, print one row.

@@ -127,7 +127,7 @@ median() { cut -d' ' -f"$1" "$2" | sort -g | awk '{ v[NR] = $1 } END { print (NR
 baseline_cpu() { [ -f "$BASELINE" ] && awk -v m="$MODE" -v t="$1" '$1 == m && $2 == t { print $3 }' "$BASELINE" || true; }
 
 echo "tbdrsim speed: atrium:3, entrance, $RES, $LIGHTS lights, images $IMAGES, median of $REPS; forward_multipass $LPP lights per pass"
-echo "build: $BUILD${AGAINST:+ (against $AGAINST, interleaved)}; host $(hostname), $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "build: $BUILD ($("$BUILD/tbdrsim" --version 2>/dev/null | sed "s/^tbdrsim //"))${AGAINST:+ (against $AGAINST: $("$AGAINST/tbdrsim" --version 2>/dev/null | sed "s/^tbdrsim //"), interleaved)}; host $(hostname), $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
 if [ "$THREADS" -gt 1 ]; then
   echo "threads: 1 and $THREADS, interleaved run by run; tiles_x = tile rendering wall at 1 thread / at $THREADS threads;"
   echo "serial = 1 - tile rendering wall / run wall (1 thread); timing = the timing model's share of it (part of serial);"

@@ -279,7 +279,9 @@ int cli_main(const std::vector<std::string>& args, std::ostream& out, std::ostre
       return 0;
     }
     if (name == "--version") {
-      out << "tbdrsim " << kToolVersion << "\n";
+      // The instruction set it was compiled for (CMakeLists.txt, TBDRSIM_X86_64_LEVEL): host
+      // timings of builds for different levels differ; no figure does.
+      out << "tbdrsim " << kToolVersion << ", compiled for " << TBDRSIM_INSTRUCTION_SET << "\n";
       return 0;
     }
     for (const auto& c : cli_commands()) {
