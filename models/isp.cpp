@@ -474,10 +474,15 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
       // Final verdicts: stencil ops, and the passing samples become tags.
       const bool unresolved = p.hsr == HsrClass::PunchThrough && write_on;
       const bool writes_depth_now = write_on && p.hsr != HsrClass::PunchThrough;
-      std::uint64_t kept = 0;
+      std::uint64_t kept = 0, failed = 0, hidden = 0;
+      // The stacks through pointers taken once and a stack's depth read into a register: a
+      // store through a byte reference (the depth) may alias anything, and the compiler would
+      // load the vectors' pointers and the counters again after each.
+      std::uint8_t* const stack_depths = depth_of_.data();
+      Layer* const stack_layers = layers_.data();
       for (const Candidate& c : candidates) {
         if (!c.depth_pass) {
-          ++isp.depth_test_failed_samples;
+          ++failed;
           if (stencil_on) {
             const std::size_t gi = global_index(c.x, c.y, c.bit);
             stencil[gi] = apply_stencil(pl.stencil_depth_fail_op, stencil[gi], ref);
@@ -489,21 +494,23 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
           const std::size_t gi = global_index(c.x, c.y, c.bit);
           stencil[gi] = apply_stencil(pl.stencil_pass_op, stencil[gi], ref);
         }
-        Layer* stack = &layers_[static_cast<std::size_t>(c.li) * static_cast<std::size_t>(L)];
-        std::uint8_t& n = depth_of_[c.li];
+        std::uint32_t n = stack_depths[c.li];
         if (!layered) {
-          isp.hsr_removed_samples += n;  // every layer beneath is hidden: never shaded
-          layers_hidden_ = layers_hidden_ || n != 0;
+          hidden += n;  // every layer beneath is hidden: never shaded
           n = 0;
         }
         pushed_.push_back({{list_pos, c.x, c.y, c.bit, c.z, unresolved}, c.li, n});
-        stack[n++] = {list_pos, c.z, unresolved};
+        stack_layers[static_cast<std::size_t>(c.li) * static_cast<std::size_t>(L) + n] = {list_pos, c.z, unresolved};
+        stack_depths[c.li] = static_cast<std::uint8_t>(n + 1);
         // Opaque and translucent depth is known now; punch-through depth waits for the alpha test.
         if (writes_depth_now) {
           depth[global_index(c.x, c.y, c.bit)] = c.z;
           widen_tile_depth(c.z);
         }
       }
+      isp.depth_test_failed_samples += failed;
+      isp.hsr_removed_samples += hidden;
+      layers_hidden_ = layers_hidden_ || hidden != 0;
       if (unresolved) unresolved_layers_ += kept;
       isp.tag_buffer_write_bytes += tag_bytes * kept;
       if (writes_depth_now) isp.depth_buffer_write_bytes += ds_bytes * kept;
