@@ -1,6 +1,7 @@
 #include "models/isp.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <bit>
 #include <cstddef>
 #include <span>
@@ -42,11 +43,45 @@ constexpr std::uint32_t passing_outcomes(CompareOp op) {
 
 /// Whether `incoming` passes the comparison whose passing_outcomes() is `outcomes`.
 template <class T>
-bool passes_outcomes(std::uint32_t outcomes, T incoming, T stored) {
+constexpr bool passes_outcomes(std::uint32_t outcomes, T incoming, T stored) {
   const auto outcome = static_cast<std::uint32_t>(incoming < stored) | static_cast<std::uint32_t>(incoming == stored) << 1 |
                        static_cast<std::uint32_t>(incoming > stored) << 2;
   return ((outcomes >> outcome) & 1u) != 0;
 }
+
+/// A depth test as the per-sample loops compile it: the five comparisons an unordered pair fails
+/// as the one comparison each is (the same verdicts as their outcome sets, NaN included), any
+/// other through its outcome set (passes_outcomes).
+enum class DepthTest : std::uint8_t { ByOutcomes, Less, LessEqual, Equal, Greater, GreaterEqual };
+template <DepthTest kTest>
+constexpr bool passes_depth(std::uint32_t outcomes, float incoming, float stored) {
+  if constexpr (kTest == DepthTest::Less) return incoming < stored;
+  else if constexpr (kTest == DepthTest::LessEqual) return incoming <= stored;
+  else if constexpr (kTest == DepthTest::Equal) return incoming == stored;
+  else if constexpr (kTest == DepthTest::Greater) return incoming > stored;
+  else if constexpr (kTest == DepthTest::GreaterEqual) return incoming >= stored;
+  else return passes_outcomes(outcomes, incoming, stored);
+}
+/// Whether compiled test kTest gives comparison `op`'s verdict (its outcome set's) for every pair
+/// of depths that order differently: signed zeros, infinities and NaN among them.
+template <DepthTest kTest>
+constexpr bool compiles_as(CompareOp op) {
+  constexpr float kInf = std::numeric_limits<float>::infinity(), kNan = std::numeric_limits<float>::quiet_NaN();
+  constexpr float kDepths[] = {-kInf, -1.0f, -0.0f, 0.0f, 0.25f, 1.0f, kInf, kNan};
+  for (const float a : kDepths) {
+    for (const float b : kDepths) {
+      if (passes_depth<kTest>(0, a, b) != passes_outcomes(passing_outcomes(op), a, b)) return false;
+    }
+  }
+  return true;
+}
+static_assert(compiles_as<DepthTest::Less>(CompareOp::Less) && compiles_as<DepthTest::LessEqual>(CompareOp::LessEqual) &&
+                  compiles_as<DepthTest::Equal>(CompareOp::Equal) &&
+                  compiles_as<DepthTest::Greater>(CompareOp::Greater) &&
+                  compiles_as<DepthTest::GreaterEqual>(CompareOp::GreaterEqual),
+              "a compiled depth test differs from its comparison's outcome set");
+static_assert(!compiles_as<DepthTest::Less>(CompareOp::LessEqual) && !compiles_as<DepthTest::GreaterEqual>(CompareOp::Greater),
+              "the check above tells comparisons apart");
 
 template <class T>
 bool passes(CompareOp op, T incoming, T stored) {
@@ -344,7 +379,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
       };
       // One sample per pixel: the same visit a row's run at a time (the depth test reads the
       // run's stored depths in a row; no coverage mask to walk).
-      auto visit_spans = [&]<bool kDepthTest, bool kOverdraw>() {
+      auto visit_spans = [&]<bool kDepthTest, bool kOverdraw, DepthTest kTest = DepthTest::ByOutcomes>() {
         std::uint64_t counted = 0;
         bool full_stack = false;
         Candidate* out = cand + n_cand;
@@ -358,7 +393,7 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
           const auto li0 = static_cast<std::uint32_t>((y - y0) * rw + (xa - x0));
           for (std::uint32_t i = 0; i < n; ++i) {
             if constexpr (kDepthTest) {
-              if (!passes_outcomes(depth_outcomes, z[i], depth[row + i])) continue;
+              if (!passes_depth<kTest>(depth_outcomes, z[i], depth[row + i])) continue;
             }
             const std::uint32_t li = li0 + i;
             if (layered) full_stack = full_stack || stack_depth[li] >= L;
@@ -369,12 +404,23 @@ void Isp::render_tile(const PixelRect& rect, const std::vector<std::uint32_t>& p
         conflict = conflict || full_stack;
         n_cand = static_cast<std::size_t>(out - cand);
       };
+      // A span's depth tests compiled as the pipeline's comparison (the common five).
+      const auto tested_spans = [&]<bool kOverdraw>() {
+        switch (pl.depth_compare) {
+          case CompareOp::Less: return visit_spans.template operator()<true, kOverdraw, DepthTest::Less>();
+          case CompareOp::LessEqual: return visit_spans.template operator()<true, kOverdraw, DepthTest::LessEqual>();
+          case CompareOp::Equal: return visit_spans.template operator()<true, kOverdraw, DepthTest::Equal>();
+          case CompareOp::Greater: return visit_spans.template operator()<true, kOverdraw, DepthTest::Greater>();
+          case CompareOp::GreaterEqual: return visit_spans.template operator()<true, kOverdraw, DepthTest::GreaterEqual>();
+          default: return visit_spans.template operator()<true, kOverdraw, DepthTest::ByOutcomes>();
+        }
+      };
       const bool spans = S == 1;
       if (depth_on) {
         if (overdraw) {
-          spans ? visit_spans.template operator()<true, true>() : visit.template operator()<true, true>();
+          spans ? tested_spans.template operator()<true>() : visit.template operator()<true, true>();
         } else {
-          spans ? visit_spans.template operator()<true, false>() : visit.template operator()<true, false>();
+          spans ? tested_spans.template operator()<false>() : visit.template operator()<true, false>();
         }
         depth_reads = rasterised;
         final_fails = rasterised - n_cand;
