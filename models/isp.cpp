@@ -1,9 +1,9 @@
 #include "models/isp.hpp"
 
 #include <algorithm>
-#include <limits>
 #include <bit>
 #include <cstddef>
+#include <limits>
 #include <span>
 
 #include "kernel/bits.hpp"
