@@ -8,13 +8,33 @@ void DmaStream::add(std::uint64_t addr, std::uint64_t bytes) {
   for_each_request(addr, bytes, [&](std::uint64_t a, std::uint32_t n) { chunks_.push_back({a, n}); });
 }
 
+void DmaStream::reset(Client client, bool write, DramClass cls, std::uint32_t outstanding) {
+  client_ = client;
+  write_ = write;
+  cls_ = cls;
+  outstanding_ = outstanding;
+  chunks_.clear();
+  next_ = 0;
+  completed_ = 0;
+  in_flight_ = 0;
+  waiting_ = false;
+  done_ = nullptr;
+}
+
 void DmaStream::start(std::function<void()> done) {
   done_ = std::move(done);
   if (chunks_.empty()) {
-    eq_.schedule(eq_.now(), [this] { done_(); });
+    eq_.schedule(eq_.now(), [this] { finish(); });
     return;
   }
   pump();
+}
+
+void DmaStream::finish() {
+  const std::function<void()> done = std::move(done_);
+  done_ = nullptr;
+  done();
+  if (idle_ != nullptr) idle_->push_back(this);
 }
 
 void DmaStream::pump() {
@@ -24,7 +44,7 @@ void DmaStream::pump() {
     const bool ok = mem_.issue(client_, ch.first, ch.second, write_, cls_, [this] {
       --in_flight_;
       if (++completed_ == chunks_.size()) {
-        done_();
+        finish();
         return;
       }
       if (!waiting_) pump();

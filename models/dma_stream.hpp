@@ -26,6 +26,12 @@ class DmaStream {
   DmaStream(const DmaStream&) = delete;
   DmaStream& operator=(const DmaStream&) = delete;
 
+  /// Where the stream puts itself once `done` has returned (when set): its owner reuses it
+  /// through reset(), keeping its request list's storage.
+  void recycle_into(std::vector<DmaStream*>* idle) { idle_ = idle; }
+  /// A finished stream made ready to be filled again, as if constructed with these arguments.
+  void reset(Client client, bool write, DramClass cls, std::uint32_t outstanding);
+
   /// Calls fn(addr, bytes) for each request the stream cuts [addr, addr + bytes) into.
   template <typename Fn>
   static void for_each_request(std::uint64_t addr, std::uint64_t bytes, Fn&& fn) {
@@ -44,6 +50,9 @@ class DmaStream {
 
  private:
   void pump();
+  /// Runs `done` (moved out first: a stream it starts may be this one only after it returned),
+  /// then offers the stream for reuse.
+  void finish();
   EventQueue& eq_;
   MemorySystem& mem_;
   Client client_;
@@ -56,6 +65,7 @@ class DmaStream {
   std::uint32_t in_flight_ = 0;
   bool waiting_ = false;
   std::function<void()> done_;
+  std::vector<DmaStream*>* idle_ = nullptr;
 };
 
 }  // namespace tbdr
