@@ -39,7 +39,7 @@ struct RunOutcome {
   double timing_wait_seconds = 0; ///< host time the timing model waited for the functional run (WorkFeed::consumer_wait_seconds; 0 at one thread)
   double image_cpu_seconds = 0; ///< host CPU time of writing the images (write_frame_images on all its threads; 0 without)
   unsigned threads = 1;          ///< threads the simulation ran on
-  FrameResult frame;
+  FrameResult frame;              ///< its work without commands: those are released once timed
   TimingResult timing;
   EnergyBreakdown energy;
   std::vector<std::string> images_written;
