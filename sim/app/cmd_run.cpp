@@ -158,6 +158,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   if (vm.count("images")) req.images_dir = vm["images"].as<std::string>();
   req.command_line = invocation_command_line();
   req.threads = threads_option(vm, default_thread_count());
+  req.summary_figures = !vm.count("quiet");  // only the summary reads them (1 ms of the serial end)
   for (const char* file : {"stats", "timeline"}) {
     if (vm.count(file)) check_output_file(std::string("--") + file, vm[file].as<std::string>());  // before the run
   }

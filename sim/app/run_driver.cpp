@@ -430,7 +430,7 @@ RunOutcome run_one(const RunRequest& req) {
   rec.tiles = outcome.timing.tiles;
   if (!db) db.emplace(req.db_path);
   outcome.run_id = db->write_run(rec);
-  outcome.derived = read_derived_figures(*db, outcome.run_id);
+  if (req.summary_figures) outcome.derived = read_derived_figures(*db, outcome.run_id);
   if (released.valid()) released.get();
   return outcome;
 }

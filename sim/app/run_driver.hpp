@@ -24,6 +24,7 @@ struct RunRequest {
   std::string images_dir;    ///< empty: no images
   std::string command_line;  ///< recorded in the runs table
   unsigned threads = 1;      ///< threads the frame's tiles render on (FrameOptions::threads); no figure depends on it
+  bool summary_figures = true;  ///< read RunOutcome::derived back from the database (for print_run_summary)
 };
 
 /// What a run produced.
@@ -43,7 +44,7 @@ struct RunOutcome {
   TimingResult timing;
   EnergyBreakdown energy;
   std::vector<std::string> images_written;
-  DerivedFigures derived;        ///< read back from the database (views.sql defines them)
+  DerivedFigures derived;        ///< read back from the database (views.sql defines them) when RunRequest::summary_figures
 };
 
 /// The trace's identity and technique options as run parameters (origin: the trace file and the
