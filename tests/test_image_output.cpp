@@ -234,6 +234,16 @@ TEST(ImageOutputHeatmap, CountsGiveTheSameImageAsTheirValuesAsDoubles) {
     EXPECT_EQ(from_counts, heatmap_to_image(values, w, h, spec)) << "log_scale " << log_scale;
     EXPECT_GT(from_counts.height, h);  // the legend is there
   }
+  // The counts above go through a colour per count (their largest, 47, is below an eighth of the
+  // 2880 pixels); one count of 100000 takes them the per-pixel way, and a clamped range (a
+  // spec's max) maps every count above it to the top colour either way.
+  std::vector<std::uint32_t> wide = counts;
+  wide[17] = 100000;
+  const std::vector<double> wide_values(wide.begin(), wide.end());
+  HeatmapSpec plain{"Overdraw", "samples", false, std::nullopt, std::nullopt};
+  EXPECT_EQ(heatmap_to_image(wide, w, h, plain), heatmap_to_image(wide_values, w, h, plain));
+  HeatmapSpec clamped{"Overdraw", "samples", false, 20.0, std::nullopt};
+  EXPECT_EQ(heatmap_to_image(counts, w, h, clamped), heatmap_to_image(values, w, h, clamped));
 }
 
 TEST(ImageOutputHeatmap, MaxValueClampsAndLogScaleMapsEnds) {
