@@ -85,6 +85,8 @@ class SurfaceStore {
   std::size_t size() const { return size_; }
   /// The site of sample `k` (set before), without copying its look.
   const SurfaceSite& site(std::size_t k) const { return sites_[k]; }
+  /// The look of sample `k` (set before; the store keeps looks, with colours), without its site.
+  const SurfaceLook& look(std::size_t k) const { return looks_[k]; }
   /// The whole surface of sample `k` (set before).
   SurfacePoint operator[](std::size_t k) const {
     SurfacePoint s;

@@ -44,6 +44,29 @@ bool row_is_non_uniform(const ImageRGB8& img, int y) {
   return false;
 }
 
+// The inline rounding the conversions use per pixel is std::lround over [0, 255] (every float a
+// step of 1/8 apart, each value's neighbouring floats, and the ties) and at its edges; NaN gives 0.
+TEST(ImageOutputColor, InlineRoundingIsLroundForNonNegativeValues) {
+  std::vector<double> xs = {0.0, 0.49999999999999994, 0.5, 0.5000000000000001, 1.5, 2.5, 254.5, 255.0, 4503599627370495.5};
+  for (int i = 0; i <= 255 * 8; ++i) {
+    const double x = i / 8.0;
+    xs.push_back(x);
+    xs.push_back(std::nextafter(x, 0.0));
+    xs.push_back(std::nextafter(x, 1e9));
+  }
+  for (const double x : xs) {
+    EXPECT_EQ(lround_nonnegative(x), std::lround(x)) << x;
+    const auto f = static_cast<float>(x);
+    if (f < 1e7f) {
+      EXPECT_EQ(lround_nonnegative(f), std::lround(f)) << f;
+      EXPECT_EQ(lround_nonnegative(std::nextafter(f, 0.0f)), std::lround(std::nextafter(f, 0.0f))) << f;
+      EXPECT_EQ(lround_nonnegative(std::nextafter(f, 1e9f)), std::lround(std::nextafter(f, 1e9f))) << f;
+    }
+  }
+  EXPECT_EQ(lround_nonnegative(std::nan("")), 0);
+  EXPECT_EQ(lround_nonnegative(std::nanf("")), 0);
+}
+
 TEST(ImageOutputColor, SrgbTransferFunctionExactValues) {
   EXPECT_EQ(linear_to_srgb8(0.0), 0);
   EXPECT_EQ(linear_to_srgb8(1.0), 255);

@@ -735,7 +735,7 @@ ImageRGB8 depth_to_image(const std::vector<float>& depth01, int w, int h, bool l
   constexpr int kNear = 255;
   constexpr int kFar = 24;
   auto grey_at = [&](double t) {  // t: 0 near .. 1 far
-    const auto g = static_cast<std::uint8_t>(kNear - std::lround((kNear - kFar) * std::clamp(t, 0.0, 1.0)));
+    const auto g = static_cast<std::uint8_t>(kNear - lround_nonnegative((kNear - kFar) * std::clamp(t, 0.0, 1.0)));
     return Rgb8{g, g, g};
   };
   const double span = static_cast<double>(dmax) - static_cast<double>(dmin);

@@ -23,6 +23,17 @@
 namespace tbdr {
 
 /// One 8-bit sRGB color.
+/// std::lround(x) for 0 <= x < 2^52 (ties away from zero), inline: x - trunc(x) is exact there,
+/// so rounding up exactly when that fraction is 0.5 or more gives the same integer. The image
+/// conversions round a value per pixel, and std::lround is a library call. NaN gives 0 (the byte
+/// std::lround's unspecified result became).
+template <typename F>
+constexpr long lround_nonnegative(F x) {
+  if (!(x >= F(0))) return 0;
+  const auto whole = static_cast<long>(x);
+  return whole + (x - static_cast<F>(whole) >= F(0.5) ? 1 : 0);
+}
+
 struct Rgb8 {
   std::uint8_t r = 0;
   std::uint8_t g = 0;

@@ -101,20 +101,23 @@ std::optional<ImageRGB8> surface_image(const FrameImages& images, const std::str
     }
     return ids_to_image(id, w, h, 0);
   }
+  // (Looks are kept: surface stores keep them with colours, which images imply.)
   if (albedo) {
     std::vector<glm::vec3> rgb(pixels, glm::vec3(0.0f));
     for (std::size_t p = 0; p < pixels; ++p) {
-      if (written(p)) rgb[p] = store->surface[p * S].albedo;  // linear colour: shown in sRGB
+      if (written(p)) rgb[p] = store->surface.look(p * S).albedo;  // linear colour: shown in sRGB
     }
     return color_to_image(rgb, w, h);
   }
   // A normal map's usual picture: n/2 + 1/2 as 8-bit unorm, not a colour (no sRGB curve).
   ImageRGB8 out(w, h);
-  auto unorm8 = [](float v) { return static_cast<std::uint8_t>(std::lround(std::clamp(v * 0.5f + 0.5f, 0.0f, 1.0f) * 255.0f)); };
+  auto unorm8 = [](float v) { return static_cast<std::uint8_t>(lround_nonnegative(std::clamp(v * 0.5f + 0.5f, 0.0f, 1.0f) * 255.0f)); };
   for (std::size_t p = 0; p < pixels; ++p) {
     if (!written(p)) continue;
-    const glm::vec3 n = store->surface[p * S].normal;
-    out.set(static_cast<int>(p % static_cast<std::size_t>(w)), static_cast<int>(p / static_cast<std::size_t>(w)), Rgb8{unorm8(n.x), unorm8(n.y), unorm8(n.z)});
+    const glm::vec3 n = store->surface.look(p * S).normal;
+    out.rgb[3 * p] = unorm8(n.x);
+    out.rgb[3 * p + 1] = unorm8(n.y);
+    out.rgb[3 * p + 2] = unorm8(n.z);
   }
   return out;
 }
