@@ -292,10 +292,16 @@ class SrgbTable {
   std::array<std::uint8_t, (0x3f800000u >> kBucketShift)> bucket_start_{};
 };
 
+/// The table, built once (thread-safe static initialisation).
+const SrgbTable& srgb_table() {
+  static const SrgbTable table;
+  return table;
+}
+
 template <typename Vec>
 ImageRGB8 color_image(const std::vector<Vec>& linear, int w, int h) {
   check_size(linear.size(), w, h, "color_to_image");
-  static const SrgbTable srgb;  // built once (thread-safe static initialisation)
+  const SrgbTable& srgb = srgb_table();
   ImageRGB8 image(w, h);
   for (std::size_t i = 0; i < linear.size(); ++i) {
     image.rgb[3 * i] = srgb(linear[i].x);
@@ -313,6 +319,11 @@ ImageRGB8 color_to_image(const std::vector<glm::vec4>& linear, int w, int h) {
 
 ImageRGB8 color_to_image(const std::vector<glm::vec3>& linear, int w, int h) {
   return color_image(linear, w, h);
+}
+
+Rgb8 linear_to_srgb8(const glm::vec3& linear) {
+  const SrgbTable& srgb = srgb_table();
+  return {srgb(linear.x), srgb(linear.y), srgb(linear.z)};
 }
 
 // ---------------------------------------------------------------------------------------------

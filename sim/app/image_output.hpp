@@ -73,6 +73,9 @@ std::uint8_t linear_to_srgb8(double linear);
 /// the vector does not hold w * h colors.
 ImageRGB8 color_to_image(const std::vector<glm::vec4>& linear, int w, int h);
 ImageRGB8 color_to_image(const std::vector<glm::vec3>& linear, int w, int h);
+/// One linear colour's sRGB bytes, as color_to_image converts each pixel (for images made pixel
+/// by pixel from other data, without a frame-sized copy of their colours).
+Rgb8 linear_to_srgb8(const glm::vec3& linear);
 
 /// The heat-map colormap (viridis) at t in [0, 1] (clamped; NaN -> 0).
 Rgb8 colormap_color(double t);

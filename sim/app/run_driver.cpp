@@ -102,12 +102,16 @@ std::optional<ImageRGB8> surface_image(const FrameImages& images, const std::str
     return ids_to_image(id, w, h, 0);
   }
   // (Looks are kept: surface stores keep them with colours, which images imply.)
-  if (albedo) {
-    std::vector<glm::vec3> rgb(pixels, glm::vec3(0.0f));
+  if (albedo) {  // linear colour, shown in sRGB as color_to_image shows it (black: sRGB of 0)
+    ImageRGB8 out(w, h);
     for (std::size_t p = 0; p < pixels; ++p) {
-      if (written(p)) rgb[p] = store->surface.look(p * S).albedo;  // linear colour: shown in sRGB
+      if (!written(p)) continue;
+      const Rgb8 c = linear_to_srgb8(store->surface.look(p * S).albedo);
+      out.rgb[3 * p] = c.r;
+      out.rgb[3 * p + 1] = c.g;
+      out.rgb[3 * p + 2] = c.b;
     }
-    return color_to_image(rgb, w, h);
+    return out;
   }
   // A normal map's usual picture: n/2 + 1/2 as 8-bit unorm, not a colour (no sRGB curve).
   ImageRGB8 out(w, h);
