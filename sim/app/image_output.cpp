@@ -279,7 +279,12 @@ class SrgbTable {
     if (!(x > 0.0f)) return 0;  // also NaN
     if (x >= thresholds_.back()) return 255;  // also every x >= 1: the buckets end below 1
     std::size_t i = bucket_start_[std::bit_cast<std::uint32_t>(x) >> kBucketShift];
-    while (thresholds_[i] <= x) ++i;  // stops by i = 254: x < thresholds_[254]
+    // Up to two steps without a branch (how far a bucket's codes mostly go: a loop's exit,
+    // taken after 0, 1 or 2 steps at random, mispredicted), then the loop for any further ones.
+    // Every step stops by i = 254: x < thresholds_[254].
+    i += thresholds_[i] <= x ? 1 : 0;
+    i += thresholds_[i] <= x ? 1 : 0;
+    while (thresholds_[i] <= x) ++i;
     return static_cast<std::uint8_t>(i);
   }
 
