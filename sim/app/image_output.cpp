@@ -833,6 +833,11 @@ double heatmap_position(double v, const HeatmapRange& range, bool log_scale) {
 
 namespace {
 
+/// A heat map of counts colours each count once, from a table up to the largest count, when that
+/// table has at most one entry per this many pixels (a 1080p counter's largest count is tens to
+/// hundreds against 2 M pixels); a larger one (a rare huge count) would cost more than it saves.
+constexpr std::size_t kCountTableShare = 8;
+
 /// heatmap_to_image for values of type T (double, or counts read as they are stored).
 template <typename T>
 ImageRGB8 values_heatmap(const std::vector<T>& values, int w, int h, const HeatmapSpec& spec) {
@@ -845,7 +850,7 @@ ImageRGB8 values_heatmap(const std::vector<T>& values, int w, int h, const Heatm
   bool drawn = false;
   if constexpr (std::is_integral_v<T>) {
     const auto top = static_cast<std::uint64_t>(st.count > 0 ? st.max : 0);
-    if (top < values.size() / 8) {
+    if (top < values.size() / kCountTableShare) {
       std::vector<Rgb8> colour(top + 1);
       for (std::uint64_t v = 0; v <= top; ++v) colour[v] = colormap_color(heatmap_position(static_cast<double>(v), range, spec.log_scale));
       for (std::size_t i = 0; i < values.size(); ++i) {
