@@ -40,6 +40,7 @@
 #include "app/cli.hpp"
 #include "app/commands.hpp"
 #include "app/run_driver.hpp"
+#include "kernel/cpu_placement.hpp"
 #include "kernel/thread_pool.hpp"
 #include "models/command_processor.hpp"
 #include "models/hw_config.hpp"
@@ -404,6 +405,7 @@ TEST(ThreadEquivalenceDatabase, RunsWriteTheSameRowsAndImagesAtEveryThreadCount)
   write_trace_file(generate_trace("deferred", setup), trace_path);
   std::vector<std::vector<std::string>> rows;
   std::vector<std::vector<std::string>> images;
+  const CpuList cpus_before = allowed_cpus();
   for (const unsigned n : kThreadCounts) {
     RunRequest req;
     req.config = resolve_config({}, {});
@@ -412,6 +414,9 @@ TEST(ThreadEquivalenceDatabase, RunsWriteTheSameRowsAndImagesAtEveryThreadCount)
     req.images_dir = (dir / ("images" + std::to_string(n))).string();
     req.threads = n;
     const RunOutcome o = run_one(req);
+    // Kept apart from the timing model's while the frame ran (kernel/cpu_placement.hpp), the
+    // caller's thread has every CPU it had once the run is done.
+    EXPECT_EQ(allowed_cpus(), cpus_before) << n << " threads";
     rows.push_back(database_rows(req.db_path, o.run_id));
     EXPECT_EQ(testing_support::query_number(req.db_path, "SELECT value FROM stats WHERE run_id = " + std::to_string(o.run_id) +
                                                              " AND scope = 'frame/host' AND name = 'simulation_threads'"),

@@ -13,6 +13,7 @@
 #include <ostream>
 #include <sstream>
 
+#include "kernel/cpu_placement.hpp"
 #include "kernel/errors.hpp"
 #include "kernel/thread_pool.hpp"
 #include "models/work_feed.hpp"
@@ -294,9 +295,15 @@ RunOutcome run_one(const RunRequest& req) {
   WorkFeed feed;
   std::future<TimingResult> timed;
   double timing_thread_cpu = 0;
+  // The caller's thread and the timing model's kept on different CPUs while the frame runs, when
+  // the run has the CPUs to itself (kernel/cpu_placement.hpp).
+  std::optional<CriticalThreadPlacement> placement;
   if (pipelined) {
-    timed = std::async(std::launch::async, [&req, &feed, &timing_thread_cpu] {
+    placement.emplace(req.threads);
+    timed = std::async(std::launch::async, [&req, &feed, &timing_thread_cpu, &placement] {
       const double c = thread_cpu_seconds();
+      feed.frame();  // the frame has begun: its tile helpers exist, with every CPU the caller had
+      placement->keep_apart();
       TimingResult r = run_timing(req.config.hw, feed);
       timing_thread_cpu = thread_cpu_seconds() - c;
       return r;
@@ -306,6 +313,7 @@ RunOutcome run_one(const RunRequest& req) {
     outcome.frame = simulate_frame(trace, req.trace_path, scene, req.config.hw,
                                    FrameOptions{.colour = colour, .threads = req.threads, .feed = pipelined ? &feed : nullptr});
   } catch (...) {
+    if (placement) placement->restore();
     // The feed is closed (simulate_frame closes it; again here, whatever failed): the timing
     // model ends with what it was given; its result is dropped.
     feed.close();
@@ -317,6 +325,8 @@ RunOutcome run_one(const RunRequest& req) {
     }
     throw;
   }
+  // The caller's thread gets its CPUs back before it starts the image writers (threads inherit them).
+  if (placement) placement->restore();
   outcome.wall_seconds = seconds_since(t_sim);
   const double c_functional = cpu_seconds() - c_sim;  // (pipelined: the timing thread's so far too)
   // Without images nothing reads the frame's pixels again (the statistics are taken): their
