@@ -22,7 +22,6 @@
 
 namespace tbdr {
 
-/// One 8-bit sRGB color.
 /// std::lround(x) for 0 <= x < 2^52 (ties away from zero), inline: x - trunc(x) is exact there,
 /// so rounding up exactly when that fraction is 0.5 or more gives the same integer. The image
 /// conversions round a value per pixel, and std::lround is a library call. NaN gives 0 (the byte
@@ -34,6 +33,7 @@ constexpr long lround_nonnegative(F x) {
   return whole + (x - static_cast<F>(whole) >= F(0.5) ? 1 : 0);
 }
 
+/// One 8-bit sRGB color.
 struct Rgb8 {
   std::uint8_t r = 0;
   std::uint8_t g = 0;
