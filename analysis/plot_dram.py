@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """DRAM traffic by class for one configuration: one bar per technique (and variant), MB read +
-written stacked by traffic class as the units requested it at the chip boundary, and a black tick
-at what reached the DRAM devices after the system level cache. A panel per light count.
+written at the DRAM devices (after the texture, vertex and system level caches) stacked by the
+traffic class that caused it, and a black tick at what the units requested at the chip boundary
+before those caches. A panel per light count.
 
 Reads a tbdrsim results database through v_run_summary and v_dram_class (finished runs). The
 selection must hold one configuration (pick it with --config) and one scene and frame size; runs
@@ -23,11 +24,14 @@ def draw(args, db, runs):
     dram_classes."""
     panels, fixed = pc.facets(runs, facet=("lights",))
     ids = pc.int_list(runs.run_id)
-    d = pc.query(db, "SELECT run_id, class, total_mb, device_total_mb FROM v_dram_class WHERE run_id IN (%s)" % ids)
+    d = pc.query(db, "SELECT run_id, class, total_mb, requested_total_mb FROM v_dram_class WHERE run_id IN (%s)" % ids)
     if d.empty:
         pc.fail("--db %s: the selected runs recorded no DRAM traffic per class" % args.db)
     d = d.merge(runs, on="run_id")
-    per_run = d.groupby("run_id")[["total_mb", "device_total_mb"]].sum(min_count=1).reset_index()
+    per_run = d.groupby("run_id")[["total_mb", "requested_total_mb"]].sum(min_count=1).reset_index()
+    if d.total_mb.isna().all():
+        pc.fail("--db %s: the selected runs have no DRAM device figures (written before the memory system model)"
+                % args.db)
     classes = pc.ordered(d[d.total_mb > 0]["class"].unique(), pc.DRAM_CLASSES)
     n = len(panels)
     width = max(6.0, 0.55 * runs.series.nunique() + 3.5)
@@ -39,14 +43,14 @@ def draw(args, db, runs):
         table = table.loc[table.sum(axis=1).sort_values().index]
         x = list(range(len(table)))
         pc.stacked_bars(ax, table, pc.CLASS_COLORS)
-        dev = per_run.merge(pr, on="run_id").groupby("series").device_total_mb.mean().reindex(table.index)
-        if dev.notna().any():
-            ax.scatter(x, dev, marker="_", s=300, color="black", zorder=3, label="after the SLC (device)")
-        ax.set_ylabel("DRAM traffic (MB, read + written)")
+        req = per_run.merge(pr, on="run_id").groupby("series").requested_total_mb.mean().reindex(table.index)
+        if req.notna().any():
+            ax.scatter(x, req, marker="_", s=300, color="black", zorder=3, label="requested (before the caches)")
+        ax.set_ylabel("DRAM traffic at the devices (MB, read + written)")
         if ptitle:
             ax.set_title(ptitle, fontsize=9)
     note = pc.repetition_note(runs)
-    fig.suptitle("DRAM traffic by class, requested at the chip boundary\n%s%s"
+    fig.suptitle("DRAM traffic by class at the devices (tick: requested before the caches)\n%s%s"
                  % (pc.title_line(fixed), "\n(" + note + ")" if note else ""), fontsize=10)
     pc.side_legend(fig, axes[0, 0], "traffic class", LEGEND_WIDTH)
     pc.save(fig, args.out, "%d runs, %d series, %d panel(s)" % (len(runs), runs.series.nunique(), n))

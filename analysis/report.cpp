@@ -91,15 +91,16 @@ bool starts_ends(const std::string& s, const std::string& pre, const std::string
 /// The default report's three tables: frame figures, DRAM MB per class, energy mJ per component.
 std::vector<ReportTable::Section> default_sections(const std::vector<std::string>& metrics) {
   ReportTable::Section frame{"per frame", {}, {}};
-  ReportTable::Section dram{"DRAM MB per traffic class (read + written, as requested by the units; device = after the caches)", {}, {}};
+  ReportTable::Section dram{"DRAM MB per traffic class (read + written at the DRAM devices, after the caches; "
+                            "requested = what the units asked for before them)", {}, {}};
   ReportTable::Section energy{"energy mJ per component", {}, {}};
-  std::optional<std::size_t> dram_total, device_total, energy_total;
+  std::optional<std::size_t> dram_total, requested_total, energy_total;
   for (std::size_t i = 0; i < metrics.size(); ++i) {
     const std::string& m = metrics[i];
     if (m == "dram_total_mb") dram_total = i;
-    if (m == "dram_device_total_mb") device_total = i;
+    if (m == "requested_total_mb") requested_total = i;
     if (m == "energy_total_mj") energy_total = i;
-    if (m != "dram_total_mb" && m != "dram_device_total_mb" && starts_ends(m, "dram_", "_mb")) {
+    if (m != "dram_total_mb" && starts_ends(m, "dram_", "_mb") && m != "dram_read_mb" && m != "dram_write_mb") {
       dram.metrics.push_back(i);
       dram.headers.push_back(m.substr(5, m.size() - 8));
     } else if (m != "energy_total_mj" && starts_ends(m, "energy_", "_mj")) {
@@ -114,9 +115,9 @@ std::vector<ReportTable::Section> default_sections(const std::vector<std::string
     dram.metrics.push_back(*dram_total);
     dram.headers.push_back("total");
   }
-  if (!dram.metrics.empty() && device_total) {
-    dram.metrics.push_back(*device_total);
-    dram.headers.push_back("device_total");
+  if (!dram.metrics.empty() && requested_total) {
+    dram.metrics.push_back(*requested_total);
+    dram.headers.push_back("requested");
   }
   if (!energy.metrics.empty() && energy_total) {
     energy.metrics.push_back(*energy_total);
@@ -167,13 +168,13 @@ std::string md_field(const std::string& s) {
 }
 
 bool is_optional_default(const std::string& metric) {
-  return metric.rfind("dram_", 0) == 0 || metric.rfind("energy_", 0) == 0 || metric == "frame_time_ms" ||
+  return metric.rfind("dram_", 0) == 0 || metric.rfind("requested_", 0) == 0 || metric.rfind("energy_", 0) == 0 || metric == "frame_time_ms" ||
          metric == "cycles";
 }
 
 /// The default metrics, in column order (figures absent from every run are dropped later).
 std::vector<std::string> default_report_metrics(const SqlConnection& db) {
-  std::vector<std::string> m = {"frame_time_ms", "cycles", "dram_total_mb", "dram_device_total_mb"};
+  std::vector<std::string> m = {"frame_time_ms", "cycles", "dram_total_mb", "requested_total_mb"};
   std::set<std::string> classes;
   {
     SqlStatement q(db, "SELECT DISTINCT substr(scope, 12) FROM stats WHERE scope GLOB 'frame/dram.*'");
@@ -705,7 +706,7 @@ void print_report(const ReportTable& t, ReportFormat format, bool transpose, std
 
 DerivedFigures read_derived_figures(const ResultsDb& db, std::int64_t run_id) {
   SqlStatement q(db.sql(),
-                 "SELECT frame_time_ms, cycles, dram_total_mb, dram_device_total_mb, energy_total_mj, "
+                 "SELECT frame_time_ms, cycles, dram_total_mb, requested_total_mb, energy_total_mj, "
                  "shaded_fragments_per_pixel, overshading, lights_per_pixel, lights_per_fragment, config_label "
                  "FROM v_run_summary WHERE run_id = ?", run_id);
   if (!q.step()) throw InputError(db.path(), "no run " + std::to_string(run_id));
@@ -717,7 +718,7 @@ DerivedFigures read_derived_figures(const ResultsDb& db, std::int64_t run_id) {
   d.frame_time_ms = get(0);
   d.cycles = get(1);
   d.dram_total_mb = get(2);
-  d.dram_device_total_mb = get(3);
+  d.requested_total_mb = get(3);
   d.energy_total_mj = get(4);
   d.shaded_fragments_per_pixel = get(5);
   d.overshading = get(6);

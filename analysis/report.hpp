@@ -88,7 +88,7 @@ std::string canonical_group_key(const std::string& key);
 /// The derived figures of one run, read from v_run_summary (their one definition: views.sql);
 /// nullopt where the run did not record what a figure needs.
 struct DerivedFigures {
-  std::optional<double> frame_time_ms, cycles, dram_total_mb, dram_device_total_mb, energy_total_mj;
+  std::optional<double> frame_time_ms, cycles, dram_total_mb, requested_total_mb, energy_total_mj;
   std::optional<double> shaded_fragments_per_pixel, overshading, lights_per_pixel, lights_per_fragment;
   std::string config_label;
 };

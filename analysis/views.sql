@@ -9,8 +9,10 @@
 -- Figures a run did not record (cycles, time and energy before the timing model existed, a
 -- traffic class a version did not book) come out NULL, never 0 and never an error.
 -- Units are in the column names: _mb = 1e6 bytes, _mj = millijoules, _ms = milliseconds.
--- dram_*_mb is the traffic the units requested at the chip boundary (frame/dram*, before the
--- system level cache); dram_device_*_mb is what reached the DRAM devices (mem/dram*).
+-- dram_*_mb is what reached the DRAM devices (mem/dram*: after the texture, vertex and system level
+-- caches), per traffic class by the class of the request that caused it (a miss, or the eviction of
+-- a dirty line the class wrote); requested_*_mb is the traffic the units requested at the chip
+-- boundary, before those caches (frame/dram*). A "DRAM" figure without qualifier is device bytes.
 -- light_evaluations counts fragment shading (tsp) and compute shading (deferred dispatches).
 -- The derived figures are defined HERE and nowhere else (the study, `report`, `run` and the stats
 -- files read them from v_run_summary; docs/queries.md states each):
@@ -64,8 +66,8 @@ WITH f AS (
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/compute' AND name = 'compute_light_evaluations') AS compute_light_evaluations,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/isp' AND name = 'samples_rasterised') AS samples_rasterised,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tiler' AND name = 'partial_renders') AS partial_renders,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram' AND name = 'read_bytes') AS dram_read_bytes,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram' AND name = 'write_bytes') AS dram_write_bytes,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram' AND name = 'read_bytes') AS requested_read_bytes,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram' AND name = 'write_bytes') AS requested_write_bytes,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'mem/dram' AND name = 'read_bytes') AS device_read_bytes,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'mem/dram' AND name = 'write_bytes') AS device_write_bytes,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/timing' AND name = 'frame_cycles') AS cycles,
@@ -82,35 +84,63 @@ WITH f AS (
   FROM runs r
 ),
 dram AS (
-  -- DRAM MB per traffic class (frame/dram.<class>), read and written: one index range per run.
+  -- Per traffic class, MB read and written: at the DRAM devices (mem/dram.class.<class>) and as
+  -- requested by the units (frame/dram.<class>): one index range per run and scope prefix.
   SELECT r.id AS run_id,
-    sum(CASE WHEN s.scope = 'frame/dram.parameter_buffer' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_parameter_buffer_read_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.parameter_buffer' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_parameter_buffer_write_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.vertices' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_vertices_read_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.vertices' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_vertices_write_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.indices' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_indices_read_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.indices' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_indices_write_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.textures' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_textures_read_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.textures' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_textures_write_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.color' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_color_read_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.color' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_color_write_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.depth_stencil' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_depth_stencil_read_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.depth_stencil' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_depth_stencil_write_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.gbuffer' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_gbuffer_read_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.gbuffer' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_gbuffer_write_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.visibility' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_visibility_read_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.visibility' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_visibility_write_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.light_data' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_light_data_read_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.light_data' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_light_data_write_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.light_lists' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_light_lists_read_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.light_lists' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_light_lists_write_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.work_lists' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_work_lists_read_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.work_lists' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_work_lists_write_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.spill' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_spill_read_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.spill' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_spill_write_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.other' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_other_read_mb,
-    sum(CASE WHEN s.scope = 'frame/dram.other' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_other_write_mb
-  FROM runs r LEFT JOIN stats s ON s.run_id = r.id AND s.scope > 'frame/dram.' AND s.scope < 'frame/dram/'
+    sum(CASE WHEN s.scope = 'mem/dram.class.parameter_buffer' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_parameter_buffer_read_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.parameter_buffer' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_parameter_buffer_write_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.vertices' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_vertices_read_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.vertices' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_vertices_write_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.indices' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_indices_read_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.indices' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_indices_write_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.textures' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_textures_read_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.textures' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_textures_write_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.color' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_color_read_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.color' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_color_write_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.depth_stencil' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_depth_stencil_read_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.depth_stencil' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_depth_stencil_write_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.gbuffer' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_gbuffer_read_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.gbuffer' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_gbuffer_write_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.visibility' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_visibility_read_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.visibility' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_visibility_write_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.light_data' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_light_data_read_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.light_data' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_light_data_write_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.light_lists' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_light_lists_read_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.light_lists' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_light_lists_write_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.work_lists' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_work_lists_read_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.work_lists' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_work_lists_write_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.spill' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_spill_read_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.spill' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_spill_write_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.other' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS dram_other_read_mb,
+    sum(CASE WHEN s.scope = 'mem/dram.class.other' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS dram_other_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.parameter_buffer' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_parameter_buffer_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.parameter_buffer' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_parameter_buffer_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.vertices' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_vertices_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.vertices' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_vertices_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.indices' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_indices_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.indices' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_indices_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.textures' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_textures_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.textures' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_textures_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.color' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_color_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.color' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_color_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.depth_stencil' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_depth_stencil_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.depth_stencil' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_depth_stencil_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.gbuffer' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_gbuffer_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.gbuffer' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_gbuffer_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.visibility' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_visibility_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.visibility' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_visibility_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.light_data' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_light_data_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.light_data' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_light_data_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.light_lists' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_light_lists_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.light_lists' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_light_lists_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.work_lists' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_work_lists_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.work_lists' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_work_lists_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.spill' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_spill_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.spill' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_spill_write_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.other' AND s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_other_read_mb,
+    sum(CASE WHEN s.scope = 'frame/dram.other' AND s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_other_write_mb
+  FROM runs r LEFT JOIN stats s ON s.run_id = r.id
+    AND ((s.scope > 'frame/dram.' AND s.scope < 'frame/dram/') OR (s.scope > 'mem/dram.class.' AND s.scope < 'mem/dram.class/'))
   GROUP BY r.id
 ),
 g AS (
@@ -119,7 +149,7 @@ g AS (
          ELSE coalesce(f.tsp_light_evaluations, 0) + coalesce(f.compute_light_evaluations, 0) END AS light_evaluations
   FROM f
 )
-SELECT d.*,  -- run_id, then dram_<class>_read_mb and dram_<class>_write_mb for every traffic class
+SELECT d.*,  -- run_id, dram_<class>_read_mb / _write_mb (device), requested_<class>_read_mb / _write_mb
   r.technique, r.scene, r.config_name, l.config_label, r.status, r.error,
   r.config_hash, r.trace_hash, r.trace_path, r.started_at, r.host,
   f.width, f.height, f.samples_per_pixel, f.lights, f.passes, f.geometry_passes, f.dispatches,
@@ -130,12 +160,12 @@ SELECT d.*,  -- run_id, then dram_<class>_read_mb and dram_<class>_write_mb for 
   (coalesce(f.lit_surface_invocations, 0) + coalesce(f.compute_shaded_pixels, 0)) / nullif(f.covered_pixels, 0) AS overshading,
   f.light_evaluations / nullif(f.width * f.height, 0) AS lights_per_pixel,
   f.light_evaluations / nullif(f.shader_invocations, 0) AS lights_per_fragment,
-  f.dram_read_bytes / 1e6 AS dram_read_mb,
-  f.dram_write_bytes / 1e6 AS dram_write_mb,
-  (f.dram_read_bytes + f.dram_write_bytes) / 1e6 AS dram_total_mb,
-  f.device_read_bytes / 1e6 AS dram_device_read_mb,
-  f.device_write_bytes / 1e6 AS dram_device_write_mb,
-  (f.device_read_bytes + f.device_write_bytes) / 1e6 AS dram_device_total_mb,
+  f.device_read_bytes / 1e6 AS dram_read_mb,
+  f.device_write_bytes / 1e6 AS dram_write_mb,
+  (f.device_read_bytes + f.device_write_bytes) / 1e6 AS dram_total_mb,
+  f.requested_read_bytes / 1e6 AS requested_read_mb,
+  f.requested_write_bytes / 1e6 AS requested_write_mb,
+  (f.requested_read_bytes + f.requested_write_bytes) / 1e6 AS requested_total_mb,
   f.cycles, f.frame_time_ms,
   f.energy_total_mj,
   f.e_dram_pj * 1e-9 AS energy_dram_mj,
@@ -189,20 +219,21 @@ FROM runs r JOIN stats s ON s.run_id = r.id AND s.scope = 'frame/frame'
   AND s.name IN ('lights', 'width', 'height', 'samples_per_pixel');
 
 -- DRAM traffic per run and traffic class (long form: works for classes added later). read/write/
--- total_mb: what the units requested (frame/dram.<class>); device_*_mb: what reached the DRAM
--- devices after the caches (mem/dram.class.<class>), NULL for runs without a memory system model.
+-- total_mb: what reached the DRAM devices after the caches (mem/dram.class.<class>), booked to the
+-- class of the request that caused it; requested_*_mb: what the units requested at the chip boundary
+-- (frame/dram.<class>). Device figures are NULL for runs without a memory system model.
 DROP VIEW IF EXISTS v_dram_class;
 CREATE VIEW v_dram_class AS
 SELECT r.id AS run_id, r.technique, r.config_name, r.status, substr(s.scope, 12) AS class,
-  sum(CASE WHEN s.name = 'read_bytes' THEN s.value END) / 1e6 AS read_mb,
-  sum(CASE WHEN s.name = 'write_bytes' THEN s.value END) / 1e6 AS write_mb,
-  sum(s.value) / 1e6 AS total_mb,
   (SELECT value FROM stats WHERE run_id = r.id AND scope = 'mem/dram.class.' || substr(s.scope, 12)
-     AND name = 'read_bytes') / 1e6 AS device_read_mb,
+     AND name = 'read_bytes') / 1e6 AS read_mb,
   (SELECT value FROM stats WHERE run_id = r.id AND scope = 'mem/dram.class.' || substr(s.scope, 12)
-     AND name = 'write_bytes') / 1e6 AS device_write_mb,
+     AND name = 'write_bytes') / 1e6 AS write_mb,
   (SELECT sum(value) FROM stats WHERE run_id = r.id AND scope = 'mem/dram.class.' || substr(s.scope, 12)
-     AND name IN ('read_bytes', 'write_bytes')) / 1e6 AS device_total_mb
+     AND name IN ('read_bytes', 'write_bytes')) / 1e6 AS total_mb,
+  sum(CASE WHEN s.name = 'read_bytes' THEN s.value END) / 1e6 AS requested_read_mb,
+  sum(CASE WHEN s.name = 'write_bytes' THEN s.value END) / 1e6 AS requested_write_mb,
+  sum(s.value) / 1e6 AS requested_total_mb
 FROM runs r
 JOIN stats s ON s.run_id = r.id AND s.scope > 'frame/dram.' AND s.scope < 'frame/dram/'  -- 'frame/dram.*'
   AND s.name IN ('read_bytes', 'write_bytes')
@@ -235,12 +266,12 @@ SELECT column1 AS metric, column2 AS unit, column3 AS description FROM (VALUES
   ('frame_time_ms', 'ms', 'Frame time (timing model)'),
   ('cycles', 'cycles', 'Frame time in core clock cycles'),
   ('energy_total_mj', 'mJ', 'Energy of the frame, every component'),
-  ('dram_total_mb', 'MB', 'DRAM bytes read and written as the units requested them (before the caches), 1e6 bytes'),
-  ('dram_read_mb', 'MB', 'DRAM bytes read as requested by the units'),
-  ('dram_write_mb', 'MB', 'DRAM bytes written as requested by the units'),
-  ('dram_device_total_mb', 'MB', 'Bytes that reached the DRAM devices (after the system level cache)'),
-  ('dram_device_read_mb', 'MB', 'Bytes read from the DRAM devices'),
-  ('dram_device_write_mb', 'MB', 'Bytes written to the DRAM devices'),
+  ('dram_total_mb', 'MB', 'Bytes read from and written to the DRAM devices (after the texture, vertex and system level caches), 1e6 bytes'),
+  ('dram_read_mb', 'MB', 'Bytes read from the DRAM devices'),
+  ('dram_write_mb', 'MB', 'Bytes written to the DRAM devices'),
+  ('requested_total_mb', 'MB', 'Bytes the units requested from memory at the chip boundary, read + written, before the caches'),
+  ('requested_read_mb', 'MB', 'Bytes the units requested to read, before the caches'),
+  ('requested_write_mb', 'MB', 'Bytes the units requested to write, before the caches'),
   ('overshading', 'lit fragments/covered pixel',
    '(tsp.lit_surface_invocations + compute.compute_shaded_pixels) / covered_pixels: lighting computed on surfaces or by kernels per visible pixel; above 1, hidden surfaces were lit'),
   ('shaded_fragments_per_pixel', 'fragments/pixel',
@@ -256,9 +287,9 @@ SELECT column1 AS metric, column2 AS unit, column3 AS description FROM (VALUES
 
 -- Every figure of every run, one row each (metric, value, unit): the derived figures of
 -- v_run_summary under their column names (frame_time_ms, cycles, dram_total_mb, energy_total_mj,
--- overshading, shaded_fragments_per_pixel, lights_per_pixel, ...), DRAM MB read+written per class ('dram_<class>_mb'), energy
--- per component ('energy_<component>_mj'), DRAM MB after the caches per class
--- ('dram_device_<class>_mb'), and every raw frame statistic as '<unit>.<name>' (the scope without
+-- overshading, shaded_fragments_per_pixel, lights_per_pixel, ...), DRAM MB at the devices read+written
+-- per class ('dram_<class>_mb'), energy per component ('energy_<component>_mj'), MB the units requested
+-- per class ('requested_<class>_mb'), and every raw frame statistic as '<unit>.<name>' (the scope without
 -- 'frame/': 'tsp.shaded_samples', 'dram.color.write_bytes', 'unit.usc.utilization').
 DROP VIEW IF EXISTS v_metric;
 CREATE VIEW v_metric AS
@@ -270,9 +301,9 @@ SELECT s.run_id, m.metric,
     WHEN 'dram_total_mb' THEN s.dram_total_mb
     WHEN 'dram_read_mb' THEN s.dram_read_mb
     WHEN 'dram_write_mb' THEN s.dram_write_mb
-    WHEN 'dram_device_total_mb' THEN s.dram_device_total_mb
-    WHEN 'dram_device_read_mb' THEN s.dram_device_read_mb
-    WHEN 'dram_device_write_mb' THEN s.dram_device_write_mb
+    WHEN 'requested_total_mb' THEN s.requested_total_mb
+    WHEN 'requested_read_mb' THEN s.requested_read_mb
+    WHEN 'requested_write_mb' THEN s.requested_write_mb
     WHEN 'overshading' THEN s.overshading
     WHEN 'shaded_fragments_per_pixel' THEN s.shaded_fragments_per_pixel
     WHEN 'covered_pixels' THEN s.covered_pixels
@@ -289,8 +320,8 @@ CROSS JOIN v_metric_def m
 UNION ALL
 SELECT run_id, 'dram_' || class || '_mb', total_mb, 'MB' FROM v_dram_class WHERE total_mb IS NOT NULL
 UNION ALL
-SELECT run_id, 'dram_device_' || class || '_mb', device_total_mb, 'MB' FROM v_dram_class
-WHERE device_total_mb IS NOT NULL
+SELECT run_id, 'requested_' || class || '_mb', requested_total_mb, 'MB' FROM v_dram_class
+WHERE requested_total_mb IS NOT NULL
 UNION ALL
 SELECT run_id, 'energy_' || component || '_mj', energy_mj, 'mJ' FROM v_energy_component
 UNION ALL
@@ -351,14 +382,14 @@ JOIN v_metric m ON m.run_id = p.run_id;
 
 -- Techniques side by side: one row per (hardware config, scene, resolution, samples, lights,
 -- technique) over finished runs, repetitions averaged, with each technique's rank in its group
--- (1 = fastest / least DRAM traffic / least energy).
+-- (1 = fastest / least DRAM traffic at the devices / least energy).
 DROP VIEW IF EXISTS v_technique_comparison;
 CREATE VIEW v_technique_comparison AS
 SELECT config_name, min(config_label) AS config_label, config_hash, scene, width, height, samples_per_pixel, lights,
   technique, count(*) AS runs,
   avg(frame_time_ms) AS frame_time_ms, avg(cycles) AS cycles,
   avg(dram_total_mb) AS dram_total_mb, avg(dram_read_mb) AS dram_read_mb, avg(dram_write_mb) AS dram_write_mb,
-  avg(dram_device_total_mb) AS dram_device_total_mb,
+  avg(requested_total_mb) AS requested_total_mb,
   avg(dram_parameter_buffer_read_mb + dram_parameter_buffer_write_mb) AS dram_parameter_buffer_mb,
   avg(dram_vertices_read_mb + dram_vertices_write_mb) AS dram_vertices_mb,
   avg(dram_indices_read_mb + dram_indices_write_mb) AS dram_indices_mb,

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <limits>
 #include <cctype>
 #include <chrono>
 #include <cstdint>
@@ -375,37 +376,76 @@ void print_comparison(const StudyPlan& plan, const std::vector<StudyPoint>& poin
     options += (options.empty() ? "" : "; ") + t;
     for (const auto& o : kv) options += " " + o;
   }
-  out << "\nComparison (" << plan.config_label << "): frame time, DRAM traffic requested by the units, energy"
-      << " (technique options: " << (options.empty() ? "the techniques' defaults" : options) << ")\n";
+  out << "\nComparison (" << plan.config_label << "): frame time, DRAM traffic at the devices (after the caches), energy"
+      << " (technique options: " << (options.empty() ? "the techniques' defaults" : options) << "); per light count"
+      << (modes ? " and mode" : "") << ", least DRAM traffic first\n";
   out << std::left << std::setw(30) << "technique" << std::right << std::setw(7) << "lights";
   if (modes) out << std::setw(6) << "mode";
-  out << std::setw(11) << "frame ms" << std::setw(11) << "DRAM MB" << std::setw(11) << "energy mJ" << std::setw(10)
-      << "frags/px" << std::setw(12) << "overshading" << std::setw(11) << "lights/px" << std::setw(13) << "stack ovf %"
-      << "\n";
+  out << std::setw(11) << "frame ms" << std::setw(11) << "DRAM MB" << std::setw(6) << "rank" << std::setw(10) << "req MB"
+      << std::setw(11) << "energy mJ" << std::setw(10) << "frags/px" << std::setw(12) << "overshading" << std::setw(11)
+      << "lights/px" << std::setw(13) << "stack ovf %" << "\n";
+  // The rows of each light count (and mode), ordered and ranked by the bytes that reached DRAM.
+  struct Row {
+    const StudyPoint* point;
+    std::optional<std::int64_t> run;
+    DerivedFigures d;
+    double overflow = 0;
+    int rank = 0;
+  };
+  std::vector<Row> rows;
   std::vector<std::string> overflowed;
   for (const auto& p : points) {
-    const std::optional<std::int64_t> run = results.run_of(p);
+    Row row{&p, results.run_of(p), {}, 0.0, 0};
+    if (row.run) {
+      row.d = results.derived(*row.run);
+      // A PLS light stack that overflows falls back to every light: its frame time is then the
+      // overflow's cost, not the technique's; the share of lit fragments that overflowed says so.
+      const double lit = std::max(1.0, results.stat(*row.run, "frame/tsp", "lit_surface_invocations"));
+      row.overflow = 100.0 * results.stat(*row.run, "frame/tsp", "light_stack_overflow_fragments") / lit;
+      if (row.overflow > 0) {
+        overflowed.push_back(p.technique + " at " + std::to_string(p.lights) + " lights" + (modes ? " on " + p.mode : "") +
+                             ": " + fmt(row.overflow, 1) + " %");
+      }
+    }
+    rows.push_back(std::move(row));
+  }
+  // Failed runs and runs without a device figure last, in the plan's order.
+  const auto dram_key = [](const Row& r) {
+    return r.d.dram_total_mb.value_or(std::numeric_limits<double>::infinity());
+  };
+  std::stable_sort(rows.begin(), rows.end(), [&](const Row& a, const Row& b) {
+    if (a.point->lights != b.point->lights) return a.point->lights < b.point->lights;
+    if (a.point->config != b.point->config) return a.point->config < b.point->config;
+    return dram_key(a) < dram_key(b);
+  });
+  for (auto& r : rows) {
+    if (!r.run || !r.d.dram_total_mb) continue;
+    r.rank = 1;
+    for (const auto& o : rows) {
+      if (o.point->lights == r.point->lights && o.point->config == r.point->config && o.d.dram_total_mb &&
+          *o.d.dram_total_mb < *r.d.dram_total_mb) {
+        ++r.rank;
+      }
+    }
+  }
+  for (const auto& r : rows) {
+    const StudyPoint& p = *r.point;
     out << std::left << std::setw(30) << p.technique << std::right << std::setw(7) << p.lights;
     if (modes) out << std::setw(6) << p.mode;
-    if (!run) {
+    if (!r.run) {
       out << "   (failed)\n";
       continue;
     }
-    const DerivedFigures d = results.derived(*run);
-    // A PLS light stack that overflows falls back to every light: its frame time is then the
-    // overflow's cost, not the technique's; the share of lit fragments that overflowed says so.
-    const double lit = std::max(1.0, results.stat(*run, "frame/tsp", "lit_surface_invocations"));
-    const double overflow = 100.0 * results.stat(*run, "frame/tsp", "light_stack_overflow_fragments") / lit;
-    if (overflow > 0) {
-      overflowed.push_back(p.technique + " at " + std::to_string(p.lights) + " lights" + (modes ? " on " + p.mode : "") +
-                           ": " + fmt(overflow, 1) + " %");
-    }
-    out << std::setw(11) << fig(d.frame_time_ms, 2) << std::setw(11) << fig(d.dram_total_mb, 1) << std::setw(11)
-        << fig(d.energy_total_mj, 2) << std::setw(10) << fig(d.shaded_fragments_per_pixel, 2) << std::setw(12)
-        << fig(d.overshading, 2) << std::setw(11) << fig(d.lights_per_pixel, 1) << std::setw(13) << fmt(overflow, 1)
-        << "\n";
+    const DerivedFigures& d = r.d;
+    out << std::setw(11) << fig(d.frame_time_ms, 2) << std::setw(11) << fig(d.dram_total_mb, 1) << std::setw(6)
+        << (r.rank > 0 ? std::to_string(r.rank) : std::string("-")) << std::setw(10) << fig(d.requested_total_mb, 1)
+        << std::setw(11) << fig(d.energy_total_mj, 2) << std::setw(10) << fig(d.shaded_fragments_per_pixel, 2)
+        << std::setw(12) << fig(d.overshading, 2) << std::setw(11) << fig(d.lights_per_pixel, 1) << std::setw(13)
+        << fmt(r.overflow, 1) << "\n";
   }
-  out << "  (frags/px: fragment shader invocations per pixel, every pass; overshading: lighting computed on surfaces or\n"
+  out << "  (DRAM MB: bytes read and written at the DRAM devices, after the texture, vertex and system level caches;\n"
+      << "   rank: 1 = least DRAM traffic at this light count; req MB: what the units requested before the caches;\n";
+  out << "   frags/px: fragment shader invocations per pixel, every pass; overshading: lighting computed on surfaces or\n"
       << "   by kernels per visible pixel, above 1 = hidden surfaces lit; lights/px: light evaluations per pixel;\n"
       << "   definitions: docs/queries.md)\n";
   for (const auto& o : overflowed) {

@@ -468,14 +468,22 @@ void print_run_summary(const RunOutcome& o, std::ostream& out) {
   out << "  frame: " << stat_text(o.timing.frame_cycles) << " cycles, " << stat_text(o.timing.frame_time_ps * 1e-9)
       << " ms, energy " << stat_text(o.energy.total_pj * 1e-9)
       << " mJ (timing model " << stat_text(o.timing_seconds) << " s)\n";
-  out << "  DRAM MB read/written per class (requested by the units, before caches):\n";
+  // DRAM per class: what reached the devices (the timing model's memory system, after the caches),
+  // beside what the units requested (the functional count at the chip boundary).
+  const DramTraffic& device = o.timing.dram;
+  out << "  DRAM MB per class          read   written   (requested by the units, before the caches: read, written)\n";
   for (std::size_t c = 0; c < kDramClassCount; ++c) {
-    if (f.dram.read_bytes[c] == 0 && f.dram.write_bytes[c] == 0) continue;
+    if (f.dram.read_bytes[c] == 0 && f.dram.write_bytes[c] == 0 && device.read_bytes[c] == 0 &&
+        device.write_bytes[c] == 0) {
+      continue;
+    }
     out << "    " << std::left << std::setw(18) << to_string(static_cast<DramClass>(c)) << std::right << std::setw(10)
-        << stat_text(f.dram.read_bytes[c] / 1e6) << std::setw(10) << stat_text(f.dram.write_bytes[c] / 1e6) << "\n";
+        << stat_text(device.read_bytes[c] / 1e6) << std::setw(10) << stat_text(device.write_bytes[c] / 1e6) << "   ("
+        << stat_text(f.dram.read_bytes[c] / 1e6) << ", " << stat_text(f.dram.write_bytes[c] / 1e6) << ")\n";
   }
-  out << "    " << std::left << std::setw(18) << "total" << std::right << std::setw(10) << stat_text(f.dram.total_read() / 1e6)
-      << std::setw(10) << stat_text(f.dram.total_written() / 1e6) << "\n";
+  out << "    " << std::left << std::setw(18) << "total" << std::right << std::setw(10) << stat_text(device.total_read() / 1e6)
+      << std::setw(10) << stat_text(device.total_written() / 1e6) << "   (" << stat_text(f.dram.total_read() / 1e6) << ", "
+      << stat_text(f.dram.total_written() / 1e6) << ")\n";
   if (!o.images_written.empty()) {
     out << "  images: " << o.images_written.size() << " files in "
         << std::filesystem::path(o.images_written.front()).parent_path().string() << "\n";

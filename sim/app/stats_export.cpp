@@ -119,10 +119,10 @@ std::vector<Figure> run_figures(const ResultsDb& db, std::int64_t run_id) {
     while (q.step()) {
       std::string description = q.text(3);
       const std::string metric = q.text(0);
-      if (description.empty() && metric.rfind("dram_device_", 0) == 0) {
-        description = "Bytes of this traffic class that reached the DRAM devices, read + written, 1e6 bytes";
+      if (description.empty() && metric.rfind("requested_", 0) == 0) {
+        description = "Bytes of this traffic class the units requested before the caches, read + written, 1e6 bytes";
       } else if (description.empty() && metric.rfind("dram_", 0) == 0) {
-        description = "DRAM bytes of this traffic class as requested by the units, read + written, 1e6 bytes";
+        description = "Bytes of this traffic class read from and written to the DRAM devices (after the caches), 1e6 bytes";
       } else if (description.empty() && metric.rfind("energy_", 0) == 0) {
         description = "Energy of this component";
       }
