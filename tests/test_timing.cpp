@@ -270,11 +270,13 @@ std::vector<std::string> add_transient_gbuffer(PassDesc& p, int k) {
 
 /// Frame cycles of a 512x512 pass keeping k 32-bit G-buffer targets on chip (transient,
 /// store=dont_care) beside its stored colour, one cheap full-frame layer, on the GX6250 preset's
-/// 256 bits per pixel (2 USCs) plus `sets`.
+/// 256 bits per pixel (2 USCs) plus `sets`. The tile buffer moves 16 B per clock per USC here (set,
+/// not the fitted default, so that the steps' arithmetic is in round numbers).
 std::vector<double> onchip_gbuffer_cliff(int k_first, int k_last, std::vector<std::string> sets = {}) {
   Scene s = base_scene();
   add_quad(s, "wall", 3, -512, 1024, 0);
-  sets.insert(sets.begin(), {"usc.count=2", "texture.units=1", "pls.tile_buffer_bits_per_pixel=256"});
+  sets.insert(sets.begin(), {"usc.count=2", "texture.units=1", "pls.tile_buffer_bits_per_pixel=256",
+                             "pls.tile_buffer_bytes_per_clock=16"});
   std::vector<double> cycles;
   for (int k = k_first; k <= k_last; ++k) {
     Trace t = frame_of(512);
@@ -325,7 +327,8 @@ void add_fullscreen_light(Trace& t) {
 /// Frame cycles and split renders of a 512x512 pass with subpasses, as deferred shading keeps its
 /// G-buffer on chip: a wall writes the colour plus k 32-bit transient G-buffer targets, then a
 /// fullscreen draw fetches the k targets at every pixel and adds onto the colour; on the GX6250
-/// preset's 256 bits per pixel (2 USCs, one texture unit) plus `sets`.
+/// preset's 256 bits per pixel (2 USCs, one texture unit), 16 B per clock per USC of tile buffer
+/// (round arithmetic, as above), plus `sets`.
 struct SubpassCliff {
   std::vector<double> cycles;
   std::vector<double> split_renders;
@@ -334,7 +337,8 @@ struct SubpassCliff {
 SubpassCliff onchip_subpass_cliff(int k_first, int k_last, std::vector<std::string> sets = {}) {
   Scene s = base_scene();
   add_quad(s, "wall", 3, -512, 1024, 0);
-  sets.insert(sets.begin(), {"usc.count=2", "texture.units=1", "pls.tile_buffer_bits_per_pixel=256"});
+  sets.insert(sets.begin(), {"usc.count=2", "texture.units=1", "pls.tile_buffer_bits_per_pixel=256",
+                             "pls.tile_buffer_bytes_per_clock=16"});
   SubpassCliff out;
   for (int k = k_first; k <= k_last; ++k) {
     Trace t = frame_of(512);
@@ -366,8 +370,9 @@ TEST(TimingCliff, SubpassesPastTheBudgetSplitTheRender) {
   // (pls.over_budget = split_render, Mesa pvr_hw_pass.c): 8 MiB of G-buffer and the 1 MiB colour
   // go to memory, the colour and depth come back, and the fullscreen draw reads the 8 MiB
   // G-buffer as images through the texture unit (8 fetches x 262144 pixels on one unit) and the
-  // caches: at least 3x the earlier steps, as the GX6250's 288-bit step (+10 ms) is 5.6x its
-  // earlier steps' mean (+1.8 ms). Under spill the same pass pays only its spilled share: less.
+  // caches: at least 3x the earlier steps at this tile-buffer rate (the step's size against the
+  // GX6250's, at the fitted rate, is `tbdrsim validate`'s cliff row). Under spill the same pass
+  // pays only its spilled share: less.
   const SubpassCliff c = onchip_subpass_cliff(4, 8);
   for (std::size_t i = 0; i < c.cycles.size(); ++i)
     std::printf("[ cliff    ] %3zu bits/pixel: %.3f ms, %g split renders\n", 32 * (5 + i), c.cycles[i] / 600e3, c.split_renders[i]);
