@@ -10,6 +10,7 @@
 #include "models/command_processor.hpp"
 #include "models/hw_config.hpp"
 #include "models/timing_model.hpp"
+#include "atrium_trace_setup.hpp"
 #include "scene/lights.hpp"
 #include "scene/scene_library.hpp"
 #include "techniques/technique.hpp"
@@ -202,6 +203,58 @@ TEST(TagBuffers, MoreTagBuffersNeverSlowTheInterleavedWorkload) {
     previous_alu = alu;
   }
 }
+
+/// The reference set: every technique on atrium:1 from the entrance, 320x180, 32 lights.
+class TagBuffersReferenceSet : public testing_support::AtriumTechniqueSuite {};
+
+TEST_P(TagBuffersReferenceSet, TheWorkTheTagBuffersDecideNeverGrowsWithMoreBuffers) {
+  // What the number of tag buffers decides, per frame (exact counts: the model is
+  // deterministic): the mid-tile flushes, the ISP's busy cycles (rasterisation plus the waits
+  // for punch-through depth resolves), and the shading (invocations, quads, fragment ALU ops,
+  // texels). Each is never larger with 2 buffers than with 1, nor with 4 than with 2.
+  // The frame cycles are printed, not compared: on these workloads the buffers change only a few
+  // hundred ISP cycles of punch-through waits (no shading at all on most techniques), and the
+  // frame moves by the timing model's sensitivity to when each tile's DRAM traffic is issued,
+  // which is of either sign (docs/hsr-and-tag-buffers.md, "Frame cycles and the order of DRAM
+  // traffic").
+  const std::string technique = GetParam();
+  TraceSetup setup = testing_support::atrium_entrance_setup(*scene_, 32, 320, 180);
+  const Trace trace = generate_trace(technique, setup);
+  struct Work {
+    std::uint64_t flushes, invocations, quads, alu, texels;
+    double isp_cycles, frame_cycles;
+  };
+  std::vector<Work> runs;
+  for (int n : {1, 2, 4}) {
+    const HwConfig hw = resolve_config({}, {"isp.tag_buffers=" + std::to_string(n)}).hw;
+    const FrameResult f = simulate_frame(trace, technique + ".trace", *scene_, hw);
+    const TimingResult timing = run_timing(hw, f.work);
+    double isp = -1;
+    for (const auto& u : timing.units) {
+      if (u.name == "isp") isp = u.busy_cycles;
+    }
+    const auto& r = f.totals.render;
+    runs.push_back({r.isp.tag_flushes.value(), r.tsp.shader_invocations.value(), r.tsp.shaded_quads.value(),
+                    r.tsp.fragment_alu_ops.value(), r.tsp.texels_filtered.value(), isp, timing.frame_cycles});
+  }
+  std::printf("[ tagbuf   ] %-28s flushes %llu/%llu/%llu, ISP %.0f/%.0f/%.0f, frame %.0f/%.0f/%.0f cycles (1/2/4 buffers)\n",
+              technique.c_str(), static_cast<unsigned long long>(runs[0].flushes), static_cast<unsigned long long>(runs[1].flushes),
+              static_cast<unsigned long long>(runs[2].flushes), runs[0].isp_cycles, runs[1].isp_cycles, runs[2].isp_cycles,
+              runs[0].frame_cycles, runs[1].frame_cycles, runs[2].frame_cycles);
+  for (std::size_t i = 1; i < runs.size(); ++i) {
+    SCOPED_TRACE("from " + std::to_string(1 << (i - 1)) + " to " + std::to_string(1 << i) + " tag buffers");
+    EXPECT_LE(runs[i].flushes, runs[i - 1].flushes);
+    EXPECT_LE(runs[i].isp_cycles, runs[i - 1].isp_cycles);
+    EXPECT_GE(runs[i].isp_cycles, 0.0);
+    EXPECT_LE(runs[i].invocations, runs[i - 1].invocations);
+    EXPECT_LE(runs[i].quads, runs[i - 1].quads);
+    EXPECT_LE(runs[i].alu, runs[i - 1].alu);
+    EXPECT_LE(runs[i].texels, runs[i - 1].texels);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryTechnique, TagBuffersReferenceSet, testing_support::every_technique(),
+                         testing_support::technique_test_name);
 
 }  // namespace
 }  // namespace tbdr
