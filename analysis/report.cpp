@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <ostream>
 #include <set>
@@ -395,6 +396,50 @@ bool key_equal(const std::string& a, const std::string& b) {
   return a == b || (parse_number(a, x) && parse_number(b, y) && x == y);
 }
 
+/// Ranks the rows by `metric` among the rows sharing every group key but the last (all rows with
+/// one key): 1 = least (or largest, t.rank_largest_first); equal values share a rank; rows without
+/// the figure get 0 and sort last. Rows are then ordered by those keys and the rank; with `best`,
+/// only the rows ranked 1 stay.
+void apply_rank(ReportTable& t, const std::string& metric, bool best) {
+  const std::size_t m = static_cast<std::size_t>(std::find(t.metrics.begin(), t.metrics.end(), metric) - t.metrics.begin());
+  t.rank_metric = m;
+  const std::size_t shared = t.group_keys.empty() ? 0 : t.group_keys.size() - 1;
+  auto same_group = [&](const ReportTable::Row& a, const ReportTable::Row& b) {
+    for (std::size_t k = 0; k < shared; ++k) {
+      if (a.keys[k] != b.keys[k]) return false;
+    }
+    return true;
+  };
+  auto better = [&](double a, double b) { return t.rank_largest_first ? a > b : a < b; };
+  std::vector<int> ranks(t.rows.size(), 0);
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    const auto& v = t.rows[i].values[m];
+    if (!v) continue;
+    ranks[i] = 1;
+    for (std::size_t j = 0; j < t.rows.size(); ++j) {
+      const auto& w = t.rows[j].values[m];
+      if (j != i && w && same_group(t.rows[i], t.rows[j]) && better(*w, *v)) ++ranks[i];
+    }
+  }
+  std::vector<std::size_t> order(t.rows.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    for (std::size_t k = 0; k < shared; ++k) {
+      if (t.rows[a].keys[k] != t.rows[b].keys[k]) return key_less(t.rows[a].keys[k], t.rows[b].keys[k]);
+    }
+    const int ra = ranks[a] == 0 ? std::numeric_limits<int>::max() : ranks[a];
+    const int rb = ranks[b] == 0 ? std::numeric_limits<int>::max() : ranks[b];
+    return ra < rb;
+  });
+  std::vector<ReportTable::Row> rows;
+  for (std::size_t i : order) {
+    if (best && ranks[i] != 1) continue;
+    rows.push_back(std::move(t.rows[i]));
+    t.ranks.push_back(ranks[i]);
+  }
+  t.rows = std::move(rows);
+}
+
 /// Finds, for every row, the row that differs from it only in the baseline key, where that key
 /// has the baseline value, and keeps that row's values beside it.
 void apply_baseline(ReportTable& t, const std::string& typed_key, const std::string& typed) {
@@ -463,6 +508,21 @@ ReportTable build_report(const ResultsDb& db, const ReportOptions& opt) {
 
   const bool defaults = opt.metrics.empty();
   t.metrics = defaults ? default_report_metrics(sql) : opt.metrics;
+  std::string rank_name = opt.rank;
+  if (!rank_name.empty()) {
+    const auto colon = rank_name.rfind(':');
+    if (colon != std::string::npos) {
+      const std::string order = rank_name.substr(colon + 1);
+      if (order != "max" && order != "min") {
+        throw InputError("--rank " + opt.rank, "expected METRIC, METRIC:min (least first, the default) or METRIC:max");
+      }
+      t.rank_largest_first = order == "max";
+      rank_name = rank_name.substr(0, colon);
+    }
+    if (std::find(t.metrics.begin(), t.metrics.end(), rank_name) == t.metrics.end()) t.metrics.push_back(rank_name);
+  } else if (opt.best) {
+    throw InputError("--best", "needs --rank METRIC: the figure that says which row is best");
+  }
   std::map<std::vector<std::string>, GroupSums> groups;
   for (const auto id : runs.ok) {
     auto& acc = groups[run_keys[id]];
@@ -473,13 +533,15 @@ ReportTable build_report(const ResultsDb& db, const ReportOptions& opt) {
   }
   const MetricsSeen seen = sum_metrics(sql, t.metrics, selected, run_keys, groups);
   t.units = seen.units;
-  if (!defaults && !runs.ok.empty()) {
+  if ((!defaults || !rank_name.empty()) && !runs.ok.empty()) {
     for (std::size_t m = 0; m < t.metrics.size(); ++m) {
-      if (seen.seen[m]) continue;
+      if (seen.seen[m] || (defaults && t.metrics[m] != rank_name)) continue;
       SqlStatement any(sql, "SELECT 1 FROM v_metric WHERE metric = ? LIMIT 1");
       any.bind(1, t.metrics[m]);
       if (!any.step()) {
-        throw InputError("--metric " + t.metrics[m],
+        const bool only_ranked = t.metrics[m] == rank_name &&
+                                 std::find(opt.metrics.begin(), opt.metrics.end(), rank_name) == opt.metrics.end();
+        throw InputError((only_ranked ? "--rank " : "--metric ") + t.metrics[m],
                          "no run has this figure; see docs/queries.md or `SELECT DISTINCT metric FROM v_metric`");
       }
     }
@@ -488,7 +550,10 @@ ReportTable build_report(const ResultsDb& db, const ReportOptions& opt) {
   // some run has a non-zero value).
   std::vector<std::size_t> keep;
   for (std::size_t m = 0; m < t.metrics.size(); ++m) {
-    if (!defaults || (seen.seen[m] && (seen.nonzero[m] || !is_optional_default(t.metrics[m])))) keep.push_back(m);
+    if (!defaults || t.metrics[m] == rank_name ||
+        (seen.seen[m] && (seen.nonzero[m] || !is_optional_default(t.metrics[m])))) {
+      keep.push_back(m);
+    }
   }
   std::vector<std::string> metrics, units;
   for (auto m : keep) {
@@ -527,6 +592,7 @@ ReportTable build_report(const ResultsDb& db, const ReportOptions& opt) {
     }
     return false;
   });
+  if (!rank_name.empty()) apply_rank(t, rank_name, opt.best);
   if (t.baseline_key) apply_baseline(t, baseline_key_typed, opt.baseline);
   return t;
 }
@@ -587,6 +653,10 @@ void print_report(const ReportTable& t, ReportFormat format, bool transpose, std
     return csv ? format_csv_value(*v) : format_value(*v);
   };
   const bool compare = t.baseline_key.has_value();
+  const bool ranked = t.rank_metric.has_value();
+  const std::string rank_header =
+      ranked ? (csv ? std::string("rank") : "rank (" + t.metrics[*t.rank_metric] + (t.rank_largest_first ? ", largest" : ", least") + " first)")
+             : std::string();
   // One printed column per metric, or three with a baseline: the value, its difference from the
   // baseline group's and their ratio.
   struct Column {
@@ -625,6 +695,14 @@ void print_report(const ReportTable& t, ReportFormat format, bool transpose, std
     out << ", grouped by ";
     for (std::size_t k = 0; k < t.group_keys.size(); ++k) out << (k ? " x " : "") << t.group_keys[k];
     out << "; the runs of a group averaged\n";
+    if (ranked) {
+      out << "ranked by " << t.metrics[*t.rank_metric] << (t.rank_largest_first ? " (largest first)" : " (least first)");
+      if (t.group_keys.size() > 1) {
+        out << " among the rows of equal ";
+        for (std::size_t k = 0; k + 1 < t.group_keys.size(); ++k) out << (k ? ", " : "") << t.group_keys[k];
+      }
+      out << "\n";
+    }
     if (compare) {
       out << "baseline: " << t.group_keys[*t.baseline_key] << " = " << t.baseline_value
           << " (each group against the one that differs only in " << t.group_keys[*t.baseline_key]
@@ -658,11 +736,13 @@ void print_report(const ReportTable& t, ReportFormat format, bool transpose, std
     if (!transpose) {
       std::vector<std::string> head = t.group_keys;
       head.push_back("runs");
+      if (ranked) head.push_back(rank_header);
       for (const auto& c : cols) head.push_back(c.header);
       grid.push_back(head);
       for (std::size_t r = 0; r < t.rows.size(); ++r) {
         std::vector<std::string> line = t.rows[r].keys;
         line.push_back(std::to_string(t.rows[r].runs));
+        if (ranked) line.push_back(t.ranks[r] ? std::to_string(t.ranks[r]) : std::string(csv ? "" : "-"));
         for (const auto& c : cols) line.push_back(cell(c, r));
         grid.push_back(line);
       }
@@ -680,6 +760,13 @@ void print_report(const ReportTable& t, ReportFormat format, bool transpose, std
       std::vector<std::string> runs = {"runs"};
       for (const auto& r : t.rows) runs.push_back(std::to_string(r.runs));
       grid.push_back(runs);
+      if (ranked) {
+        std::vector<std::string> rank_line = {rank_header};
+        for (std::size_t r = 0; r < t.rows.size(); ++r) {
+          rank_line.push_back(t.ranks[r] ? std::to_string(t.ranks[r]) : std::string(csv ? "" : "-"));
+        }
+        grid.push_back(rank_line);
+      }
       for (const auto& c : cols) {
         std::vector<std::string> line = {c.header};
         for (std::size_t r = 0; r < t.rows.size(); ++r) line.push_back(cell(c, r));

@@ -47,6 +47,12 @@ struct ReportOptions {
   /// KEY has VALUE (KEY is added to the group keys when absent). Empty: no comparison.
   std::string baseline;
   bool transpose = false;  ///< metrics as rows, groups as columns
+  /// A metric to rank the rows by, least first ("energy_dram_mj"), or largest first with ":max"
+  /// ("tsp.shaded_samples:max"): rows are ranked among the rows that share every group key but the
+  /// last (with one key, among all rows), sorted by those keys and the rank. Added to the metrics
+  /// when absent. Empty: no rank.
+  std::string rank;
+  bool best = false;  ///< with `rank`: only the rows ranked first (ties kept)
 };
 
 /// A computed comparison: one row per group (finished runs only, repetitions averaged).
@@ -67,6 +73,11 @@ struct ReportTable {
   std::string baseline_value;
   std::vector<std::vector<std::optional<double>>> baseline_values;
   std::int64_t rows_without_baseline = 0;  ///< rows whose baseline group is absent
+  /// With a rank: the metric ranked (index into `metrics`), whether larger is better, and per row
+  /// its rank (1 = best; 0 = the row has no value for the metric).
+  std::optional<std::size_t> rank_metric;
+  bool rank_largest_first = false;
+  std::vector<int> ranks;
   /// How the table/markdown formats split the metrics into titled tables with short headers (the
   /// default report: frame figures, DRAM per class, energy per component); CSV prints them flat.
   struct Section {

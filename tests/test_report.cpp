@@ -315,6 +315,60 @@ TEST(Report, GroupsByTechniqueAveragingRepetitions) {
   EXPECT_NE(text.find("  total"), std::string::npos);
 }
 
+TEST(Report, RanksRowsWithinTheGroupsOfAllButTheLastKeyAndKeepsTheBest) {
+  const std::string path = (scratch("rank") / "r.db").string();
+  ResultsDb db(path);
+  // shaded samples (the ranked figure) per technique and tile width:
+  //   tile 16: a 5016, b 6016, c 4016   -> c 1, a 2, b 3
+  //   tile 32: a 5032, b 6032, c 6032   -> a 1, b and c share 2
+  for (int w : {16, 32}) {
+    db.write_run(synthetic_run("a", w, 5000 + w, 64, false));
+    db.write_run(synthetic_run("b", w, 6000 + w, 64, false));
+    db.write_run(synthetic_run("c", w, (w == 16 ? 4000 : 6000) + w, 64, false));
+  }
+  ReportOptions opt;
+  opt.by = {"tiling.tile_width", "technique"};
+  opt.metrics = {"overshading"};
+  opt.rank = "tsp.shaded_samples";
+  ReportTable t = build_report(db, opt);
+  ASSERT_EQ(t.rows.size(), 6u);
+  ASSERT_EQ(t.metrics.back(), "tsp.shaded_samples");  // added to the metrics
+  const std::vector<std::vector<std::string>> keys = {{"16", "c"}, {"16", "a"}, {"16", "b"},
+                                                      {"32", "a"}, {"32", "b"}, {"32", "c"}};
+  const std::vector<int> ranks = {1, 2, 3, 1, 2, 2};
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    EXPECT_EQ(t.rows[i].keys, keys[i]) << i;
+    EXPECT_EQ(t.ranks[i], ranks[i]) << i;
+  }
+  opt.best = true;
+  t = build_report(db, opt);
+  ASSERT_EQ(t.rows.size(), 2u);
+  EXPECT_EQ(t.rows[0].keys, (std::vector<std::string>{"16", "c"}));
+  EXPECT_EQ(t.rows[1].keys, (std::vector<std::string>{"32", "a"}));
+  opt.rank = "tsp.shaded_samples:max";  // largest first: tile 32's b and c share rank 1
+  t = build_report(db, opt);
+  ASSERT_EQ(t.rows.size(), 3u);
+  EXPECT_EQ(t.rows[0].keys, (std::vector<std::string>{"16", "b"}));
+  EXPECT_EQ(t.rows[1].keys[0], "32");
+  EXPECT_EQ(t.rows[2].keys[0], "32");
+  std::ostringstream out, err;
+  EXPECT_EQ(cli_main({"report", "--db", path, "--rank", "tsp.shaded_sample"}, out, err), 2);
+  EXPECT_NE(err.str().find("did you mean 'tsp.shaded_samples'"), std::string::npos) << err.str();
+  EXPECT_EQ(cli_main({"report", "--db", path, "--best"}, out, err), 2);
+  EXPECT_EQ(cli_main({"report", "--db", path, "--rank", "overshading:best"}, out, err), 2);
+  std::ostringstream text;
+  ASSERT_EQ(cli_main({"report", "--db", path, "--by", "tiling.tile_width,technique", "--rank", "tsp.shaded_samples",
+                      "--best", "--format", "csv"},
+                     text, err),
+            0)
+      << err.str();
+  // The default figures, with the ranked one added after them.
+  const std::string head = lines_of(text.str())[0];
+  EXPECT_EQ(head.rfind("tiling.tile_width,technique,runs,rank,", 0), 0u) << head;
+  EXPECT_EQ(head.substr(head.size() - 19), ",tsp.shaded_samples") << head;
+  EXPECT_EQ(lines_of(text.str()).size(), 3u);
+}
+
 TEST(Report, GroupsByParameterKeysWithFilterAndFormats) {
   const std::string path = (scratch("param") / "p.db").string();
   ResultsDb db(path);

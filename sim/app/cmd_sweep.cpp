@@ -175,7 +175,11 @@ int cmd_report(const std::vector<std::string>& args, std::ostream& out, std::ost
       ("transpose,t", "one row per metric, one column per group")
       ("baseline", po::value<std::string>(),
        "KEY=VALUE: compare each group with the group differing only in KEY, where KEY = VALUE (difference and ratio "
-       "per metric), e.g. pls.tile_buffer_bits_per_pixel=128 or technique=deferred");
+       "per metric), e.g. pls.tile_buffer_bits_per_pixel=128 or technique=deferred")
+      ("rank", po::value<std::string>(),
+       "METRIC[:min|:max]: rank the rows by a figure, least first (:max: largest first), among the rows that share "
+       "every --by key but the last, e.g. --by tiling.tile_width technique --rank energy_dram_mj")
+      ("best", "with --rank: only the best row of each group (ties kept)");
   po::variables_map vm;
   if (!parse_command_options("report", args, desc, nullptr, vm, out)) return 0;
   const std::string path = vm["db"].as<std::string>();
@@ -187,6 +191,8 @@ int cmd_report(const std::vector<std::string>& args, std::ostream& out, std::ost
   if (vm.count("where")) opt.where = vm["where"].as<std::string>();
   opt.transpose = vm.count("transpose") > 0;
   if (vm.count("baseline")) opt.baseline = vm["baseline"].as<std::string>();
+  if (vm.count("rank")) opt.rank = vm["rank"].as<std::string>();
+  opt.best = vm.count("best") > 0;
   const ReportFormat format = parse_report_format(vm["format"].as<std::string>());
   ReportTable table;
   try {
@@ -197,6 +203,10 @@ int cmd_report(const std::vector<std::string>& args, std::ostream& out, std::ost
     std::string guess;
     if (where.rfind("--by ", 0) == 0) guess = did_you_mean(where.substr(5), report_group_key_names(db));
     if (where.rfind("--metric ", 0) == 0) guess = did_you_mean(where.substr(9), report_metric_names(db));
+    if (where.rfind("--rank ", 0) == 0) {
+      const std::string name = where.substr(7);
+      guess = did_you_mean(name.substr(0, name.rfind(':')), report_metric_names(db));
+    }
     if (guess.empty()) throw;
     throw InputError("", std::string(e.what()) + "; " + guess);
   }
