@@ -17,6 +17,7 @@ import argparse
 import concurrent.futures
 import os
 import re
+import shutil
 import sqlite3
 import subprocess
 import sys
@@ -35,6 +36,8 @@ ZERO_DEFAULT_FRACTION = 0.01
 ZERO_DEFAULT_HIGH_CAP = 100.0
 # Statistics that restate the configuration rather than measure the run.
 CONFIG_ECHO = {("mem/dram", "peak_bandwidth_gbps")}
+# Per-unit figures that are the frame time's other side (a unit not busy is idle or stalled).
+IDLE_FIGURES = {"idle_cycles", "stalled_cycles", "utilization"}
 
 
 def parse_params(build):
@@ -87,9 +90,13 @@ def run_one(build, trace, sets, db):
     cmd = [os.path.join(build, "tbdrsim"), "run", "--trace", trace, "--db", db, "--quiet", "--threads", "1"]
     for s in sets:
         cmd += ["--set", s]
-    p = subprocess.run(cmd, capture_output=True, text=True)
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True)
+    except OSError as e:  # the binary being rebuilt meanwhile, say: report it, keep the others
+        return {"error": "cannot run %s: %s" % (cmd[0], e)}
     if p.returncode != 0:
         msg = (p.stderr.strip().splitlines() or ["exit %d" % p.returncode])[-1]
+        msg = re.sub(r"^error: \S*\.trace(:\d+)?: ", "", msg)  # the scratch trace path says nothing
         return {"error": msg}
     con = sqlite3.connect(db)
     rows = con.execute("SELECT scope, name, value FROM stats WHERE run_id = (SELECT max(id) FROM runs)").fetchall()
@@ -127,11 +134,20 @@ def main():
     ap.add_argument("--techniques", default="deferred,forward_plus,plain_forward,deferred_tile_store,tiled_deferred,"
                                             "visibility_buffer")
     ap.add_argument("--only", default="", help="regular expression: the parameters to measure (default all)")
+    ap.add_argument("--base", action="append", default=[], metavar="KEY=VALUE",
+                    help="a --set applied to every run before the measured one (e.g. gpu.mode=imr), repeatable")
     args = ap.parse_args()
     if args.jobs < 1:
         sys.exit("param_effects: --jobs expects a positive integer")
-    start = time.time()
     tmp = tempfile.mkdtemp(prefix="param_effects.")
+    try:
+        measure(args, tmp)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def measure(args, tmp):
+    start = time.time()
     tbdrsim = os.path.join(args.build, "tbdrsim")
     traces = {}
     for t in args.techniques.split(","):
@@ -150,12 +166,12 @@ def main():
                 jobs.append((key, v, t))
     results = {}
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        futs = {pool.submit(run_one, args.build, traces[t], ["%s=%s" % (k, v)],
+        futs = {pool.submit(run_one, args.build, traces[t], args.base + ["%s=%s" % (k, v)],
                             os.path.join(tmp, "%d.db" % i)): (k, v, t) for i, (k, v, t) in enumerate(jobs)}
         for f in concurrent.futures.as_completed(futs):
             results[futs[f]] = f.result()
 
-    print("| parameter | default | values | frame_time | dram_bytes | energy | other statistic moved most | effect |")
+    print("| parameter | default | values (first / last) | frame_time | dram_bytes | energy | other frame statistic moved most | effect |")
     print("|---|---|---|---|---|---|---|---|")
     inert = []
     for key, default, unit, rng in params:
@@ -185,7 +201,10 @@ def main():
             if len(rs) < 2:
                 continue
             for name in rs[0]:
-                if name in CONFIG_ECHO or any(name[0] == s and name[1] in n for _, s, n in HEADLINE):
+                # Frame-level statistics, less the host's (wall and CPU time), the headline figures, the configuration echoes and
+                # the idle / stalled / utilisation figures that restate the frame time.
+                if (not name[0].startswith("frame/") or name[0] == "frame/host" or name in CONFIG_ECHO or name[1] in IDLE_FIGURES
+                        or any(name[0] == s and name[1] in n for _, s, n in HEADLINE)):
                     continue
                 xs = [r.get(name, 0.0) for r in rs]
                 a, b = max(abs(x) for x in xs), min(abs(x) for x in xs)
@@ -194,11 +213,11 @@ def main():
                     other_ch, other = ch, "%s %s (%s)" % (name[0], name[1], t)
         other_col = "%s: %.1f %% of the larger" % (other, 100 * other_ch) if other else "none"
         if len(vals) == 2:
-            direction = "higher value: " + ", ".join(
-                "%s %s" % (lab, "up" if c.startswith("+") else "down") for (lab, _, _), c in zip(HEADLINE, cols)
-                if c != "0" and not c.startswith("0 ->") and not c.startswith(">0"))
+            direction = "at %s: " % vals[1] + ", ".join(
+                "%s %s" % (lab, "up" if c.startswith(("+", "0 ->")) else "down")
+                for (lab, _, _), c in zip(HEADLINE, cols) if c != "0")
         else:
-            direction = "choices differ"
+            direction = "the choices differ (smallest to largest)"
         effect = direction if moved else "NONE on frame time, DRAM bytes, energy"
         if errors:
             effect += "; refused: " + "; ".join(errors)[:160]
@@ -208,13 +227,10 @@ def main():
                                                              other_col, effect))
     runs = len(jobs)
     print()
-    print("%d parameters, %d runs on %d workloads (%s %s, %s lights: %s), %.0f s with %d jobs" % (
+    print("%d parameters, %d runs on %d workloads (%s %s, %s lights: %s)%s, %.0f s with %d jobs" % (
         len(params), runs, len(traces), args.scene, args.resolution, args.lights, ", ".join(traces),
-        time.time() - start, args.jobs))
+        "".join(" --set " + b for b in args.base), time.time() - start, args.jobs))
     print("no effect on frame time, DRAM bytes or energy: " + (", ".join(inert) if inert else "none"))
-    for f in os.listdir(tmp):
-        os.remove(os.path.join(tmp, f))
-    os.rmdir(tmp)
 
 
 if __name__ == "__main__":

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <string>
 #include <vector>
 
@@ -108,6 +109,7 @@ TEST(DramDataRate, ClockSetsTheStreamTime) {
     return run_dram_microbench(resolve_config({}, {"dram.clock_mhz=" + mhz}).hw, DramPattern::Stream, 65536).ns;
   };
   const double at400 = stream_ns("400"), at800 = stream_ns("800"), at1600 = stream_ns("1600");
+  std::cout << "[ figures  ] stream of 4 MiB: " << at400 << " / " << at800 << " / " << at1600 << " ns at 400 / 800 / 1600 MHz\n";
   EXPECT_NEAR(at400 / at800, 2.0, 0.1) << at400 << " vs " << at800 << " ns";
   EXPECT_NEAR(at800 / at1600, 2.0, 0.15) << at800 << " vs " << at1600 << " ns";
 }
@@ -141,6 +143,8 @@ TEST(DramDataRate, ClockMovesADramBoundFrame) {
     return r.timing.frame_cycles;
   };
   const double at400 = cycles("400"), at800 = cycles("800"), at1600 = cycles("1600");
+  std::cout << "[ figures  ] store-bound frame: " << at400 << " / " << at800 << " / " << at1600
+            << " cycles at 400 / 800 / 1600 MHz\n";
   const DramParams d = resolve_config({}, {}).hw.dram;
   const double refresh = 1.0 - (d.t_wr_ns + d.t_rp_ns + d.t_rfc_ns + d.t_rcd_ns + d.t_cl_ns) / d.t_refi_ns;
   const double bound800 = 256.0 * 256 * 128 / 12.8e9 * 600e6 / refresh;
