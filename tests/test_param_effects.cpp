@@ -114,6 +114,22 @@ TEST(DramDataRate, ClockSetsTheStreamTime) {
   EXPECT_NEAR(at800 / at1600, 2.0, 0.15) << at800 << " vs " << at1600 << " ns";
 }
 
+TEST(DramDataRate, TransfersPerClockAndBusWidthAreOneRate) {
+  // At one command clock, twice the transfers per clock and twice the bus width give the same
+  // burst time (32 B: 2500 ps on 2 x 12.8 GB/s instead of 5000 ps), hence the same stream to the
+  // picosecond; both halve the default stream time up to the fixed ns costs (refresh, row opens).
+  const auto stream_ns = [](const std::string& set, double burst_ps) {
+    const HwConfig hw = resolve_config({}, {set}).hw;
+    EventQueue eq;
+    EXPECT_EQ(Dram(hw.dram, hw.energy, eq).timing().burst_ps, burst_ps) << set;
+    return run_dram_microbench(hw, DramPattern::Stream, 65536).ns;
+  };
+  const double base = stream_ns("dram.transfers_per_clock=2", 5000.0);
+  const double tpc = stream_ns("dram.transfers_per_clock=4", 2500.0), width = stream_ns("dram.bus_width_bits=64", 2500.0);
+  EXPECT_EQ(tpc, width);
+  EXPECT_NEAR(base / tpc, 2.0, 0.15) << base << " vs " << tpc << " ns";
+}
+
 TEST(DramDataRate, ClockMovesADramBoundFrame) {
   // One cheap full-frame quad at 256x256 writing 8 rgba32f targets that are all stored: 256 x 256 x
   // 128 B = 8 MiB. At 800 MHz (12.8 GB/s) the DRAM needs 8388608 / 12.8 GB/s = 655.4 us = 393 k
