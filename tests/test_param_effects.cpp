@@ -94,6 +94,21 @@ TEST(DramDataRate, ParamsPrintsTheDerivedPeak) {
   EXPECT_NE(l5.out.find("dram peak bandwidth  25.6 GB/s"), std::string::npos) << l5.out;
 }
 
+TEST(DramDataRate, RunSummaryShowsThePeak) {
+  const auto dir = std::filesystem::temp_directory_path() / "tbdrsim_test_param_effects";
+  std::filesystem::create_directories(dir);
+  const std::string trace = (dir / "pf.trace").string(), db = (dir / "pf.db").string();
+  std::filesystem::remove(db);
+  ASSERT_EQ(run_cli({"trace", "--technique", "plain_forward", "--scene", "atrium:1", "--lights", "8", "--resolution",
+                     "64x36", "--out", trace})
+                .code,
+            0);
+  const auto r = run_cli({"run", "--trace", trace, "--db", db, "--set", "dram.clock_mhz=400"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  // 400 MHz x 2 x 32 / 8 x 2 = 6.4 GB/s.
+  EXPECT_NE(r.out.find("GB/s achieved of 6.40 GB/s peak"), std::string::npos) << r.out;
+}
+
 TEST(DramDataRate, BurstMustBeWholeTransfers) {
   // 32 B bursts on a 96-bit bus would be 2.67 transfers.
   const HwConfig hw = resolve_config({}, {"dram.bus_width_bits=96"}).hw;
