@@ -47,7 +47,13 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
   if (p.burst_bytes < 1 || p.row_bytes < p.burst_bytes || p.row_bytes % p.burst_bytes != 0) {
     bad("row_bytes must be a positive multiple of burst_bytes");
   }
-  if (!(p.bandwidth_gbps > 0)) bad("bandwidth_gbps must be positive");
+  if (!(p.clock_mhz > 0) || !(p.transfers_per_clock > 0) || p.bus_width_bits < 1) {
+    bad("clock_mhz, transfers_per_clock and bus_width_bits must be positive");
+  }
+  if ((p.burst_bytes * 8) % p.bus_width_bits != 0) {
+    bad("burst_bytes (" + std::to_string(p.burst_bytes) + ") must be a whole number of transfers of bus_width_bits (" +
+        std::to_string(p.bus_width_bits) + ")");
+  }
   if (p.read_queue_entries < 1 || p.write_queue_entries < 1) bad("queues need at least one entry");
   const auto fraction = [](double v) { return v >= 0 && v <= 1; };
   if (!fraction(p.write_low_watermark) || !fraction(p.write_high_watermark)) bad("write watermarks must be in [0, 1]");
@@ -79,8 +85,11 @@ Dram::Dram(const DramParams& p, const EnergyParams& e, EventQueue& eq, std::stri
     timing_.t_rfc_cycles = ns_to_cycles(p.t_rfc_ns);
   }
   timing_.controller = Tick{std::llround(p.controller_latency_ns * 1000.0)};
-  // bytes / (GB/s) = ns; one channel carries bandwidth_gbps / channels.
-  timing_.burst_ps = static_cast<double>(burst_bytes_) * 1000.0 / (p.bandwidth_gbps / static_cast<double>(p.channels));
+  // bytes / (GB/s) = ns; one channel carries clock_mhz x transfers_per_clock x bus_width_bits / 8 MB/s
+  // (DramParams::channel_peak_bandwidth_gbps), so a burst is burst_bytes x 8 / bus_width_bits transfers
+  // at clock_mhz x transfers_per_clock per microsecond.
+  timing_.burst_ps = static_cast<double>(burst_bytes_) * 1000.0 / p.channel_peak_bandwidth_gbps();
+  stats_.peak_bandwidth_gbps.set(p.peak_bandwidth_gbps());
 
   pow2_map_ = is_pow2(row_bytes_) && is_pow2(static_cast<std::uint64_t>(p.channels)) && is_pow2(banks_);
   if (pow2_map_) {

@@ -128,6 +128,7 @@ double dram_energy_pj(const EnergyParams& e, std::uint64_t read_bytes, std::uint
   X(Accumulator, row_hit_rate, "ratio", Derived, "Row hits / requests") \
   X(Accumulator, avg_read_latency_ns, "ns", Derived, "Mean timed read latency per line, enqueue to data back") \
   X(Accumulator, achieved_bandwidth_gbps, "GB/s", Derived, "Timed bytes / (last completion - first enqueue)") \
+  X(Accumulator, peak_bandwidth_gbps, "GB/s", Gauge, "Peak data bandwidth: dram.clock_mhz x transfers_per_clock x bus_width_bits / 8 x channels") \
   X(Accumulator, energy_read_pj, "pJ", Sum, "Read core energy: read bits x dram_read_pj_per_bit") \
   X(Accumulator, energy_write_pj, "pJ", Sum, "Write core energy: write bits x dram_write_pj_per_bit") \
   X(Accumulator, energy_io_pj, "pJ", Sum, "I/O energy: (read + write bits) x dram_io_pj_per_bit") \

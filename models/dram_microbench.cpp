@@ -43,7 +43,7 @@ DramBenchResult run_dram_microbench(const HwConfig& hw, DramPattern pattern, std
   DramBenchResult r;
   r.ns = static_cast<double>(eq.now().ps()) * 1e-3;
   r.bytes = static_cast<double>(dram.stats().read_bytes.value());
-  r.efficiency = r.ns > 0 ? r.bytes / (hw.dram.bandwidth_gbps * r.ns) : 0.0;
+  r.efficiency = r.ns > 0 ? r.bytes / (hw.dram.peak_bandwidth_gbps() * r.ns) : 0.0;
   r.pj_per_bit = dram.stats().energy_per_bit_pj.value();
   r.stats = dram.stats();
   return r;
@@ -52,7 +52,7 @@ DramBenchResult run_dram_microbench(const HwConfig& hw, DramPattern pattern, std
 MemspecPerBit preset_memspec_per_bit(const DramPresetMemspec& p, const HwConfig& hw) {
   MemspecChannel ch;
   ch.dies = p.dies;
-  ch.gbps = hw.dram.bandwidth_gbps / static_cast<double>(hw.dram.channels);
+  ch.gbps = hw.dram.channel_peak_bandwidth_gbps();
   ch.io_pj_per_bit = hw.energy.dram_io_pj_per_bit;
   return memspec_per_bit(*p.memspec, ch);
 }

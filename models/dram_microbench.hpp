@@ -22,7 +22,7 @@ enum class DramPattern : std::uint8_t {
 struct DramBenchResult {
   double ns = 0;          ///< first request to last data back
   double bytes = 0;       ///< bytes read
-  double efficiency = 0;  ///< bytes / (dram.bandwidth_gbps x ns)
+  double efficiency = 0;  ///< bytes / (dram peak bandwidth x ns), DramParams::peak_bandwidth_gbps
   double pj_per_bit = 0;  ///< all DRAM energy (dynamic, background, refresh) / bits read
   DramStats stats;        ///< the DRAM's statistics at the end (derived ones set)
 };

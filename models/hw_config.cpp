@@ -286,11 +286,24 @@ ParamRegistry<HwConfig> make_registry() {
       .doc("Row (page) size per bank").source("LPDDR3 x32 page size 4 KB (JESD209-3)");
   r.add(TBDR_PARAM(dram.burst_bytes), 32).unit("bytes").range(8, 1024)
       .doc("Bytes per burst (BL8 on a 32-bit channel)").source("LPDDR3 BL8 x32");
-  r.add(TBDR_PARAM(dram.bandwidth_gbps), 12.8).unit("GB/s").range(0.1, 4096)
-      .doc("Peak bandwidth of all channels together")
-      .source("JESD209-3: LPDDR3-1600 moves 6.4 GB/s per 32-bit channel, 2 channels");
   r.add(TBDR_PARAM(dram.clock_mhz), 800.0).unit("MHz").range(50, 8000)
-      .doc("DRAM command clock").source("LPDDR3-1600: 800 MHz");
+      .doc("DRAM command clock CK: commands and timings (in ns, rounded up to CK cycles) run on it, and the "
+           "data rate is clock_mhz x transfers_per_clock")
+      .source("JESD209-3: LPDDR3-1600 has tCK 1.25 ns, 800 MHz");
+  r.add(TBDR_PARAM(dram.transfers_per_clock), 2.0).unit("transfers/clock").range(0.25, 32)
+      .doc("Data transfers per DQ pin per CK cycle: 2 for double data rate on CK (LPDDR3, LPDDR4/4X), "
+           "8 for LPDDR5 at a 4:1 WCK:CK ratio (double data rate on WCK), 4 at 2:1; a real number so that a "
+           "synthetic part can pair a round command clock with a round burst time")
+      .source("JESD209-3: LPDDR3-1600 moves 1600 MT/s on an 800 MHz CK (JESD209-4 likewise for LPDDR4; "
+              "JESD209-5: LPDDR5 data is clocked by WCK)");
+  r.add(TBDR_PARAM(dram.bus_width_bits), 32).unit("bits").range(8, 1024)
+      .doc("Data bus (DQ) width of one channel; the peak bandwidth, derived and reported by `tbdrsim params` "
+           "and as mem/dram peak_bandwidth_gbps, is clock_mhz x transfers_per_clock x bus_width_bits / 8 x channels")
+      .source("JESD209-3: an LPDDR3 channel is 32 bits wide (x32 die): 1600 MT/s x 4 B x 2 channels = 12.8 GB/s");
+  r.retire("dram.bandwidth_gbps",
+           "the peak bandwidth is derived, dram.clock_mhz x dram.transfers_per_clock x dram.bus_width_bits / 8 x "
+           "dram.channels (LPDDR3-1600 2x32: 800 MHz x 2 x 32 / 8 x 2 = 12.8 GB/s); set those instead "
+           "(`tbdrsim params` prints the derived figure)");
   r.add(TBDR_PARAM(dram.t_rcd_ns), 18.0).unit("ns").range(0, 1000)
       .doc("Activate to read/write").source("LPDDR3 tRCD 18 ns");
   r.add(TBDR_PARAM(dram.t_rp_ns), 18.0).unit("ns").range(0, 1000)

@@ -188,8 +188,9 @@ struct DramParams {
   std::int64_t banks = 0;
   std::int64_t row_bytes = 0;
   std::int64_t burst_bytes = 0;
-  double bandwidth_gbps = 0;
-  double clock_mhz = 0;
+  double clock_mhz = 0;                   ///< command clock CK
+  double transfers_per_clock = 0;         ///< data transfers per DQ pin per CK cycle (DDR: 2; LPDDR5 WCK 4:1: 8)
+  std::int64_t bus_width_bits = 0;        ///< data bus (DQ) width of one channel
   double t_rcd_ns = 0;
   double t_rp_ns = 0;
   double t_cl_ns = 0;
@@ -218,6 +219,15 @@ struct DramParams {
   DramMapping address_mapping = DramMapping::RowBankChannelColumn;
   double write_high_watermark = 0;  ///< fraction of write_queue_entries that starts a write drain
   double write_low_watermark = 0;   ///< fraction of write_queue_entries that ends it
+
+  /// Data rate per DQ pin, MT/s: clock_mhz x transfers_per_clock.
+  double data_rate_mtps() const { return clock_mhz * transfers_per_clock; }
+  /// Peak data bandwidth of one channel, GB/s: data rate x bus_width_bits / 8 bytes.
+  double channel_peak_bandwidth_gbps() const {
+    return data_rate_mtps() * static_cast<double>(bus_width_bits) / 8.0 / 1000.0;
+  }
+  /// Peak data bandwidth of all channels, GB/s (derived: the one source is clock, rate, width, channels).
+  double peak_bandwidth_gbps() const { return channel_peak_bandwidth_gbps() * static_cast<double>(channels); }
 };
 
 /// [energy] energy per access and static power.

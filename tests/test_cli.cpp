@@ -44,7 +44,7 @@ TEST(Cli, HelpAndUnknownCommandOrOption) {
 TEST(Cli, ParamsListsEveryParameterWithDocAndRange) {
   const auto r = run_cli({"params"});
   ASSERT_EQ(r.code, 0) << r.err;
-  for (const char* key : {"isp.samples_per_clock", "tiling.tile_width", "dram.bandwidth_gbps",
+  for (const char* key : {"isp.samples_per_clock", "tiling.tile_width", "dram.transfers_per_clock",
                           "energy.dram_activate_precharge_nj", "cache.slc.size_bytes", "pls.tile_buffer_bits_per_pixel"}) {
     EXPECT_NE(r.out.find(key), std::string::npos) << key;
   }

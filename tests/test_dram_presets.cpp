@@ -116,7 +116,7 @@ TEST(DramPresets, EnergyPerBitAndEfficiencyAgainstTheMemspecAndTheTimings) {
     // of the bus before refresh; the per-channel queue holds lines of the next row, in another group.
     const auto& d = hw.dram;
     const double refresh = 1.0 - (d.t_rp_ns + d.t_rfc_ns + d.t_rcd_ns + d.t_cl_ns) / d.t_refi_ns;
-    const double burst_ns = static_cast<double>(d.burst_bytes) * static_cast<double>(d.channels) / d.bandwidth_gbps;
+    const double burst_ns = static_cast<double>(d.burst_bytes) / d.channel_peak_bandwidth_gbps();
     const bool bg = d.bank_groups > 1 && d.t_ccd_l_ns > burst_ns;
     const double k = 64.0 / static_cast<double>(d.burst_bytes);
     const double low = bg ? refresh * burst_ns / d.t_ccd_l_ns : refresh;
@@ -139,11 +139,12 @@ TEST(DramPresets, EnergyPerBitAndEfficiencyAgainstTheMemspecAndTheTimings) {
   }
 }
 
-/// One channel, 16 banks in 4 groups, 32 B bursts of 2.5 ns (12.8 GB/s), 1 GHz command clock,
+/// One channel, 16 banks in 4 groups, 32 B bursts of 2.5 ns (12.8 GB/s: a synthetic 32-bit bus at 3.2
+/// transfers per clock), 1 GHz command clock,
 /// tCCD_L 5 ns, tCCD_S 2.5 ns, refresh off.
 HwConfig bank_group_config(const std::vector<std::string>& sets = {}) {
   std::vector<std::string> all = {"dram.clock_mhz=1000", "dram.channels=1", "dram.banks=16", "dram.bank_groups=4",
-                                  "dram.row_bytes=2048", "dram.burst_bytes=32", "dram.bandwidth_gbps=12.8",
+                                  "dram.row_bytes=2048", "dram.burst_bytes=32", "dram.transfers_per_clock=3.2", "dram.bus_width_bits=32",
                                   "dram.t_rcd_ns=18", "dram.t_rp_ns=18", "dram.t_cl_ns=20", "dram.t_ras_ns=42",
                                   "dram.t_rrd_ns=5", "dram.t_faw_ns=20", "dram.t_ccd_l_ns=5", "dram.t_ccd_s_ns=2.5",
                                   "dram.t_refi_ns=0", "dram.controller_latency_ns=10",
@@ -204,7 +205,7 @@ TEST(DramBankGroups, AGroupCountThatDoesNotDivideTheBanksIsRefused) {
 }
 
 TEST(DramPowerDown, AnIdleChannelPowersDownAndItsNextRequestPaysTxp) {
-  // 1 GHz DRAM, 2 channels of 6.4 GB/s (a 64 B line: 10 ns of bus), controller 30 ns each way,
+  // 1 GHz DRAM, 2 channels of 6.4 GB/s (1.6 transfers per clock x 32 bits; a 64 B line: 10 ns of bus), controller 30 ns each way,
   // tRCD 18, RL 15, refresh off; power-down after 100 ns idle, tXP 10 ns.
   //   t = 0:      a read to channel 0 (empty bank): ACT 30, data 63..73, back at 103 ns.
   //   t = 10 us:  a read of the same row: a row hit, 30 + 15 + 10 + 30 = 85 ns when awake; channel
@@ -217,7 +218,7 @@ TEST(DramPowerDown, AnIdleChannelPowersDownAndItsNextRequestPaysTxp) {
   //                (before the activate) + ch1: 2 mW x 19900 + 49.2 mW x 100   [mW x ns = pJ]
   const auto cfg = [](double after) {
     return resolve_config({}, {"dram.clock_mhz=1000", "dram.channels=2", "dram.banks=8", "dram.row_bytes=4096",
-                               "dram.burst_bytes=32", "dram.bandwidth_gbps=12.8", "dram.t_rcd_ns=18", "dram.t_rp_ns=18",
+                               "dram.burst_bytes=32", "dram.transfers_per_clock=1.6", "dram.bus_width_bits=32", "dram.t_rcd_ns=18", "dram.t_rp_ns=18",
                                "dram.t_cl_ns=15", "dram.t_refi_ns=0", "dram.controller_latency_ns=30",
                                "dram.active_standby_mw=57.6", "dram.precharge_standby_mw=49.2",
                                "dram.active_powerdown_mw=12", "dram.precharge_powerdown_mw=2", "dram.t_xp_ns=10",

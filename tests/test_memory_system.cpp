@@ -36,13 +36,13 @@ namespace {
 
 /// The declared defaults with DRAM timing in whole nanoseconds at a 1 GHz DRAM clock and a 1 GHz
 /// core: tRCD 18, tRP 18, RL 15, tRAS 42, tWR 15, tRRD 10, tFAW 50, tWTR 10 cycles, tRTW 4 ns;
-/// controller 30 ns each way; 2 channels of 6.4 GB/s, so a 64 B line occupies a channel's data bus
-/// for exactly 10 ns. Refresh is off (t_refi_ns=0) so that latencies are exact; the refresh tests
+/// controller 30 ns each way; 2 channels of 6.4 GB/s (a synthetic 32-bit bus at 1.6 transfers per
+/// 1 GHz clock: 1000 x 1.6 x 4 B), so a 64 B line occupies a channel's data bus for exactly 10 ns. Refresh is off (t_refi_ns=0) so that latencies are exact; the refresh tests
 /// turn it on with tREFI 3900 and tRFC 130 ns (the LPDDR3 defaults).
 /// `sets` (section.key=value, as --set) apply on top.
 HwConfig test_config(const std::vector<std::string>& sets = {}) {
   std::vector<std::string> all = {"gpu.core_clock_mhz=1000", "dram.clock_mhz=1000", "dram.channels=2", "dram.banks=8",
-                                  "dram.row_bytes=4096", "dram.burst_bytes=32", "dram.bandwidth_gbps=12.8",
+                                  "dram.row_bytes=4096", "dram.burst_bytes=32", "dram.transfers_per_clock=1.6", "dram.bus_width_bits=32",
                                   "dram.t_rcd_ns=18", "dram.t_rp_ns=18", "dram.t_cl_ns=15", "dram.t_ras_ns=42",
                                   "dram.t_wr_ns=15", "dram.t_rrd_ns=10", "dram.t_faw_ns=50", "dram.t_wtr_ns=10",
                                   "dram.t_rtw_ns=4", "dram.t_refi_ns=0", "dram.t_rfc_ns=130",
@@ -738,7 +738,7 @@ TEST(DramTest, PresetEnergyPerBitIsTheMemspecArithmetic) {
     const double simulated = d->stats().energy_per_bit_pj.value();
     std::cout << "[ figures  ] " << hw.dram.name << ": streaming read " << simulated << " pJ/bit (memspec arithmetic "
               << predicted << "; core read " << hw.energy.dram_read_pj_per_bit << " + I/O " << hw.energy.dram_io_pj_per_bit
-              << "), " << 100.0 * static_cast<double>(kLines * 64) / hw.dram.bandwidth_gbps * 1000.0 / took_ps
+              << "), " << 100.0 * static_cast<double>(kLines * 64) / hw.dram.peak_bandwidth_gbps() * 1000.0 / took_ps
               << " % of peak\n";
     EXPECT_NEAR(simulated / predicted, 1.0, 0.01) << hw.dram.name;
     // A refresh closes the rows being streamed: each costs up to two activates more (the row in
@@ -1437,7 +1437,7 @@ std::uint64_t stream_tile_traffic(MemorySystem& m, EventQueue& eq, std::uint64_t
 
 TEST(MemorySystemTest, StreamingReachesDramBandwidth) {
   // 4 MiB of tile loads, then of tile stores (stream_tile_traffic), on both shipped DRAM presets.
-  // Bound: 4 MiB / (dram.bandwidth_gbps x refresh efficiency), where each refresh idles the bus
+  // Bound: 4 MiB / (peak bandwidth x refresh efficiency), where each refresh idles the bus
   // for [tWR after the last write +] tRP + tRFC + tRCD + RL per tREFI (LPDDR3 loads: 1 - 182.5 /
   // 3900 = 95.3 %; LPDDR4X loads: 1 - 333.5 / 3904 = 91.5 %). The overflow queue in front of each
   // DRAM channel lets the source run ahead of a full channel, so the stream must come within 5 %
@@ -1453,10 +1453,10 @@ TEST(MemorySystemTest, StreamingReachesDramBandwidth) {
       ASSERT_EQ(stream_tile_traffic(m, eq, kTotal, write), kTotal);
       const auto& p = hw.dram;
       const double lost_ns = (write ? p.t_wr_ns : 0.0) + p.t_rp_ns + p.t_rfc_ns + p.t_rcd_ns + p.t_cl_ns;
-      const double bound_ps = static_cast<double>(kTotal) / hw.dram.bandwidth_gbps * 1000.0 / (1.0 - lost_ns / p.t_refi_ns);
+      const double bound_ps = static_cast<double>(kTotal) / hw.dram.peak_bandwidth_gbps() * 1000.0 / (1.0 - lost_ns / p.t_refi_ns);
       const double took_ps = static_cast<double>(eq.now().ps());
       std::cout << "[ figures  ] " << preset << (write ? " stores" : " loads") << ": " << 100.0 * bound_ps / took_ps
-                << " % of " << hw.dram.bandwidth_gbps << " GB/s less refresh ("
+                << " % of " << hw.dram.peak_bandwidth_gbps() << " GB/s less refresh ("
                 << 100.0 * (1.0 - lost_ns / p.t_refi_ns) << " % of it)\n";
       EXPECT_LE(took_ps, 1.05 * bound_ps) << preset << " write=" << write;
       EXPECT_EQ(write ? m.traffic().writes(DramClass::Color) : m.traffic().reads(DramClass::Color), kTotal);
@@ -1478,7 +1478,7 @@ TEST(MemorySystemTest, OverflowRoomLetsOneStreamKeepBothChannelsBusy) {
   const HwConfig hw =
       resolve_config({std::string(TBDRSIM_SOURCE_DIR) + "/configs/series6xt_gx6450.ini"}, {"dram.read_queue_entries=8"}).hw;
   constexpr std::uint64_t kTotal = 2u << 20;
-  const double bound_ps = static_cast<double>(kTotal) / hw.dram.bandwidth_gbps * 1000.0;  // (before refresh)
+  const double bound_ps = static_cast<double>(kTotal) / hw.dram.peak_bandwidth_gbps() * 1000.0;  // (before refresh)
   std::vector<double> took;
   for (const std::uint32_t entries : {0u, 8u, 32u, 128u}) {
     EventQueue eq;

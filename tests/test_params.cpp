@@ -56,18 +56,20 @@ TEST(Params, DefaultsDescribeTheSeries6xtPreset) {
 TEST(Params, FileThenSetLayeringAndOrigins) {
   const auto a = write_temp("a.ini", "# preset A\n[tiling]\ntile_width = 16\ntile_height=16\n\n[usc]\ncount = 6 # GX6650\n");
   const auto b = write_temp("b.ini", "[usc]\ncount = 2\n[gpu]\nmode = tbr\n");
-  const ResolvedConfig rc = resolve_config({a, b}, {"usc.count=8", "dram.bandwidth_gbps=34"});
+  const ResolvedConfig rc = resolve_config({a, b}, {"usc.count=8", "dram.bus_width_bits=64"});
   EXPECT_EQ(rc.hw.tiling.tile_width, 16);
   EXPECT_EQ(rc.hw.usc.count, 8);
   EXPECT_EQ(rc.hw.gpu.mode, GpuMode::Tbr);
-  EXPECT_DOUBLE_EQ(rc.hw.dram.bandwidth_gbps, 34.0);
+  EXPECT_EQ(rc.hw.dram.bus_width_bits, 64);
+  // 800 MHz x 2 transfers x 64 bits / 8 x 2 channels = 25.6 GB/s: the derived peak follows the width.
+  EXPECT_DOUBLE_EQ(rc.hw.dram.peak_bandwidth_gbps(), 25.6);
   const auto& t = hw_params().table();
   EXPECT_EQ(rc.params.origins[static_cast<std::size_t>(t.find("tiling.tile_width"))].text, a + ":3");
   EXPECT_EQ(rc.params.origins[static_cast<std::size_t>(t.find("gpu.mode"))].text, b + ":4");
   EXPECT_EQ(rc.params.origins[static_cast<std::size_t>(t.find("usc.count"))].text, "--set usc.count=8");
   EXPECT_EQ(rc.params.config_name, "b");
   EXPECT_NE(rc.hash, resolve_config({}, {}).hash);
-  EXPECT_EQ(rc.hash, resolve_config({a, b}, {"usc.count=8", "dram.bandwidth_gbps=34"}).hash);
+  EXPECT_EQ(rc.hash, resolve_config({a, b}, {"usc.count=8", "dram.bus_width_bits=64"}).hash);
 }
 
 TEST(Params, MisspeltKeyNamesFileLineAndSuggestion) {
@@ -103,7 +105,7 @@ TEST(Params, SetErrorsNameTheArgumentAndTheRange) {
   EXPECT_NE(e.find("[1, 1024]"), std::string::npos) << e;
   EXPECT_NE(error_of({}, {"isp.samples_per_clock"}).find("expected section.key=value"), std::string::npos);
   EXPECT_NE(error_of({}, {"nosuch.key=1"}).find("unknown section 'nosuch'"), std::string::npos);
-  EXPECT_NE(error_of({}, {"dram.bandwidth_gbps=nan"}).find("finite number"), std::string::npos);
+  EXPECT_NE(error_of({}, {"dram.clock_mhz=nan"}).find("finite number"), std::string::npos);
   EXPECT_NE(error_of({}, {"usc.count=4.5"}).find("an integer"), std::string::npos);
   EXPECT_NE(error_of({}, {"pls.tile_buffer_bits_per_pixel=128bits"}).find("an integer"), std::string::npos);
 }

@@ -97,7 +97,7 @@ TEST(TimingRoofline, AluBoundFrameMatchesTheUscRate) {
 
 TEST(TimingRoofline, StoreBoundFrameMatchesDramBandwidth) {
   // One cheap full-frame quad at 512x512 writing 8 rgba32f targets that are all stored:
-  // 512 x 512 x 128 B = 33554432 B. Bound: bytes / dram.bandwidth_gbps (12.8 GB/s) = 2.6214 ms
+  // 512 x 512 x 128 B = 33554432 B. Bound: bytes / DRAM peak bandwidth (12.8 GB/s) = 2.6214 ms
   // = 1572864 cycles at 600 MHz (the pixel back end alone would need 1048576 cycles), over the
   // bus time refresh leaves: each refresh idles it tWR + tRP + tRFC + tRCD + RL per tREFI
   // (docs/memory-model.md; 1 - 197.5 / 3900 = 94.9 % with LPDDR3): 1656 k cycles.
@@ -159,7 +159,7 @@ TEST(TimingRoofline, TextureBoundFrameMatchesDramBandwidth) {
   // (8 x 1 MiB footprints; border lines shared by neighbouring tiles may hit in the SLC) plus a
   // 1 MiB colour store. 2.1 M bilinear fetches (one filtered texel each): at the default 2 x 4
   // filtered texels per clock the texture units take 262 k cycles, near the DRAM bound; at 16 per
-  // clock (66 k cycles) the bound is the DRAM: bytes moved / dram.bandwidth_gbps (12.8 GB/s), at
+  // clock (66 k cycles) the bound is the DRAM: bytes moved / DRAM peak bandwidth (12.8 GB/s), at
   // 600 MHz.
   const Timed r = run_wall(textured_wall(8), {"texture.texels_per_clock=16"});
   const double footprint = static_cast<double>(r.timing.texture_footprint_lines * 64);

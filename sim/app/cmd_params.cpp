@@ -2,6 +2,9 @@
 #include <algorithm>
 #include <iomanip>
 #include <ostream>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include <boost/program_options.hpp>
 
@@ -85,6 +88,18 @@ void print_ini(const ParamTable& table, const ResolvedParams& p, std::ostream& o
   }
 }
 
+/// The figures derived from the parameters (not parameters themselves), one line each:
+/// name, value, unit, and the formula with this configuration's numbers.
+std::vector<std::string> derived_lines(const HwConfig& hw) {
+  const DramParams& d = hw.dram;
+  std::ostringstream bw;
+  bw << "dram peak bandwidth  " << format_param_value(d.peak_bandwidth_gbps()) << " GB/s  = dram.clock_mhz x "
+     << "transfers_per_clock x bus_width_bits / 8 x channels = " << format_param_value(d.clock_mhz) << " MHz x "
+     << format_param_value(d.transfers_per_clock) << " x " << d.bus_width_bits << " / 8 x " << d.channels << " ("
+     << format_param_value(d.data_rate_mtps()) << " MT/s per pin)";
+  return {bw.str()};
+}
+
 }  // namespace
 
 int cmd_params(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
@@ -101,15 +116,22 @@ int cmd_params(const std::vector<std::string>& args, std::ostream& out, std::ost
   const ResolvedConfig rc = config_from_options(vm);
   const bool resolved = vm.count("config") || vm.count("set");
   const ParamTable& table = hw_params().table();
+  const std::vector<std::string> derived = derived_lines(rc.hw);
   if (format == "markdown") {
     print_markdown(table, rc.params, resolved, out);
+    out << "\nDerived (not parameters):\n\n";
+    for (const auto& l : derived) out << "- " << l << "\n";
   } else if (format == "ini") {
     print_ini(table, rc.params, out);
+    out << "\n# Derived (not parameters):\n";
+    for (const auto& l : derived) out << "# " << l << "\n";
   } else {
     out << table.decls().size() << " parameters";
     if (resolved) out << ", configuration '" << rc.params.config_name << "', hash " << rc.hash;
     out << "\n";
     print_table(table, rc.params, resolved, out);
+    out << "\nDerived (not parameters):\n";
+    for (const auto& l : derived) out << "  " << l << "\n";
   }
   return 0;
 }

@@ -639,13 +639,13 @@ void fill_and_bandwidth_rooflines(Validator& v, std::vector<AnchorRow>& rows, co
     const double bytes = stat(r, "mem/dram", "write_bytes") + stat(r, "mem/dram", "read_bytes");
     const auto& d = hw.dram;
     const double cycles_per_ns = hw.gpu.core_clock_mhz * 1e-3;
-    const double peak_bytes_per_cycle = d.bandwidth_gbps / cycles_per_ns;
+    const double peak_bytes_per_cycle = d.peak_bandwidth_gbps() / cycles_per_ns;
     const double opened = stat(r, "mem/dram", "row_misses"), refreshes = stat(r, "mem/dram", "refreshes");
     const double bound = bytes / peak_bytes_per_cycle +
                          (opened * (d.t_wr_ns + d.t_rp_ns + d.t_rcd_ns) + refreshes * d.t_rfc_ns) * cycles_per_ns /
                              static_cast<double>(d.channels);
     const double cycles = stat(r, "frame/timing", "frame_cycles");
-    rows.push_back(roofline("Roofline: a DRAM-bound frame", bound, fixed(bound, 0) + " cycles (DRAM bytes / dram.bandwidth_gbps + (rows opened x (tWR + tRP + tRCD) + "
+    rows.push_back(roofline("Roofline: a DRAM-bound frame", bound, fixed(bound, 0) + " cycles (DRAM bytes / peak bandwidth (dram.clock_mhz x transfers_per_clock x bus_width_bits / 8 x channels) + (rows opened x (tWR + tRP + tRCD) + "
                     "refreshes x tRFC) / channels)", cycles, "32 passes each storing a 480x270 rgba8 image: " + fixed(bytes / kMiB, 1) + " MiB, " + fixed(opened, 0) +
                         " rows opened (one per tile store and after refreshes), " + fixed(refreshes, 0) + " refreshes", 1.0));
   }

@@ -484,6 +484,14 @@ void print_run_summary(const RunOutcome& o, std::ostream& out) {
   out << "    " << std::left << std::setw(18) << "total" << std::right << std::setw(10) << stat_text(device.total_read() / 1e6)
       << std::setw(10) << stat_text(device.total_written() / 1e6) << "   (" << stat_text(f.dram.total_read() / 1e6) << ", "
       << stat_text(f.dram.total_written() / 1e6) << ")\n";
+  // The device's side (after the caches) against its peak, which dram.clock_mhz sets.
+  const auto mem_stat = [&](const char* name) {
+    for (const StatRecord& r : o.timing.memory_stats) {
+      if (r.scope == "mem/dram" && r.name == name) return r.value;
+    }
+    return 0.0;
+  };
+  out << "  DRAM bandwidth: " << stat_text(mem_stat("achieved_bandwidth_gbps")) << " GB/s achieved of " << stat_text(mem_stat("peak_bandwidth_gbps")) << " GB/s peak\n";
   if (!o.images_written.empty()) {
     out << "  images: " << o.images_written.size() << " files in "
         << std::filesystem::path(o.images_written.front()).parent_path().string() << "\n";

@@ -163,6 +163,18 @@ void ParamTable::section(std::string name, std::string doc) {
   sections_.emplace_back(std::move(name), std::move(doc));
 }
 
+void ParamTable::retire(std::string key, std::string replacement) {
+  if (find(key) >= 0) throw std::logic_error("parameter retired while still declared: " + key);
+  retired_.emplace_back(std::move(key), std::move(replacement));
+}
+
+const std::string* ParamTable::retired(const std::string& key) const {
+  for (const auto& r : retired_) {
+    if (r.first == key) return &r.second;
+  }
+  return nullptr;
+}
+
 int ParamTable::find(const std::string& key) const {
   for (std::size_t i = 0; i < decls_.size(); ++i) {
     if (decls_[i].key == key) return static_cast<int>(i);
@@ -227,6 +239,9 @@ void apply_one(const ParamTable& table, ResolvedParams& p, const std::string& wh
                const std::string& value) {
   const int idx = table.find(key);
   if (idx < 0) {
+    if (const std::string* instead = table.retired(key)) {
+      throw InputError(where, "parameter '" + key + "' was removed: " + *instead);
+    }
     std::string msg = "unknown parameter '" + key + "'";
     const std::string guess = closest_key(table, key);
     if (!guess.empty()) msg += " (did you mean '" + guess + "'?)";

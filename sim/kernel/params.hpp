@@ -145,6 +145,11 @@ class ParamTable {
   Builder declare(std::string key, ParamType type, ParamValue default_value);
   /// Declares a section so its name is known (and documented) even before it has keys.
   void section(std::string name, std::string doc);
+  /// Records a key that was removed: a config file or --set that still sets it is refused with
+  /// `replacement` (what to set instead) rather than a bare "unknown parameter".
+  void retire(std::string key, std::string replacement);
+  /// What replaced a removed key, or nullptr when `key` was never retired.
+  const std::string* retired(const std::string& key) const;
 
   const std::vector<ParamDecl>& decls() const { return decls_; }
   const std::vector<std::pair<std::string, std::string>>& sections() const { return sections_; }
@@ -169,6 +174,7 @@ class ParamTable {
   void check_default(const ParamDecl& d) const;
   std::vector<ParamDecl> decls_;
   std::vector<std::pair<std::string, std::string>> sections_;
+  std::vector<std::pair<std::string, std::string>> retired_;  ///< removed key, what replaced it
 };
 
 /// A ParamTable bound to a plain struct `Config`: each declaration also knows how to write its
@@ -221,6 +227,8 @@ class ParamRegistry {
     return table_.declare(std::move(key), ParamType::Text, def_name).choices(std::move(choices));
   }
   void section(std::string name, std::string doc) { table_.section(std::move(name), std::move(doc)); }
+  /// See ParamTable::retire.
+  void retire(std::string key, std::string replacement) { table_.retire(std::move(key), std::move(replacement)); }
 
   const ParamTable& table() const { return table_; }
   /// Writes every resolved value into a fresh Config.
