@@ -25,6 +25,9 @@ namespace {
 
 HwConfig config(const std::vector<std::string>& sets = {}) { return resolve_config({}, sets).hw; }
 
+/// The shipped config file `name` (configs/<name>.ini in the source tree).
+std::string config_file(const std::string& name) { return std::string(TBDRSIM_SOURCE_DIR) + "/configs/" + name + ".ini"; }
+
 /// The CACTI point of `kind` at `node` nm and `size` bytes (the test fails when it is missing).
 const SramPoint* cacti_point(SramArray kind, int node, double size) {
   for (const SramPoint& p : kCactiSramTable) {
@@ -230,6 +233,30 @@ TEST_F(EnergyFrame, AFixedFramePeriodAddsIdlePowerTimesIdleTime) {
   const Timed short_period = timed({"gpu.frame_period_us=1"});
   EXPECT_EQ(short_period.energy.idle_ps, 0.0);
   EXPECT_DOUBLE_EQ(short_period.energy.at_period_total_pj(), short_period.energy.total_pj);
+}
+
+TEST(DramRails, EveryPresetChargesIoStandbyAndSelfRefreshOnItsOwnVddq) {
+  // The LPDDR4 die (DRAMSys memspec MICRON_6Gb_LPDDR4-3200_32bit_A): read I/O (idd4rq 150 - idd3nq
+  // 0.75) mA over a 5 ns BL16 burst of 256 bits; self-refresh idd61 0.3 mA x 1.8 V + idd62 0.5 mA x
+  // 1.1 V + idd6q 0.1 mA x VDDQ. LPDDR3 (DRAMPower MICRON_4Gb_LPDDR3-1600_32bit_A, no VDDQ currents):
+  // idd6 1.0 mA x 1.8 V + idd62 3.27 mA x 1.2 V = 5.724 mW.
+  const auto io = [](double vddq) { return 149.25 * vddq * 5.0 / 256.0; };
+  const auto sr = [](double vddq) { return 0.3 * 1.8 + 0.5 * 1.1 + 0.1 * vddq; };
+  const HwConfig lp3 = config();
+  EXPECT_NEAR(lp3.dram.self_refresh_mw, 1.0 * 1.8 + 3.27 * 1.2, 0.01);
+  // LPDDR4X: VDDQ 0.6 V (JESD209-4-1) for I/O as for standby; two x16 dies per modelled channel.
+  const HwConfig lp4x = resolve_config({config_file("mobile_16x16_lpddr4x")}, {}).hw;
+  EXPECT_NEAR(lp4x.energy.dram_io_pj_per_bit, io(0.6), 0.01);  // 1.749
+  EXPECT_NEAR(lp4x.dram.self_refresh_mw, 2 * sr(0.6), 0.01);    // 2 x 1.15
+  // Standby's VDDQ share is the same 0.6 V: 2 x (2.25 x 1.8 + 30 x 1.1 + 0.75 x 0.6) = 75.0 mW.
+  EXPECT_NEAR(lp4x.dram.active_standby_mw, 2 * (2.25 * 1.8 + 30 * 1.1 + 0.75 * 0.6), 0.01);
+  // LPDDR5 presets: the same die at LPDDR5's VDDQ 0.5 V, one per x16 channel.
+  for (const char* cfg : {"dram_lpddr5_6400", "dram_lpddr5_6400_bg"}) {
+    const HwConfig lp5 = resolve_config({config_file("mobile_16x16_lpddr4x"), config_file(cfg)}, {}).hw;
+    EXPECT_NEAR(lp5.energy.dram_io_pj_per_bit, io(0.5), 0.01) << cfg;  // 1.458
+    EXPECT_NEAR(lp5.dram.self_refresh_mw, sr(0.5), 0.01) << cfg;       // 1.14
+    EXPECT_NEAR(lp5.dram.active_standby_mw, 2.25 * 1.8 + 30 * 1.1 + 0.75 * 0.5, 0.05) << cfg;
+  }
 }
 
 TEST(EnergyParams, EveryEnergyConstantNamesASource) {
