@@ -11,6 +11,9 @@ namespace {
 /// Fixed-function units besides the ISP's raster pipes: geometry, tiler, pixel back end.
 constexpr double kFixedFunctionUnitsBesidesRasterPipes = 3.0;
 
+/// Share of an ALU op's operand bytes that are reads: an FMA reads three sources and writes one result.
+constexpr double kOperandReadShare = 0.75;
+
 /// mW x ps = 1e-3 W x 1e-12 s = 1e-15 J = 1e-3 pJ; mW x ns = 1 pJ.
 constexpr double kPjPerMwPs = 1e-3;
 
@@ -99,7 +102,8 @@ EnergyBreakdown compute_energy(const HwConfig& hw, const FrameStats& frame, cons
   {
     // An op's arithmetic at the node plus its operands: register_file_bytes_per_op bytes, 3 read for
     // 1 written (an FMA's three sources and one result).
-    const double operand_pjb = 0.75 * pjb(OnChipArray::RegisterFile, false) + 0.25 * pjb(OnChipArray::RegisterFile, true);
+    const double operand_pjb = kOperandReadShare * pjb(OnChipArray::RegisterFile, false) +
+                               (1.0 - kOperandReadShare) * pjb(OnChipArray::RegisterFile, true);
     term("alu", "ops", d(tsp.fragment_alu_ops) + d(frame.render.geometry.vertex_alu_ops) + d(frame.compute.compute_alu_ops),
          e.alu_op_pj_45nm * scale + e.register_file_bytes_per_op * operand_pjb);
   }
