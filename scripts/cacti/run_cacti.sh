@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates models/sram_energy_table.hpp, the CACTI 7 table the energy model reads (per access
 # read/write energy and leakage of an on-chip SRAM array by size and process node), from the
-# user's own build of CACTI 7 (github HewlettPackard/cacti; `make opt` in its directory).
+# user's own build of CACTI 7 (github HewlettPackard/cacti): the directory holding its `cacti` binary.
 #
 #   scripts/cacti/run_cacti.sh /path/to/cacti-build [out.hpp]
 #
@@ -13,7 +13,7 @@ set -euo pipefail
 cacti_dir=${1:?usage: run_cacti.sh CACTI_DIR [OUT_HPP]}
 here=$(cd "$(dirname "$0")" && pwd)
 out=${2:-$here/../../models/sram_energy_table.hpp}
-[[ -x $cacti_dir/cacti ]] || { echo "run_cacti.sh: $cacti_dir/cacti: no CACTI binary (build it with make opt)" >&2; exit 2; }
+[[ -x $cacti_dir/cacti ]] || { echo "run_cacti.sh: $cacti_dir/cacti: no CACTI binary there" >&2; exit 2; }
 commit=$(git -C "$cacti_dir" rev-parse HEAD 2>/dev/null || echo unknown)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
