@@ -39,7 +39,10 @@ MemspecEnergy memspec_energy(const DramMemspec& m) {
   return e;
 }
 
-MemspecPerBit memspec_per_bit(const DramMemspec& m, const MemspecChannel& c) {
+MemspecPerBit memspec_per_bit(const DramMemspec& die, const MemspecChannel& c) {
+  // The same currents at the preset's VDDQ (LPDDR4X runs the LPDDR4 die's I/O at 0.6 V).
+  DramMemspec m = die;
+  if (c.vddq_v > 0 && m.has_vddq) m.vddq.volts = c.vddq_v;
   const MemspecEnergy e = memspec_energy(m);
   const double dies = c.dies;
   const double peak_bits_per_ns = c.gbps * 8.0;
@@ -111,11 +114,12 @@ const std::vector<DramPresetMemspec>& dram_preset_memspecs() {
       {"LPDDR3-1600 2x32", {"series6xt_gx6450"}, &memspec_lpddr3_1600(), 1,
        "the memspec has no I/O currents: I/O is the preset's pin-capacitance estimate (energy.dram_io_pj_per_bit)"},
       {"LPDDR4X-4266 2x32", {"mobile_16x16_lpddr4x"}, &memspec_lpddr4_3200(), 2,
-       "LPDDR4-3200 x16 dies, two per modelled 32-bit channel, at 4266 MT/s; VDDQ 1.1 V (LPDDR4X: 0.6 V)"},
+       "LPDDR4-3200 x16 dies, two per modelled 32-bit channel, at 4266 MT/s; the memspec's VDDQ 1.1 V at LPDDR4X's "
+       "0.6 V (JESD209-4-1)", 0.6},
       {"LPDDR5-6400 4x16 (8B mode)", {"mobile_16x16_lpddr4x", "dram_lpddr5_6400"}, &memspec_lpddr4_3200(), 1,
-       "no public LPDDR5 memspec has currents: the LPDDR4 die's, at LPDDR5's bandwidth"},
+       "no public LPDDR5 memspec has currents: the LPDDR4 die's, at LPDDR5's bandwidth and VDDQ 0.5 V", 0.5},
       {"LPDDR5-6400 4x16 (BG mode)", {"mobile_16x16_lpddr4x", "dram_lpddr5_6400_bg"}, &memspec_lpddr4_3200(), 1,
-       "LPDDR4 die's currents as above; bank-group timing from JESD209-5 (gem5 transcription)"},
+       "LPDDR4 die's currents as above; bank-group timing from JESD209-5 (gem5 transcription)", 0.5},
   };
   return presets;
 }

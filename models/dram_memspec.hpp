@@ -65,6 +65,7 @@ struct MemspecChannel {
   int dies = 1;              ///< dies side by side on one modelled channel (each activates and bursts)
   double gbps = 0;           ///< peak bandwidth of one modelled channel
   double io_pj_per_bit = 0;  ///< I/O energy to use when the memspec gives no VDDQ currents (0: none)
+  double vddq_v = 0;         ///< VDDQ the preset runs its dies at, when not the memspec's (0: the memspec's)
 };
 
 /// Energy per bit of reads, from the memspec alone, for two patterns on one channel:
@@ -94,6 +95,7 @@ struct DramPresetMemspec {
   const DramMemspec* memspec = nullptr;
   int dies = 1;      ///< memspec dies on one modelled channel
   std::string note;  ///< how the preset departs from the memspec
+  double vddq_v = 0; ///< the preset's VDDQ when not the memspec's (LPDDR4X 0.6 V, LPDDR5 0.5 V; 0: the memspec's)
 };
 
 /// Every shipped DRAM preset with its memspec (the default, LPDDR4X, LPDDR5 8-bank and bank-group modes).

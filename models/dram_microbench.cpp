@@ -54,6 +54,7 @@ MemspecPerBit preset_memspec_per_bit(const DramPresetMemspec& p, const HwConfig&
   ch.dies = p.dies;
   ch.gbps = hw.dram.channel_peak_bandwidth_gbps();
   ch.io_pj_per_bit = hw.energy.dram_io_pj_per_bit;
+  ch.vddq_v = p.vddq_v;
   return memspec_per_bit(*p.memspec, ch);
 }
 

@@ -1,8 +1,11 @@
 #pragma once
-// The energy model: every component's energy is a counter of the run times its unit cost from
-// the [energy] parameters (DRAM per bit and per activate+precharge from the memory system, SRAM
-// per byte by structure, per ALU op, per texel) plus static power times frame time. The records
-// it produces let a reader recompute every figure from the counters.
+// The energy model: every component's energy is a counter of the run times its unit cost (DRAM per
+// bit and per activate+precharge from the memory system; SRAM per byte by structure from the CACTI
+// table at the structure's configured size and node; per ALU op and per texel from Horowitz's 45 nm
+// figures scaled to the node) plus static power (leakage summed over the configured units and
+// arrays) times frame time. At a fixed frame period (gpu.frame_period_us) the idle time after the
+// frame adds idle power: gated units, caches, DRAM in power-down then self-refresh. The records it
+// produces let a reader recompute every figure from the counters (docs/energy.md).
 #include <string>
 #include <vector>
 
@@ -22,11 +25,36 @@ struct EnergyTerm {
   double pj = 0;
 };
 
-/// The energy of a frame by component.
+/// Leakage of the configured GPU, by kind, at its node.
+struct StaticPower {
+  double logic_mw = 0;          ///< USCs, texture units, fixed-function units
+  double sram_gated_mw = 0;     ///< per-tile buffers and register files (gated when the GPU idles)
+  double sram_retained_mw = 0;  ///< caches (keep their data: never gated)
+  double total_mw() const { return logic_mw + sram_gated_mw + sram_retained_mw; }
+  /// Leakage while the GPU idles: gated parts at energy.gated_leakage_fraction, caches in full.
+  double idle_mw(double gated_fraction) const { return (logic_mw + sram_gated_mw) * gated_fraction + sram_retained_mw; }
+};
+
+/// The configured GPU's leakage (energy.*_leakage_mw per unit, CACTI per array).
+StaticPower static_power(const HwConfig& hw);
+
+/// Background energy of all DRAM channels idle for `idle_ps` after a frame: precharge standby until
+/// dram.powerdown_after_ns, then precharge power-down (refreshing) until the next refresh is due
+/// (one dram.t_refi_ns at most), then self-refresh (dram.self_refresh_mw; 0: power-down goes on).
+double dram_idle_pj(const DramParams& d, double idle_ps);
+
+/// The energy of a frame by component, and of one frame period.
 struct EnergyBreakdown {
   std::vector<EnergyTerm> terms;
-  double total_pj = 0;
-  /// Statistic records: "frame/energy" <component>_pj and total_pj / total_mj.
+  double total_pj = 0;        ///< the frame at its own duration (race to idle)
+  StaticPower leakage;        ///< what the static term charges over the frame time
+  double idle_ps = 0;         ///< gpu.frame_period_us - frame time (0 when no period or a longer frame)
+  double idle_gpu_pj = 0;     ///< GPU leakage over idle_ps (gated units and caches)
+  double idle_dram_pj = 0;    ///< DRAM background over idle_ps
+  double idle_pj() const { return idle_gpu_pj + idle_dram_pj; }
+  double at_period_total_pj() const { return total_pj + idle_pj(); }
+  /// Statistic records: "frame/energy" <component>_pj, total_pj / total_mj, and the leakage and
+  /// frame-period figures (static_power_mw, idle_mj, at_period_total_mj, ...: none named *_pj).
   void collect(std::vector<StatRecord>& out) const;
 };
 

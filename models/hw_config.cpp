@@ -53,6 +53,11 @@ ParamRegistry<HwConfig> make_registry() {
            "refused: no tile memory to keep it in)")
       .source("Imagination, PowerVR Architecture Guide (tile-based deferred rendering); tbr and imr are the "
               "comparison modes");
+  r.add(TBDR_PARAM(gpu.frame_period_us), 0.0).unit("us").range(0, 1e7)
+      .doc("Display frame period: frame/energy also reports the energy of one period (at_period_total_mj), the "
+           "frame plus the idle time after it at idle power (gated units' leakage, caches' leakage, DRAM in "
+           "power-down then self-refresh); 0 = race to idle only, a frame longer than the period has no idle time")
+      .source("a use-case figure, not hardware: 16666.7 us at 60 Hz, 8333.3 us at 120 Hz");
 
   r.section("geometry", "Vertex fetch, vertex shading, clip/cull and viewport transform");
   r.add(TBDR_PARAM(geometry.primitives_per_clock), 1.0).unit("primitives/clock").range(0.01, 64)
@@ -359,11 +364,14 @@ ParamRegistry<HwConfig> make_registry() {
   r.add(TBDR_PARAM(dram.refresh_nj), 26.8).unit("nJ").range(0, 100000)
       .doc("Energy of one all-bank refresh of a channel above active standby ((IDD5 - IDD3N) x VDD x tRFC per rail)")
       .source(lpddr3_memspec + ": ((40 - 2) mA x 1.8 V + (160 - 45) mA x 1.2 V) x 130 ns = 206.4 mW x 130 ns");
-  r.add(TBDR_PARAM(dram.powerdown_after_ns), 0.0).unit("ns").range(0, 1e9)
+  r.add(TBDR_PARAM(dram.powerdown_after_ns), 7.5).unit("ns").range(0, 1e9)
       .doc("A channel with no request queued or in service for this long enters power-down (active power-down "
            "with a row open, precharge power-down otherwise) until its next request arrives, which then waits "
            "t_xp_ns; refreshes go on meanwhile (0: never: an idle channel stands by)")
-      .source("controller policy, no public figure for a GPU's controller: off by default");
+      .source("DRAMSys (github tukl-msd/DRAMSys, src/DRAMSys/controller/powerdown/PowerDownManagerStaggered.cpp at "
+              "2107966): its power-down policy (Staggered) requests entry as soon as the controller has no request; "
+              "the delay here is one minimum power-down (tCKE, " + lpddr3_memspec + ": CKE 6 cycles at 800 MHz = "
+              "7.5 ns), the shortest idle a power-down can fill (JESD209-3)");
   r.add(TBDR_PARAM(dram.active_powerdown_mw), 11.9).unit("mW").range(0, 100000)
       .doc("Background power of one channel in active power-down (IDD3P x VDD per rail)")
       .source(lpddr3_memspec + ": idd3p0 1.2 mA x 1.8 V + idd3p02 8.15 mA x 1.2 V = 11.94 mW");
@@ -372,6 +380,12 @@ ParamRegistry<HwConfig> make_registry() {
       .source(lpddr3_memspec + ": idd2p0 0.6 mA x 1.8 V + idd2p02 0.87 mA x 1.2 V = 2.12 mW");
   r.add(TBDR_PARAM(dram.t_xp_ns), 7.5).unit("ns").range(0, 1000)
       .doc("Power-down exit to the first command (tXP)").source(lpddr3_memspec + ": XP 6 cycles at 800 MHz");
+  r.add(TBDR_PARAM(dram.self_refresh_mw), 5.72).unit("mW").range(0, 100000)
+      .doc("Background power of one channel in self-refresh, its own refreshes included (IDD6 x VDD per rail). "
+           "Used for the idle time after a frame (gpu.frame_period_us): a channel in precharge power-down enters "
+           "self-refresh at its next refresh, as DRAMSys's Staggered policy does; 0 = no self-refresh (power-down "
+           "and refreshes go on). Not modelled within a frame")
+      .source(lpddr3_memspec + ": idd6 1.0 mA x vdd 1.8 V + idd62 3.27 mA x vdd2 1.2 V = 5.72 mW");
   r.add(TBDR_PARAM(dram.controller_latency_ns), 30.0).unit("ns").range(0, 10000)
       .doc("Memory controller and interconnect latency each way").source("no public figure");
   r.add(TBDR_PARAM(dram.read_queue_entries), 32).unit("requests").range(1, 4096)
@@ -395,9 +409,20 @@ ParamRegistry<HwConfig> make_registry() {
   r.add(TBDR_PARAM(dram.address_mapping), DramMapping::RowBankChannelColumn, kDramMappingNames)
       .doc("Physical address bit order, most significant first").source("design choice");
 
-  const std::string sram_8k = "Horowitz ISSCC 2014: 8 KB SRAM 1.25 pJ/B";
-  const std::string sram_32k = "Horowitz ISSCC 2014: 32 KB SRAM 2.5 pJ/B";
-  r.section("energy", "Energy per access and static power");
+  const std::string horowitz = "Horowitz, \"Computing's energy problem (and what we can do about it)\", ISSCC 2014 "
+                               "(45 nm, 0.9 V)";
+  const std::string no_leak = "no public figure for a Rogue unit's leakage: the three logic figures are chosen so "
+                              "that the default GPU (4 USCs, 2 texture units, 4 fixed-function units) leaks about "
+                              "60 mW of logic, near the single 100 mW static figure this model used before";
+  r.section("energy", "Energy per access and per op, leakage per unit, and the process node that scales them "
+                      "(SRAM figures come from the CACTI 7 table by array size: docs/energy.md)");
+  r.add(TBDR_PARAM(energy.process_nm), 28.0).unit("nm").range(7, 130)
+      .doc("CMOS node: scales the per-op energies given at 45 nm (Stillmaker & Baas 2017) and picks the CACTI "
+           "SRAM figures (interpolated between CACTI's 22, 32, 45, 65, 90 nm)")
+      .source("Series6XT shipped on 28 nm: MediaTek MT8173 (GX6250, TSMC 28 nm HPM)");
+  r.add(TBDR_PARAM(energy.vdd_v), 0.9).unit("V").range(0.5, 1.5)
+      .doc("Core supply at energy.process_nm: the voltage of the Stillmaker & Baas energy factor")
+      .source("TSMC 28 nm HPM nominal core supply 0.9 V; no public figure for the GPU rail");
   r.add(TBDR_PARAM(energy.dram_read_pj_per_bit), 5.1).unit("pJ/bit").range(0, 1000)
       .doc("DRAM read energy per bit (core)").source(lpddr3_memspec);
   r.add(TBDR_PARAM(energy.dram_write_pj_per_bit), 5.9).unit("pJ/bit").range(0, 1000)
@@ -410,26 +435,43 @@ ParamRegistry<HwConfig> make_registry() {
               "0.375 x 7 pF x 1.44 V^2 = 3.8 pJ");
   r.add(TBDR_PARAM(energy.dram_activate_precharge_nj), 4.3).unit("nJ").range(0, 1000)
       .doc("Energy of one activate + precharge pair").source(lpddr3_memspec);
-  r.add(TBDR_PARAM(energy.tile_buffer_pj_per_byte), 1.25).unit("pJ/byte").range(0, 1000)
-      .doc("On-chip tile buffer access").source(sram_8k);
-  r.add(TBDR_PARAM(energy.tag_buffer_pj_per_byte), 1.25).unit("pJ/byte").range(0, 1000)
-      .doc("Tag buffer and on-chip depth access").source(sram_8k);
-  r.add(TBDR_PARAM(energy.texture_cache_pj_per_byte), 2.5).unit("pJ/byte").range(0, 1000)
-      .doc("Texture cache access").source(sram_32k);
-  r.add(TBDR_PARAM(energy.vertex_cache_pj_per_byte), 2.5).unit("pJ/byte").range(0, 1000)
-      .doc("Vertex / parameter buffer cache access").source(sram_32k);
-  r.add(TBDR_PARAM(energy.slc_pj_per_byte), 12.5).unit("pJ/byte").range(0, 1000)
-      .doc("System level cache access").source("Horowitz ISSCC 2014: 1 MB SRAM 12.5 pJ/B");
-  r.add(TBDR_PARAM(energy.rop_cache_pj_per_byte), 2.5).unit("pJ/byte").range(0, 1000)
-      .doc("gpu.mode=imr: ROP depth and colour cache access (16 KiB SRAMs)").source(sram_32k);
-  r.add(TBDR_PARAM(energy.alu_op_pj), 2.0).unit("pJ/op").range(0, 1000)
-      .doc("One FP32 ALU op including operand delivery")
-      .source("Horowitz ISSCC 2014 (45 nm): FP32 add 0.9 pJ, mult 3.7 pJ");
-  r.add(TBDR_PARAM(energy.texel_pj), 32.0).unit("pJ/filtered texel").range(0, 1000)
-      .doc("Producing one bilinear-filtered texel (texture.texels_per_clock's unit): 4 texel reads, weights, blend")
-      .source("no public figure; about 4 FP32 ops per texel read, 4 texels read");
-  r.add(TBDR_PARAM(energy.static_power_mw), 100.0).unit("mW").range(0, 100000)
-      .doc("Leakage and clock tree of the whole GPU while a frame runs").source("no public figure");
+  r.add(TBDR_PARAM(energy.alu_op_pj_45nm), 2.3).unit("pJ/op").range(0, 1000)
+      .doc("Arithmetic of one FP32 ALU op at 45 nm, 0.9 V, scaled to energy.process_nm; operand delivery is "
+           "charged apart (energy.register_file_bytes_per_op)")
+      .source(horowitz + ": FP32 add 0.9 pJ + FP32 mult 3.7 pJ = one FMA, which usc.alu_ops_per_lane_per_clock "
+              "counts as 2 ops: 4.6 / 2 = 2.3 pJ/op");
+  r.add(TBDR_PARAM(energy.register_file_bytes_per_op), 8.0).unit("bytes/op").range(0, 64)
+      .doc("Register-file bytes read and written per ALU op, charged at the register file's CACTI energy per byte "
+           "(a lane's slice of energy.register_file_bytes_per_usc)")
+      .source("an FMA (2 ops) reads 3 FP32 operands and writes 1: 16 B / 2 ops; no operand cache or forwarding "
+              "modelled (Horowitz ISSCC 2014: operand delivery costs more than the arithmetic)");
+  r.add(TBDR_PARAM(energy.register_file_bytes_per_usc), 81920.0).unit("bytes").range(1024, 64 * kMiB)
+      .doc("Register storage of one USC: its leakage (CACTI RAM of this size) and, per lane slice (/ usc.lanes), "
+           "its access energy")
+      .source(mesa + ": common_store_size_in_dwords = 1280 x 4 x 4 dwords = 80 KiB; the unified store of "
+              "temporaries (unified_store_depth = 256) has no byte size there and is not counted");
+  r.add(TBDR_PARAM(energy.texel_pj_45nm), 12.7).unit("pJ/filtered texel").range(0, 1000)
+      .doc("Arithmetic of one bilinear-filtered texel (texture.texels_per_clock's unit) at 45 nm, 0.9 V, scaled "
+           "to energy.process_nm; its texel bytes are the texture cache's")
+      .source(horowitz + " per-op figures: coordinates 2 FP32 mult (2 x 3.7) + 2 FP32 add for the fractions "
+              "(2 x 0.9) + 4 texel addresses (4 x 32-bit add 0.1) + RGBA8 filter, 4 channels x 3 lerps x "
+              "(8-bit mult 0.2 + 2 x 8-bit add 0.03): 7.4 + 1.8 + 0.4 + 3.12 = 12.7 pJ");
+  r.add(TBDR_PARAM(energy.usc_leakage_mw), 10.0).unit("mW").range(0, 100000)
+      .doc("Logic leakage of one USC at the configured node (its register file's leakage comes from CACTI); "
+           "static power is the sum over usc.count").source(no_leak + "; a USC is the largest block: 10 mW");
+  r.add(TBDR_PARAM(energy.texture_unit_leakage_mw), 5.0).unit("mW").range(0, 100000)
+      .doc("Logic leakage of one texture unit (texture.units of them) at the configured node")
+      .source(no_leak + "; half a USC: 5 mW");
+  r.add(TBDR_PARAM(energy.fixed_function_leakage_mw), 3.0).unit("mW").range(0, 100000)
+      .doc("Logic leakage of one fixed-function unit at the configured node: geometry, tiler, pixel back end and "
+           "one per ISP raster pipe (isp.raster_pipes)")
+      .source(no_leak + ": 3 mW");
+  r.add(TBDR_PARAM(energy.gated_leakage_fraction), 0.1).range(0, 1)
+      .doc("Share of a unit's leakage still drawn while it is power gated: applied to the USCs, texture and "
+           "fixed-function units and the per-tile buffers and register files in the idle time after a frame "
+           "(gpu.frame_period_us); the caches keep their data and leak in full. Within a frame nothing is gated")
+      .source("no public figure: Imagination's PowerGearing gates idle Rogue USCs without published figures; "
+              "0.1 assumes the power switches leave a tenth of a domain's leakage");
   return r;
 }
 

@@ -76,6 +76,7 @@ struct GpuParams {
   std::string name;
   double core_clock_mhz = 0;
   GpuMode mode = GpuMode::Tbdr;
+  double frame_period_us = 0;  ///< display frame period the energy is also reported at (0: race to idle only)
 };
 
 /// [geometry] vertex fetch, vertex shading and primitive setup (clip, cull, viewport).
@@ -212,6 +213,7 @@ struct DramParams {
   double active_powerdown_mw = 0;    ///< background power per channel in power-down with a row open (IDD3P x VDD)
   double precharge_powerdown_mw = 0; ///< background power per channel in power-down, all precharged (IDD2P x VDD)
   double t_xp_ns = 0;                ///< power-down exit: the first command waits this long after the request arrives
+  double self_refresh_mw = 0;        ///< background power per channel in self-refresh, refresh included (IDD6 x VDD)
   double controller_latency_ns = 0;
   std::int64_t read_queue_entries = 0;
   std::int64_t write_queue_entries = 0;
@@ -230,21 +232,22 @@ struct DramParams {
   double peak_bandwidth_gbps() const { return channel_peak_bandwidth_gbps() * static_cast<double>(channels); }
 };
 
-/// [energy] energy per access and static power.
+/// [energy] energy per access and per op, leakage per unit, the process node that scales them.
 struct EnergyParams {
+  double process_nm = 0;  ///< CMOS node the on-chip figures are scaled to
+  double vdd_v = 0;       ///< core supply at that node
   double dram_read_pj_per_bit = 0;
   double dram_write_pj_per_bit = 0;
   double dram_io_pj_per_bit = 0;
   double dram_activate_precharge_nj = 0;
-  double tile_buffer_pj_per_byte = 0;
-  double tag_buffer_pj_per_byte = 0;
-  double texture_cache_pj_per_byte = 0;
-  double vertex_cache_pj_per_byte = 0;
-  double slc_pj_per_byte = 0;
-  double rop_cache_pj_per_byte = 0;  ///< gpu.mode=imr: ROP depth and colour caches
-  double alu_op_pj = 0;
-  double texel_pj = 0;  ///< per filtered texel
-  double static_power_mw = 0;
+  double alu_op_pj_45nm = 0;               ///< one FP32 ALU op's arithmetic at 45 nm, 0.9 V
+  double register_file_bytes_per_op = 0;   ///< operand bytes read and written per ALU op
+  double register_file_bytes_per_usc = 0;  ///< a USC's register storage (CACTI array)
+  double texel_pj_45nm = 0;                ///< one bilinear-filtered texel's arithmetic at 45 nm, 0.9 V
+  double usc_leakage_mw = 0;               ///< logic leakage of one USC at the configured node (SRAM apart)
+  double texture_unit_leakage_mw = 0;      ///< logic leakage of one texture unit
+  double fixed_function_leakage_mw = 0;    ///< logic leakage of one fixed-function unit
+  double gated_leakage_fraction = 0;       ///< share of a power-gated unit's leakage still drawn while idle
 };
 
 /// The whole GPU as the units see it. Built only from resolved parameters (hw_params().build()).

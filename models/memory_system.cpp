@@ -4,6 +4,8 @@
 #include <functional>
 #include <stdexcept>
 
+#include "models/sram_energy.hpp"
+
 namespace tbdr {
 
 namespace {
@@ -42,9 +44,11 @@ MemorySystem::MemorySystem(const HwConfig& hw, EventQueue& eq, std::string scope
       core_(ClockDomain::from_mhz("core", hw.gpu.core_clock_mhz)),
       caches_enabled_(opt.caches_enabled),
       energy_(hw.energy),
-      texture_(std::make_unique<Cache>(scope + "/cache.texture", hw.cache.texture, hw.energy.texture_cache_pj_per_byte)),
-      vertex_(std::make_unique<Cache>(scope + "/cache.vertex", hw.cache.vertex, hw.energy.vertex_cache_pj_per_byte)),
-      slc_(std::make_unique<Cache>(scope + "/cache.slc", hw.cache.slc, hw.energy.slc_pj_per_byte)),
+      texture_(std::make_unique<Cache>(scope + "/cache.texture", hw.cache.texture,
+                                          on_chip_pj_per_byte(hw, OnChipArray::TextureCache))),
+      vertex_(std::make_unique<Cache>(scope + "/cache.vertex", hw.cache.vertex,
+                                         on_chip_pj_per_byte(hw, OnChipArray::VertexCache))),
+      slc_(std::make_unique<Cache>(scope + "/cache.slc", hw.cache.slc, on_chip_pj_per_byte(hw, OnChipArray::Slc))),
       dram_(hw.dram, hw.energy, eq, scope + "/dram"),
       burst_bytes_(static_cast<std::uint32_t>(hw.dram.burst_bytes)),
       max_chain_bytes_(static_cast<std::uint64_t>(std::max<std::int64_t>(0, hw.dram.max_chain_bytes))),

@@ -47,7 +47,10 @@ HwConfig test_config(const std::vector<std::string>& sets = {}) {
                                   "dram.t_wr_ns=15", "dram.t_rrd_ns=10", "dram.t_faw_ns=50", "dram.t_wtr_ns=10",
                                   "dram.t_rtw_ns=4", "dram.t_refi_ns=0", "dram.t_rfc_ns=130",
                                   "dram.controller_latency_ns=30", "dram.read_queue_entries=32",
-                                  "dram.write_queue_entries=32", "dram.address_mapping=row_bank_channel_column"};
+                                  "dram.write_queue_entries=32", "dram.address_mapping=row_bank_channel_column",
+                                  // Power-down (on by default) off, as refresh: the latency arithmetic
+                                  // below has no tXP; the power-down tests set it themselves.
+                                  "dram.powerdown_after_ns=0"};
   all.insert(all.end(), sets.begin(), sets.end());  // the test's own settings win
   return resolve_config({}, all).hw;
 }
