@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cstdlib>
 #include <limits>
+#include <new>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -18,6 +20,21 @@
 #include "models/texture_unit.hpp"
 
 namespace tbdr {
+
+LitSampleLedger::LitSampleLedger(std::size_t samples)
+    : held_(static_cast<std::uint64_t*>(std::calloc(std::max<std::size_t>(samples, 1), sizeof(std::uint64_t)))) {
+  if (!held_) throw std::bad_alloc();
+}
+
+void LitSampleLedger::Free::operator()(std::uint64_t* p) const { std::free(p); }
+
+void LitSampleLedger::add(std::uint64_t& held, std::uint64_t lights) {
+  const std::uint64_t count = held >> kLightBits, sum = held & kLightMask;
+  if (count + 1 >= (std::uint64_t{1} << kCountBits) || lights > kLightMask - sum) {
+    throw std::overflow_error("LitSampleLedger: a sample holds more than 2^24 lit colour writes or 2^40 of their lights");
+  }
+  held += (std::uint64_t{1} << kLightBits) + lights;
+}
 
 Tsp::Tsp(RenderContext& ctx) : ctx_(ctx), texture_lines_out_(ctx.texture_lines), dram_out_(ctx.dram) {}
 
@@ -467,6 +484,23 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   for (std::uint32_t o = 0; o < outputs; ++o) out_bytes_per_sample += bytes_per_sample(ctx_.color_targets[o]->format);
   const BlendMode blend = d.pipeline->blend;
   if (alive) alive->assign(pixels.size(), 0);
+  // The pass's lit-sample ledger (LitSampleLedger), for colour-writing fragments. A lit
+  // scene-surface fragment is lit_surface_invocations' kind; an unblended write replaces the
+  // sample's colour unless the shader read the pass's attachments (framebuffer fetch, or those a
+  // split render left in memory, read as images): what it writes then depends on what was there.
+  LitSampleLedger* const ledger = outputs > 0 ? ctx_.lit_samples : nullptr;
+  const bool lit_surface = from_triangle && sh.light_source != LightSource::None && sh.light_source != LightSource::Proxy;
+  const bool replaces_colour = blend == BlendMode::Off && d.fetch_bytes == 0 && d.image_fetches == 0;
+  const bool ledger_tracks = ledger != nullptr && (lit_surface || replaces_colour);
+  // One fragment's colour write at pixel `pixel` in the ledger: its samples shaded but not
+  // written (late depth/stencil tests failed) are hidden at once; its written samples replace or
+  // add to what they held.
+  const auto keep_ledger = [&](std::size_t pixel, const ShadePixel& px, std::uint32_t write_mask, std::uint64_t lights) {
+    if (lit_surface && (px.mask & ~px.write) != 0) {
+      LitSampleLedger::hidden_unwritten(static_cast<std::uint32_t>(bit_count(px.mask & ~px.write)), lights, stats);
+    }
+    if (write_mask != 0) ledger->write(pixel * static_cast<std::size_t>(S), write_mask, replaces_colour, lit_surface, lights, stats);
+  };
   // Whether anything reads a stored surface (G-buffer or PLS) this batch loads: its colour, its
   // cluster (its depth), or a G-buffer target it is stored to. Without colours, a light volume's
   // fragments read none of it: the same counts without touching the stored surfaces.
@@ -637,6 +671,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       const std::size_t pixel = static_cast<std::size_t>(px.y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(px.x);
       const std::uint32_t write_mask = px.mask & px.write;
       if (alive) (*alive)[i] = write_mask;
+      if (ledger_tracks) keep_ledger(pixel, px, write_mask, count);
       shaded[pixel] += 1;
       if (image_counters) {
         ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(count);
@@ -815,6 +850,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     light_sum += fl.count;  // the per-fragment charges are booked for the batch after the loop
     ctx_.images->counters.shaded[pixel] += 1;
     if (image_counters) ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(fl.count);
+    if (ledger_tracks) keep_ledger(pixel, px, write_mask, fl.count);
     if (write_mask == 0) continue;
     // The frame-unique id (as SurfacePoint::triangle).
     if (image_counters) ctx_.images->counters.triangle_id[pixel] = p.id + 1;

@@ -6,7 +6,9 @@
 // For scene triangles it also computes the texture lines each quad's fetches touch
 // (models/texture_unit.hpp) and appends them to the tile's list (RenderContext::texture_lines).
 #include <array>
+#include <bit>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -40,10 +42,64 @@ namespace tbdr {
   X(Counter, light_stack_overflow_fragments, "fragments", Sum, "Fragments whose PLS light stack overflowed (fell back to every light)") \
   X(Counter, pls_bytes_accessed, "bytes", Sum, "Pixel local storage bytes read and written by shaders (the pass's PLS layout per access)") \
   X(Counter, tile_buffer_read_bytes, "bytes", Sum, "On-chip tile buffer bytes read by blending and fetch") \
-  X(Counter, tile_buffer_write_bytes, "bytes", Sum, "On-chip tile buffer bytes written by shaders")
+  X(Counter, tile_buffer_write_bytes, "bytes", Sum, "On-chip tile buffer bytes written by shaders") \
+  X(Counter, hidden_lit_samples, "samples", Sum, "Samples lit scene-surface fragments shaded whose colour did not last to the end of the pass: replaced by a later unblended colour write, or (isp.early_z=0) failing the depth/stencil test after the shader; at 1 sample per pixel, fragments (LitSampleLedger)") \
+  X(Counter, hidden_light_evaluations, "evaluations", Sum, "Lights evaluated by the fragments of hidden_lit_samples, counted once per hidden sample; at 1 sample per pixel, the light evaluations spent on hidden surfaces")
 /// Statistics of fragment shading.
 struct TspStats {
   TBDR_STATS(TBDR_TSP_STATS)
+};
+
+/// Per sample of one render pass, the colour writes of lit scene-surface fragments (a scene
+/// triangle's, its shader evaluating lights: lit_surface_invocations' fragments) that the sample's
+/// colour still holds, and the lights those fragments evaluated. Tsp::shade keeps it for every
+/// colour-writing fragment: an unblended write that reads nothing of the target (no framebuffer
+/// fetch) replaces the sample's colour, so what the sample held is hidden (counted in
+/// TspStats::hidden_lit_samples and hidden_light_evaluations) and only the new write remains; a
+/// blended write adds to what the sample holds. What it holds at the end of the pass is the final
+/// image's (stored or resolved). Light-volume and full-screen fragments are not lit surfaces:
+/// they replace or add, never count. The pass's TileMemory owns it (RenderContext::lit_samples);
+/// tiles write disjoint samples, so tiles on several threads keep it without locks.
+class LitSampleLedger {
+ public:
+  /// For `samples` samples (width x height x sample count), none holding a lit write. The memory
+  /// is zeroed by the system as first touched: a pass pays for the samples its fragments write.
+  explicit LitSampleLedger(std::size_t samples);
+  /// A colour write at the samples `mask` of the pixel whose first sample is `first`: `replaces`
+  /// (unblended) hides what the samples held; `lit` (a lit scene-surface fragment that evaluated
+  /// `lights` lights) is then held.
+  void write(std::size_t first, std::uint32_t mask, bool replaces, bool lit, std::uint64_t lights, TspStats& stats) {
+    for (std::uint32_t m = mask; m != 0; m &= m - 1) {
+      std::uint64_t& held = held_[first + static_cast<std::size_t>(std::countr_zero(m))];
+      if (replaces) {
+        if (held != 0) hide(held, stats);
+        held = 0;
+      }
+      if (lit) add(held, lights);
+    }
+  }
+  /// `samples` samples of a lit fragment that evaluated `lights` lights, shaded but not written
+  /// (isp.early_z=0: the depth or stencil test after the shader failed): hidden at once.
+  static void hidden_unwritten(std::uint32_t samples, std::uint64_t lights, TspStats& stats) {
+    stats.hidden_lit_samples += samples;
+    stats.hidden_light_evaluations += std::uint64_t{samples} * lights;
+  }
+
+ private:
+  /// A sample's entry: the lit writes it holds (top kCountBits bits) and their lights (the rest).
+  static constexpr int kCountBits = 24;
+  static constexpr int kLightBits = 64 - kCountBits;
+  static constexpr std::uint64_t kLightMask = (std::uint64_t{1} << kLightBits) - 1;
+  static void hide(std::uint64_t held, TspStats& stats) {
+    stats.hidden_lit_samples += held >> kLightBits;
+    stats.hidden_light_evaluations += held & kLightMask;
+  }
+  /// Adds one lit write of `lights` lights to `held` (std::overflow_error past its fields).
+  static void add(std::uint64_t& held, std::uint64_t lights);
+  struct Free {
+    void operator()(std::uint64_t* p) const;
+  };
+  std::unique_ptr<std::uint64_t[], Free> held_;
 };
 
 /// One pixel of a shading batch: absolute coordinates, the samples shaded and, of those, the
