@@ -87,9 +87,7 @@ TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats)
     return d.shader->color_outputs > 0 && d.shader->light_source != LightSource::None && d.shader->light_source != LightSource::Proxy;
   });
   if (lit_colour && !ctx.color_targets.empty()) {
-    lit_samples_ = std::make_unique<LitSampleLedger>(static_cast<std::size_t>(ctx.viewport.width_px) *
-                                                     static_cast<std::size_t>(ctx.viewport.height_px) *
-                                                     static_cast<std::size_t>(ctx.pattern.count));
+    lit_samples_ = std::make_unique<LitSampleLedger>(ctx.viewport.width_px, ctx.viewport.height_px, ctx.pattern.count);
     ctx.lit_samples = lit_samples_.get();
   }
   stats_.onchip_need_bytes_per_pixel += need_;

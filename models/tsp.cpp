@@ -3,12 +3,11 @@
 #include <algorithm>
 #include <array>
 #include <bit>
-#include <cstdlib>
 #include <limits>
-#include <new>
 #include <optional>
 #include <span>
 #include <stdexcept>
+#include <thread>
 
 #if defined(__SSE2__)
 #include <xmmintrin.h>
@@ -21,12 +20,25 @@
 
 namespace tbdr {
 
-LitSampleLedger::LitSampleLedger(std::size_t samples)
-    : held_(static_cast<std::uint64_t*>(std::calloc(std::max<std::size_t>(samples, 1), sizeof(std::uint64_t)))) {
-  if (!held_) throw std::bad_alloc();
+LitSampleLedger::LitSampleLedger(int width, int height, int samples)
+    : blocks_x_(static_cast<std::size_t>((width + kBlockMask) >> kBlockBits)),
+      samples_(static_cast<std::size_t>(samples)),
+      block_entries_((std::size_t{1} << (2 * kBlockBits)) * static_cast<std::size_t>(samples)) {
+  const std::size_t blocks = blocks_x_ * static_cast<std::size_t>((height + kBlockMask) >> kBlockBits);
+  held_.reset(new std::uint64_t[blocks * block_entries_]);  // default-initialised: untouched until zeroed
+  state_ = std::make_unique<std::atomic<std::uint8_t>[]>(blocks);
+  for (std::size_t b = 0; b < blocks; ++b) state_[b].store(kUntouched, std::memory_order_relaxed);
 }
 
-void LitSampleLedger::Free::operator()(std::uint64_t* p) const { std::free(p); }
+void LitSampleLedger::make_ready(std::size_t b) {
+  std::uint8_t expected = kUntouched;
+  if (state_[b].compare_exchange_strong(expected, kZeroing, std::memory_order_acq_rel, std::memory_order_acquire)) {
+    std::fill_n(held_.get() + b * block_entries_, block_entries_, std::uint64_t{0});
+    state_[b].store(kReady, std::memory_order_release);
+    return;
+  }
+  while (state_[b].load(std::memory_order_acquire) != kReady) std::this_thread::yield();  // another tile's thread zeroes it
+}
 
 void LitSampleLedger::add(std::uint64_t& held, std::uint64_t lights) {
   const std::uint64_t count = held >> kLightBits, sum = held & kLightMask;
@@ -495,11 +507,11 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   // One fragment's colour write at pixel `pixel` in the ledger: its samples shaded but not
   // written (late depth/stencil tests failed) are hidden at once; its written samples replace or
   // add to what they held.
-  const auto keep_ledger = [&](std::size_t pixel, const ShadePixel& px, std::uint32_t write_mask, std::uint64_t lights) {
+  const auto keep_ledger = [&](const ShadePixel& px, std::uint32_t write_mask, std::uint64_t lights) {
     if (lit_surface && (px.mask & ~px.write) != 0) {
       LitSampleLedger::hidden_unwritten(static_cast<std::uint32_t>(bit_count(px.mask & ~px.write)), lights, stats);
     }
-    if (write_mask != 0) ledger->write(pixel * static_cast<std::size_t>(S), write_mask, replaces_colour, lit_surface, lights, stats);
+    if (write_mask != 0) ledger->write(px.x, px.y, write_mask, replaces_colour, lit_surface, lights, stats);
   };
   // Whether anything reads a stored surface (G-buffer or PLS) this batch loads: its colour, its
   // cluster (its depth), or a G-buffer target it is stored to. Without colours, a light volume's
@@ -671,7 +683,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       const std::size_t pixel = static_cast<std::size_t>(px.y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(px.x);
       const std::uint32_t write_mask = px.mask & px.write;
       if (alive) (*alive)[i] = write_mask;
-      if (ledger_tracks) keep_ledger(pixel, px, write_mask, count);
+      if (ledger_tracks) keep_ledger(px, write_mask, count);
       shaded[pixel] += 1;
       if (image_counters) {
         ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(count);
@@ -850,7 +862,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     light_sum += fl.count;  // the per-fragment charges are booked for the batch after the loop
     ctx_.images->counters.shaded[pixel] += 1;
     if (image_counters) ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(fl.count);
-    if (ledger_tracks) keep_ledger(pixel, px, write_mask, fl.count);
+    if (ledger_tracks) keep_ledger(px, write_mask, fl.count);
     if (write_mask == 0) continue;
     // The frame-unique id (as SurfacePoint::triangle).
     if (image_counters) ctx_.images->counters.triangle_id[pixel] = p.id + 1;

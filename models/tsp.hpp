@@ -6,6 +6,7 @@
 // For scene triangles it also computes the texture lines each quad's fetches touch
 // (models/texture_unit.hpp) and appends them to the tile's list (RenderContext::texture_lines).
 #include <array>
+#include <atomic>
 #include <bit>
 #include <cstdint>
 #include <memory>
@@ -59,20 +60,29 @@ struct TspStats {
 /// blended write adds to what the sample holds. What it holds at the end of the pass is the final
 /// image's (stored or resolved). Light-volume and full-screen fragments are not lit surfaces:
 /// they replace or add, never count. The pass's TileMemory owns it (RenderContext::lit_samples);
-/// tiles write disjoint samples, so tiles on several threads keep it without locks.
+/// tiles write disjoint samples, so tiles on several threads keep it without locks (a block of
+/// samples is published once, atomically).
 class LitSampleLedger {
  public:
-  /// For `samples` samples (width x height x sample count), none holding a lit write. The memory
-  /// is zeroed by the system as first touched: a pass pays for the samples its fragments write.
-  explicit LitSampleLedger(std::size_t samples);
-  /// A colour write at the samples `mask` of the pixel whose first sample is `first`: `replaces`
-  /// (unblended) hides what the samples held; `lit` (a lit scene-surface fragment that evaluated
-  /// `lights` lights) is then held.
-  void write(std::size_t first, std::uint32_t mask, bool replaces, bool lit, std::uint64_t lights, TspStats& stats) {
+  /// For a `width` x `height` frame of `samples` samples per pixel, none holding a lit write.
+  LitSampleLedger(int width, int height, int samples);
+  LitSampleLedger(const LitSampleLedger&) = delete;
+  LitSampleLedger& operator=(const LitSampleLedger&) = delete;
+  /// A colour write at the samples `mask` of pixel (x, y): `replaces` (unblended) hides what the
+  /// samples held; `lit` (a lit scene-surface fragment that evaluated `lights` lights) is then held.
+  void write(int x, int y, std::uint32_t mask, bool replaces, bool lit, std::uint64_t lights, TspStats& stats) {
+    const std::size_t b = static_cast<std::size_t>(y >> kBlockBits) * blocks_x_ + static_cast<std::size_t>(x >> kBlockBits);
+    if (state_[b].load(std::memory_order_acquire) != kReady) {
+      // Nothing lit was held in this block: only a lit write changes that.
+      if (!lit) return;
+      make_ready(b);
+    }
+    std::uint64_t* held_at = held_.get() + b * block_entries_ +
+                             (static_cast<std::size_t>(y & kBlockMask) << kBlockBits | static_cast<std::size_t>(x & kBlockMask)) * samples_;
     for (std::uint32_t m = mask; m != 0; m &= m - 1) {
-      std::uint64_t& held = held_[first + static_cast<std::size_t>(std::countr_zero(m))];
-      if (replaces) {
-        if (held != 0) hide(held, stats);
+      std::uint64_t& held = held_at[std::countr_zero(m)];
+      if (replaces && held != 0) {
+        hide(held, stats);
         held = 0;
       }
       if (lit) add(held, lights);
@@ -86,6 +96,12 @@ class LitSampleLedger {
   }
 
  private:
+  /// The samples are kept in blocks of 2^kBlockBits x 2^kBlockBits pixels, each zeroed at the
+  /// first lit write in it (the array is allocated uninitialised): a pass touches the blocks its
+  /// lit fragments write (a deferred lighting pass, its glass), and a tile's samples lie in a few
+  /// contiguous blocks. Host speed and memory only: every block size counts the same.
+  static constexpr int kBlockBits = 3;
+  static constexpr int kBlockMask = (1 << kBlockBits) - 1;
   /// A sample's entry: the lit writes it holds (top kCountBits bits) and their lights (the rest).
   static constexpr int kCountBits = 24;
   static constexpr int kLightBits = 64 - kCountBits;
@@ -96,10 +112,17 @@ class LitSampleLedger {
   }
   /// Adds one lit write of `lights` lights to `held` (std::overflow_error past its fields).
   static void add(std::uint64_t& held, std::uint64_t lights);
-  struct Free {
-    void operator()(std::uint64_t* p) const;
-  };
-  std::unique_ptr<std::uint64_t[], Free> held_;
+  /// A block's state: untouched, being zeroed by one thread, zeroed (its entries are valid).
+  static constexpr std::uint8_t kUntouched = 0, kZeroing = 1, kReady = 2;
+  /// Zeroes block `b` unless a thread did: tiles that share a block (tile sizes not a multiple of
+  /// its side, strips) write different samples of it, after it is zeroed.
+  void make_ready(std::size_t b);
+
+  std::size_t blocks_x_ = 0;
+  std::size_t samples_ = 1;
+  std::size_t block_entries_ = 0;  ///< entries of a block: 2^(2 kBlockBits) pixels x samples
+  std::unique_ptr<std::uint64_t[]> held_;            ///< blocks x block_entries_, block after block
+  std::unique_ptr<std::atomic<std::uint8_t>[]> state_;  ///< per block
 };
 
 /// One pixel of a shading batch: absolute coordinates, the samples shaded and, of those, the

@@ -298,9 +298,7 @@ class RenderRig {
   /// Gives the pass a lit-sample ledger (LitSampleLedger), as the tile memory does for a pass
   /// whose draws light colour: the TSP counts hidden_lit_samples from then on.
   void keep_lit_sample_ledger() {
-    const std::size_t samples = static_cast<std::size_t>(ctx_.viewport.width_px) *
-                                static_cast<std::size_t>(ctx_.viewport.height_px) * static_cast<std::size_t>(ctx_.pattern.count);
-    ledger_ = std::make_unique<LitSampleLedger>(samples);
+    ledger_ = std::make_unique<LitSampleLedger>(ctx_.viewport.width_px, ctx_.viewport.height_px, ctx_.pattern.count);
     ctx_.lit_samples = ledger_.get();
   }
   /// The TSP shades `pixels` of primitive `prim` (one batch, sorted by row then column).
