@@ -24,28 +24,53 @@ LitSampleLedger::LitSampleLedger(int width, int height, int samples)
     : blocks_x_(static_cast<std::size_t>((width + kBlockMask) >> kBlockBits)),
       samples_(static_cast<std::size_t>(samples)),
       block_entries_((std::size_t{1} << (2 * kBlockBits)) * static_cast<std::size_t>(samples)) {
-  const std::size_t blocks = blocks_x_ * static_cast<std::size_t>((height + kBlockMask) >> kBlockBits);
-  held_.reset(new std::uint64_t[blocks * block_entries_]);  // default-initialised: untouched until zeroed
-  state_ = std::make_unique<std::atomic<std::uint8_t>[]>(blocks);
-  for (std::size_t b = 0; b < blocks; ++b) state_[b].store(kUntouched, std::memory_order_relaxed);
+  blocks_ = blocks_x_ * static_cast<std::size_t>((height + kBlockMask) >> kBlockBits);
+  held_.reset(new std::uint32_t[blocks_ * block_entries_]);  // default-initialised: untouched until zeroed
+  state_ = std::make_unique<std::atomic<std::uint8_t>[]>(blocks_);
+  wide_ = std::make_unique<std::atomic<std::uint64_t*>[]>(blocks_);
+  for (std::size_t b = 0; b < blocks_; ++b) {
+    state_[b].store(kUntouched, std::memory_order_relaxed);
+    wide_[b].store(nullptr, std::memory_order_relaxed);
+  }
+}
+
+LitSampleLedger::~LitSampleLedger() {
+  for (std::size_t b = 0; b < blocks_; ++b) delete[] wide_[b].load(std::memory_order_relaxed);
 }
 
 void LitSampleLedger::make_ready(std::size_t b) {
   std::uint8_t expected = kUntouched;
   if (state_[b].compare_exchange_strong(expected, kZeroing, std::memory_order_acq_rel, std::memory_order_acquire)) {
-    std::fill_n(held_.get() + b * block_entries_, block_entries_, std::uint64_t{0});
+    std::fill_n(held_.get() + b * block_entries_, block_entries_, std::uint32_t{0});
     state_[b].store(kReady, std::memory_order_release);
     return;
   }
   while (state_[b].load(std::memory_order_acquire) != kReady) std::this_thread::yield();  // another tile's thread zeroes it
 }
 
-void LitSampleLedger::add(std::uint64_t& held, std::uint64_t lights) {
-  const std::uint64_t count = held >> kLightBits, sum = held & kLightMask;
-  if (count + 1 >= (std::uint64_t{1} << kCountBits) || lights > kLightMask - sum) {
+void LitSampleLedger::add_wide(std::uint32_t& held, std::size_t b, std::size_t i, std::uint64_t lights) {
+  std::uint64_t* wide = wide_[b].load(std::memory_order_acquire);
+  if (wide == nullptr) {
+    // Made once per block (tiles sharing the block use different entries of it).
+    auto* fresh = new std::uint64_t[block_entries_]();
+    std::uint64_t* expected = nullptr;
+    if (wide_[b].compare_exchange_strong(expected, fresh, std::memory_order_acq_rel, std::memory_order_acquire)) {
+      wide = fresh;
+    } else {
+      delete[] fresh;
+      wide = expected;
+    }
+  }
+  std::uint64_t& w = wide[i];
+  if (held != kWide) {
+    w = std::uint64_t{held >> kLightBits} << kWideLightBits | (held & kLightMask);
+    held = kWide;
+  }
+  const std::uint64_t count = w >> kWideLightBits, sum = w & kWideLightMask;
+  if (count + 1 >= (std::uint64_t{1} << kWideCountBits) || lights > kWideLightMask - sum) {
     throw std::overflow_error("LitSampleLedger: a sample holds more than 2^24 lit colour writes or 2^40 of their lights");
   }
-  held += (std::uint64_t{1} << kLightBits) + lights;
+  w += (std::uint64_t{1} << kWideLightBits) + lights;
 }
 
 Tsp::Tsp(RenderContext& ctx) : ctx_(ctx), texture_lines_out_(ctx.texture_lines), dram_out_(ctx.dram) {}

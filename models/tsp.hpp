@@ -66,6 +66,7 @@ class LitSampleLedger {
  public:
   /// For a `width` x `height` frame of `samples` samples per pixel, none holding a lit write.
   LitSampleLedger(int width, int height, int samples);
+  ~LitSampleLedger();
   LitSampleLedger(const LitSampleLedger&) = delete;
   LitSampleLedger& operator=(const LitSampleLedger&) = delete;
   /// A colour write at the samples `mask` of pixel (x, y): `replaces` (unblended) hides what the
@@ -77,15 +78,28 @@ class LitSampleLedger {
       if (!lit) return;
       make_ready(b);
     }
-    std::uint64_t* held_at = held_.get() + b * block_entries_ +
-                             (static_cast<std::size_t>(y & kBlockMask) << kBlockBits | static_cast<std::size_t>(x & kBlockMask)) * samples_;
+    const std::size_t first = (static_cast<std::size_t>(y & kBlockMask) << kBlockBits | static_cast<std::size_t>(x & kBlockMask)) * samples_;
+    std::uint32_t* held_at = held_.get() + b * block_entries_ + first;
     for (std::uint32_t m = mask; m != 0; m &= m - 1) {
-      std::uint64_t& held = held_at[std::countr_zero(m)];
+      const auto s = static_cast<std::size_t>(std::countr_zero(m));
+      std::uint32_t& held = held_at[s];
       if (replaces && held != 0) {
-        hide(held, stats);
+        if (held == kWide) {
+          std::uint64_t& w = wide_[b].load(std::memory_order_acquire)[first + s];
+          hide(w >> kWideLightBits, w & kWideLightMask, stats);
+          w = 0;
+        } else {
+          hide(held >> kLightBits, held & kLightMask, stats);
+        }
         held = 0;
       }
-      if (lit) add(held, lights);
+      if (lit) {
+        if (held != kWide && held >> kLightBits < kMaxCount - 1 && lights <= kLightMask - (held & kLightMask)) {
+          held += (std::uint32_t{1} << kLightBits) + static_cast<std::uint32_t>(lights);
+        } else {
+          add_wide(held, b, first + s, lights);
+        }
+      }
     }
   }
   /// `samples` samples of a lit fragment that evaluated `lights` lights, shaded but not written
@@ -102,16 +116,25 @@ class LitSampleLedger {
   /// contiguous blocks. Host speed and memory only: every block size counts the same.
   static constexpr int kBlockBits = 3;
   static constexpr int kBlockMask = (1 << kBlockBits) - 1;
-  /// A sample's entry: the lit writes it holds (top kCountBits bits) and their lights (the rest).
-  static constexpr int kCountBits = 24;
-  static constexpr int kLightBits = 64 - kCountBits;
-  static constexpr std::uint64_t kLightMask = (std::uint64_t{1} << kLightBits) - 1;
-  static void hide(std::uint64_t held, TspStats& stats) {
-    stats.hidden_lit_samples += held >> kLightBits;
-    stats.hidden_light_evaluations += held & kLightMask;
+  /// A sample's entry: the lit writes it holds (top kCountBits bits) and their lights (the rest),
+  /// or kWide: they no longer fit, and its block's wide entry (64 bits: kWideCountBits and the
+  /// rest) holds them. Four bytes a sample where they fit (every sample of the atrium's frames:
+  /// each page of entries is a page fault on first touch).
+  static constexpr int kCountBits = 8;
+  static constexpr int kLightBits = 32 - kCountBits;
+  static constexpr std::uint32_t kLightMask = (std::uint32_t{1} << kLightBits) - 1;
+  static constexpr std::uint32_t kMaxCount = (std::uint32_t{1} << kCountBits) - 1;  ///< count field of kWide
+  static constexpr std::uint32_t kWide = ~std::uint32_t{0};
+  static constexpr int kWideCountBits = 24;
+  static constexpr int kWideLightBits = 64 - kWideCountBits;
+  static constexpr std::uint64_t kWideLightMask = (std::uint64_t{1} << kWideLightBits) - 1;
+  static void hide(std::uint64_t count, std::uint64_t lights, TspStats& stats) {
+    stats.hidden_lit_samples += count;
+    stats.hidden_light_evaluations += lights;
   }
-  /// Adds one lit write of `lights` lights to `held` (std::overflow_error past its fields).
-  static void add(std::uint64_t& held, std::uint64_t lights);
+  /// Adds one lit write of `lights` lights to the sample of entry `held`, index `i` of block `b`,
+  /// in its wide entry (moved there first; std::overflow_error past the wide entry's fields).
+  void add_wide(std::uint32_t& held, std::size_t b, std::size_t i, std::uint64_t lights);
   /// A block's state: untouched, being zeroed by one thread, zeroed (its entries are valid).
   static constexpr std::uint8_t kUntouched = 0, kZeroing = 1, kReady = 2;
   /// Zeroes block `b` unless a thread did: tiles that share a block (tile sizes not a multiple of
@@ -121,8 +144,10 @@ class LitSampleLedger {
   std::size_t blocks_x_ = 0;
   std::size_t samples_ = 1;
   std::size_t block_entries_ = 0;  ///< entries of a block: 2^(2 kBlockBits) pixels x samples
-  std::unique_ptr<std::uint64_t[]> held_;            ///< blocks x block_entries_, block after block
+  std::unique_ptr<std::uint32_t[]> held_;            ///< blocks x block_entries_, block after block
   std::unique_ptr<std::atomic<std::uint8_t>[]> state_;  ///< per block
+  std::unique_ptr<std::atomic<std::uint64_t*>[]> wide_;  ///< per block: its wide entries, made at its first kWide
+  std::size_t blocks_ = 0;
 };
 
 /// One pixel of a shading batch: absolute coordinates, the samples shaded and, of those, the

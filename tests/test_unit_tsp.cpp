@@ -574,6 +574,36 @@ TEST(UnitTsp, LitSamplesAnUnblendedWriteReplacesAreHidden) {
   EXPECT_EQ(rig.tsp_stats.light_evaluations.value(), 2u * 33u);
 }
 
+TEST(UnitTsp, ASampleHoldsAnyNumberOfBlendedLitWrites) {
+  // 300 blended lit writes at pixel (3,5) (more than a sample's 4-byte entry counts: it moves to
+  // its block's wide entry), then an unlit unblended write: all 300 are hidden, 2 lights each;
+  // then 2 more there (its entry narrow again) and a replacement of it and of its neighbour's
+  // one write: 303.
+  RenderRig rig(RenderSpec{.lights = two_lights()});
+  rig.keep_lit_sample_ledger();
+  PipelineState blended;
+  blended.blend = BlendMode::Add;
+  const std::uint32_t glass = rig.add_draw(make_shader(1, 12, LightSource::All, 1), blended, {0, 1});
+  const std::uint32_t unlit = rig.add_draw(make_shader(1, 0, LightSource::None, 1));
+  ScreenTri t = kUpperLeft;
+  t.material = 0;
+  t.draw = glass;
+  const std::uint32_t g = rig.add_triangle(t);
+  t.draw = unlit;
+  const std::uint32_t cover = rig.add_triangle(t);
+  for (int i = 0; i < 300; ++i) rig.shade(g, {{3, 5, 1u}});
+  rig.shade(g, {{4, 5, 1u}});  // a neighbour in the same block stays narrow
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 0u);
+  rig.shade(cover, {{3, 5, 1u}});
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 300u);
+  EXPECT_EQ(rig.tsp_stats.hidden_light_evaluations.value(), 600u);
+  rig.shade(g, {{3, 5, 1u}});
+  rig.shade(g, {{3, 5, 1u}});
+  rig.shade(cover, {{3, 5, 1u}, {4, 5, 1u}});
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 303u);
+  EXPECT_EQ(rig.tsp_stats.hidden_light_evaluations.value(), 606u);
+}
+
 TEST(UnitTsp, HiddenLitSamplesAreCountedPerSampleWithMsaa) {
   // 4 samples per pixel: a lit fragment writing all 4 samples of pixel (0,0), then an unlit one
   // writing samples 0 and 1 only: 2 of the lit fragment's samples are hidden, each counting the
