@@ -529,7 +529,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   const bool lit_surface = from_triangle && sh.light_source != LightSource::None && sh.light_source != LightSource::Proxy;
   const bool replaces_colour = blend == BlendMode::Off && d.fetch_bytes == 0 && d.image_fetches == 0;
   const bool ledger_tracks = ledger != nullptr && (lit_surface || replaces_colour);
-  // One fragment's colour write at pixel `pixel` in the ledger: its samples shaded but not
+  // One fragment's colour write at its pixel in the ledger: its samples shaded but not
   // written (late depth/stencil tests failed) are hidden at once; its written samples replace or
   // add to what they held.
   const auto keep_ledger = [&](const ShadePixel& px, std::uint32_t write_mask, std::uint64_t lights) {
