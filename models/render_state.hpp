@@ -33,6 +33,7 @@ struct ViewFrustum;
 struct AttachmentImage;
 class TextureLayout;
 class RenderOutputUnit;
+class LitSampleLedger;
 
 /// The camera as the units use it: matrices and the eye position.
 struct CameraXform {
@@ -333,6 +334,7 @@ struct RenderContext : FrameInputs {
   std::vector<AttachmentImage*> color_targets;  ///< images the shaders' color outputs write, in order
   AttachmentImage* depth = nullptr;           ///< the pass's depth attachment image, or nullptr
   PlsState* pls = nullptr;                    ///< the pass's pixel local storage, or nullptr
+  LitSampleLedger* lit_samples = nullptr;     ///< the pass's lit colour writes per sample (models/tsp.hpp), or nullptr
   DramTraffic* dram = nullptr;                ///< the pass's DRAM traffic (shader image reads)
   std::uint32_t frame_prim_base = 0;      ///< the next Primitive::id: primitives the frame's geometry delivered so far
   /// Texture addresses of scene triangles' fetches: where textures live, and the list the TSP

@@ -81,6 +81,15 @@ TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats)
     pls_.overflow.assign(pixels, 0);
     ctx.pls = &pls_;
   }
+  // The lit colour writes each sample holds (Tsp::shade), when some shader of the pass writes
+  // colour from lights: kept over the whole pass (its partial and split renders, imr's batches).
+  const bool lit_colour = std::any_of(ctx.draws.begin(), ctx.draws.end(), [](const DrawContext& d) {
+    return d.shader->color_outputs > 0 && d.shader->light_source != LightSource::None && d.shader->light_source != LightSource::Proxy;
+  });
+  if (lit_colour && !ctx.color_targets.empty()) {
+    lit_samples_ = std::make_unique<LitSampleLedger>(ctx.viewport.width_px, ctx.viewport.height_px, ctx.pattern.count);
+    ctx.lit_samples = lit_samples_.get();
+  }
   stats_.onchip_need_bytes_per_pixel += need_;
   stats_.onchip_budget_bytes_per_pixel += budget_;
   stats_.tile_split_factor += static_cast<std::uint64_t>(split_);

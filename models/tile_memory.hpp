@@ -15,10 +15,12 @@
 // each tile as several strips that fit (each strip re-reads the tile's parameter buffer data and
 // re-rasterises its primitives).
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "models/hw_config.hpp"
 #include "models/render_state.hpp"
+#include "models/tsp.hpp"
 #include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
 
@@ -65,7 +67,9 @@ class TileMemory {
   /// Computes the pass's on-chip needs against the budget and records them (and split renders) in
   /// `stats`; refuses a
   /// pass whose pixel local storage exceeds pls.max_pls_bytes_per_pixel (check_pls_layout).
-  /// Holds the pass's pixel local storage (if it declares one) and points `ctx.pls` at it.
+  /// Holds the pass's pixel local storage (if it declares one) and points `ctx.pls` at it; and,
+  /// when a draw's shader evaluates lights and writes colour, the pass's lit-sample ledger
+  /// (`ctx.lit_samples`: TspStats::hidden_lit_samples).
   TileMemory(RenderContext& ctx, TileMemoryStats& stats);
   TileMemory(const TileMemory&) = delete;
   TileMemory& operator=(const TileMemory&) = delete;
@@ -120,6 +124,7 @@ class TileMemory {
   std::vector<std::uint8_t> in_memory_;  ///< per attachment of the pass: 1 after the split
   std::vector<std::uint8_t> evicted_;    ///< per attachment: stays in memory after the split
   PlsState pls_;  ///< the pass's pixel local storage (empty when it declares none)
+  std::unique_ptr<LitSampleLedger> lit_samples_;  ///< the pass's lit colour writes per sample, or null
 };
 
 }  // namespace tbdr

@@ -7,6 +7,7 @@
 #include <optional>
 #include <span>
 #include <stdexcept>
+#include <thread>
 
 #if defined(__SSE2__)
 #include <xmmintrin.h>
@@ -18,6 +19,59 @@
 #include "models/texture_unit.hpp"
 
 namespace tbdr {
+
+LitSampleLedger::LitSampleLedger(int width, int height, int samples)
+    : blocks_x_(static_cast<std::size_t>((width + kBlockMask) >> kBlockBits)),
+      samples_(static_cast<std::size_t>(samples)),
+      block_entries_((std::size_t{1} << (2 * kBlockBits)) * static_cast<std::size_t>(samples)) {
+  blocks_ = blocks_x_ * static_cast<std::size_t>((height + kBlockMask) >> kBlockBits);
+  held_.reset(new std::uint32_t[blocks_ * block_entries_]);  // default-initialised: untouched until zeroed
+  state_ = std::make_unique<std::atomic<std::uint8_t>[]>(blocks_);
+  wide_ = std::make_unique<std::atomic<std::uint64_t*>[]>(blocks_);
+  for (std::size_t b = 0; b < blocks_; ++b) {
+    state_[b].store(kUntouched, std::memory_order_relaxed);
+    wide_[b].store(nullptr, std::memory_order_relaxed);
+  }
+}
+
+LitSampleLedger::~LitSampleLedger() {
+  for (std::size_t b = 0; b < blocks_; ++b) delete[] wide_[b].load(std::memory_order_relaxed);
+}
+
+void LitSampleLedger::make_ready(std::size_t b) {
+  std::uint8_t expected = kUntouched;
+  if (state_[b].compare_exchange_strong(expected, kZeroing, std::memory_order_acq_rel, std::memory_order_acquire)) {
+    std::fill_n(held_.get() + b * block_entries_, block_entries_, std::uint32_t{0});
+    state_[b].store(kReady, std::memory_order_release);
+    return;
+  }
+  while (state_[b].load(std::memory_order_acquire) != kReady) std::this_thread::yield();  // another tile's thread zeroes it
+}
+
+void LitSampleLedger::add_wide(std::uint32_t& held, std::size_t b, std::size_t i, std::uint64_t lights) {
+  std::uint64_t* wide = wide_[b].load(std::memory_order_acquire);
+  if (wide == nullptr) {
+    // Made once per block (tiles sharing the block use different entries of it).
+    auto* fresh = new std::uint64_t[block_entries_]();
+    std::uint64_t* expected = nullptr;
+    if (wide_[b].compare_exchange_strong(expected, fresh, std::memory_order_acq_rel, std::memory_order_acquire)) {
+      wide = fresh;
+    } else {
+      delete[] fresh;
+      wide = expected;
+    }
+  }
+  std::uint64_t& w = wide[i];
+  if (held != kWide) {
+    w = std::uint64_t{held >> kLightBits} << kWideLightBits | (held & kLightMask);
+    held = kWide;
+  }
+  const std::uint64_t count = w >> kWideLightBits, sum = w & kWideLightMask;
+  if (count + 1 >= (std::uint64_t{1} << kWideCountBits) || lights > kWideLightMask - sum) {
+    throw std::overflow_error("LitSampleLedger: a sample holds more than 2^24 lit colour writes or 2^40 of their lights");
+  }
+  w += (std::uint64_t{1} << kWideLightBits) + lights;
+}
 
 Tsp::Tsp(RenderContext& ctx) : ctx_(ctx), texture_lines_out_(ctx.texture_lines), dram_out_(ctx.dram) {}
 
@@ -467,6 +521,23 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   for (std::uint32_t o = 0; o < outputs; ++o) out_bytes_per_sample += bytes_per_sample(ctx_.color_targets[o]->format);
   const BlendMode blend = d.pipeline->blend;
   if (alive) alive->assign(pixels.size(), 0);
+  // The pass's lit-sample ledger (LitSampleLedger), for colour-writing fragments. A lit
+  // scene-surface fragment is lit_surface_invocations' kind; an unblended write replaces the
+  // sample's colour unless the shader read the pass's attachments (framebuffer fetch, or those a
+  // split render left in memory, read as images): what it writes then depends on what was there.
+  LitSampleLedger* const ledger = outputs > 0 ? ctx_.lit_samples : nullptr;
+  const bool lit_surface = from_triangle && sh.light_source != LightSource::None && sh.light_source != LightSource::Proxy;
+  const bool replaces_colour = blend == BlendMode::Off && d.fetch_bytes == 0 && d.image_fetches == 0;
+  const bool ledger_tracks = ledger != nullptr && (lit_surface || replaces_colour);
+  // One fragment's colour write at its pixel in the ledger: its samples shaded but not
+  // written (late depth/stencil tests failed) are hidden at once; its written samples replace or
+  // add to what they held.
+  const auto keep_ledger = [&](const ShadePixel& px, std::uint32_t write_mask, std::uint64_t lights) {
+    if (lit_surface && (px.mask & ~px.write) != 0) {
+      LitSampleLedger::hidden_unwritten(static_cast<std::uint32_t>(bit_count(px.mask & ~px.write)), lights, stats);
+    }
+    if (write_mask != 0) ledger->write(px.x, px.y, write_mask, replaces_colour, lit_surface, lights, stats);
+  };
   // Whether anything reads a stored surface (G-buffer or PLS) this batch loads: its colour, its
   // cluster (its depth), or a G-buffer target it is stored to. Without colours, a light volume's
   // fragments read none of it: the same counts without touching the stored surfaces.
@@ -637,6 +708,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
       const std::size_t pixel = static_cast<std::size_t>(px.y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(px.x);
       const std::uint32_t write_mask = px.mask & px.write;
       if (alive) (*alive)[i] = write_mask;
+      if (ledger_tracks) keep_ledger(px, write_mask, count);
       shaded[pixel] += 1;
       if (image_counters) {
         ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(count);
@@ -815,6 +887,7 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
     light_sum += fl.count;  // the per-fragment charges are booked for the batch after the loop
     ctx_.images->counters.shaded[pixel] += 1;
     if (image_counters) ctx_.images->counters.lights_evaluated[pixel] += static_cast<std::uint32_t>(fl.count);
+    if (ledger_tracks) keep_ledger(px, write_mask, fl.count);
     if (write_mask == 0) continue;
     // The frame-unique id (as SurfacePoint::triangle).
     if (image_counters) ctx_.images->counters.triangle_id[pixel] = p.id + 1;

@@ -6,7 +6,10 @@
 // For scene triangles it also computes the texture lines each quad's fetches touch
 // (models/texture_unit.hpp) and appends them to the tile's list (RenderContext::texture_lines).
 #include <array>
+#include <atomic>
+#include <bit>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -40,10 +43,111 @@ namespace tbdr {
   X(Counter, light_stack_overflow_fragments, "fragments", Sum, "Fragments whose PLS light stack overflowed (fell back to every light)") \
   X(Counter, pls_bytes_accessed, "bytes", Sum, "Pixel local storage bytes read and written by shaders (the pass's PLS layout per access)") \
   X(Counter, tile_buffer_read_bytes, "bytes", Sum, "On-chip tile buffer bytes read by blending and fetch") \
-  X(Counter, tile_buffer_write_bytes, "bytes", Sum, "On-chip tile buffer bytes written by shaders")
+  X(Counter, tile_buffer_write_bytes, "bytes", Sum, "On-chip tile buffer bytes written by shaders") \
+  X(Counter, hidden_lit_samples, "samples", Sum, "Samples lit scene-surface fragments shaded whose colour did not last to the end of the pass: replaced by a later unblended colour write, or (isp.early_z=0) failing the depth/stencil test after the shader; at 1 sample per pixel, fragments (LitSampleLedger)") \
+  X(Counter, hidden_light_evaluations, "evaluations", Sum, "Lights evaluated by the fragments of hidden_lit_samples, counted once per hidden sample; at 1 sample per pixel, the light evaluations spent on hidden surfaces")
 /// Statistics of fragment shading.
 struct TspStats {
   TBDR_STATS(TBDR_TSP_STATS)
+};
+
+/// Per sample of one render pass, the colour writes of lit scene-surface fragments (a scene
+/// triangle's, its shader evaluating lights: lit_surface_invocations' fragments) that the sample's
+/// colour still holds, and the lights those fragments evaluated. Tsp::shade keeps it for every
+/// colour-writing fragment: an unblended write that reads nothing of the target (no framebuffer
+/// fetch) replaces the sample's colour, so what the sample held is hidden (counted in
+/// TspStats::hidden_lit_samples and hidden_light_evaluations) and only the new write remains; a
+/// blended write adds to what the sample holds. What it holds at the end of the pass is the final
+/// image's (stored or resolved). Light-volume and full-screen fragments are not lit surfaces:
+/// they replace or add, never count. The pass's TileMemory owns it (RenderContext::lit_samples);
+/// tiles write disjoint samples, so tiles on several threads keep it without locks (a block of
+/// samples is published once, atomically).
+class LitSampleLedger {
+ public:
+  /// For a `width` x `height` frame of `samples` samples per pixel, none holding a lit write.
+  LitSampleLedger(int width, int height, int samples);
+  ~LitSampleLedger();
+  LitSampleLedger(const LitSampleLedger&) = delete;
+  LitSampleLedger& operator=(const LitSampleLedger&) = delete;
+  /// A colour write at the samples `mask` of pixel (x, y): `replaces` (unblended) hides what the
+  /// samples held; `lit` (a lit scene-surface fragment that evaluated `lights` lights) is then held.
+  void write(int x, int y, std::uint32_t mask, bool replaces, bool lit, std::uint64_t lights, TspStats& stats) {
+    const std::size_t b = static_cast<std::size_t>(y >> kBlockBits) * blocks_x_ + static_cast<std::size_t>(x >> kBlockBits);
+    if (state_[b].load(std::memory_order_acquire) != kReady) {
+      // Nothing lit was held in this block: only a lit write changes that.
+      if (!lit) return;
+      make_ready(b);
+    }
+    const std::size_t first = (static_cast<std::size_t>(y & kBlockMask) << kBlockBits | static_cast<std::size_t>(x & kBlockMask)) * samples_;
+    std::uint32_t* held_at = held_.get() + b * block_entries_ + first;
+    for (std::uint32_t m = mask; m != 0; m &= m - 1) {
+      const auto s = static_cast<std::size_t>(std::countr_zero(m));
+      std::uint32_t& held = held_at[s];
+      if (replaces && held != 0) {
+        if (held == kWide) {
+          std::uint64_t& w = wide_[b].load(std::memory_order_acquire)[first + s];
+          hide(w >> kWideLightBits, w & kWideLightMask, stats);
+          w = 0;
+        } else {
+          hide(held >> kLightBits, held & kLightMask, stats);
+        }
+        held = 0;
+      }
+      if (lit) {
+        if (held != kWide && held >> kLightBits < kMaxCount - 1 && lights <= kLightMask - (held & kLightMask)) {
+          held += (std::uint32_t{1} << kLightBits) + static_cast<std::uint32_t>(lights);
+        } else {
+          add_wide(held, b, first + s, lights);
+        }
+      }
+    }
+  }
+  /// `samples` samples of a lit fragment that evaluated `lights` lights, shaded but not written
+  /// (isp.early_z=0: the depth or stencil test after the shader failed): hidden at once.
+  static void hidden_unwritten(std::uint32_t samples, std::uint64_t lights, TspStats& stats) {
+    stats.hidden_lit_samples += samples;
+    stats.hidden_light_evaluations += std::uint64_t{samples} * lights;
+  }
+
+ private:
+  /// The samples are kept in blocks of 2^kBlockBits x 2^kBlockBits pixels, each zeroed at the
+  /// first lit write in it (the array is allocated uninitialised): a pass touches the blocks its
+  /// lit fragments write (a deferred lighting pass, its glass), and a tile's samples lie in a few
+  /// contiguous blocks. Host speed and memory only: every block size counts the same.
+  static constexpr int kBlockBits = 3;
+  static constexpr int kBlockMask = (1 << kBlockBits) - 1;
+  /// A sample's entry: the lit writes it holds (top kCountBits bits) and their lights (the rest),
+  /// or kWide: they no longer fit, and its block's wide entry (64 bits: kWideCountBits and the
+  /// rest) holds them. Four bytes a sample where they fit (every sample of the atrium's frames:
+  /// each page of entries is a page fault on first touch).
+  static constexpr int kCountBits = 8;
+  static constexpr int kLightBits = 32 - kCountBits;
+  static constexpr std::uint32_t kLightMask = (std::uint32_t{1} << kLightBits) - 1;
+  static constexpr std::uint32_t kMaxCount = (std::uint32_t{1} << kCountBits) - 1;  ///< count field of kWide
+  static constexpr std::uint32_t kWide = ~std::uint32_t{0};
+  static constexpr int kWideCountBits = 24;
+  static constexpr int kWideLightBits = 64 - kWideCountBits;
+  static constexpr std::uint64_t kWideLightMask = (std::uint64_t{1} << kWideLightBits) - 1;
+  static void hide(std::uint64_t count, std::uint64_t lights, TspStats& stats) {
+    stats.hidden_lit_samples += count;
+    stats.hidden_light_evaluations += lights;
+  }
+  /// Adds one lit write of `lights` lights to the sample of entry `held`, index `i` of block `b`,
+  /// in its wide entry (moved there first; std::overflow_error past the wide entry's fields).
+  void add_wide(std::uint32_t& held, std::size_t b, std::size_t i, std::uint64_t lights);
+  /// A block's state: untouched, being zeroed by one thread, zeroed (its entries are valid).
+  static constexpr std::uint8_t kUntouched = 0, kZeroing = 1, kReady = 2;
+  /// Zeroes block `b` unless a thread did: tiles that share a block (tile sizes not a multiple of
+  /// its side, strips) write different samples of it, after it is zeroed.
+  void make_ready(std::size_t b);
+
+  std::size_t blocks_x_ = 0;
+  std::size_t samples_ = 1;
+  std::size_t block_entries_ = 0;  ///< entries of a block: 2^(2 kBlockBits) pixels x samples
+  std::unique_ptr<std::uint32_t[]> held_;            ///< blocks x block_entries_, block after block
+  std::unique_ptr<std::atomic<std::uint8_t>[]> state_;  ///< per block
+  std::unique_ptr<std::atomic<std::uint64_t*>[]> wide_;  ///< per block: its wide entries, made at its first kWide
+  std::size_t blocks_ = 0;
 };
 
 /// One pixel of a shading batch: absolute coordinates, the samples shaded and, of those, the

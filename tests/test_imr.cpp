@@ -184,3 +184,54 @@ TEST(ImmediateMode, UnitsOverlapAsAPipeline) {
 
 }  // namespace
 }  // namespace tbdr
+
+namespace tbdr {
+namespace {
+
+using namespace synthetic;
+
+/// layers() with a lit shader: every fragment evaluates the trace's 3 lights (light_source=all).
+Layers lit_layers(int n, bool back_to_front) {
+  Layers l = layers(n, back_to_front);
+  l.trace.shaders[0].light_source = LightSource::All;
+  l.trace.shaders[0].light_alu_ops = 12;
+  for (int i = 0; i < 3; ++i) {
+    Light light;
+    light.position = {static_cast<float>(i), 0.0f, -2.0f};
+    light.radius = 5.0f;
+    l.trace.lights.push_back(light);
+  }
+  return l;
+}
+
+TEST(ImmediateMode, BackToFrontLitLayersHideOneScreenOfSamplesWithEarlyZAndNoneOnATbdr) {
+  // Two full-frame opaque lit quads, the far one first. IMR (early-Z in submission order): the
+  // far quad passes and writes every sample, lit; the near one passes too and replaces each: one
+  // screen of lit samples hidden, 256 x 256 = 65,536, each having evaluated 3 lights (196,608).
+  // The TBDR's tag buffer removes the far quad before shading: nothing lit is hidden.
+  const Layers l = lit_layers(2, true);
+  const double screen = kFrame * kFrame;
+  const Timed imr = run_timed(l.trace, l.scene, {"gpu.mode=imr"});
+  const Timed tbr = run_timed(l.trace, l.scene, {"gpu.mode=tbr"});
+  const Timed tbdr = run_timed(l.trace, l.scene, {"gpu.mode=tbdr"});
+  EXPECT_EQ(stat(imr.frame.stats, "frame/tsp", "lit_surface_invocations"), 2 * screen);
+  EXPECT_EQ(stat(imr.frame.stats, "frame/tsp", "hidden_lit_samples"), screen);
+  EXPECT_EQ(stat(imr.frame.stats, "frame/tsp", "hidden_light_evaluations"), 3 * screen);
+  EXPECT_EQ(stat(tbr.frame.stats, "frame/tsp", "hidden_lit_samples"), screen);  // tbr: the same order
+  EXPECT_EQ(stat(tbdr.frame.stats, "frame/tsp", "lit_surface_invocations"), screen);
+  EXPECT_EQ(stat(tbdr.frame.stats, "frame/tsp", "hidden_lit_samples"), 0.0);
+  EXPECT_EQ(stat(tbdr.frame.stats, "frame/tsp", "hidden_light_evaluations"), 0.0);
+  // Front to back, early-Z rejects the far quad: nothing hidden. With the tests after the shader
+  // (isp.early_z=0) the far quad is shaded everywhere and fails: one screen hidden again.
+  const Layers f = lit_layers(2, false);
+  EXPECT_EQ(stat(run_timed(f.trace, f.scene, {"gpu.mode=imr"}).frame.stats, "frame/tsp", "hidden_lit_samples"), 0.0);
+  const Timed late = run_timed(f.trace, f.scene, {"gpu.mode=imr", "isp.early_z=0"});
+  EXPECT_EQ(stat(late.frame.stats, "frame/tsp", "hidden_lit_samples"), screen);
+  EXPECT_EQ(stat(late.frame.stats, "frame/tsp", "hidden_light_evaluations"), 3 * screen);
+  // 4 back-to-front layers on the IMR: each of the first 3 is replaced by the next: 3 screens.
+  const Layers four = lit_layers(4, true);
+  EXPECT_EQ(stat(run_timed(four.trace, four.scene, {"gpu.mode=imr"}).frame.stats, "frame/tsp", "hidden_lit_samples"), 3 * screen);
+}
+
+}  // namespace
+}  // namespace tbdr

@@ -515,3 +515,119 @@ TEST(UnitTsp, GbufferTargetsKeepTheSurfaceAtTheirPrecision) {
 
 }  // namespace
 }  // namespace tbdr
+
+namespace tbdr {
+namespace {
+
+using namespace unit;
+
+/// Two point lights near the upper-left tile (the counts do not depend on where they are).
+std::vector<Light> two_lights() {
+  Light a;
+  a.position = {0.0f, 0.0f, 1.0f};
+  a.radius = 10.0f;
+  Light b = a;
+  b.position = {1.0f, 0.0f, 1.0f};
+  return {a, b};
+}
+
+TEST(UnitTsp, LitSamplesAnUnblendedWriteReplacesAreHidden) {
+  // One sample per pixel, lit shaders evaluating both lights (light_source=all, 2 selected).
+  RenderRig rig(RenderSpec{.lights = two_lights()});
+  rig.keep_lit_sample_ledger();
+  PipelineState blended;
+  blended.blend = BlendMode::Alpha;
+  const std::uint32_t lit = rig.add_draw(make_shader(1, 12, LightSource::All, 1), {}, {0, 1});
+  const std::uint32_t lit_blended = rig.add_draw(make_shader(1, 12, LightSource::All, 1), blended, {0, 1});
+  const std::uint32_t unlit = rig.add_draw(make_shader(1, 0, LightSource::None, 1));
+  ScreenTri t = kUpperLeft;
+  t.material = 0;  // a scene triangle (opaque material): a lit surface
+  t.draw = lit;
+  const std::uint32_t a = rig.add_triangle(t), b = rig.add_triangle(t);
+  t.draw = lit_blended;
+  const std::uint32_t glass = rig.add_triangle(t);
+  t.draw = unlit;
+  const std::uint32_t cover = rig.add_triangle(t);
+  // a lights 4x4 pixels: they hold its writes, nothing is hidden yet.
+  rig.shade(a, block(0, 0, 3, 3));
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 0u);
+  // b replaces columns 0..1 (8 pixels): a's 8 samples there are hidden, 8 x 2 lights.
+  rig.shade(b, block(0, 0, 1, 3));
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 8u);
+  EXPECT_EQ(rig.tsp_stats.hidden_light_evaluations.value(), 16u);
+  // Blended glass over columns 2..3 hides nothing: those samples now hold a's write and the glass's.
+  rig.shade(glass, block(2, 0, 3, 3));
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 8u);
+  // An unlit unblended write over all 16 pixels hides what they hold: b's 8, and a's and the
+  // glass's 2 x 8: 24 samples (48 evaluations) more, 32 (64) in all. It holds nothing lit itself.
+  rig.shade(cover, block(0, 0, 3, 3));
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 32u);
+  EXPECT_EQ(rig.tsp_stats.hidden_light_evaluations.value(), 64u);
+  rig.shade(cover, block(0, 0, 3, 3));
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 32u);
+  // A lit fragment shaded but not written (the depth test after the shader failed: isp.early_z=0)
+  // is hidden at once: 1 sample, 2 evaluations.
+  rig.shade(a, {{10, 10, 1u, 0u}});
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 33u);
+  EXPECT_EQ(rig.tsp_stats.hidden_light_evaluations.value(), 66u);
+  // Every lit fragment counted its 2 lights once: 16 + 8 + 8 + 1 fragments.
+  EXPECT_EQ(rig.tsp_stats.light_evaluations.value(), 2u * 33u);
+}
+
+TEST(UnitTsp, ASampleHoldsAnyNumberOfBlendedLitWrites) {
+  // 300 blended lit writes at pixel (3,5) (more than a sample's 4-byte entry counts: it moves to
+  // its block's wide entry), then an unlit unblended write: all 300 are hidden, 2 lights each;
+  // then 2 more there (its entry narrow again) and a replacement of it and of its neighbour's
+  // one write: 303.
+  RenderRig rig(RenderSpec{.lights = two_lights()});
+  rig.keep_lit_sample_ledger();
+  PipelineState blended;
+  blended.blend = BlendMode::Add;
+  const std::uint32_t glass = rig.add_draw(make_shader(1, 12, LightSource::All, 1), blended, {0, 1});
+  const std::uint32_t unlit = rig.add_draw(make_shader(1, 0, LightSource::None, 1));
+  ScreenTri t = kUpperLeft;
+  t.material = 0;
+  t.draw = glass;
+  const std::uint32_t g = rig.add_triangle(t);
+  t.draw = unlit;
+  const std::uint32_t cover = rig.add_triangle(t);
+  for (int i = 0; i < 300; ++i) rig.shade(g, {{3, 5, 1u}});
+  rig.shade(g, {{4, 5, 1u}});  // a neighbour in the same block stays narrow
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 0u);
+  rig.shade(cover, {{3, 5, 1u}});
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 300u);
+  EXPECT_EQ(rig.tsp_stats.hidden_light_evaluations.value(), 600u);
+  rig.shade(g, {{3, 5, 1u}});
+  rig.shade(g, {{3, 5, 1u}});
+  rig.shade(cover, {{3, 5, 1u}, {4, 5, 1u}});
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 303u);
+  EXPECT_EQ(rig.tsp_stats.hidden_light_evaluations.value(), 606u);
+}
+
+TEST(UnitTsp, HiddenLitSamplesAreCountedPerSampleWithMsaa) {
+  // 4 samples per pixel: a lit fragment writing all 4 samples of pixel (0,0), then an unlit one
+  // writing samples 0 and 1 only: 2 of the lit fragment's samples are hidden, each counting the
+  // fragment's 2 lights (4 evaluations: per hidden sample, not per fragment).
+  RenderRig rig(RenderSpec{.attachments = default_attachments(4), .lights = two_lights()});
+  ASSERT_EQ(rig.samples_per_pixel(), 4);
+  rig.keep_lit_sample_ledger();
+  const std::uint32_t lit = rig.add_draw(make_shader(1, 12, LightSource::All, 1), {}, {0, 1});
+  const std::uint32_t unlit = rig.add_draw(make_shader(1, 0, LightSource::None, 1));
+  ScreenTri t = kUpperLeft;
+  t.material = 0;  // a scene triangle (opaque material): a lit surface
+  t.draw = lit;
+  const std::uint32_t a = rig.add_triangle(t);
+  t.draw = unlit;
+  const std::uint32_t b = rig.add_triangle(t);
+  rig.shade(a, {{0, 0, 0xFu}});
+  rig.shade(b, {{0, 0, 0x3u}});
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 2u);
+  EXPECT_EQ(rig.tsp_stats.hidden_light_evaluations.value(), 4u);
+  // The other two follow when they are replaced.
+  rig.shade(b, {{0, 0, 0xCu}});
+  EXPECT_EQ(rig.tsp_stats.hidden_lit_samples.value(), 4u);
+  EXPECT_EQ(rig.tsp_stats.hidden_light_evaluations.value(), 8u);
+}
+
+}  // namespace
+}  // namespace tbdr

@@ -295,6 +295,12 @@ class RenderRig {
     render_tile(tile_rect(0, 0));
     return ids;
   }
+  /// Gives the pass a lit-sample ledger (LitSampleLedger), as the tile memory does for a pass
+  /// whose draws light colour: the TSP counts hidden_lit_samples from then on.
+  void keep_lit_sample_ledger() {
+    ledger_ = std::make_unique<LitSampleLedger>(ctx_.viewport.width_px, ctx_.viewport.height_px, ctx_.pattern.count);
+    ctx_.lit_samples = ledger_.get();
+  }
   /// The TSP shades `pixels` of primitive `prim` (one batch, sorted by row then column).
   void shade(std::uint32_t prim, const std::vector<ShadePixel>& pixels, std::vector<std::uint32_t>* alive = nullptr) {
     tsp_->shade(prim, pixels, alive, tsp_stats);
@@ -334,6 +340,7 @@ class RenderRig {
   LightScreenBins light_bins_;
   RenderContext ctx_;
   std::unique_ptr<TileMemory> tile_memory_;
+  std::unique_ptr<LitSampleLedger> ledger_;
   std::unique_ptr<Tsp> tsp_;
   std::unique_ptr<Isp> isp_;
 };
