@@ -18,10 +18,12 @@
 -- files read them from v_run_summary; docs/queries.md states each):
 --   shaded_fragments_per_pixel = tsp.shader_invocations / (width x height): fragment shader
 --     invocations of every pass (scene geometry, light proxies, full-screen passes) per screen pixel;
---   overshading = (tsp.lit_surface_invocations + compute.compute_shaded_pixels) / covered_pixels:
---     lighting computed on scene surfaces or by kernels per visible pixel; above 1, lighting was
---     computed for surfaces that ended up hidden; below 1, the lighting runs on proxies (light
---     volumes, counted by lights_per_pixel instead);
+--   overshading = tsp.hidden_light_evaluations / covered_pixels: light evaluations spent on scene
+--     surfaces that are not in the final image (lit, then replaced by an unblended write in the same
+--     pass, or failing a late depth test), per covered pixel; 0 for a technique that lights only the
+--     final surface (deferred, tiled, clustered, visibility buffer, forward after a depth pre-pass);
+--   hidden_lit_fragments_per_pixel = tsp.hidden_lit_samples / (covered_pixels x samples_per_pixel):
+--     the same in lit fragments (samples) per covered sample;
 --   lights_per_pixel = (tsp.light_evaluations + compute.compute_light_evaluations) / (width x height);
 --   lights_per_fragment = the same evaluations / tsp.shader_invocations;
 --   a unit's utilization = busy cycles / frame cycles (stored as frame/unit.<unit> utilization by
@@ -61,7 +63,8 @@ WITH f AS (
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'shader_invocations') AS shader_invocations,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'light_evaluations') AS tsp_light_evaluations,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'lit_surface_invocations') AS lit_surface_invocations,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/compute' AND name = 'compute_shaded_pixels') AS compute_shaded_pixels,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'hidden_lit_samples') AS hidden_lit_samples,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'hidden_light_evaluations') AS hidden_light_evaluations,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'covered_pixels') AS covered_pixels,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/compute' AND name = 'compute_light_evaluations') AS compute_light_evaluations,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/isp' AND name = 'samples_rasterised') AS samples_rasterised,
@@ -80,6 +83,9 @@ WITH f AS (
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'alu_pj') AS e_alu_pj,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'texture_pj') AS e_texture_pj,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'static_pj') AS e_static_pj,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'rop_caches_pj') AS e_rop_caches_pj,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'at_period_total_mj') AS energy_at_period_mj,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'static_power_mw') AS static_power_mw,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/host' AND name = 'simulation_wall_seconds') AS sim_wall_seconds
   FROM runs r
 ),
@@ -156,8 +162,8 @@ SELECT d.*,  -- run_id, dram_<class>_read_mb / _write_mb (device), requested_<cl
   f.shaded_samples, f.shader_invocations, f.light_evaluations, f.samples_rasterised, f.partial_renders,
   f.covered_pixels,
   f.shader_invocations / nullif(f.width * f.height, 0) AS shaded_fragments_per_pixel,
-  -- A unit with no work in a frame records no row (frame/compute without a compute pass): zero.
-  (coalesce(f.lit_surface_invocations, 0) + coalesce(f.compute_shaded_pixels, 0)) / nullif(f.covered_pixels, 0) AS overshading,
+  f.hidden_light_evaluations / nullif(f.covered_pixels, 0) AS overshading,
+  f.hidden_lit_samples / nullif(f.covered_pixels * f.samples_per_pixel, 0) AS hidden_lit_fragments_per_pixel,
   f.light_evaluations / nullif(f.width * f.height, 0) AS lights_per_pixel,
   f.light_evaluations / nullif(f.shader_invocations, 0) AS lights_per_fragment,
   f.device_read_bytes / 1e6 AS dram_read_mb,
@@ -175,6 +181,8 @@ SELECT d.*,  -- run_id, dram_<class>_read_mb / _write_mb (device), requested_<cl
   f.e_alu_pj * 1e-9 AS energy_alu_mj,
   f.e_texture_pj * 1e-9 AS energy_texture_mj,
   f.e_static_pj * 1e-9 AS energy_static_mj,
+  f.e_rop_caches_pj * 1e-9 AS energy_rop_caches_mj,
+  f.energy_at_period_mj, f.static_power_mw,
   f.sim_wall_seconds
 FROM runs r JOIN g AS f ON f.run_id = r.id JOIN dram d ON d.run_id = r.id JOIN v_config_label l ON l.run_id = r.id;
 
@@ -272,8 +280,12 @@ SELECT column1 AS metric, column2 AS unit, column3 AS description FROM (VALUES
   ('requested_total_mb', 'MB', 'Bytes the units requested from memory at the chip boundary, read + written, before the caches'),
   ('requested_read_mb', 'MB', 'Bytes the units requested to read, before the caches'),
   ('requested_write_mb', 'MB', 'Bytes the units requested to write, before the caches'),
-  ('overshading', 'lit fragments/covered pixel',
-   '(tsp.lit_surface_invocations + compute.compute_shaded_pixels) / covered_pixels: lighting computed on surfaces or by kernels per visible pixel; above 1, hidden surfaces were lit'),
+  ('overshading', 'light evaluations/covered pixel',
+   'tsp.hidden_light_evaluations / covered_pixels: lights evaluated on scene surfaces that are not in the final image, per covered pixel; 0 = only the final surface is lit'),
+  ('hidden_lit_fragments_per_pixel', 'fragments/covered sample',
+   'tsp.hidden_lit_samples / (covered_pixels x samples_per_pixel): lit scene-surface samples later hidden, per covered sample'),
+  ('energy_at_period_mj', 'mJ', 'Energy of the frame plus the idle time to gpu.frame_period_us at idle power (= energy_total_mj when the period is 0: race to idle)'),
+  ('static_power_mw', 'mW', 'Leakage of the configured units and arrays while the frame runs'),
   ('shaded_fragments_per_pixel', 'fragments/pixel',
    'tsp.shader_invocations / (width x height): fragment shader invocations of every pass per screen pixel'),
   ('covered_pixels', 'pixels', 'Pixels shaded at least once (the visible surface)'),
@@ -305,6 +317,9 @@ SELECT s.run_id, m.metric,
     WHEN 'requested_read_mb' THEN s.requested_read_mb
     WHEN 'requested_write_mb' THEN s.requested_write_mb
     WHEN 'overshading' THEN s.overshading
+    WHEN 'hidden_lit_fragments_per_pixel' THEN s.hidden_lit_fragments_per_pixel
+    WHEN 'energy_at_period_mj' THEN s.energy_at_period_mj
+    WHEN 'static_power_mw' THEN s.static_power_mw
     WHEN 'shaded_fragments_per_pixel' THEN s.shaded_fragments_per_pixel
     WHEN 'covered_pixels' THEN s.covered_pixels
     WHEN 'lights_per_pixel' THEN s.lights_per_pixel
@@ -404,6 +419,7 @@ SELECT config_name, min(config_label) AS config_label, config_hash, scene, width
   avg(dram_spill_read_mb + dram_spill_write_mb) AS dram_spill_mb,
   avg(dram_other_read_mb + dram_other_write_mb) AS dram_other_mb,
   avg(energy_total_mj) AS energy_total_mj,
+  avg(energy_at_period_mj) AS energy_at_period_mj,
   avg(overshading) AS overshading, avg(shaded_fragments_per_pixel) AS shaded_fragments_per_pixel,
   avg(lights_per_pixel) AS lights_per_pixel,
   rank() OVER (PARTITION BY config_hash, scene, width, height, samples_per_pixel, lights

@@ -58,6 +58,9 @@ RunRecord synthetic_run(const std::string& technique, int tile_width, double sha
   st("frame/tsp", "shader_invocations", shaded_samples, "fragments");
   st("frame/tsp", "light_evaluations", shaded_samples * 4, "evaluations");
   st("frame/tsp", "lit_surface_invocations", shaded_samples / 2, "fragments");
+  // overshading = hidden light evaluations / covered pixels (half the shaded samples' worth here)
+  st("frame/tsp", "hidden_light_evaluations", shaded_samples / 2, "evaluations");
+  st("frame/tsp", "hidden_lit_samples", shaded_samples / 8, "samples");
   st("frame/frame", "covered_pixels", 4000, "pixels");
   st("frame/dram", "read_bytes", 3e6, "bytes");
   st("frame/dram", "write_bytes", 1e6, "bytes");
@@ -174,7 +177,7 @@ TEST(ReportViews, SummaryFiguresAreNullWhenARunDidNotRecordThem) {
   const std::string u = " FROM v_run_summary WHERE run_id = " + std::to_string(untimed);
   const std::string t = " FROM v_run_summary WHERE run_id = " + std::to_string(timed);
   EXPECT_DOUBLE_EQ(real_of(db, "SELECT shaded_fragments_per_pixel" + u), 1.5);  // 7500 / (100 x 50)
-  // (3750 lit surface fragments + 0 compute-shaded pixels: frame/compute absent) / 4000 covered
+  // 3750 hidden light evaluations / 4000 covered pixels
   EXPECT_DOUBLE_EQ(real_of(db, "SELECT overshading" + u), 0.9375);
   EXPECT_DOUBLE_EQ(real_of(db, "SELECT lights_per_pixel" + u), 6.0);  // 30000 evaluations / 5000 pixels
   EXPECT_DOUBLE_EQ(real_of(db, "SELECT value FROM v_metric WHERE metric = 'overshading' AND run_id = " +
@@ -253,7 +256,7 @@ TEST(ReportViews, ParametersPivotAndSensitivity) {
             1.2},  // 6000 / (100 x 50)
            {"SELECT metric_value FROM v_sensitivity WHERE key = 'tiling.tile_width' AND value = '32' "
             "AND metric = 'overshading'",
-            0.75},  // 3000 lit fragments / 4000 covered pixels
+            0.75},  // 3000 hidden light evaluations / 4000 covered pixels
            {"SELECT count(*) FROM v_run_summary WHERE status = 'failed' AND error = 'boom'", 1},
            {"SELECT count(*) FROM v_sensitivity WHERE run_id = 3", 0}});
 }
