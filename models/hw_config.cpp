@@ -196,13 +196,13 @@ ParamRegistry<HwConfig> make_registry() {
       .doc("On-chip color/PLS storage per pixel (depth kept separately)")
       .source("Imagination, PowerVR Performance Recommendations, \"On-Chip Memory Performance\": typically 128 "
               "bits per pixel on low-end parts, 256 on high-end ones");
-  r.add(TBDR_PARAM(pls.tile_buffer_bytes_per_clock), 8.65).unit("bytes/clock").range(1, 4096)
+  r.add(TBDR_PARAM(pls.tile_buffer_bytes_per_clock), 8.73).unit("bytes/clock").range(1, 4096)
       .doc("On-chip tile buffer bandwidth per USC: colour/PLS bytes the shaders read and write in tile memory "
            "(outputs, blending, PLS) per clock; a tile's shading takes at least its tile-buffer bytes over this x usc.count")
       .source("no public figure; fitted: the value whose frame times best match, in shape (least squares after one "
               "scale factor), the flat part (96 .. 256 bits per pixel, inside the budget) of Imagination's GX6250 "
               "measurements in PowerVR Performance Recommendations, \"On-Chip Memory Performance\" (20, 21, 23, 24, "
-              "28, 29 ms; rms 0.56 ms), on deferred gbuffer_storage=onchip, atrium:2 480x270 64 lights "
+              "28, 29 ms; rms 0.57 ms), on deferred gbuffer_storage=onchip, atrium:2 480x270 64 lights "
               "(bench/onchip_cliff_fit.py); the step past the budget is then predicted, not fitted "
               "(`tbdrsim validate`)");
   r.add(TBDR_PARAM(pls.max_pls_bytes_per_pixel), 16).unit("bytes/pixel").range(16, 256)
