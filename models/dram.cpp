@@ -1,4 +1,5 @@
 #include "models/dram.hpp"
+#include "models/dram_observer.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -253,6 +254,7 @@ bool Dram::enqueue(DramRequest&& req) {
   e.bank = d.bank;
   e.bytes = transfer_bytes(req.bytes);
   e.lines = lines;
+  e.column = d.column;
   e.cls = req.cls;
   e.is_write = req.is_write;
   q.push_back(e);
@@ -262,6 +264,7 @@ bool Dram::enqueue(DramRequest&& req) {
     first_enqueue_ = now;
   }
   ++in_flight_;
+  if (observer_) observer_->request(now, req.addr, e.bytes, e.is_write);
   kick(d.channel, e.arrival);
   return true;
 }
@@ -290,6 +293,7 @@ void Dram::refresh_until(Channel& ch, std::int64_t n) {
     if (ch.closed_since < 0) ch.closed_since = end;
     ++stats_.refreshes;
     ++ch.stats.refreshes;
+    if (observer_) observer_->refresh(static_cast<std::uint32_t>(&ch - channels_.data()), start, 1, timing_.t_refi_cycles);
     const bool on_time = start == ch.next_refresh;
     ch.next_refresh += timing_.t_refi_cycles;
     if (on_time && ch.next_refresh <= n) {
@@ -303,6 +307,7 @@ void Dram::refresh_until(Channel& ch, std::int64_t n) {
         b.col_ready = last_end;
         b.pre_ready = last_end;
       }
+      if (observer_) observer_->refresh(static_cast<std::uint32_t>(&ch - channels_.data()), ch.next_refresh, more, timing_.t_refi_cycles);
       stats_.refreshes += static_cast<std::uint64_t>(more);
       ch.stats.refreshes += static_cast<std::uint64_t>(more);
       ch.next_refresh += more * timing_.t_refi_cycles;
@@ -372,6 +377,7 @@ void Dram::open_row(Channel& ch, Entry& e, std::int64_t n) {
   b.pre_ready = t_act + timing_.t_ras_cycles;
   e.outcome = o;
   account_activate(ch, o, e.cls);
+  if (observer_) observer_->activate(static_cast<std::uint32_t>(&ch - channels_.data()), e.bank, e.row, o == RowOutcome::Conflict ? t_bank - timing_.t_rp_cycles : -1, t_act);
 }
 
 std::int64_t Dram::next_column_cycle(const Channel& ch, const std::vector<Entry>& q, std::uint64_t hit_banks, std::int64_t n,
@@ -436,6 +442,7 @@ void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::in
   b.pre_ready = std::max(b.pre_ready, e.is_write ? end_c + timing_.t_wr_cycles : end_c);
 
   account_request(ch, e.outcome, e.is_write, e.cls, e.bytes, e.lines);
+  if (observer_) observer_->column(c, e.bank, e.row, e.column, e.is_write, n, bursts, e.lines, e.enqueued, start, end, timing_.controller);
   if (ch.readq.empty() && ch.writeq.empty()) {  // nothing left: idle once this data is through
     ch.idle = true;
     ch.idle_from = end;
