@@ -92,19 +92,20 @@ def cmd_dramsim3(outdir, tck_ns, trfc_cycles, first_cycle):
             hist[k] = hist.get(k, 0) + v
     n = sum(hist.values())
     mean = sum(int(k) * v for k, v in hist.items()) / n if n else 0
-    request_bytes = None
-    # Completion: the end of the first epoch by which every transaction was done.
+    # Completion: the end of the first epoch (each entry: one channel's counts over one epoch) by
+    # which every transaction was done.
     done_cycle = None
     try:
         epochs = json.load(open(f"{outdir}/dramsim3epoch.json"))
         per = {}
         for e in epochs:
             per.setdefault(int(e.get("epoch_num", 0)), []).append(e)
-        acc = 0
+        acc, end = 0, 0.0
         for num in sorted(per):
+            end += float(per[num][0].get("num_cycles", 0))
             acc += sum(float(e.get("num_reads_done", 0)) + float(e.get("num_writes_done", 0)) for e in per[num])
             if acc >= reads + writes:
-                done_cycle = max(float(e.get("num_cycles", 0)) for e in per[num])
+                done_cycle = end
                 break
     except (OSError, json.JSONDecodeError):
         pass
@@ -147,7 +148,7 @@ def cmd_tbdrsim_db(db, burst_bytes, trfc_ns):
     st = {n: v for n, v in rows}
     ft = con.execute("select value from stats where scope = 'frame/timing' and name = 'frame_time_ms' "
                      "and run_id = (select max(run_id) from stats)").fetchone()
-    chans = con.execute("select count(distinct scope) from stats where scope like 'mem/dram/channel%' "
+    chans = con.execute("select count(distinct scope) from stats where scope like 'mem/dram.ch%' "
                         "and run_id = (select max(run_id) from stats)").fetchone()[0] or 1
     frame_ns = ft[0] * 1e6 if ft else 0
     bursts = (st.get("read_bytes", 0) + st.get("write_bytes", 0)) / burst_bytes
@@ -189,8 +190,8 @@ def cmd_drampower5(path):
     }
     out["core_total_pj"] = sum(out.values())
     iface = j.get("InterfaceEnergy", {})
+    # The interface model needs impedances the memspec does not give (placeholders): reported, not compared.
     out["interface_pj"] = sum(float(v) for v in _leaves(iface)) * pj
-    out["total_pj"] = float(j.get("TotalEnergy", 0)) * pj
     kv(out)
 
 
@@ -198,7 +199,7 @@ def _leaves(x):
     if isinstance(x, dict):
         for v in x.values():
             yield from _leaves(v)
-    elif isinstance(x, (int, float)):
+    elif isinstance(x, (int, float)) and x == x:
         yield x
 
 

@@ -21,9 +21,11 @@ dcc_device() {
       # Two 32-bit channels of one x32 die each (the stock config: one 64-bit channel of two dies),
       # one rank, tbdrsim's address mapping (row | bank | channel | 4 KiB row), the refresh interval
       # under the key DRAMsim3 reads (the stock file spells it REFI, which DRAMsim3 ignores, falling
-      # back to 7800 cycles), queues of 32 lines of 64 B = 64 transactions of 32 B.
+      # back to 7800 cycles), a read queue of 32 transactions: with DRAMsim3's per-bank command
+      # queues (8 each) behind it, as many reads in flight as tbdrsim's 32-line queue (64 bursts)
+      # holds (docs/dram-cross-check.md: 68 vs 67 per channel on the random stream; 64 gives ~101).
       DS3_SETS=(system.channels=2 system.bus_width=32 system.channel_size=1024
-                system.address_mapping=rorabgbachco timing.tREFI=3120 system.trans_queue_size=64)
+                system.address_mapping=rorabgbachco timing.tREFI=3120 system.trans_queue_size=32)
       TCK_NS=1.25 TRFC_CYCLES=168 TRFC_NS=210 BURST_BYTES=32
       ;;
     lpddr4)
@@ -45,13 +47,13 @@ dcc_device() {
       # DRAMsim3 has no LPDDR4-3200 config: configs/LPDDR4_8Gb_x16_2400.ini with the same memspec
       # timings in cycles at 0.625 ns, 8 banks in one group (LPDDR4 has no bank groups; the stock
       # file has 2 x 4 with tCCD_L 6), tCCD 8 (BL16 on the bus), two 16-bit channels of one die,
-      # one rank, tbdrsim's mapping (row | bank | channel | 2 KiB row), 64-transaction queues.
+      # one rank, tbdrsim's mapping (row | bank | channel | 2 KiB row), 32-transaction queues (as for LPDDR3).
       DS3_INI=LPDDR4_8Gb_x16_2400.ini
       DS3_SETS=(dram_structure.bankgroups=1 dram_structure.banks_per_group=8 timing.tCK=0.625 timing.CL=28
                 timing.CWL=14 timing.tRCD=29 timing.tRP=29 timing.tRAS=68 timing.tRFC=448 timing.tREFI=6246
                 timing.tRRD_S=16 timing.tRRD_L=16 timing.tWTR_S=16 timing.tWTR_L=16 timing.tFAW=64 timing.tWR=29
                 timing.tRTP=12 timing.tCCD_S=8 timing.tCCD_L=8 timing.tXP=12 system.channels=2 system.bus_width=16
-                system.channel_size=1024 system.address_mapping=rorabgbachco system.trans_queue_size=64)
+                system.channel_size=1024 system.address_mapping=rorabgbachco system.trans_queue_size=32)
       TCK_NS=0.625 TRFC_CYCLES=448 TRFC_NS=280 BURST_BYTES=32
       ;;
     *) echo "unknown device $1" >&2; return 2 ;;
