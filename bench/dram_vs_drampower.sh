@@ -75,7 +75,10 @@ for dev in lpddr4 lpddr3; do
     out="$WORK/$dev.$s.dp.csv"
     dcc_export "$BUILD" "$WORK" "$s" drampower "$out" "${TB_DRAM[@]}"
     if [ "$dev" = lpddr4 ]; then
-      "$CLI" "$out" "$WORK/lpddr4_3200.json" --json "$out.json" > "$out.log" 2>&1
+      # DRAMPower 5.1's CLI once died with SIGSEGV on a frame trace and priced the same file on a
+      # second try (its CSV reader parses on a thread): one retry.
+      "$CLI" "$out" "$WORK/lpddr4_3200.json" --json "$out.json" > "$out.log" 2>&1 ||
+        "$CLI" "$out" "$WORK/lpddr4_3200.json" --json "$out.json" > "$out.log" 2>&1
       py drampower5 "$out.json" > "$out.dp"
     else
       # DRAMPower 4 prices one rank: one trace per channel (rank), "cycle,CMD,bank", REFA -> REF.
