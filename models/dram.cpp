@@ -537,10 +537,17 @@ void Dram::wakeup(std::uint32_t c) {
     // oldest request overrides that after kStarvationCap younger ones were served before it).
     const bool starving = ch.oldest_bypassed >= kStarvationCap;
     int prep = -1, eligible = 0;
+    // A starving oldest request may close a row this cycle's column command still reads: it waits a
+    // cycle, so that the precharge follows that command's data (and the new row's tRCD holds).
+    const std::int64_t issue_bank = issue >= 0 ? (*q)[static_cast<std::size_t>(issue)].bank : -1;
     for (std::uint32_t bank = 0; bank < banks_; ++bank) {
       const int i = first_need_[bank];
       if (i < 0 || (((wanted >> bank) & 1) != 0 && !(i == 0 && starving))) continue;
       ++eligible;
+      if (bank == issue_bank) {
+        ++eligible;  // come back next cycle for it
+        continue;
+      }
       if (prep < 0 || i < prep) prep = i;
     }
     const bool oldest_needs_row = first_need_[q->front().bank] == 0;

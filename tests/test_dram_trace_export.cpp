@@ -12,6 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "kernel/event_queue.hpp"
+#include "models/dram.hpp"
+#include "models/dram_trace_export.hpp"
+#include "models/hw_config.hpp"
 #include "cli_run.hpp"
 #include "db_query.hpp"
 #include "scratch_dir.hpp"
@@ -186,6 +190,70 @@ TEST(DramTraceExport, StreamBenchmarkOpensEachRowOnce) {
   EXPECT_EQ(sum.at("rd"), 8192.0);
   EXPECT_EQ(sum.at("read_lines"), 4096.0);
   EXPECT_NE(r.out.find("activates 64\n"), std::string::npos) << r.out;
+}
+
+// Replays a DRAMPower CSV on per-bank row state: column commands to a row that is not open, and
+// ones earlier than tRCD after their row's activate.
+struct ReplayFaults {
+  int not_open = 0, before_trcd = 0, columns = 0;
+};
+ReplayFaults replay(const std::string& path, std::int64_t t_rcd_cycles) {
+  ReplayFaults r;
+  std::map<std::pair<int, int>, std::pair<std::int64_t, std::int64_t>> open;  // (rank, bank) -> (row, ACT cycle)
+  std::ifstream in(path);
+  for (std::string line; std::getline(in, line);) {
+    const auto f = split(line, ',');
+    const std::int64_t cycle = std::stoll(f[0]);
+    const auto key = std::make_pair(std::stoi(f[2]), std::stoi(f[4]));
+    if (f[1] == "ACT") open[key] = {std::stoll(f[5]), cycle};
+    if (f[1] == "PRE") open.erase(key);
+    if (f[1] == "PREA") open.clear();  // one rank here
+    if (f[1] == "RD" || f[1] == "WR") {
+      ++r.columns;
+      const auto it = open.find(key);
+      if (it == open.end() || it->second.first != std::stoll(f[5])) {
+        ++r.not_open;
+      } else if (cycle < it->second.second + t_rcd_cycles) {
+        ++r.before_trcd;
+      }
+    }
+  }
+  return r;
+}
+
+// The FR-FCFS starvation cap (Dram::kStarvationCap = 16): the oldest read (row 1 of bank 0) waits
+// while 24 younger reads hit the open row 0 of the same bank; after 16 of them it may close row 0.
+// It used to be prepared in the very cycle a row-0 hit took its column command: the precharge came
+// before that hit's data, and the bank's column timer (set by the hit) let the next row-1 reads go
+// before the activate. Now it waits a cycle: every column command finds its row open, tRCD after
+// the activate (default preset: tRCD 18 ns = 15 cycles at 800 MHz), and row 1 is opened (one bank:
+// every activate after the first closes the previous row, so precharges = activates - 1).
+TEST(DramTraceExport, StarvationCapClosesARowOnlyAfterItsLastColumnCommand) {
+  HwConfig hw = resolve_config({}, {"dram.t_refi_ns=0"}).hw;
+  EventQueue eq;
+  Dram dram(hw.dram, hw.energy, eq);
+  dram.set_verify_scheduler(true);
+  DramTraceExport ex(DramTraceFormat::Drampower);
+  ex.attach(dram);
+  dram.set_observer(&ex);
+  // Row 0 of bank 0 open first; rows of bank 0 on channel 0 are 64 KiB apart (4 KiB x 2 ch x 8 banks).
+  ASSERT_TRUE(dram.enqueue(DramRequest{0, 64, false, DramClass::Other, {}}));
+  eq.run();
+  ASSERT_TRUE(dram.enqueue(DramRequest{65536, 64, false, DramClass::Other, {}}));
+  for (std::uint64_t i = 1; i <= 24; ++i) ASSERT_TRUE(dram.enqueue(DramRequest{i * 64, 64, false, DramClass::Other, {}}));
+  ASSERT_TRUE(dram.enqueue(DramRequest{65536 + 64, 64, false, DramClass::Other, {}}));
+  eq.run();
+  const auto dir = testing_scratch::scratch_dir("dram_export", "starve");
+  const std::string file = (dir / "c.csv").string();
+  ex.write(file);
+  const ReplayFaults r = replay(file, dram.timing().t_rcd_cycles);
+  EXPECT_EQ(dram.timing().t_rcd_cycles, 15);
+  EXPECT_EQ(r.columns, 2 * 27);  // 27 reads of 64 B, 2 bursts each
+  EXPECT_EQ(r.not_open, 0);
+  EXPECT_EQ(r.before_trcd, 0);
+  EXPECT_GE(ex.counts().act, 2u);
+  EXPECT_EQ(ex.counts().pre, ex.counts().act - 1);
+  EXPECT_GE(dram.stats().row_conflicts.value(), 1u);
 }
 
 // Wrong options exit 2 naming what is wrong, before running, and write nothing.
