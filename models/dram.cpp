@@ -1,4 +1,5 @@
 #include "models/dram.hpp"
+#include "models/dram_observer.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -262,6 +263,7 @@ bool Dram::enqueue(DramRequest&& req) {
   e.bank = d.bank;
   e.bytes = transfer_bytes(req.bytes);
   e.lines = lines;
+  e.column = d.column;
   e.cls = req.cls;
   e.is_write = req.is_write;
   q.push_back(e);
@@ -271,6 +273,7 @@ bool Dram::enqueue(DramRequest&& req) {
     first_enqueue_ = now;
   }
   ++in_flight_;
+  if (observer_) observer_->request(now, req.addr, e.bytes, e.is_write);
   kick(d.channel, e.arrival);
   return true;
 }
@@ -299,6 +302,7 @@ void Dram::refresh_until(Channel& ch, std::int64_t n) {
     if (ch.closed_since < 0) ch.closed_since = end;
     ++stats_.refreshes;
     ++ch.stats.refreshes;
+    if (observer_) observer_->refresh(static_cast<std::uint32_t>(&ch - channels_.data()), start, 1, timing_.t_refi_cycles);
     const bool on_time = start == ch.next_refresh;
     ch.next_refresh += timing_.t_refi_cycles;
     if (on_time && ch.next_refresh <= n) {
@@ -312,6 +316,7 @@ void Dram::refresh_until(Channel& ch, std::int64_t n) {
         b.col_ready = last_end;
         b.pre_ready = last_end;
       }
+      if (observer_) observer_->refresh(static_cast<std::uint32_t>(&ch - channels_.data()), ch.next_refresh, more, timing_.t_refi_cycles);
       stats_.refreshes += static_cast<std::uint64_t>(more);
       ch.stats.refreshes += static_cast<std::uint64_t>(more);
       ch.next_refresh += more * timing_.t_refi_cycles;
@@ -381,6 +386,7 @@ void Dram::open_row(Channel& ch, Entry& e, std::int64_t n) {
   b.pre_ready = t_act + timing_.t_ras_cycles;
   e.outcome = o;
   account_activate(ch, o, e.cls);
+  if (observer_) observer_->activate(static_cast<std::uint32_t>(&ch - channels_.data()), e.bank, e.row, o == RowOutcome::Conflict ? t_bank - timing_.t_rp_cycles : -1, t_act);
 }
 
 std::int64_t Dram::next_column_cycle(const Channel& ch, const std::vector<Entry>& q, std::uint64_t hit_banks, std::int64_t n,
@@ -445,6 +451,7 @@ void Dram::commit(std::uint32_t c, std::vector<Entry>& q, std::size_t i, std::in
   b.pre_ready = std::max(b.pre_ready, e.is_write ? end_c + timing_.t_wr_cycles : end_c);
 
   account_request(ch, e.outcome, e.is_write, e.cls, e.bytes, e.lines);
+  if (observer_) observer_->column(c, e.bank, e.row, e.column, e.is_write, n, bursts, e.lines, e.enqueued, start, end, timing_.controller);
   if (ch.readq.empty() && ch.writeq.empty()) {  // nothing left: idle once this data is through
     ch.idle = true;
     ch.idle_from = end;
@@ -539,10 +546,17 @@ void Dram::wakeup(std::uint32_t c) {
     // oldest request overrides that after kStarvationCap younger ones were served before it).
     const bool starving = ch.oldest_bypassed >= kStarvationCap;
     int prep = -1, eligible = 0;
+    // A starving oldest request may close a row this cycle's column command still reads: it waits a
+    // cycle, so that the precharge follows that command's data (and the new row's tRCD holds).
+    const std::int64_t issue_bank = issue >= 0 ? (*q)[static_cast<std::size_t>(issue)].bank : -1;
     for (std::uint32_t bank = 0; bank < banks_; ++bank) {
       const int i = first_need_[bank];
       if (i < 0 || (((wanted >> bank) & 1) != 0 && !(i == 0 && starving))) continue;
       ++eligible;
+      if (bank == issue_bank) {
+        ++eligible;  // come back next cycle for it
+        continue;
+      }
       if (prep < 0 || i < prep) prep = i;
     }
     const bool oldest_needs_row = first_need_[q->front().bank] == 0;

@@ -34,6 +34,8 @@
 
 namespace tbdr {
 
+class DramObserver;  // models/dram_observer.hpp
+
 /// One transfer between the chip and DRAM (normally one cache line; never crossing a row).
 struct DramRequest {
   std::uint64_t addr = 0;
@@ -214,6 +216,8 @@ class Dram final : public Unit {
   void set_schedule_callback(std::function<void(std::uint64_t tag, const DramSchedule&)> cb) {
     schedule_cb_ = std::move(cb);
   }
+  /// Reports every accepted request and every command to `o` (nullptr: none; not owned).
+  void set_observer(DramObserver* o) { observer_ = o; }
 
   /// Functional: the same row-buffer and statistics update as a timed request, without timing.
   RowOutcome access_functional(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls,
@@ -281,6 +285,7 @@ class Dram final : public Unit {
     std::uint32_t bank = 0;
     std::uint32_t bytes = 0;  // whole bursts
     std::uint32_t lines = 1;  // line transfers merged (statistics)
+    std::uint32_t column = 0; // byte offset in the row (the observer's column commands)
     std::uint64_t tag = 0;    // report_when_scheduled: the requester's tag
     DramClass cls = DramClass::Other;
     bool is_write = false;
@@ -424,6 +429,7 @@ class Dram final : public Unit {
   bool verify_scheduler_ = false;  // set_verify_scheduler
   std::function<void(std::uint32_t)> space_cb_;
   std::function<void(std::uint64_t, const DramSchedule&)> schedule_cb_;
+  DramObserver* observer_ = nullptr;  // set_observer
   std::vector<int> first_need_;  // scratch of wakeup(): per bank, the oldest request needing a row
 
   DramStats stats_;

@@ -5,6 +5,7 @@
 
 #include "kernel/event_queue.hpp"
 #include "kernel/random.hpp"
+#include "models/dram_observer.hpp"
 
 namespace tbdr {
 
@@ -17,9 +18,14 @@ constexpr std::uint64_t kRandomLines = (std::uint64_t{1} << 30) / kLineBytes;
 
 }  // namespace
 
-DramBenchResult run_dram_microbench(const HwConfig& hw, DramPattern pattern, std::uint64_t lines, std::uint64_t seed) {
+DramBenchResult run_dram_microbench(const HwConfig& hw, DramPattern pattern, std::uint64_t lines, std::uint64_t seed,
+                                    DramObserver* observer) {
   EventQueue eq;
   Dram dram(hw.dram, hw.energy, eq);
+  if (observer != nullptr) {
+    observer->attach(dram);
+    dram.set_observer(observer);
+  }
   // One in-order stream per channel: a refused request waits at its stream's head until the
   // controller reports space on that channel.
   std::vector<std::deque<std::uint64_t>> pending(dram.channels());

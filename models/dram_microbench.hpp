@@ -27,8 +27,10 @@ struct DramBenchResult {
   DramStats stats;        ///< the DRAM's statistics at the end (derived ones set)
 };
 
-/// Runs `lines` 64 B reads of `pattern` on a fresh DRAM of `hw` (seeded: the same figures every run).
-DramBenchResult run_dram_microbench(const HwConfig& hw, DramPattern pattern, std::uint64_t lines, std::uint64_t seed = 1);
+/// Runs `lines` 64 B reads of `pattern` on a fresh DRAM of `hw` (seeded: the same figures every run);
+/// `observer` (optional) sees its requests and commands (models/dram_observer.hpp).
+DramBenchResult run_dram_microbench(const HwConfig& hw, DramPattern pattern, std::uint64_t lines, std::uint64_t seed = 1,
+                                    DramObserver* observer = nullptr);
 
 /// The memspec's energy per bit for preset `p` loaded as `hw`: its dies on one of hw's channels,
 /// at hw's per-channel bandwidth, with hw's I/O energy where the memspec has no VDDQ currents.

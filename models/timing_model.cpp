@@ -1,5 +1,7 @@
 #include "models/timing_model.hpp"
 
+#include "models/dram_observer.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <deque>
@@ -80,6 +82,12 @@ class TimingSim final : public Unit {
     tex_rate_ = static_cast<double>(hw.texture.units) * hw.texture.texels_per_clock;
     raster_rate_ = static_cast<double>(hw.isp.samples_per_clock * hw.isp.raster_pipes);
     texture_line_bytes_ = static_cast<std::uint64_t>(hw.cache.texture.line_bytes);
+  }
+
+  /// Reports the DRAM's requests and commands to `o` (models/dram_observer.hpp).
+  void observe_dram(DramObserver* o) {
+    o->attach(mem_.dram());
+    mem_.dram().set_observer(o);
   }
 
   TimingResult run() {
@@ -803,13 +811,14 @@ class TimingSim final : public Unit {
 
 }  // namespace
 
-TimingResult run_timing(const HwConfig& hw, const FrameWork& work) {
+TimingResult run_timing(const HwConfig& hw, const FrameWork& work, DramObserver* dram_observer) {
   WorkFeed feed(work);
-  return run_timing(hw, feed);
+  return run_timing(hw, feed, dram_observer);
 }
 
-TimingResult run_timing(const HwConfig& hw, WorkFeed& feed) {
+TimingResult run_timing(const HwConfig& hw, WorkFeed& feed, DramObserver* dram_observer) {
   TimingSim sim(hw, feed);
+  if (dram_observer != nullptr) sim.observe_dram(dram_observer);
   return sim.run();
 }
 

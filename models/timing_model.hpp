@@ -84,10 +84,13 @@ struct TimingResult {
 
 class WorkFeed;
 
-/// Runs the timing model over a frame's work.
-TimingResult run_timing(const HwConfig& hw, const FrameWork& work);
+class DramObserver;  // models/dram_observer.hpp
+
+/// Runs the timing model over a frame's work; `dram_observer` (optional) sees the DRAM's requests
+/// and commands.
+TimingResult run_timing(const HwConfig& hw, const FrameWork& work, DramObserver* dram_observer = nullptr);
 /// Runs the timing model over a frame's work as `feed` hands it over (models/work_feed.hpp): on
 /// its own thread while the functional run publishes the commands, with the same result.
-TimingResult run_timing(const HwConfig& hw, WorkFeed& feed);
+TimingResult run_timing(const HwConfig& hw, WorkFeed& feed, DramObserver* dram_observer = nullptr);
 
 }  // namespace tbdr

@@ -889,7 +889,7 @@ TEST(DramTest, SchedulerSinglePassFindsTheRowHitsASecondPassWould) {
     EXPECT_EQ(d.stats().completed.value(), 4000u);
   }
   // Few rows, many hits per row: the oldest request is bypassed until the cap lets it close a
-  // row younger requests still want (the prepared bank is then the issued one's).
+  // row younger requests still want (a cycle after the last column command to that row).
   EventQueue eq;
   Dram d(hw.dram, hw.energy, eq);
   d.set_verify_scheduler(true);

@@ -36,6 +36,7 @@ const std::vector<CliCommand>& cli_commands() {
        cmd_report},
       {"plot", "Draw a results database as a PNG: techniques, dram, energy, passes, scaling, sensitivity, delta, "
                "tiles (python3 + matplotlib)", cmd_plot},
+      {"dram-bench", "Run a DRAM microbenchmark (stream or random reads) and print its figures; --memory-trace exports it", cmd_dram_bench},
       {"validate", "Check the simulator against published figures (Bjørge, Burns & Hunt, Imagination's HSR and "
                    "on-chip memory figures, rooflines, Olsson et al., DRAM energy): published vs simulated",
        cmd_validate},

@@ -17,6 +17,8 @@
 #include "analysis/results_db.hpp"
 #include "app/run_driver.hpp"
 #include "app/stats_export.hpp"
+#include "app/memory_trace_options.hpp"
+#include "models/dram_trace_export.hpp"
 #include "tbdrsim_version.hpp"
 #include "scene/camera.hpp"
 #include "scene/lights.hpp"
@@ -148,6 +150,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
       "stats", po::value<std::string>(), "write the run's statistics to FILE (gem5 stats.txt text; JSON with units and descriptions when FILE ends .json)")(
       "timeline", po::value<std::string>(), "write the run's timeline to FILE (Chrome/Perfetto trace-event JSON)")(
       "quiet,q", "print nothing but errors");
+  add_memory_trace_options(desc);
   add_threads_option(desc, "the cores this process may use, " + std::to_string(default_thread_count()) + " here");
   po::variables_map vm;
   if (!parse_command_options("run", args, desc, nullptr, vm, out)) return 0;
@@ -162,7 +165,10 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   for (const char* file : {"stats", "timeline"}) {
     if (vm.count(file)) check_output_file(std::string("--") + file, vm[file].as<std::string>());  // before the run
   }
+  std::unique_ptr<DramTraceExport> memory_trace = memory_trace_from_options(vm);  // checked before the run
+  req.dram_observer = memory_trace.get();
   const RunOutcome outcome = run_one(req);
+  if (memory_trace) memory_trace->write(vm["memory-trace"].as<std::string>());
   if (vm.count("stats") || vm.count("timeline")) {
     const ResultsDb db(req.db_path, ResultsDb::QueryOnly{});
     if (vm.count("stats")) write_stats_file(db, outcome.run_id, vm["stats"].as<std::string>());

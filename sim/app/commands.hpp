@@ -21,6 +21,7 @@ int cmd_sweep(const std::vector<std::string>& args, std::ostream& out, std::ostr
 int cmd_merge(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_report(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_validate(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+int cmd_dram_bench(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_plot(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_import(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 

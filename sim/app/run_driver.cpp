@@ -304,7 +304,7 @@ RunOutcome run_one(const RunRequest& req) {
       const double c = thread_cpu_seconds();
       feed.frame();  // the frame has begun: its tile helpers exist, with every CPU the caller had
       placement->keep_apart();
-      TimingResult r = run_timing(req.config.hw, feed);
+      TimingResult r = run_timing(req.config.hw, feed, req.dram_observer);
       timing_thread_cpu = thread_cpu_seconds() - c;
       return r;
     });
@@ -371,7 +371,7 @@ RunOutcome run_one(const RunRequest& req) {
     outcome.cpu_seconds = c_functional;
     const auto t_timing = std::chrono::steady_clock::now();
     const double c_timing = thread_cpu_seconds();
-    outcome.timing = run_timing(req.config.hw, outcome.frame.work);
+    outcome.timing = run_timing(req.config.hw, outcome.frame.work, req.dram_observer);
     outcome.timing_seconds = seconds_since(t_timing);
     outcome.timing_cpu_seconds = thread_cpu_seconds() - c_timing;
   }

@@ -16,6 +16,8 @@
 
 namespace tbdr {
 
+class DramObserver;  // models/dram_observer.hpp
+
 /// What to simulate and where the results go.
 struct RunRequest {
   ResolvedConfig config;
@@ -25,6 +27,7 @@ struct RunRequest {
   std::string command_line;  ///< recorded in the runs table
   unsigned threads = 1;      ///< threads the frame's tiles render on (FrameOptions::threads); no figure depends on it
   bool summary_figures = true;  ///< read RunOutcome::derived back from the database (for print_run_summary)
+  DramObserver* dram_observer = nullptr;  ///< sees the timing model's DRAM requests and commands (--memory-trace); not owned
 };
 
 /// What a run produced.
