@@ -11,7 +11,8 @@ dcc_device() {
   case "$1" in
     lpddr3)
       # The default preset, LPDDR3-1600 2x32 (one MICRON_4Gb_LPDDR3-1600_32bit_A die per channel).
-      TB_DRAM=()
+      # Power-down off: the exports carry no power-down commands (the preset's default enters it).
+      TB_DRAM=(--set dram.powerdown_after_ns=0)
       # DRAMsim3 configs/LPDDR3_8Gb_x32_1600.ini (tCK 1.25 ns) in ns: tRCD = tRP = 15, CL 12, tRAS 34,
       # tWR 12, tRRD 8, tFAW 40, tWTR 6, tRFC 168, tREFI 3120 cycles.
       TB_MATCH=(--set dram.t_rcd_ns=18.75 --set dram.t_rp_ns=18.75 --set dram.t_cl_ns=15 --set dram.t_ras_ns=42.5
@@ -36,8 +37,8 @@ dcc_device() {
       # 2.25 mA x 1.8 V + 30 mA x 1.1 V + 0.75 mA x 1.1 V = 37.875 mW; precharge standby
       # 2.0 x 1.8 + 27 x 1.1 + 0.75 x 1.1 = 34.125 mW; refresh ((10 - 2.25) x 1.8 + (90 - 30) x 1.1) mW
       # x 280 ns = 22.386 nJ; activate + precharge 1.2 nJ; read 5.3, write 3.9, I/O 3.2 pJ/bit.
-      TB_DRAM=(--set dram.channels=2 --set dram.banks=8 --set dram.row_bytes=2048 --set dram.burst_bytes=32
-               --set dram.bandwidth_gbps=12.8 --set dram.clock_mhz=1600 --set dram.t_rcd_ns=18.125
+      TB_DRAM=(--set dram.powerdown_after_ns=0 --set dram.channels=2 --set dram.banks=8 --set dram.row_bytes=2048 --set dram.burst_bytes=32
+               --set dram.clock_mhz=1600 --set dram.transfers_per_clock=2 --set dram.bus_width_bits=16 --set dram.t_rcd_ns=18.125
                --set dram.t_rp_ns=18.125 --set dram.t_cl_ns=17.5 --set dram.t_ras_ns=42.5 --set dram.t_wr_ns=18.125
                --set dram.t_rrd_ns=10 --set dram.t_faw_ns=40 --set dram.t_wtr_ns=10 --set dram.t_rfc_ns=280
                --set dram.t_refi_ns=3903.75 --set dram.active_standby_mw=37.875 --set dram.precharge_standby_mw=34.125

@@ -780,6 +780,58 @@ void dram_memspecs(Validator& v, std::vector<AnchorRow>& rows, const HwConfig& v
                   pj_per_bit >= frame_low && pj_per_bit <= frame_high});
 }
 
+/// One figure of the DRAM model beside another project's tool run on the same request or command
+/// stream, as bench/dram_vs_dramsim3.sh and bench/dram_vs_drampower.sh measured them (stored here;
+/// the scripts re-check them against the user's build of the tool: docs/dram-cross-check.md).
+struct CrossCheck {
+  const char* tool;       ///< the tool and the commit built
+  const char* figure;     ///< what was compared, on which DRAM and stream
+  double reference = 0;   ///< the tool's figure
+  double tbdrsim = 0;     ///< the simulator's, at the commit below
+  const char* unit;
+  double tolerance = 0;   ///< the relative difference that holds (the issue's 10 % timing, 5 % energy)
+};
+constexpr const char* kDramsim3 = "DRAMsim3 29817593b3389f1337235d63cac515024ab8fd6e";
+constexpr const char* kDrampower4 = "DRAMPower 4.1 1ddc48a3 (LPDDR3)";
+constexpr const char* kDrampower5 = "DRAMPower 5.1 5ed2d6e95e10c64ea83e9505c85d1828aeaf49ec (LPDDR4)";
+constexpr CrossCheck kDramCrossChecks[] = {
+    {kDramsim3, "LPDDR3-1600 2x32, 65536-line read stream: bandwidth", 11.94, 11.94, "GB/s", 0.10},
+    {kDramsim3, "LPDDR3-1600 2x32, 16384 random 64 B lines: bandwidth", 9.321, 9.298, "GB/s", 0.10},
+    {kDramsim3, "LPDDR3-1600 2x32, random lines: mean read latency (queue depths matched)", 470.2, 462.9, "ns", 0.10},
+    {kDramsim3, "LPDDR3-1600 2x32, read stream: row hits per burst", 0.9903, 0.9901, "", 0.10},
+    {kDramsim3, "LPDDR3-1600 2x32, deferred 1080p frame's DRAM stream: bandwidth", 8.956, 8.969, "GB/s", 0.10},
+    {kDramsim3, "LPDDR3-1600 2x32, deferred 1080p frame: refresh share of time", 0.0538, 0.0538, "", 0.10},
+    // Not within 10 %: on a DRAM-bound frame replayed at tbdrsim's acceptance times the latency is
+    // queue occupancy (Little's law), and DRAMsim3's queues stay emptier for reasons not yet isolated
+    // (docs/dram-cross-check.md): a frame's DRAM latency is not yet checked by another tool.
+    {kDramsim3, "LPDDR3-1600 2x32, deferred 1080p frame: mean read latency", 237.1, 530.8, "ns", 0.10},
+    {kDramsim3, "LPDDR4-3200 2x16, 16384 random 64 B lines: bandwidth", 11.26, 11.11, "GB/s", 0.10},
+    {kDramsim3, "LPDDR4-3200 2x16, forward_plus 1080p frame's DRAM stream: bandwidth", 10.64, 10.69, "GB/s", 0.10},
+    {kDrampower4, "LPDDR3-1600 2x32, deferred 1080p frame's commands: core energy", 5.6528e9, 5.6536e9, "pJ", 0.05},
+    {kDrampower4, "LPDDR3-1600 2x32, random lines' commands: core energy", 1.2558e8, 1.2919e8, "pJ", 0.05},
+    {kDrampower5, "LPDDR4-3200 2x16, deferred 1080p frame's commands: core energy", 4.5025e9, 4.545e9, "pJ", 0.05},
+    {kDrampower5, "LPDDR4-3200 2x16, read stream's commands: core energy", 2.1017e8, 2.1199e8, "pJ", 0.05},
+};
+
+/// The stored cross-checks as rows: independent (another project's tool on the same stream).
+void dram_cross_checks(std::vector<AnchorRow>& rows) {
+  for (const auto& c : kDramCrossChecks) {
+    const double diff = c.tbdrsim / c.reference - 1.0;
+    const auto num = [](double v) {
+      std::ostringstream o;
+      o << std::setprecision(4) << v;
+      return o.str();
+    };
+    rows.push_back({std::string(c.tool) + ": " + c.figure, num(c.reference) + (*c.unit ? " " : "") + c.unit,
+                    num(c.tbdrsim) + (*c.unit ? " " : "") + c.unit + " (" + (diff >= 0 ? "+" : "") +
+                        fixed(100.0 * diff, 1) + " %)",
+                    "stored by bench/dram_vs_dramsim3.sh / bench/dram_vs_drampower.sh at tbdrsim 4ef31f0 (power-down "
+                    "off: the exports carry no power-down commands); holds within " +
+                        fixed(100.0 * c.tolerance, 0) + " %; docs/dram-cross-check.md explains every difference",
+                    "shape", std::abs(diff) <= c.tolerance});
+  }
+}
+
 /// Published figures looked for and not turned into rows, each with the reason.
 const char* kNotReproduced =
     "\n## Published figures not reproduced here, and why\n\n"
@@ -887,6 +939,11 @@ int cmd_validate(const std::vector<std::string>& args, std::ostream& out, std::o
   olsson(v, rows, config.hw);
   label_rows(rows, first, Basis::Independent,
              "Olsson, Billeter & Assarsson's measured shading times (compared in direction; the ratio stated)");
+  first = rows.size();
+  dram_cross_checks(rows);
+  label_rows(rows, first, Basis::Independent,
+             "DRAMsim3 and DRAMPower, built from their repositories and run on the simulator's exported request and "
+             "command streams (figures stored; the bench scripts re-check them)");
   first = rows.size();
   dram_memspecs(v, rows, config.hw);
   label_rows(rows, first, Basis::SelfConsistency,
