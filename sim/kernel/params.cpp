@@ -9,7 +9,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <cerrno>
 #include <climits>
+#include <system_error>
 #include <unistd.h>
 
 #include <boost/program_options/options_description.hpp>
@@ -282,13 +284,38 @@ void check_path_length(const std::string& path, const std::string& what) {
   }
 }
 
+void check_input_file(const std::string& path, const std::string& what, bool allow_special) {
+  namespace fs = std::filesystem;
+  check_path_length(path, what);
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  const auto why = [](const std::error_code& e) -> std::string {
+    if (e == std::errc::permission_denied || e == std::errc::operation_not_permitted) {
+      return "permission denied (the file, or a folder on its path, is not readable)";
+    }
+    if (e == std::errc::too_many_symbolic_link_levels) return "too many levels of symbolic links (a symlink loop)";
+    if (e == std::errc::no_such_file_or_directory) return "not found";
+    if (e == std::errc::not_a_directory) return "not found (a part of its path is not a folder)";
+    return e.message();
+  };
+  if (ec) throw InputError(path, "cannot read " + what + ": " + why(ec));
+  if (st.type() == fs::file_type::not_found) throw InputError(path, "cannot read " + what + ": not found");
+  if (st.type() == fs::file_type::directory) throw InputError(path, "cannot read " + what + ": it is a folder, not a file");
+  if (st.type() != fs::file_type::regular && !allow_special) {
+    throw InputError(path, "cannot read " + what + ": not a regular file (a device, FIFO or socket)");
+  }
+  if (::access(path.c_str(), R_OK) != 0) {
+    throw InputError(path, "cannot read " + what + ": " + why(std::error_code(errno, std::generic_category())));
+  }
+}
+
 std::string_view strip_utf8_bom(std::string_view text) {
   if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
   return text;
 }
 
 std::string read_text_input(const std::string& path, const std::string& what, std::uint64_t max_bytes) {
-  check_path_length(path, what);
+  check_input_file(path, what, /*allow_special=*/false);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open " + what);
   in.seekg(0, std::ios::end);

@@ -1064,16 +1064,56 @@ void Reader::check_world(const Line& l, std::string_view key, const glm::vec3& v
       fail(l.number, std::string(key) + "=" + require(l, key) + " has a component beyond +-1e+09 world units (docs/limits.md)");
 }
 
+/// std::getline with a bound: reads the next line of `in` into `out` (without its '\n') and returns
+/// false at the end of the input. A line longer than `max_bytes` stops the read as soon as the bound
+/// is passed (`too_long` set), so a stream without newlines (/dev/zero) is never held whole.
+bool read_line_bounded(std::istream& in, std::string& out, std::uint64_t max_bytes, bool& too_long) {
+  // Chunks of this many bytes are read at once (istream::getline scans them for the newline).
+  constexpr std::streamsize kChunkBytes = 1 << 16;
+  char buf[kChunkBytes];
+  out.clear();
+  too_long = false;
+  bool any = false;
+  for (;;) {
+    in.getline(buf, kChunkBytes);
+    const std::streamsize n = in.gcount();
+    if (!in.fail()) {  // a whole line: the newline was extracted and counted
+      out.append(buf, static_cast<std::size_t>(n > 0 ? n - 1 : 0));
+      too_long = out.size() > max_bytes;
+      return true;
+    }
+    if (in.bad()) return false;
+    any |= n > 0;
+    out.append(buf, static_cast<std::size_t>(n));
+    if (in.eof()) return any;  // the last line has no newline (or the input ended)
+    in.clear();                // the chunk filled without a newline: read on
+    if (out.size() > max_bytes) {
+      too_long = true;
+      return true;
+    }
+  }
+}
+
+/// The longest trace line read (bytes), checked while the line is read: the longest line a
+/// generator writes is a draw whose `lights=` lists 1,000,000 scattered lights one by one (at most
+/// 7 bytes each, 6.9 MB); the bound keeps a stream without newlines (/dev/zero) to 16 MiB held.
+constexpr std::uint64_t kMaxTraceLineBytes = 16ull << 20;
+
 Trace Reader::run(std::istream& in) {
   std::string text;
   int number = 0;
   bool have_header = false;
   Line l;
   std::uint64_t bytes = 0;
-  while (std::getline(in, text)) {
+  bool too_long = false;
+  while (read_line_bounded(in, text, std::min(kMaxTraceLineBytes, kMaxTraceBytes - std::min(bytes, kMaxTraceBytes)),
+                           too_long)) {
     ++number;
     bytes += text.size() + 1;
-    if (bytes > kMaxTraceBytes + 1)
+    if (too_long && text.size() > kMaxTraceLineBytes)
+      fail(number, "line " + std::to_string(number) + " is longer than " + std::to_string(kMaxTraceLineBytes) +
+                       " bytes, the longest accepted (docs/limits.md)");
+    if (too_long || bytes > kMaxTraceBytes + 1)
       fail(number, "the trace is longer than " + std::to_string(kMaxTraceBytes) + " bytes, the largest accepted (docs/limits.md)");
     if (!text.empty() && text.back() == '\r') text.pop_back();
     if (!have_header) {
@@ -1096,7 +1136,8 @@ Trace Reader::run(std::istream& in) {
 Trace parse_trace(std::istream& in, const std::string& name) { return Reader(name).run(in); }
 
 Trace read_trace(const std::string& path) {
-  check_path_length(path, "trace");
+  // Streams (a FIFO, /dev/stdin) are read too: the bounded line reader keeps them to kMaxTraceBytes.
+  check_input_file(path, "trace", /*allow_special=*/true);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open the trace file");
   std::error_code ec;
