@@ -5,6 +5,11 @@
 // too large to decode.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -25,6 +30,38 @@ const testing_scratch::ScratchCleanup cleanup{"input_validation"};
 using testing_support::run_cli;
 
 bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+/// What one tbdrsim process ended with: its exit code and its peak resident memory (KiB).
+struct ChildRun {
+  int code = -1;
+  long peak_kib = 0;
+};
+
+/// Runs the tbdrsim binary with `args` (output to /dev/null) and reports its peak memory
+/// (getrusage of the child, ru_maxrss).
+ChildRun run_binary(const std::vector<std::string>& args) {
+  std::vector<std::string> all = {TBDRSIM_BINARY};
+  all.insert(all.end(), args.begin(), args.end());
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int null = open("/dev/null", O_WRONLY);
+    dup2(null, 1);
+    dup2(null, 2);
+    std::vector<char*> argv;
+    for (auto& a : all) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  rusage usage{};
+  ChildRun r;
+  if (pid > 0 && wait4(pid, &status, 0, &usage) == pid) {
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    r.peak_kib = usage.ru_maxrss;
+  }
+  return r;
+}
 
 /// A glTF with only its asset and `extras` nested `depth` arrays deep (on line 2).
 std::string nested_gltf(int depth, char open = '[', char close = ']') {
@@ -185,6 +222,34 @@ TEST(Hardening, TraceStreamWithoutNewlinesStopsAtTheLineBound) {
   EXPECT_FALSE(fs::exists(dir / "r.db"));
 }
 
+TEST(Hardening, TraceStreamPeakMemoryStaysWithinTheLineBound) {
+  // A separate process, so its peak is its own: 16 MiB of line and the binary (56 MB measured;
+  // 16.8 GB before the bound, the whole of /dev/zero up to the reader's 4 GB string).
+  const fs::path dir = dir_for("dev_zero_peak");
+  const ChildRun r = run_binary({"run", "--trace", "/dev/zero", "--db", (dir / "r.db").string(), "--quiet"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_LT(r.peak_kib, 100 * 1024) << "peak " << r.peak_kib << " KiB";
+  EXPECT_FALSE(fs::exists(dir / "r.db"));
+}
+
+TEST(Hardening, SweepPointsCostHundredsOfBytesNotKilobytes) {
+  // A sweep keeps a configuration's hash, not its resolved parameters (11.5 KB each before: the
+  // issue's 999,000-point dry run reached 8.4 GB). 20,000 points against 1: the difference in
+  // peak memory per point stays under 2 KB (about 650 bytes measured; 11.5 KB before).
+  const fs::path dir = dir_for("sweep_memory");
+  write_file(dir / "t.trace", trace_text(kCamera, "", kPass));
+  write_file(dir / "one.ini", "[sweep]\ntrace = t.trace\n");
+  write_file(dir / "many.ini", "[sweep]\ntrace = t.trace\n[vary]\ngeometry.vertex_shader_alu_ops = 1..200\n"
+                               "dram.t_rcd_ns = 1..100\n");
+  const ChildRun one = run_binary({"sweep", (dir / "one.ini").string(), "--db", (dir / "s.db").string(), "--dry-run"});
+  const ChildRun many = run_binary({"sweep", (dir / "many.ini").string(), "--db", (dir / "s.db").string(), "--dry-run"});
+  ASSERT_EQ(one.code, 0);
+  ASSERT_EQ(many.code, 0);
+  const double per_point_bytes = static_cast<double>(many.peak_kib - one.peak_kib) * 1024.0 / 20000.0;
+  EXPECT_LT(per_point_bytes, 2048.0) << one.peak_kib << " KiB for 1 point, " << many.peak_kib << " KiB for 20,000";
+  EXPECT_FALSE(fs::exists(dir / "s.db"));
+}
+
 TEST(Hardening, PathsThatCannotBeReadAreRefusedSayingWhy) {
   const fs::path dir = dir_for("paths");
   fs::create_directories(dir / "folder");
@@ -204,6 +269,14 @@ TEST(Hardening, PathsThatCannotBeReadAreRefusedSayingWhy) {
   r = run_cli({"scene", "info", (dir / "loop").string()});
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_TRUE(has(r.err, "symlink loop")) << r.err;
+  // A trace whose scene is a folder: the trace's scene line is named, and why.
+  std::string text = trace_text(kCamera, "", kPass);
+  text.replace(text.find("scene atrium detail=1"), 21, "scene gltf path=.");
+  write_file(dir / "g.trace", text);
+  r = run_cli({"run", "--trace", (dir / "g.trace").string(), "--db", (dir / "r.db").string(), "--quiet"});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(has(r.err, "g.trace:2: scene")) << r.err;
+  EXPECT_TRUE(has(r.err, "it is a folder, not a file")) << r.err;
   EXPECT_FALSE(fs::exists(dir / "r.db"));
 }
 

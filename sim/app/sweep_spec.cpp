@@ -213,6 +213,7 @@ void check_point_configs(const SweepSpec& spec, const std::map<std::string, std:
   for (std::size_t a : relevant) combos *= spec.axes[a].values.size();
   const auto& reg = hw_params();
   const ParamTable& table = reg.table();
+  std::map<std::vector<std::string>, ResolvedParams> bases;
   for (std::size_t c = 0; c < combos; ++c) {
     std::vector<std::string> configs = spec.base_configs;
     std::vector<std::string> sets = spec.sets;
@@ -233,7 +234,11 @@ void check_point_configs(const SweepSpec& spec, const std::map<std::string, std:
     }
     ResolvedParams params;
     try {
-      params = table.resolve(configs, sets);
+      // Config files are read once per list of them; each combination is a copy with its overrides.
+      auto base = bases.find(configs);
+      if (base == bases.end()) base = bases.emplace(configs, table.resolve(configs, {})).first;
+      params = base->second;
+      for (const auto& set : sets) table.apply_override(params, set);
     } catch (const InputError& e) {
       throw InputError(e.where().rfind("--set ", 0) == 0 ? spec.path : e.where(),
                        (label.empty() ? "" : "the point " + label + ": ") + bare_message(e));

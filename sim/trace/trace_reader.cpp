@@ -1036,6 +1036,13 @@ void Reader::on_barrier(const Line& l) {
   trace_.commands.emplace_back(std::move(b));
 }
 
+/// The most workgroups one dispatch may launch per pixel of its frame. Every kernel works on the
+/// frame's pixels, tiles or clusters (docs/kernels.md); the most a generator launches is
+/// cluster_light_assign with 4-pixel tiles (1/16 of a pixel each) and 4,096 depth slices: 256 per
+/// pixel. Groups beyond it find no work, and the count was recorded as if they ran
+/// (65535^3 = 2.8e14 workgroups on a 320x180 frame).
+constexpr std::uint64_t kMaxWorkgroupsPerPixel = 256;
+
 void Reader::finish(int last_line) {
   if (current_pass_)
     fail(pass().line, "pass " + q(pass().name) + " is not closed (missing 'end' before the end of the file)");
@@ -1043,6 +1050,18 @@ void Reader::finish(int last_line) {
   if (!have_scene_) fail(at, "missing required 'scene' line");
   if (!have_frame_) fail(at, "missing required 'frame' line");
   if (!have_camera_) fail(at, "missing required 'camera' line");
+  const std::uint64_t pixels = static_cast<std::uint64_t>(trace_.frame.width) * static_cast<std::uint64_t>(trace_.frame.height);
+  for (const auto& cmd : trace_.commands) {
+    const auto* d = std::get_if<DispatchCmd>(&cmd);
+    if (d == nullptr) continue;
+    const std::uint64_t groups = std::uint64_t{d->groups[0]} * d->groups[1] * d->groups[2];
+    if (groups > kMaxWorkgroupsPerPixel * pixels)
+      fail(d->line, "dispatch of " + std::to_string(groups) + " workgroups on a " + std::to_string(trace_.frame.width) +
+                        "x" + std::to_string(trace_.frame.height) + " frame; at most " +
+                        std::to_string(kMaxWorkgroupsPerPixel) + " per pixel (" +
+                        std::to_string(kMaxWorkgroupsPerPixel * pixels) +
+                        "): the kernels work on the frame's pixels, tiles and clusters (docs/limits.md)");
+  }
   const std::uint64_t light_bytes = kLightBufferBytesPerLight * trace_.lights.size();
   for (const auto& b : trace_.buffers) {
     if (b.content == BufferContent::Lights && b.bytes < light_bytes)
