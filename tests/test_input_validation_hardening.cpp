@@ -63,10 +63,10 @@ ChildRun run_binary(const std::vector<std::string>& args) {
   return r;
 }
 
-/// A glTF with only its asset and `extras` nested `depth` arrays deep (on line 2).
-std::string nested_gltf(int depth, char open = '[', char close = ']') {
+/// A glTF with only its asset and `extras` nested `depth` arrays (or objects) deep, on line 2.
+std::string nested_gltf(int depth, bool objects = false) {
   std::string inner;
-  if (open == '[') {
+  if (!objects) {
     inner = std::string(static_cast<std::size_t>(depth), '[') + std::string(static_cast<std::size_t>(depth), ']');
   } else {
     for (int i = 0; i < depth; ++i) inner += "{\"a\":";
@@ -99,7 +99,7 @@ TEST(Hardening, GltfNestedPastTheLimitExitsTwoNamingTheLine) {
   EXPECT_TRUE(has(r.err, "d.gltf:2")) << r.err;  // the line the depth passes 256
   EXPECT_TRUE(has(r.err, "deeper than 256")) << r.err;
   // Objects nest the same way; a '[' inside a string is not nesting.
-  write_file(dir / "o.gltf", nested_gltf(15000, '{', '}'));
+  write_file(dir / "o.gltf", nested_gltf(15000, true));
   r = run_cli({"scene", "info", (dir / "o.gltf").string()});
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_TRUE(has(r.err, "o.gltf:2")) << r.err;
@@ -206,7 +206,7 @@ TEST(Hardening, SweepPointBreakingAConstraintIsRefusedAtReadTime) {
                             "cache.texture.size_bytes = 12288, 10000\n");
   r = run_cli({"sweep", (dir / "z.ini").string(), "--db", db.string(), "--dry-run"});
   EXPECT_EQ(r.code, 2) << r.err;
-  EXPECT_TRUE(has(r.err, "z.ini:7: the point cache.texture.size_bytes=10000")) << r.err;
+  EXPECT_TRUE(has(r.err, "z.ini:6: the point cache.texture.size_bytes=10000")) << r.err;
   EXPECT_TRUE(has(r.err, "cache.texture.ways from " + (dir / "z.ini").string() + ":4")) << r.err;
   EXPECT_FALSE(fs::exists(db));
 }
@@ -258,6 +258,7 @@ TEST(Hardening, PathsThatCannotBeReadAreRefusedSayingWhy) {
   EXPECT_TRUE(has(r.err, "it is a folder, not a file")) << r.err;
   // A symlink loop, as a trace, a config and a scene.
   fs::create_symlink(dir / "loop", dir / "loop");
+  fs::create_symlink(dir / "loop.gltf", dir / "loop.gltf");
   r = run_cli({"run", "--trace", (dir / "loop").string(), "--db", (dir / "r.db").string(), "--quiet"});
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_TRUE(has(r.err, "symlink loop")) << r.err;
@@ -266,12 +267,12 @@ TEST(Hardening, PathsThatCannotBeReadAreRefusedSayingWhy) {
                (dir / "r.db").string(), "--quiet"});
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_TRUE(has(r.err, "symlink loop")) << r.err;
-  r = run_cli({"scene", "info", (dir / "loop").string()});
+  r = run_cli({"scene", "info", (dir / "loop.gltf").string()});
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_TRUE(has(r.err, "symlink loop")) << r.err;
   // A trace whose scene is a folder: the trace's scene line is named, and why.
   std::string text = trace_text(kCamera, "", kPass);
-  text.replace(text.find("scene atrium detail=1"), 21, "scene gltf path=.");
+  text.replace(text.find("scene atrium detail=1"), 21, "scene gltf path=. hash=0123456789abcdef");
   write_file(dir / "g.trace", text);
   r = run_cli({"run", "--trace", (dir / "g.trace").string(), "--db", (dir / "r.db").string(), "--quiet"});
   EXPECT_EQ(r.code, 2) << r.err;
