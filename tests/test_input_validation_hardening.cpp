@@ -305,6 +305,21 @@ TEST(Hardening, SweepGlobMeetingAnUnreadableEntrySaysPermissionDenied) {
   EXPECT_FALSE(fs::exists(dir / "r.db"));
 }
 
+TEST(Hardening, BytesOfTheInputQuotedInAMessageAreEscaped) {
+  // A NUL byte cut the message short (what() is a C string) and binary bytes reached the terminal raw.
+  const fs::path dir = dir_for("escape");
+  write_file(dir / "n.trace", std::string("tbdrsim-trace 2\nscene atrium detail=1\0zz\xff\xfe\n", 43));
+  auto r = run_cli({"run", "--trace", (dir / "n.trace").string(), "--db", (dir / "r.db").string(), "--quiet"});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(has(r.err, "n.trace:2:")) << r.err;
+  EXPECT_TRUE(has(r.err, "1\\x00zz\\xff\\xfe")) << r.err;  // the whole value, escaped
+  write_file(dir / "b.ini", std::string("[gpu]\ncore_clock_mhz = 7\x01\xc3\n", 27));
+  r = run_cli({"params", "--config", (dir / "b.ini").string()});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(has(r.err, "b.ini:2: parameter 'gpu.core_clock_mhz' = '7\\x01\\xc3'")) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "r.db"));
+}
+
 TEST(Hardening, ImageOfAFormatTheLoaderDoesNotReadIsNotDecoded) {
   // The 16384 x 16384 RLE TGA (1 GiB as RGBA8) used 2.38 GB in `scene info` although the
   // loader counts it as 0 bytes: it is no longer decoded. Here 2^21 RLE packets of 128 pixels each.

@@ -19,6 +19,7 @@
 
 #include "kernel/errors.hpp"
 #include "kernel/hash.hpp"
+#include "kernel/text_escape.hpp"
 
 namespace tbdr {
 
@@ -233,13 +234,13 @@ void apply_one(const ParamTable& table, ResolvedParams& p, const std::string& wh
     const std::string guess = closest_key(table, key);
     if (!guess.empty()) msg += " (did you mean '" + guess + "'?)";
     msg += "; `tbdrsim params` lists every parameter";
-    throw InputError(where, msg);
+    throw InputError(where, escape_for_message(msg));
   }
   const ParamDecl& d = table.decls()[static_cast<std::size_t>(idx)];
   std::string why;
   ParamValue v;
   if (!d.parse(value, v, why)) {
-    throw InputError(where, "parameter '" + key + "' = '" + value + "': expected " + why +
+    throw InputError(where, "parameter '" + escape_for_message(key) + "' = '" + escape_for_message(value) + "': expected " + why +
                                 (d.unit.empty() ? "" : " (" + d.unit + ")"));
   }
   p.values[static_cast<std::size_t>(idx)] = std::move(v);
@@ -350,10 +351,10 @@ std::vector<IniLine> scan_ini_lines(const std::string& path, std::istream& in, c
     const std::string s = trim(line);
     if (s.empty()) continue;
     if (s.front() == '[') {
-      if (s.back() != ']') throw InputError(path, n, "malformed section header '" + s + "' (expected [name])");
+      if (s.back() != ']') throw InputError(path, n, "malformed section header '" + escape_for_message(s) + "' (expected [name])");
       section = trim(s.substr(1, s.size() - 2));
       if (!rules.known_section(section)) {
-        throw InputError(path, n, "unknown section [" + section + "] (known sections: " + rules.known_sections + ")");
+        throw InputError(path, n, "unknown section [" + escape_for_message(section) + "] (known sections: " + rules.known_sections + ")");
       }
       if (auto it = section_lines.find(section); it != section_lines.end() && rules.sections_once) {
         throw InputError(path, n, "section [" + section + "] appears twice (first at line " + std::to_string(it->second) + ")");
@@ -362,9 +363,9 @@ std::vector<IniLine> scan_ini_lines(const std::string& path, std::istream& in, c
       continue;
     }
     const auto eq = s.find('=');
-    if (eq == std::string::npos) throw InputError(path, n, "expected 'key = value' or '[section]', found '" + s + "'");
+    if (eq == std::string::npos) throw InputError(path, n, "expected 'key = value' or '[section]', found '" + escape_for_message(s) + "'");
     if (section.empty() && rules.keys_need_section) {
-      throw InputError(path, n, "'" + s + "' is outside any section (known sections: " + rules.known_sections + ")");
+      throw InputError(path, n, "'" + escape_for_message(s) + "' is outside any section (known sections: " + rules.known_sections + ")");
     }
     IniLine l;
     l.section = section;

@@ -15,6 +15,7 @@
 
 #include "kernel/errors.hpp"
 #include "kernel/params.hpp"
+#include "kernel/text_escape.hpp"
 #include "scene/atrium.hpp"
 #include "trace/trace.hpp"
 
@@ -69,7 +70,9 @@ class Reader {
   Trace run(std::istream& in);
 
  private:
-  [[noreturn]] void fail(int line, const std::string& msg) const { throw InputError(name_, line, msg); }
+  [[noreturn]] void fail(int line, const std::string& msg) const {
+    throw InputError(name_, line, escape_for_message(msg));  // a quoted value may hold any byte
+  }
 
   // --- tokenising -------------------------------------------------------------------------
   bool tokenize(const std::string& text, int number, Line& out) const;
