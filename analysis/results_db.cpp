@@ -127,8 +127,15 @@ void check_results_db_target(const std::string& path) {
   std::error_code ec;
   if (path.empty()) throw InputError("--db", "empty results database path");
   if (fs::exists(path, ec)) {
-    { ResultsDb check(path, ResultsDb::QueryOnly{}); }
+    // Refused before it is opened: opening a WAL database creates its -wal and -shm files, which a
+    // connection that cannot write leaves behind.
+    const fs::path folder = fs::path(path).has_parent_path() ? fs::path(path).parent_path() : fs::path(".");
     if (access(path.c_str(), W_OK) != 0) throw InputError(path, "results database is not writable");
+    if (access(folder.c_str(), W_OK | X_OK) != 0) {
+      throw InputError(path, "results database's folder '" + folder.string() +
+                                 "' is not writable (SQLite writes its -wal and -shm files beside the database)");
+    }
+    { ResultsDb check(path, ResultsDb::QueryOnly{}); }
     return;
   }
   const fs::path folder = fs::path(path).has_parent_path() ? fs::path(path).parent_path() : fs::path(".");

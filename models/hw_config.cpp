@@ -1,5 +1,7 @@
 #include "models/hw_config.hpp"
 
+#include "models/config_checks.hpp"
+
 namespace tbdr {
 
 // Declares a parameter whose key is the HwConfig member path, so key and member cannot drift apart.
@@ -490,6 +492,7 @@ ResolvedConfig resolve_config(const std::vector<std::string>& config_files,
   ResolvedConfig rc;
   rc.params = reg.table().resolve(config_files, overrides);
   rc.hw = reg.build(rc.params);
+  check_config_constraints(rc.hw, rc.params);
   rc.hash = reg.table().hash(rc.params);
   return rc;
 }

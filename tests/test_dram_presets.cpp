@@ -15,6 +15,7 @@
 #include "models/dram_memspec.hpp"
 #include "models/dram_microbench.hpp"
 #include "models/hw_config.hpp"
+#include "kernel/errors.hpp"
 #include "kernel/event_queue.hpp"
 
 namespace tbdr {
@@ -201,7 +202,11 @@ TEST(DramBankGroups, SameGroupColumnsAreTccdLApartOtherGroupsTccdS) {
 }
 
 TEST(DramBankGroups, AGroupCountThatDoesNotDivideTheBanksIsRefused) {
-  const HwConfig hw = bank_group_config({"dram.bank_groups=3"});
+  // Refused where the configuration is resolved (models/config_checks: InputError naming both
+  // parameters, exit 2), and by the model itself when given such a struct directly.
+  EXPECT_THROW(bank_group_config({"dram.bank_groups=3"}), InputError);
+  HwConfig hw = bank_group_config({});
+  hw.dram.bank_groups = 3;
   EventQueue eq;
   EXPECT_THROW(Dram(hw.dram, hw.energy, eq), std::invalid_argument);
 }

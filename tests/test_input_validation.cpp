@@ -99,6 +99,17 @@ TEST(InputValidation, DispatchSizesBeyondVulkanLimitsAreRefused) {
                  {"group_size=64,64,1", "4096 invocations", "1024"});
 }
 
+TEST(InputValidation, DispatchOfMoreWorkgroupsThanTheFrameCanUseIsRefused) {
+  // The 64x64 frame has 4,096 pixels: at most 256 workgroups per pixel, 1,048,576. The issue's
+  // 65535^3 (2.8e14) is refused at its line; 1024 x 1024 x 1 is the limit itself and is read.
+  const std::string decl = "buffer out bytes=64 traffic=other content=other\n";
+  expect_refused(trace_text(kCamera, decl, "dispatch tile_light_cull groups=65535,65535,65535 group_size=32,32,1 writes=out\n"),
+                 8, {"281462092005375 workgroups", "64x64 frame", "at most 256 per pixel (1048576)"});
+  expect_refused(trace_text(kCamera, decl, "dispatch tile_light_cull groups=1024,1024,2 group_size=16,16,1 writes=out\n"),
+                 8, {"2097152 workgroups"});
+  EXPECT_NO_THROW(parse(trace_text(kCamera, decl, "dispatch tile_light_cull groups=1024,1024,1 group_size=16,16,1 writes=out\n")));
+}
+
 TEST(InputValidation, AtriumDetailOutsideOneToFiveIsRefused) {
   std::string t = trace_text(kCamera, "", kPass);
   for (const char* bad : {"detail=0", "detail=6", "detail=16"}) {

@@ -186,6 +186,10 @@ std::string find_data_file(const std::string& arg, DataFolder folder) {
   for (const auto& p : tried) {
     if (fs::is_regular_file(p, ec)) return p == given ? arg : p.lexically_normal().string();
   }
+  // The path is there but cannot be read (permission denied, a folder, a symlink loop): say why.
+  if (std::error_code lec; fs::symlink_status(given, lec).type() != fs::file_type::not_found) {
+    check_input_file(arg, what);
+  }
   std::string msg = std::string("no such ") + what + " (looked for";
   for (std::size_t i = 0; i < tried.size(); ++i) msg += (i ? ", " : " ") + tried[i].lexically_normal().string();
   msg += ")";

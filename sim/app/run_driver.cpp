@@ -15,6 +15,7 @@
 
 #include "kernel/cpu_placement.hpp"
 #include "kernel/errors.hpp"
+#include "kernel/params.hpp"
 #include "kernel/thread_pool.hpp"
 #include "models/work_feed.hpp"
 #include "app/allocator_tunables.hpp"
@@ -49,9 +50,15 @@ std::shared_ptr<const Scene> load_trace_scene(const Trace& trace, const std::str
   namespace fs = std::filesystem;
   const fs::path rel = fs::path(trace_path).parent_path() / trace.scene.path;
   const std::string path = fs::exists(rel) ? rel.string() : trace.scene.path;
-  if (!fs::exists(path)) {
+  std::error_code ec;
+  if (fs::status(path, ec).type() == fs::file_type::not_found) {
     throw InputError(trace_path, trace.scene.line, "scene file '" + trace.scene.path + "' not found (looked in " +
                                                        rel.string() + " and the working directory)");
+  }
+  try {
+    check_input_file(path, "scene file");  // a folder (path=.), permission denied, a symlink loop
+  } catch (const InputError& e) {
+    throw InputError(trace_path, trace.scene.line, std::string("scene ") + e.what());
   }
   return shared_scene(path, options);
 }

@@ -20,6 +20,7 @@
 #include "app/commands.hpp"
 #include "app/worker_pool.hpp"
 #include "kernel/errors.hpp"
+#include "models/config_checks.hpp"
 #include "models/hw_config.hpp"
 #include "tbdrsim_version.hpp"
 #include "techniques/technique.hpp"
@@ -61,7 +62,7 @@ TraceInfo read_trace_info(const std::string& path) {
 /// Announces the traces that draw the scene kSlowSceneDraws times or more, with their points and
 /// how many times the scene they draw compared with the sweep's lightest trace.
 void warn_slow_traces(const std::map<std::string, TraceInfo>& traces, const std::vector<SweepPoint>& points,
-                      std::ostream& out) {
+                      std::ostream& out, const std::vector<std::size_t>* only = nullptr) {
   std::size_t lightest = 0;
   for (const auto& [path, info] : traces) {
     if (info.scene_draws > 0 && (lightest == 0 || info.scene_draws < lightest)) lightest = info.scene_draws;
@@ -69,7 +70,11 @@ void warn_slow_traces(const std::map<std::string, TraceInfo>& traces, const std:
   for (const auto& [path, info] : traces) {
     if (info.scene_draws < kSlowSceneDraws) continue;
     std::size_t n = 0;
-    for (const auto& p : points) n += p.trace == path ? 1 : 0;
+    if (only) {
+      for (const std::size_t i : *only) n += points[i].trace == path ? 1 : 0;
+    } else {
+      for (const auto& p : points) n += p.trace == path ? 1 : 0;
+    }
     out << "slow: " << n << " point(s) replay " << path << " (" << info.technique << "), which draws the scene "
         << info.scene_draws << " times";
     if (lightest > 0 && lightest < info.scene_draws) {
@@ -81,13 +86,20 @@ void warn_slow_traces(const std::map<std::string, TraceInfo>& traces, const std:
   out << std::flush;
 }
 
+/// What a sweep keeps of one resolved configuration: its hash. The resolved parameters (about
+/// 11 KB: a value and an origin per parameter) are resolved again for the rare point that fails,
+/// so a sweep of a million configurations holds a million hashes, not 11 GB.
+struct PointConfig {
+  std::string hash;  ///< hw_params().table().hash() of the resolved parameters
+};
+
 /// Every point's resolved configuration and trace, read once before anything runs (points of one
 /// configuration or one trace share them).
 struct PointInputs {
-  std::map<std::string, ResolvedConfig> configs;  ///< by config_key()
-  std::map<std::string, TraceInfo> traces;        ///< by trace path
-  std::vector<const ResolvedConfig*> config;      ///< per point
-  std::vector<const TraceInfo*> trace;            ///< per point
+  std::map<std::string, PointConfig> configs;  ///< by config_key()
+  std::map<std::string, TraceInfo> traces;     ///< by trace path
+  std::vector<const PointConfig*> config;      ///< per point
+  std::vector<const TraceInfo*> trace;         ///< per point
 };
 
 std::string config_key(const SweepPoint& p) {
@@ -219,14 +231,23 @@ PointInputs resolve_inputs(const SweepSpec& spec, const std::vector<SweepPoint>&
   PointInputs in;
   in.config.resize(points.size());
   in.trace.resize(points.size());
+  // The config files of a point are read once per list of files (not once per point): each
+  // configuration is that base with the point's overrides, as resolve_config layers them.
+  const auto& reg = hw_params();
+  std::map<std::vector<std::string>, ResolvedParams> bases;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const SweepPoint& p = points[i];
     const std::string key = config_key(p);
     auto it = in.configs.find(key);
     if (it == in.configs.end()) {
-      ResolvedConfig config;
+      PointConfig config;
       try {
-        config = resolve_config(p.configs, p.sets);
+        auto base = bases.find(p.configs);
+        if (base == bases.end()) base = bases.emplace(p.configs, reg.table().resolve(p.configs, {})).first;
+        ResolvedParams params = base->second;
+        for (const auto& set : p.sets) reg.table().apply_override(params, set);
+        check_config_constraints(reg.build(params), params);
+        config.hash = reg.table().hash(params);
       } catch (const InputError& e) {
         throw InputError(spec.path, "point '" + p.label + "': " + std::string(e.what()));
       }
@@ -286,8 +307,8 @@ struct Launch {
 };
 
 /// The row of a failed point: its inputs and resolved parameters, status failed, no statistics.
-RunRecord failed_run(const SweepPoint& p, const ResolvedConfig& config, const TraceInfo& trace, const Launch& launch,
-                     const std::string& error) {
+RunRecord failed_run(const SweepPoint& p, const TraceInfo& trace, const Launch& launch, const std::string& error) {
+  const ResolvedConfig config = resolve_config(p.configs, p.sets);  // resolved at read time: cannot fail now
   RunRecord rec;
   rec.started_at = launch.started_at;
   rec.finished_at = utc_now_iso8601();
@@ -496,8 +517,10 @@ void print_slow_points(const SweepSpec& spec, std::ostream& out) {
 SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostream& out) {
   const auto t0 = std::chrono::steady_clock::now();
   SweepSummary summary;
-  const std::vector<SweepPoint> all = expand_sweep(spec);
-  const std::vector<SweepPoint> points = slice_points(all, opt.slice);
+  // One list of points (a slice keeps its own, never a second copy of the whole sweep).
+  std::vector<SweepPoint> points = expand_sweep(spec);
+  const std::size_t all_points = points.size();
+  if (opt.slice.count > 1) points = slice_points(points, opt.slice);
   summary.points = points.size();
   if (opt.jobs < 1 || opt.jobs > 1024) throw InputError("-j " + std::to_string(opt.jobs), "expected 1..1024 worker processes");
   if (opt.threads < 1 || opt.threads > 1024) throw InputError("--threads " + std::to_string(opt.threads), "expected 1..1024 threads per run");
@@ -519,7 +542,7 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
       done_before[i] = done && (*done)(i);
       if (done_before[i]) ++summary.skipped;
     }
-    print_plan(spec, opt, points.size(), all.size(), inputs, summary.skipped, points.size() - summary.skipped, out);
+    print_plan(spec, opt, points.size(), all_points, inputs, summary.skipped, points.size() - summary.skipped, out);
     std::size_t to_generate = 0;
     for (const auto& [path, info] : inputs.traces) to_generate += info.hash == kNotGenerated ? 1 : 0;
     if (to_generate) {
@@ -544,10 +567,8 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
       todo.push_back(i);
     }
   }
-  print_plan(spec, opt, points.size(), all.size(), inputs, summary.skipped, todo.size(), out);
-  std::vector<SweepPoint> to_run;
-  for (const auto i : todo) to_run.push_back(points[i]);
-  warn_slow_traces(inputs.traces, to_run, out);
+  print_plan(spec, opt, points.size(), all_points, inputs, summary.skipped, todo.size(), out);
+  warn_slow_traces(inputs.traces, points, out, &todo);
 
   SweepProgressDisplay progress(opt.progress, out, points.size(), summary.skipped);
   std::vector<Launch> launches(points.size());
@@ -583,7 +604,7 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
       ++summary.ok;
     } else {
       error = failure_text(end);
-      db.write_run(failed_run(points[i], *inputs.config[i], *inputs.trace[i], launches[i], error));
+      db.write_run(failed_run(points[i], *inputs.trace[i], launches[i], error));
       ++summary.failed;
     }
     claims.release(i);

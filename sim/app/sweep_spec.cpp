@@ -14,6 +14,7 @@
 
 #include "kernel/errors.hpp"
 #include "kernel/hash.hpp"
+#include "models/config_checks.hpp"
 #include "models/hw_config.hpp"
 
 namespace tbdr {
@@ -149,10 +150,19 @@ std::string check_param_value(const std::string& key, const std::string& value, 
   return format_param_value(p.values[static_cast<std::size_t>(table.find(key))]);
 }
 
+/// check_input_file for a file a sweep names at `where`: the error is located at the sweep's line.
+void check_named_file(const std::string& p, const std::string& what, const std::string& where, bool allow_special) {
+  try {
+    check_input_file(p, what, allow_special);
+  } catch (const InputError& e) {
+    throw InputError(where, what + " '" + p + "': " + bare_message(e));
+  }
+}
+
 std::vector<std::string> expand_traces(const std::string& pattern, const fs::path& base_dir, const std::string& where) {
   const std::string p = checked_length(relative_to(base_dir, pattern), "trace", where);
   if (!has_glob_chars(pattern)) {
-    if (!fs::is_regular_file(p)) throw InputError(where, "trace file '" + p + "' not found");
+    check_named_file(p, "trace file", where, false);
     return {p};
   }
   glob_t g{};
@@ -160,12 +170,96 @@ std::vector<std::string> expand_traces(const std::string& pattern, const fs::pat
   std::vector<std::string> out;
   if (rc == 0) {
     for (std::size_t i = 0; i < g.gl_pathc; ++i) {
-      if (fs::is_regular_file(g.gl_pathv[i])) out.push_back(g.gl_pathv[i]);
+      // A match that cannot be examined (permission denied, a symlink loop) is refused by name;
+      // folders, devices and the like are not traces and are passed over.
+      const std::string m = g.gl_pathv[i];
+      std::error_code ec;
+      const fs::file_status st = fs::status(m, ec);
+      if ((ec && st.type() != fs::file_type::not_found) || st.type() == fs::file_type::regular) {
+        try {
+          check_input_file(m, "trace file");
+        } catch (const InputError& e) {
+          globfree(&g);
+          throw InputError(where, "trace pattern '" + p + "' matches '" + m + "': " + bare_message(e));
+        }
+        out.push_back(m);
+      }
     }
   }
   globfree(&g);
   if (out.empty()) throw InputError(where, "trace pattern '" + p + "' matches no file");
   return out;
+}
+
+/// Checks, at read time, the constraints between parameters (models/config_checks.hpp) of every
+/// configuration the sweep's points resolve to. Only the axes that set a constrained parameter or
+/// a config file can change the outcome, so only their combinations are resolved (a sweep of a
+/// million points over unconstrained parameters resolves one). `key_where`: the file:line of
+/// every key the sweep file sets or sweeps. InputError at the line of the first involved key the
+/// sweep sets (else the sweep file), naming the point and where each involved value came from.
+void check_point_configs(const SweepSpec& spec, const std::map<std::string, std::string>& key_where) {
+  const auto& constrained = constrained_param_keys();
+  const std::set<std::string> ckeys(constrained.begin(), constrained.end());
+  std::vector<std::size_t> relevant;
+  for (std::size_t a = 0; a < spec.axes.size(); ++a) {
+    for (const auto& k : spec.axes[a].keys) {
+      if (k == "config" || ckeys.count(k)) {
+        relevant.push_back(a);
+        break;
+      }
+    }
+  }
+  std::size_t combos = 1;  // <= kMaxSweepPoints: check_sweep_size ran first
+  for (std::size_t a : relevant) combos *= spec.axes[a].values.size();
+  const auto& reg = hw_params();
+  const ParamTable& table = reg.table();
+  std::map<std::vector<std::string>, ResolvedParams> bases;
+  for (std::size_t c = 0; c < combos; ++c) {
+    std::vector<std::string> configs = spec.base_configs;
+    std::vector<std::string> sets = spec.sets;
+    std::string label;
+    std::size_t rest = c;
+    std::vector<std::size_t> digit(relevant.size());
+    for (std::size_t r = relevant.size(); r-- > 0;) {
+      digit[r] = rest % spec.axes[relevant[r]].values.size();
+      rest /= spec.axes[relevant[r]].values.size();
+    }
+    for (std::size_t r = 0; r < relevant.size(); ++r) {
+      const SweepAxis& axis = spec.axes[relevant[r]];
+      for (std::size_t k = 0; k < axis.keys.size(); ++k) {
+        const std::string& val = axis.values[digit[r]][k];
+        (axis.keys[k] == "config" ? configs : sets).push_back(axis.keys[k] == "config" ? val : axis.keys[k] + "=" + val);
+        label += (label.empty() ? "" : " ") + axis.keys[k] + "=" + val;
+      }
+    }
+    ResolvedParams params;
+    try {
+      // Config files are read once per list of them; each combination is a copy with its overrides.
+      auto base = bases.find(configs);
+      if (base == bases.end()) base = bases.emplace(configs, table.resolve(configs, {})).first;
+      params = base->second;
+      for (const auto& set : sets) table.apply_override(params, set);
+    } catch (const InputError& e) {
+      throw InputError(e.where().rfind("--set ", 0) == 0 ? spec.path : e.where(),
+                       (label.empty() ? "" : "the point " + label + ": ") + bare_message(e));
+    }
+    const auto bad = first_constraint_violation(reg.build(params));
+    if (!bad) continue;
+    std::string where;
+    std::string origins;
+    for (const auto& key : bad->keys) {
+      const auto it = key_where.find(key);
+      const int i = table.find(key);
+      const std::string origin = it != key_where.end() ? it->second
+                                 : i < 0            ? "default"
+                                                    : params.origins[static_cast<std::size_t>(i)].text;
+      if (where.empty() && origin != "default") where = origin;
+      origins += (origins.empty() ? "" : "; ") + key + " from " + origin;
+    }
+    throw InputError(where.empty() ? spec.path : where,
+                     (label.empty() ? "every point" : "the point " + label) + ": " + bad->message + " [" + origins +
+                         "]; docs/sweeps.md");
+  }
 }
 
 }  // namespace
@@ -201,7 +295,7 @@ void apply_sweep_key(SweepSpec& spec, const IniLine& l, const std::string& value
     for (const auto& item : split_commas(value)) {
       if (item.empty()) throw InputError(where, "empty config file name");
       const std::string p = checked_length(relative_to(base_dir, item), "config file", where);
-      if (!fs::is_regular_file(p)) throw InputError(where, "config file '" + p + "' not found");
+      check_named_file(p, "config file", where, false);
       spec.base_configs.push_back(p);
     }
   } else if (l.name == "trace") {
@@ -246,7 +340,7 @@ std::vector<std::string> axis_values(const IniLine& l, const std::string& value,
   }
   for (auto& v : values) {
     v = checked_length(relative_to(base_dir, v), "config file", where);
-    if (!fs::is_regular_file(v)) throw InputError(where, "config file '" + v + "' not found");
+    check_named_file(v, "config file", where, false);
   }
   return values;
 }
@@ -498,6 +592,7 @@ SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::strin
     if (sec.rfind("zip.", 0) == 0 && !zip_axis.count(sec)) throw InputError(path, line, "[" + sec + "] is empty");
   }
   check_sweep_size(spec);
+  check_point_configs(spec, key_where);
   return spec;
 }
 

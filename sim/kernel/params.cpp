@@ -9,7 +9,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <cerrno>
 #include <climits>
+#include <system_error>
 #include <unistd.h>
 
 #include <boost/program_options/options_description.hpp>
@@ -17,6 +19,7 @@
 
 #include "kernel/errors.hpp"
 #include "kernel/hash.hpp"
+#include "kernel/text_escape.hpp"
 
 namespace tbdr {
 
@@ -246,13 +249,13 @@ void apply_one(const ParamTable& table, ResolvedParams& p, const std::string& wh
     const std::string guess = closest_key(table, key);
     if (!guess.empty()) msg += " (did you mean '" + guess + "'?)";
     msg += "; `tbdrsim params` lists every parameter";
-    throw InputError(where, msg);
+    throw InputError(where, escape_for_message(msg));
   }
   const ParamDecl& d = table.decls()[static_cast<std::size_t>(idx)];
   std::string why;
   ParamValue v;
   if (!d.parse(value, v, why)) {
-    throw InputError(where, "parameter '" + key + "' = '" + value + "': expected " + why +
+    throw InputError(where, "parameter '" + escape_for_message(key) + "' = '" + escape_for_message(value) + "': expected " + why +
                                 (d.unit.empty() ? "" : " (" + d.unit + ")"));
   }
   p.values[static_cast<std::size_t>(idx)] = std::move(v);
@@ -297,13 +300,38 @@ void check_path_length(const std::string& path, const std::string& what) {
   }
 }
 
+void check_input_file(const std::string& path, const std::string& what, bool allow_special) {
+  namespace fs = std::filesystem;
+  check_path_length(path, what);
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  const auto why = [](const std::error_code& e) -> std::string {
+    if (e == std::errc::permission_denied || e == std::errc::operation_not_permitted) {
+      return "permission denied (the file, or a folder on its path, is not readable)";
+    }
+    if (e == std::errc::too_many_symbolic_link_levels) return "too many levels of symbolic links (a symlink loop)";
+    if (e == std::errc::no_such_file_or_directory) return "not found";
+    if (e == std::errc::not_a_directory) return "not found (a part of its path is not a folder)";
+    return e.message();
+  };
+  if (ec) throw InputError(path, "cannot read " + what + ": " + why(ec));
+  if (st.type() == fs::file_type::not_found) throw InputError(path, "cannot read " + what + ": not found");
+  if (st.type() == fs::file_type::directory) throw InputError(path, "cannot read " + what + ": it is a folder, not a file");
+  if (st.type() != fs::file_type::regular && !allow_special) {
+    throw InputError(path, "cannot read " + what + ": not a regular file (a device, FIFO or socket)");
+  }
+  if (::access(path.c_str(), R_OK) != 0) {
+    throw InputError(path, "cannot read " + what + ": " + why(std::error_code(errno, std::generic_category())));
+  }
+}
+
 std::string_view strip_utf8_bom(std::string_view text) {
   if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
   return text;
 }
 
 std::string read_text_input(const std::string& path, const std::string& what, std::uint64_t max_bytes) {
-  check_path_length(path, what);
+  check_input_file(path, what, /*allow_special=*/false);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open " + what);
   in.seekg(0, std::ios::end);
@@ -338,10 +366,10 @@ std::vector<IniLine> scan_ini_lines(const std::string& path, std::istream& in, c
     const std::string s = trim(line);
     if (s.empty()) continue;
     if (s.front() == '[') {
-      if (s.back() != ']') throw InputError(path, n, "malformed section header '" + s + "' (expected [name])");
+      if (s.back() != ']') throw InputError(path, n, "malformed section header '" + escape_for_message(s) + "' (expected [name])");
       section = trim(s.substr(1, s.size() - 2));
       if (!rules.known_section(section)) {
-        throw InputError(path, n, "unknown section [" + section + "] (known sections: " + rules.known_sections + ")");
+        throw InputError(path, n, "unknown section [" + escape_for_message(section) + "] (known sections: " + rules.known_sections + ")");
       }
       if (auto it = section_lines.find(section); it != section_lines.end() && rules.sections_once) {
         throw InputError(path, n, "section [" + section + "] appears twice (first at line " + std::to_string(it->second) + ")");
@@ -350,9 +378,9 @@ std::vector<IniLine> scan_ini_lines(const std::string& path, std::istream& in, c
       continue;
     }
     const auto eq = s.find('=');
-    if (eq == std::string::npos) throw InputError(path, n, "expected 'key = value' or '[section]', found '" + s + "'");
+    if (eq == std::string::npos) throw InputError(path, n, "expected 'key = value' or '[section]', found '" + escape_for_message(s) + "'");
     if (section.empty() && rules.keys_need_section) {
-      throw InputError(path, n, "'" + s + "' is outside any section (known sections: " + rules.known_sections + ")");
+      throw InputError(path, n, "'" + escape_for_message(s) + "' is outside any section (known sections: " + rules.known_sections + ")");
     }
     IniLine l;
     l.section = section;

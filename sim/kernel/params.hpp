@@ -31,6 +31,12 @@ inline constexpr std::uint64_t kMaxIniFileBytes = 1u << 20;
 /// the path's start, its length and the limit, so a caller never meets ENAMETOOLONG later.
 void check_path_length(const std::string& path, const std::string& what);
 
+/// Refuses an input path that cannot be read as a file, saying why by name: not found, permission
+/// denied (on the file or a folder on its way), a folder, a symlink loop, and (unless
+/// `allow_special`: a trace may be a stream) a device, FIFO or socket. Checks the path's length
+/// first (check_path_length). InputError naming the path and `what` ("trace", "config file").
+void check_input_file(const std::string& path, const std::string& what, bool allow_special = false);
+
 /// `text` without a leading UTF-8 byte-order mark (EF BB BF), which editors on Windows write.
 std::string_view strip_utf8_bom(std::string_view text);
 

@@ -15,6 +15,7 @@
 
 #include "kernel/errors.hpp"
 #include "kernel/params.hpp"
+#include "kernel/text_escape.hpp"
 #include "scene/atrium.hpp"
 #include "trace/trace.hpp"
 
@@ -69,7 +70,9 @@ class Reader {
   Trace run(std::istream& in);
 
  private:
-  [[noreturn]] void fail(int line, const std::string& msg) const { throw InputError(name_, line, msg); }
+  [[noreturn]] void fail(int line, const std::string& msg) const {
+    throw InputError(name_, line, escape_for_message(msg));  // a quoted value may hold any byte
+  }
 
   // --- tokenising -------------------------------------------------------------------------
   bool tokenize(const std::string& text, int number, Line& out) const;
@@ -1036,6 +1039,13 @@ void Reader::on_barrier(const Line& l) {
   trace_.commands.emplace_back(std::move(b));
 }
 
+/// The most workgroups one dispatch may launch per pixel of its frame. Every kernel works on the
+/// frame's pixels, tiles or clusters (docs/kernels.md); the most a generator launches is
+/// cluster_light_assign with 4-pixel tiles (1/16 of a pixel each) and 4,096 depth slices: 256 per
+/// pixel. Groups beyond it find no work, and the count was recorded as if they ran
+/// (65535^3 = 2.8e14 workgroups on a 320x180 frame).
+constexpr std::uint64_t kMaxWorkgroupsPerPixel = 256;
+
 void Reader::finish(int last_line) {
   if (current_pass_)
     fail(pass().line, "pass " + q(pass().name) + " is not closed (missing 'end' before the end of the file)");
@@ -1043,6 +1053,18 @@ void Reader::finish(int last_line) {
   if (!have_scene_) fail(at, "missing required 'scene' line");
   if (!have_frame_) fail(at, "missing required 'frame' line");
   if (!have_camera_) fail(at, "missing required 'camera' line");
+  const std::uint64_t pixels = static_cast<std::uint64_t>(trace_.frame.width) * static_cast<std::uint64_t>(trace_.frame.height);
+  for (const auto& cmd : trace_.commands) {
+    const auto* d = std::get_if<DispatchCmd>(&cmd);
+    if (d == nullptr) continue;
+    const std::uint64_t groups = std::uint64_t{d->groups[0]} * d->groups[1] * d->groups[2];
+    if (groups > kMaxWorkgroupsPerPixel * pixels)
+      fail(d->line, "dispatch of " + std::to_string(groups) + " workgroups on a " + std::to_string(trace_.frame.width) +
+                        "x" + std::to_string(trace_.frame.height) + " frame; at most " +
+                        std::to_string(kMaxWorkgroupsPerPixel) + " per pixel (" +
+                        std::to_string(kMaxWorkgroupsPerPixel * pixels) +
+                        "): the kernels work on the frame's pixels, tiles and clusters (docs/limits.md)");
+  }
   const std::uint64_t light_bytes = kLightBufferBytesPerLight * trace_.lights.size();
   for (const auto& b : trace_.buffers) {
     if (b.content == BufferContent::Lights && b.bytes < light_bytes)
@@ -1064,16 +1086,56 @@ void Reader::check_world(const Line& l, std::string_view key, const glm::vec3& v
       fail(l.number, std::string(key) + "=" + require(l, key) + " has a component beyond +-1e+09 world units (docs/limits.md)");
 }
 
+/// std::getline with a bound: reads the next line of `in` into `out` (without its '\n') and returns
+/// false at the end of the input. A line longer than `max_bytes` stops the read as soon as the bound
+/// is passed (`too_long` set), so a stream without newlines (/dev/zero) is never held whole.
+bool read_line_bounded(std::istream& in, std::string& out, std::uint64_t max_bytes, bool& too_long) {
+  // Chunks of this many bytes are read at once (istream::getline scans them for the newline).
+  constexpr std::streamsize kChunkBytes = 1 << 16;
+  char buf[kChunkBytes];
+  out.clear();
+  too_long = false;
+  bool any = false;
+  for (;;) {
+    in.getline(buf, kChunkBytes);
+    const std::streamsize n = in.gcount();
+    if (!in.fail()) {  // a whole line: the newline was extracted and counted
+      out.append(buf, static_cast<std::size_t>(n > 0 ? n - 1 : 0));
+      too_long = out.size() > max_bytes;
+      return true;
+    }
+    if (in.bad()) return false;
+    any |= n > 0;
+    out.append(buf, static_cast<std::size_t>(n));
+    if (in.eof()) return any;  // the last line has no newline (or the input ended)
+    in.clear();                // the chunk filled without a newline: read on
+    if (out.size() > max_bytes) {
+      too_long = true;
+      return true;
+    }
+  }
+}
+
+/// The longest trace line read (bytes), checked while the line is read: the longest line a
+/// generator writes is a draw whose `lights=` lists 1,000,000 scattered lights one by one (at most
+/// 7 bytes each, 6.9 MB); the bound keeps a stream without newlines (/dev/zero) to 16 MiB held.
+constexpr std::uint64_t kMaxTraceLineBytes = 16ull << 20;
+
 Trace Reader::run(std::istream& in) {
   std::string text;
   int number = 0;
   bool have_header = false;
   Line l;
   std::uint64_t bytes = 0;
-  while (std::getline(in, text)) {
+  bool too_long = false;
+  while (read_line_bounded(in, text, std::min(kMaxTraceLineBytes, kMaxTraceBytes - std::min(bytes, kMaxTraceBytes)),
+                           too_long)) {
     ++number;
     bytes += text.size() + 1;
-    if (bytes > kMaxTraceBytes + 1)
+    if (too_long && text.size() > kMaxTraceLineBytes)
+      fail(number, "line " + std::to_string(number) + " is longer than " + std::to_string(kMaxTraceLineBytes) +
+                       " bytes, the longest accepted (docs/limits.md)");
+    if (too_long || bytes > kMaxTraceBytes + 1)
       fail(number, "the trace is longer than " + std::to_string(kMaxTraceBytes) + " bytes, the largest accepted (docs/limits.md)");
     if (!text.empty() && text.back() == '\r') text.pop_back();
     if (!have_header) {
@@ -1096,7 +1158,8 @@ Trace Reader::run(std::istream& in) {
 Trace parse_trace(std::istream& in, const std::string& name) { return Reader(name).run(in); }
 
 Trace read_trace(const std::string& path) {
-  check_path_length(path, "trace");
+  // Streams (a FIFO, /dev/stdin) are read too: the bounded line reader keeps them to kMaxTraceBytes.
+  check_input_file(path, "trace", /*allow_special=*/true);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open the trace file");
   std::error_code ec;

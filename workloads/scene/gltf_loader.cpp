@@ -24,6 +24,7 @@
 
 #include "kernel/errors.hpp"
 #include "kernel/hash.hpp"
+#include "kernel/params.hpp"
 
 namespace tbdr {
 
@@ -249,6 +250,49 @@ double read_component(const unsigned char* p, int ct, bool normalized) {
 // right size, buffer views must lie inside their buffers. tinygltf reports a missing buffer
 // file only by its uri and reads image buffer views without a range check, so both are checked
 // here, naming the buffer.
+
+/// The deepest nesting of JSON arrays and objects a glTF file may have. The schema's own objects
+/// nest at most 7 deep (root, meshes[], mesh, primitives[], primitive, targets[], target) and
+/// `extras` are small application data; nlohmann's parser (used by the pre-checks and by
+/// tinygltf) and the JSON type check recurse once per level, so an unbounded depth overflowed the
+/// stack (a 30 KB file of 15,000 '[' crashed with signal 11). 256 levels keep every recursion a few
+/// hundred KB deep, far inside the 8 MiB default stack, also under AddressSanitizer.
+constexpr int kMaxJsonNestingDepth = 256;
+
+/// Refuses JSON text nested deeper than kMaxJsonNestingDepth before any parser sees it: a scan of
+/// the bytes that counts '[' and '{' outside strings. `offset` is where `text` starts in the file
+/// (the GLB JSON chunk starts at byte 20); the error names the file, the line (text glTF) or the
+/// byte offset (GLB), the depth and the limit.
+void check_json_nesting(const std::string& path, const std::uint8_t* text, std::size_t size, std::size_t offset,
+                        bool binary) {
+  int depth = 0;
+  long line = 1;
+  bool in_string = false;
+  for (std::size_t i = 0; i < size; ++i) {
+    const std::uint8_t c = text[i];
+    if (c == '\n') ++line;
+    if (in_string) {
+      if (c == '\\') {
+        ++i;  // the escaped character cannot end the string
+      } else if (c == '"') {
+        in_string = false;
+      }
+      continue;
+    }
+    if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonNestingDepth) {
+        const std::string what = "JSON nested deeper than " + std::to_string(kMaxJsonNestingDepth) +
+                                 " arrays/objects (the declared limit, docs/limits.md)";
+        if (binary) throw InputError(path, "byte " + std::to_string(offset + i) + ": " + what);
+        throw InputError(path, line, what);
+      }
+    } else if (c == ']' || c == '}') {
+      if (depth > 0) --depth;
+    }
+  }
+}
 
 std::optional<nlohmann::json> extract_json(const std::vector<std::uint8_t>& bytes, bool binary) {
   try {
@@ -745,7 +789,17 @@ const Converter::DecodedImage& Converter::decode_base_color(int image, const std
   DecodedImage out;
   const tinygltf::Image& img = m_.images[static_cast<std::size_t>(image)];
   const auto header = parse_image_header(img.image.data(), img.image.size());
-  if (header && static_cast<std::size_t>(header->width) * static_cast<std::size_t>(header->height) > max_decoded_texels) {
+  // stb_image's own header reader covers every format it decodes (TGA, PSD, HDR, ... besides the
+  // ones parse_image_header knows): the pixel count is bounded before any pixel is decoded.
+  int info_w = 0, info_h = 0, info_comp = 0;
+  const bool info = !img.image.empty() && stbi_info_from_memory(img.image.data(), static_cast<int>(img.image.size()),
+                                                                &info_w, &info_h, &info_comp) != 0;
+  if (!header && !img.image.empty()) {
+    // A format the loader does not recognise (collect_textures warned, counted as 0 bytes): not decoded.
+    scene_.warnings.push_back(material_desc + ": base color image " + std::to_string(image) +
+                              " is not PNG/JPEG/GIF/BMP/KTX2; not decoded, the shader uses the base color factor");
+  } else if ((header && static_cast<std::size_t>(header->width) * static_cast<std::size_t>(header->height) > max_decoded_texels) ||
+             (info && static_cast<std::size_t>(info_w) * static_cast<std::size_t>(info_h) > max_decoded_texels)) {
     scene_.warnings.push_back(material_desc + ": base color image " + std::to_string(image) + " is too large (" +
                               std::to_string(header->width) + "x" + std::to_string(header->height) +
                               ") to decode; the shader uses the base color factor");
@@ -1265,10 +1319,24 @@ std::optional<ImageHeader> parse_image_header(const std::uint8_t* d, std::size_t
 }
 
 Scene load_gltf(const std::string& path) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw InputError(path, "scene file not found");
+  check_input_file(path, "scene file");  // not found, permission denied, a folder, a symlink loop: by name
   const std::vector<std::uint8_t> bytes = read_all(path);
   const bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
+  if (binary) {
+    // GLB header (glTF 2.0 specification, section 4.4.3): magic, version, length. Version 1 is the
+    // binary glTF 1.0 extension, whose JSON tinygltf would read as 2.0.
+    if (bytes.size() < 12) throw InputError(path, "GLB header truncated (" + std::to_string(bytes.size()) + " of 12 bytes)");
+    const std::uint32_t version = le32(bytes.data() + 4);
+    if (version != 2) {
+      throw InputError(path, "GLB header version " + std::to_string(version) + " (byte 4): only version 2 (glTF 2.0) is read");
+    }
+    if (bytes.size() >= 20) {
+      const std::size_t chunk = std::min<std::size_t>(le32(bytes.data() + 12), bytes.size() - 20);
+      check_json_nesting(path, bytes.data() + 20, chunk, 20, true);
+    }
+  } else {
+    check_json_nesting(path, bytes.data(), bytes.size(), 0, false);
+  }
   if (auto j = extract_json(bytes, binary)) {
     JsonTypeCheck(path).run(*j);
     precheck_json(path, *j);
