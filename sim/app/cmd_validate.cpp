@@ -248,6 +248,16 @@ void bjorge(Validator& v, std::vector<AnchorRow>& rows) {
                   "one pass, PLS albedo/normal/light, depth transient", "exact", std::abs(mib[1] - surface) < 0.005});
 }
 
+/// Bytes of the framebuffer classes (colour, G-buffer, depth/stencil) that reached DRAM in a run.
+double framebuffer_device_bytes(const RunOutcome& r) {
+  const DramTraffic& d = r.timing.dram;
+  double b = 0;
+  for (DramClass c : {DramClass::Color, DramClass::Gbuffer, DramClass::DepthStencil}) {
+    b += static_cast<double>(d.reads(c) + d.writes(c));
+  }
+  return b;
+}
+
 /// Bjørge's MRT-vs-PLS comparison on the techniques users run: the study's deferred and
 /// deferred_tile_store at 1080p (atrium:3, 256 lights, the study's default view), the framebuffer
 /// classes (colour, G-buffer, depth/stencil) reconciled with Bjørge's passes line by line, in bytes
@@ -296,10 +306,7 @@ std::string bjorge_on_study(Validator& v, std::vector<AnchorRow>& rows) {
     total_dv += l.device;
   }
   const double pls_rq = framebuffer_bytes(pls) / kMiB;
-  const double pls_dv =
-      mib(pls.timing.dram.reads(DramClass::Color) + pls.timing.dram.writes(DramClass::Color) +
-          pls.timing.dram.reads(DramClass::Gbuffer) + pls.timing.dram.writes(DramClass::Gbuffer) +
-          pls.timing.dram.reads(DramClass::DepthStencil) + pls.timing.dram.writes(DramClass::DepthStencil));
+  const double pls_dv = framebuffer_device_bytes(pls) / kMiB;
   std::ostringstream md;
   md << "\n## Bjørge on the study's techniques\n\n"
      << "The study's `deferred` and `deferred_tile_store` at 1920x1080 (atrium:3, 256 lights, the default view), "
@@ -325,16 +332,6 @@ std::string bjorge_on_study(Validator& v, std::vector<AnchorRow>& rows) {
                   "atrium:3 1920x1080 256 lights, the study's generators and default view", "exact",
                   std::abs(pls_dv - surface) < 0.005 && std::abs(pls_rq - surface) < 0.005});
   return md.str();
-}
-
-/// Bytes of the framebuffer classes (colour, G-buffer, depth/stencil) that reached DRAM in a run.
-double framebuffer_device_bytes(const RunOutcome& r) {
-  const DramTraffic& d = r.timing.dram;
-  double b = 0;
-  for (DramClass c : {DramClass::Color, DramClass::Gbuffer, DramClass::DepthStencil}) {
-    b += static_cast<double>(d.reads(c) + d.writes(c));
-  }
-  return b;
 }
 
 /// Vendors' published bandwidth and power figures on G-buffers kept on chip:
