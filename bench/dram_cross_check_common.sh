@@ -3,21 +3,17 @@
 # docs/dram-cross-check.md explains every setting.
 
 # dcc_device lpddr3|lpddr4: sets
-#   TB_DRAM     tbdrsim --set arguments of the DRAM (beside the default GPU)
-#   TB_MATCH    further --set arguments matching tbdrsim's timing to the DRAMsim3 config (timing runs only)
+#   TB_DRAM     tbdrsim --config argument of the DRAM (configs/crosscheck/, beside the default GPU)
+#   TB_MATCH    further --config arguments matching tbdrsim's timing to the DRAMsim3 config (timing runs only)
 #   DS3_INI     the DRAMsim3 config it starts from (in DRAMsim3's configs/) and DS3_SETS the keys changed
 #   TCK_NS, TRFC_CYCLES, TRFC_NS, BURST_BYTES
 dcc_device() {
   case "$1" in
     lpddr3)
-      # The default preset, LPDDR3-1600 2x32 (one MICRON_4Gb_LPDDR3-1600_32bit_A die per channel).
-      # Power-down off: the exports carry no power-down commands (the preset's default enters it).
-      TB_DRAM=(--set dram.powerdown_after_ns=0)
-      # DRAMsim3 configs/LPDDR3_8Gb_x32_1600.ini (tCK 1.25 ns) in ns: tRCD = tRP = 15, CL 12, tRAS 34,
-      # tWR 12, tRRD 8, tFAW 40, tWTR 6, tRFC 168, tREFI 3120 cycles.
-      TB_MATCH=(--set dram.t_rcd_ns=18.75 --set dram.t_rp_ns=18.75 --set dram.t_cl_ns=15 --set dram.t_ras_ns=42.5
-                --set dram.t_wr_ns=15 --set dram.t_rrd_ns=10 --set dram.t_faw_ns=50 --set dram.t_wtr_ns=7.5
-                --set dram.t_rfc_ns=210 --set dram.t_refi_ns=3900)
+      # The default preset, LPDDR3-1600 2x32 (one MICRON_4Gb_LPDDR3-1600_32bit_A die per channel),
+      # and for the timing runs DRAMsim3's timings (configs/crosscheck/*.ini say why).
+      TB_DRAM=(--config configs/crosscheck/lpddr3_1600.ini)
+      TB_MATCH=(--config configs/crosscheck/lpddr3_1600_dramsim3_timing.ini)
       DS3_INI=LPDDR3_8Gb_x32_1600.ini
       # Two 32-bit channels of one x32 die each (the stock config: one 64-bit channel of two dies),
       # one rank, tbdrsim's address mapping (row | bank | channel | 4 KiB row), the refresh interval
@@ -30,20 +26,9 @@ dcc_device() {
       TCK_NS=1.25 TRFC_CYCLES=168 TRFC_NS=210 BURST_BYTES=32
       ;;
     lpddr4)
-      # LPDDR4-3200 2x16: one MICRON_6Gb_LPDDR4-3200_32bit_A x16 die per channel (the die of the
-      # LPDDR4X preset's energies), its memspec timings at tCK 0.625 ns: RCD = RPpb 29, RL 28,
-      # RAS 68, RRD 16, FAW 64, RFCab 448, REFI 6246 cycles; tWR 18 ns, tWTR 10 ns (JESD209-4).
-      # Energies of one die (the preset's per-die arithmetic, VDDQ 1.1 V): active standby
-      # 2.25 mA x 1.8 V + 30 mA x 1.1 V + 0.75 mA x 1.1 V = 37.875 mW; precharge standby
-      # 2.0 x 1.8 + 27 x 1.1 + 0.75 x 1.1 = 34.125 mW; refresh ((10 - 2.25) x 1.8 + (90 - 30) x 1.1) mW
-      # x 280 ns = 22.386 nJ; activate + precharge 1.2 nJ; read 5.3, write 3.9, I/O 3.2 pJ/bit.
-      TB_DRAM=(--set dram.powerdown_after_ns=0 --set dram.channels=2 --set dram.banks=8 --set dram.row_bytes=2048 --set dram.burst_bytes=32
-               --set dram.clock_mhz=1600 --set dram.transfers_per_clock=2 --set dram.bus_width_bits=16 --set dram.t_rcd_ns=18.125
-               --set dram.t_rp_ns=18.125 --set dram.t_cl_ns=17.5 --set dram.t_ras_ns=42.5 --set dram.t_wr_ns=18.125
-               --set dram.t_rrd_ns=10 --set dram.t_faw_ns=40 --set dram.t_wtr_ns=10 --set dram.t_rfc_ns=280
-               --set dram.t_refi_ns=3903.75 --set dram.active_standby_mw=37.875 --set dram.precharge_standby_mw=34.125
-               --set dram.refresh_nj=22.386 --set energy.dram_read_pj_per_bit=5.3 --set energy.dram_write_pj_per_bit=3.9
-               --set energy.dram_io_pj_per_bit=3.2 --set energy.dram_activate_precharge_nj=1.2)
+      # LPDDR4-3200 2x16: one MICRON_6Gb_LPDDR4-3200_32bit_A x16 die per channel, its memspec's
+      # timings and energies (configs/crosscheck/lpddr4_3200_x16.ini has the arithmetic).
+      TB_DRAM=(--config configs/crosscheck/lpddr4_3200_x16.ini)
       TB_MATCH=()
       # DRAMsim3 has no LPDDR4-3200 config: configs/LPDDR4_8Gb_x16_2400.ini with the same memspec
       # timings in cycles at 0.625 ns, 8 banks in one group (LPDDR4 has no bank groups; the stock
@@ -61,9 +46,6 @@ dcc_device() {
   esac
 }
 
-# The controller and interconnect latency (30 ns each way by default) is set to 0 in every
-# cross-check run: DRAMsim3 measures a read from its arrival at the controller to its data.
-DCC_COMMON=(--set dram.controller_latency_ns=0)
 # The four streams: 65536 streaming and 16384 random 64 B reads (models/dram_microbench), and the
 # DRAM traffic of two frames: deferred and forward_plus on atrium:3 at 1920x1080 with 256 lights.
 DCC_STREAMS=(stream random deferred forward_plus)
@@ -85,12 +67,12 @@ dcc_export() {
     stream|random)
       local lines=65536
       [ "$stream" = random ] && lines=16384
-      "$build/tbdrsim" dram-bench --pattern "$stream" --lines "$lines" "${DCC_COMMON[@]}" "$@" \
+      "$build/tbdrsim" dram-bench --pattern "$stream" --lines "$lines" "$@" \
         --memory-trace "$out" --memory-trace-format "$format" > "$out.tb"
       ;;
     *)
       rm -f "$out.db"
-      "$build/tbdrsim" run --trace "$dir/$stream.trace" --db "$out.db" -q "${DCC_COMMON[@]}" "$@" \
+      "$build/tbdrsim" run --trace "$dir/$stream.trace" --db "$out.db" -q "$@" \
         --memory-trace "$out" --memory-trace-format "$format"
       /usr/bin/python3 bench/dram_cross_check.py tbdrsim-db "$out.db" "$BURST_BYTES" "$TRFC_NS" > "$out.tb"
       ;;

@@ -69,7 +69,7 @@ compare() {  # STREAM TBFILE DPFILE
 for dev in lpddr4 lpddr3; do
   dcc_device "$dev"
   if [ "$dev" = lpddr3 ] && [ -z "$DP4" ]; then echo "== lpddr3: skipped (no DRAMPOWER4_DIR)"; continue; fi
-  echo "== $dev: tbdrsim ${TB_DRAM[*]:-(default preset)} ${DCC_COMMON[*]}"
+  echo "== $dev: tbdrsim ${TB_DRAM[*]:-(default preset)}"
   printf "%-13s %-22s %14s %14s %8s\n" stream figure tbdrsim DRAMPower "diff %"
   for s in "${DCC_STREAMS[@]}"; do
     out="$WORK/$dev.$s.dp.csv"
