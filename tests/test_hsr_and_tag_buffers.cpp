@@ -247,19 +247,36 @@ std::vector<TagBufferWork> expect_tag_buffer_work_never_grows(const Trace& trace
 /// The reference set: every technique on atrium:1 from the entrance, 320x180, 32 lights.
 class TagBuffersReferenceSet : public testing_support::AtriumTechniqueSuite {};
 
+/// The one technique of the reference set whose frame is longer with more tag buffers: measured
+/// 162,986 / 163,459 / 163,616 cycles with 1 / 2 / 4 (+0.29 %, +0.10 %). The buffers change no timed
+/// shading there (the quads they merge run a shader without ALU or texture work: fragment ALU ops
+/// and texels are equal), only the task slots tiles hold and when each tile's memory traffic is
+/// issued; the frame moves with the order of DRAM traffic (docs/hsr-and-tag-buffers.md, "Frame
+/// cycles and the order of DRAM traffic"). Issue 49's "never slower" does not hold on it.
+constexpr const char* kFrameOrderAnomaly = "cascaded_clustered_forward";
+/// How much longer that frame may be with more buffers before this test says so: the measured
+/// +0.29 %, rounded up to 0.5 %.
+constexpr double kFrameOrderAnomalyBound = 0.005;
+
 TEST_P(TagBuffersReferenceSet, TheWorkTheTagBuffersDecideNeverGrowsWithMoreBuffers) {
   // What the number of tag buffers decides, per frame: the mid-tile flushes, the ISP's busy
   // cycles (rasterisation plus the waits for punch-through depth resolves), and the shading
   // (invocations, quads, fragment ALU ops, texels). Each is never larger with 2 buffers than
-  // with 1, nor with 4 than with 2.
-  // The frame cycles are printed, not compared: on these workloads the buffers change only a few
-  // hundred ISP cycles of punch-through waits (no shading at all on most techniques), and the
-  // frame moves by the timing model's sensitivity to when each tile's DRAM traffic is issued,
-  // which is of either sign (docs/hsr-and-tag-buffers.md, "Frame cycles and the order of DRAM
-  // traffic": deferred here gives 192,907 / 193,738 / 192,103 cycles with 1 / 2 / 4 buffers).
+  // with 1, nor with 4 than with 2. The frame is never longer either, on 12 of the 13
+  // techniques (bench/tag_buffers.sh reference prints them: e.g. deferred 194,447 / 194,443 /
+  // 194,376 cycles, light_prepass 324,317 / 324,012 / 323,594); on kFrameOrderAnomaly it may be
+  // longer by at most kFrameOrderAnomalyBound.
   const std::string technique = GetParam();
   const Trace trace = generate_trace(technique, testing_support::atrium_entrance_setup(*scene_, 32, 320, 180));
-  expect_tag_buffer_work_never_grows(trace, *scene_, technique);
+  const std::vector<TagBufferWork> runs = expect_tag_buffer_work_never_grows(trace, *scene_, technique);
+  for (std::size_t i = 1; i < runs.size(); ++i) {
+    SCOPED_TRACE(technique + ": frame cycles from " + std::to_string(1 << (i - 1)) + " to " + std::to_string(1 << i) + " tag buffers");
+    if (technique == kFrameOrderAnomaly) {
+      EXPECT_LE(runs[i].frame_cycles, runs[i - 1].frame_cycles * (1.0 + kFrameOrderAnomalyBound));
+    } else {
+      EXPECT_LE(runs[i].frame_cycles, runs[i - 1].frame_cycles);
+    }
+  }
 }
 
 TEST_F(TagBuffersReferenceSet, TheInterleavedWorkloadIsNeverSlowerWithMoreBuffers) {
