@@ -992,7 +992,8 @@ int cmd_validate(const std::vector<std::string>& args, std::ostream& out, std::o
   dram_cross_checks(rows);
   label_rows(rows, first, Basis::Independent,
              "DRAMsim3 and DRAMPower, built from their repositories and run on the simulator's exported request and "
-             "command streams (figures stored; the bench scripts re-check them)");
+             "command streams (the tools' figures stored, the bench scripts re-check them; the simulator's side of a "
+             "microbenchmark recomputed by this run)");
   first = rows.size();
   dram_memspecs(v, rows, config.hw);
   label_rows(rows, first, Basis::SelfConsistency,
