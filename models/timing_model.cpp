@@ -26,17 +26,12 @@ namespace tbdr {
 
 namespace {
 
-/// Bytes of one USC memory load or store of spilled tile-buffer data: a 64-byte line, the cache
-/// line of the SLC it goes through (the default cache line; addresses are fixed as in the map).
-constexpr std::uint64_t kUscAccessBytes = 64;
-
 /// Lanes of a 2x2 quad: the unit fragment shading runs in (helpers included).
 constexpr std::uint64_t kLanesPerQuad = 4;
 
 /// A FIFO server with a throughput: jobs reserve it in arrival order.
 struct Server {
-  std::string name;
-  std::size_t unit = 0;  ///< its index in TimingResult::units (and in each command's busy intervals)
+  TimedUnit unit = TimedUnit::Binning;  ///< which unit it is (its index in TimingResult::units)
   Tick free_at{0};
   double busy_cycles = 0;
   double stalled_cycles = 0;
@@ -64,20 +59,8 @@ class TimingSim final : public Unit {
         mem_(hw, eq_, "mem"),
         map_(work_, static_cast<std::uint64_t>(hw.tiling.pb_capacity_bytes), mem_.address_space()),
         slots_(static_cast<std::uint64_t>(hw.usc.count * hw.usc.tasks_in_flight)) {
-    binner_.name = "binning";
-    binner_.unit = 0;
-    // unit 1: the tile fetch (kTileFetchUnit)
-    isp_.name = "isp";
-    isp_.unit = 2;
-    usc_.name = "usc";
-    usc_.unit = 3;
-    tpu_.name = "texture";
-    tpu_.unit = 4;
-    tile_buffer_.name = "tile_buffer";
-    tile_buffer_.unit = 5;
+    for (std::size_t u = 0; u < kTimedUnitCount; ++u) servers_[u].unit = static_cast<TimedUnit>(u);
     tile_buffer_rate_ = static_cast<double>(hw.usc.count) * hw.pls.tile_buffer_bytes_per_clock;
-    pbe_.name = "pixel_back_end";
-    pbe_.unit = 6;
     alu_rate_ = static_cast<double>(hw.usc.count * hw.usc.lanes) * hw.usc.alu_ops_per_lane_per_clock;
     tex_rate_ = static_cast<double>(hw.texture.units) * hw.texture.texels_per_clock;
     raster_rate_ = static_cast<double>(hw.isp.samples_per_clock * hw.isp.raster_pipes);
@@ -105,15 +88,15 @@ class TimingSim final : public Unit {
     end_commands_before(commands_.size());  // (checks their tiles fit their slots)
     result_.frame_time_ps = static_cast<double>(end_tick_.ps());
     result_.frame_cycles = static_cast<double>(core_.cycles_at(end_tick_).count());
-    result_.units = {{binner_.name, binner_.busy_cycles, binner_.stalled_cycles},
-                     {"tile_fetch", fetch_busy_cycles_, 0},
-                     {isp_.name, isp_.busy_cycles, isp_.stalled_cycles},
-                     {usc_.name, usc_.busy_cycles, usc_.stalled_cycles},
-                     {tpu_.name, tpu_.busy_cycles, tpu_.stalled_cycles},
-                     {tile_buffer_.name, tile_buffer_.busy_cycles, tile_buffer_.stalled_cycles},
-                     {pbe_.name, pbe_.busy_cycles, pbe_.stalled_cycles}};
+    result_.units.clear();
+    for (std::size_t u = 0; u < kTimedUnitCount; ++u) {
+      // The tile fetch is not a server: it is busy while any tile is being fetched.
+      const bool fetch = u == index_of(TimedUnit::TileFetch);
+      result_.units.push_back({std::string(kTimedUnitNames[u]), fetch ? fetch_busy_cycles_ : servers_[u].busy_cycles,
+                               fetch ? 0.0 : servers_[u].stalled_cycles});
+    }
     for (std::size_t c = 0; c < busy_.size(); ++c) {
-      for (std::size_t u = 0; u < kUnits; ++u) {
+      for (std::size_t u = 0; u < kTimedUnitCount; ++u) {
         if (!busy_[c][u].intervals().empty()) result_.commands[c].unit_busy.push_back({result_.units[u].name, busy_[c][u].intervals()});
       }
     }
@@ -154,7 +137,7 @@ class TimingSim final : public Unit {
   std::uint64_t progress() const override {
     const Tick now = eq_.now();
     bool working = false;
-    for (const Server* s : {&binner_, &isp_, &usc_, &tpu_, &tile_buffer_, &pbe_}) working = working || s->free_at > now;
+    for (const Server& s : servers_) working = working || s.free_at > now;
     return next_frag_ * 1000000 + tiles_done_ + next_bin_ + (working ? static_cast<std::uint64_t>(now.ps()) : 0);
   }
   std::string stall_reason() const override {
@@ -203,7 +186,7 @@ class TimingSim final : public Unit {
       renders_.emplace_back();
       map_.add_command(*cmd);
       result_.commands.push_back({cmd->name, -1, 0, 0, {}});
-      busy_.emplace_back(kUnits, BusyIntervals(per_command_intervals_));
+      busy_.emplace_back(kTimedUnitCount, BusyIntervals(per_command_intervals_));
       if (cmd->is_dispatch) {  // a fragment job only
         frag_jobs_.push_back({c, -1});
         frag_done_.push_back(false);
@@ -242,7 +225,7 @@ class TimingSim final : public Unit {
     const Tick end = after_cycles(start, cycles);
     s.free_at = end;
     s.busy_cycles += cycles;
-    if (cycles > 0) busy_[command][s.unit].add(cycles_of(start), cycles_of(start) + cycles, cycles);
+    if (cycles > 0) busy_[command][index_of(s.unit)].add(cycles_of(start), cycles_of(start) + cycles, cycles);
     return end;
   }
 
@@ -294,7 +277,7 @@ class TimingSim final : public Unit {
       const Tick end = std::max(eq_.now(), compute_end);
       eq_.schedule(end, [this, k, compute_end] {
         // Time spent waiting for memory after the binning work itself was done.
-        binner_.stalled_cycles += std::max(0.0, cycles_of(eq_.now()) - cycles_of(compute_end));
+        server(TimedUnit::Binning).stalled_cycles += std::max(0.0, cycles_of(eq_.now()) - cycles_of(compute_end));
         bin_done_[k] = true;
         binning_busy_ = false;
         result_.commands[bin_jobs_[k].command].binning_end_cycle = cycles_of(eq_.now());
@@ -319,8 +302,8 @@ class TimingSim final : public Unit {
     const double cycles = std::max({static_cast<double>(b.primitives_in) / hw_.geometry.primitives_per_clock,
                                     static_cast<double>(b.primitives_binned) / hw_.tiling.primitives_per_clock,
                                     static_cast<double>(b.vertex_fetch_bytes + b.index_fetch_bytes) / hw_.geometry.vertex_fetch_bytes_per_clock});
-    return std::max(reserve(binner_, command, start, cycles),
-                    reserve(usc_, command, start, static_cast<double>(b.vertex_alu_ops) / alu_rate_));
+    return std::max(reserve(server(TimedUnit::Binning), command, start, cycles),
+                    reserve(server(TimedUnit::Usc), command, start, static_cast<double>(b.vertex_alu_ops) / alu_rate_));
   }
 
   /// Starts the vertex and index fetch of `b`, work of render `render` of `command` (one
@@ -412,8 +395,8 @@ class TimingSim final : public Unit {
   void start_dispatch(std::size_t f, const CommandWork& cmd) {
     const Tick start = eq_.now();
     const std::size_t command = frag_jobs_[f].command;
-    const Tick compute_end = std::max(reserve(usc_, command, start, static_cast<double>(cmd.compute_alu_ops) / alu_rate_),
-                                      reserve(tpu_, command, start, static_cast<double>(cmd.compute_texels) / tex_rate_));
+    const Tick compute_end = std::max(reserve(server(TimedUnit::Usc), command, start, static_cast<double>(cmd.compute_alu_ops) / alu_rate_),
+                                      reserve(server(TimedUnit::Texture), command, start, static_cast<double>(cmd.compute_texels) / tex_rate_));
     auto pending = std::make_shared<int>(1);
     auto finish = [this, f, compute_end, pending]() {
       if (--*pending > 0) return;
@@ -507,7 +490,7 @@ class TimingSim final : public Unit {
         if (--fetches_in_flight_ == 0) {
           const double from = cycles_of(fetch_busy_since_), to = cycles_of(eq_.now());
           fetch_busy_cycles_ += to - from;
-          busy_[render_command_][kTileFetchUnit].add(from, to, to - from);
+          busy_[render_command_][index_of(TimedUnit::TileFetch)].add(from, to, to - from);
         }
         advance_isp();
       };
@@ -555,7 +538,7 @@ class TimingSim final : public Unit {
     const double isp_cycles = std::max(static_cast<double>(t.primitives), static_cast<double>(t.samples) / raster_rate_) +
                               std::max(static_cast<double>(t.isp_wait_alu_ops) / alu_rate_, static_cast<double>(t.isp_wait_texels) / tex_rate_);
     isp_busy_ = true;
-    const Tick raster_end = reserve(isp_, render_command_, eq_.now(), isp_cycles);
+    const Tick raster_end = reserve(server(TimedUnit::Isp), render_command_, eq_.now(), isp_cycles);
     if (t.rop_depth.empty()) {
       eq_.schedule(raster_end, [this, i] { request_slots(i); });
       return;
@@ -566,7 +549,7 @@ class TimingSim final : public Unit {
     auto finish = [this, i, raster_end, pending]() {
       if (--*pending > 0) return;
       const Tick end = std::max(eq_.now(), raster_end);
-      if (end > raster_end) isp_.stalled_cycles += cycles_of(end) - cycles_of(raster_end);
+      if (end > raster_end) server(TimedUnit::Isp).stalled_cycles += cycles_of(end) - cycles_of(raster_end);
       eq_.schedule(end, [this, i] { request_slots(i); });
     };
     *pending += stream_rop(t.rop_depth, finish);
@@ -584,7 +567,7 @@ class TimingSim final : public Unit {
     TileState& ts = tiles_[i];
     ts.slots = slots_.slots_for(tasks_of(*ts.work));
     slots_.acquire(ts.slots, [this, i, resolved] {
-      isp_.stalled_cycles += cycles_of(eq_.now()) - cycles_of(resolved);
+      server(TimedUnit::Isp).stalled_cycles += cycles_of(eq_.now()) - cycles_of(resolved);
       isp_busy_ = false;
       --in_flight_;  // the tile has left the ISP: the tile fetch may bring the next one
       start_shading(i);
@@ -602,9 +585,9 @@ class TimingSim final : public Unit {
     const TileWork& t = *tiles_[i].work;
     TileState& ts = tiles_[i];
     const Tick now = eq_.now();
-    ts.usc_end = std::max({reserve(usc_, render_command_, now, static_cast<double>(t.alu_ops) / alu_rate_),
-                           reserve(tpu_, render_command_, now, static_cast<double>(t.texels) / tex_rate_),
-                           reserve(tile_buffer_, render_command_, now, static_cast<double>(t.tile_buffer_bytes) / tile_buffer_rate_)});
+    ts.usc_end = std::max({reserve(server(TimedUnit::Usc), render_command_, now, static_cast<double>(t.alu_ops) / alu_rate_),
+                           reserve(server(TimedUnit::Texture), render_command_, now, static_cast<double>(t.texels) / tex_rate_),
+                           reserve(server(TimedUnit::TileBuffer), render_command_, now, static_cast<double>(t.tile_buffer_bytes) / tile_buffer_rate_)});
     ts.pending_shading = 1;
     eq_.schedule(ts.usc_end, [this, i] { shading_part_done(i); });
     if (!t.texture_lines.empty()) {
@@ -667,7 +650,7 @@ class TimingSim final : public Unit {
       ++tiles_[i].pending_shading;
       s->start([this, i] {
         const Tick usc_end = tiles_[i].usc_end;
-        if (eq_.now() > usc_end) usc_.stalled_cycles += cycles_of(eq_.now()) - cycles_of(usc_end);
+        if (eq_.now() > usc_end) server(TimedUnit::Usc).stalled_cycles += cycles_of(eq_.now()) - cycles_of(usc_end);
         shading_part_done(i);
       });
     }
@@ -684,8 +667,10 @@ class TimingSim final : public Unit {
       const std::uint64_t bytes = write ? t.spill_write_bytes : t.spill_read_bytes;
       if (bytes == 0) continue;
       DmaStream* s = new_stream(Client::PixelBackEnd, write != 0, DramClass::Spill, outstanding);
-      // Reads come back from where the writes went (the slot holds the larger of the two).
-      for (std::uint64_t off = 0; off < bytes; off += kUscAccessBytes) s->add(base + off, std::min(kUscAccessBytes, bytes - off));
+      // Reads come back from where the writes went (the slot holds the larger of the two). One
+      // USC load or store per line of the SLC it goes through.
+      const auto line = static_cast<std::uint64_t>(hw_.cache.slc.line_bytes);
+      for (std::uint64_t off = 0; off < bytes; off += line) s->add(base + off, std::min(line, bytes - off));
       ++tiles_[i].pending_shading;
       s->start([this, i] { shading_part_done(i); });
     }
@@ -707,7 +692,7 @@ class TimingSim final : public Unit {
     for (const std::uint64_t l : t.texture_lines) s->add(map_.textures() + l, line);
     s->start([this, i] {
       const Tick usc_end = tiles_[i].usc_end;
-      if (eq_.now() > usc_end) usc_.stalled_cycles += cycles_of(eq_.now()) - cycles_of(usc_end);
+      if (eq_.now() > usc_end) server(TimedUnit::Usc).stalled_cycles += cycles_of(eq_.now()) - cycles_of(usc_end);
       shading_part_done(i);
     });
   }
@@ -729,12 +714,12 @@ class TimingSim final : public Unit {
     const TileWork& t = *tiles_[i].work;
     std::uint64_t store = 0;
     for (auto b : t.store_bytes) store += b;
-    const Tick pbe_end = reserve(pbe_, render_command_, eq_.now(), static_cast<double>(store) / hw_.writeback.bytes_per_clock);
+    const Tick pbe_end = reserve(server(TimedUnit::PixelBackEnd), render_command_, eq_.now(), static_cast<double>(store) / hw_.writeback.bytes_per_clock);
     auto pending = std::make_shared<int>(1);
     auto finish = [this, i, pbe_end, pending]() {
       if (--*pending > 0) return;
       const Tick end = std::max(eq_.now(), pbe_end);
-      if (end > pbe_end) pbe_.stalled_cycles += cycles_of(end) - cycles_of(pbe_end);
+      if (end > pbe_end) server(TimedUnit::PixelBackEnd).stalled_cycles += cycles_of(end) - cycles_of(pbe_end);
       eq_.schedule(end, [this, i] {
         store_busy_ = false;
         tile_done(i);
@@ -777,11 +762,8 @@ class TimingSim final : public Unit {
   FrameAddressMap map_;
   TileRecordBook tile_records_;
   TimingResult result_;
-  Server binner_, isp_, usc_, tpu_, tile_buffer_, pbe_;
-  /// The units of TimingResult::units: binning, tile fetch, ISP, USC, texture, tile buffer, PBE.
-  static constexpr std::size_t kUnits = 7;
-  /// The tile fetch's index there: not a Server (busy while any tile is being fetched).
-  static constexpr std::size_t kTileFetchUnit = 1;
+  std::array<Server, kTimedUnitCount> servers_{};  ///< by TimedUnit (the tile fetch's entry unused)
+  Server& server(TimedUnit u) { return servers_[index_of(u)]; }
   std::vector<std::vector<BusyIntervals>> busy_;  ///< per command and unit: when it worked for it
   TaskSlots slots_;  ///< resident tasks across the USCs (usc.count x usc.tasks_in_flight)
   bool isp_busy_ = false;  ///< the ISP is resolving a tile or holds one waiting for task slots

@@ -25,8 +25,10 @@
 // tiles of the current one (two parameter buffers), but after a partial render the next binning
 // waits (the parameter buffer is only freed when its tiles are done); a command that reads what
 // an earlier one produced waits for all earlier work.
+#include <array>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "models/busy_intervals.hpp"
@@ -37,6 +39,24 @@
 #include "kernel/stats.hpp"
 
 namespace tbdr {
+
+/// The units the timing model schedules, in the order TimingResult::units reports them.
+enum class TimedUnit : std::uint8_t {
+  Binning,       ///< geometry, tiling and the vertex work on the USCs' behalf
+  TileFetch,     ///< reading a tile's primitive lists and loads (busy while any tile is fetched)
+  Isp,           ///< hidden surface removal: rasterisation and punch-through depth resolves
+  Usc,           ///< the unified shading clusters' ALUs
+  Texture,       ///< the texture units' filtering
+  TileBuffer,    ///< the on-chip tile buffer's port (PLS, framebuffer fetch, spills)
+  PixelBackEnd,  ///< formatting and storing a finished tile
+};
+/// How many TimedUnit there are.
+inline constexpr std::size_t kTimedUnitCount = 7;
+/// Their names in the results (UnitTime::name, the database's `frame/unit.<name>` scopes), by enum.
+inline constexpr std::array<std::string_view, kTimedUnitCount> kTimedUnitNames = {
+    "binning", "tile_fetch", "isp", "usc", "texture", "tile_buffer", "pixel_back_end"};
+/// The index of `u` in TimingResult::units and in each command's busy intervals.
+constexpr std::size_t index_of(TimedUnit u) { return static_cast<std::size_t>(u); }
 
 /// Busy, stalled and idle time of one unit over the frame.
 struct UnitTime {
@@ -65,7 +85,9 @@ struct TimingResult {
   double frame_cycles = 0;
   double frame_time_ps = 0;
   std::vector<CommandTime> commands;
-  std::vector<UnitTime> units;
+  std::vector<UnitTime> units;  ///< one per TimedUnit, in its order
+  /// The busy and stalled time of `u`.
+  const UnitTime& unit(TimedUnit u) const { return units.at(index_of(u)); }
   /// Per DRAM channel ("dram.ch0", ...): when its data bus transferred, over the frame.
   std::vector<UnitBusy> dram_bus;
   DramTraffic requested;              ///< bytes the units requested, per class (before the caches)

@@ -219,10 +219,7 @@ std::vector<TagBufferWork> expect_tag_buffer_work_never_grows(const Trace& trace
     const HwConfig hw = resolve_config({}, {"isp.tag_buffers=" + std::to_string(n)}).hw;
     const FrameResult f = simulate_frame(trace, name + ".trace", scene, hw);
     const TimingResult timing = run_timing(hw, f.work);
-    double isp = -1;
-    for (const auto& u : timing.units) {
-      if (u.name == "isp") isp = u.busy_cycles;
-    }
+    const double isp = timing.unit(TimedUnit::Isp).busy_cycles;
     const auto& r = f.totals.render;
     runs.push_back({r.isp.tag_flushes.value(), r.tsp.shader_invocations.value(), r.tsp.shaded_quads.value(),
                     r.tsp.fragment_alu_ops.value(), r.tsp.texels_filtered.value(), isp, timing.frame_cycles});

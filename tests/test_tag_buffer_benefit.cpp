@@ -74,7 +74,7 @@ LayersRun run_layers(int buffers) {
     }
   }
   const TimingResult r = run_schedule(frame_work({pass_work("layers", {render_work(tiles, binning_work(kPrimitives))})}), sets);
-  return {rig.isp_stats, rig.tsp_stats, r.frame_cycles, unit_time(r, "usc").busy_cycles};
+  return {rig.isp_stats, rig.tsp_stats, r.frame_cycles, r.unit(TimedUnit::Usc).busy_cycles};
 }
 
 TEST(TagBufferBenefit, LayersOverABackgroundAreBatchedAndTheOccluderRemovesThemUnshaded) {

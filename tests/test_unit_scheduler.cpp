@@ -31,9 +31,9 @@ TEST(UnitScheduler, AnAluBoundTileTakesItsOpsOverTheUscRate) {
   // ISP: max(1 primitive, 32 samples / 32) = 1 cycle; USCs: 128000 / 128 = 1000 cycles.
   const TimingResult r = run_schedule(one_render({tile_work(0, 0, 1, 32, 128000)}));
   EXPECT_EQ(r.frame_cycles, 1001.0);
-  EXPECT_EQ(unit_time(r, "usc").busy_cycles, 1000.0);
-  EXPECT_EQ(unit_time(r, "isp").busy_cycles, 1.0);
-  EXPECT_EQ(unit_time(r, "isp").stalled_cycles, 0.0);
+  EXPECT_EQ(r.unit(TimedUnit::Usc).busy_cycles, 1000.0);
+  EXPECT_EQ(r.unit(TimedUnit::Isp).busy_cycles, 1.0);
+  EXPECT_EQ(r.unit(TimedUnit::Isp).stalled_cycles, 0.0);
   // One tile row for the heat map: fetched at 0, stored at 1001.
   ASSERT_EQ(r.tiles.size(), 1u);
   EXPECT_NEAR(r.tiles[0].cycles, 1001.0, kTickRounding);
@@ -44,7 +44,7 @@ TEST(UnitScheduler, TwiceTheUscsHalveTheShadingTime) {
   const FrameWork w = one_render({tile_work(0, 0, 1, 32, 128000)});
   for (const char* set : {"usc.count=8", "usc.lanes=32", "usc.alu_ops_per_lane_per_clock=4"}) {
     const TimingResult r = run_schedule(w, {set});
-    EXPECT_EQ(unit_time(r, "usc").busy_cycles, 500.0) << set;
+    EXPECT_EQ(r.unit(TimedUnit::Usc).busy_cycles, 500.0) << set;
     EXPECT_EQ(r.frame_cycles, 501.0) << set;
   }
 }
@@ -54,7 +54,7 @@ TEST(UnitScheduler, AFillBoundTileTakesItsSamplesOverTheRasterRate) {
   const FrameWork w = one_render({tile_work(0, 0, 10, 64000, 0)});
   const TimingResult one = run_schedule(w);
   EXPECT_EQ(one.frame_cycles, 2000.0);
-  EXPECT_EQ(unit_time(one, "isp").busy_cycles, 2000.0);
+  EXPECT_EQ(one.unit(TimedUnit::Isp).busy_cycles, 2000.0);
   const TimingResult two = run_schedule(w, {"isp.raster_pipes=2"});
   EXPECT_EQ(two.frame_cycles, 1000.0);
   // Setup bound: 3000 primitives of few samples take 3000 cycles (one per clock).
@@ -65,8 +65,8 @@ TEST(UnitScheduler, ATextureBoundTileTakesItsTexelsOverTheTextureRate) {
   // 8000 texels / (2 units x 4 texels per clock) = 1000 cycles on the texture units, while the
   // ALU work takes 128 ops / 128 = 1 cycle on the USCs.
   const TimingResult r = run_schedule(one_render({tile_work(0, 0, 0, 0, 128, 8000)}));
-  EXPECT_EQ(unit_time(r, "texture").busy_cycles, 1000.0);
-  EXPECT_EQ(unit_time(r, "usc").busy_cycles, 1.0);
+  EXPECT_EQ(r.unit(TimedUnit::Texture).busy_cycles, 1000.0);
+  EXPECT_EQ(r.unit(TimedUnit::Usc).busy_cycles, 1.0);
   EXPECT_EQ(r.frame_cycles, 1000.0);
   const TimingResult more = run_schedule(one_render({tile_work(0, 0, 0, 0, 128, 8000)}), {"texture.units=4"});
   EXPECT_EQ(more.frame_cycles, 500.0);
@@ -86,8 +86,8 @@ TEST(UnitScheduler, OneTilesShadingOverlapsTheNextOnesRasterisation) {
   for (const char* set : {"isp.tiles_in_flight=4", "isp.tiles_in_flight=1"}) {
     const TimingResult r = run_schedule(four_balanced_tiles(), {set});
     EXPECT_EQ(r.frame_cycles, 5000.0) << set;
-    EXPECT_EQ(unit_time(r, "isp").busy_cycles, 4000.0) << set;
-    EXPECT_EQ(unit_time(r, "usc").busy_cycles, 4000.0) << set;
+    EXPECT_EQ(r.unit(TimedUnit::Isp).busy_cycles, 4000.0) << set;
+    EXPECT_EQ(r.unit(TimedUnit::Usc).busy_cycles, 4000.0) << set;
   }
 }
 
@@ -102,16 +102,16 @@ TEST(UnitScheduler, FullTaskSlotsStallTheIsp) {
   const FrameWork w = one_render(tiles);
   const TimingResult r = run_schedule(w);
   EXPECT_EQ(r.frame_cycles, 3100.0);
-  EXPECT_EQ(unit_time(r, "isp").busy_cycles, 300.0);
-  EXPECT_NEAR(unit_time(r, "isp").stalled_cycles, 1800.0, kTickRounding);
+  EXPECT_EQ(r.unit(TimedUnit::Isp).busy_cycles, 300.0);
+  EXPECT_NEAR(r.unit(TimedUnit::Isp).stalled_cycles, 1800.0, kTickRounding);
   // 4 x 168 = 672 slots hold all three tiles (3 x 224): no stall, the same ALU-bound frame.
   const TimingResult deep = run_schedule(w, {"usc.tasks_in_flight=168"});
-  EXPECT_NEAR(unit_time(deep, "isp").stalled_cycles, 0.0, kTickRounding);
+  EXPECT_NEAR(deep.unit(TimedUnit::Isp).stalled_cycles, 0.0, kTickRounding);
   EXPECT_EQ(deep.frame_cycles, 3100.0);
   // 4 x 167 = 668 slots hold two (448 + 224 > 668): tile 2, resolved at 300, waits for tile 0 to
   // leave at 1100: 800 stalled.
   const TimingResult two = run_schedule(w, {"usc.tasks_in_flight=167"});
-  EXPECT_NEAR(unit_time(two, "isp").stalled_cycles, 800.0, kTickRounding);
+  EXPECT_NEAR(two.unit(TimedUnit::Isp).stalled_cycles, 800.0, kTickRounding);
 }
 
 TEST(UnitScheduler, VertexShadingCompetesWithFragmentShadingForTheUscs) {
@@ -125,7 +125,7 @@ TEST(UnitScheduler, VertexShadingCompetesWithFragmentShadingForTheUscs) {
   const RenderWork a = render_work({tile_work(0, 0, 0, 0, 128000)});
   const RenderWork b = render_work({tile_work(0, 0, 0, 0, 128000)}, vs);
   const TimingResult r = run_schedule(frame_work({pass_work("a", {a}), pass_work("b", {b})}));
-  EXPECT_EQ(unit_time(r, "usc").busy_cycles, 3000.0);
+  EXPECT_EQ(r.unit(TimedUnit::Usc).busy_cycles, 3000.0);
   EXPECT_EQ(r.frame_cycles, 3000.0);
 }
 
@@ -135,7 +135,7 @@ TEST(UnitScheduler, BinningOfTheNextPassOverlapsTheTilesOfThisOne) {
   const RenderWork r = render_work({tile_work(0, 0, 0, 0, 128000)}, binning_work(1000));
   const TimingResult two_passes = run_schedule(frame_work({pass_work("a", {r}), pass_work("b", {r})}));
   EXPECT_EQ(two_passes.frame_cycles, 3000.0);
-  EXPECT_EQ(unit_time(two_passes, "binning").busy_cycles, 2000.0);
+  EXPECT_EQ(two_passes.unit(TimedUnit::Binning).busy_cycles, 2000.0);
   ASSERT_EQ(two_passes.commands.size(), 2u);
   EXPECT_NEAR(two_passes.commands[1].start_cycle, 1000.0, kTickRounding);
   EXPECT_NEAR(two_passes.commands[1].binning_end_cycle, 2000.0, kTickRounding);

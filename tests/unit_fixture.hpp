@@ -678,13 +678,5 @@ inline FrameWork frame_work(std::vector<CommandWork> commands) {
 inline TimingResult run_schedule(const FrameWork& work, const std::vector<std::string>& sets = {}) {
   return run_timing(make_hw(sets), work);
 }
-/// Busy and stalled cycles of a unit of the result ("binning", "tile_fetch", "isp", "usc",
-/// "pixel_back_end"); a unit that is not reported fails the test through a sentinel.
-inline UnitTime unit_time(const TimingResult& r, std::string_view name) {
-  for (const auto& u : r.units) {
-    if (u.name == name) return u;
-  }
-  return {std::string(name), -1.0, -1.0};
-}
 
 }  // namespace tbdr::unit
