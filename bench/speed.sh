@@ -9,7 +9,7 @@
 # measured in the 1-thread run (1 - tile_render_wall_seconds / the process's wall seconds: trace
 # and scene loading, geometry, binning, dispatches, the timing model, the database) with the
 # speed-up Amdahl's law then allows at 16 threads, and tail_T: in the T-thread run, where the
-# timing model runs beside the functional run (docs/architecture.md), the seconds it ran on after
+# timing model runs beside the functional run (docs/performance-notes.md), the seconds it ran on after
 # the functional run ended (timing_wall_seconds - simulation_wall_seconds: what the functional run
 # does not hide), and wait_T: the seconds the timing model waited there for work the functional
 # run had not produced yet (timing_wait_seconds). The load average is printed before and after:

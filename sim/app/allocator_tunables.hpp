@@ -3,7 +3,7 @@
 // thresholds in the running process (mallopt) or, where huge pages are wanted, which only
 // GLIBC_TUNABLES can ask for, re-executes the program once with them all in GLIBC_TUNABLES; a run
 // records which it had (run_driver.cpp). Host speed only: no figure depends on them. Why each,
-// with measurements: main.cpp and docs/architecture.md, "The allocator".
+// with measurements: main.cpp and docs/performance-notes.md, "The allocator".
 #include <cstdlib>
 #include <string>
 

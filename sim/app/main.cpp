@@ -29,7 +29,7 @@ namespace {
 // fresh huge page is backed again by the host (2.9 ms per 2 MiB measured 2026-12-06; 1 ms on the
 // one measured until 2026-12-03), and the same run spent 0.56-0.78 s in the kernel with them
 // against 0.14 s without, the study 30.4 against 28.4 s (tbdr::host_reports_free_pages).
-// TBDRSIM_HUGE_PAGES=1 or 0 decides instead (docs/architecture.md, "The allocator"). Both
+// TBDRSIM_HUGE_PAGES=1 or 0 decides instead (docs/performance-notes.md, "The allocator"). Both
 // settings: tbdr::malloc_tunables (app/allocator_tunables.hpp).
 
 /// Set in the environment of the re-executed process, so it runs once (and its children, which
