@@ -130,6 +130,7 @@ template <class Ready>
 void WorkFeed::wait_until(std::unique_lock<std::mutex>& lock, Ready ready) {
   if (ready() || closed_) return;
   const auto from = std::chrono::steady_clock::now();
+  ++waits_;
   changed_.wait(lock, [&] { return ready() || closed_; });
   wait_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - from).count();
 }
@@ -141,6 +142,11 @@ void WorkFeed::wait_begun(std::unique_lock<std::mutex>& lock) {
 double WorkFeed::consumer_wait_seconds() const {
   std::lock_guard lock(mutex_);
   return wait_seconds_;
+}
+
+std::uint64_t WorkFeed::consumer_waits() const {
+  std::lock_guard lock(mutex_);
+  return waits_;
 }
 
 const FrameWork& WorkFeed::frame() {

@@ -93,6 +93,8 @@ class WorkFeed {
   /// part of the timing model's wall time in which the functional run, not the timing model,
   /// was behind.
   double consumer_wait_seconds() const;
+  /// How many times the consumer has begun to wait (counted as it blocks, before it wakes).
+  std::uint64_t consumer_waits() const;
 
  private:
   /// What of one command is published.
@@ -119,6 +121,7 @@ class WorkFeed {
   bool begun_ = false, closed_ = false;
   std::size_t expected_ = 0;
   double wait_seconds_ = 0;            ///< consumer_wait_seconds (under mutex_)
+  std::uint64_t waits_ = 0;            ///< consumer_waits (under mutex_)
 };
 
 }  // namespace tbdr

@@ -6,7 +6,6 @@
 // (That the timing it gives is the same as on a complete frame: tests/test_threads.cpp.)
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <chrono>
 #include <future>
 #include <stdexcept>
@@ -89,22 +88,21 @@ TEST(WorkFeed, OnlyTheTimeTheConsumerIsBlockedCountsAsWaiting) {
   EXPECT_EQ(ahead.wait_for(1), nullptr);
   EXPECT_EQ(ahead.consumer_wait_seconds(), 0.0);
 
-  // The consumer asks first and blocks until the producer publishes, 200 ms after it said it was
-  // about to ask: that time counts (more than 0), and no more than the call lasted.
+  // The consumer asks first and blocks until the producer publishes, which it does only once the
+  // consumer has begun to wait (consumer_waits, counted before it blocks): that time counts (more
+  // than 0), and no more than the call lasted. No clock decides the order.
   WorkFeed feed;
   feed.begin(frame, 1);
-  std::atomic<bool> asking{false};
-  std::future<double> call_seconds = std::async(std::launch::async, [&feed, &asking] {
+  std::future<double> call_seconds = std::async(std::launch::async, [&feed] {
     const auto from = std::chrono::steady_clock::now();
-    asking = true;
     EXPECT_NE(feed.wait_for(0), nullptr);
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - from).count();
   });
-  while (!asking) std::this_thread::yield();
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  while (feed.consumer_waits() == 0) std::this_thread::yield();
   feed.publish(named("a"));
   feed.close();
   const double call = call_seconds.get();
+  EXPECT_EQ(feed.consumer_waits(), 1u);
   EXPECT_GT(feed.consumer_wait_seconds(), 0.0);
   EXPECT_LE(feed.consumer_wait_seconds(), call);
 }

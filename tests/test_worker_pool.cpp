@@ -154,32 +154,43 @@ struct Interrupted {
   bool interrupted = false;
 };
 
-/// Ten jobs on two workers (the first 100 ms, the others 1 s); after the first ends, SIGINT is
-/// raised `interrupts` times while the second still runs.
-Interrupted interrupt_after_first(int interrupts) {
+/// Ten jobs on two workers: the first returns at once, the others wait (in their child process)
+/// until the test writes to a pipe, so the first always ends first, whatever the machine's load.
+/// When it has ended, SIGINT is raised `interrupts` times while the second still waits; then,
+/// if `release`, the waiting jobs are let go (else they wait until the pool kills them).
+Interrupted interrupt_after_first(int interrupts, bool release) {
   Interrupted r;
+  int gate[2];
+  if (pipe(gate) != 0) throw std::runtime_error("pipe failed");
   WorkerPoolHooks hooks;
   hooks.next = [&]() -> std::optional<WorkerJob> {
     if (r.launched == 10) return std::nullopt;
     const std::size_t i = r.launched++;
-    return function_job(i, [i] {
-      std::this_thread::sleep_for(std::chrono::milliseconds(i == 0 ? 100 : 1000));
-      return 0;
+    return function_job(i, [i, &gate] {
+      if (i == 0) return 0;
+      char c = 0;
+      return read(gate[0], &c, 1) == 1 ? 0 : 1;
     });
   };
   hooks.ended = [&](const WorkerEnd& e) {
     r.ends[e.id] = e;
     if (r.ends.size() == 1) {
       for (int k = 0; k < interrupts; ++k) raise(SIGINT);
+      if (release) {
+        const char bytes[9] = {};
+        if (write(gate[1], bytes, sizeof bytes) != static_cast<ssize_t>(sizeof bytes)) throw std::runtime_error("write failed");
+      }
     }
   };
   hooks.stopping = [&](bool kill, std::size_t) { r.stops.push_back(kill); };
   r.interrupted = run_worker_pool({2, true}, hooks);
+  close(gate[0]);
+  close(gate[1]);
   return r;
 }
 
 TEST(WorkerPool, FirstSigintStopsLaunchingAndWaits) {
-  const Interrupted r = interrupt_after_first(1);
+  const Interrupted r = interrupt_after_first(1, true);
   EXPECT_TRUE(r.interrupted);
   EXPECT_EQ(r.stops, std::vector<bool>{false});
   EXPECT_EQ(r.launched, 2u);
@@ -188,7 +199,7 @@ TEST(WorkerPool, FirstSigintStopsLaunchingAndWaits) {
 }
 
 TEST(WorkerPool, SecondSigintKillsTheRunningJobs) {
-  const Interrupted r = interrupt_after_first(2);
+  const Interrupted r = interrupt_after_first(2, false);
   EXPECT_TRUE(r.interrupted);
   EXPECT_EQ(r.stops, std::vector<bool>{true});
   EXPECT_EQ(r.ends.size(), r.launched);
