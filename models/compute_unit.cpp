@@ -449,288 +449,355 @@ ImageBuffer shade_surfaces(const ComputeContext& ctx, const AttachmentImage& sur
   return img;
 }
 
+/// One dispatch being run: its command, where its figures go, and the frame's size.
+struct KernelRun {
+  Dispatch& k;
+  const ComputeContext& ctx;
+  const DispatchCmd& cmd;
+  ComputeStats& stats;
+  DramTraffic& dram;
+  std::string& image_written;
+  int W, H;
+  std::uint64_t pixels, n_lights;
+
+  /// Tiles of `tile_px` pixels across and down the frame.
+  void tiles_of(int tile_px, int& tx, int& ty) const {
+    tx = (W + tile_px - 1) / tile_px;
+    ty = (H + tile_px - 1) / tile_px;
+  }
+  /// Keeps the kernel's output image and charges its writes.
+  void write_image(const std::string& name, ImageBuffer&& img) {
+    ctx.images->image_buffers[name] = std::move(img);
+    k.charge_write(name, pixels * kImageBytesPerPixel);
+    image_written = name;
+  }
+};
+
+/// depth_bounds: the nearest and farthest visible distance per tile.
+void run_depth_bounds(KernelRun& r) {
+  Dispatch& k = r.k;
+  const ComputeContext& ctx = r.ctx;
+  const DispatchCmd& cmd = r.cmd;
+  ComputeStats& stats = r.stats;
+  [[maybe_unused]] DramTraffic& dram = r.dram;
+  [[maybe_unused]] const int W = r.W, H = r.H;
+  [[maybe_unused]] const std::uint64_t pixels = r.pixels, n_lights = r.n_lights;
+  k.allow({"tile_px"});
+  const int tile_px = k.get_int("tile_px", kDefaultTilePx, 1, 1024);
+  const AttachmentImage* depth = k.read_depth();
+  if (!depth) k.fail("needs a depth image in reads=");
+  const std::string out = k.buffer_with(cmd.writes, BufferContent::DepthBounds);
+  if (out.empty()) k.fail("needs a depth_bounds buffer in writes=");
+  auto b = std::make_shared<DepthBounds>(DepthBounds::compute(*ctx.frustum, *depth, tile_px, ctx.pool));
+  stats.compute_alu_ops += pixels * depth->samples * kDepthReduceOps;
+  k.charge_write(out, b->min_distance.size() * kDepthBoundsTileBytes);
+  ctx.images->depth_bounds[out] = b;
+}
+
+/// tile_light_cull and tiled_deferred_shade (`shade`): the lights touching each tile, and for the
+/// second the pixels shaded from their tile's list in the same pass (Andersson's single pass).
+void run_tile_light_cull(KernelRun& r, bool shade) {
+  Dispatch& k = r.k;
+  const ComputeContext& ctx = r.ctx;
+  const DispatchCmd& cmd = r.cmd;
+  ComputeStats& stats = r.stats;
+  [[maybe_unused]] DramTraffic& dram = r.dram;
+  [[maybe_unused]] const int W = r.W, H = r.H;
+  [[maybe_unused]] const std::uint64_t pixels = r.pixels, n_lights = r.n_lights;
+  if (shade) {
+    k.allow({"tile_px", "max_lights_per_tile", "bounds", "shader"});
+  } else {
+    k.allow({"tile_px", "max_lights_per_tile", "bounds"});
+  }
+  const int tile_px = k.get_int("tile_px", kDefaultTilePx, 1, 1024);
+  const int cap = k.get_int("max_lights_per_tile", 0, 0, 1 << 20);
+  const DepthRange bounds_mode = k.get_choice("bounds", DepthRange::MinMax,
+                                              {{DepthRange::MinMax, "minmax"}, {DepthRange::Max, "max"}, {DepthRange::None, "none"}});
+  auto grid = std::make_shared<TileLightGrid>();
+  grid->tile_px = tile_px;
+  r.tiles_of(tile_px, grid->tiles_x, grid->tiles_y);
+  grid->max_lights_per_tile = static_cast<std::uint32_t>(cap);
+  const std::size_t tiles = static_cast<std::size_t>(grid->tiles_x) * static_cast<std::size_t>(grid->tiles_y);
+  grid->lists.assign(tiles, {});
+  // Depth bounds: from a depth_bounds buffer, else computed here from a depth image.
+  std::shared_ptr<DepthBounds> bounds;
+  const std::string bname = k.buffer_with(cmd.reads, BufferContent::DepthBounds);
+  if (!bname.empty()) {
+    auto it = ctx.images->depth_bounds.find(bname);
+    if (it == ctx.images->depth_bounds.end()) k.fail("depth_bounds buffer '" + bname + "' was not written by a depth_bounds dispatch");
+    if (it->second->tile_px != tile_px) k.fail("depth_bounds buffer '" + bname + "' has another tile size");
+    bounds = it->second;
+  } else if (const AttachmentImage* depth = k.read_depth(); depth && bounds_mode != DepthRange::None) {
+    bounds = std::make_shared<DepthBounds>(DepthBounds::compute(*ctx.frustum, *depth, tile_px, ctx.pool));
+    stats.compute_alu_ops += pixels * depth->samples * kDepthReduceOps;
+  }
+  // Each tile keeps the lights whose screen rectangle meets it and whose sphere touches its
+  // volume, ascending (what a hierarchical kernel computes). One item per row of tiles: it alone
+  // writes its tiles' lists and counts its overflows.
+  const auto rects = light_rects(ctx);
+  const auto spheres = view_spheres(ctx);
+  const auto row_lights = lights_by_tile_row(rects, tile_px, grid->tiles_y);
+  std::vector<std::uint64_t> row_overflows(static_cast<std::size_t>(grid->tiles_y), 0);
+  run_items(ctx, static_cast<std::size_t>(grid->tiles_y), [&](std::size_t row, unsigned /*worker*/) {
+    const int ty = static_cast<int>(row);
+    for (int tx = 0; tx < grid->tiles_x; ++tx) {
+      const std::size_t t = static_cast<std::size_t>(ty * grid->tiles_x + tx);
+      float d0 = 0.0f, d1 = 1e30f;
+      if (bounds) {
+        if (bounds->min_distance[t] > bounds->max_distance[t]) continue;  // nothing visible: empty list
+        d1 = bounds->max_distance[t] * kBoundsFarScale;
+        if (bounds_mode == DepthRange::MinMax) d0 = bounds->min_distance[t] * kBoundsNearScale;
+      }
+      const PixelRect rect = intersect({tx * tile_px, ty * tile_px, (tx + 1) * tile_px, (ty + 1) * tile_px}, {0, 0, W, H});
+      const TileSides sides = TileSides::of(*ctx.frustum, rect);
+      std::vector<std::uint32_t>& list = grid->lists[t];
+      for (std::uint32_t l : row_lights[row]) {
+        if (intersect(rects[l], rect).empty()) continue;
+        if (sides.touches(spheres[l], d0, d1)) list.push_back(l);
+      }
+      if (cap > 0 && list.size() > static_cast<std::size_t>(cap)) ++row_overflows[row];
+    }
+  });
+  for (std::uint64_t o : row_overflows) grid->overflowed_tiles += o;
+  stats.light_volume_tests += tiles * n_lights;
+  stats.compute_alu_ops += tiles * n_lights * kSphereVolumeTestOps;
+  stats.light_list_entries += grid->total_entries();
+  stats.light_list_overflows += grid->overflowed_tiles;
+  if (!shade) {
+    const std::string gname = k.buffer_with(cmd.writes, BufferContent::TileGrid);
+    const std::string lname = k.buffer_with(cmd.writes, BufferContent::LightIndexList);
+    if (gname.empty() || lname.empty()) k.fail("needs a tile_grid and a light_index_list buffer in writes=");
+    k.charge_write(gname, tiles * kTileGridEntryBytes);
+    k.charge_write(lname, grid->total_entries() * kLightIndexBytes);
+    ctx.images->tile_grids[gname] = grid;
+    return;
+  }
+  // Andersson's single pass: shade every pixel from its tile's list (kept in group-shared memory).
+  const ShaderDesc& sh = k.shader();
+  const AttachmentImage* surfaces = k.read_surfaces();
+  if (!surfaces) k.fail("needs a G-buffer image (written by a pass) in reads=");
+  const std::string out = k.buffer_with(cmd.writes, BufferContent::Image);
+  if (out.empty()) k.fail("needs an image buffer in writes=");
+  ImageBuffer img = shade_surfaces(ctx, *surfaces, sh, grid.get(), nullptr, 0, stats, dram);
+  material_texture_lines(ctx, *surfaces, k.material_fetches(sh), tile_px, stats, dram);
+  r.write_image(out, std::move(img));
+}
+
+/// cluster_flag and cluster_light_assign (`assign`): the clusters holding visible samples, and the
+/// lights touching each used cluster.
+void run_clusters(KernelRun& r, bool assign) {
+  Dispatch& k = r.k;
+  const ComputeContext& ctx = r.ctx;
+  const DispatchCmd& cmd = r.cmd;
+  ComputeStats& stats = r.stats;
+  [[maybe_unused]] DramTraffic& dram = r.dram;
+  [[maybe_unused]] const int W = r.W, H = r.H;
+  [[maybe_unused]] const std::uint64_t pixels = r.pixels, n_lights = r.n_lights;
+  if (assign) {
+    k.allow({"tile_px", "slices", "slicing", "min_depth", "dense"});
+  } else {
+    k.allow({"tile_px", "slices", "slicing", "min_depth"});
+  }
+  const int tile_px = k.get_int("tile_px", kDefaultClusterTilePx, 1, 1024);
+  const int slices = k.get_int("slices", kDefaultClusterSlices, 1, 4096);
+  const Slicing slicing = k.get_choice("slicing", Slicing::Log, {{Slicing::Log, "log"}, {Slicing::Cubical, "cubical"}});
+  const float min_depth = k.get_float("min_depth", ctx.frustum->near_plane, 0.0f, 1e6f);
+  auto grid = std::make_shared<ClusterGrid>();
+  grid->configure(*ctx.frustum, tile_px, slices, slicing, min_depth);
+  const std::size_t clusters = grid->used.size();
+  if (!assign) {
+    const AttachmentImage* depth = k.read_depth();
+    if (!depth) k.fail("needs a depth image in reads=");
+    const std::string out = k.buffer_with(cmd.writes, BufferContent::UsedClusters);
+    if (out.empty()) k.fail("needs a used_clusters buffer in writes=");
+    // One item per row of cluster tiles: it alone flags that row's clusters.
+    run_items(ctx, static_cast<std::size_t>(grid->tiles_y), [&](std::size_t row, unsigned /*worker*/) {
+      const int y_end = std::min(H, (static_cast<int>(row) + 1) * tile_px);
+      for (int y = static_cast<int>(row) * tile_px; y < y_end; ++y) {
+        for (int x = 0; x < W; ++x) {
+          const std::size_t p = (static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x)) * depth->samples;
+          for (std::size_t s = 0; s < depth->samples; ++s) {
+            const float d = depth->depth[p + s];
+            if (d < 1.0f) grid->used[grid->cluster_of(x, y, ctx.frustum->distance_of_window_depth(d))] = 1;
+          }
+        }
+      }
+    });
+    stats.compute_alu_ops += pixels * depth->samples * kClusterIndexOps;
+    stats.clusters_used += grid->used_count();
+    k.charge_write(out, clusters / 8 + grid->used_count() * kUsedClusterBytes);  // flag bits + compact list of used clusters
+    ctx.images->cluster_grids[out] = grid;
+    return;
+  }
+  const bool dense_param = k.get_choice("dense", false, {{true, "yes"}, {false, "no"}});
+  const std::string used_name = k.buffer_with(cmd.reads, BufferContent::UsedClusters);
+  if (!dense_param && !used_name.empty()) {
+    auto it = ctx.images->cluster_grids.find(used_name);
+    if (it == ctx.images->cluster_grids.end()) k.fail("used_clusters buffer '" + used_name + "' was not written by cluster_flag");
+    const ClusterGrid& f = *it->second;
+    if (f.tile_px != grid->tile_px || f.slices != grid->slices || f.slicing != grid->slicing) {
+      k.fail("cluster geometry differs from the cluster_flag dispatch that wrote '" + used_name + "'");
+    }
+    grid->used = f.used;
+  } else {
+    std::fill(grid->used.begin(), grid->used.end(), 1);
+  }
+  // Each light is tested against the used clusters its screen rectangle and depth extent reach.
+  // One item per row of cluster tiles, lights ascending: it alone writes that row's lists.
+  const auto rects = light_rects(ctx);
+  const auto spheres = view_spheres(ctx);
+  const auto row_lights = lights_by_tile_row(rects, tile_px, grid->tiles_y);
+  const auto& lights = ctx.trace->lights;
+  std::vector<std::pair<int, int>> light_slices(lights.size());  // first and last slice each light reaches
+  for (std::uint32_t l = 0; l < lights.size(); ++l) {
+    const float dist = ctx.frustum->distance_of(lights[l].position);
+    light_slices[l] = {grid->slice_of(std::max(0.0f, dist - lights[l].radius)), grid->slice_of(dist + lights[l].radius)};
+  }
+  std::vector<std::pair<float, float>> slice_ranges(static_cast<std::size_t>(grid->slices));
+  for (int s = 0; s < grid->slices; ++s) grid->slice_range(s, slice_ranges[static_cast<std::size_t>(s)].first, slice_ranges[static_cast<std::size_t>(s)].second);
+  run_items(ctx, static_cast<std::size_t>(grid->tiles_y), [&](std::size_t row, unsigned /*worker*/) {
+    const int ty = static_cast<int>(row);
+    std::vector<TileSides> sides(static_cast<std::size_t>(grid->tiles_x));
+    for (int tx = 0; tx < grid->tiles_x; ++tx) {
+      sides[static_cast<std::size_t>(tx)] =
+          TileSides::of(*ctx.frustum, intersect({tx * tile_px, ty * tile_px, (tx + 1) * tile_px, (ty + 1) * tile_px}, {0, 0, W, H}));
+    }
+    for (std::uint32_t l : row_lights[row]) {
+      const PixelRect& lr = rects[l];
+      for (int s = light_slices[l].first; s <= light_slices[l].second; ++s) {
+        const auto [d0, d1] = slice_ranges[static_cast<std::size_t>(s)];
+        for (int tx = lr.x0 / tile_px; tx <= (lr.x1 - 1) / tile_px; ++tx) {
+          const std::size_t c = grid->index(tx, ty, s);
+          if (!grid->used[c]) continue;
+          if (sides[static_cast<std::size_t>(tx)].touches(spheres[l], d0, d1)) grid->lists[c].push_back(l);
+        }
+      }
+    }
+  });
+  const std::uint64_t processed = grid->used_count();
+  stats.light_volume_tests += processed * n_lights;
+  stats.compute_alu_ops += processed * n_lights * kSphereVolumeTestOps;
+  stats.light_list_entries += grid->total_entries();
+  const std::string gname = k.buffer_with(cmd.writes, BufferContent::ClusterGrid);
+  const std::string lname = k.buffer_with(cmd.writes, BufferContent::LightIndexList);
+  if (gname.empty() || lname.empty()) k.fail("needs a cluster_grid and a light_index_list buffer in writes=");
+  k.charge_write(gname, clusters * kTileGridEntryBytes);
+  k.charge_write(lname, grid->total_entries() * kLightIndexBytes);
+  ctx.images->cluster_grids[gname] = grid;
+}
+
+/// deferred_shade and vbuffer_shade (`vbuffer`): every stored surface shaded from the lights its
+/// shader reads.
+void run_surface_shade(KernelRun& r, bool vbuffer) {
+  Dispatch& k = r.k;
+  const ComputeContext& ctx = r.ctx;
+  const DispatchCmd& cmd = r.cmd;
+  ComputeStats& stats = r.stats;
+  [[maybe_unused]] DramTraffic& dram = r.dram;
+  [[maybe_unused]] const int W = r.W, H = r.H;
+  [[maybe_unused]] const std::uint64_t pixels = r.pixels, n_lights = r.n_lights;
+  k.allow({"shader", "tile_px"});
+  const ShaderDesc& sh = k.shader();
+  const AttachmentImage* surfaces = k.read_surfaces();
+  if (!surfaces) k.fail("needs a G-buffer or visibility image (written by a pass) in reads=");
+  const std::string out = k.buffer_with(cmd.writes, BufferContent::Image);
+  if (out.empty()) k.fail("needs an image buffer in writes=");
+  const TileLightGrid* tgrid = nullptr;
+  const ClusterGrid* cgrid = nullptr;
+  if (sh.light_source == LightSource::TileList) {
+    const std::string g = k.buffer_with(cmd.reads, BufferContent::TileGrid);
+    auto it = ctx.images->tile_grids.find(g);
+    if (g.empty() || it == ctx.images->tile_grids.end()) k.fail("light_source=tile_list needs a tile_grid written by tile_light_cull in reads=");
+    tgrid = it->second.get();
+  } else if (sh.light_source == LightSource::ClusterList) {
+    const std::string g = k.buffer_with(cmd.reads, BufferContent::ClusterGrid);
+    auto it = ctx.images->cluster_grids.find(g);
+    if (g.empty() || it == ctx.images->cluster_grids.end()) k.fail("light_source=cluster_list needs a cluster_grid written by cluster_light_assign in reads=");
+    cgrid = it->second.get();
+  } else if (sh.light_source != LightSource::All) {
+    k.fail(std::string("light_source '") + to_string(sh.light_source) + "' cannot be used by a compute kernel");
+  }
+  const int tile_px = k.get_int("tile_px", kDefaultTilePx, 1, 1024);
+  ImageBuffer img = shade_surfaces(ctx, *surfaces, sh, tgrid, cgrid, vbuffer ? tile_px : 0, stats, dram);
+  material_texture_lines(ctx, *surfaces, k.material_fetches(sh), tile_px, stats, dram);
+  r.write_image(out, std::move(img));
+}
+
+/// vbuffer_worklists: one entry per distinct (tile, material).
+void run_vbuffer_worklists(KernelRun& r) {
+  Dispatch& k = r.k;
+  const ComputeContext& ctx = r.ctx;
+  const DispatchCmd& cmd = r.cmd;
+  ComputeStats& stats = r.stats;
+  [[maybe_unused]] DramTraffic& dram = r.dram;
+  [[maybe_unused]] const int W = r.W, H = r.H;
+  [[maybe_unused]] const std::uint64_t pixels = r.pixels, n_lights = r.n_lights;
+  k.allow({"tile_px"});
+  const int tile_px = k.get_int("tile_px", kDefaultTilePx, 1, 1024);
+  const AttachmentImage* vis = k.read_surfaces();
+  if (!vis) k.fail("needs a visibility image (written by a pass) in reads=");
+  const std::string out = k.buffer_with(cmd.writes, BufferContent::WorkLists);
+  if (out.empty()) k.fail("needs a work_lists buffer in writes=");
+  // One entry per distinct (tile, material). One item per row of tiles, counting its own tiles'
+  // pairs; the rows' counts add up to the frame's.
+  const int rows = (H + tile_px - 1) / tile_px;
+  const std::uint64_t tiles_x = static_cast<std::uint64_t>((W + tile_px - 1) / tile_px);
+  std::vector<std::uint64_t> row_entries(static_cast<std::size_t>(rows), 0);
+  run_items(ctx, row_entries.size(), [&](std::size_t row, unsigned /*worker*/) {
+    std::vector<std::uint64_t> pairs;  // (tile << 32) | material, a run of equal pairs once
+    const int y_end = std::min(H, (static_cast<int>(row) + 1) * tile_px);
+    for (int y = static_cast<int>(row) * tile_px; y < y_end; ++y) {
+      for (int x = 0; x < W; ++x) {
+        const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
+        if (!vis->surface_valid[p * vis->samples]) continue;
+        const std::uint64_t key = ((static_cast<std::uint64_t>(row) * tiles_x + static_cast<std::uint64_t>(x / tile_px)) << 32) |
+                                  vis->surface[p * vis->samples].material;
+        if (pairs.empty() || pairs.back() != key) pairs.push_back(key);
+      }
+    }
+    std::sort(pairs.begin(), pairs.end());
+    row_entries[row] = static_cast<std::uint64_t>(std::unique(pairs.begin(), pairs.end()) - pairs.begin());
+  });
+  std::uint64_t entries = 0;
+  for (std::uint64_t e : row_entries) entries += e;
+  stats.compute_alu_ops += pixels * kWorkListOps;
+  stats.work_list_entries += entries;
+  k.charge_write(out, entries * kWorkListEntryBytes);
+}
+
+/// The kernels: each ComputeKernel and the function that runs it (the flag says which of a pair).
+struct KernelDesc {
+  ComputeKernel kernel;
+  void (*run)(KernelRun&, bool);
+  bool flag = false;
+};
+const KernelDesc kKernels[] = {
+    {ComputeKernel::DepthBounds, [](KernelRun& r, bool) { run_depth_bounds(r); }},
+    {ComputeKernel::TileLightCull, run_tile_light_cull, false},
+    {ComputeKernel::TiledDeferredShade, run_tile_light_cull, true},
+    {ComputeKernel::ClusterFlag, run_clusters, false},
+    {ComputeKernel::ClusterLightAssign, run_clusters, true},
+    {ComputeKernel::DeferredShade, run_surface_shade, false},
+    {ComputeKernel::VbufferShade, run_surface_shade, true},
+    {ComputeKernel::VbufferWorklists, [](KernelRun& r, bool) { run_vbuffer_worklists(r); }},
+};
+
 }  // namespace
 
 void run_dispatch(const ComputeContext& ctx, const DispatchCmd& cmd, ComputeStats& stats, DramTraffic& dram,
                   std::string& image_written) {
   Dispatch k(ctx, cmd, stats, dram);
-  const ComputeKernel kernel = cmd.kernel;
   const int W = ctx.viewport.width_px, H = ctx.viewport.height_px;
-  const std::uint64_t pixels = static_cast<std::uint64_t>(W) * static_cast<std::uint64_t>(H);
-  const auto n_lights = static_cast<std::uint64_t>(ctx.trace->lights.size());
   ++stats.dispatches;
   stats.workgroups += cmd.group_count();
   stats.threads += cmd.group_count() * cmd.group_size[0] * cmd.group_size[1] * cmd.group_size[2];
   k.charge_reads();
-
-  auto tiles_of = [&](int tile_px, int& tx, int& ty) {
-    tx = (W + tile_px - 1) / tile_px;
-    ty = (H + tile_px - 1) / tile_px;
-  };
-  auto write_image = [&](const std::string& name, ImageBuffer&& img) {
-    ctx.images->image_buffers[name] = std::move(img);
-    k.charge_write(name, pixels * kImageBytesPerPixel);
-    image_written = name;
-  };
-
-  if (kernel == ComputeKernel::DepthBounds) {
-    k.allow({"tile_px"});
-    const int tile_px = k.get_int("tile_px", kDefaultTilePx, 1, 1024);
-    const AttachmentImage* depth = k.read_depth();
-    if (!depth) k.fail("needs a depth image in reads=");
-    const std::string out = k.buffer_with(cmd.writes, BufferContent::DepthBounds);
-    if (out.empty()) k.fail("needs a depth_bounds buffer in writes=");
-    auto b = std::make_shared<DepthBounds>(DepthBounds::compute(*ctx.frustum, *depth, tile_px, ctx.pool));
-    stats.compute_alu_ops += pixels * depth->samples * kDepthReduceOps;
-    k.charge_write(out, b->min_distance.size() * kDepthBoundsTileBytes);
-    ctx.images->depth_bounds[out] = b;
-    return;
+  KernelRun r{k, ctx, cmd, stats, dram, image_written, W, H,
+              static_cast<std::uint64_t>(W) * static_cast<std::uint64_t>(H), static_cast<std::uint64_t>(ctx.trace->lights.size())};
+  for (const KernelDesc& d : kKernels) {
+    if (d.kernel == cmd.kernel) return d.run(r, d.flag);
   }
-
-  if (kernel == ComputeKernel::TileLightCull || kernel == ComputeKernel::TiledDeferredShade) {
-    const bool shade = kernel == ComputeKernel::TiledDeferredShade;
-    if (shade) {
-      k.allow({"tile_px", "max_lights_per_tile", "bounds", "shader"});
-    } else {
-      k.allow({"tile_px", "max_lights_per_tile", "bounds"});
-    }
-    const int tile_px = k.get_int("tile_px", kDefaultTilePx, 1, 1024);
-    const int cap = k.get_int("max_lights_per_tile", 0, 0, 1 << 20);
-    const DepthRange bounds_mode = k.get_choice("bounds", DepthRange::MinMax,
-                                                {{DepthRange::MinMax, "minmax"}, {DepthRange::Max, "max"}, {DepthRange::None, "none"}});
-    auto grid = std::make_shared<TileLightGrid>();
-    grid->tile_px = tile_px;
-    tiles_of(tile_px, grid->tiles_x, grid->tiles_y);
-    grid->max_lights_per_tile = static_cast<std::uint32_t>(cap);
-    const std::size_t tiles = static_cast<std::size_t>(grid->tiles_x) * static_cast<std::size_t>(grid->tiles_y);
-    grid->lists.assign(tiles, {});
-    // Depth bounds: from a depth_bounds buffer, else computed here from a depth image.
-    std::shared_ptr<DepthBounds> bounds;
-    const std::string bname = k.buffer_with(cmd.reads, BufferContent::DepthBounds);
-    if (!bname.empty()) {
-      auto it = ctx.images->depth_bounds.find(bname);
-      if (it == ctx.images->depth_bounds.end()) k.fail("depth_bounds buffer '" + bname + "' was not written by a depth_bounds dispatch");
-      if (it->second->tile_px != tile_px) k.fail("depth_bounds buffer '" + bname + "' has another tile size");
-      bounds = it->second;
-    } else if (const AttachmentImage* depth = k.read_depth(); depth && bounds_mode != DepthRange::None) {
-      bounds = std::make_shared<DepthBounds>(DepthBounds::compute(*ctx.frustum, *depth, tile_px, ctx.pool));
-      stats.compute_alu_ops += pixels * depth->samples * kDepthReduceOps;
-    }
-    // Each tile keeps the lights whose screen rectangle meets it and whose sphere touches its
-    // volume, ascending (what a hierarchical kernel computes). One item per row of tiles: it alone
-    // writes its tiles' lists and counts its overflows.
-    const auto rects = light_rects(ctx);
-    const auto spheres = view_spheres(ctx);
-    const auto row_lights = lights_by_tile_row(rects, tile_px, grid->tiles_y);
-    std::vector<std::uint64_t> row_overflows(static_cast<std::size_t>(grid->tiles_y), 0);
-    run_items(ctx, static_cast<std::size_t>(grid->tiles_y), [&](std::size_t row, unsigned /*worker*/) {
-      const int ty = static_cast<int>(row);
-      for (int tx = 0; tx < grid->tiles_x; ++tx) {
-        const std::size_t t = static_cast<std::size_t>(ty * grid->tiles_x + tx);
-        float d0 = 0.0f, d1 = 1e30f;
-        if (bounds) {
-          if (bounds->min_distance[t] > bounds->max_distance[t]) continue;  // nothing visible: empty list
-          d1 = bounds->max_distance[t] * kBoundsFarScale;
-          if (bounds_mode == DepthRange::MinMax) d0 = bounds->min_distance[t] * kBoundsNearScale;
-        }
-        const PixelRect rect = intersect({tx * tile_px, ty * tile_px, (tx + 1) * tile_px, (ty + 1) * tile_px}, {0, 0, W, H});
-        const TileSides sides = TileSides::of(*ctx.frustum, rect);
-        std::vector<std::uint32_t>& list = grid->lists[t];
-        for (std::uint32_t l : row_lights[row]) {
-          if (intersect(rects[l], rect).empty()) continue;
-          if (sides.touches(spheres[l], d0, d1)) list.push_back(l);
-        }
-        if (cap > 0 && list.size() > static_cast<std::size_t>(cap)) ++row_overflows[row];
-      }
-    });
-    for (std::uint64_t o : row_overflows) grid->overflowed_tiles += o;
-    stats.light_volume_tests += tiles * n_lights;
-    stats.compute_alu_ops += tiles * n_lights * kSphereVolumeTestOps;
-    stats.light_list_entries += grid->total_entries();
-    stats.light_list_overflows += grid->overflowed_tiles;
-    if (!shade) {
-      const std::string gname = k.buffer_with(cmd.writes, BufferContent::TileGrid);
-      const std::string lname = k.buffer_with(cmd.writes, BufferContent::LightIndexList);
-      if (gname.empty() || lname.empty()) k.fail("needs a tile_grid and a light_index_list buffer in writes=");
-      k.charge_write(gname, tiles * kTileGridEntryBytes);
-      k.charge_write(lname, grid->total_entries() * kLightIndexBytes);
-      ctx.images->tile_grids[gname] = grid;
-      return;
-    }
-    // Andersson's single pass: shade every pixel from its tile's list (kept in group-shared memory).
-    const ShaderDesc& sh = k.shader();
-    const AttachmentImage* surfaces = k.read_surfaces();
-    if (!surfaces) k.fail("needs a G-buffer image (written by a pass) in reads=");
-    const std::string out = k.buffer_with(cmd.writes, BufferContent::Image);
-    if (out.empty()) k.fail("needs an image buffer in writes=");
-    ImageBuffer img = shade_surfaces(ctx, *surfaces, sh, grid.get(), nullptr, 0, stats, dram);
-    material_texture_lines(ctx, *surfaces, k.material_fetches(sh), tile_px, stats, dram);
-    write_image(out, std::move(img));
-    return;
-  }
-
-  if (kernel == ComputeKernel::ClusterFlag || kernel == ComputeKernel::ClusterLightAssign) {
-    const bool assign = kernel == ComputeKernel::ClusterLightAssign;
-    if (assign) {
-      k.allow({"tile_px", "slices", "slicing", "min_depth", "dense"});
-    } else {
-      k.allow({"tile_px", "slices", "slicing", "min_depth"});
-    }
-    const int tile_px = k.get_int("tile_px", kDefaultClusterTilePx, 1, 1024);
-    const int slices = k.get_int("slices", kDefaultClusterSlices, 1, 4096);
-    const Slicing slicing = k.get_choice("slicing", Slicing::Log, {{Slicing::Log, "log"}, {Slicing::Cubical, "cubical"}});
-    const float min_depth = k.get_float("min_depth", ctx.frustum->near_plane, 0.0f, 1e6f);
-    auto grid = std::make_shared<ClusterGrid>();
-    grid->configure(*ctx.frustum, tile_px, slices, slicing, min_depth);
-    const std::size_t clusters = grid->used.size();
-    if (!assign) {
-      const AttachmentImage* depth = k.read_depth();
-      if (!depth) k.fail("needs a depth image in reads=");
-      const std::string out = k.buffer_with(cmd.writes, BufferContent::UsedClusters);
-      if (out.empty()) k.fail("needs a used_clusters buffer in writes=");
-      // One item per row of cluster tiles: it alone flags that row's clusters.
-      run_items(ctx, static_cast<std::size_t>(grid->tiles_y), [&](std::size_t row, unsigned /*worker*/) {
-        const int y_end = std::min(H, (static_cast<int>(row) + 1) * tile_px);
-        for (int y = static_cast<int>(row) * tile_px; y < y_end; ++y) {
-          for (int x = 0; x < W; ++x) {
-            const std::size_t p = (static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x)) * depth->samples;
-            for (std::size_t s = 0; s < depth->samples; ++s) {
-              const float d = depth->depth[p + s];
-              if (d < 1.0f) grid->used[grid->cluster_of(x, y, ctx.frustum->distance_of_window_depth(d))] = 1;
-            }
-          }
-        }
-      });
-      stats.compute_alu_ops += pixels * depth->samples * kClusterIndexOps;
-      stats.clusters_used += grid->used_count();
-      k.charge_write(out, clusters / 8 + grid->used_count() * kUsedClusterBytes);  // flag bits + compact list of used clusters
-      ctx.images->cluster_grids[out] = grid;
-      return;
-    }
-    const bool dense_param = k.get_choice("dense", false, {{true, "yes"}, {false, "no"}});
-    const std::string used_name = k.buffer_with(cmd.reads, BufferContent::UsedClusters);
-    if (!dense_param && !used_name.empty()) {
-      auto it = ctx.images->cluster_grids.find(used_name);
-      if (it == ctx.images->cluster_grids.end()) k.fail("used_clusters buffer '" + used_name + "' was not written by cluster_flag");
-      const ClusterGrid& f = *it->second;
-      if (f.tile_px != grid->tile_px || f.slices != grid->slices || f.slicing != grid->slicing) {
-        k.fail("cluster geometry differs from the cluster_flag dispatch that wrote '" + used_name + "'");
-      }
-      grid->used = f.used;
-    } else {
-      std::fill(grid->used.begin(), grid->used.end(), 1);
-    }
-    // Each light is tested against the used clusters its screen rectangle and depth extent reach.
-    // One item per row of cluster tiles, lights ascending: it alone writes that row's lists.
-    const auto rects = light_rects(ctx);
-    const auto spheres = view_spheres(ctx);
-    const auto row_lights = lights_by_tile_row(rects, tile_px, grid->tiles_y);
-    const auto& lights = ctx.trace->lights;
-    std::vector<std::pair<int, int>> light_slices(lights.size());  // first and last slice each light reaches
-    for (std::uint32_t l = 0; l < lights.size(); ++l) {
-      const float dist = ctx.frustum->distance_of(lights[l].position);
-      light_slices[l] = {grid->slice_of(std::max(0.0f, dist - lights[l].radius)), grid->slice_of(dist + lights[l].radius)};
-    }
-    std::vector<std::pair<float, float>> slice_ranges(static_cast<std::size_t>(grid->slices));
-    for (int s = 0; s < grid->slices; ++s) grid->slice_range(s, slice_ranges[static_cast<std::size_t>(s)].first, slice_ranges[static_cast<std::size_t>(s)].second);
-    run_items(ctx, static_cast<std::size_t>(grid->tiles_y), [&](std::size_t row, unsigned /*worker*/) {
-      const int ty = static_cast<int>(row);
-      std::vector<TileSides> sides(static_cast<std::size_t>(grid->tiles_x));
-      for (int tx = 0; tx < grid->tiles_x; ++tx) {
-        sides[static_cast<std::size_t>(tx)] =
-            TileSides::of(*ctx.frustum, intersect({tx * tile_px, ty * tile_px, (tx + 1) * tile_px, (ty + 1) * tile_px}, {0, 0, W, H}));
-      }
-      for (std::uint32_t l : row_lights[row]) {
-        const PixelRect& lr = rects[l];
-        for (int s = light_slices[l].first; s <= light_slices[l].second; ++s) {
-          const auto [d0, d1] = slice_ranges[static_cast<std::size_t>(s)];
-          for (int tx = lr.x0 / tile_px; tx <= (lr.x1 - 1) / tile_px; ++tx) {
-            const std::size_t c = grid->index(tx, ty, s);
-            if (!grid->used[c]) continue;
-            if (sides[static_cast<std::size_t>(tx)].touches(spheres[l], d0, d1)) grid->lists[c].push_back(l);
-          }
-        }
-      }
-    });
-    const std::uint64_t processed = grid->used_count();
-    stats.light_volume_tests += processed * n_lights;
-    stats.compute_alu_ops += processed * n_lights * kSphereVolumeTestOps;
-    stats.light_list_entries += grid->total_entries();
-    const std::string gname = k.buffer_with(cmd.writes, BufferContent::ClusterGrid);
-    const std::string lname = k.buffer_with(cmd.writes, BufferContent::LightIndexList);
-    if (gname.empty() || lname.empty()) k.fail("needs a cluster_grid and a light_index_list buffer in writes=");
-    k.charge_write(gname, clusters * kTileGridEntryBytes);
-    k.charge_write(lname, grid->total_entries() * kLightIndexBytes);
-    ctx.images->cluster_grids[gname] = grid;
-    return;
-  }
-
-  if (kernel == ComputeKernel::DeferredShade || kernel == ComputeKernel::VbufferShade) {
-    k.allow({"shader", "tile_px"});
-    const ShaderDesc& sh = k.shader();
-    const AttachmentImage* surfaces = k.read_surfaces();
-    if (!surfaces) k.fail("needs a G-buffer or visibility image (written by a pass) in reads=");
-    const std::string out = k.buffer_with(cmd.writes, BufferContent::Image);
-    if (out.empty()) k.fail("needs an image buffer in writes=");
-    const TileLightGrid* tgrid = nullptr;
-    const ClusterGrid* cgrid = nullptr;
-    if (sh.light_source == LightSource::TileList) {
-      const std::string g = k.buffer_with(cmd.reads, BufferContent::TileGrid);
-      auto it = ctx.images->tile_grids.find(g);
-      if (g.empty() || it == ctx.images->tile_grids.end()) k.fail("light_source=tile_list needs a tile_grid written by tile_light_cull in reads=");
-      tgrid = it->second.get();
-    } else if (sh.light_source == LightSource::ClusterList) {
-      const std::string g = k.buffer_with(cmd.reads, BufferContent::ClusterGrid);
-      auto it = ctx.images->cluster_grids.find(g);
-      if (g.empty() || it == ctx.images->cluster_grids.end()) k.fail("light_source=cluster_list needs a cluster_grid written by cluster_light_assign in reads=");
-      cgrid = it->second.get();
-    } else if (sh.light_source != LightSource::All) {
-      k.fail(std::string("light_source '") + to_string(sh.light_source) + "' cannot be used by a compute kernel");
-    }
-    const bool vbuffer = kernel == ComputeKernel::VbufferShade;
-    const int tile_px = k.get_int("tile_px", kDefaultTilePx, 1, 1024);
-    ImageBuffer img = shade_surfaces(ctx, *surfaces, sh, tgrid, cgrid, vbuffer ? tile_px : 0, stats, dram);
-    material_texture_lines(ctx, *surfaces, k.material_fetches(sh), tile_px, stats, dram);
-    write_image(out, std::move(img));
-    return;
-  }
-
-  if (kernel == ComputeKernel::VbufferWorklists) {
-    k.allow({"tile_px"});
-    const int tile_px = k.get_int("tile_px", kDefaultTilePx, 1, 1024);
-    const AttachmentImage* vis = k.read_surfaces();
-    if (!vis) k.fail("needs a visibility image (written by a pass) in reads=");
-    const std::string out = k.buffer_with(cmd.writes, BufferContent::WorkLists);
-    if (out.empty()) k.fail("needs a work_lists buffer in writes=");
-    // One entry per distinct (tile, material). One item per row of tiles, counting its own tiles'
-    // pairs; the rows' counts add up to the frame's.
-    const int rows = (H + tile_px - 1) / tile_px;
-    const std::uint64_t tiles_x = static_cast<std::uint64_t>((W + tile_px - 1) / tile_px);
-    std::vector<std::uint64_t> row_entries(static_cast<std::size_t>(rows), 0);
-    run_items(ctx, row_entries.size(), [&](std::size_t row, unsigned /*worker*/) {
-      std::vector<std::uint64_t> pairs;  // (tile << 32) | material, a run of equal pairs once
-      const int y_end = std::min(H, (static_cast<int>(row) + 1) * tile_px);
-      for (int y = static_cast<int>(row) * tile_px; y < y_end; ++y) {
-        for (int x = 0; x < W; ++x) {
-          const std::size_t p = static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x);
-          if (!vis->surface_valid[p * vis->samples]) continue;
-          const std::uint64_t key = ((static_cast<std::uint64_t>(row) * tiles_x + static_cast<std::uint64_t>(x / tile_px)) << 32) |
-                                    vis->surface[p * vis->samples].material;
-          if (pairs.empty() || pairs.back() != key) pairs.push_back(key);
-        }
-      }
-      std::sort(pairs.begin(), pairs.end());
-      row_entries[row] = static_cast<std::uint64_t>(std::unique(pairs.begin(), pairs.end()) - pairs.begin());
-    });
-    std::uint64_t entries = 0;
-    for (std::uint64_t e : row_entries) entries += e;
-    stats.compute_alu_ops += pixels * kWorkListOps;
-    stats.work_list_entries += entries;
-    k.charge_write(out, entries * kWorkListEntryBytes);
-    return;
-  }
-
-  k.fail(std::string("kernel '") + to_string(kernel) + "' is not implemented");
+  k.fail(std::string("kernel '") + to_string(cmd.kernel) + "' is not implemented");
 }
 
 }  // namespace tbdr
