@@ -28,6 +28,7 @@
 // forward pixel kill (Arm Mali) after the next isp.forward_pixel_kill_window primitives, unless
 // one of them wrote an opaque sample over it meanwhile. With isp.early_z=0 (tbr/imr) the tests
 // come after the shader: every rasterised sample is shaded and only those passing write colour.
+#include <bit>
 #include <cstdint>
 #include <deque>
 #include <vector>
@@ -103,6 +104,58 @@ class Isp {
     std::uint32_t li;      ///< sample index in the tile
     std::uint32_t slot;    ///< its place in the sample's stack
   };
+  /// The tile being rendered, as the per-primitive steps read it (set by begin_tile).
+  struct TileFrame {
+    PixelRect rect{};
+    int W = 0, S = 1, rw = 0, L = 1;  ///< frame width, samples per pixel, tile width, layers per sample
+    bool late_z = false;              ///< tbr / imr with isp.early_z=0: shade every rasterised sample
+    std::size_t fpk_window = 0;       ///< tbr forward pixel kill: primitives queued before shading
+    std::uint64_t ds_bytes = 0, tag_bytes = 0;  ///< per sample: depth/stencil and tag buffer bytes
+    float* depth = nullptr;           ///< the frame's depth (null: no depth attachment)
+    std::uint8_t* stencil = nullptr;
+    bool has_stencil = false;
+    std::uint32_t* overdraw = nullptr;  ///< per pixel: rasterised samples (only with images)
+    /// Index of a sample in the frame's depth and stencil.
+    std::size_t global_index(std::int32_t x, std::int32_t y, std::uint32_t bit) const {
+      return (static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x)) * static_cast<std::size_t>(S) +
+             static_cast<std::size_t>(std::countr_zero(bit));
+    }
+  };
+  /// One primitive's visit of the tile: what its pipeline asks of the tests, and what rasterising
+  /// it counted (the candidates are candidates_[0, n_cand)).
+  struct PrimitiveVisit {
+    const Primitive* p;
+    const PipelineState* pl;
+    std::uint32_t prim_index = 0, list_pos = 0;
+    bool depth_on = false, write_on = false, stencil_on = false;
+    bool early_write = false;    ///< tbr / imr: an opaque primitive writes its depth at the test
+    bool layered = false;        ///< not opaque: its samples stack on the layers beneath
+    bool open_verdicts = false;  ///< tbdr: a punch-through layer may still change a depth verdict
+    std::uint8_t ref = 0;        ///< stencil reference
+    std::uint32_t depth_outcomes = 0;
+    std::uint64_t rasterised = 0, depth_reads = 0;
+    std::uint64_t final_fails = 0;  ///< tbdr: samples whose depth test failed for good
+    /// tbdr: a sample cannot take the primitive without a punch-through's alpha result or a free
+    /// layer: the tile's layers are flushed first.
+    bool conflict = false;
+    std::size_t n_cand = 0;
+  };
+  /// Prepares the tile's state (stacks, forward pixel kill queue) and fills `tf`.
+  void begin_tile(const PixelRect& rect, TileFrame& tf);
+  /// The visit of the primitive at `list_pos` of the tile's list, before rasterising.
+  PrimitiveVisit begin_primitive(const TileFrame& tf, std::uint32_t list_pos, std::uint32_t prim_index) const;
+  /// tbdr: a primitive the tile's depth bounds hide everywhere, counted without a per-sample test.
+  void count_hidden_primitive(const TileFrame& tf, const PrimitiveVisit& v, IspStats& isp);
+  /// tbdr's common case (no stencil, no open verdict, no ROP): rasterises into candidates.
+  void rasterize_deferred(const TileFrame& tf, PrimitiveVisit& v);
+  /// Every other case: stencil and depth tests per sample, candidates (tbdr) or pending samples.
+  void rasterize_general(const TileFrame& tf, PrimitiveVisit& v, IspStats& isp);
+  /// tbdr: flushes first on a conflict, then applies the final verdicts and pushes the tags.
+  void take_verdicts(const TileFrame& tf, const PrimitiveVisit& v, const std::vector<std::uint32_t>& prims, IspStats& isp,
+                     TspStats& tsp);
+  /// tbr / imr: shades the primitive's samples now, or queues them for forward pixel kill.
+  void shade_in_submission_order(const TileFrame& tf, const PrimitiveVisit& v, std::uint32_t& arrivals, IspStats& isp,
+                                 TspStats& tsp);
   /// Shades every layer of the tile in submission order and empties the stacks; a mid-tile flush
   /// that resolves punch-through depth makes the ISP wait for those punch-through shaders.
   void flush(const std::vector<std::uint32_t>& prims, bool mid_tile, IspStats& isp, TspStats& tsp);
