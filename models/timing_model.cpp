@@ -39,7 +39,48 @@ struct Server {
   std::size_t unit = 0;  ///< its index in TimingResult::units (and in each command's busy intervals)
   Tick free_at{0};
   double busy_cycles = 0;
-  double stalled_cycles = 0;
+  /// Its busy spans and the spans its work waited (for memory, for a full queue downstream), in
+  /// cycles, merged as they grow: the stalled time is the time it was waiting and not busy, counted
+  /// once however many of its tiles wait at once (stalled_cycles()), so that busy + stalled + idle
+  /// is the frame.
+  std::vector<std::pair<double, double>> spans;
+  std::size_t spans_merged = 0;  ///< size of `spans` after its last merge
+
+  /// Notes a span it was busy or waited, [from, to) in cycles.
+  void add_span(double from, double to) {
+    if (to <= from) return;
+    if (!spans.empty() && from <= spans.back().second && from >= spans.back().first) {
+      spans.back().second = std::max(spans.back().second, to);  // (back-to-back reservations)
+      return;
+    }
+    spans.emplace_back(from, to);
+    if (spans.size() >= 2 * std::max<std::size_t>(spans_merged, kSpansBeforeMerge)) merge_spans();
+  }
+  /// Sorts and merges the spans (their union stays the same).
+  void merge_spans() {
+    std::sort(spans.begin(), spans.end());
+    std::size_t n = 0;
+    for (const auto& sp : spans) {
+      if (n > 0 && sp.first <= spans[n - 1].second) {
+        spans[n - 1].second = std::max(spans[n - 1].second, sp.second);
+      } else {
+        spans[n++] = sp;
+      }
+    }
+    spans.resize(n);
+    spans_merged = n;
+  }
+  /// Cycles it waited while not busy: the union of its spans less its busy cycles (the busy spans
+  /// are disjoint: a reservation starts when the one before it ends).
+  double stalled_cycles() {
+    merge_spans();
+    double covered = 0;
+    for (const auto& sp : spans) covered += sp.second - sp.first;
+    return std::max(0.0, covered - busy_cycles);
+  }
+  /// Spans kept before the first merge (later: twice the merged count); a merge sorts them, so
+  /// about log2 of the frame's spans merges in all.
+  static constexpr std::size_t kSpansBeforeMerge = 4096;
 };
 
 /// Scheduling state of one tile of the current render.
@@ -105,13 +146,13 @@ class TimingSim final : public Unit {
     end_commands_before(commands_.size());  // (checks their tiles fit their slots)
     result_.frame_time_ps = static_cast<double>(end_tick_.ps());
     result_.frame_cycles = static_cast<double>(core_.cycles_at(end_tick_).count());
-    result_.units = {{binner_.name, binner_.busy_cycles, binner_.stalled_cycles},
+    result_.units = {{binner_.name, binner_.busy_cycles, binner_.stalled_cycles()},
                      {"tile_fetch", fetch_busy_cycles_, 0},
-                     {isp_.name, isp_.busy_cycles, isp_.stalled_cycles},
-                     {usc_.name, usc_.busy_cycles, usc_.stalled_cycles},
-                     {tpu_.name, tpu_.busy_cycles, tpu_.stalled_cycles},
-                     {tile_buffer_.name, tile_buffer_.busy_cycles, tile_buffer_.stalled_cycles},
-                     {pbe_.name, pbe_.busy_cycles, pbe_.stalled_cycles}};
+                     {isp_.name, isp_.busy_cycles, isp_.stalled_cycles()},
+                     {usc_.name, usc_.busy_cycles, usc_.stalled_cycles()},
+                     {tpu_.name, tpu_.busy_cycles, tpu_.stalled_cycles()},
+                     {tile_buffer_.name, tile_buffer_.busy_cycles, tile_buffer_.stalled_cycles()},
+                     {pbe_.name, pbe_.busy_cycles, pbe_.stalled_cycles()}};
     for (std::size_t c = 0; c < busy_.size(); ++c) {
       for (std::size_t u = 0; u < kUnits; ++u) {
         if (!busy_[c][u].intervals().empty()) result_.commands[c].unit_busy.push_back({result_.units[u].name, busy_[c][u].intervals()});
@@ -242,7 +283,10 @@ class TimingSim final : public Unit {
     const Tick end = after_cycles(start, cycles);
     s.free_at = end;
     s.busy_cycles += cycles;
-    if (cycles > 0) busy_[command][s.unit].add(cycles_of(start), cycles_of(start) + cycles, cycles);
+    if (cycles > 0) {
+      busy_[command][s.unit].add(cycles_of(start), cycles_of(start) + cycles, cycles);
+      s.add_span(cycles_of(start), cycles_of(start) + cycles);
+    }
     return end;
   }
 
@@ -294,7 +338,7 @@ class TimingSim final : public Unit {
       const Tick end = std::max(eq_.now(), compute_end);
       eq_.schedule(end, [this, k, compute_end] {
         // Time spent waiting for memory after the binning work itself was done.
-        binner_.stalled_cycles += std::max(0.0, cycles_of(eq_.now()) - cycles_of(compute_end));
+        binner_.add_span(cycles_of(compute_end), cycles_of(eq_.now()));
         bin_done_[k] = true;
         binning_busy_ = false;
         result_.commands[bin_jobs_[k].command].binning_end_cycle = cycles_of(eq_.now());
@@ -566,7 +610,7 @@ class TimingSim final : public Unit {
     auto finish = [this, i, raster_end, pending]() {
       if (--*pending > 0) return;
       const Tick end = std::max(eq_.now(), raster_end);
-      if (end > raster_end) isp_.stalled_cycles += cycles_of(end) - cycles_of(raster_end);
+      if (end > raster_end) isp_.add_span(cycles_of(raster_end), cycles_of(end));
       eq_.schedule(end, [this, i] { request_slots(i); });
     };
     *pending += stream_rop(t.rop_depth, finish);
@@ -584,7 +628,7 @@ class TimingSim final : public Unit {
     TileState& ts = tiles_[i];
     ts.slots = slots_.slots_for(tasks_of(*ts.work));
     slots_.acquire(ts.slots, [this, i, resolved] {
-      isp_.stalled_cycles += cycles_of(eq_.now()) - cycles_of(resolved);
+      isp_.add_span(cycles_of(resolved), cycles_of(eq_.now()));
       isp_busy_ = false;
       --in_flight_;  // the tile has left the ISP: the tile fetch may bring the next one
       start_shading(i);
@@ -667,7 +711,7 @@ class TimingSim final : public Unit {
       ++tiles_[i].pending_shading;
       s->start([this, i] {
         const Tick usc_end = tiles_[i].usc_end;
-        if (eq_.now() > usc_end) usc_.stalled_cycles += cycles_of(eq_.now()) - cycles_of(usc_end);
+        if (eq_.now() > usc_end) usc_.add_span(cycles_of(usc_end), cycles_of(eq_.now()));
         shading_part_done(i);
       });
     }
@@ -707,7 +751,7 @@ class TimingSim final : public Unit {
     for (const std::uint64_t l : t.texture_lines) s->add(map_.textures() + l, line);
     s->start([this, i] {
       const Tick usc_end = tiles_[i].usc_end;
-      if (eq_.now() > usc_end) usc_.stalled_cycles += cycles_of(eq_.now()) - cycles_of(usc_end);
+      if (eq_.now() > usc_end) usc_.add_span(cycles_of(usc_end), cycles_of(eq_.now()));
       shading_part_done(i);
     });
   }
@@ -734,7 +778,7 @@ class TimingSim final : public Unit {
     auto finish = [this, i, pbe_end, pending]() {
       if (--*pending > 0) return;
       const Tick end = std::max(eq_.now(), pbe_end);
-      if (end > pbe_end) pbe_.stalled_cycles += cycles_of(end) - cycles_of(pbe_end);
+      if (end > pbe_end) pbe_.add_span(cycles_of(pbe_end), cycles_of(end));
       eq_.schedule(end, [this, i] {
         store_busy_ = false;
         tile_done(i);
