@@ -75,6 +75,8 @@ int cmd_sweep(const std::vector<std::string>& args, std::ostream& out, std::ostr
 
   const std::vector<std::string> traces =
       vm.count("trace") ? vm["trace"].as<std::vector<std::string>>() : std::vector<std::string>{};
+  // `config = series6xt_gx6450` in the file names the preset as --config does.
+  set_sweep_config_lookup([](const std::string& name) { return find_data_file(name, DataFolder::Configs); });
   const SweepSpec spec = parse_sweep_file(find_data_file(vm["file"].as<std::string>(), DataFolder::Sweeps), traces,
                                           vm.count("db") ? vm["db"].as<std::string>() : std::string(), trace_generators());
   const std::string binary = vm.count("tbdrsim") ? vm["tbdrsim"].as<std::string>() : self_executable();
