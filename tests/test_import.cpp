@@ -99,6 +99,15 @@ TEST(Import, FixtureBecomesATraceAndAClipSpaceGlb) {
   for (const char* f : {"vkcube.trace", "vkcube.glb", "vkcube.import.txt", "vkcube.reference.png"}) {
     EXPECT_TRUE(fs::is_regular_file(dir / f)) << f;
   }
+  // Imported from the exported intermediate, as from an .rdc, the intermediate is kept beside the
+  // trace as vkcube.capture/ (docs/capture-import.md's step 4 reads it), without the .rdc.
+  EXPECT_TRUE(fs::is_regular_file(dir / "vkcube.capture" / "frame.json"));
+  EXPECT_TRUE(fs::is_regular_file(dir / "vkcube.capture" / "reference.png"));
+  EXPECT_FALSE(fs::exists(dir / "vkcube.capture" / "vkcube_frame272.rdc"));
+  // The clear colour as the capture's floats read, not their double expansion (0.20000000298023224).
+  std::ifstream summary_in(dir / "vkcube.import.txt");
+  const std::string summary((std::istreambuf_iterator<char>(summary_in)), {});
+  EXPECT_NE(summary.find("clears to colour [0.2, 0.2, 0.2, 0.2]"), std::string::npos) << summary;
   const Trace t = read_trace(trace_path.string());
   EXPECT_EQ(t.frame.width, 320);
   EXPECT_EQ(t.frame.height, 240);
