@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/report.hpp"
 #include "analysis/results_db.hpp"
 #include "analysis/sql.hpp"
 #include "cli_run.hpp"
@@ -138,6 +139,21 @@ TEST(CliHonest, ParamsFiltersAndWraps) {
   EXPECT_NE(none.err.find("did you mean 'tiling.tile_width'"), std::string::npos) << none.err;
 }
 
+// Item 6: the views' SQL is printed by the tool itself (`tbdrsim --views | sqlite3 DB` from any
+// folder, where `sqlite3 DB < analysis/views.sql` needs the checkout), exactly as compiled in.
+TEST(CliHonest, ViewsArePrintedFromAnyFolder) {
+  const auto r = run_cli({"--views"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out, std::string(views_sql()));
+  EXPECT_NE(r.out.find("CREATE VIEW v_run_summary"), std::string::npos);
+  const auto dir = testing_scratch::scratch_dir("cli_honest", "views");
+  const SqlConnection db((dir / "by_hand.db").string());
+  db.exec(r.out);  // what sqlite3 does with it
+  SqlStatement q(db, "SELECT count(*) FROM sqlite_master WHERE type = 'view' AND name = 'v_unit'");
+  ASSERT_TRUE(q.step());
+  EXPECT_EQ(q.int64(0), 1);
+}
+
 // Item 8: `run --images none` writes no images and no folder named none; a run that fails (its
 // trace is missing) leaves no images folder it created.
 TEST(CliHonest, RunImagesNoneAndFailedRunsLeaveNoFolder) {
@@ -190,6 +206,26 @@ TEST(CliHonest, StudyRefusalsAreCountedNotFailures) {
   EXPECT_NE(again.out.find("(this study: 3 finished run(s), 1 refused; the database holds 8 run(s), 6 finished, 4 of them "
                            "from earlier studies into " + out),
             std::string::npos) << again.out;
+}
+
+// Item 10: a study refuses a light count of 0 (nothing to compare: the frame is unlit) before
+// writing anything, even for techniques whose generators accept it; `trace --lights 0` stays the
+// documented unlit frame (validate's probes), with no light evaluated.
+TEST(CliHonest, StudyRefusesZeroLightsTraceDocumentsThem) {
+  const auto dir = testing_scratch::scratch_dir("cli_honest", "zero_lights");
+  const std::string out = (dir / "s").string();
+  const auto r = run_cli({"study", "--out", out, "--resolution", "64x36", "--scene", "atrium:1", "--lights", "0", "--technique",
+                          "plain_forward", "--images", "none", "--jobs", "1"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--lights 0"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  const auto help = run_cli({"trace", "--help"});
+  EXPECT_NE(help.out.find("0: none, the surfaces shaded"), std::string::npos) << help.out;  // (Boost wraps the rest)
+  const std::string trace = (dir / "unlit.trace").string();
+  ASSERT_EQ(run_cli({"trace", "--lights", "0", "--resolution", "64x36", "--scene", "atrium:1", "--out", trace}).code, 0);
+  const std::string db = (dir / "r.db").string();
+  ASSERT_EQ(run_cli({"run", "--trace", trace, "--db", db, "--quiet"}).code, 0);
+  EXPECT_EQ(query_number(db, "SELECT lights_per_pixel FROM v_run_summary"), 0.0);
 }
 
 // Item 9: a sweep file's `config = NAME` names a preset as --config does; the dry run names each

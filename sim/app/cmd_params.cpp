@@ -97,7 +97,7 @@ void print_table(const ParamTable& table, const ResolvedParams& p, bool resolved
       // The key, value and unit on one line; the range, the description and its source below it.
       std::string line = head.str();
       while (!line.empty() && line.back() == ' ') line.pop_back();
-      out << line << "\n" << wrapped("range " + d.range_text() + ". " + d.doc + " (source: " + d.source + ")", 6);
+      out << line << "\n" << wrapped((d.range_text().rfind("one of", 0) == 0 ? "" : "range ") + d.range_text() + ". " + d.doc + " (source: " + d.source + ")", 6);
     }
   }
 }

@@ -107,7 +107,9 @@ void add_trace_setup_options(po::options_description& desc) {
   desc.add_options()
       ("scene", po::value<std::string>()->default_value("atrium:" + std::to_string(default_atrium_detail)),
        "atrium[:detail] (detail 1..5, default 3) or a .gltf/.glb file")
-      ("lights", po::value<int>()->default_value(256), "number of generated lights")
+      ("lights", po::value<int>()->default_value(256),
+       "number of generated lights, 0 to 1000000; 0: none, the surfaces shaded unlit (validate's ALU- and "
+       "texture-bound probes; techniques that cull a light array refuse it)")
       ("light-seed", po::value<std::uint64_t>()->default_value(1), "seed of the light placement")
       ("light-file", po::value<std::string>(), "read the lights from this file instead of generating them")
       ("camera", po::value<std::string>()->default_value(""), "atrium viewpoint (entrance, gallery, top, ...); glTF: framing")

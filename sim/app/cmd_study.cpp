@@ -159,6 +159,9 @@ void draw_progress(std::ostream& out, std::size_t done, std::size_t total, doubl
   }
 }
 
+/// The most lights a study point may have: the trace generator's limit (`trace --lights`).
+constexpr int kMaxStudyLights = 1000000;
+
 StudyPlan plan_from_options(const po::variables_map& vm) {
   StudyPlan plan;
   plan.dir = vm["out"].as<std::string>();
@@ -166,6 +169,14 @@ StudyPlan plan_from_options(const po::variables_map& vm) {
   if (plan.jobs < 1 || plan.jobs > 64) throw InputError("--jobs " + std::to_string(plan.jobs), "expected 1..64 worker processes");
   plan.threads = threads_option(vm, threads_per_worker(plan.jobs));
   plan.light_counts = vm.count("lights") ? vm["lights"].as<std::vector<int>>() : std::vector<int>{256, 1024};
+  for (const int n : plan.light_counts) {
+    // A study compares how techniques light: a frame without lights (`trace --lights 0`, the unlit
+    // frame validate's probes use) has nothing to compare, and the light-culling techniques refuse it.
+    if (n < 1 || n > kMaxStudyLights) {
+      throw InputError("--lights " + std::to_string(n), "a study compares lighting: expected light counts in [1, " +
+                                                            std::to_string(kMaxStudyLights) + "]");
+    }
+  }
   plan.techniques = vm.count("technique") ? vm["technique"].as<std::vector<std::string>>() : technique_names();
   for (const auto& n : plan.techniques) find_technique(n);  // InputError for an unknown name
   plan.image_mode = vm["images"].as<std::string>();
@@ -661,7 +672,7 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
       "jobs,j", po::value<int>()->default_value(2), "worker processes")(
       "scene", po::value<std::string>()->default_value("atrium:" + std::to_string(default_atrium_detail)), "scene")(
       "resolution", po::value<std::string>()->default_value("1920x1080"), "WIDTHxHEIGHT")(
-      "lights", po::value<std::vector<int>>()->multitoken(), "light counts (default 256 1024)")(
+      "lights", po::value<std::vector<int>>()->multitoken(), "light counts, each 1 or more (default 256 1024)")(
       "technique", po::value<std::vector<std::string>>()->multitoken(), "techniques (default: all)")(
       "images", po::value<std::string>()->default_value("largest"), "write images for: none | largest (light count) | all")(
       "option", po::value<std::vector<std::string>>()->composing(),
