@@ -97,7 +97,7 @@ void print_table(const ParamTable& table, const ResolvedParams& p, bool resolved
       // The key, value and unit on one line; the range, the description and its source below it.
       std::string line = head.str();
       while (!line.empty() && line.back() == ' ') line.pop_back();
-      out << line << "\n" << wrapped((d.range_text().rfind("one of", 0) == 0 ? "" : "range ") + d.range_text() + ". " + d.doc + " (source: " + d.source + ")", 6);
+      out << line << "\n" << wrapped((d.range_text().rfind('[', 0) == 0 || d.range_text().rfind('(', 0) == 0 ? "range " : "") + d.range_text() + ". " + d.doc + " (source: " + d.source + ")", 6);
     }
   }
 }
@@ -203,7 +203,18 @@ int cmd_params(const std::vector<std::string>& args, std::ostream& out, std::ost
     out << "\n";
     print_table(table, rc.params, resolved, shown, out);
     if (!derived.empty()) out << "\nDerived (not parameters):\n";
-    for (const auto& l : derived) out << wrapped(l, 2);
+    for (const auto& l : derived) {
+      // "name  value  = formula = numbers": each "= ..." on a line of its own (the lines stay short).
+      std::size_t start = 0;
+      for (bool first = true;; first = false) {
+        const std::size_t eq = l.find(" = ", start);
+        std::string part = l.substr(start, eq == std::string::npos ? std::string::npos : eq - start);
+        while (!part.empty() && part.back() == ' ') part.pop_back();
+        out << (first ? "  " : "      = ") << part << "\n";
+        if (eq == std::string::npos) break;
+        start = eq + 3;
+      }
+    }
   }
   return 0;
 }
