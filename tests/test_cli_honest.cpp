@@ -51,6 +51,9 @@ TEST(CliHonest, MisspelledOptionsAreAnsweredWithASuggestion) {
   const auto s = run_cli({"study", "--resolutoin", "64x36"});
   EXPECT_EQ(s.code, 2);
   EXPECT_NE(s.err.find("did you mean '--resolution'"), std::string::npos) << s.err;
+  const auto cmd = run_cli({"reprot", "--db", "x.db"});
+  EXPECT_EQ(cmd.code, 2);
+  EXPECT_NE(cmd.err.find("unknown command 'reprot'; did you mean 'report'?"), std::string::npos) << cmd.err;
   // Nothing close: the usage, as before.
   const auto far = run_cli({"params", "--zzzzzzzz"});
   EXPECT_EQ(far.code, 2);

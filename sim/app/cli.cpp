@@ -336,7 +336,10 @@ int cli_main(const std::vector<std::string>& args, std::ostream& out, std::ostre
     for (const auto& c : cli_commands()) {
       if (name == c.name) return c.run(std::vector<std::string>(args.begin() + 1, args.end()), out, err);
     }
-    err << "tbdrsim: unknown command '" << name << "'\n\n";
+    std::vector<std::string> names;
+    for (const auto& c : cli_commands()) names.push_back(c.name);
+    const std::string guess = did_you_mean(name, names);
+    err << "tbdrsim: unknown command '" << name << "'" << (guess.empty() ? "" : "; " + guess) << "\n\n";
     print_usage(err);
     return 2;
   } catch (const UsageError& e) {
