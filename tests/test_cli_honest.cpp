@@ -203,6 +203,10 @@ TEST(CliHonest, StudyRefusalsAreCountedNotFailures) {
   EXPECT_NE(rep.out.find("3 finished run(s) (1 failed run(s) left out)"), std::string::npos) << rep.out;
   EXPECT_NE(rep.out.find("  1 x refused: pass '"), std::string::npos) << rep.out;
   EXPECT_NE(rep.out.find("immediate-mode GPU (gpu.mode=imr) does not have"), std::string::npos) << rep.out;
+  const auto csv = run_cli({"report", "--db", db, "--metric", "cycles", "--format", "csv"});
+  ASSERT_EQ(csv.code, 0) << csv.err;
+  EXPECT_EQ(csv.out.find("refused"), std::string::npos) << "the CSV stays a table: " << csv.out;
+  EXPECT_NE(csv.err.find("1 failed run(s) left out:\n  1 x refused: pass '"), std::string::npos) << csv.err;
   // Again into the same folder: 3 more finished runs; the database holds 8 rows, 4 of them earlier.
   const auto again = run_cli(args);
   EXPECT_EQ(again.code, 0) << again.err;

@@ -162,7 +162,7 @@ int cmd_merge(const std::vector<std::string>& args, std::ostream& out, std::ostr
   return 0;
 }
 
-int cmd_report(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
+int cmd_report(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   po::options_description desc("report options");
   desc.add_options()
       ("db,d", po::value<std::string>()->required(), "results database")
@@ -213,6 +213,12 @@ int cmd_report(const std::vector<std::string>& args, std::ostream& out, std::ost
     throw InputError("", std::string(e.what()) + "; " + guess);
   }
   print_report(table, format, opt.transpose, out);
+  if (format == ReportFormat::Csv && table.runs_failed > 0) {
+    // The CSV stays a table; what it left out is said beside it.
+    err << "tbdrsim report: " << table.runs_failed << " failed run(s) left out:";
+    for (const auto& [reason, n] : table.failed_reasons) err << "\n  " << n << " x " << reason;
+    err << "\n";
+  }
   return 0;
 }
 
