@@ -203,7 +203,29 @@ struct SelectedRuns {
   std::vector<std::int64_t> ok;              ///< ascending
   std::map<std::int64_t, std::string> inputs;
   std::int64_t failed = 0;                   ///< failed runs passing the filter
+  std::map<std::string, std::int64_t> failed_reasons;  ///< reason -> runs
 };
+
+/// A failed run's error as a reason shared by the runs it stopped: without the "FILE:LINE: " of
+/// the trace it names (each point has its own), "(no error recorded)" when empty.
+std::string failure_reason(const std::string& error) {
+  if (error.empty()) return "(no error recorded)";
+  std::string prefix, rest = error;
+  if (rest.rfind("refused: ", 0) == 0) {
+    prefix = "refused: ";
+    rest = rest.substr(prefix.size());
+  }
+  // "path/x.trace:12: pass 'lighting' ...": drop up to the ": " after the first ":<digits>".
+  for (std::size_t colon = rest.find(':'); colon != std::string::npos; colon = rest.find(':', colon + 1)) {
+    std::size_t d = colon + 1;
+    while (d < rest.size() && std::isdigit(static_cast<unsigned char>(rest[d]))) ++d;
+    if (d > colon + 1 && rest.compare(d, 2, ": ") == 0) {
+      rest = rest.substr(d + 2);
+      break;
+    }
+  }
+  return prefix + rest;
+}
 
 /// The keys of v_param: every stored parameter key and the pseudo-keys of the view.
 std::vector<std::string> param_keys(const SqlConnection& db) {
@@ -291,7 +313,7 @@ SelectedRuns select_runs(const SqlConnection& db, const std::string& where) {
       pivot = "WITH p AS (SELECT run_id AS p_run_id" + cols + " FROM v_param WHERE key IN (" + in +
               ") GROUP BY run_id) ";
     }
-    SqlStatement q(db, pivot + "SELECT run_id, status, config_hash, trace_hash FROM v_run_summary" +
+    SqlStatement q(db, pivot + "SELECT run_id, status, config_hash, trace_hash, coalesce(error, '') FROM v_run_summary" +
                            (used.empty() ? "" : " LEFT JOIN p ON p.p_run_id = run_id") + " WHERE (" + cond +
                            ") ORDER BY run_id");
     int b = 1;
@@ -303,6 +325,7 @@ SelectedRuns select_runs(const SqlConnection& db, const std::string& where) {
         r.inputs[q.int64(0)] = q.text(2) + "/" + q.text(3);
       } else {
         ++r.failed;
+        ++r.failed_reasons[failure_reason(q.text(4))];
       }
     }
   } catch (const InputError& e) {
@@ -502,6 +525,9 @@ ReportTable build_report(const ResultsDb& db, const ReportOptions& opt) {
   }
   const SelectedRuns runs = select_runs(sql, opt.where);
   t.runs_failed = runs.failed;
+  for (const auto& [reason, n] : runs.failed_reasons) t.failed_reasons.emplace_back(reason, n);
+  std::stable_sort(t.failed_reasons.begin(), t.failed_reasons.end(),
+                   [](const auto& a, const auto& b) { return a.second > b.second; });
   t.runs_used = static_cast<std::int64_t>(runs.ok.size());
   const std::set<std::int64_t> selected(runs.ok.begin(), runs.ok.end());
   auto run_keys = group_keys_of(sql, keys, t.group_keys, selected);
@@ -695,6 +721,18 @@ void print_report(const ReportTable& t, ReportFormat format, bool transpose, std
     out << ", grouped by ";
     for (std::size_t k = 0; k < t.group_keys.size(); ++k) out << (k ? " x " : "") << t.group_keys[k];
     out << "; the runs of a group averaged\n";
+    if (t.runs_failed) {
+      // Which runs did not finish, and why (a study's refused points, a sweep's failed ones).
+      constexpr std::size_t kReasonsShown = 5;
+      out << "left out: " << t.runs_failed << " failed run(s), status failed, by reason:\n";
+      for (std::size_t i = 0; i < t.failed_reasons.size() && i < kReasonsShown; ++i) {
+        out << "  " << t.failed_reasons[i].second << " x " << t.failed_reasons[i].first << "\n";
+      }
+      if (t.failed_reasons.size() > kReasonsShown) {
+        out << "  (" << t.failed_reasons.size() - kReasonsShown << " other reason(s): "
+            << "`SELECT run_id, technique, error FROM v_run_summary WHERE status <> 'ok'` lists every one)\n";
+      }
+    }
     if (ranked) {
       out << "ranked by " << t.metrics[*t.rank_metric] << (t.rank_largest_first ? " (largest first)" : " (least first)");
       if (t.group_keys.size() > 1) {

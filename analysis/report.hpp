@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace tbdr {
@@ -88,6 +89,9 @@ struct ReportTable {
   std::vector<Section> sections;
   std::int64_t runs_used = 0;     ///< finished runs that passed the filter
   std::int64_t runs_failed = 0;   ///< failed runs left out (matching the filter)
+  /// Why they failed: each distinct reason (the runs' error without the trace's file:line prefix)
+  /// and how many runs it left out, most first.
+  std::vector<std::pair<std::string, std::int64_t>> failed_reasons;
   /// Groups holding runs of different configurations or traces (averaged together), if any.
   std::int64_t mixed_groups = 0;
 };

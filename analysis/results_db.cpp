@@ -1,5 +1,6 @@
 #include "analysis/results_db.hpp"
 
+#include <sqlite3.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -184,12 +185,17 @@ void ResultsDb::check_identity() {
   // like a foreign one (id 0 with schema objects).
   int app_id = 0;
   int object_count = 0;
-  {
+  try {
     SqlStatement s(conn_, "SELECT (SELECT application_id FROM pragma_application_id), (SELECT count(*) FROM sqlite_master)");
     if (s.step()) {
       app_id = static_cast<int>(s.int64(0));
       object_count = static_cast<int>(s.int64(1));
     }
+  } catch (const SqlError& e) {
+    // A text file, an image, a trace given as --db: SQLite cannot read its header.
+    if (e.code() != SQLITE_NOTADB) throw;
+    throw InputError(path(), "not a results database: the file is not an SQLite database (a text or other file); "
+                             "--db names the database a run, sweep or study wrote, or a new file to create");
   }
   if (app_id != kApplicationId && (app_id != 0 || object_count != 0)) {
     throw InputError(path(), "not a tbdrsim results database (SQLite application_id " +

@@ -256,16 +256,23 @@ FROM runs r JOIN stats s ON s.run_id = r.id AND s.scope = 'frame/energy'
 WHERE s.name GLOB '*_pj' AND s.name <> 'total_pj';
 
 -- Busy, stalled and idle cycles and utilization per run and timed unit (binning, tile fetch, ISP,
--- USC, pixel back end: every frame/unit.<unit> scope the run driver wrote).
+-- USC, pixel back end: every frame/unit.<unit> scope the run driver wrote). A unit's instances
+-- (the USCs) are one server: busy is the time it worked, stalled the time its work waited (for
+-- memory, for a full queue downstream) while it was not working, counted once however many tiles
+-- waited at once, idle the rest; the three add up to the frame, and their _pct columns to 100.
 DROP VIEW IF EXISTS v_unit;
 CREATE VIEW v_unit AS
-SELECT r.id AS run_id, r.technique, r.config_name, r.status, substr(s.scope, 12) AS unit,
-  max(CASE WHEN s.name = 'busy_cycles' THEN s.value END) AS busy_cycles,
-  max(CASE WHEN s.name = 'stalled_cycles' THEN s.value END) AS stalled_cycles,
-  max(CASE WHEN s.name = 'idle_cycles' THEN s.value END) AS idle_cycles,
-  max(CASE WHEN s.name = 'utilization' THEN s.value END) AS utilization
-FROM runs r JOIN stats s ON s.run_id = r.id AND s.scope > 'frame/unit.' AND s.scope < 'frame/unit/'  -- 'frame/unit.*'
-GROUP BY r.id, s.scope;
+SELECT u.*, 100.0 * u.busy_cycles / f.value AS busy_pct, 100.0 * u.stalled_cycles / f.value AS stalled_pct,
+  100.0 * u.idle_cycles / f.value AS idle_pct
+FROM (
+  SELECT r.id AS run_id, r.technique, r.config_name, r.status, substr(s.scope, 12) AS unit,
+    max(CASE WHEN s.name = 'busy_cycles' THEN s.value END) AS busy_cycles,
+    max(CASE WHEN s.name = 'stalled_cycles' THEN s.value END) AS stalled_cycles,
+    max(CASE WHEN s.name = 'idle_cycles' THEN s.value END) AS idle_cycles,
+    max(CASE WHEN s.name = 'utilization' THEN s.value END) AS utilization
+  FROM runs r JOIN stats s ON s.run_id = r.id AND s.scope > 'frame/unit.' AND s.scope < 'frame/unit/'  -- 'frame/unit.*'
+  GROUP BY r.id, s.scope) u
+LEFT JOIN stats f ON f.run_id = u.run_id AND f.scope = 'frame/timing' AND f.name = 'frame_cycles' AND f.value > 0;
 
 -- The derived figures of v_metric: name, unit and meaning (stats files and docs/queries.md use it).
 DROP VIEW IF EXISTS v_metric_def;

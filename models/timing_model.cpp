@@ -34,7 +34,48 @@ struct Server {
   TimedUnit unit = TimedUnit::Binning;  ///< which unit it is (its index in TimingResult::units)
   Tick free_at{0};
   double busy_cycles = 0;
-  double stalled_cycles = 0;
+  /// Its busy spans and the spans its work waited (for memory, for a full queue downstream), in
+  /// cycles, merged as they grow: the stalled time is the time it was waiting and not busy, counted
+  /// once however many of its tiles wait at once (stalled_cycles()), so that busy + stalled + idle
+  /// is the frame.
+  std::vector<std::pair<double, double>> spans;
+  std::size_t spans_merged = 0;  ///< size of `spans` after its last merge
+
+  /// Notes a span it was busy or waited, [from, to) in cycles.
+  void add_span(double from, double to) {
+    if (to <= from) return;
+    if (!spans.empty() && from <= spans.back().second && from >= spans.back().first) {
+      spans.back().second = std::max(spans.back().second, to);  // (back-to-back reservations)
+      return;
+    }
+    spans.emplace_back(from, to);
+    if (spans.size() >= 2 * std::max<std::size_t>(spans_merged, kSpansBeforeMerge)) merge_spans();
+  }
+  /// Sorts and merges the spans (their union stays the same).
+  void merge_spans() {
+    std::sort(spans.begin(), spans.end());
+    std::size_t n = 0;
+    for (const auto& sp : spans) {
+      if (n > 0 && sp.first <= spans[n - 1].second) {
+        spans[n - 1].second = std::max(spans[n - 1].second, sp.second);
+      } else {
+        spans[n++] = sp;
+      }
+    }
+    spans.resize(n);
+    spans_merged = n;
+  }
+  /// Cycles it waited while not busy: the union of its spans less its busy cycles (the busy spans
+  /// are disjoint: a reservation starts when the one before it ends).
+  double stalled_cycles() {
+    merge_spans();
+    double covered = 0;
+    for (const auto& sp : spans) covered += sp.second - sp.first;
+    return std::max(0.0, covered - busy_cycles);
+  }
+  /// Spans kept before the first merge (later: twice the merged count); a merge sorts them, so
+  /// about log2 of the frame's spans merges in all.
+  static constexpr std::size_t kSpansBeforeMerge = 4096;
 };
 
 /// Scheduling state of one tile of the current render.
@@ -93,7 +134,7 @@ class TimingSim final : public Unit {
       // The tile fetch is not a server: it is busy while any tile is being fetched.
       const bool fetch = u == index_of(TimedUnit::TileFetch);
       result_.units.push_back({std::string(kTimedUnitNames[u]), fetch ? fetch_busy_cycles_ : servers_[u].busy_cycles,
-                               fetch ? 0.0 : servers_[u].stalled_cycles});
+                               fetch ? 0.0 : servers_[u].stalled_cycles()});
     }
     for (std::size_t c = 0; c < busy_.size(); ++c) {
       for (std::size_t u = 0; u < kTimedUnitCount; ++u) {
@@ -225,7 +266,10 @@ class TimingSim final : public Unit {
     const Tick end = after_cycles(start, cycles);
     s.free_at = end;
     s.busy_cycles += cycles;
-    if (cycles > 0) busy_[command][index_of(s.unit)].add(cycles_of(start), cycles_of(start) + cycles, cycles);
+    if (cycles > 0) {
+      busy_[command][index_of(s.unit)].add(cycles_of(start), cycles_of(start) + cycles, cycles);
+      s.add_span(cycles_of(start), cycles_of(start) + cycles);
+    }
     return end;
   }
 
@@ -277,7 +321,7 @@ class TimingSim final : public Unit {
       const Tick end = std::max(eq_.now(), compute_end);
       eq_.schedule(end, [this, k, compute_end] {
         // Time spent waiting for memory after the binning work itself was done.
-        server(TimedUnit::Binning).stalled_cycles += std::max(0.0, cycles_of(eq_.now()) - cycles_of(compute_end));
+        server(TimedUnit::Binning).add_span(cycles_of(compute_end), cycles_of(eq_.now()));
         bin_done_[k] = true;
         binning_busy_ = false;
         result_.commands[bin_jobs_[k].command].binning_end_cycle = cycles_of(eq_.now());
@@ -549,7 +593,7 @@ class TimingSim final : public Unit {
     auto finish = [this, i, raster_end, pending]() {
       if (--*pending > 0) return;
       const Tick end = std::max(eq_.now(), raster_end);
-      if (end > raster_end) server(TimedUnit::Isp).stalled_cycles += cycles_of(end) - cycles_of(raster_end);
+      if (end > raster_end) server(TimedUnit::Isp).add_span(cycles_of(raster_end), cycles_of(end));
       eq_.schedule(end, [this, i] { request_slots(i); });
     };
     *pending += stream_rop(t.rop_depth, finish);
@@ -567,7 +611,7 @@ class TimingSim final : public Unit {
     TileState& ts = tiles_[i];
     ts.slots = slots_.slots_for(tasks_of(*ts.work));
     slots_.acquire(ts.slots, [this, i, resolved] {
-      server(TimedUnit::Isp).stalled_cycles += cycles_of(eq_.now()) - cycles_of(resolved);
+      server(TimedUnit::Isp).add_span(cycles_of(resolved), cycles_of(eq_.now()));
       isp_busy_ = false;
       --in_flight_;  // the tile has left the ISP: the tile fetch may bring the next one
       start_shading(i);
@@ -650,7 +694,7 @@ class TimingSim final : public Unit {
       ++tiles_[i].pending_shading;
       s->start([this, i] {
         const Tick usc_end = tiles_[i].usc_end;
-        if (eq_.now() > usc_end) server(TimedUnit::Usc).stalled_cycles += cycles_of(eq_.now()) - cycles_of(usc_end);
+        if (eq_.now() > usc_end) server(TimedUnit::Usc).add_span(cycles_of(usc_end), cycles_of(eq_.now()));
         shading_part_done(i);
       });
     }
@@ -692,7 +736,7 @@ class TimingSim final : public Unit {
     for (const std::uint64_t l : t.texture_lines) s->add(map_.textures() + l, line);
     s->start([this, i] {
       const Tick usc_end = tiles_[i].usc_end;
-      if (eq_.now() > usc_end) server(TimedUnit::Usc).stalled_cycles += cycles_of(eq_.now()) - cycles_of(usc_end);
+      if (eq_.now() > usc_end) server(TimedUnit::Usc).add_span(cycles_of(usc_end), cycles_of(eq_.now()));
       shading_part_done(i);
     });
   }
@@ -719,7 +763,7 @@ class TimingSim final : public Unit {
     auto finish = [this, i, pbe_end, pending]() {
       if (--*pending > 0) return;
       const Tick end = std::max(eq_.now(), pbe_end);
-      if (end > pbe_end) server(TimedUnit::PixelBackEnd).stalled_cycles += cycles_of(end) - cycles_of(pbe_end);
+      if (end > pbe_end) server(TimedUnit::PixelBackEnd).add_span(cycles_of(pbe_end), cycles_of(end));
       eq_.schedule(end, [this, i] {
         store_busy_ = false;
         tile_done(i);

@@ -178,7 +178,7 @@ TEST(Cli, StrayPositionalArgumentsAreRefusedByName) {
   const auto dir = testing_scratch::scratch_dir("cli", "stray");
   const std::string db = (dir / "r.db").string();
   const std::vector<std::vector<std::string>> lines = {
-      {"params", "--set", "isp.tag_buffers=4", "stray"},
+      {"params", "--set", "isp.tag_buffers=4", "tile", "stray"},  // (params takes one PATTERN)
       {"run", "--trace", (dir / "none.trace").string(), "--db", db, "stray"},
       {"report", "--db", db, "--format", "csv", "stray"},
       {"trace", "--out", (dir / "t.trace").string(), "stray"},

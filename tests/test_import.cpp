@@ -99,6 +99,15 @@ TEST(Import, FixtureBecomesATraceAndAClipSpaceGlb) {
   for (const char* f : {"vkcube.trace", "vkcube.glb", "vkcube.import.txt", "vkcube.reference.png"}) {
     EXPECT_TRUE(fs::is_regular_file(dir / f)) << f;
   }
+  // Imported from the exported intermediate, as from an .rdc, the intermediate is kept beside the
+  // trace as vkcube.capture/ (docs/capture-import.md's step 4 reads it), without the .rdc.
+  EXPECT_TRUE(fs::is_regular_file(dir / "vkcube.capture" / "frame.json"));
+  EXPECT_TRUE(fs::is_regular_file(dir / "vkcube.capture" / "reference.png"));
+  EXPECT_FALSE(fs::exists(dir / "vkcube.capture" / "vkcube_frame272.rdc"));
+  // The clear colour as the capture's floats read, not their double expansion (0.20000000298023224).
+  std::ifstream summary_in(dir / "vkcube.import.txt");
+  const std::string summary((std::istreambuf_iterator<char>(summary_in)), {});
+  EXPECT_NE(summary.find("clears to colour [0.2, 0.2, 0.2, 0.2]"), std::string::npos) << summary;
   const Trace t = read_trace(trace_path.string());
   EXPECT_EQ(t.frame.width, 320);
   EXPECT_EQ(t.frame.height, 240);
@@ -149,6 +158,28 @@ TEST(Import, FixtureBecomesATraceAndAClipSpaceGlb) {
   EXPECT_EQ(scene.textures[0].width, 256);
   EXPECT_EQ(scene.textures[0].height, 256);
   EXPECT_EQ(t.scene.content_hash, scene.content_hash);
+}
+
+// docs/capture-import.md quotes the report of the vkcube frame on the three modes: the commands it
+// shows, run here, print exactly its table (a change of the model's figures fails this test until
+// the doc's table is replaced by what they print now).
+TEST(Import, DocsReportTableIsCurrent) {
+  const fs::path dir = scratch_dir("import", "docs_table");
+  const fs::path trace_path = import_fixture(dir);
+  const std::string db = (dir / "vkcube.db").string();
+  for (const char* mode : {"tbdr", "tbr", "imr"}) {
+    const auto r = run_cli({"run", "--trace", trace_path.string(), "--set", std::string("gpu.mode=") + mode, "--db", db,
+                            "--quiet"});
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  const auto rep = run_cli({"report", "--db", db, "--by", "gpu.mode", "--format", "markdown", "--metric", "cycles",
+                            "frame_time_ms", "requested_total_mb", "dram_total_mb", "energy_total_mj"});
+  ASSERT_EQ(rep.code, 0) << rep.err;
+  const std::string table = rep.out.substr(rep.out.find("| gpu.mode"));
+  std::ifstream in(fs::path(TBDRSIM_SOURCE_DIR) / "docs" / "capture-import.md");
+  const std::string doc((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_NE(doc.find(table), std::string::npos) << "docs/capture-import.md's table is stale; the commands now print:\n"
+                                                << table;
 }
 
 TEST(Import, ReplayMatchesTheApplicationsFrameOnEveryMode) {

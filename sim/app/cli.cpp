@@ -7,6 +7,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "analysis/report.hpp"
 #include "app/commands.hpp"
 #include "app/worker_pool.hpp"
 #include "kernel/thread_pool.hpp"
@@ -70,7 +71,9 @@ void print_usage(std::ostream& os) {
      << ": cycle-approximate simulator of a tile-based deferred rendering GPU\n\n"
      << "usage: tbdrsim <command> [options]\n"
      << "       tbdrsim <command> --help\n"
-     << "       tbdrsim --checkout   (prints the checkout, or the installed data folder: its configs/, configs/sweeps/ and analysis/ scripts)\n\ncommands:\n";
+     << "       tbdrsim --checkout   (prints the checkout, or the installed data folder: its configs/, configs/sweeps/ and analysis/ scripts)\n"
+     << "       tbdrsim --views      (prints the SQL of the analysis views, analysis/views.sql, as this tbdrsim creates them:\n"
+     << "                             `tbdrsim --views | sqlite3 results.db` adds them to a database by hand)\n\ncommands:\n";
   for (const auto& c : cli_commands()) {
     os << "  " << c.name << std::string(c.name && std::string(c.name).size() < 10 ? 10 - std::string(c.name).size() : 1, ' ')
        << c.summary << "\n";
@@ -215,6 +218,28 @@ std::string did_you_mean(const std::string& token, const std::vector<std::string
     const std::size_t d = tail ? 0 : edit_distance(token, c);
     if (d <= limit) close.emplace_back(d, c);
   }
+  // The same words in another order ("dram_energy_mj" -> "energy_dram_mj"), however far apart.
+  const auto words = [](const std::string& s) {
+    std::vector<std::string> w;
+    std::string lower;
+    for (char ch : s) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    std::size_t start = 0;
+    while (start <= lower.size()) {
+      const std::size_t end = lower.find_first_of("_.-", start);
+      w.push_back(lower.substr(start, end == std::string::npos ? std::string::npos : end - start));
+      if (end == std::string::npos) break;
+      start = end + 1;
+    }
+    std::sort(w.begin(), w.end());
+    return w;
+  };
+  const std::vector<std::string> token_words = words(token);
+  if (token_words.size() > 1) {
+    for (const auto& c : candidates) {
+      if (c == token || words(c) != token_words) continue;
+      if (std::none_of(close.begin(), close.end(), [&](const auto& e) { return e.second == c; })) close.emplace_back(0, c);
+    }
+  }
   if (close.empty()) return "";
   std::stable_sort(close.begin(), close.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::string text = "did you mean ";
@@ -259,6 +284,21 @@ bool parse_command_options(const std::string& command, const std::vector<std::st
       return false;
     }
     po::notify(vm);
+  } catch (const po::unknown_option& e) {
+    // A misspelled option: the closest ones this command takes, as for parameters and metrics.
+    const std::string name = e.get_option_name();
+    std::vector<std::string> known;
+    for (const auto& o : all.options()) {
+      if (!o->long_name().empty()) known.push_back("--" + o->long_name());
+    }
+    const std::string guess = did_you_mean(name, known);
+    if (!guess.empty()) {
+      throw UsageError("tbdrsim " + command + ": " + e.what() + "; " + guess + " (`tbdrsim " + command +
+                       " --help` lists the options)");
+    }
+    std::ostringstream help;
+    help << all;
+    throw UsageError("tbdrsim " + command + ": " + e.what() + "\n\nusage: tbdrsim " + command + " [options]\n\n" + help.str());
   } catch (const po::error& e) {
     std::ostringstream help;
     help << all;
@@ -279,6 +319,10 @@ int cli_main(const std::vector<std::string>& args, std::ostream& out, std::ostre
       print_usage(out);
       return 0;
     }
+    if (name == "--views") {  // the analysis views' SQL, compiled in: `tbdrsim --views | sqlite3 DB` from any folder
+      out << views_sql();
+      return 0;
+    }
     if (name == "--checkout") {  // where the configs, sweeps and analysis scripts are
       out << data_root() << "\n";
       return 0;
@@ -292,7 +336,10 @@ int cli_main(const std::vector<std::string>& args, std::ostream& out, std::ostre
     for (const auto& c : cli_commands()) {
       if (name == c.name) return c.run(std::vector<std::string>(args.begin() + 1, args.end()), out, err);
     }
-    err << "tbdrsim: unknown command '" << name << "'\n\n";
+    std::vector<std::string> names;
+    for (const auto& c : cli_commands()) names.push_back(c.name);
+    const std::string guess = did_you_mean(name, names);
+    err << "tbdrsim: unknown command '" << name << "'" << (guess.empty() ? "" : "; " + guess) << "\n\n";
     print_usage(err);
     return 2;
   } catch (const UsageError& e) {

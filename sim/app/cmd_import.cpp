@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -302,9 +303,16 @@ CaptureImport convert_capture(const std::string& frame_json_path, const std::str
       if (a.usage == AttachmentUsage::Color && aj.contains("clear") && a.load == LoadOp::Clear) {
         const json& col = r.array(r.get(aj, "clear", awhere), "color", awhere + " clear");
         bool black = true;
-        for (const auto& c : col) black = black && r.number(c, awhere + " clear colour") == 0.0f;
+        std::string shown;  // the components as the capture's floats read ("0.2", not 0.20000000298023224)
+        for (const auto& c : col) {
+          const float v = r.number(c, awhere + " clear colour");
+          black = black && v == 0.0f;
+          char buf[32];
+          std::snprintf(buf, sizeof buf, "%g", static_cast<double>(v));
+          shown += (shown.empty() ? "" : ", ") + std::string(buf);
+        }
         if (!black) {
-          out.unsupported.push_back(awhere + ": clears to colour " + col.dump() +
+          out.unsupported.push_back(awhere + ": clears to colour [" + shown + "]" +
                                     "; the simulator's images clear to black (counts and traffic are unaffected)");
         }
       }
@@ -732,6 +740,16 @@ int cmd_import(const std::vector<std::string>& args, std::ostream& out, std::ost
     fs::rename(frame_json.parent_path(), scratch / (stem + ".capture"));
     fs::remove_all(out_dir / (stem + ".capture"), ec);
     moves.push_back({scratch / (stem + ".capture"), out_dir / (stem + ".capture")});
+  } else if (fs::is_directory(input, ec)) {
+    // An exported intermediate (the committed vkcube one): copied as STEM.capture/ too, so that both
+    // routes leave the same files (compare_frame.py reads it), without the .rdc capture beside it.
+    const fs::path copy = scratch / (stem + ".capture");
+    fs::create_directories(copy);
+    for (const auto& e : fs::directory_iterator(input)) {
+      if (e.is_regular_file() && e.path().extension() != ".rdc") fs::copy_file(e.path(), copy / e.path().filename());
+    }
+    fs::remove_all(out_dir / (stem + ".capture"), ec);
+    moves.push_back({copy, out_dir / (stem + ".capture")});
   }
   for (const auto& [from, to] : moves) fs::rename(from, to);
   out << st << "wrote " << trace_path.string() << " (scene " << glb_name << ", hash " << imp.trace.scene.content_hash

@@ -107,7 +107,9 @@ void add_trace_setup_options(po::options_description& desc) {
   desc.add_options()
       ("scene", po::value<std::string>()->default_value("atrium:" + std::to_string(default_atrium_detail)),
        "atrium[:detail] (detail 1..5, default 3) or a .gltf/.glb file")
-      ("lights", po::value<int>()->default_value(256), "number of generated lights")
+      ("lights", po::value<int>()->default_value(256),
+       "number of generated lights, 0 to 1000000; 0: none, the surfaces shaded unlit (validate's ALU- and "
+       "texture-bound probes; techniques that cull a light array refuse it)")
       ("light-seed", po::value<std::uint64_t>()->default_value(1), "seed of the light placement")
       ("light-file", po::value<std::string>(), "read the lights from this file instead of generating them")
       ("camera", po::value<std::string>()->default_value(""), "atrium viewpoint (entrance, gallery, top, ...); glTF: framing")
@@ -146,8 +148,11 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   add_config_options(desc);
   desc.add_options()("trace,t", po::value<std::string>()->required(), "command trace to replay")(
       "db,d", po::value<std::string>()->required(), "results database (created if absent)")(
-      "images,i", po::value<std::string>(), "write the frame's images and heat maps into this folder")(
-      "stats", po::value<std::string>(), "write the run's statistics to FILE (gem5 stats.txt text; JSON with units and descriptions when FILE ends .json)")(
+      "images,i", po::value<std::string>(),
+      "write the frame's images and heat maps into this folder (created; 'none': no images, as without the option)")(
+      "stats", po::value<std::vector<std::string>>()->composing(),
+      "write the run's statistics to FILE (gem5 stats.txt text; JSON with units and descriptions when FILE ends "
+      ".json); repeatable: one run, several files (--stats s.txt --stats s.json)")(
       "timeline", po::value<std::string>(), "write the run's timeline to FILE (Chrome/Perfetto trace-event JSON)")(
       "quiet,q", "print nothing but errors");
   add_memory_trace_options(desc);
@@ -158,20 +163,38 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   req.config = config_from_options(vm);
   req.trace_path = vm["trace"].as<std::string>();
   req.db_path = vm["db"].as<std::string>();
-  if (vm.count("images")) req.images_dir = vm["images"].as<std::string>();
+  // "none" means no images, as `study --images none` does (a folder named none: --images ./none).
+  if (vm.count("images") && vm["images"].as<std::string>() != "none") req.images_dir = vm["images"].as<std::string>();
   req.command_line = invocation_command_line();
   req.threads = threads_option(vm, default_thread_count());
   req.summary_figures = !vm.count("quiet");  // only the summary reads them (1 ms of the serial end)
-  for (const char* file : {"stats", "timeline"}) {
-    if (vm.count(file)) check_output_file(std::string("--") + file, vm[file].as<std::string>());  // before the run
+  const std::vector<std::string> stats_files =
+      vm.count("stats") ? vm["stats"].as<std::vector<std::string>>() : std::vector<std::string>{};
+  for (std::size_t i = 0; i < stats_files.size(); ++i) {
+    check_output_file("--stats", stats_files[i]);  // before the run
+    for (std::size_t j = 0; j < i; ++j) {
+      if (std::filesystem::path(stats_files[j]).lexically_normal() == std::filesystem::path(stats_files[i]).lexically_normal()) {
+        throw InputError("--stats " + stats_files[i], "given twice: each --stats names another file");
+      }
+    }
   }
+  if (vm.count("timeline")) check_output_file("--timeline", vm["timeline"].as<std::string>());
   std::unique_ptr<DramTraceExport> memory_trace = memory_trace_from_options(vm);  // checked before the run
   req.dram_observer = memory_trace.get();
-  const RunOutcome outcome = run_one(req);
+  // A run that fails leaves no images folder behind that it created (it is made before the run).
+  std::error_code ec;
+  const bool images_existed = req.images_dir.empty() || std::filesystem::exists(req.images_dir, ec);
+  RunOutcome outcome;
+  try {
+    outcome = run_one(req);
+  } catch (...) {
+    if (!images_existed) std::filesystem::remove_all(req.images_dir, ec);
+    throw;
+  }
   if (memory_trace) memory_trace->write(vm["memory-trace"].as<std::string>());
-  if (vm.count("stats") || vm.count("timeline")) {
+  if (!stats_files.empty() || vm.count("timeline")) {
     const ResultsDb db(req.db_path, ResultsDb::QueryOnly{});
-    if (vm.count("stats")) write_stats_file(db, outcome.run_id, vm["stats"].as<std::string>());
+    for (const auto& f : stats_files) write_stats_file(db, outcome.run_id, f);
     if (vm.count("timeline")) write_timeline_file(db, outcome.run_id, outcome.timing, vm["timeline"].as<std::string>());
   }
   if (!vm.count("quiet")) print_run_summary(outcome, out);

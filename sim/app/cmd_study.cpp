@@ -34,7 +34,9 @@
 #include "app/run_driver.hpp"
 #include "app/worker_pool.hpp"
 #include "kernel/errors.hpp"
+#include "models/hardware_checks.hpp"
 #include "scene/scene_library.hpp"
+#include "tbdrsim_version.hpp"
 #include "techniques/technique.hpp"
 #include "trace/trace.hpp"
 
@@ -77,7 +79,47 @@ struct StudyPoint {
   /// Draws of the scene's geometry in the trace: each sends (the part inside its cull box of) the
   /// scene through the geometry unit, the tiler and the ISP, the replay's dominant unit of work.
   std::size_t scene_draws = 0;
+  /// Why the configuration refuses the trace, before any work (check_trace_on_hardware: PLS on an
+  /// immediate-mode GPU or past its limit, a sample count the sub-pixel grid cannot place; each
+  /// documented in docs/hardware-model.md): such a point is recorded as refused, not run. Empty:
+  /// the point runs.
+  std::string refusal;
 };
+
+/// The `error` text of a refused point's row ("refused: " and the refusal): `report` counts the
+/// runs left out by it.
+constexpr const char* kRefusedPrefix = "refused: ";
+
+/// Writes the row of a point that did not run (status failed, its error, the configuration's
+/// parameters, no statistics), so that the database and `tbdrsim report` count it with its reason.
+void record_failed_point(const std::string& db_path, const ResolvedConfig& config, const StudyPoint& p,
+                         const std::string& error, const std::string& command_line) {
+  RunRecord rec;
+  rec.started_at = rec.finished_at = utc_now_iso8601();
+  rec.tool_version = kToolVersion;
+  rec.host = host_name();
+  rec.command_line = command_line;
+  rec.config_name = config.params.config_name;
+  rec.config_hash = config.hash;
+  rec.trace_path = p.trace_path;
+  rec.technique = p.technique;
+  try {
+    const Trace trace = read_trace(p.trace_path);
+    rec.trace_hash = trace_hash(trace);
+    rec.scene = trace.scene.kind == SceneKind::Atrium ? "atrium:" + std::to_string(trace.scene.detail) : trace.scene.path;
+    for (auto& tp : trace_run_params(trace, p.trace_path)) rec.params.push_back(std::move(tp));
+  } catch (const std::exception&) {
+    // (an unreadable trace: the row keeps its path and the error says why)
+  }
+  rec.status = "failed";
+  rec.error = error;
+  const auto& table = hw_params().table();
+  for (std::size_t i = 0; i < table.decls().size(); ++i) {
+    rec.params.push_back({table.decls()[i].key, format_param_value(config.params.values[i]), config.params.origins[i].text});
+  }
+  ResultsDb db(db_path);
+  db.write_run(rec);
+}
 
 std::string fmt(double v, int decimals) {
   std::ostringstream o;
@@ -117,6 +159,9 @@ void draw_progress(std::ostream& out, std::size_t done, std::size_t total, doubl
   }
 }
 
+/// The most lights a study point may have: the trace generator's limit (`trace --lights`).
+constexpr int kMaxStudyLights = 1000000;
+
 StudyPlan plan_from_options(const po::variables_map& vm) {
   StudyPlan plan;
   plan.dir = vm["out"].as<std::string>();
@@ -124,6 +169,14 @@ StudyPlan plan_from_options(const po::variables_map& vm) {
   if (plan.jobs < 1 || plan.jobs > 64) throw InputError("--jobs " + std::to_string(plan.jobs), "expected 1..64 worker processes");
   plan.threads = threads_option(vm, threads_per_worker(plan.jobs));
   plan.light_counts = vm.count("lights") ? vm["lights"].as<std::vector<int>>() : std::vector<int>{256, 1024};
+  for (const int n : plan.light_counts) {
+    // A study compares how techniques light: a frame without lights (`trace --lights 0`, the unlit
+    // frame validate's probes use) has nothing to compare, and the light-culling techniques refuse it.
+    if (n < 1 || n > kMaxStudyLights) {
+      throw InputError("--lights " + std::to_string(n), "a study compares lighting: expected light counts in [1, " +
+                                                            std::to_string(kMaxStudyLights) + "]");
+    }
+  }
   plan.techniques = vm.count("technique") ? vm["technique"].as<std::vector<std::string>>() : technique_names();
   for (const auto& n : plan.techniques) find_technique(n);  // InputError for an unknown name
   plan.image_mode = vm["images"].as<std::string>();
@@ -241,7 +294,8 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
     throw InputError("study", failed);
   }
   for (StudyPoint& p : traces) {
-    for (const TraceCommand& c : read_trace(p.trace_path).commands) {
+    const Trace trace = read_trace(p.trace_path);
+    for (const TraceCommand& c : trace.commands) {
       if (const auto* pass = std::get_if<PassDesc>(&c)) {
         for (const DrawCmd& d : pass->draws) p.scene_draws += d.geometry == GeometryKind::Scene ? 1 : 0;
       }
@@ -251,6 +305,12 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
       q.config = c;
       q.mode = mode_of(plan.configs[c]);
       if (c > 0) q.images_dir.clear();  // images of the first configuration only
+      try {
+        check_trace_on_hardware(trace, plan.configs[c].hw, p.trace_path);  // what `run` would refuse first
+      } catch (const InputError& e) {
+        q.refusal = e.what();
+        q.images_dir.clear();
+      }
       points.push_back(q);
     }
   }
@@ -258,8 +318,15 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
 }
 
 /// Runs every point on the worker pool, one simulation per child process, each run written at once
-/// (one transaction); a failed point's message goes to `err`. Returns the number of failed points.
+/// (one transaction); a failed point's message goes to `err` and its row (status failed, the error)
+/// to the database. A refused point is not run: its row is written here. Returns the number of
+/// failed points (refused ones not counted).
 int run_points(const StudyPlan& plan, const std::vector<StudyPoint>& points, std::ostream& out, std::ostream& err) {
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (points[i].refusal.empty()) continue;
+    record_failed_point(plan.db_path, plan.configs[points[i].config], points[i], kRefusedPrefix + points[i].refusal,
+                        invocation_command_line() + " [point " + std::to_string(i) + "]");
+  }
   const auto t0 = std::chrono::steady_clock::now();
   auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   const bool tty = isatty(STDOUT_FILENO) != 0 && &out == &std::cout;
@@ -272,14 +339,17 @@ int run_points(const StudyPlan& plan, const std::vector<StudyPoint>& points, std
   // Longest first, so that the last run to end is a short one: most scene draws first
   // (forward_multipass draws the scene once per light, about a third of the study's CPU time at
   // 1024 lights), then most lights. Ties keep the points' order.
-  std::vector<std::size_t> order(points.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (points[i].refusal.empty()) order.push_back(i);
+  }
+  done = points.size() - order.size();  // the refused points are done: recorded above
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return std::tie(points[b].scene_draws, points[b].lights) < std::tie(points[a].scene_draws, points[a].lights);
   });
   WorkerPoolHooks hooks;
   hooks.next = [&]() -> std::optional<WorkerJob> {
-    if (next == points.size()) return std::nullopt;
+    if (next == order.size()) return std::nullopt;
     const std::size_t i = order[next++];
     WorkerJob job;
     job.id = i;
@@ -297,6 +367,12 @@ int run_points(const StudyPlan& plan, const std::vector<StudyPoint>& points, std
       } catch (const std::exception& e) {
         std::cerr << "study: " << points[i].technique << " with " << points[i].lights << " lights on " << points[i].mode
                   << " failed: " << e.what() << "\n";
+        try {
+          record_failed_point(plan.db_path, plan.configs[points[i].config], points[i], e.what(),
+                              invocation_command_line() + " [point " + std::to_string(i) + "]");
+        } catch (const std::exception& w) {
+          std::cerr << "study: its row could not be written: " << w.what() << "\n";
+        }
         return 1;
       }
     };
@@ -433,7 +509,7 @@ void print_comparison(const StudyPlan& plan, const std::vector<StudyPoint>& poin
     out << std::left << std::setw(30) << p.technique << std::right << std::setw(7) << p.lights;
     if (modes) out << std::setw(6) << p.mode;
     if (!r.run) {
-      out << "   (failed)\n";
+      out << (p.refusal.empty() ? "   (failed)\n" : "   (refused: the configuration cannot run it; below)\n");
       continue;
     }
     const DerivedFigures& d = r.d;
@@ -490,6 +566,9 @@ void print_mode_table(const StudyPlan& plan, const std::vector<StudyPoint>& poin
         for (const auto& mode : plan.modes) {
           const auto it = cells[tech].find(mode);
           std::string text = "failed";
+          for (const auto& p : points) {
+            if (p.lights == lights && p.technique == tech && p.mode == mode && !p.refusal.empty()) text = "refused";
+          }
           if (it != cells[tech].end()) {
             const auto& values = it->second->values;
             text = m < values.size() && values[m].has_value() ? fmt(values[m].value(), decimals[m]) : std::string("-");
@@ -593,7 +672,7 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
       "jobs,j", po::value<int>()->default_value(2), "worker processes")(
       "scene", po::value<std::string>()->default_value("atrium:" + std::to_string(default_atrium_detail)), "scene")(
       "resolution", po::value<std::string>()->default_value("1920x1080"), "WIDTHxHEIGHT")(
-      "lights", po::value<std::vector<int>>()->multitoken(), "light counts (default 256 1024)")(
+      "lights", po::value<std::vector<int>>()->multitoken(), "light counts, each 1 or more (default 256 1024)")(
       "technique", po::value<std::vector<std::string>>()->multitoken(), "techniques (default: all)")(
       "images", po::value<std::string>()->default_value("largest"), "write images for: none | largest (light count) | all")(
       "option", po::value<std::vector<std::string>>()->composing(),
@@ -639,11 +718,30 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
     }
     throw;
   }
-  fs::create_directories(fs::path(plan.dir) / "images", ec);
-  if (ec) throw InputError(plan.dir, "cannot create the study folder: " + ec.message());
-  { ResultsDb db(plan.db_path); }  // create or migrate before the workers start
+  if (plan.image_mode != "none") {
+    fs::create_directories(fs::path(plan.dir) / "images", ec);
+    if (ec) throw InputError(plan.dir, "cannot create the study folder: " + ec.message());
+  }
+  std::int64_t runs_before = 0;  // rows of earlier studies into this folder
+  {
+    ResultsDb db(plan.db_path);  // create or migrate before the workers start
+    SqlStatement q(db.sql(), "SELECT count(*) FROM runs");
+    if (q.step()) runs_before = q.int64(0);
+  }
   const int failures = run_points(plan, points, out, err);
   if (failures > 0) err << "study: " << failures << " worker(s) reported failed runs (see above)\n";
+  // Refusals are the configuration's documented limits (a technique with pixel local storage on an
+  // immediate-mode GPU, ...): the study goes on, and says which and why.
+  std::map<std::string, std::vector<std::string>> refused;  // reason -> the points
+  std::size_t refused_count = 0;
+  for (const auto& p : points) {
+    if (p.refusal.empty()) continue;
+    ++refused_count;
+    std::string reason = p.refusal;
+    // The reason without the trace's path and line, which differ between the points.
+    if (const auto pass = reason.find(": pass '"); pass != std::string::npos) reason = reason.substr(pass + 2);
+    refused[reason].push_back(p.technique + " at " + std::to_string(p.lights) + " lights on " + p.mode);
+  }
   // The plot scripts (python, about a second each) draw while this process writes the tables
   // (about a second too: the database's queries and the blending column's image comparisons);
   // both only read the database, which every run has written by now.
@@ -657,10 +755,37 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
     print_method_table(plan, points, results, out);
   }
   const int plotted = plotted_later.get();
+  std::int64_t runs_after = 0, ok_after = 0;
+  {
+    const ResultsDb db(plan.db_path);
+    SqlStatement q(db.sql(), "SELECT count(*), coalesce(sum(status = 'ok'), 0) FROM runs");
+    if (q.step()) {
+      runs_after = q.int64(0);
+      ok_after = q.int64(1);
+    }
+  }
   close_results_db_cleanly(plan.db_path);  // the plot scripts read it: leave no -wal/-shm beside it
-  out << "\nresults: " << plan.db_path << " (" << points.size() << " runs), traces in " << (fs::path(plan.dir) / "traces").string()
-      << ", images and heat maps in " << (fs::path(plan.dir) / "images").string() << ", " << plotted << " plots in " << plots.string()
-      << "\n";
+  if (refused_count > 0) {
+    out << "\nrefused: " << refused_count << " of the " << points.size()
+        << " points, as documented (docs/hardware-model.md; not failures: the exit code stays 0 for them):\n";
+    for (const auto& [reason, which] : refused) {
+      out << "  ";
+      for (std::size_t i = 0; i < which.size(); ++i) out << (i ? ", " : "") << which[i];
+      out << ": " << reason << "\n";
+    }
+  }
+  const std::size_t ran = points.size() - refused_count - static_cast<std::size_t>(failures);
+  out << "\nresults: " << plan.db_path << " (this study: " << ran << " finished run(s)";
+  if (failures > 0) out << ", " << failures << " failed";
+  if (refused_count > 0) out << ", " << refused_count << " refused";
+  out << "; the database holds " << runs_after << " run(s), " << ok_after << " finished";
+  if (runs_before > 0) {
+    out << ", " << runs_before << " of them from earlier studies into " << plan.dir
+        << " (the tables above read this study's latest run of each point)";
+  }
+  out << "), traces in " << (fs::path(plan.dir) / "traces").string();
+  if (plan.image_mode != "none") out << ", images and heat maps in " << (fs::path(plan.dir) / "images").string();
+  out << ", " << plotted << " plots in " << plots.string() << "\n";
   return failures > 0 ? 1 : 0;
 }
 

@@ -75,6 +75,8 @@ int cmd_sweep(const std::vector<std::string>& args, std::ostream& out, std::ostr
 
   const std::vector<std::string> traces =
       vm.count("trace") ? vm["trace"].as<std::vector<std::string>>() : std::vector<std::string>{};
+  // `config = series6xt_gx6450` in the file names the preset as --config does.
+  set_sweep_config_lookup([](const std::string& name) { return find_data_file(name, DataFolder::Configs); });
   const SweepSpec spec = parse_sweep_file(find_data_file(vm["file"].as<std::string>(), DataFolder::Sweeps), traces,
                                           vm.count("db") ? vm["db"].as<std::string>() : std::string(), trace_generators());
   const std::string binary = vm.count("tbdrsim") ? vm["tbdrsim"].as<std::string>() : self_executable();
@@ -160,7 +162,7 @@ int cmd_merge(const std::vector<std::string>& args, std::ostream& out, std::ostr
   return 0;
 }
 
-int cmd_report(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
+int cmd_report(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   po::options_description desc("report options");
   desc.add_options()
       ("db,d", po::value<std::string>()->required(), "results database")
@@ -211,6 +213,12 @@ int cmd_report(const std::vector<std::string>& args, std::ostream& out, std::ost
     throw InputError("", std::string(e.what()) + "; " + guess);
   }
   print_report(table, format, opt.transpose, out);
+  if (format == ReportFormat::Csv && table.runs_failed > 0) {
+    // The CSV stays a table; what it left out is said beside it.
+    err << "tbdrsim report: " << table.runs_failed << " failed run(s) left out:";
+    for (const auto& [reason, n] : table.failed_reasons) err << "\n  " << n << " x " << reason;
+    err << "\n";
+  }
   return 0;
 }
 

@@ -327,23 +327,27 @@ void write_timeline_file(const ResultsDb& db, std::int64_t run_id, const TimingR
   }
   // Process 2: each unit's share of the frame. The timing model reports busy and stalled cycles
   // per unit over the frame, not their intervals: one slice per unit spans the frame and carries
-  // them, and a counter track shows the unit's busy and stalled percentages.
-  meta("process_name", 2, 0, "units: busy / stalled / idle over the frame (totals, not intervals)");
+  // them, and a counter track shows the unit's busy, stalled and idle percentages (their sum is
+  // 100: stalled is time waiting while not busy, docs/queries.md).
+  meta("process_name", 2, 0, "units: busy / stalled / idle over the frame (totals, not intervals; they add up to 100 %)");
   for (std::size_t i = 0; i < units.size(); ++i) {
     const UnitCycles& u = units[i];
     const int tid = static_cast<int>(i) + 1;
     meta("thread_name", 2, tid, u.name);
     sort_index(2, tid, tid);
     const double busy_pct = 100.0 * u.busy / frame_cycles, stalled_pct = 100.0 * u.stalled / frame_cycles;
-    char label[96];
-    std::snprintf(label, sizeof label, "%s busy %.1f %%, stalled %.1f %%", u.name.c_str(), busy_pct, stalled_pct);
+    const double idle_pct = 100.0 * u.idle / frame_cycles;
+    char label[128];
+    std::snprintf(label, sizeof label, "%s busy %.1f %%, stalled %.1f %%, idle %.1f %%", u.name.c_str(), busy_pct,
+                  stalled_pct, idle_pct);
     slice(2, tid, label, 0, frame_cycles,
           "\"busy_cycles\": " + json_number(u.busy) + ", \"stalled_cycles\": " + json_number(u.stalled) +
               ", \"idle_cycles\": " + json_number(u.idle));
     for (const double at : {0.0, frame_cycles}) {
       events.push_back("{\"ph\": \"C\", \"name\": " + json_string(u.name + " %") + ", \"pid\": 2, \"tid\": " +
                        std::to_string(tid) + ", \"ts\": " + json_number(at * us_per_cycle) + ", \"args\": {\"busy\": " +
-                       json_number(busy_pct) + ", \"stalled\": " + json_number(stalled_pct) + "}}");
+                       json_number(busy_pct) + ", \"stalled\": " + json_number(stalled_pct) +
+                       ", \"idle\": " + json_number(idle_pct) + "}}");
     }
   }
   // Processes 3..: one per unit of the timing model, a track per pass or dispatch it worked for
@@ -387,7 +391,9 @@ void write_timeline_file(const ResultsDb& db, std::int64_t run_id, const TimingR
       }
     }
   }
-  o << "{\n  \"displayTimeUnit\": \"ns\",\n  \"otherData\": {";
+  // Trace-event timestamps and durations are microseconds (the format's one unit); displayTimeUnit
+  // only says how the viewer shows them: milliseconds, the scale of a frame.
+  o << "{\n  \"displayTimeUnit\": \"ms\",\n  \"otherData\": {";
   for (std::size_t i = 0; i < id.fields.size(); ++i) {
     o << (i ? ", " : "") << json_string(id.fields[i].first) << ": " << json_string(id.fields[i].second);
   }

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -91,6 +92,9 @@ void warn_slow_traces(const std::map<std::string, TraceInfo>& traces, const std:
 /// so a sweep of a million configurations holds a million hashes, not 11 GB.
 struct PointConfig {
   std::string hash;  ///< hw_params().table().hash() of the resolved parameters
+  /// Its label, as v_config_label names it: the preset's name and the keys the point sets on top
+  /// of it, sorted by key ("series6xt_gx6450 tiling.tile_width=16"); what a dry run shows.
+  std::string label;
 };
 
 /// Every point's resolved configuration and trace, read once before anything runs (points of one
@@ -248,6 +252,10 @@ PointInputs resolve_inputs(const SweepSpec& spec, const std::vector<SweepPoint>&
         for (const auto& set : p.sets) reg.table().apply_override(params, set);
         check_config_constraints(reg.build(params), params);
         config.hash = reg.table().hash(params);
+        std::vector<std::string> sets = p.sets;
+        std::sort(sets.begin(), sets.end());
+        config.label = params.config_name;
+        for (const auto& set : sets) config.label += " " + set;
       } catch (const InputError& e) {
         throw InputError(spec.path, "point '" + p.label + "': " + std::string(e.what()));
       }
@@ -551,7 +559,7 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
     warn_slow_traces(inputs.traces, points, out);
     for (std::size_t i = 0; i < points.size(); ++i) {
       out << "  " << std::setw(5) << points[i].index << "  " << (done_before[i] ? "done  " : "to run") << "  "
-          << points[i].label << "  (config " << inputs.config[i]->hash << ", trace " << inputs.trace[i]->hash << ")\n";
+          << points[i].label << "  (config " << inputs.config[i]->label << ", trace " << inputs.trace[i]->hash << ")\n";
     }
     summary.not_run = points.size() - summary.skipped;
     return summary;

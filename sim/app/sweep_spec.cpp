@@ -58,6 +58,24 @@ const std::string& checked_length(const std::string& p, const std::string& what,
   return p;
 }
 
+ConfigNameLookup g_config_lookup = nullptr;  ///< set_sweep_config_lookup
+
+/// A config value written in the sweep file: the file beside the sweep file (or the path as
+/// written when absolute), else, for a bare name, the preset the lookup finds (as --config would).
+std::string sweep_config_path(const fs::path& base_dir, const std::string& item, const std::string& where) {
+  const std::string p = checked_length(relative_to(base_dir, item), "config file", where);
+  std::error_code ec;
+  if (g_config_lookup == nullptr || fs::symlink_status(p, ec).type() != fs::file_type::not_found ||
+      fs::path(item).has_parent_path()) {
+    return p;
+  }
+  try {
+    return g_config_lookup(item);
+  } catch (const InputError& e) {
+    throw InputError(where, "config file '" + p + "' not found, nor a preset of that name: " + bare_message(e));
+  }
+}
+
 bool has_glob_chars(const std::string& s) { return s.find_first_of("*?[") != std::string::npos; }
 
 // ---------------------------------------------------------------------------------------------
@@ -294,7 +312,7 @@ void apply_sweep_key(SweepSpec& spec, const IniLine& l, const std::string& value
   } else if (l.name == "config") {
     for (const auto& item : split_commas(value)) {
       if (item.empty()) throw InputError(where, "empty config file name");
-      const std::string p = checked_length(relative_to(base_dir, item), "config file", where);
+      const std::string p = sweep_config_path(base_dir, item, where);
       check_named_file(p, "config file", where, false);
       spec.base_configs.push_back(p);
     }
@@ -339,7 +357,7 @@ std::vector<std::string> axis_values(const IniLine& l, const std::string& value,
     if (!seen.insert(v).second) throw InputError(where, "config file '" + v + "' listed twice");
   }
   for (auto& v : values) {
-    v = checked_length(relative_to(base_dir, v), "config file", where);
+    v = sweep_config_path(base_dir, v, where);
     check_named_file(v, "config file", where, false);
   }
   return values;
@@ -522,6 +540,8 @@ std::string generated_trace_dir(const std::string& db_path) {
 std::string generated_trace_path(const SweepSpec& spec, const TraceRequest& request) {
   return (fs::path(spec.generated_dir) / (request.technique + "-" + request.id + ".trace")).string();
 }
+
+void set_sweep_config_lookup(ConfigNameLookup lookup) { g_config_lookup = lookup; }
 
 SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::string>& traces, const std::string& db_path,
                            const TraceGenerators& generators) {

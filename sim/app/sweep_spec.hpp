@@ -86,6 +86,12 @@ inline constexpr std::uint64_t kMaxSweepPoints = 1'000'000;
 /// product of its axes), computed without overflow and before any point is made.
 void check_sweep_size(const SweepSpec& spec);
 
+/// How a sweep file's config value that is not a file beside it is looked up as a preset name
+/// (`config = series6xt_gx6450`), as --config finds it: the path found, or InputError saying why
+/// not. The command sets it (find_data_file); unset, a config value is a file path only.
+using ConfigNameLookup = std::string (*)(const std::string& name);
+void set_sweep_config_lookup(ConfigNameLookup lookup);
+
 /// Parses a sweep file (generated traces go into generated_trace_dir(db_path); empty: a
 /// placeholder folder, for sweeps that only list or count points; a [generate] section is checked
 /// against `generators`, and names no known technique without them). InputError naming file:line for anything malformed or unknown (sections,
