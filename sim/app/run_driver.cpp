@@ -6,6 +6,8 @@
 #include <ctime>
 #include <time.h>
 #include <filesystem>
+
+#include <unistd.h>
 #include <functional>
 #include <future>
 #include <iomanip>
@@ -359,11 +361,42 @@ RunOutcome run_one(const RunRequest& req) {
   // With more than one thread the results database is opened (a new one created) while the
   // timing model finishes: the functional run has read every input by now, so an input it
   // refuses has written nothing; with one, after the timing model, as before.
+  // A new database is made beside its name with the run in it and linked in at the end, so a run
+  // that fails to write it (a full disk) leaves no database at all (ResultsDb::link_into_place).
+  std::error_code db_ec;
+  const bool new_db = !std::filesystem::exists(req.db_path, db_ec) && !db_ec;
+  const std::string db_path = new_db ? req.db_path + ".run-" + std::to_string(getpid()) : req.db_path;
+  struct NewDbGuard {
+    std::string path;
+    ~NewDbGuard() {
+      if (path.empty()) return;
+      std::error_code ec;
+      for (const char* suffix : {"", "-wal", "-shm", "-journal"}) std::filesystem::remove(path + suffix, ec);
+    }
+  } new_db_guard{new_db ? db_path : std::string()};
+  // Errors about the new database's working file name the database asked for.
+  const auto as_asked = [&](auto&& step) {
+    if (!new_db) return step();
+    try {
+      return step();
+    } catch (const InputError& e) {
+      auto named = [&](std::string text) {
+        for (auto at = text.find(db_path); at != std::string::npos; at = text.find(db_path, at + req.db_path.size())) {
+          text.replace(at, db_path.size(), req.db_path);
+        }
+        return text;
+      };
+      const std::string where = named(e.where());
+      std::string what = named(e.what());
+      if (what.rfind(where + ": ", 0) == 0) what = what.substr(where.size() + 2);
+      throw InputError(where, what);
+    }
+  };
   std::optional<ResultsDb> db;
   double db_open_cpu = 0;
   if (pipelined) {
     const double c = thread_cpu_seconds();
-    db.emplace(req.db_path);
+    as_asked([&] { db.emplace(db_path); });
     db_open_cpu = thread_cpu_seconds() - c;
     outcome.timing = timed.get();
     outcome.frame.work = feed.take();
@@ -446,9 +479,20 @@ RunOutcome run_one(const RunRequest& req) {
                        "1 on a virtual machine that reports freed memory to its host (virtio-balloon free page reporting): "
                        "fresh huge pages are slow there, so none are asked for by default"});
   rec.tiles = outcome.timing.tiles;
-  if (!db) db.emplace(req.db_path);
-  outcome.run_id = db->write_run(rec);
-  if (req.summary_figures) outcome.derived = read_derived_figures(*db, outcome.run_id);
+  as_asked([&] {
+    if (!db) db.emplace(db_path);
+    outcome.run_id = db->write_run(rec);
+    if (req.summary_figures) outcome.derived = read_derived_figures(*db, outcome.run_id);
+    if (new_db) db.reset();  // closed: the write-ahead log is folded in
+  });
+  if (new_db) {
+    if (!as_asked([&] { return ResultsDb::link_into_place(db_path, req.db_path); })) {
+      // Another process created the database meanwhile: the run goes into theirs.
+      db.emplace(req.db_path);
+      outcome.run_id = db->write_run(rec);
+      if (req.summary_figures) outcome.derived = read_derived_figures(*db, outcome.run_id);
+    }
+  }
   if (released.valid()) released.get();
   return outcome;
 }
