@@ -550,6 +550,33 @@ TEST(Hardening, FullDiskLeavesNoPartialTrace) {
   EXPECT_EQ(std::string((std::istreambuf_iterator<char>(in)), {}), "an older trace\n");
 }
 
+TEST(Hardening, FailedRunLeavesNoImagesFolder) {
+  // The images folder was made before the trace was read: a refused trace or a full disk left it.
+  const fs::path dir = dir_for("images_left");
+  const fs::path trace = small_trace(dir);
+  write_file(dir / "bad.trace", "tbdrsim-trace 2\nscene atrium detail=9\n");
+  auto r = run_limited({"run", "--trace", (dir / "bad.trace").string(), "--db", (dir / "r.db").string(), "--images",
+                        (dir / "img" / "deeper").string(), "--quiet"}, {});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "img")) << "a refused trace left its images folder";
+  r = run_limited({"run", "--trace", trace.string(), "--db", (dir / "r.db").string(), "--images", (dir / "img").string(), "--quiet"},
+                  {.file_size_bytes = 2048});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(has(r.err, "File too large") || has(r.err, "a full disk or a file size limit?")) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "img")) << "a run that could not write left its images folder";
+  EXPECT_FALSE(fs::exists(dir / "r.db"));
+  // A folder that was there before is kept.
+  fs::create_directories(dir / "kept");
+  r = run_limited({"run", "--trace", (dir / "bad.trace").string(), "--db", (dir / "r.db").string(), "--images",
+                   (dir / "kept").string(), "--quiet"}, {});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(fs::is_directory(dir / "kept"));
+  // With room, the images are written and stay.
+  r = run_limited({"run", "--trace", trace.string(), "--db", (dir / "r.db").string(), "--images", (dir / "img").string(), "--quiet"}, {});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "img" / "heat_tile_cycles.png"));
+}
+
 /// Whether a child without CAP_DAC_OVERRIDE is refused a write into a 0555 folder: false where
 /// capabilities cannot be dropped (then the tests below cannot tell root's writes from a user's).
 bool dac_capabilities_drop(const fs::path& dir) {

@@ -280,10 +280,26 @@ RunOutcome run_one(const RunRequest& req) {
   const auto t_load = std::chrono::steady_clock::now();
   const std::string started = utc_now_iso8601();
   check_results_db_target(req.db_path);  // a bad --db is reported now, not after the simulation
+  // The images folder, and the folders above it this run creates, are removed again when the run
+  // fails (a refused trace, a full disk): a failed run leaves nothing behind. Declared before the
+  // image writer's future, so that it is destroyed after the writer has finished.
+  struct CreatedFolder {
+    std::string path;  ///< the outermost folder this run created; empty once the run succeeded
+    ~CreatedFolder() {
+      std::error_code ec;
+      if (!path.empty()) std::filesystem::remove_all(path, ec);
+    }
+  } created_images_folder;
   if (!req.images_dir.empty()) {
     std::error_code ec;
+    fs::path outermost;
+    for (fs::path p = fs::path(req.images_dir).lexically_normal(); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+      outermost = p;
+      if (p == p.parent_path()) break;
+    }
     fs::create_directories(req.images_dir, ec);
     if (ec || !fs::is_directory(req.images_dir)) throw InputError(req.images_dir, "cannot create the images folder");
+    created_images_folder.path = outermost.string();
   }
   const Trace trace = read_trace(req.trace_path);
   // Colours (and the texels they sample) are computed only for the images that read them: the
@@ -494,6 +510,7 @@ RunOutcome run_one(const RunRequest& req) {
     }
   }
   if (released.valid()) released.get();
+  created_images_folder.path.clear();  // the run is written: its images stay
   return outcome;
 }
 
