@@ -66,6 +66,10 @@ class ResultsDb {
   /// then hard-linked to `path` (link fails rather than replace a file). InputError naming `path`
   /// and the system's reason when it cannot, with the temporary and its -wal and -shm removed.
   static bool create_whole(const std::string& path, int target_version = kSchemaVersion);
+  /// Selects the constructor that opens or creates `path` in place, without create_whole's
+  /// temporary: for a file only this process knows (create_whole's temporary, a run's working file).
+  struct InPlace {};
+  ResultsDb(const std::string& path, int target_version, InPlace);
   /// Moves a database this process made and closed (no -wal left) to `path` when nothing is there:
   /// true; false (and `made` left) when something is. InputError naming `path` when it cannot.
   static bool link_into_place(const std::string& made, const std::string& path);
@@ -84,9 +88,6 @@ class ResultsDb {
   std::vector<StatRecord> run_stats(std::int64_t run_id) const;
 
  private:
-  /// Selects the constructor that creates `path`'s schema without the temporary (create_whole's own).
-  struct InPlace {};
-  ResultsDb(const std::string& path, int target_version, InPlace);
   /// InputError unless the file is empty or a tbdrsim database (its application id).
   void check_identity();
   /// InputError when the schema is newer than this tbdrsim's.

@@ -405,14 +405,25 @@ RunOutcome run_one(const RunRequest& req) {
       const std::string where = named(e.where());
       std::string what = named(e.what());
       if (what.rfind(where + ": ", 0) == 0) what = what.substr(where.size() + 2);
+      if (where == req.db_path && what.rfind("cannot create the results database", 0) != 0) {
+        what = "cannot create the results database: " + what + "; nothing written";
+      }
       throw InputError(where, what);
     }
   };
   std::optional<ResultsDb> db;
+  // The working file is this process's alone: its schema is made in place (no second temporary).
+  const auto open_db = [&] {
+    if (new_db) {
+      db.emplace(db_path, ResultsDb::kSchemaVersion, ResultsDb::InPlace{});
+    } else {
+      db.emplace(db_path);
+    }
+  };
   double db_open_cpu = 0;
   if (pipelined) {
     const double c = thread_cpu_seconds();
-    as_asked([&] { db.emplace(db_path); });
+    as_asked([&] { open_db(); });
     db_open_cpu = thread_cpu_seconds() - c;
     outcome.timing = timed.get();
     outcome.frame.work = feed.take();
@@ -496,7 +507,7 @@ RunOutcome run_one(const RunRequest& req) {
                        "fresh huge pages are slow there, so none are asked for by default"});
   rec.tiles = outcome.timing.tiles;
   as_asked([&] {
-    if (!db) db.emplace(db_path);
+    if (!db) open_db();
     outcome.run_id = db->write_run(rec);
     if (req.summary_figures) outcome.derived = read_derived_figures(*db, outcome.run_id);
     if (new_db) db.reset();  // closed: the write-ahead log is folded in
