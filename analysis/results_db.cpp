@@ -3,6 +3,9 @@
 #include <sqlite3.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
+
 #include <chrono>
 #include <ctime>
 #include <filesystem>
@@ -148,12 +151,77 @@ void check_results_db_target(const std::string& path) {
   }
 }
 
-ResultsDb::ResultsDb(const std::string& path, int target_version) : conn_(path) {
+namespace {
+
+/// `path`, after create_whole made it when it was absent.
+const std::string& created_if_absent(const std::string& path, int target_version) {
+  std::error_code ec;
+  const bool special = path.empty() || path == ":memory:" || path.rfind("file:", 0) == 0;  // SQLite's own names
+  if (!special && !std::filesystem::exists(path, ec) && !ec) ResultsDb::create_whole(path, target_version);
+  return path;
+}
+
+/// Removes a database file and the files SQLite keeps beside it, unless released.
+class DatabaseFilesGuard {
+ public:
+  explicit DatabaseFilesGuard(std::string path) : path_(std::move(path)) {}
+  ~DatabaseFilesGuard() {
+    if (path_.empty()) return;
+    std::error_code ec;
+    for (const char* suffix : {"", "-wal", "-shm", "-journal"}) std::filesystem::remove(path_ + suffix, ec);
+  }
+  DatabaseFilesGuard(const DatabaseFilesGuard&) = delete;
+  DatabaseFilesGuard& operator=(const DatabaseFilesGuard&) = delete;
+
+ private:
+  std::string path_;
+};
+
+}  // namespace
+
+bool ResultsDb::create_whole(const std::string& path, int target_version) {
+  const std::string temp = path + ".new-" + std::to_string(getpid());
+  DatabaseFilesGuard guard(temp);  // whatever happens, the temporary goes
+  try {
+    ResultsDb made(temp, target_version, InPlace{});
+  } catch (const InputError& e) {
+    std::string why = e.what();
+    if (why.rfind(temp + ": ", 0) == 0) why = why.substr(temp.size() + 2);
+    throw InputError(path, "cannot create the results database: " + why + "; nothing written");
+  }
+  return link_into_place(temp, path);
+}
+
+bool ResultsDb::link_into_place(const std::string& made, const std::string& path) {
+  std::error_code ec;
+  // The connection's close folds the write-ahead log into the file and removes it; a close that
+  // could not (a full disk) leaves it, and the file alone would miss its last commits.
+  if (std::filesystem::exists(made + "-wal", ec)) {
+    throw InputError(path, "cannot create the results database: its write-ahead log could not be folded in "
+                           "(a full disk?); nothing written");
+  }
+  if (link(made.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    if (err == EEXIST) return false;
+    throw InputError(path, "cannot create the results database: " + std::string(std::strerror(err)) + "; nothing written");
+  }
+  std::filesystem::remove(made, ec);
+  return true;
+}
+
+ResultsDb::ResultsDb(const std::string& path, int target_version) : conn_(created_if_absent(path, target_version)) {
   if (target_version < 1 || target_version > kSchemaVersion) {
     throw std::logic_error("ResultsDb: bad target schema version");
   }
   // Opening writers race on a new file (creating the schema, switching to WAL); SQLite reports
   // some of those races as busy without waiting, so the whole setup is retried.
+  retry_while_busy([&] { setup(target_version); });
+}
+
+ResultsDb::ResultsDb(const std::string& path, int target_version, InPlace) : conn_(path) {
+  if (target_version < 1 || target_version > kSchemaVersion) {
+    throw std::logic_error("ResultsDb: bad target schema version");
+  }
   retry_while_busy([&] { setup(target_version); });
 }
 

@@ -48,7 +48,9 @@ class ResultsDb {
   static constexpr int kSchemaVersion = 5;
   static constexpr int kApplicationId = 0x54424452;  ///< "TBDR"
 
-  /// Opens (creating if absent) and migrates up to `target_version` (tests use older versions).
+  /// Opens (creating if absent) and migrates up to `target_version` (tests use older versions). A
+  /// new database is made whole beside its name and linked in (create_whole): a failure (a full
+  /// disk, a file size limit) leaves no file, not even its -wal or -shm.
   explicit ResultsDb(const std::string& path, int target_version = kSchemaVersion);
   /// Selects the constructor that opens a database only to read it.
   struct QueryOnly {};
@@ -57,6 +59,20 @@ class ResultsDb {
   ResultsDb(const std::string& path, QueryOnly);
   ResultsDb(const ResultsDb&) = delete;
   ResultsDb& operator=(const ResultsDb&) = delete;
+
+  /// Creates `path` (absent) with the schema of `target_version` and returns true, or returns
+  /// false when another process created it meanwhile: the schema is written into a temporary
+  /// database beside it whose connection is closed (folding its write-ahead log in) and which is
+  /// then hard-linked to `path` (link fails rather than replace a file). InputError naming `path`
+  /// and the system's reason when it cannot, with the temporary and its -wal and -shm removed.
+  static bool create_whole(const std::string& path, int target_version = kSchemaVersion);
+  /// Selects the constructor that opens or creates `path` in place, without create_whole's
+  /// temporary: for a file only this process knows (create_whole's temporary, a run's working file).
+  struct InPlace {};
+  ResultsDb(const std::string& path, int target_version, InPlace);
+  /// Moves a database this process made and closed (no -wal left) to `path` when nothing is there:
+  /// true; false (and `made` left) when something is. InputError naming `path` when it cannot.
+  static bool link_into_place(const std::string& made, const std::string& path);
 
   const std::string& path() const { return conn_.path(); }
   /// The open connection, for the queries of the analysis, sweep and study code.

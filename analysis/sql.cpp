@@ -1,5 +1,7 @@
 #include "analysis/sql.hpp"
 
+#include <cstring>
+
 #include <sqlite3.h>
 #include <unistd.h>
 
@@ -45,15 +47,34 @@ SqlConnection::SqlConnection(const std::string& path, SqlOpen mode) : path_(path
 
 SqlConnection::~SqlConnection() { sqlite3_close(db_); }
 
+namespace {
+
+/// SQLite's message for result code `rc` of `db`, with the operating system's reason when the
+/// file system failed it (a full disk, a file size limit, a permission): "disk I/O error (File too large)".
+std::string sqlite_reason(sqlite3* db, int rc, const std::string& message) {
+  const int primary = rc & 0xff;
+  const int os = sqlite3_system_errno(db);
+  if (os != 0 && (primary == SQLITE_IOERR || primary == SQLITE_FULL || primary == SQLITE_CANTOPEN ||
+                  primary == SQLITE_READONLY || primary == SQLITE_PERM)) {
+    return message + " (" + std::strerror(os) + ")";
+  }
+  // SQLite keeps the last system error, which a rollback after the failed write may have reset.
+  if (primary == SQLITE_IOERR) return message + " (a read or write of the file failed: a full disk or a file size limit?)";
+  return message;
+}
+
+}  // namespace
+
 void SqlConnection::fail(const std::string& what) const {
-  throw SqlError(path_, "SQLite: " + what + ": " + sqlite3_errmsg(db_), sqlite3_errcode(db_) & 0xff);
+  const int rc = sqlite3_extended_errcode(db_);
+  throw SqlError(path_, "SQLite: " + what + ": " + sqlite_reason(db_, rc, sqlite3_errmsg(db_)), rc & 0xff);
 }
 
 void SqlConnection::exec(const std::string& script) const {
   char* err = nullptr;
   const int rc = sqlite3_exec(db_, script.c_str(), nullptr, nullptr, &err);
   if (rc != SQLITE_OK) {
-    const std::string msg = err ? err : sqlite3_errmsg(db_);
+    const std::string msg = sqlite_reason(db_, rc, err ? err : sqlite3_errmsg(db_));
     sqlite3_free(err);
     throw SqlError(path_, "SQLite: cannot run " + sql_head(script) + ": " + msg, rc & 0xff);
   }

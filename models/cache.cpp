@@ -27,17 +27,20 @@ Cache::Cache(std::string scope, const CacheParams& p, double pj_per_byte, bool w
   set_mask_ = sets_ - 1;
   hit_latency_cycles_ = p.hit_latency_cycles;
   const std::size_t lines = static_cast<std::size_t>(sets_) * ways_;
-  tags_.assign(lines, kInvalid);
-  stamps_.assign(lines, 0);
-  dirty_.assign(lines, 0);
-  cls_.assign(lines, DramClass::Other);
-  fill_.assign(lines, kNoFill);
-  arrival_ps_.assign(lines, 0);
+  // All empty: zero bytes (kInvalid tags, no fill), pages mapped as sets are first written.
+  tags_ = ZeroedArray<std::uint64_t>(lines);
+  stamps_ = ZeroedArray<std::uint64_t>(lines);
+  dirty_ = ZeroedArray<std::uint8_t>(lines);
+  cls_ = ZeroedArray<DramClass>(lines);
+  fill_ = ZeroedArray<std::uint32_t>(lines);
+  arrival_ps_ = ZeroedArray<std::int64_t>(lines);
+  used_.assign((lines + kSlotsPerChunk - 1) / kSlotsPerChunk, 0);
 }
 
 namespace {
 
-/// The way of a set (its `ways` tags) holding `line`, or `ways` when none does. W: the ways known
+/// The way of a set (its `ways` stored tags) holding stored tag `line` (~ the line address), or
+/// `ways` when none does. W: the ways known
 /// when compiled (the configurations' 4, 8 and 16: a fixed count the compiler unrolls into
 /// compares without a branch per way), 0: `ways` read at run time.
 template <std::uint32_t W>
@@ -85,6 +88,7 @@ CacheAccess Cache::access_in(std::uint64_t addr, std::uint32_t bytes, bool is_wr
   const std::uint64_t line = addr >> line_shift_;
   const std::uint32_t base = set_of(line) * ways_;
   const std::uint64_t* tags = tags_.data() + base;
+  const std::uint64_t tag = ~line;  // as stored
   CacheClassStats& cs = class_stats_[static_cast<std::size_t>(cls)];
   const std::uint64_t stamp = ++clock_;
   CacheAccess r;
@@ -98,7 +102,7 @@ CacheAccess Cache::access_in(std::uint64_t addr, std::uint32_t bytes, bool is_wr
   }
 
   // The hit, if any (a hit does not read the ways' stamps).
-  if (const std::uint32_t w = way_holding<W>(tags, line, ways_); w != ways_) {
+  if (const std::uint32_t w = way_holding<W>(tags, tag, ways_); w != ways_) {
     const std::uint32_t slot = base + w;
     stamps_[slot] = stamp;
     if (is_write) {
@@ -133,7 +137,7 @@ CacheAccess Cache::access_in(std::uint64_t addr, std::uint32_t bytes, bool is_wr
   if (tags_[victim] != kInvalid) {
     if (dirty_[victim]) {
       r.writeback = true;
-      r.victim_addr = tags_[victim] << line_shift_;
+      r.victim_addr = ~tags_[victim] << line_shift_;
       r.victim_cls = cls_[victim];
       ++stats_.dirty_evictions;
       stats_.writeback_bytes += line_bytes_;
@@ -141,11 +145,12 @@ CacheAccess Cache::access_in(std::uint64_t addr, std::uint32_t bytes, bool is_wr
       ++stats_.clean_evictions;
     }
   }
-  tags_[victim] = line;
+  tags_[victim] = tag;
+  used_[victim / kSlotsPerChunk] = 1;
   stamps_[victim] = stamp;
   dirty_[victim] = is_write ? 1 : 0;
   cls_[victim] = cls;
-  fill_[victim] = kNoFill;
+  fill_[victim] = ~kNoFill;
   arrival_ps_[victim] = 0;
   if (is_write) {
     ++stats_.write_allocations;
@@ -161,22 +166,25 @@ CacheAccess Cache::access_in(std::uint64_t addr, std::uint32_t bytes, bool is_wr
 bool Cache::probe(std::uint64_t addr) const {
   const std::uint64_t line = addr >> line_shift_;
   const std::uint32_t base = set_of(line) * ways_;
-  return way_holding<0>(tags_.data() + base, line, ways_) != ways_;
+  return way_holding<0>(tags_.data() + base, ~line, ways_) != ways_;
 }
 
 bool Cache::is_dirty(std::uint64_t addr) const {
   const std::uint64_t line = addr >> line_shift_;
   const std::uint32_t base = set_of(line) * ways_;
-  const std::uint32_t w = way_holding<0>(tags_.data() + base, line, ways_);
+  const std::uint32_t w = way_holding<0>(tags_.data() + base, ~line, ways_);
   return w != ways_ && dirty_[base + w] != 0;
 }
 
 void Cache::invalidate_all() {
-  std::fill(tags_.begin(), tags_.end(), kInvalid);
-  std::fill(stamps_.begin(), stamps_.end(), 0);
-  std::fill(dirty_.begin(), dirty_.end(), 0);
-  std::fill(fill_.begin(), fill_.end(), kNoFill);
-  std::fill(arrival_ps_.begin(), arrival_ps_.end(), 0);
+  // Empty is zero bytes (kInvalid tags, no fill); mapped arrays give their pages back.
+  tags_.clear();
+  stamps_.clear();
+  dirty_.clear();
+  cls_.clear();
+  fill_.clear();
+  arrival_ps_.clear();
+  std::fill(used_.begin(), used_.end(), 0);
 }
 
 void Cache::update_derived_stats() {

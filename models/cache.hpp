@@ -8,6 +8,9 @@
 // Hot path: tags, LRU stamps, dirty bits and classes are flat arrays indexed by
 // set * ways + way (a "slot"); a lookup scans one set's `ways` tags. True LRU keeps one 64-bit
 // access stamp per line and evicts the smallest (invalid lines have stamp 0, so they go first).
+// An empty slot is all zero bytes in every array (tags and fills are stored complemented), so the
+// arrays are ZeroedArrays: a large cache takes memory for the sets a run touches, not its capacity.
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -17,6 +20,7 @@
 #include "models/hw_config.hpp"
 #include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
+#include "kernel/zeroed_array.hpp"
 
 namespace tbdr {
 
@@ -106,12 +110,12 @@ class Cache {
   /// arrival is not known yet (kNoFill when none), and the tick (ps) its data arrives once it is
   /// (0 when it has always been there). Both reset whenever the slot is (re)allocated.
   static constexpr std::uint32_t kNoFill = UINT32_MAX;
-  std::uint32_t fill_of(std::uint32_t slot) const { return fill_[slot]; }
-  void set_fill(std::uint32_t slot, std::uint32_t fill) { fill_[slot] = fill; }
+  std::uint32_t fill_of(std::uint32_t slot) const { return ~fill_[slot]; }
+  void set_fill(std::uint32_t slot, std::uint32_t fill) { fill_[slot] = ~fill; }
   std::int64_t arrival_ps(std::uint32_t slot) const { return arrival_ps_[slot]; }
   void set_arrival_ps(std::uint32_t slot, std::int64_t ps) { arrival_ps_[slot] = ps; }
   /// Line address (first byte) held by a slot.
-  std::uint64_t slot_addr(std::uint32_t slot) const { return tags_[slot] << line_shift_; }
+  std::uint64_t slot_addr(std::uint32_t slot) const { return ~tags_[slot] << line_shift_; }
 
   std::uint64_t line_bytes() const { return line_bytes_; }
   std::uint64_t line_addr(std::uint64_t addr) const { return addr & ~(line_bytes_ - 1); }
@@ -134,7 +138,9 @@ class Cache {
   void reset_stats();
 
  private:
-  static constexpr std::uint64_t kInvalid = UINT64_MAX;
+  /// The stored tag of an empty slot: tags are stored complemented (~line), so an empty slot is
+  /// zero bytes like every other array's (a line address of all ones is beyond any address).
+  static constexpr std::uint64_t kInvalid = 0;
   /// access() for a cache of W ways (0: any number, read from ways_).
   template <std::uint32_t W>
   CacheAccess access_in(std::uint64_t addr, std::uint32_t bytes, bool is_write, DramClass cls, Allocation alloc);
@@ -153,12 +159,17 @@ class Cache {
   bool write_allocate_;
   std::uint64_t clock_ = 0;  // LRU stamp source: incremented per access
 
-  std::vector<std::uint64_t> tags_;    // line address (addr >> line_shift_), kInvalid when empty
-  std::vector<std::uint64_t> stamps_;  // last access stamp, 0 when empty
-  std::vector<std::uint8_t> dirty_;
-  std::vector<DramClass> cls_;         // class of the line's data (allocating access or last writer)
-  std::vector<std::uint32_t> fill_;    // timing model's pending fill id, kNoFill when none
-  std::vector<std::int64_t> arrival_ps_;  // timing model's data arrival tick (ps)
+  ZeroedArray<std::uint64_t> tags_;    // ~line address (~(addr >> line_shift_)), kInvalid (0) when empty
+  ZeroedArray<std::uint64_t> stamps_;  // last access stamp, 0 when empty
+  ZeroedArray<std::uint8_t> dirty_;
+  ZeroedArray<DramClass> cls_;         // class of the line's data (allocating access or last writer); any when empty
+  ZeroedArray<std::uint32_t> fill_;    // ~ the timing model's pending fill id (0: kNoFill)
+  ZeroedArray<std::int64_t> arrival_ps_;  // timing model's data arrival tick (ps)
+  /// Slots per chunk of used_: a 4 KiB page of tags. flush() reads the chunks a line was ever
+  /// installed in, not every slot: reading a page of a ZeroedArray can take memory too (it does in
+  /// some sandboxes), and flushes come at the end of every pass.
+  static constexpr std::uint32_t kSlotsPerChunk = 512;
+  std::vector<std::uint8_t> used_;     // 1: a line was installed in the chunk since the last invalidate_all
 
   std::string scope_;  // statistics scope, e.g. "mem/cache.texture"
   CacheStats stats_;
@@ -168,13 +179,18 @@ class Cache {
 template <class Fn>
 std::uint64_t Cache::flush(Fn&& fn) {
   std::uint64_t n = 0;
-  for (std::uint32_t s = 0; s < tags_.size(); ++s) {
-    if (tags_[s] == kInvalid || !dirty_[s]) continue;
-    dirty_[s] = 0;
-    ++n;
-    ++stats_.flush_writebacks;
-    stats_.writeback_bytes += line_bytes_;
-    fn(tags_[s] << line_shift_, cls_[s]);
+  const auto slots = static_cast<std::uint32_t>(tags_.size());
+  for (std::uint32_t chunk = 0; chunk < used_.size(); ++chunk) {
+    if (!used_[chunk]) continue;
+    const std::uint32_t end = std::min(slots, (chunk + 1) * kSlotsPerChunk);
+    for (std::uint32_t s = chunk * kSlotsPerChunk; s < end; ++s) {
+      if (tags_[s] == kInvalid || !dirty_[s]) continue;
+      dirty_[s] = 0;
+      ++n;
+      ++stats_.flush_writebacks;
+      stats_.writeback_bytes += line_bytes_;
+      fn(~tags_[s] << line_shift_, cls_[s]);
+    }
   }
   return n;
 }

@@ -2,11 +2,15 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
+
+#include "kernel/errors.hpp"
+#include "kernel/output_file.hpp"
 
 namespace tbdr {
 
@@ -21,14 +25,22 @@ struct FileCloser {
 };
 using File = std::unique_ptr<std::FILE, FileCloser>;
 
-File open_out(const std::string& path) {
-  File f(std::fopen(path.c_str(), "w"));
-  if (!f) throw std::runtime_error(path + ": cannot write the memory trace");
+/// Opens the temporary file of a pending output (InputError naming the output when it cannot).
+File open_out(const PendingOutput& out) {
+  errno = 0;
+  File f(std::fopen(out.temp_path().c_str(), "w"));
+  if (!f) throw InputError(out.path(), write_failure("the memory trace", errno));
   return f;
 }
 
-void close_checked(File f, const std::string& path) {
-  if (std::ferror(f.get()) != 0 || std::fclose(f.release()) != 0) throw std::runtime_error(path + ": write failed");
+/// Closes the temporary file (InputError naming the output when a write failed; the pending output
+/// then removes it).
+void close_checked(File f, const PendingOutput& out) {
+  const bool failed = std::ferror(f.get()) != 0;
+  const int err = errno;
+  if (failed) throw InputError(out.path(), write_failure("the memory trace", err));
+  errno = 0;
+  if (std::fclose(f.release()) != 0) throw InputError(out.path(), write_failure("the memory trace", errno));
 }
 
 }  // namespace
@@ -110,7 +122,10 @@ void DramTraceExport::refresh(std::uint32_t channel, std::int64_t start_cycle, s
 }
 
 void DramTraceExport::write(const std::string& path) {
-  File f = open_out(path);
+  // Both files whole or neither (kernel/output_file.hpp): each goes in beside its name first.
+  PendingOutput trace_out(path);
+  PendingOutput summary_out(path + ".summary");
+  File f = open_out(trace_out);
   if (format_ == DramTraceFormat::Dramsim3) {
     for (const Req& r : reqs_) {
       std::fprintf(f.get(), "0x%" PRIx64 " %s %" PRId64 "\n", r.addr, r.is_write ? "WRITE" : "READ", r.cycle);
@@ -131,10 +146,9 @@ void DramTraceExport::write(const std::string& path) {
     }
     std::fprintf(f.get(), "%" PRId64 ",%s,0,0,0,0,0\n", last + 1, kCmdNames[kEnd]);
   }
-  close_checked(std::move(f), path);
+  close_checked(std::move(f), trace_out);
 
-  const std::string spath = path + ".summary";
-  File s = open_out(spath);
+  File s = open_out(summary_out);
   std::vector<std::int64_t> lat = read_latency_ps_;
   std::sort(lat.begin(), lat.end());
   double mean = 0;
@@ -151,7 +165,9 @@ void DramTraceExport::write(const std::string& path) {
                         "read_latency_p50_ns %.3f\nread_latency_p99_ns %.3f\n",
                counts_.request_lines, counts_.rd, counts_.wr, counts_.act, counts_.pre, counts_.prea, counts_.refa,
                lat.size(), mean * 1e-3, pct(0.5), pct(0.99));
-  close_checked(std::move(s), spath);
+  close_checked(std::move(s), summary_out);
+  trace_out.commit();
+  summary_out.commit();
 }
 
 }  // namespace tbdr

@@ -304,6 +304,25 @@ TEST(Import, BadCapturesNameTheDrawAndWriteNothing) {
   expect_refused(in / "missing.rdc", out, "capture not found");
 }
 
+TEST(Import, PngThatIsPlainTextIsRefusedBeforeDecoding) {
+  // The issue 55 reproducer: a texture named .png that is text was embedded as image/png without
+  // a word. Refused by its signature, exit 2, naming the file and its first bytes; nothing written.
+  const fs::path out = scratch_dir("import", "text_png_out");
+  const fs::path d = scratch_dir("import", "text_png");
+  const fs::path json = edited_fixture(d, [](nlohmann::json&) {});
+  std::ofstream(d / "tex_164.png", std::ios::trunc) << "hello world\n";
+  expect_refused(json, out,
+                 (d / "tex_164.png").string() + ": draw at event 11 (vkCmdDraw()) texture: not a PNG file: it starts with "
+                 "68 65 6c 6c 6f 20 77 6f ('hello wo'), where a PNG starts with 89 50 4e 47 0d 0a 1a 0a");
+  std::ofstream(d / "tex_164.png", std::ios::trunc);  // empty
+  expect_refused(json, out, "tex_164.png: draw at event 11 (vkCmdDraw()) texture: not a PNG file: it is empty");
+  // The application's own frame, copied beside the trace, is checked the same way.
+  fs::copy_file(kFixture / "tex_164.png", d / "tex_164.png", fs::copy_options::overwrite_existing);
+  std::ofstream(d / "reference.png") << "P3\n2 2\n255\n";
+  expect_refused(json, out, (d / "reference.png").string() + ": the application's frame (copied to x.reference.png): "
+                            "not a PNG file: it starts with 50 33 0a 32 20 32 0a 32 ('P3\\x0a2 2\\x0a2')");
+}
+
 TEST(Import, RdcExportReproducesTheFixture) {
   // The .rdc route end to end, where RenderDoc is installed (scripts/install_capture_deps.sh): the
   // committed capture exported again gives the committed intermediate (pixel history aside, which

@@ -24,6 +24,7 @@
 #include "app/cli.hpp"
 #include "app/sweep.hpp"
 #include "app/worker_pool.hpp"
+#include "models/hw_config.hpp"
 #include "kernel/errors.hpp"
 #include "db_query.hpp"
 #include "scratch_dir.hpp"
@@ -207,6 +208,72 @@ TEST(SweepParse, ListsRangesZipsGlobsAndRepetitions) {
   EXPECT_EQ(fs::path(cp[1].configs[0]).filename(), "alt.ini");
   EXPECT_EQ(cp[1].sets, (std::vector<std::string>{"gpu.core_clock_mhz=450"}));
   EXPECT_NE(cp[1].label.find("config=alt.ini"), std::string::npos);
+}
+
+// The points are made from their index (nothing is kept per point): every slice's points equal
+// those of the whole list that fall in it, and a configuration's hash, continued from the last
+// one's, equals the hash of its parameters resolved from scratch (the runs' config_hash, which
+// finds the points already in a database), in order, backwards and in a stride.
+TEST(SweepParse, LazyPointsAndConfigHashesMatchAFullResolution) {
+  const fs::path dir = scratch("lazy");
+  write_file(dir / "a.trace", "x");
+  write_file(dir / "b.trace", "x");
+  write_file(dir / "base.ini", "[usc]\ncount = 6\n");
+  write_file(dir / "alt.ini", "[usc]\ncount = 2\n[dram]\nt_rcd_ns = 20\n");
+  write_file(dir / "s.ini",
+             "[sweep]\nconfig = base.ini\ntrace = a.trace, b.trace\nrepetitions = 2\n"
+             "[set]\nisp.tag_buffers = 3\n"
+             "[vary]\ngpu.core_clock_mhz = 450.0, 600\ndram.t_rcd_ns = 10..14\n"
+             "[zip.preset]\nconfig = base.ini, alt.ini\ngeometry.vertex_shader_alu_ops = 8, 24\n");
+  const SweepSpec spec = parse_sweep_file((dir / "s.ini").string());
+  const SweepPoints all(spec);
+  ASSERT_EQ(all.size(), 2u * 5u * 2u * 2u * 2u);  // clock x t_rcd x zip x traces x repetitions
+  EXPECT_EQ(all.total(), all.size());
+  EXPECT_EQ(all.groups(), 2u * 5u * 2u * 2u);
+  EXPECT_EQ(all.combinations(), 2u * 5u * 2u);
+  const auto list = expand_sweep(spec);
+  for (int count = 1; count <= 7; ++count) {
+    for (int index = 0; index < count; ++index) {
+      const SweepPoints slice(spec, {index, count});
+      const auto expected = slice_points(list, {index, count});
+      ASSERT_EQ(slice.size(), expected.size()) << index << "/" << count;
+      for (std::size_t i = 0; i < slice.size(); ++i) {
+        const SweepPoint p = slice[i];
+        EXPECT_EQ(p.index, expected[i].index);
+        EXPECT_EQ(p.group, expected[i].group);
+        EXPECT_EQ(p.repetition, expected[i].repetition);
+        EXPECT_EQ(p.sets, expected[i].sets);
+        EXPECT_EQ(p.configs, expected[i].configs);
+        EXPECT_EQ(p.trace, expected[i].trace);
+        EXPECT_EQ(p.label, expected[i].label);
+        EXPECT_EQ(slice.traces()[slice.trace(i)], p.trace);
+        EXPECT_EQ(slice.index(i), p.index);
+      }
+    }
+  }
+  // The order: the last axis fastest, then traces, then repetitions.
+  EXPECT_EQ(list[0].label, "gpu.core_clock_mhz=450.0 dram.t_rcd_ns=10 config=base.ini geometry.vertex_shader_alu_ops=8 | a.trace #1");
+  EXPECT_EQ(list[1].label, "gpu.core_clock_mhz=450.0 dram.t_rcd_ns=10 config=base.ini geometry.vertex_shader_alu_ops=8 | a.trace #2");
+  EXPECT_EQ(list[2].trace, (dir / "b.trace").lexically_normal().string());
+  EXPECT_EQ(list[4].label, "gpu.core_clock_mhz=450.0 dram.t_rcd_ns=10 config=alt.ini geometry.vertex_shader_alu_ops=24 | a.trace #1");
+
+  const ParamTable& table = hw_params().table();
+  std::vector<std::string> full(all.combinations());
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    const SweepPoint p = all[i];
+    full[all.combination(i)] = table.hash(table.resolve(p.configs, p.sets));
+  }
+  std::set<std::string> distinct(full.begin(), full.end());
+  EXPECT_EQ(distinct.size(), full.size()) << "every configuration differs";
+  SweepConfigHashes forward(spec);
+  for (std::size_t c = 0; c < full.size(); ++c) EXPECT_EQ(forward(c), full[c]) << "configuration " << c;
+  SweepConfigHashes backward(spec);
+  for (std::size_t c = full.size(); c-- > 0;) EXPECT_EQ(backward(c), full[c]) << "configuration " << c;
+  SweepConfigHashes stride(spec);
+  for (std::size_t k = 0; k < 3 * full.size(); ++k) {
+    const std::size_t c = (k * 7) % full.size();
+    EXPECT_EQ(stride(c), full[c]) << "configuration " << c;
+  }
 }
 
 TEST(SweepParse, ValueListsAndRanges) {

@@ -32,6 +32,7 @@
 #include "app/worker_pool.hpp"
 #include "kernel/errors.hpp"
 #include "kernel/hash.hpp"
+#include "kernel/text_escape.hpp"
 #include "scene/gltf_loader.hpp"
 
 extern char** environ;
@@ -191,6 +192,37 @@ std::vector<std::uint8_t> read_bytes(const fs::path& p, const std::string& what)
   std::ifstream in(p, std::ios::binary);
   if (!in) throw InputError(p.string(), what + ": cannot open file");
   return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
+}
+
+/// The 8-byte signature every PNG file starts with (ISO/IEC 15948, PNG 5.2).
+constexpr std::uint8_t kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+
+/// Refuses a file that is not a PNG by its signature, before anything decodes it (a text file
+/// named .png was embedded as image/png): InputError naming the file, `what`, and its first bytes.
+void check_png_signature(const fs::path& p, const std::string& what, const std::uint8_t* bytes, std::size_t size) {
+  if (size >= sizeof kPngSignature && std::equal(kPngSignature, kPngSignature + sizeof kPngSignature, bytes)) return;
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string hex;
+  std::string text;
+  for (std::size_t i = 0; i < std::min(size, sizeof kPngSignature); ++i) {
+    hex += (i ? " " : "") + std::string{kHex[bytes[i] >> 4], kHex[bytes[i] & 0xF]};
+    text += static_cast<char>(bytes[i]);
+  }
+  std::string quoted = escape_for_message(text);
+  for (std::size_t at = quoted.find('\n'); at != std::string::npos; at = quoted.find('\n', at)) quoted.replace(at, 1, "\\x0a");
+  throw InputError(p.string(), what + ": not a PNG file: " +
+                                   (size == 0 ? std::string("it is empty")
+                                              : "it starts with " + hex + " ('" + quoted + "')") +
+                                   ", where a PNG starts with 89 50 4e 47 0d 0a 1a 0a ('\\x89PNG\\r\\n\\x1a\\n')");
+}
+
+/// check_png_signature of a file's first bytes.
+void check_png_file(const fs::path& p, const std::string& what) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in) throw InputError(p.string(), what + ": cannot open file");
+  char head[sizeof kPngSignature] = {};
+  in.read(head, sizeof head);
+  check_png_signature(p, what, reinterpret_cast<const std::uint8_t*>(head), static_cast<std::size_t>(in.gcount()));
 }
 
 }  // namespace
@@ -498,6 +530,7 @@ CaptureImport convert_capture(const std::string& frame_json_path, const std::str
         auto it = image_of_file.find(file);
         if (it == image_of_file.end()) {
           const auto png = read_bytes(dir / file, dwhere + " texture");
+          check_png_signature(dir / file, dwhere + " texture", png.data(), png.size());
           images.push_back({{"bufferView", glb.view(png, std::nullopt)}, {"mimeType", "image/png"}, {"name", file}});
           textures.push_back({{"source", images.size() - 1}});
           it = image_of_file.emplace(file, static_cast<int>(textures.size() - 1)).first;
@@ -733,6 +766,7 @@ int cmd_import(const std::vector<std::string>& args, std::ostream& out, std::ost
                                                       {scratch / (stem + ".import.txt"), out_dir / (stem + ".import.txt")}};
   const fs::path ref = frame_json.parent_path() / "reference.png";
   if (fs::is_regular_file(ref, ec)) {
+    check_png_file(ref, "the application's frame (copied to " + stem + ".reference.png)");
     fs::copy_file(ref, scratch / (stem + ".reference.png"), fs::copy_options::overwrite_existing);
     moves.push_back({scratch / (stem + ".reference.png"), out_dir / (stem + ".reference.png")});
   }

@@ -94,8 +94,7 @@ int cmd_sweep(const std::vector<std::string>& args, std::ostream& out, std::ostr
     }
     if (vm.count("slice")) throw UsageError("tbdrsim sweep: --emit-slurm and --slice do not go together");
     if (vm.count("db")) throw UsageError("tbdrsim sweep: --emit-slurm writes one shard database per task; --db goes with a sweep that runs");
-    std::size_t groups = 0;
-    for (const auto& p : expand_sweep(spec)) groups = std::max(groups, p.group + 1);
+    const std::size_t groups = SweepPoints(spec).groups();
     SlurmJobOptions job;
     job.slices = vm.count("slices") ? vm["slices"].as<int>() : static_cast<int>(std::min<std::size_t>(groups, 32));
     job.jobs = jobs;

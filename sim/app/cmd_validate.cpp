@@ -24,6 +24,7 @@
 #include "models/dram_memspec.hpp"
 #include "models/dram_microbench.hpp"
 #include "kernel/errors.hpp"
+#include "kernel/output_file.hpp"
 #include "scene/camera.hpp"
 #include "trace/trace.hpp"
 
@@ -1003,8 +1004,7 @@ int cmd_validate(const std::vector<std::string>& args, std::ostream& out, std::o
   out << md;
   if (vm.count("markdown")) {
     const std::string path = vm["markdown"].as<std::string>();
-    std::ofstream f(path);
-    if (!(f << md)) throw InputError(path, "cannot write the markdown table");
+    write_output_file(path, "the markdown table", md);  // whole or not at all
   }
   out << "\nruns in " << v.db() << "\n";
   (void)err;

@@ -18,6 +18,7 @@
 #include <type_traits>
 
 #include "kernel/errors.hpp"
+#include "kernel/output_file.hpp"
 
 // stb_image: declarations only, the implementation lives in libstb. PNGs are written with
 // libdeflate (a zlib stream and CRC-32s, as PNG defines them).
@@ -200,18 +201,8 @@ void write_png(const std::string& path, const ImageRGB8& image) {
   put_chunk(png, "IHDR", ihdr.data(), ihdr.size());
   put_chunk(png, "IDAT", z.get(), zsize);
   put_chunk(png, "IEND", nullptr, 0);
-  errno = 0;
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  const bool ok = f != nullptr && std::fwrite(png.data(), 1, png.size(), f) == png.size();
-  const int err = errno;
-  if (f != nullptr && std::fclose(f) != 0 && ok) {
-    throw InputError(path, std::string("cannot write PNG image (") + std::strerror(errno) + ")");
-  }
-  if (!ok) {
-    std::string message = "cannot write PNG image";
-    if (err != 0) message += std::string(" (") + std::strerror(err) + ")";
-    throw InputError(path, message);
-  }
+  // Whole or not at all (kernel/output_file.hpp).
+  write_output_file(path, "PNG image", std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
 }
 
 ImageRGB8 read_png(const std::string& path) {

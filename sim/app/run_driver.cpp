@@ -6,6 +6,8 @@
 #include <ctime>
 #include <time.h>
 #include <filesystem>
+
+#include <unistd.h>
 #include <functional>
 #include <future>
 #include <iomanip>
@@ -278,10 +280,26 @@ RunOutcome run_one(const RunRequest& req) {
   const auto t_load = std::chrono::steady_clock::now();
   const std::string started = utc_now_iso8601();
   check_results_db_target(req.db_path);  // a bad --db is reported now, not after the simulation
+  // The images folder, and the folders above it this run creates, are removed again when the run
+  // fails (a refused trace, a full disk): a failed run leaves nothing behind. Declared before the
+  // image writer's future, so that it is destroyed after the writer has finished.
+  struct CreatedFolder {
+    std::string path;  ///< the outermost folder this run created; empty once the run succeeded
+    ~CreatedFolder() {
+      std::error_code ec;
+      if (!path.empty()) std::filesystem::remove_all(path, ec);
+    }
+  } created_images_folder;
   if (!req.images_dir.empty()) {
     std::error_code ec;
+    fs::path outermost;
+    for (fs::path p = fs::path(req.images_dir).lexically_normal(); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+      outermost = p;
+      if (p == p.parent_path()) break;
+    }
     fs::create_directories(req.images_dir, ec);
     if (ec || !fs::is_directory(req.images_dir)) throw InputError(req.images_dir, "cannot create the images folder");
+    created_images_folder.path = outermost.string();
   }
   const Trace trace = read_trace(req.trace_path);
   // Colours (and the texels they sample) are computed only for the images that read them: the
@@ -359,11 +377,53 @@ RunOutcome run_one(const RunRequest& req) {
   // With more than one thread the results database is opened (a new one created) while the
   // timing model finishes: the functional run has read every input by now, so an input it
   // refuses has written nothing; with one, after the timing model, as before.
+  // A new database is made beside its name with the run in it and linked in at the end, so a run
+  // that fails to write it (a full disk) leaves no database at all (ResultsDb::link_into_place).
+  std::error_code db_ec;
+  const bool new_db = !std::filesystem::exists(req.db_path, db_ec) && !db_ec;
+  const std::string db_path = new_db ? req.db_path + ".run-" + std::to_string(getpid()) : req.db_path;
+  struct NewDbGuard {
+    std::string path;
+    ~NewDbGuard() {
+      if (path.empty()) return;
+      std::error_code ec;
+      for (const char* suffix : {"", "-wal", "-shm", "-journal"}) std::filesystem::remove(path + suffix, ec);
+    }
+  } new_db_guard{new_db ? db_path : std::string()};
+  // Errors about the new database's working file name the database asked for.
+  const auto as_asked = [&](auto&& step) {
+    if (!new_db) return step();
+    try {
+      return step();
+    } catch (const InputError& e) {
+      auto named = [&](std::string text) {
+        for (auto at = text.find(db_path); at != std::string::npos; at = text.find(db_path, at + req.db_path.size())) {
+          text.replace(at, db_path.size(), req.db_path);
+        }
+        return text;
+      };
+      const std::string where = named(e.where());
+      std::string what = named(e.what());
+      if (what.rfind(where + ": ", 0) == 0) what = what.substr(where.size() + 2);
+      if (where == req.db_path && what.rfind("cannot create the results database", 0) != 0) {
+        what = "cannot create the results database: " + what + "; nothing written";
+      }
+      throw InputError(where, what);
+    }
+  };
   std::optional<ResultsDb> db;
+  // The working file is this process's alone: its schema is made in place (no second temporary).
+  const auto open_db = [&] {
+    if (new_db) {
+      db.emplace(db_path, ResultsDb::kSchemaVersion, ResultsDb::InPlace{});
+    } else {
+      db.emplace(db_path);
+    }
+  };
   double db_open_cpu = 0;
   if (pipelined) {
     const double c = thread_cpu_seconds();
-    db.emplace(req.db_path);
+    as_asked([&] { open_db(); });
     db_open_cpu = thread_cpu_seconds() - c;
     outcome.timing = timed.get();
     outcome.frame.work = feed.take();
@@ -446,10 +506,22 @@ RunOutcome run_one(const RunRequest& req) {
                        "1 on a virtual machine that reports freed memory to its host (virtio-balloon free page reporting): "
                        "fresh huge pages are slow there, so none are asked for by default"});
   rec.tiles = outcome.timing.tiles;
-  if (!db) db.emplace(req.db_path);
-  outcome.run_id = db->write_run(rec);
-  if (req.summary_figures) outcome.derived = read_derived_figures(*db, outcome.run_id);
+  as_asked([&] {
+    if (!db) open_db();
+    outcome.run_id = db->write_run(rec);
+    if (req.summary_figures) outcome.derived = read_derived_figures(*db, outcome.run_id);
+    if (new_db) db.reset();  // closed: the write-ahead log is folded in
+  });
+  if (new_db) {
+    if (!as_asked([&] { return ResultsDb::link_into_place(db_path, req.db_path); })) {
+      // Another process created the database meanwhile: the run goes into theirs.
+      db.emplace(req.db_path);
+      outcome.run_id = db->write_run(rec);
+      if (req.summary_figures) outcome.derived = read_derived_figures(*db, outcome.run_id);
+    }
+  }
   if (released.valid()) released.get();
+  created_images_folder.path.clear();  // the run is written: its images stay
   return outcome;
 }
 

@@ -17,6 +17,7 @@
 #include "analysis/results_db.hpp"
 #include "analysis/sql.hpp"
 #include "kernel/errors.hpp"
+#include "kernel/output_file.hpp"
 
 namespace tbdr {
 
@@ -68,11 +69,7 @@ std::string text_number(double v) {
 
 /// Writes `text` to `path` (InputError naming it when that fails).
 void write_file(const std::string& path, const std::string& text) {
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  if (!f) throw InputError(path, "cannot write the file");
-  f << text;
-  f.close();
-  if (!f) throw InputError(path, "cannot write the file (disk full?)");
+  write_output_file(path, "the file", text);  // whole or not at all (kernel/output_file.hpp)
 }
 
 /// Who the run is: the columns of runs and its configuration's label.

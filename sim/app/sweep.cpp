@@ -4,8 +4,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <cerrno>
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -61,24 +61,29 @@ TraceInfo read_trace_info(const std::string& path) {
 }
 
 /// Announces the traces that draw the scene kSlowSceneDraws times or more, with their points and
-/// how many times the scene they draw compared with the sweep's lightest trace.
-void warn_slow_traces(const std::map<std::string, TraceInfo>& traces, const std::vector<SweepPoint>& points,
-                      std::ostream& out, const std::vector<std::size_t>* only = nullptr) {
-  std::size_t lightest = 0;
-  for (const auto& [path, info] : traces) {
-    if (info.scene_draws > 0 && (lightest == 0 || info.scene_draws < lightest)) lightest = info.scene_draws;
+/// how many times the scene they draw compared with the sweep's lightest trace. `infos` and
+/// `points_per_trace` are indexed like SweepPoints::traces(); traces not read (empty hash) are left out.
+void warn_slow_traces(const SweepPoints& points, const std::vector<TraceInfo>& infos,
+                      const std::vector<std::size_t>& points_per_trace, std::ostream& out) {
+  // By path (one path may be listed twice), in path order.
+  std::map<std::string, std::pair<const TraceInfo*, std::size_t>> traces;
+  for (std::size_t t = 0; t < infos.size(); ++t) {
+    if (infos[t].hash.empty()) continue;
+    auto& [info, n] = traces[points.traces()[t]];
+    info = &infos[t];
+    n += points_per_trace[t];
   }
-  for (const auto& [path, info] : traces) {
-    if (info.scene_draws < kSlowSceneDraws) continue;
-    std::size_t n = 0;
-    if (only) {
-      for (const std::size_t i : *only) n += points[i].trace == path ? 1 : 0;
-    } else {
-      for (const auto& p : points) n += p.trace == path ? 1 : 0;
-    }
-    out << "slow: " << n << " point(s) replay " << path << " (" << info.technique << "), which draws the scene "
-        << info.scene_draws << " times";
-    if (lightest > 0 && lightest < info.scene_draws) {
+  std::size_t lightest = 0;
+  for (const auto& [path, entry] : traces) {
+    const std::size_t draws = entry.first->scene_draws;
+    if (draws > 0 && (lightest == 0 || draws < lightest)) lightest = draws;
+  }
+  for (const auto& [path, entry] : traces) {
+    const auto& [info, n] = entry;
+    if (info->scene_draws < kSlowSceneDraws) continue;
+    out << "slow: " << n << " point(s) replay " << path << " (" << info->technique << "), which draws the scene "
+        << info->scene_draws << " times";
+    if (lightest > 0 && lightest < info->scene_draws) {
       out << ", " << lightest << " in this sweep's lightest trace";
     }
     out << ": replay time grows with each draw, so these points take the longest; leave the trace out with "
@@ -87,30 +92,15 @@ void warn_slow_traces(const std::map<std::string, TraceInfo>& traces, const std:
   out << std::flush;
 }
 
-/// What a sweep keeps of one resolved configuration: its hash. The resolved parameters (about
-/// 11 KB: a value and an origin per parameter) are resolved again for the rare point that fails,
-/// so a sweep of a million configurations holds a million hashes, not 11 GB.
-struct PointConfig {
-  std::string hash;  ///< hw_params().table().hash() of the resolved parameters
-  /// Its label, as v_config_label names it: the preset's name and the keys the point sets on top
-  /// of it, sorted by key ("series6xt_gx6450 tiling.tile_width=16"); what a dry run shows.
-  std::string label;
-};
-
-/// Every point's resolved configuration and trace, read once before anything runs (points of one
-/// configuration or one trace share them).
-struct PointInputs {
-  std::map<std::string, PointConfig> configs;  ///< by config_key()
-  std::map<std::string, TraceInfo> traces;     ///< by trace path
-  std::vector<const PointConfig*> config;      ///< per point
-  std::vector<const TraceInfo*> trace;         ///< per point
-};
-
-std::string config_key(const SweepPoint& p) {
-  std::string k;
-  for (const auto& c : p.configs) k += "c:" + c + "\n";
-  for (const auto& s : p.sets) k += "s:" + s + "\n";
-  return k;
+/// A point's configuration as v_config_label names it: the preset's (last config file's) name and
+/// the keys the point sets on top of it, sorted by key ("series6xt_gx6450 tiling.tile_width=16");
+/// what a dry run shows.
+std::string config_label(const SweepPoint& p) {
+  std::string label = p.configs.empty() ? std::string("default") : std::filesystem::path(p.configs.back()).stem().string();
+  std::vector<std::string> sets = p.sets;
+  std::sort(sets.begin(), sets.end());
+  for (const auto& set : sets) label += " " + set;
+  return label;
 }
 
 /// The hash shown for a generated trace that a dry run has not generated: no run has it.
@@ -156,16 +146,18 @@ std::string bare_message(const InputError& e) {
 /// `tbdrsim trace` (cmd_trace, the same code path). All of them are written into a staging folder
 /// first and moved in only when every one succeeded, so a bad option value leaves nothing behind
 /// (InputError naming the [generate] line). Returns how many it generated.
-std::size_t generate_traces(const SweepSpec& spec, const std::vector<SweepPoint>& points, std::ostream& out) {
+std::size_t generate_traces(const SweepSpec& spec, const SweepPoints& points, std::ostream& out) {
   namespace fs = std::filesystem;
   const auto by_path = generated_by_path(spec);
   std::vector<const TraceRequest*> missing;
   std::set<std::string> seen;
   std::size_t present = 0;
-  for (const auto& p : points) {
-    const auto it = by_path.find(p.trace);
-    if (it == by_path.end() || !seen.insert(p.trace).second) continue;
-    if (fs::is_regular_file(p.trace)) {
+  const std::vector<bool> used = points.traces_used();
+  for (std::size_t t = 0; t < used.size(); ++t) {
+    const std::string& path = points.traces()[t];
+    const auto it = by_path.find(path);
+    if (!used[t] || it == by_path.end() || !seen.insert(path).second) continue;
+    if (fs::is_regular_file(path)) {
       ++present;
     } else {
       missing.push_back(it->second);
@@ -227,50 +219,28 @@ std::size_t generate_traces(const SweepSpec& spec, const std::vector<SweepPoint>
   return missing.size();
 }
 
-/// Resolves every configuration and reads every trace: bad input stops the sweep before anything
-/// runs, and the hashes identify points already in the database. A generated trace that is not
-/// there yet (a dry run) is known by its request only.
-PointInputs resolve_inputs(const SweepSpec& spec, const std::vector<SweepPoint>& points) {
+/// Reads every trace the points replay (bad input stops the sweep before anything runs; the
+/// hashes identify points already in the database), indexed like points.traces(); a trace no point
+/// replays is left empty. A generated trace that is not there yet (a dry run) is known by its
+/// request only.
+std::vector<TraceInfo> read_traces(const SweepSpec& spec, const SweepPoints& points) {
   const auto generated = generated_by_path(spec);
-  PointInputs in;
-  in.config.resize(points.size());
-  in.trace.resize(points.size());
-  // The config files of a point are read once per list of files (not once per point): each
-  // configuration is that base with the point's overrides, as resolve_config layers them.
-  const auto& reg = hw_params();
-  std::map<std::vector<std::string>, ResolvedParams> bases;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const SweepPoint& p = points[i];
-    const std::string key = config_key(p);
-    auto it = in.configs.find(key);
-    if (it == in.configs.end()) {
-      PointConfig config;
-      try {
-        auto base = bases.find(p.configs);
-        if (base == bases.end()) base = bases.emplace(p.configs, reg.table().resolve(p.configs, {})).first;
-        ResolvedParams params = base->second;
-        for (const auto& set : p.sets) reg.table().apply_override(params, set);
-        check_config_constraints(reg.build(params), params);
-        config.hash = reg.table().hash(params);
-        std::vector<std::string> sets = p.sets;
-        std::sort(sets.begin(), sets.end());
-        config.label = params.config_name;
-        for (const auto& set : sets) config.label += " " + set;
-      } catch (const InputError& e) {
-        throw InputError(spec.path, "point '" + p.label + "': " + std::string(e.what()));
-      }
-      it = in.configs.emplace(key, std::move(config)).first;
+  const std::vector<bool> used = points.traces_used();
+  std::vector<TraceInfo> infos(used.size());
+  std::map<std::string, std::size_t> read;  // path -> the index it was read for
+  for (std::size_t t = 0; t < used.size(); ++t) {
+    if (!used[t]) continue;
+    const std::string& path = points.traces()[t];
+    if (const auto it = read.find(path); it != read.end()) {
+      infos[t] = infos[it->second];
+      continue;
     }
-    in.config[i] = &it->second;
-    auto tt = in.traces.find(p.trace);
-    if (tt == in.traces.end()) {
-      const auto g = generated.find(p.trace);
-      const bool absent = g != generated.end() && !std::filesystem::exists(p.trace);
-      tt = in.traces.emplace(p.trace, absent ? ungenerated_info(*g->second) : read_trace_info(p.trace)).first;
-    }
-    in.trace[i] = &tt->second;
+    const auto g = generated.find(path);
+    const bool absent = g != generated.end() && !std::filesystem::exists(path);
+    infos[t] = absent ? ungenerated_info(*g->second) : read_trace_info(path);
+    read.emplace(path, t);
   }
-  return in;
+  return infos;
 }
 
 /// The command line of one point's worker: `tbdrsim run` with its configs, overrides, trace and
@@ -342,21 +312,17 @@ RunRecord failed_run(const SweepPoint& p, const TraceInfo& trace, const Launch& 
 /// configuration and trace than the point's repetition number.
 class DoneCheck {
  public:
-  DoneCheck(const ResultsDb& db, const PointInputs& inputs, const std::vector<SweepPoint>& points)
-      : count_(db.sql(), "SELECT count(*) FROM runs WHERE config_hash = ? AND trace_hash = ? AND status = 'ok'"),
-        inputs_(inputs),
-        points_(points) {}
-  bool operator()(std::size_t i) {
-    count_.bind(1, inputs_.config[i]->hash).bind(2, inputs_.trace[i]->hash);
+  explicit DoneCheck(const ResultsDb& db)
+      : count_(db.sql(), "SELECT count(*) FROM runs WHERE config_hash = ? AND trace_hash = ? AND status = 'ok'") {}
+  bool operator()(const std::string& config_hash, const std::string& trace_hash, int repetition) {
+    count_.bind(1, config_hash).bind(2, trace_hash);
     const std::int64_t n = count_.step() ? count_.int64(0) : 0;
     count_.reset();
-    return n > points_[i].repetition;
+    return n > repetition;
   }
 
  private:
   SqlStatement count_;
-  const PointInputs& inputs_;
-  const std::vector<SweepPoint>& points_;
 };
 
 /// How long a point's claim holds without renewal. A sweep renews its claims every
@@ -381,10 +347,8 @@ class PointClaims {
   /// What claim() found.
   enum class Result { Ours, Done, Elsewhere };
 
-  PointClaims(const ResultsDb& db, const PointInputs& inputs, const std::vector<SweepPoint>& points)
+  explicit PointClaims(const ResultsDb& db)
       : db_(db),
-        inputs_(inputs),
-        points_(points),
         host_(host_name()),
         pid_(getpid()),
         owner_(host_ + "/" + std::to_string(pid_) + "/" + std::to_string(unix_seconds())),
@@ -400,22 +364,23 @@ class PointClaims {
   PointClaims(const PointClaims&) = delete;
   PointClaims& operator=(const PointClaims&) = delete;
 
-  /// Claims point i unless it is done or a live sweep holds it.
-  Result claim(std::size_t i) {
+  /// Claims the point of this configuration, trace and repetition unless it is done or a live
+  /// sweep holds it.
+  Result claim(const std::string& config, const std::string& trace, int repetition) {
     Result result = Result::Ours;
     retry_while_busy([&] {
       SqlTransaction tx(db_.sql());
-      result = claim_in_transaction(i);
+      result = claim_in_transaction(config, trace, repetition);
       tx.commit();
     });
     return result;
   }
 
-  /// Releases point i (its run ended).
-  void release(std::size_t i) {
+  /// Releases a point (its run ended).
+  void release(const std::string& config, const std::string& trace, int repetition) {
     SqlStatement s(db_.sql(),
                    "DELETE FROM sweep_claims WHERE config_hash = ? AND trace_hash = ? AND repetition = ? AND owner = ?");
-    s.bind(1, inputs_.config[i]->hash).bind(2, inputs_.trace[i]->hash).bind(3, static_cast<std::int64_t>(points_[i].repetition)).bind(4, owner_);
+    s.bind(1, config).bind(2, trace).bind(3, static_cast<std::int64_t>(repetition)).bind(4, owner_);
     retry_while_busy([&] { s.run(); });
   }
 
@@ -430,10 +395,8 @@ class PointClaims {
   }
 
  private:
-  Result claim_in_transaction(std::size_t i) {
-    const std::string& config = inputs_.config[i]->hash;
-    const std::string& trace = inputs_.trace[i]->hash;
-    const auto rep = static_cast<std::int64_t>(points_[i].repetition);
+  Result claim_in_transaction(const std::string& config, const std::string& trace, int repetition) {
+    const auto rep = static_cast<std::int64_t>(repetition);
     {
       SqlStatement done(db_.sql(), "SELECT count(*) FROM runs WHERE config_hash = ? AND trace_hash = ? AND status = 'ok'");
       done.bind(1, config).bind(2, trace);
@@ -465,8 +428,6 @@ class PointClaims {
   }
 
   const ResultsDb& db_;
-  const PointInputs& inputs_;
-  const std::vector<SweepPoint>& points_;
   std::string host_;
   pid_t pid_;
   std::string owner_;
@@ -474,11 +435,16 @@ class PointClaims {
 };
 
 /// The sweep's first line: its points, configurations, traces, what is done and what will run.
-void print_plan(const SweepSpec& spec, const SweepOptions& opt, std::size_t points, std::size_t all,
-                const PointInputs& inputs, std::size_t skipped, std::size_t to_run, std::ostream& out) {
-  out << "sweep " << spec.name << ": " << points << " point(s)";
-  if (opt.slice.count > 1) out << " in slice " << opt.slice.index << "/" << opt.slice.count << " (of " << all << ")";
-  out << " (" << inputs.configs.size() << " configuration(s) x " << inputs.traces.size() << " trace(s)";
+void print_plan(const SweepSpec& spec, const SweepOptions& opt, const SweepPoints& points, std::size_t skipped,
+                std::size_t to_run, std::ostream& out) {
+  out << "sweep " << spec.name << ": " << points.size() << " point(s)";
+  if (opt.slice.count > 1) out << " in slice " << opt.slice.index << "/" << opt.slice.count << " (of " << points.total() << ")";
+  std::set<std::string> traces;  // distinct paths
+  const std::vector<bool> used = points.traces_used();
+  for (std::size_t t = 0; t < used.size(); ++t) {
+    if (used[t]) traces.insert(points.traces()[t]);
+  }
+  out << " (" << points.configurations_in_slice() << " configuration(s) x " << traces.size() << " trace(s)";
   if (spec.repetitions > 1) out << " x " << spec.repetitions << " repetitions";
   out << "), " << skipped << " already in " << opt.db_path << ", " << to_run << " to run";
   if (!opt.dry_run) out << " with " << opt.jobs << " worker(s) x " << opt.threads << " thread(s)";
@@ -510,25 +476,121 @@ TraceGenerators trace_generators() {
   return g;
 }
 
+SweepConfigHashes::SweepConfigHashes(const SweepSpec& spec) : spec_(spec) {
+  const ParamTable& table = hw_params().table();
+  const auto& decls = table.decls();
+  // The canonical line of every value of every swept parameter (an override sets the whole value,
+  // so it does not depend on the configuration it lands on).
+  ResolvedParams scratch = table.defaults();
+  lines_.resize(spec.axes.size());
+  for (std::size_t a = 0; a < spec.axes.size(); ++a) {
+    const SweepAxis& axis = spec.axes[a];
+    lines_[a].assign(axis.values.size(), std::vector<std::string>(axis.keys.size()));
+    for (std::size_t k = 0; k < axis.keys.size(); ++k) {
+      const std::string& key = axis.keys[k];
+      if (key == "config") {
+        config_axis_ = a;
+        config_key_ = k;
+        continue;
+      }
+      const int d = table.find(key);
+      if (d < 0) throw InputError(spec.path, "unknown parameter '" + key + "'; `tbdrsim params` lists every parameter");
+      varying_.push_back({static_cast<std::size_t>(d), a, k});
+      for (std::size_t v = 0; v < axis.values.size(); ++v) {
+        try {
+          table.apply_override(scratch, key + "=" + axis.values[v][k]);
+        } catch (const InputError& e) {
+          throw InputError(spec.path, "point '" + key + "=" + axis.values[v][k] + "': " + std::string(e.what()));
+        }
+        lines_[a][v][k] = key + "=" + format_param_value(scratch.values[static_cast<std::size_t>(d)]) + "\n";
+      }
+    }
+  }
+  std::sort(varying_.begin(), varying_.end(), [](const Varying& x, const Varying& y) { return x.decl < y.decl; });
+  // Every config file list, with the fixed overrides (ParamTable::resolve's order: files, then
+  // overrides; the axes' overrides come last and set parameters no fixed one sets).
+  const std::size_t bases = config_axis_ == SIZE_MAX ? 1 : spec.axes[config_axis_].values.size();
+  for (std::size_t b = 0; b < bases; ++b) {
+    std::vector<std::string> configs = spec.base_configs;
+    std::string label = "(every point)";
+    if (config_axis_ != SIZE_MAX) {
+      configs.push_back(spec.axes[config_axis_].values[b][config_key_]);
+      label = "config=" + std::filesystem::path(configs.back()).filename().string();
+    }
+    ResolvedParams params;
+    try {
+      params = table.resolve(configs, spec.sets);
+    } catch (const InputError& e) {
+      throw InputError(spec.path, "point '" + label + "': " + std::string(e.what()));
+    }
+    Base base;
+    base.segments.resize(varying_.size() + 1);
+    std::size_t k = 0;
+    for (std::size_t d = 0; d < decls.size(); ++d) {
+      if (k < varying_.size() && varying_[k].decl == d) {
+        ++k;
+        continue;
+      }
+      base.segments[k] += decls[d].key + "=" + format_param_value(params.values[d]) + "\n";
+    }
+    bases_.push_back(std::move(base));
+  }
+  digits_.resize(spec.axes.size());
+  value_at_.assign(varying_.size(), SIZE_MAX);
+  before_.resize(varying_.size() + 1);
+}
+
+const std::string& SweepConfigHashes::operator()(std::size_t c) {
+  if (c == last_) return hash_;
+  std::size_t rest = c;
+  for (std::size_t a = spec_.axes.size(); a-- > 0;) {  // the last axis fastest (SweepPoints::digits)
+    digits_[a] = rest % spec_.axes[a].values.size();
+    rest /= spec_.axes[a].values.size();
+  }
+  const std::size_t b = config_axis_ == SIZE_MAX ? 0 : digits_[config_axis_];
+  const Base& base = bases_[b];
+  // The first varying parameter whose value differs from the last configuration's: the hash state
+  // before it is still right (all of it when the config files differ).
+  std::size_t from = 0;
+  if (b != base_) {
+    base_ = b;
+    before_[0] = Fnv1a64{};
+    before_[0].update(base.segments[0]);
+  } else {
+    while (from < varying_.size() && value_at_[from] == digits_[varying_[from].axis]) ++from;
+  }
+  Fnv1a64 h = before_[from];
+  for (std::size_t k = from; k < varying_.size(); ++k) {
+    const Varying& v = varying_[k];
+    value_at_[k] = digits_[v.axis];
+    h.update(lines_[v.axis][value_at_[k]][v.key]);
+    h.update(base.segments[k + 1]);
+    before_[k + 1] = h;
+  }
+  hash_ = before_[varying_.size()].hex();
+  last_ = c;
+  return hash_;
+}
+
 void print_slow_points(const SweepSpec& spec, std::ostream& out) {
-  std::map<std::string, TraceInfo> traces;
-  for (const auto& t : spec.traces) {
-    if (!traces.count(t)) traces.emplace(t, read_trace_info(t));
+  const SweepPoints points(spec);
+  std::vector<TraceInfo> infos(points.traces().size());
+  std::vector<std::size_t> counts(points.traces().size(), 0);
+  for (std::size_t t = 0; t < points.traces().size(); ++t) {
+    const std::string& path = points.traces()[t];
+    if (t >= spec.traces.size() && !std::filesystem::is_regular_file(path)) continue;  // known once generated
+    infos[t] = read_trace_info(path);
+    counts[t] = points.combinations() * static_cast<std::size_t>(std::max(spec.repetitions, 1));
   }
-  for (const auto& g : spec.generate) {  // known once generated
-    const std::string t = generated_trace_path(spec, g);
-    if (!traces.count(t) && std::filesystem::is_regular_file(t)) traces.emplace(t, read_trace_info(t));
-  }
-  warn_slow_traces(traces, expand_sweep(spec), out);
+  warn_slow_traces(points, infos, counts, out);
 }
 
 SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostream& out) {
   const auto t0 = std::chrono::steady_clock::now();
   SweepSummary summary;
-  // One list of points (a slice keeps its own, never a second copy of the whole sweep).
-  std::vector<SweepPoint> points = expand_sweep(spec);
-  const std::size_t all_points = points.size();
-  if (opt.slice.count > 1) points = slice_points(points, opt.slice);
+  // The points of the slice, each made from its index when needed: nothing is kept per point but
+  // one bit (whether it was done before this sweep started).
+  const SweepPoints points(spec, opt.slice);
   summary.points = points.size();
   if (opt.jobs < 1 || opt.jobs > 1024) throw InputError("-j " + std::to_string(opt.jobs), "expected 1..1024 worker processes");
   if (opt.threads < 1 || opt.threads > 1024) throw InputError("--threads " + std::to_string(opt.threads), "expected 1..1024 threads per run");
@@ -537,56 +599,72 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
     throw InputError(binary, "the tbdrsim binary for the workers is not executable");
   }
   if (!opt.dry_run) generate_traces(spec, points, out);
-  const PointInputs inputs = resolve_inputs(spec, points);
+  // Every trace is read and every config file list resolved before anything runs (the values of
+  // the axes and the constraints between parameters were checked when the sweep file was read).
+  const std::vector<TraceInfo> traces = read_traces(spec, points);
+  SweepConfigHashes config_hash(spec);
+  auto trace_hash = [&](std::size_t i) -> const std::string& { return traces[points.trace(i)].hash; };
+
+  // A dry run writes nothing: it reads the database when there is one, and creates none.
+  std::optional<ResultsDb> db;
+  if (!opt.dry_run) {
+    db.emplace(opt.db_path);
+  } else if (std::filesystem::exists(opt.db_path)) {
+    db.emplace(opt.db_path, ResultsDb::QueryOnly{});
+  }
+  std::vector<bool> done_before(points.size(), false);
+  if (db) {
+    DoneCheck done(*db);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      done_before[i] = done(config_hash(points.combination(i)), trace_hash(i), points.repetition(i));
+      summary.skipped += done_before[i] ? 1 : 0;
+    }
+  }
+  const std::size_t to_run = points.size() - summary.skipped;
+  print_plan(spec, opt, points, summary.skipped, to_run, out);
+  std::vector<std::size_t> points_per_trace(traces.size(), 0);  // of those to run (a dry run: all)
+  for (std::size_t i = 0; i < points.size(); ++i) points_per_trace[points.trace(i)] += opt.dry_run || !done_before[i] ? 1 : 0;
 
   if (opt.dry_run) {
-    // A dry run writes nothing: it reads the database when there is one, and creates none.
-    std::optional<ResultsDb> existing;
-    if (std::filesystem::exists(opt.db_path)) existing.emplace(opt.db_path, ResultsDb::QueryOnly{});
-    std::optional<DoneCheck> done;
-    if (existing) done.emplace(*existing, inputs, points);
-    std::vector<bool> done_before(points.size(), false);
+    std::set<std::string> to_generate;
+    const std::vector<bool> used = points.traces_used();
+    for (std::size_t t = 0; t < traces.size(); ++t) {
+      if (used[t] && traces[t].hash == kNotGenerated) to_generate.insert(points.traces()[t]);
+    }
+    if (!to_generate.empty()) {
+      out << "dry run: would generate " << to_generate.size() << " trace(s) into " << spec.generated_dir
+          << "; generated none\n";
+    }
+    warn_slow_traces(points, traces, points_per_trace, out);
+    // Streamed: one line per point, made when it is written.
     for (std::size_t i = 0; i < points.size(); ++i) {
-      done_before[i] = done && (*done)(i);
-      if (done_before[i]) ++summary.skipped;
+      const SweepPoint p = points[i];
+      out << "  " << std::setw(5) << p.index << "  " << (done_before[i] ? "done  " : "to run") << "  " << p.label
+          << "  (config " << config_label(p) << ", trace " << trace_hash(i) << ")\n";
     }
-    print_plan(spec, opt, points.size(), all_points, inputs, summary.skipped, points.size() - summary.skipped, out);
-    std::size_t to_generate = 0;
-    for (const auto& [path, info] : inputs.traces) to_generate += info.hash == kNotGenerated ? 1 : 0;
-    if (to_generate) {
-      out << "dry run: would generate " << to_generate << " trace(s) into " << spec.generated_dir << "; generated none\n";
-    }
-    warn_slow_traces(inputs.traces, points, out);
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      out << "  " << std::setw(5) << points[i].index << "  " << (done_before[i] ? "done  " : "to run") << "  "
-          << points[i].label << "  (config " << inputs.config[i]->label << ", trace " << inputs.trace[i]->hash << ")\n";
-    }
-    summary.not_run = points.size() - summary.skipped;
+    summary.not_run = to_run;
     return summary;
   }
-
-  ResultsDb db(opt.db_path);
-  DoneCheck already_done(db, inputs, points);
-  std::vector<std::size_t> todo;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (already_done(i)) {
-      ++summary.skipped;
-    } else {
-      todo.push_back(i);
-    }
-  }
-  print_plan(spec, opt, points.size(), all_points, inputs, summary.skipped, todo.size(), out);
-  warn_slow_traces(inputs.traces, points, out, &todo);
+  warn_slow_traces(points, traces, points_per_trace, out);
 
   SweepProgressDisplay progress(opt.progress, out, points.size(), summary.skipped);
-  std::vector<Launch> launches(points.size());
-  std::size_t next = 0;
+  // The points being run, by index: their launch (for the row of a failed run) and hashes.
+  struct Running {
+    Launch launch;
+    std::string config_hash;
+  };
+  std::map<std::size_t, Running> running;
+  std::size_t next = 0;     // the next point to consider
+  std::size_t visited = 0;  // points not done before that next() has taken (launched or skipped)
   WorkerPoolHooks hooks;
-  PointClaims claims(db, inputs, points);
+  PointClaims claims(*db);
   hooks.next = [&]() -> std::optional<WorkerJob> {
-    while (next < todo.size()) {
-      const std::size_t i = todo[next++];
-      const PointClaims::Result claim = claims.claim(i);
+    while (next < points.size()) {
+      const std::size_t i = next++;
+      if (done_before[i]) continue;
+      ++visited;
+      const std::string config = config_hash(points.combination(i));
+      const PointClaims::Result claim = claims.claim(config, trace_hash(i), points.repetition(i));
       if (claim != PointClaims::Result::Ours) {  // another sweep on the same database finished it or runs it
         ++(claim == PointClaims::Result::Done ? summary.skipped : summary.elsewhere);
         progress.skipped();
@@ -595,41 +673,45 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
       WorkerJob job;
       job.id = i;
       job.argv = run_args(binary, points[i], opt.db_path, opt.threads);
-      launches[i] = {shell_command_line(job.argv), utc_now_iso8601()};
+      running[i] = {{shell_command_line(job.argv), utc_now_iso8601()}, config};
       return job;
     }
     return std::nullopt;
   };
   hooks.ended = [&](const WorkerEnd& end) {
     const std::size_t i = end.id;
+    const auto it = running.find(i);
+    const Running run = it->second;
+    running.erase(it);
     if (end.killed) {
-      claims.release(i);
+      claims.release(run.config_hash, trace_hash(i), points.repetition(i));
       ++summary.not_run;
       return;
     }
+    const SweepPoint p = points[i];
     std::string error;
     if (end.ok()) {
       ++summary.ok;
     } else {
       error = failure_text(end);
-      db.write_run(failed_run(points[i], *inputs.trace[i], launches[i], error));
+      db->write_run(failed_run(p, traces[points.trace(i)], run.launch, error));
       ++summary.failed;
     }
-    claims.release(i);
-    progress.finished(points[i], end.ok(), end.seconds, error);
+    claims.release(run.config_hash, trace_hash(i), points.repetition(i));
+    progress.finished(p, end.ok(), end.seconds, error);
   };
   hooks.running = [&](std::size_t n) { progress.set_running(n); };
   hooks.tick = [&] {
     claims.renew_if_due();
     progress.draw(false);
   };
-  hooks.stopping = [&](bool kill, std::size_t running) {
-    progress.message(kill ? "stopping: killing " + std::to_string(running) + " running point(s); finished runs are kept"
-                          : "stopping: waiting for " + std::to_string(running) +
+  hooks.stopping = [&](bool kill, std::size_t n) {
+    progress.message(kill ? "stopping: killing " + std::to_string(n) + " running point(s); finished runs are kept"
+                          : "stopping: waiting for " + std::to_string(n) +
                                 " running point(s) to finish (Ctrl-C again to kill them)");
   };
   summary.interrupted = run_worker_pool({opt.jobs, true}, hooks);
-  summary.not_run += todo.size() - next;
+  summary.not_run += to_run - visited;
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   progress.end();
   print_summary(spec, summary, out);

@@ -6,8 +6,12 @@
 // (app/sweep_slurm.hpp) run slices of a sweep into shard databases that app/sweep_merge.hpp joins.
 // Syntax: docs/sweeps.md.
 #include <cstddef>
+#include <cstdint>
 #include <iosfwd>
 #include <string>
+#include <vector>
+
+#include "kernel/hash.hpp"
 
 #include "app/sweep_progress.hpp"
 #include "app/sweep_spec.hpp"
@@ -35,6 +39,46 @@ struct SweepSummary {
   std::size_t not_run = 0;     ///< left when interrupted
   bool interrupted = false;
   double seconds = 0;
+};
+
+/// The hash of each configuration of a sweep (ParamTable::hash of the parameters its config
+/// files and overrides resolve to: the runs' config_hash), from the configuration's number
+/// (SweepPoints::combination). Each config file list is resolved once and every axis value
+/// formatted once; a configuration's hash continues the hash of the canonical text from the first
+/// parameter whose value differs from the configuration asked for before, so a sweep's points in
+/// order cost a fraction of a full resolution each, and nothing is kept per configuration.
+class SweepConfigHashes {
+ public:
+  /// Resolves every config file list of the sweep (InputError naming the sweep file and the point
+  /// when one is bad).
+  explicit SweepConfigHashes(const SweepSpec& spec);
+  /// The hash of configuration c (16 hex digits).
+  const std::string& operator()(std::size_t c);
+
+ private:
+  /// A parameter an axis sets: its declaration's position, axis and key within the axis.
+  struct Varying {
+    std::size_t decl, axis, key;
+  };
+  /// The canonical text ("key=value\n" lines) of one config file list with the fixed overrides,
+  /// cut at the varying parameters: segments[0] precedes the first, segments[k + 1] follows the k-th.
+  struct Base {
+    std::vector<std::string> segments;
+  };
+  const SweepSpec& spec_;
+  std::vector<Varying> varying_;                            ///< by declaration order
+  std::vector<std::vector<std::vector<std::string>>> lines_;  ///< [axis][value][key]: "key=value\n"
+  std::vector<Base> bases_;                                 ///< by value of the config axis (one without)
+  std::size_t config_axis_ = SIZE_MAX;                      ///< the axis that varies config files, if any
+  std::size_t config_key_ = 0;                              ///< "config"'s key within that axis
+  std::vector<std::size_t> digits_;
+  // The last configuration hashed: its base, each varying parameter's axis value, the hash state
+  // before each varying parameter, and its hash.
+  std::size_t base_ = SIZE_MAX;
+  std::vector<std::size_t> value_at_;
+  std::vector<Fnv1a64> before_;
+  std::size_t last_ = SIZE_MAX;
+  std::string hash_;
 };
 
 /// The registered techniques with their options and this tool's version: what a sweep file's

@@ -3,11 +3,13 @@
 #include <cctype>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <regex>
 
 #include "app/sweep_spec.hpp"
 #include "app/worker_pool.hpp"
 #include "kernel/errors.hpp"
+#include "kernel/output_file.hpp"
 
 namespace tbdr {
 
@@ -63,8 +65,8 @@ std::string write_slurm_job(const SweepSpec& spec, const std::string& dir, const
                             shell_quote(adir) + "/shard_*.db";
   std::string trace_args;
   for (const auto& t : opt.traces) trace_args += " --trace " + shell_quote(fs::absolute(t).lexically_normal().string());
-  const std::size_t points = expand_sweep(spec).size();
-  std::ofstream f(script);
+  const std::size_t points = SweepPoints(spec).total();
+  std::ostringstream f;
   f << "#!/bin/bash\n"
     << "# tbdrsim sweep '" << spec.name << "' (" << points << " points) as a Slurm job array of " << slices
     << " tasks.\n"
@@ -88,15 +90,15 @@ std::string write_slurm_job(const SweepSpec& spec, const std::string& dir, const
     << "exec \"$TBDRSIM\" sweep " << shell_quote(asweep) << trace_args << " --slice \"${TASK}/" << slices << "\" \\\n"
     << "  --db " << shell_quote(adir) << "/shard_\"${TASK}\".db -j \"${SLURM_CPUS_PER_TASK:-" << jobs
     << "}\" --progress lines\n";
-  f.close();
-  if (!f) throw InputError(script, "cannot write the Slurm script");
+  write_output_file(script, "the Slurm script", f.str());  // whole or not at all
   fs::permissions(script, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec, fs::perm_options::add, ec);
-  std::ofstream readme(fs::path(adir) / "README.md");
+  std::ostringstream readme;
   readme << "# Slurm job for the tbdrsim sweep '" << spec.name << "'\n\n"
          << "Submit: `sbatch " << script << "` (" << slices << " array tasks; task i writes `shard_i.db` here).\n"
          << "Without Slurm, run task i by hand: `SLURM_ARRAY_TASK_ID=i bash " << script << "`.\n\n"
          << "Merge the shards when every task has finished (re-running a task resumes it):\n\n"
          << "    " << merge << "\n";
+  write_output_file((fs::path(adir) / "README.md").string(), "the job's README", readme.str());
   return script;
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -632,56 +633,98 @@ void check_sweep_size(const SweepSpec& spec) {
   }
 }
 
-std::vector<SweepPoint> expand_sweep(const SweepSpec& spec) {
-  check_sweep_size(spec);
-  std::size_t combos = 1;
-  for (const auto& a : spec.axes) combos *= a.values.size();
-  std::vector<SweepPoint> points;
-  points.reserve(combos * (spec.traces.size() + spec.generate.size()) * static_cast<std::size_t>(spec.repetitions));
-  std::vector<std::size_t> digit(spec.axes.size(), 0);
-  std::size_t group = 0;
-  std::vector<std::pair<std::string, std::string>> traces;  // path, label
-  for (const auto& t : spec.traces) traces.emplace_back(t, fs::path(t).filename().string());
-  for (const auto& g : spec.generate) traces.emplace_back(generated_trace_path(spec, g), g.label);
-  for (std::size_t c = 0; c < combos; ++c) {
-    // Mixed-radix decode, the last axis fastest.
-    std::size_t rest = c;
-    for (std::size_t a = spec.axes.size(); a-- > 0;) {
-      digit[a] = rest % spec.axes[a].values.size();
-      rest /= spec.axes[a].values.size();
-    }
-    std::vector<std::string> configs = spec.base_configs;
-    std::vector<std::string> sets = spec.sets;
-    std::string label;
-    for (std::size_t a = 0; a < spec.axes.size(); ++a) {
-      const auto& axis = spec.axes[a];
-      for (std::size_t k = 0; k < axis.keys.size(); ++k) {
-        const std::string& v = axis.values[digit[a]][k];
-        if (axis.keys[k] == "config") {
-          configs.push_back(v);
-          label += (label.empty() ? "" : " ") + std::string("config=") + fs::path(v).filename().string();
-        } else {
-          sets.push_back(axis.keys[k] + "=" + v);
-          label += (label.empty() ? "" : " ") + axis.keys[k] + "=" + v;
-        }
+SweepPoints::SweepPoints(const SweepSpec& spec, SweepSlice slice) : spec_(&spec) {
+  check_sweep_size(spec);  // so every product below fits (at most kMaxSweepPoints)
+  for (const auto& a : spec.axes) combos_ *= a.values.size();
+  for (const auto& t : spec.traces) {
+    trace_paths_.push_back(t);
+    trace_labels_.push_back(fs::path(t).filename().string());
+  }
+  for (const auto& g : spec.generate) {
+    trace_paths_.push_back(generated_trace_path(spec, g));
+    trace_labels_.push_back(g.label);
+  }
+  reps_ = static_cast<std::size_t>(std::max(spec.repetitions, 1));
+  groups_ = combos_ * trace_paths_.size();
+  slice_step_ = static_cast<std::size_t>(std::max(slice.count, 1));
+  slice_first_ = static_cast<std::size_t>(std::max(slice.index, 0));
+  const std::size_t slice_groups = groups_ > slice_first_ ? (groups_ - slice_first_ + slice_step_ - 1) / slice_step_ : 0;
+  size_ = slice_groups * reps_;
+}
+
+void SweepPoints::digits(std::size_t c, std::vector<std::size_t>& digits) const {
+  digits.resize(spec_->axes.size());
+  for (std::size_t a = spec_->axes.size(); a-- > 0;) {  // the last axis fastest
+    digits[a] = c % spec_->axes[a].values.size();
+    c /= spec_->axes[a].values.size();
+  }
+}
+
+SweepPoint SweepPoints::operator[](std::size_t i) const {
+  SweepPoint p;
+  p.index = index(i);
+  p.group = group(i);
+  p.repetition = repetition(i);
+  p.configs = spec_->base_configs;
+  p.sets = spec_->sets;
+  std::vector<std::size_t> digit;
+  digits(combination(i), digit);
+  std::string label;
+  for (std::size_t a = 0; a < spec_->axes.size(); ++a) {
+    const auto& axis = spec_->axes[a];
+    for (std::size_t k = 0; k < axis.keys.size(); ++k) {
+      const std::string& v = axis.values[digit[a]][k];
+      if (!label.empty()) label += ' ';
+      if (axis.keys[k] == "config") {
+        p.configs.push_back(v);
+        label += "config=" + fs::path(v).filename().string();
+      } else {
+        p.sets.push_back(axis.keys[k] + "=" + v);
+        label += axis.keys[k] + "=" + v;
       }
-    }
-    for (const auto& [trace, trace_label] : traces) {
-      for (int r = 0; r < spec.repetitions; ++r) {
-        SweepPoint p;
-        p.index = points.size();
-        p.group = group;
-        p.repetition = r;
-        p.configs = configs;
-        p.sets = sets;
-        p.trace = trace;
-        p.label = (label.empty() ? "" : label + " | ") + trace_label;
-        if (spec.repetitions > 1) p.label += " #" + std::to_string(r + 1);
-        points.push_back(std::move(p));
-      }
-      ++group;
     }
   }
+  const std::size_t t = trace(i);
+  p.trace = trace_paths_[t];
+  p.label = (label.empty() ? "" : label + " | ") + trace_labels_[t];
+  if (reps_ > 1) p.label += " #" + std::to_string(p.repetition + 1);
+  return p;
+}
+
+std::size_t SweepPoints::configurations_in_slice() const {
+  // The slice's groups in order have non-decreasing configurations: count the changes.
+  std::size_t n = 0;
+  std::size_t last = SIZE_MAX;
+  for (std::size_t i = 0; i < size_; i += reps_) {
+    const std::size_t c = combination(i);
+    n += c != last ? 1 : 0;
+    last = c;
+  }
+  return n;
+}
+
+std::vector<bool> SweepPoints::traces_used() const {
+  std::vector<bool> used(trace_paths_.size(), false);
+  std::size_t found = 0;
+  for (std::size_t i = 0; i < size_ && found < used.size(); i += reps_) {
+    if (!used[trace(i)]) {
+      used[trace(i)] = true;
+      ++found;
+    }
+  }
+  return used;
+}
+
+std::size_t SweepPoints::traces_in_slice() const {
+  const auto used = traces_used();
+  return static_cast<std::size_t>(std::count(used.begin(), used.end(), true));
+}
+
+std::vector<SweepPoint> expand_sweep(const SweepSpec& spec) {
+  const SweepPoints lazy(spec);
+  std::vector<SweepPoint> points;
+  points.reserve(lazy.size());
+  for (std::size_t i = 0; i < lazy.size(); ++i) points.push_back(lazy[i]);
   return points;
 }
 

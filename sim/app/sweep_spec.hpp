@@ -105,8 +105,58 @@ SweepSpec parse_sweep_file(const std::string& path, const std::vector<std::strin
 /// InputError naming `where` when malformed.
 std::vector<std::string> expand_value_list(const std::string& text, const std::string& where);
 
-/// All points in their deterministic order: axes (last fastest), then traces (the [sweep] traces,
-/// then the generated ones in [generate] order), then repetitions.
+/// The points of a sweep, or of one slice of it, in their deterministic order: axes (last
+/// fastest), then traces (the [sweep] traces, then the generated ones in [generate] order), then
+/// repetitions. A point is made from its index when asked (a mixed-radix decode of the axes'
+/// values), so a sweep of a million points keeps nothing per point (docs/limits.md).
+class SweepPoints {
+ public:
+  /// The points of `spec` (kept by reference: it must outlive this) in `slice`: the point groups
+  /// g with g % count == index. InputError when the sweep has more than kMaxSweepPoints points.
+  explicit SweepPoints(const SweepSpec& spec, SweepSlice slice = {});
+
+  std::size_t size() const { return size_; }            ///< points in the slice
+  std::size_t total() const { return groups_ * reps_; }  ///< points in the whole sweep
+  std::size_t groups() const { return groups_; }         ///< (configuration, trace) pairs of the whole sweep
+  std::size_t combinations() const { return combos_; }   ///< configurations: the product of the axes' lengths
+  /// Every trace path, in point order (a point's trace() indexes it).
+  const std::vector<std::string>& traces() const { return trace_paths_; }
+
+  /// Point i of the slice (0 <= i < size()).
+  SweepPoint operator[](std::size_t i) const;
+  /// Position of point i of the slice in the whole sweep.
+  std::size_t index(std::size_t i) const { return group(i) * reps_ + i % reps_; }
+  /// Its (configuration, trace) pair's number in the whole sweep.
+  std::size_t group(std::size_t i) const { return slice_first_ + (i / reps_) * slice_step_; }
+  /// Its configuration's number (the axes' values as digits, the last axis fastest).
+  std::size_t combination(std::size_t i) const { return group(i) / trace_paths_.size(); }
+  /// Its trace's position in traces().
+  std::size_t trace(std::size_t i) const { return group(i) % trace_paths_.size(); }
+  /// Its repetition (0-based).
+  int repetition(std::size_t i) const { return static_cast<int>(i % reps_); }
+
+  /// The value index of every axis of configuration c (the mixed-radix digits), into `digits`.
+  void digits(std::size_t c, std::vector<std::size_t>& digits) const;
+  /// The distinct configurations and traces of the slice's points (print_plan's counts).
+  std::size_t configurations_in_slice() const;
+  std::size_t traces_in_slice() const;
+  /// Whether a point of the slice replays traces()[t].
+  std::vector<bool> traces_used() const;
+
+ private:
+  const SweepSpec* spec_;
+  std::vector<std::string> trace_paths_;
+  std::vector<std::string> trace_labels_;  ///< the trace part of a point's label
+  std::size_t combos_ = 1;
+  std::size_t groups_ = 0;
+  std::size_t reps_ = 1;
+  std::size_t slice_first_ = 0;  ///< the slice's first group
+  std::size_t slice_step_ = 1;   ///< groups between two of the slice's
+  std::size_t size_ = 0;
+};
+
+/// All points in their deterministic order, as a list (SweepPoints without the laziness: for the
+/// tests and the fuzz harness; a sweep runs over SweepPoints).
 std::vector<SweepPoint> expand_sweep(const SweepSpec& spec);
 
 /// Parses "i/K" (0 <= i < K). InputError naming the argument otherwise.

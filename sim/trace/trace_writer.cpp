@@ -8,6 +8,7 @@
 #include <system_error>
 
 #include "kernel/errors.hpp"
+#include "kernel/output_file.hpp"
 #include "trace/trace.hpp"
 
 namespace tbdr {
@@ -175,11 +176,8 @@ void write_trace(const Trace& t, std::ostream& out) {
 }
 
 void write_trace_file(const Trace& trace, const std::string& path) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw InputError(path, "cannot open the trace file for writing");
-  write_trace(trace, out);
-  out.flush();
-  if (!out) throw InputError(path, "error writing the trace file");
+  // Whole or not at all: a full disk leaves no partial trace (kernel/output_file.hpp).
+  write_output_file(path, "the trace file", [&](std::ostream& out) { write_trace(trace, out); });
 }
 
 }  // namespace tbdr
