@@ -127,7 +127,10 @@ def parser(doc, out):
     ap.add_argument("--technique", action="append", help="only this technique; repeatable")
     ap.add_argument("--scene", help="only runs of this scene (v_run_summary.scene)")
     ap.add_argument("--fix", action="append", default=[], metavar="KEY=VALUE",
-                    help="only runs with this hardware parameter value (`tbdrsim params` keys); repeatable")
+                    help="only runs with this parameter value: a hardware parameter (`tbdrsim params`), a technique "
+                         "option (technique.pls_bytes) or a trace key (trace.camera), as report --by takes; repeatable")
+    ap.add_argument("--independent-y", action="store_true",
+                    help="each panel its own y scale (default: the panels of a figure share one, so that they compare)")
     return ap
 
 
@@ -249,15 +252,16 @@ def load_runs(db, args):
     if not os.path.isdir(folder):  # before any work
         fail("--out %s: no such folder %s" % (args.out, folder))
     label = "config_label" if has_column(db, "v_run_summary", "config_label") else "config_name"
-    conds = ["status = 'ok'"]
+    conds = []
     if args.where:
         conds.append("(" + args.where + ")")
-    if getattr(args, "lights", None):
-        conds.append("lights IN (%s)" % int_list(args.lights))
     if getattr(args, "technique", None):
         conds.append("technique IN (%s)" % _sql_list(args.technique))
     if getattr(args, "scene", None):
         conds.append("scene = " + _sql_list([args.scene]))
+    lights = "lights IN (%s)" % int_list(args.lights) if getattr(args, "lights", None) else None
+    _count_unfinished(db, args, label, conds, lights)
+    conds = ["status = 'ok'"] + conds + ([lights] if lights else [])
     runs = query(db, "SELECT run_id, technique, scene, config_name, %s AS config_label, config_hash, trace_hash, "
                      "trace_path, width, height, samples_per_pixel, lights FROM v_run_summary WHERE %s ORDER BY run_id"
                  % (label, " AND ".join(conds)), where=args.where)
@@ -276,17 +280,71 @@ def load_runs(db, args):
                      for w, h, s in zip(runs.width, runs.height, runs.samples_per_pixel)]
     runs["config"] = _config_labels(db, runs, label)
     if getattr(args, "config", None):
-        chosen = runs[runs.config_name.isin(args.config) | runs.config.isin(args.config)]
+        chosen = runs[config_matches(runs, args.config)]
         if chosen.empty:
             fail("--config %s: no selected run has this configuration; they have: %s"
                  % (", ".join(args.config), "; ".join(sorted(runs.config.unique()))))
         runs = chosen.reset_index(drop=True)
     if getattr(args, "fix", None):
-        wide, num = hardware_params(db, runs)
+        wide, num = hardware_params(db, runs, [f.partition("=")[0] for f in args.fix])
         runs = apply_fix(runs, wide, num, args.fix).reset_index(drop=True)
     runs["variant"] = _variants(db, runs)
     runs["series"] = [t + (" " + v if v else "") for t, v in zip(runs.technique, runs.variant)]
     return runs
+
+
+def config_matches(runs, names):
+    """Which `runs` --config `names` picks: each name is a configuration label (the `config` column,
+    which the messages list) or, when no label is that name, a config_name (every configuration of
+    that preset)."""
+    pick = pd.Series(False, index=runs.index)
+    for name in names:
+        by_label = runs.config == name
+        pick |= by_label if by_label.any() else runs.config_name == name
+    return pick
+
+
+#: Notes on what a figure leaves out (unfinished runs, runs without a partner, ...): save() puts
+#: them under the figure's title and prints them.
+_NOTES = []
+
+
+def note(text):
+    """Records that the figure leaves something out: `text` goes under the title and to stdout."""
+    if text and text not in _NOTES:
+        _NOTES.append(text)
+
+
+#: At most this many characters of a failed run's error in the note that counts it.
+ERROR_CHARS = 70
+
+
+def _count_unfinished(db, args, label, conds, lights):
+    """Notes the runs of the selection that did not finish (failed, refused, still running), with
+    their reasons: plots draw finished runs only. A failed run has no figures, so a --lights or
+    --where condition on its figures is unknown (NULL): it is counted unless a condition is false."""
+    if not has_column(db, "v_run_summary", "status"):
+        return
+    where = ["status <> 'ok'"] + ["(%s) IS NOT 0" % c for c in conds]
+    try:
+        bad = pd.read_sql_query("SELECT run_id, technique, config_name, %s AS config, status, error, lights "
+                                "FROM v_run_summary WHERE %s" % (label, " AND ".join(where)), db)
+    except (sqlite3.Error, pd.errors.DatabaseError):
+        return
+    if bad.empty:
+        return
+    if getattr(args, "config", None):
+        bad = bad[config_matches(bad, args.config)]
+    if lights:
+        bad = bad[bad.lights.isna() | bad.lights.round().isin(args.lights)]
+    if bad.empty:
+        return
+    reasons = []
+    for (status, error), g in bad.groupby(["status", bad.error.fillna("").str.split("\n").str[0]]):
+        why = error if len(error) <= ERROR_CHARS else error[:ERROR_CHARS - 3] + "..."
+        reasons.append("%d %s (%s)%s" % (len(g), status, ", ".join(ordered(g.technique.unique(), TECHNIQUES)),
+                                         ": " + why if why else ""))
+    note("left out: %d run(s) that did not finish: %s" % (len(bad), "; ".join(reasons)))
 
 
 def option(*names, **kwargs):
@@ -501,23 +559,66 @@ def wide_range(values, factor):
     return len(v) == len(list(values)) and len(v) > 1 and max(v) > factor * min(v)
 
 
+def share_y(axes, args):
+    """Gives the panels `axes` one y scale (the union of their ranges) unless --independent-y:
+    panels of one figure compare at a glance. Call after drawing, before any log_axis."""
+    axes = [ax for ax in axes if ax.get_visible()]
+    if getattr(args, "independent_y", False) or len(axes) < 2:
+        return
+    first = axes[0]
+    for ax in axes[1:]:
+        ax.sharey(first)
+    first.autoscale_view(scalex=False)  # over the data of every panel that shares the axis
+
+
 #: Values spanning more than this factor get a log axis by default: beyond ~20x the small values
 #: of a linear axis are flat against zero.
 LOG_RANGE = 20.0
 
 
+#: Characters of a title line per inch of figure width (10-point text) when notes are wrapped.
+TITLE_CHARS_PER_INCH = 13
+
+
+def _fit_below_title(fig):
+    """Moves the panels down until nothing of them (titles, tick labels) reaches into the figure's
+    title or into a text placed above them, measured as drawn."""
+    renderer = fig.canvas.get_renderer()
+    texts = [fig._suptitle] + [t for t in fig.texts if t.get_visible()]
+    for _ in range(3):
+        fig.canvas.draw()
+        bottom = min(t.get_window_extent(renderer).y0 for t in texts)
+        top = max((ax.get_tightbbox(renderer).y1 for ax in fig.axes if ax.get_visible() and getattr(ax, "get_subplotspec", lambda: None)()),
+                  default=0.0)
+        overlap = top - bottom + 8.0  # pixels of space between them
+        if overlap <= 0:
+            return
+        fig.subplots_adjust(top=fig.subplotpars.top - overlap / fig.bbox.height)
+
+
 def save(fig, out, summary):
     """Writes the figure to `out` (PlotError naming --out when it cannot) and prints `summary` and
-    the figure's title on one line."""
+    the figure's title on one line, then each note() (what the figure leaves out), which the title
+    also shows."""
     folder = os.path.dirname(os.path.abspath(out))
     if not os.path.isdir(folder):
         fail("--out %s: no such folder %s" % (out, folder))
+    if _NOTES:
+        import textwrap
+        width = max(60, int(TITLE_CHARS_PER_INCH * fig.get_figwidth()))
+        text = "\n".join(textwrap.fill("(" + n + ")", width) for n in _NOTES)
+        if fig._suptitle:
+            fig._suptitle.set_text(fig._suptitle.get_text() + "\n" + text)
+        else:
+            fig.suptitle(text, fontsize=10)
     if fig._suptitle:
-        # Room for the title above the panels (tight_layout leaves it out): about 0.2 inch a line.
+        # Room for the title above the panels (tight_layout leaves it out): about 0.2 inch a line,
+        # then as much more as the panels' own titles need (measured).
         lines = fig._suptitle.get_text().count("\n") + 1
         top = 1.0 - (0.2 * lines + 0.15) / fig.get_figheight()
         if fig.subplotpars.top > top:
             fig.subplots_adjust(top=top)
+        _fit_below_title(fig)
     try:
         fig.savefig(out, dpi=120)
     except (OSError, ValueError) as e:
@@ -525,6 +626,8 @@ def save(fig, out, summary):
     title = fig._suptitle.get_text().replace("\n", " | ") if fig._suptitle else ""
     plt.close(fig)
     print("wrote %s (%s): %s" % (out, summary, title))
+    for n in _NOTES:
+        print("  " + n)
 
 
 def stacked_bars(ax, table, palette, totals=True):
@@ -566,12 +669,15 @@ def side_legend(fig, ax, title, legend_width):
     fig.tight_layout(rect=(0, 0, 1 - legend_width / fig.get_figwidth(), 1))
 
 
-def hardware_params(db, runs):
+def hardware_params(db, runs, extra=()):
     """The resolved hardware parameters of the runs: (text, number) DataFrames indexed by run_id,
-    a column per key (v_param without the trace.*, config.* and technique.* pseudo-keys)."""
-    p = query(db, "SELECT run_id, key, value, value_num FROM v_param WHERE run_id IN (%s) AND key NOT GLOB "
-                  "'trace.*' AND key NOT GLOB 'config.*' AND key NOT GLOB 'technique.*'"
-              % int_list(runs.run_id))
+    a column per key (v_param without the trace.*, config.* and technique.* pseudo-keys), and the
+    `extra` keys of v_param among those (technique options, trace keys: whatever report --by
+    takes; a run without one has NaN)."""
+    extra = sorted(set(k for k in extra if k.split(".")[0] in ("trace", "config", "technique")))
+    p = query(db, "SELECT run_id, key, value, value_num FROM v_param WHERE run_id IN (%s) AND ((key NOT GLOB "
+                  "'trace.*' AND key NOT GLOB 'config.*' AND key NOT GLOB 'technique.*')%s)"
+              % (int_list(runs.run_id), " OR key IN (%s)" % _sql_list(extra) if extra else ""))
     return (p.pivot(index="run_id", columns="key", values="value").reindex(runs.run_id),
             p.pivot(index="run_id", columns="key", values="value_num").reindex(runs.run_id))
 
@@ -581,10 +687,12 @@ def apply_fix(runs, wide, num, fixes):
     for fix in fixes:
         key, sep, value = fix.partition("=")
         if not sep or key not in wide.columns:
-            fail("--fix %s: expected KEY=VALUE with a parameter key (tbdrsim params lists them)" % fix)
+            fail("--fix %s: expected KEY=VALUE with a parameter key (tbdrsim params lists them), a technique option "
+                 "(technique.<option>) or a trace key (trace.<key>) that the selected runs have" % fix)
         w, nm = wide.loc[runs.run_id, key], num.loc[runs.run_id, key]
         keep = (w == value) | (nm == pd.to_numeric(value, errors="coerce"))
         if not keep.any():
-            fail("--fix %s: no selected run has this value (they have %s)" % (fix, ", ".join(sorted(w.dropna().unique()))))
+            fail("--fix %s: no selected run has this value (they have %s)"
+                 % (fix, ", ".join(sorted(w.dropna().unique(), key=natural))))
         runs = runs[keep.values]
     return runs

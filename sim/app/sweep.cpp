@@ -18,6 +18,7 @@
 #include "analysis/results_db.hpp"
 #include "analysis/sql.hpp"
 #include "app/commands.hpp"
+#include "app/run_driver.hpp"
 #include "app/worker_pool.hpp"
 #include "kernel/errors.hpp"
 #include "models/config_checks.hpp"
@@ -90,7 +91,8 @@ void warn_slow_traces(const std::map<std::string, TraceInfo>& traces, const std:
 /// 11 KB: a value and an origin per parameter) are resolved again for the rare point that fails,
 /// so a sweep of a million configurations holds a million hashes, not 11 GB.
 struct PointConfig {
-  std::string hash;  ///< hw_params().table().hash() of the resolved parameters
+  std::string hash;   ///< hw_params().table().hash() of the resolved parameters
+  std::string label;  ///< hw_params().table().label(): what the database and the dry run call it
 };
 
 /// Every point's resolved configuration and trace, read once before anything runs (points of one
@@ -235,6 +237,7 @@ PointInputs resolve_inputs(const SweepSpec& spec, const std::vector<SweepPoint>&
   // configuration is that base with the point's overrides, as resolve_config layers them.
   const auto& reg = hw_params();
   std::map<std::vector<std::string>, ResolvedParams> bases;
+  std::map<std::vector<std::string>, ResolvedParams> presets;  // what the labels are relative to
   for (std::size_t i = 0; i < points.size(); ++i) {
     const SweepPoint& p = points[i];
     const std::string key = config_key(p);
@@ -248,6 +251,9 @@ PointInputs resolve_inputs(const SweepSpec& spec, const std::vector<SweepPoint>&
         for (const auto& set : p.sets) reg.table().apply_override(params, set);
         check_config_constraints(reg.build(params), params);
         config.hash = reg.table().hash(params);
+        auto preset = presets.find(p.configs);
+        if (preset == presets.end()) preset = presets.emplace(p.configs, reg.table().preset(p.configs)).first;
+        config.label = reg.table().label(params, preset->second);
       } catch (const InputError& e) {
         throw InputError(spec.path, "point '" + p.label + "': " + std::string(e.what()));
       }
@@ -327,6 +333,7 @@ RunRecord failed_run(const SweepPoint& p, const TraceInfo& trace, const Launch& 
   for (std::size_t i = 0; i < table.decls().size(); ++i) {
     rec.params.push_back({table.decls()[i].key, format_param_value(config.params.values[i]), config.params.origins[i].text});
   }
+  rec.params.push_back(config_label_param(config.label));
   return rec;
 }
 
@@ -551,7 +558,8 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
     warn_slow_traces(inputs.traces, points, out);
     for (std::size_t i = 0; i < points.size(); ++i) {
       out << "  " << std::setw(5) << points[i].index << "  " << (done_before[i] ? "done  " : "to run") << "  "
-          << points[i].label << "  (config " << inputs.config[i]->hash << ", trace " << inputs.trace[i]->hash << ")\n";
+          << points[i].label << "  (config " << inputs.config[i]->label << " [" << inputs.config[i]->hash
+          << "], trace " << inputs.trace[i]->hash << ")\n";
     }
     summary.not_run = points.size() - summary.skipped;
     return summary;
