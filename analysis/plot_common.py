@@ -260,7 +260,7 @@ def load_runs(db, args):
     if getattr(args, "scene", None):
         conds.append("scene = " + _sql_list([args.scene]))
     lights = "lights IN (%s)" % int_list(args.lights) if getattr(args, "lights", None) else None
-    _count_unfinished(db, args, label, conds, lights)
+    unfinished = _unfinished(db, args, label, conds, lights)
     conds = ["status = 'ok'"] + conds + ([lights] if lights else [])
     runs = query(db, "SELECT run_id, technique, scene, config_name, %s AS config_label, config_hash, trace_hash, "
                      "trace_path, width, height, samples_per_pixel, lights FROM v_run_summary WHERE %s ORDER BY run_id"
@@ -286,8 +286,13 @@ def load_runs(db, args):
                  % (", ".join(args.config), "; ".join(sorted(runs.config.unique()))))
         runs = chosen.reset_index(drop=True)
     if getattr(args, "fix", None):
-        wide, num = hardware_params(db, runs, [f.partition("=")[0] for f in args.fix])
+        keys = [f.partition("=")[0] for f in args.fix]
+        wide, num = hardware_params(db, runs, keys)
         runs = apply_fix(runs, wide, num, args.fix).reset_index(drop=True)
+        if not unfinished.empty:  # failed runs store their parameters too
+            wide, num = hardware_params(db, unfinished, keys)
+            unfinished = apply_fix(unfinished, wide, num, args.fix, quiet=True)
+    _note_unfinished(unfinished)
     runs["variant"] = _variants(db, runs)
     runs["series"] = [t + (" " + v if v else "") for t, v in zip(runs.technique, runs.variant)]
     return runs
@@ -316,31 +321,42 @@ def note(text):
 
 
 #: At most this many characters of a failed run's error in the note that counts it.
-ERROR_CHARS = 70
+ERROR_CHARS = 110
 
 
-def _count_unfinished(db, args, label, conds, lights):
-    """Notes the runs of the selection that did not finish (failed, refused, still running), with
-    their reasons: plots draw finished runs only. A failed run has no figures, so a --lights or
+def _unfinished(db, args, label, conds, lights):
+    """The runs of the selection that did not finish (failed, refused, still running): run_id,
+    technique, config_name, config, status, error. A failed run has no figures, so a --lights or
     --where condition on its figures is unknown (NULL): it is counted unless a condition is false."""
+    none = pd.DataFrame(columns=["run_id", "technique", "config_name", "config", "status", "error", "lights"])
     if not has_column(db, "v_run_summary", "status"):
-        return
+        return none
     where = ["status <> 'ok'"] + ["(%s) IS NOT 0" % c for c in conds]
     try:
         bad = pd.read_sql_query("SELECT run_id, technique, config_name, %s AS config, status, error, lights "
                                 "FROM v_run_summary WHERE %s" % (label, " AND ".join(where)), db)
     except (sqlite3.Error, pd.errors.DatabaseError):
-        return
-    if bad.empty:
-        return
-    if getattr(args, "config", None):
+        return none  # the selection's own query names the error
+    if getattr(args, "config", None) and not bad.empty:
         bad = bad[config_matches(bad, args.config)]
-    if lights:
+    if lights and not bad.empty:
         bad = bad[bad.lights.isna() | bad.lights.round().isin(args.lights)]
+    return bad.reset_index(drop=True)
+
+
+#: The file:line an error message starts with (a trace's line): left out of the reasons, which
+#: group runs by what went wrong.
+_WHERE_PREFIX = re.compile(r"^\S+:\d+: ")
+
+
+def _note_unfinished(bad):
+    """Notes the runs that did not finish, per status and reason, with their techniques: plots
+    draw finished runs only."""
     if bad.empty:
         return
+    reason = bad.error.fillna("").str.split("\n").str[0].map(lambda e: _WHERE_PREFIX.sub("", e))
     reasons = []
-    for (status, error), g in bad.groupby(["status", bad.error.fillna("").str.split("\n").str[0]]):
+    for (status, error), g in bad.groupby([bad.status, reason]):
         why = error if len(error) <= ERROR_CHARS else error[:ERROR_CHARS - 3] + "..."
         reasons.append("%d %s (%s)%s" % (len(g), status, ", ".join(ordered(g.technique.unique(), TECHNIQUES)),
                                          ": " + why if why else ""))
@@ -559,12 +575,20 @@ def wide_range(values, factor):
     return len(v) == len(list(values)) and len(v) > 1 and max(v) > factor * min(v)
 
 
+#: How the panels' y scales were set (share_y), for save()'s line: "one y scale" or "y scale per panel".
+_Y_SCALE = []
+
+
 def share_y(axes, args):
     """Gives the panels `axes` one y scale (the union of their ranges) unless --independent-y:
     panels of one figure compare at a glance. Call after drawing, before any log_axis."""
     axes = [ax for ax in axes if ax.get_visible()]
-    if getattr(args, "independent_y", False) or len(axes) < 2:
+    if len(axes) < 2:
         return
+    if getattr(args, "independent_y", False):
+        _Y_SCALE[:] = ["y scale per panel"]
+        return
+    _Y_SCALE[:] = ["one y scale"]
     first = axes[0]
     for ax in axes[1:]:
         ax.sharey(first)
@@ -603,15 +627,18 @@ def save(fig, out, summary):
     folder = os.path.dirname(os.path.abspath(out))
     if not os.path.isdir(folder):
         fail("--out %s: no such folder %s" % (out, folder))
+    title = fig._suptitle.get_text().replace("\n", " | ") if fig._suptitle else ""
     if _NOTES:
-        import textwrap
-        width = max(60, int(TITLE_CHARS_PER_INCH * fig.get_figwidth()))
-        text = "\n".join(textwrap.fill("(" + n + ")", width) for n in _NOTES)
+        text = "\n".join("(" + n + ")" for n in _NOTES)
         if fig._suptitle:
             fig._suptitle.set_text(fig._suptitle.get_text() + "\n" + text)
         else:
             fig.suptitle(text, fontsize=10)
     if fig._suptitle:
+        # Lines as wide as the figure at most (a long title is wrapped, never cut at its edges).
+        import textwrap
+        width = max(40, int(TITLE_CHARS_PER_INCH * fig.get_figwidth()))
+        fig._suptitle.set_text("\n".join(textwrap.fill(line, width) for line in fig._suptitle.get_text().split("\n")))
         # Room for the title above the panels (tight_layout leaves it out): about 0.2 inch a line,
         # then as much more as the panels' own titles need (measured).
         lines = fig._suptitle.get_text().count("\n") + 1
@@ -623,9 +650,8 @@ def save(fig, out, summary):
         fig.savefig(out, dpi=120)
     except (OSError, ValueError) as e:
         fail("--out %s: %s" % (out, e))
-    title = fig._suptitle.get_text().replace("\n", " | ") if fig._suptitle else ""
     plt.close(fig)
-    print("wrote %s (%s): %s" % (out, summary, title))
+    print("wrote %s (%s): %s" % (out, ", ".join([summary] + _Y_SCALE), title))
     for n in _NOTES:
         print("  " + n)
 
@@ -682,10 +708,17 @@ def hardware_params(db, runs, extra=()):
             p.pivot(index="run_id", columns="key", values="value_num").reindex(runs.run_id))
 
 
-def apply_fix(runs, wide, num, fixes):
-    """The runs whose parameters have the --fix KEY=VALUE values (numbers compare as numbers)."""
+def apply_fix(runs, wide, num, fixes, quiet=False):
+    """The runs whose parameters have the --fix KEY=VALUE values (numbers compare as numbers);
+    PlotError when a fix matches none (unless `quiet`: then no runs)."""
     for fix in fixes:
         key, sep, value = fix.partition("=")
+        if quiet:
+            if key not in wide.columns:
+                return runs.iloc[0:0]
+            keep = (wide.loc[runs.run_id, key] == value) | (num.loc[runs.run_id, key] == pd.to_numeric(value, errors="coerce"))
+            runs = runs[keep.values]
+            continue
         if not sep or key not in wide.columns:
             fail("--fix %s: expected KEY=VALUE with a parameter key (tbdrsim params lists them), a technique option "
                  "(technique.<option>) or a trace key (trace.<key>) that the selected runs have" % fix)

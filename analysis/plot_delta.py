@@ -170,6 +170,8 @@ def main():
             ptitle = (ptitle + ": " if ptitle else "") + "%s = %.4g %s" % (base_label, sel.base.iloc[0], unit)
         if ptitle:
             ax.set_title(ptitle, fontsize=9)
+    for ax in axes[:, 0]:
+        ax.margins(y=0.15)  # room for the values written at the bars' ends
     pc.share_y(axes[:, 0], args)
     fig.suptitle("%s against the baseline %s = %s (baseline %s in %s)\n%s"
                  % (args.metric, key, base_label, args.metric, unit,

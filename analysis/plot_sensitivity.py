@@ -16,6 +16,7 @@ repetitions are averaged.
         --fix pls.tile_buffer_bits_per_pixel=128
 """
 import re
+import textwrap
 
 import plot_common as pc  # first: it selects matplotlib's file-only backend and checks the modules
 
@@ -26,6 +27,8 @@ DEFAULT_PARAMS = ["tiling.tile_width", "pls.tile_buffer_bits_per_pixel"]
 #: Parameters that vary with another one by construction (a square tile's height with its width):
 #: shown in the panel title, not as rows.
 TIED = {"tiling.tile_width": ["tiling.tile_height"], "tiling.tile_height": ["tiling.tile_width"]}
+#: Characters of a panel's title per line (9-point text over a 6.2-inch panel).
+ROW_TITLE_CHARS = 80
 #: At most this many rows of panels per parameter; more means the selection varies too much.
 MAX_ROWS = 6
 
@@ -66,8 +69,10 @@ def main():
         others = [k for k in varying if k != key and k not in TIED.get(key, [])]
         if runs.lights.nunique() > 1:
             others.append("lights")
-        if runs.config.nunique() > 1:
-            others.append("config")
+        by_run = runs.set_index("run_id")
+        if by_run.config[have.values].groupby([wide[k][have] for k in others] if others else
+                                              (lambda _: 0)).nunique().max() > 1:
+            others.append("config")  # configurations that the varying parameters do not tell apart
         # Numbers as numbers, so that rows come in numeric order (64 before 128).
         frame = wide.copy()
         for k in frame.columns:
@@ -121,7 +126,7 @@ def main():
             ax.set_xlabel(key + (" (and " + ", ".join(tied) + ")" if tied else ""))
             ax.set_ylabel("%s (%s)" % (args.metric, unit) if unit else args.metric)
             ax.grid(alpha=0.3, which="both")
-            ax.set_title(rtitle or ("%s vs %s" % (args.metric, key)), fontsize=9)
+            ax.set_title(textwrap.fill(rtitle or ("%s vs %s" % (args.metric, key)), ROW_TITLE_CHARS), fontsize=9)
     visible = [ax for ax in axes.flat if ax.get_visible()]
     pc.share_y(visible, args)
     if not args.linear:
