@@ -500,6 +500,16 @@ def facets(runs, shown=(), facet=(), max_panels=8):
     return panels, fixed
 
 
+def common_config(runs):
+    """The configuration the runs share, for a title: their label when they have one, else what
+    all their labels share followed by '(+ per panel)'."""
+    labels = list(runs.config.dropna().unique())
+    if len(labels) <= 1:
+        return labels[0] if labels else None
+    common = [t for t in labels[0].split(" ") if all(t in lb.split(" ") for lb in labels)]
+    return " ".join(common) + " (+ per panel)"
+
+
 def title_line(fixed, extra=()):
     """'config X · scene atrium:2 · 1920x1080 · 256 lights': what the figure's runs share."""
     parts = []

@@ -19,6 +19,9 @@ import re
 import plot_common as pc  # first: it selects matplotlib's file-only backend and checks the modules
 
 plt = pc.plt
+
+#: Inches of legend per character of its longest label (7-point text).
+LEGEND_INCH_PER_CHAR = 0.055
 pd = pc.pd
 
 
@@ -132,7 +135,9 @@ def main():
 
     n = len(panels)
     width = max(7.0, 0.55 * ngroups * (1 if key == "technique" else len(others) ** 0.5) + 4)
-    fig, axes = plt.subplots(n, 1, figsize=(width, 4.8 * n), squeeze=False)
+    # The values against the baseline: one legend at the right, beside the panels (not over a bar).
+    legend_w = 0.0 if key == "technique" else LEGEND_INCH_PER_CHAR * max(len("%s = %s" % (key, v)) for v in others) + 0.5
+    fig, axes = plt.subplots(n, 1, figsize=(width + legend_w, 4.8 * n), squeeze=False)
     if unpaired:
         pc.note("left out: %d point(s) without a baseline partner (the same trace and other parameters at %s = %s)"
                 % (unpaired, key, base_label))
@@ -156,7 +161,6 @@ def main():
                 tops += list(zip(xs, s.delta))
             x = range(len(series))
             labels = ["%s\n(base %.3g)" % (t, sel[sel.series == t].base.iloc[0]) for t in series]
-            ax.legend(fontsize=7, loc="best")
         for xi, v in tops:
             if pd.notna(v):
                 ax.annotate("%+.1f%%" % v if not args.ratio else "%.2fx" % v, (xi, v), ha="center",
@@ -171,12 +175,16 @@ def main():
         if ptitle:
             ax.set_title(ptitle, fontsize=9)
     for ax in axes[:, 0]:
+        ax.use_sticky_edges = False  # bars stick to 0: the margin goes beyond it too
         ax.margins(y=0.15)  # room for the values written at the bars' ends
     pc.share_y(axes[:, 0], args)
     fig.suptitle("%s against the baseline %s = %s (baseline %s in %s)\n%s"
                  % (args.metric, key, base_label, args.metric, unit,
                     pc.title_line(fixed, ["fixed: " + ", ".join(args.fix)] if args.fix else [])), fontsize=10)
-    fig.tight_layout()
+    if legend_w:
+        handles, labels = axes[0, 0].get_legend_handles_labels()
+        fig.legend(handles, labels, fontsize=7, loc="center right")
+    fig.tight_layout(rect=(0, 0, 1 - legend_w / fig.get_figwidth(), 1))
     pc.save(fig, args.out, "%d comparisons, %d panel(s)" % (sum(len(p) for _, p, _ in per_panel), n))
 
 

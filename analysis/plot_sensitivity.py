@@ -69,10 +69,11 @@ def main():
         others = [k for k in varying if k != key and k not in TIED.get(key, [])]
         if runs.lights.nunique() > 1:
             others.append("lights")
+        # Configurations that the parameters varying (the x axis's among them) do not tell apart.
+        told = [k for k in others + [key] + TIED.get(key, []) if k in wide.columns]
         by_run = runs.set_index("run_id")
-        if by_run.config[have.values].groupby([wide[k][have] for k in others] if others else
-                                              (lambda _: 0)).nunique().max() > 1:
-            others.append("config")  # configurations that the varying parameters do not tell apart
+        if by_run.config[have.values].groupby([wide[k][have] for k in told]).nunique().max() > 1:
+            others.append("config")
         # Numbers as numbers, so that rows come in numeric order (64 before 128).
         frame = wide.copy()
         for k in frame.columns:
@@ -137,7 +138,7 @@ def main():
                 pc.log_axis(ax, "y", v)
     note = pc.repetition_note(runs)
     shared = pc.title_line([f for f in fixed if f[0] in ("scene", "frame")] +
-                           ([("config", runs.config.iloc[0])] if runs.config.nunique() == 1 else []) +
+                           [("config", pc.common_config(runs))] +
                            ([("lights", runs.lights.iloc[0])] if runs.lights.nunique() == 1 else []),
                            ["fixed: " + ", ".join(args.fix)] if args.fix else [])
     fig.suptitle("Sensitivity of %s\n%s%s" % (args.metric, shared, "\n(" + note + ")" if note else ""), fontsize=10)
