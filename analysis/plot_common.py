@@ -271,10 +271,11 @@ def load_runs(db, args):
             fail("--db %s: the database holds no runs" % db.path)
         if not ok:
             fail("--db %s: none of its %d runs finished (SELECT error FROM runs)" % (db.path, total))
-        have = query(db, "SELECT group_concat(DISTINCT technique) AS t, group_concat(DISTINCT config_name) AS c, "
-                         "group_concat(DISTINCT CAST(lights AS INTEGER)) AS l FROM v_run_summary WHERE status = 'ok'")
+        have = query(db, "SELECT group_concat(DISTINCT technique) AS t, group_concat(DISTINCT %s) AS c, "
+                         "group_concat(DISTINCT CAST(lights AS INTEGER)) AS l FROM v_run_summary WHERE status = 'ok'"
+                     % label)
         fail("no finished run matches the selection (%s); the database has techniques %s, configurations %s, "
-             "light counts %s" % (describe_selection(args), have.t[0], have.c[0], have.l[0]))
+             "light counts %s" % (describe_selection(args), have.t[0], have.c[0].replace(",", "; "), have.l[0]))
     runs["lights"] = runs.lights.round().astype("Int64")
     runs["frame"] = ["%dx%d%s" % (w, h, " %dx MSAA" % s if s and s > 1 else "")
                      for w, h, s in zip(runs.width, runs.height, runs.samples_per_pixel)]
