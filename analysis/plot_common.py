@@ -490,7 +490,7 @@ def facets(runs, shown=(), facet=(), max_panels=8):
         # Panels name what differs between the configurations; what they share goes to the title.
         labels = list(runs.config.dropna().unique())
         common = [t for t in labels[0].split(" ") if all(t in lb.split(" ") for lb in labels)]
-        short = {lb: " ".join(t for t in lb.split(" ") if t not in common) or lb for lb in labels}
+        short = {lb: " ".join(t for t in lb.split(" ") if t not in common) or "the title's configuration" for lb in labels}
         fixed.append(("config", " ".join(common) + " (+ per panel)"))
     panels = [(", ".join(short.get(v, v) if d == "config" else _dim_value_text(d, v)
                          for d, v in zip(split, key if isinstance(key, tuple) else (key,))), g)

@@ -110,7 +110,7 @@ def main():
         ax.set_yticks(range(n))
         ax.set_ylim(-0.6, n - 0.4)
         ax.grid(axis="x", alpha=0.3)
-    tl.set_yticklabels(first.series, fontsize=8)
+    tl.set_yticklabels(["%s\n(run %d)" % (sr, i) for sr, i in zip(first.series, first.run_id)], fontsize=8)
     ub.set_yticklabels([])
     tl.set_xlabel("time in the frame (ms)" if args.ms else "time in the frame (% of each frame's time, written at its right)")
     if not args.ms:
@@ -124,10 +124,7 @@ def main():
                loc="lower left", bbox_to_anchor=(0.08, 0.0), ncol=3)
     uh, ul = ub.get_legend_handles_labels()
     fig.legend(uh, ul, fontsize=7, loc="lower right", ncol=4)
-    ids_text = ", ".join("%s: run %d" % (s, i) for s, i in zip(first.series[::-1], first.run_id[::-1]))
     fig.suptitle("Time by pass and unit\n%s" % pc.title_line(fixed), fontsize=10)
-    fig.text(0.01, 1.0 - 0.25 / fig.get_figheight(), ids_text if len(ids_text) < 120 else "first run of each technique",
-             fontsize=6, va="top")
     fig.tight_layout(rect=(0, 0.45 / fig.get_figheight(), 1, 1))
     fit_names(fig, tl, names)
     pc.save(fig, args.out, "%d runs drawn" % n)
