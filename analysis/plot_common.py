@@ -122,7 +122,8 @@ def parser(doc, out):
     ap.add_argument("--out", default=out, help="PNG to write (default: %s)" % out)
     ap.add_argument("--where", help="SQL condition on v_run_summary's columns, e.g. \"lights = 256\"")
     ap.add_argument("--config", action="append",
-                    help="only runs of this configuration (config_name or configuration label); repeatable")
+                    help="only runs of this configuration: its label, as the messages list them, or a preset's name "
+                         "(every configuration of it); repeatable")
     ap.add_argument("--lights", type=int, action="append", help="only runs with this light count; repeatable")
     ap.add_argument("--technique", action="append", help="only this technique; repeatable")
     ap.add_argument("--scene", help="only runs of this scene (v_run_summary.scene)")
