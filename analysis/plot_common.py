@@ -122,12 +122,16 @@ def parser(doc, out):
     ap.add_argument("--out", default=out, help="PNG to write (default: %s)" % out)
     ap.add_argument("--where", help="SQL condition on v_run_summary's columns, e.g. \"lights = 256\"")
     ap.add_argument("--config", action="append",
-                    help="only runs of this configuration (config_name or configuration label); repeatable")
+                    help="only runs of this configuration: its label, as the messages list them, or a preset's name "
+                         "(every configuration of it); repeatable")
     ap.add_argument("--lights", type=int, action="append", help="only runs with this light count; repeatable")
     ap.add_argument("--technique", action="append", help="only this technique; repeatable")
     ap.add_argument("--scene", help="only runs of this scene (v_run_summary.scene)")
     ap.add_argument("--fix", action="append", default=[], metavar="KEY=VALUE",
-                    help="only runs with this hardware parameter value (`tbdrsim params` keys); repeatable")
+                    help="only runs with this parameter value: a hardware parameter (`tbdrsim params`), a technique "
+                         "option (technique.pls_bytes) or a trace key (trace.camera), as report --by takes; repeatable")
+    ap.add_argument("--independent-y", action="store_true",
+                    help="each panel its own y scale (default: the panels of a figure share one, so that they compare)")
     return ap
 
 
@@ -249,15 +253,16 @@ def load_runs(db, args):
     if not os.path.isdir(folder):  # before any work
         fail("--out %s: no such folder %s" % (args.out, folder))
     label = "config_label" if has_column(db, "v_run_summary", "config_label") else "config_name"
-    conds = ["status = 'ok'"]
+    conds = []
     if args.where:
         conds.append("(" + args.where + ")")
-    if getattr(args, "lights", None):
-        conds.append("lights IN (%s)" % int_list(args.lights))
     if getattr(args, "technique", None):
         conds.append("technique IN (%s)" % _sql_list(args.technique))
     if getattr(args, "scene", None):
         conds.append("scene = " + _sql_list([args.scene]))
+    lights = "lights IN (%s)" % int_list(args.lights) if getattr(args, "lights", None) else None
+    unfinished = _unfinished(db, args, label, conds, lights)
+    conds = ["status = 'ok'"] + conds + ([lights] if lights else [])
     runs = query(db, "SELECT run_id, technique, scene, config_name, %s AS config_label, config_hash, trace_hash, "
                      "trace_path, width, height, samples_per_pixel, lights FROM v_run_summary WHERE %s ORDER BY run_id"
                  % (label, " AND ".join(conds)), where=args.where)
@@ -267,26 +272,97 @@ def load_runs(db, args):
             fail("--db %s: the database holds no runs" % db.path)
         if not ok:
             fail("--db %s: none of its %d runs finished (SELECT error FROM runs)" % (db.path, total))
-        have = query(db, "SELECT group_concat(DISTINCT technique) AS t, group_concat(DISTINCT config_name) AS c, "
-                         "group_concat(DISTINCT CAST(lights AS INTEGER)) AS l FROM v_run_summary WHERE status = 'ok'")
+        have = query(db, "SELECT group_concat(DISTINCT technique) AS t, group_concat(DISTINCT %s) AS c, "
+                         "group_concat(DISTINCT CAST(lights AS INTEGER)) AS l FROM v_run_summary WHERE status = 'ok'"
+                     % label)
         fail("no finished run matches the selection (%s); the database has techniques %s, configurations %s, "
-             "light counts %s" % (describe_selection(args), have.t[0], have.c[0], have.l[0]))
+             "light counts %s" % (describe_selection(args), have.t[0], have.c[0].replace(",", "; "), have.l[0]))
     runs["lights"] = runs.lights.round().astype("Int64")
     runs["frame"] = ["%dx%d%s" % (w, h, " %dx MSAA" % s if s and s > 1 else "")
                      for w, h, s in zip(runs.width, runs.height, runs.samples_per_pixel)]
     runs["config"] = _config_labels(db, runs, label)
     if getattr(args, "config", None):
-        chosen = runs[runs.config_name.isin(args.config) | runs.config.isin(args.config)]
+        chosen = runs[config_matches(runs, args.config)]
         if chosen.empty:
             fail("--config %s: no selected run has this configuration; they have: %s"
                  % (", ".join(args.config), "; ".join(sorted(runs.config.unique()))))
         runs = chosen.reset_index(drop=True)
     if getattr(args, "fix", None):
-        wide, num = hardware_params(db, runs)
+        keys = [f.partition("=")[0] for f in args.fix]
+        wide, num = hardware_params(db, runs, keys)
         runs = apply_fix(runs, wide, num, args.fix).reset_index(drop=True)
+        if not unfinished.empty:  # failed runs store their parameters too
+            wide, num = hardware_params(db, unfinished, keys)
+            unfinished = apply_fix(unfinished, wide, num, args.fix, quiet=True)
+    _note_unfinished(unfinished)
     runs["variant"] = _variants(db, runs)
     runs["series"] = [t + (" " + v if v else "") for t, v in zip(runs.technique, runs.variant)]
     return runs
+
+
+def config_matches(runs, names):
+    """Which `runs` --config `names` picks: each name is a configuration label (the `config` column,
+    which the messages list) or, when no label is that name, a config_name (every configuration of
+    that preset)."""
+    pick = pd.Series(False, index=runs.index)
+    for name in names:
+        by_label = runs.config == name
+        pick |= by_label if by_label.any() else runs.config_name == name
+    return pick
+
+
+#: Notes on what a figure leaves out (unfinished runs, runs without a partner, ...): save() puts
+#: them under the figure's title and prints them.
+_NOTES = []
+
+
+def note(text):
+    """Records that the figure leaves something out: `text` goes under the title and to stdout."""
+    if text and text not in _NOTES:
+        _NOTES.append(text)
+
+
+#: At most this many characters of a failed run's error in the note that counts it.
+ERROR_CHARS = 110
+
+
+def _unfinished(db, args, label, conds, lights):
+    """The runs of the selection that did not finish (failed, refused, still running): run_id,
+    technique, config_name, config, status, error. A failed run has no figures, so a --lights or
+    --where condition on its figures is unknown (NULL): it is counted unless a condition is false."""
+    none = pd.DataFrame(columns=["run_id", "technique", "config_name", "config", "status", "error", "lights"])
+    if not has_column(db, "v_run_summary", "status"):
+        return none
+    where = ["status <> 'ok'"] + ["(%s) IS NOT 0" % c for c in conds]
+    try:
+        bad = pd.read_sql_query("SELECT run_id, technique, config_name, %s AS config, status, error, lights "
+                                "FROM v_run_summary WHERE %s" % (label, " AND ".join(where)), db)
+    except (sqlite3.Error, pd.errors.DatabaseError):
+        return none  # the selection's own query names the error
+    if getattr(args, "config", None) and not bad.empty:
+        bad = bad[config_matches(bad, args.config)]
+    if lights and not bad.empty:
+        bad = bad[bad.lights.isna() | bad.lights.round().isin(args.lights)]
+    return bad.reset_index(drop=True)
+
+
+#: The file:line an error message starts with (a trace's line): left out of the reasons, which
+#: group runs by what went wrong.
+_WHERE_PREFIX = re.compile(r"^\S+:\d+: ")
+
+
+def _note_unfinished(bad):
+    """Notes the runs that did not finish, per status and reason, with their techniques: plots
+    draw finished runs only."""
+    if bad.empty:
+        return
+    reason = bad.error.fillna("").str.split("\n").str[0].map(lambda e: _WHERE_PREFIX.sub("", e))
+    reasons = []
+    for (status, error), g in bad.groupby([bad.status, reason]):
+        why = error if len(error) <= ERROR_CHARS else error[:ERROR_CHARS - 3] + "..."
+        reasons.append("%d %s (%s)%s" % (len(g), status, ", ".join(ordered(g.technique.unique(), TECHNIQUES)),
+                                         ": " + why if why else ""))
+    note("left out: %d run(s) that did not finish: %s" % (len(bad), "; ".join(reasons)))
 
 
 def option(*names, **kwargs):
@@ -415,7 +491,7 @@ def facets(runs, shown=(), facet=(), max_panels=8):
         # Panels name what differs between the configurations; what they share goes to the title.
         labels = list(runs.config.dropna().unique())
         common = [t for t in labels[0].split(" ") if all(t in lb.split(" ") for lb in labels)]
-        short = {lb: " ".join(t for t in lb.split(" ") if t not in common) or lb for lb in labels}
+        short = {lb: " ".join(t for t in lb.split(" ") if t not in common) or "the title's configuration" for lb in labels}
         fixed.append(("config", " ".join(common) + " (+ per panel)"))
     panels = [(", ".join(short.get(v, v) if d == "config" else _dim_value_text(d, v)
                          for d, v in zip(split, key if isinstance(key, tuple) else (key,))), g)
@@ -424,6 +500,16 @@ def facets(runs, shown=(), facet=(), max_panels=8):
         fail("the selection has %d combinations of %s (at most %d panels); narrow it with --config, --lights "
              "or --where" % (len(panels), " and ".join(split), max_panels))
     return panels, fixed
+
+
+def common_config(runs):
+    """The configuration the runs share, for a title: their label when they have one, else what
+    all their labels share followed by '(+ per panel)'."""
+    labels = list(runs.config.dropna().unique())
+    if len(labels) <= 1:
+        return labels[0] if labels else None
+    common = [t for t in labels[0].split(" ") if all(t in lb.split(" ") for lb in labels)]
+    return " ".join(common) + " (+ per panel)"
 
 
 def title_line(fixed, extra=()):
@@ -501,30 +587,85 @@ def wide_range(values, factor):
     return len(v) == len(list(values)) and len(v) > 1 and max(v) > factor * min(v)
 
 
+#: How the panels' y scales were set (share_y), for save()'s line: "one y scale" or "y scale per panel".
+_Y_SCALE = []
+
+
+def share_y(axes, args):
+    """Gives the panels `axes` one y scale (the union of their ranges) unless --independent-y:
+    panels of one figure compare at a glance. Call after drawing, before any log_axis."""
+    axes = [ax for ax in axes if ax.get_visible()]
+    if len(axes) < 2:
+        return
+    if getattr(args, "independent_y", False):
+        _Y_SCALE[:] = ["y scale per panel"]
+        return
+    _Y_SCALE[:] = ["one y scale"]
+    first = axes[0]
+    for ax in axes[1:]:
+        ax.sharey(first)
+    first.autoscale_view(scalex=False)  # over the data of every panel that shares the axis
+
+
 #: Values spanning more than this factor get a log axis by default: beyond ~20x the small values
 #: of a linear axis are flat against zero.
 LOG_RANGE = 20.0
 
 
+#: Characters of a title line per inch of figure width (10-point text) when notes are wrapped.
+TITLE_CHARS_PER_INCH = 13
+
+
+def _fit_below_title(fig):
+    """Moves the panels down until nothing of them (titles, tick labels) reaches into the figure's
+    title or into a text placed above them, measured as drawn."""
+    renderer = fig.canvas.get_renderer()
+    texts = [fig._suptitle] + [t for t in fig.texts if t.get_visible()]
+    for _ in range(3):
+        fig.canvas.draw()
+        bottom = min(t.get_window_extent(renderer).y0 for t in texts)
+        top = max((ax.get_tightbbox(renderer).y1 for ax in fig.axes if ax.get_visible() and getattr(ax, "get_subplotspec", lambda: None)()),
+                  default=0.0)
+        overlap = top - bottom + 8.0  # pixels of space between them
+        if overlap <= 0:
+            return
+        fig.subplots_adjust(top=fig.subplotpars.top - overlap / fig.bbox.height)
+
+
 def save(fig, out, summary):
     """Writes the figure to `out` (PlotError naming --out when it cannot) and prints `summary` and
-    the figure's title on one line."""
+    the figure's title on one line, then each note() (what the figure leaves out), which the title
+    also shows."""
     folder = os.path.dirname(os.path.abspath(out))
     if not os.path.isdir(folder):
         fail("--out %s: no such folder %s" % (out, folder))
+    title = fig._suptitle.get_text().replace("\n", " | ") if fig._suptitle else ""
+    if _NOTES:
+        text = "\n".join("(" + n + ")" for n in _NOTES)
+        if fig._suptitle:
+            fig._suptitle.set_text(fig._suptitle.get_text() + "\n" + text)
+        else:
+            fig.suptitle(text, fontsize=10)
     if fig._suptitle:
-        # Room for the title above the panels (tight_layout leaves it out): about 0.2 inch a line.
+        # Lines as wide as the figure at most (a long title is wrapped, never cut at its edges).
+        import textwrap
+        width = max(40, int(TITLE_CHARS_PER_INCH * fig.get_figwidth()))
+        fig._suptitle.set_text("\n".join(textwrap.fill(line, width) for line in fig._suptitle.get_text().split("\n")))
+        # Room for the title above the panels (tight_layout leaves it out): about 0.2 inch a line,
+        # then as much more as the panels' own titles need (measured).
         lines = fig._suptitle.get_text().count("\n") + 1
         top = 1.0 - (0.2 * lines + 0.15) / fig.get_figheight()
         if fig.subplotpars.top > top:
             fig.subplots_adjust(top=top)
+        _fit_below_title(fig)
     try:
         fig.savefig(out, dpi=120)
     except (OSError, ValueError) as e:
         fail("--out %s: %s" % (out, e))
-    title = fig._suptitle.get_text().replace("\n", " | ") if fig._suptitle else ""
     plt.close(fig)
-    print("wrote %s (%s): %s" % (out, summary, title))
+    print("wrote %s (%s): %s" % (out, ", ".join([summary] + _Y_SCALE), title))
+    for n in _NOTES:
+        print("  " + n)
 
 
 def stacked_bars(ax, table, palette, totals=True):
@@ -566,25 +707,37 @@ def side_legend(fig, ax, title, legend_width):
     fig.tight_layout(rect=(0, 0, 1 - legend_width / fig.get_figwidth(), 1))
 
 
-def hardware_params(db, runs):
+def hardware_params(db, runs, extra=()):
     """The resolved hardware parameters of the runs: (text, number) DataFrames indexed by run_id,
-    a column per key (v_param without the trace.*, config.* and technique.* pseudo-keys)."""
-    p = query(db, "SELECT run_id, key, value, value_num FROM v_param WHERE run_id IN (%s) AND key NOT GLOB "
-                  "'trace.*' AND key NOT GLOB 'config.*' AND key NOT GLOB 'technique.*'"
-              % int_list(runs.run_id))
+    a column per key (v_param without the trace.*, config.* and technique.* pseudo-keys), and the
+    `extra` keys of v_param among those (technique options, trace keys: whatever report --by
+    takes; a run without one has NaN)."""
+    extra = sorted(set(k for k in extra if k.split(".")[0] in ("trace", "config", "technique")))
+    p = query(db, "SELECT run_id, key, value, value_num FROM v_param WHERE run_id IN (%s) AND ((key NOT GLOB "
+                  "'trace.*' AND key NOT GLOB 'config.*' AND key NOT GLOB 'technique.*')%s)"
+              % (int_list(runs.run_id), " OR key IN (%s)" % _sql_list(extra) if extra else ""))
     return (p.pivot(index="run_id", columns="key", values="value").reindex(runs.run_id),
             p.pivot(index="run_id", columns="key", values="value_num").reindex(runs.run_id))
 
 
-def apply_fix(runs, wide, num, fixes):
-    """The runs whose parameters have the --fix KEY=VALUE values (numbers compare as numbers)."""
+def apply_fix(runs, wide, num, fixes, quiet=False):
+    """The runs whose parameters have the --fix KEY=VALUE values (numbers compare as numbers);
+    PlotError when a fix matches none (unless `quiet`: then no runs)."""
     for fix in fixes:
         key, sep, value = fix.partition("=")
+        if quiet:
+            if key not in wide.columns:
+                return runs.iloc[0:0]
+            keep = (wide.loc[runs.run_id, key] == value) | (num.loc[runs.run_id, key] == pd.to_numeric(value, errors="coerce"))
+            runs = runs[keep.values]
+            continue
         if not sep or key not in wide.columns:
-            fail("--fix %s: expected KEY=VALUE with a parameter key (tbdrsim params lists them)" % fix)
+            fail("--fix %s: expected KEY=VALUE with a parameter key (tbdrsim params lists them), a technique option "
+                 "(technique.<option>) or a trace key (trace.<key>) that the selected runs have" % fix)
         w, nm = wide.loc[runs.run_id, key], num.loc[runs.run_id, key]
         keep = (w == value) | (nm == pd.to_numeric(value, errors="coerce"))
         if not keep.any():
-            fail("--fix %s: no selected run has this value (they have %s)" % (fix, ", ".join(sorted(w.dropna().unique()))))
+            fail("--fix %s: no selected run has this value (they have %s)"
+                 % (fix, ", ".join(sorted(w.dropna().unique(), key=natural))))
         runs = runs[keep.values]
     return runs

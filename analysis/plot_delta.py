@@ -14,9 +14,14 @@ parameters that vary are refused (fix them with --fix KEY=VALUE, or --where).
     tbdrsim plot delta --db out/pls_budget.db --baseline pls.tile_buffer_bits_per_pixel=128 --out delta.png
     tbdrsim plot delta --db study/study.db --baseline technique=deferred --metric dram_total_mb
 """
+import re
+
 import plot_common as pc  # first: it selects matplotlib's file-only backend and checks the modules
 
 plt = pc.plt
+
+#: Inches of legend per character of its longest label (7-point text).
+LEGEND_INCH_PER_CHAR = 0.055
 pd = pc.pd
 
 
@@ -35,7 +40,7 @@ def main():
 
     db = pc.connect(args.db)
     runs = pc.load_runs(db, args)
-    wide, num = pc.hardware_params(db, runs)
+    wide, num = pc.hardware_params(db, runs, [key])
     runs = runs.set_index("run_id", drop=False)
 
     if key == "technique":
@@ -43,7 +48,14 @@ def main():
         match = ["config_hash", "scene", "frame", "lights"]
         group, facet = "value", ("config", "lights")
     elif key == "config":
-        runs["value"] = runs.config_name
+        # Configurations by label (what the messages list); a preset's name when it names one.
+        if base not in set(runs.config) and base in set(runs.config_name):
+            labels = sorted(runs.config[runs.config_name == base].unique())
+            if len(labels) > 1:
+                pc.fail("--baseline %s: %d configurations are of the preset %s (%s); name one by its label"
+                        % (args.baseline, len(labels), base, "; ".join(labels)))
+            base = labels[0]
+        runs["value"] = runs.config
         match = ["trace_hash"]
         group, facet = "series", ("lights",)
     elif key.startswith("technique."):
@@ -51,9 +63,16 @@ def main():
                         % pc.int_list(runs.run_id), params=(key,)).set_index("run_id").value
         if opts.empty:
             pc.fail("--baseline %s: no selected run stores the technique option %s" % (args.baseline, key))
-        runs = runs[runs.run_id.isin(opts.index)]
+        without = runs[~runs.run_id.isin(opts.index)]
+        if not without.empty:
+            pc.note("left out: %d run(s) of techniques without the option %s (%s)"
+                    % (len(without), key, ", ".join(pc.ordered(without.technique.unique(), pc.TECHNIQUES))))
+        runs = runs[runs.run_id.isin(opts.index)].copy()
         runs["value"] = opts.reindex(runs.run_id).values
-        runs["series"] = runs.technique
+        # A series is the technique and its other options: the option is what the bars compare.
+        strip = re.compile(r"(^| )%s=\S+" % re.escape(key[len("technique."):]))
+        runs["variant"] = [strip.sub("", v).strip() for v in runs.variant]
+        runs["series"] = [t + (" " + v if v else "") for t, v in zip(runs.technique, runs.variant)]
         match = ["technique", "config_hash", "scene", "frame", "lights"]
         group, facet = "series", ("config", "lights")
     else:
@@ -95,8 +114,8 @@ def main():
     def deltas(pr):
         """The panel's points against their baselines: mean of repetitions, then each against the
         baseline point of the same context; and how many points had no baseline partner."""
-        cols = match + ([] if key == "technique" else ["series"])
-        pts = pr.groupby(cols + ["technique", "value"], dropna=False).metric.mean().reset_index()
+        cols = list(dict.fromkeys(match + ([] if key == "technique" else ["series"])))
+        pts = pr.groupby(list(dict.fromkeys(cols + ["technique", "value"])), dropna=False).metric.mean().reset_index()
         pts["is_base"] = pts.value == base_label
         basev = pts[pts.is_base].groupby(cols, dropna=False).metric.mean()
         pts = pts[~pts.is_base].copy()
@@ -116,7 +135,12 @@ def main():
 
     n = len(panels)
     width = max(7.0, 0.55 * ngroups * (1 if key == "technique" else len(others) ** 0.5) + 4)
-    fig, axes = plt.subplots(n, 1, figsize=(width, 4.8 * n), squeeze=False)
+    # The values against the baseline: one legend at the right, beside the panels (not over a bar).
+    legend_w = 0.0 if key == "technique" else LEGEND_INCH_PER_CHAR * max(len("%s = %s" % (key, v)) for v in others) + 0.5
+    fig, axes = plt.subplots(n, 1, figsize=(width + legend_w, 4.8 * n), squeeze=False)
+    if unpaired:
+        pc.note("left out: %d point(s) without a baseline partner (the same trace and other parameters at %s = %s)"
+                % (unpaired, key, base_label))
     for ax, (ptitle, sel, _) in zip(axes[:, 0], per_panel):
         if key == "technique":
             g = sel.groupby("value")[["delta", "base", "metric"]].mean()
@@ -137,7 +161,6 @@ def main():
                 tops += list(zip(xs, s.delta))
             x = range(len(series))
             labels = ["%s\n(base %.3g)" % (t, sel[sel.series == t].base.iloc[0]) for t in series]
-            ax.legend(fontsize=7, loc="best")
         for xi, v in tops:
             if pd.notna(v):
                 ax.annotate("%+.1f%%" % v if not args.ratio else "%.2fx" % v, (xi, v), ha="center",
@@ -151,11 +174,17 @@ def main():
             ptitle = (ptitle + ": " if ptitle else "") + "%s = %.4g %s" % (base_label, sel.base.iloc[0], unit)
         if ptitle:
             ax.set_title(ptitle, fontsize=9)
-    note = "%d point(s) without a baseline partner left out" % unpaired if unpaired else ""
-    fig.suptitle("%s against the baseline %s = %s (baseline %s in %s)\n%s%s"
-                 % (args.metric, key, base_label, args.metric, unit, pc.title_line(fixed, ["fixed: " + ", ".join(args.fix)] if args.fix else []),
-                    "\n(" + note + ")" if note else ""), fontsize=10)
-    fig.tight_layout()
+    for ax in axes[:, 0]:
+        ax.use_sticky_edges = False  # bars stick to 0: the margin goes beyond it too
+        ax.margins(y=0.15)  # room for the values written at the bars' ends
+    pc.share_y(axes[:, 0], args)
+    fig.suptitle("%s against the baseline %s = %s (baseline %s in %s)\n%s"
+                 % (args.metric, key, base_label, args.metric, unit,
+                    pc.title_line(fixed, ["fixed: " + ", ".join(args.fix)] if args.fix else [])), fontsize=10)
+    if legend_w:
+        handles, labels = axes[0, 0].get_legend_handles_labels()
+        fig.legend(handles, labels, fontsize=7, loc="center right")
+    fig.tight_layout(rect=(0, 0, 1 - legend_w / fig.get_figwidth(), 1))
     pc.save(fig, args.out, "%d comparisons, %d panel(s)" % (sum(len(p) for _, p, _ in per_panel), n))
 
 

@@ -49,6 +49,7 @@ def draw(args, db, runs):
         ax.set_ylabel("DRAM traffic at the devices (MB, read + written)")
         if ptitle:
             ax.set_title(ptitle, fontsize=9)
+    pc.share_y(axes[:, 0], args)
     note = pc.repetition_note(runs)
     fig.suptitle("DRAM traffic by class at the devices (tick: requested before the caches)\n%s%s"
                  % (pc.title_line(fixed), "\n(" + note + ")" if note else ""), fontsize=10)

@@ -43,6 +43,7 @@ def main():
             ax.set_title(ptitle, fontsize=9)
     for ax in list(axes.flat)[n:]:
         ax.set_visible(False)
+    pc.share_y(axes.flat, args)
     note = pc.repetition_note(runs)
     fig.suptitle("Energy per frame by component\n%s%s" % (pc.title_line(fixed), "\n(" + note + ")" if note else ""),
                  fontsize=10)

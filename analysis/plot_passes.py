@@ -21,8 +21,29 @@ pd = pc.pd
 
 #: A pass's name is written in its bar when the bar is at least this share of the longest frame.
 LABEL_MIN_SHARE = 0.06
+#: A pass's name is shrunk down to this size (points) to fit its bar, else left out.
+NAME_MIN_POINTS = 5
 #: Inches per technique row (two timeline lanes, one bar per unit beside them).
 ROW_HEIGHT = 0.62
+
+
+def fit_names(fig, ax, names):
+    """Keeps a pass's name only where it fits inside its bar (at the smallest readable size) and
+    clear of the names kept already (later bars, drawn over earlier ones, first), so that names
+    never run over each other or past their bar."""
+    renderer = fig.canvas.get_renderer()
+    kept = []
+    for text, a, b in reversed(names):
+        x0 = ax.transData.transform((a, 0))[0]
+        x1 = ax.transData.transform((b, 0))[0]
+        for size in (6, NAME_MIN_POINTS):
+            text.set_fontsize(size)
+            box = text.get_window_extent(renderer)
+            if box.width + 4 <= x1 - x0 and not any(box.overlaps(k) for k in kept):
+                kept.append(box)
+                break
+        else:
+            text.remove()
 
 
 def main():
@@ -50,6 +71,7 @@ def main():
     longest = max(cycles[i] * ms_per_cycle[i] for i in first.run_id) if args.ms else 100.0
     fig, (tl, ub) = plt.subplots(1, 2, figsize=(15, ROW_HEIGHT * n * 1.6 + 2.4), gridspec_kw={"width_ratios": [1.6, 1]})
     widest = 0.0
+    names = []  # (pass name annotation, bar start, bar end) on the timeline
     for row, r in first.iterrows():
         # x per cycle: ms, or percent of this run's frame
         k = ms_per_cycle[r.run_id] if args.ms else 100.0 / cycles[r.run_id]
@@ -69,7 +91,8 @@ def main():
                 tl.broken_barh([(a * k, (b - a) * k)], (y, h), facecolor=pc.PHASE_COLORS[phase], edgecolor="black",
                                linewidth=0.5)
                 if (b - a) * k > LABEL_MIN_SHARE * longest:
-                    tl.annotate(name, ((a + b) / 2 * k, y + h / 2), ha="center", va="center", fontsize=6)
+                    names.append((tl.annotate(name, ((a + b) / 2 * k, y + h / 2), ha="center", va="center",
+                                              fontsize=6), a * k, b * k))
         u = units[units.run_id == r.run_id].pivot(index="unit", columns="name", values="value")
         h = 0.8 / max(1, len(unit_names))
         for j, un in enumerate(unit_names):
@@ -87,7 +110,7 @@ def main():
         ax.set_yticks(range(n))
         ax.set_ylim(-0.6, n - 0.4)
         ax.grid(axis="x", alpha=0.3)
-    tl.set_yticklabels(first.series, fontsize=8)
+    tl.set_yticklabels(["%s\n(run %d)" % (sr, i) for sr, i in zip(first.series, first.run_id)], fontsize=8)
     ub.set_yticklabels([])
     tl.set_xlabel("time in the frame (ms)" if args.ms else "time in the frame (% of each frame's time, written at its right)")
     if not args.ms:
@@ -101,11 +124,9 @@ def main():
                loc="lower left", bbox_to_anchor=(0.08, 0.0), ncol=3)
     uh, ul = ub.get_legend_handles_labels()
     fig.legend(uh, ul, fontsize=7, loc="lower right", ncol=4)
-    ids_text = ", ".join("%s: run %d" % (s, i) for s, i in zip(first.series[::-1], first.run_id[::-1]))
     fig.suptitle("Time by pass and unit\n%s" % pc.title_line(fixed), fontsize=10)
-    fig.text(0.01, 1.0 - 0.25 / fig.get_figheight(), ids_text if len(ids_text) < 120 else "first run of each technique",
-             fontsize=6, va="top")
     fig.tight_layout(rect=(0, 0.45 / fig.get_figheight(), 1, 1))
+    fit_names(fig, tl, names)
     pc.save(fig, args.out, "%d runs drawn" % n)
 
 

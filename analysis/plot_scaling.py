@@ -42,8 +42,9 @@ def main():
         lights = sorted(p.lights.astype(float).unique())
         if not args.linear and len(lights) > 1 and lights[-1] >= LOG_LIGHTS_RANGE * max(1.0, lights[0]):
             pc.log_axis(ax, "x", lights, base=2)
-            if pc.wide_range(p.value, pc.LOG_RANGE):
-                pc.log_axis(ax, "y", p.value)
+            values = p.value if args.independent_y else g.value  # a shared y axis spans every panel
+            if pc.wide_range(values, pc.LOG_RANGE):
+                pc.log_axis(ax, "y", values)
         else:
             ax.set_xticks(lights)
             ax.set_xticklabels(["%d" % v for v in lights])
@@ -52,6 +53,7 @@ def main():
         ax.grid(alpha=0.3, which="both")
         if ptitle:
             ax.set_title(ptitle, fontsize=9)
+    pc.share_y(axes[0], args)
     note = pc.repetition_note(runs)
     fig.suptitle("%s against the light count\n%s%s" % (args.metric, pc.title_line(fixed),
                                                          "\n(" + note + ")" if note else ""), fontsize=10)

@@ -42,13 +42,16 @@ def main():
         ax.set_xticks(list(x))
         ax.set_xticklabels(g.series, rotation=35, ha="right", fontsize=8)
         ax.set_ylabel("%s (%s)" % (args.metric, unit) if unit else args.metric)
-        if args.log:
+        if args.log and args.independent_y:
             pc.log_axis(ax, "y", g["mean"])
         ax.grid(axis="y", alpha=0.3)
         if ptitle:
             ax.set_title(ptitle, fontsize=9)
     for ax in list(axes.flat)[n:]:
         ax.set_visible(False)
+    pc.share_y(axes.flat, args)
+    if args.log and not args.independent_y:
+        pc.log_axis(axes.flat[0], "y", vals.value)
     note = pc.repetition_note(runs)
     fig.suptitle("%s per technique\n%s%s" % (args.metric, pc.title_line(fixed), "\n(" + note + ")" if note else ""),
                  fontsize=10)

@@ -22,6 +22,8 @@ VALUES = {"cycles": "cycles per tile (fetch to writeback)", "samples": "samples 
           "dram_bytes": "DRAM bytes per tile"}
 #: Panels per row of the figure.
 COLUMNS = 4
+#: Inches at the right for the colour bar, its tick labels and its label.
+COLORBAR_WIDTH = 1.3
 
 
 def main():
@@ -50,7 +52,7 @@ def main():
     cols = min(COLUMNS, n)
     rows = (n + cols - 1) // cols
     aspect = h / w
-    fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols + 1.2, 3.6 * aspect * rows + 1.6), squeeze=False)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols + COLORBAR_WIDTH + 0.3, 3.6 * aspect * rows + 1.6), squeeze=False)
     im = None
     for ax, (_, r) in zip(axes.flat, first.iterrows()):
         grid = np.full((ty, tx), np.nan)
@@ -63,7 +65,11 @@ def main():
         ax.set_yticks([])
     for ax in list(axes.flat)[n:]:
         ax.set_visible(False)
-    bar = fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8, label=VALUES[args.value] +
+    # The colour bar in a column of its own at the right (beside the panels, never over one).
+    figw = fig.get_figwidth()
+    fig.subplots_adjust(left=0.2 / figw, right=1.0 - COLORBAR_WIDTH / figw, wspace=0.08, bottom=0.3 / fig.get_figheight())
+    cax = fig.add_axes([1.0 - (COLORBAR_WIDTH - 0.15) / figw, 0.12, 0.15 / figw, 0.7])
+    bar = fig.colorbar(im, cax=cax, label=VALUES[args.value] +
                        ("" if args.pass_index is None else ", pass %d" % args.pass_index))
     if args.log:
         pc.log_ticks(bar.ax.yaxis, vmin, vmax)

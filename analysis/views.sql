@@ -31,18 +31,22 @@
 -- Docs and ready-to-paste questions: docs/queries.md.
 
 -- The label of each run's configuration: the preset's name (config_name: the stem of the last
--- config file, or 'default') followed by the parameters set on top of it (origin neither 'default'
--- nor the preset's own file: --set, sweep axes, another config file), sorted by key:
--- 'series6xt_gx6450 pls.tile_buffer_bits_per_pixel=256'. Labels, not hashes, name configurations.
+-- config file; series6xt_gx6450, which the defaults are, without one) followed by the parameters
+-- whose values differ from the preset's, sorted by key:
+-- 'series6xt_gx6450 pls.tile_buffer_bits_per_pixel=256'. The run driver stores it as the run
+-- parameter config.label (sim/kernel/params.cpp ParamTable::label: one hardware and preset, one
+-- label, however it was set); for runs stored before it did, the parameters set on top of the
+-- preset (origin neither 'default' nor the preset's own file). Labels, not hashes, name configurations.
 DROP VIEW IF EXISTS v_config_label;
 CREATE VIEW v_config_label AS
 SELECT r.id AS run_id,
+  coalesce((SELECT value FROM run_params WHERE run_id = r.id AND key = 'config.label'),
   r.config_name || coalesce(' ' || (
     SELECT group_concat(key || '=' || value, ' ') FROM (
       SELECT p.key, p.value FROM run_params p
       WHERE p.run_id = r.id AND p.origin <> 'default' AND instr(p.origin, r.config_name || '.ini:') = 0
-        AND p.key NOT GLOB 'technique.*' AND p.key NOT GLOB 'trace.*'
-      ORDER BY p.key)), '') AS config_label
+        AND p.key NOT GLOB 'technique.*' AND p.key NOT GLOB 'trace.*' AND p.key NOT GLOB 'config.*'
+      ORDER BY p.key)), '')) AS config_label
 FROM runs r;
 
 -- One row per run: identity, status, frame size, the headline figures.
@@ -199,7 +203,7 @@ SELECT run_id, key, value,
        WHEN value <> '' AND trim(value, '0123456789.eE+-') = '' AND value GLOB '*[0-9]*'
          THEN CAST(value AS REAL) END AS value_num,
   origin
-FROM run_params
+FROM run_params WHERE key <> 'config.label'  -- (below, from v_config_label)
 UNION ALL
 SELECT id, 'trace.technique', technique, NULL, 'trace' FROM runs
 UNION ALL

@@ -33,6 +33,7 @@ void add_cache(ParamRegistry<HwConfig>& r, const std::string& name, const std::s
 
 ParamRegistry<HwConfig> make_registry() {
   ParamRegistry<HwConfig> r;
+  r.name_defaults(kDefaultsPreset);
   // The defaults describe one complete GPU: a PowerVR Series6XT-class part (GX6450-like: 4 USCs,
   // 32x32 tiles, 128 bits per pixel on chip) with LPDDR3-1600. configs/ holds the other presets.
   const std::string mesa = "Mesa src/imagination/common/device_info/gx6250.h";
@@ -494,6 +495,7 @@ ResolvedConfig resolve_config(const std::vector<std::string>& config_files,
   rc.hw = reg.build(rc.params);
   check_config_constraints(rc.hw, rc.params);
   rc.hash = reg.table().hash(rc.params);
+  rc.label = reg.table().label(rc.params, reg.table().preset(config_files));
   return rc;
 }
 

@@ -267,6 +267,11 @@ struct HwConfig {
   EnergyParams energy;
 };
 
+/// The preset the declared defaults are: configs/series6xt_gx6450.ini sets nothing, so a
+/// configuration resolved without a config file is named after it (one hardware, one label with
+/// and without the file; tests/test_params.cpp pins the file's hash to the defaults').
+inline constexpr const char* kDefaultsPreset = "series6xt_gx6450";
+
 /// The single declaration of every hardware parameter.
 const ParamRegistry<HwConfig>& hw_params();
 
@@ -274,7 +279,8 @@ const ParamRegistry<HwConfig>& hw_params();
 struct ResolvedConfig {
   HwConfig hw;
   ResolvedParams params;
-  std::string hash;  ///< hw_params().table().hash(params)
+  std::string hash;   ///< hw_params().table().hash(params)
+  std::string label;  ///< hw_params().table().label(): the preset's name and the values set on top of it
 };
 
 /// Resolves defaults + config files + --set overrides (InputError on any bad input).

@@ -49,7 +49,7 @@ TEST(Params, DefaultsDescribeTheSeries6xtPreset) {
   EXPECT_EQ(rc.hw.pls.tile_buffer_bits_per_pixel, 128);
   EXPECT_DOUBLE_EQ(rc.hw.energy.dram_read_pj_per_bit, 5.1);
   EXPECT_EQ(rc.hw.gpu.mode, GpuMode::Tbdr);
-  EXPECT_EQ(rc.params.config_name, "default");
+  EXPECT_EQ(rc.params.config_name, kDefaultsPreset);  // the preset the defaults are
   for (const auto& o : rc.params.origins) EXPECT_EQ(o.text, "default");
 }
 
@@ -120,6 +120,31 @@ TEST(Params, ShippedPresetsLoad) {
   EXPECT_EQ(m.hw.pls.tile_buffer_bits_per_pixel, 256);
   const ResolvedConfig s = resolve_config({dir + "series6xt_gx6450.ini"}, {});
   EXPECT_EQ(s.hash, resolve_config({}, {}).hash) << "the first preset is the declared defaults";
+}
+
+// One hardware, one label, however it was set (issue 51: a study called the GX6450 defaults
+// "default", a sweep with configs/series6xt_gx6450.ini "series6xt_gx6450", and a study's --modes
+// tbdr "default gpu.mode=tbdr", all one hash). The label is the preset and the values that differ
+// from it, sorted by key.
+TEST(Params, OneHardwareHasOneLabel) {
+  const std::string dir = std::string(TBDRSIM_SOURCE_DIR) + "/configs/";
+  const ResolvedConfig none = resolve_config({}, {});
+  const ResolvedConfig file = resolve_config({dir + "series6xt_gx6450.ini"}, {});
+  const ResolvedConfig set_to_default = resolve_config({}, {"gpu.mode=tbdr", "tiling.tile_width=32"});
+  EXPECT_EQ(none.label, "series6xt_gx6450");
+  EXPECT_EQ(file.label, none.label);
+  EXPECT_EQ(set_to_default.label, none.label);
+  EXPECT_EQ(set_to_default.hash, none.hash);
+  EXPECT_EQ(resolve_config({}, {"gpu.mode=imr"}).label, "series6xt_gx6450 gpu.mode=imr");
+  // Sorted by key, not in the order set: tile_height before tile_width.
+  EXPECT_EQ(resolve_config({}, {"tiling.tile_width=16", "tiling.tile_height=16"}).label,
+            "series6xt_gx6450 tiling.tile_height=16 tiling.tile_width=16");
+  // Relative to the named preset: its own 16x16 tiles are not "set on top".
+  EXPECT_EQ(resolve_config({dir + "mobile_16x16_lpddr4x.ini"}, {"tiling.tile_width=16"}).label, "mobile_16x16_lpddr4x");
+  // An earlier file's values are on top of the last one, the preset named.
+  const ResolvedConfig layered = resolve_config({dir + "mobile_16x16_lpddr4x.ini", dir + "series6xt_gx6450.ini"}, {});
+  EXPECT_EQ(layered.label.rfind("series6xt_gx6450 ", 0), 0u) << layered.label;
+  EXPECT_NE(layered.label.find("tiling.tile_width=16"), std::string::npos) << layered.label;
 }
 
 TEST(Params, ChoicesBecomeEnumsOnceTheTextStaysTheValue) {

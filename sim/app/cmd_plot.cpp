@@ -81,7 +81,8 @@ std::string usage() {
   os << "usage: tbdrsim plot KIND --db DB [--out FILE.png] [options]\n"
      << "       tbdrsim plot KIND --help      (the options of one kind)\n\nkinds:\n";
   print_kinds(os);
-  os << "\nEvery kind takes --db, --out, --where, --config, --lights, --technique and --scene; "
+  os << "\nEvery kind takes --db, --out, --where, --config (a label it lists, or a preset name), --lights, --technique, "
+        "--scene, --fix KEY=VALUE and --independent-y; "
         "docs/plots.md shows each plot.\n"
      << "Scripts: $TBDRSIM_ANALYSIS_DIR, <prefix>/share/tbdrsim/analysis or the checkout's analysis/; "
         "interpreter: $TBDRSIM_PYTHON or " << kDebianPython << ".\n";

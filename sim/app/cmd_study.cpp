@@ -199,8 +199,8 @@ StudyPlan plan_from_options(const po::variables_map& vm) {
       plan.configs.push_back(resolve_config(files, with_mode));
     }
   }
-  for (const auto& s : sets) plan.config_label += (plan.config_label.empty() ? "" : " ") + s;
-  plan.config_label = plan.configs.front().params.config_name + (plan.config_label.empty() ? "" : " " + plan.config_label);
+  // What the modes share, labelled as the runs are (ResolvedConfig::label).
+  plan.config_label = plan.modes.empty() ? plan.configs.front().label : resolve_config(files, sets).label;
   plan.scene = vm["scene"].as<std::string>();
   plan.resolution = vm["resolution"].as<std::string>();
   if (vm.count("option")) {

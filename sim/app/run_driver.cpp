@@ -74,6 +74,8 @@ std::string stat_text(double v) {
 
 }  // namespace
 
+RunParam config_label_param(const std::string& label) { return {"config.label", label, "config"}; }
+
 std::vector<RunParam> trace_run_params(const Trace& trace, const std::string& trace_path) {
   std::vector<RunParam> params;
   for (const auto& [k, v] : trace.options) {
@@ -478,6 +480,7 @@ RunOutcome run_one(const RunRequest& req) {
   for (std::size_t i = 0; i < table.decls().size(); ++i) {
     rec.params.push_back({table.decls()[i].key, format_param_value(req.config.params.values[i]), req.config.params.origins[i].text});
   }
+  rec.params.push_back(config_label_param(req.config.label));
   for (auto& p : trace_run_params(trace, req.trace_path)) rec.params.push_back(std::move(p));
   rec.stats = outcome.frame.stats;
   rec.stats.push_back({"frame/host", "load_wall_seconds", outcome.load_seconds, "s",

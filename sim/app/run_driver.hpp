@@ -50,6 +50,10 @@ struct RunOutcome {
   DerivedFigures derived;        ///< read back from the database (views.sql defines them) when RunRequest::summary_figures
 };
 
+/// The configuration's label (ResolvedConfig::label) as the run parameter config.label (origin
+/// "config"), which analysis/views.sql's v_config_label reads: one label per hardware and preset.
+RunParam config_label_param(const std::string& label);
+
 /// The trace's identity and technique options as run parameters (origin: the trace file and the
 /// line of its header): technique.<option> for each option of the `technique` line, and
 /// trace.camera for a named viewpoint. Dimensions of `report --by`/`--where` and of v_param.

@@ -19,6 +19,7 @@
 #include "analysis/results_db.hpp"
 #include "analysis/sql.hpp"
 #include "app/commands.hpp"
+#include "app/run_driver.hpp"
 #include "app/worker_pool.hpp"
 #include "kernel/errors.hpp"
 #include "models/config_checks.hpp"
@@ -92,16 +93,68 @@ void warn_slow_traces(const SweepPoints& points, const std::vector<TraceInfo>& i
   out << std::flush;
 }
 
-/// A point's configuration as v_config_label names it: the preset's (last config file's) name and
-/// the keys the point sets on top of it, sorted by key ("series6xt_gx6450 tiling.tile_width=16");
-/// what a dry run shows.
-std::string config_label(const SweepPoint& p) {
-  std::string label = p.configs.empty() ? std::string("default") : std::filesystem::path(p.configs.back()).stem().string();
-  std::vector<std::string> sets = p.sets;
-  std::sort(sets.begin(), sets.end());
-  for (const auto& set : sets) label += " " + set;
-  return label;
-}
+/// The labels of the points' configurations (ParamTable::label: the preset and the parameters
+/// whose values differ from it, as the database and `plot --config` name them), resolved per
+/// combination when asked and the last one kept: a dry run lists them point by point, and points
+/// of one combination are consecutive for every trace and repetition.
+class SweepConfigLabels {
+ public:
+  const std::string& operator()(const SweepPoint& p, std::size_t combination) {
+    if (combination == last_ && !label_.empty()) return label_;
+    const auto& table = hw_params().table();
+    auto it = bases_.find(p.configs);
+    if (it == bases_.end()) {
+      // Per list of config files, once: the resolved base, and the base's and the preset's
+      // values formatted as the label writes them.
+      Base b;
+      b.params = table.resolve(p.configs, {});
+      b.base = b.params;
+      const ResolvedParams preset = table.preset(p.configs);
+      for (std::size_t i = 0; i < table.decls().size(); ++i) {
+        b.base_text.push_back(format_param_value(b.params.values[i]));
+        b.preset_text.push_back(format_param_value(preset.values[i]));
+      }
+      it = bases_.emplace(p.configs, std::move(b)).first;
+    }
+    Base& b = it->second;
+    // The base's parameters the point sets take the point's values (restored after): the label
+    // is ParamTable::label of the resolved point, computed from the keys that differ only.
+    std::vector<std::size_t> touched;
+    for (const auto& set : p.sets) {
+      table.apply_override(b.params, set);
+      const int i = table.find(set.substr(0, set.find('=')));
+      if (i >= 0) touched.push_back(static_cast<std::size_t>(i));
+    }
+    std::vector<std::pair<std::string, std::string>> differ;  // key, value
+    for (std::size_t i = 0; i < b.base_text.size(); ++i) {
+      const bool set_here = std::find(touched.begin(), touched.end(), i) != touched.end();
+      const std::string& v = set_here ? (b.scratch = format_param_value(b.params.values[i])) : b.base_text[i];
+      if (v != b.preset_text[i]) differ.emplace_back(table.decls()[i].key, v);
+    }
+    std::sort(differ.begin(), differ.end());
+    label_ = b.params.config_name;
+    for (const auto& [k, v] : differ) label_ += " " + k + "=" + v;
+    // Back to the base for the next point (only the keys the point set changed).
+    for (std::size_t i : touched) {
+      b.params.values[i] = b.base.values[i];
+      b.params.origins[i] = b.base.origins[i];
+    }
+    last_ = combination;
+    return label_;
+  }
+
+ private:
+  /// One list of config files: its resolved parameters (the working copy a point's keys are set
+  /// in, then restored from `base`), and its and its preset's values as the label writes them.
+  struct Base {
+    ResolvedParams params, base;
+    std::vector<std::string> base_text, preset_text;
+    std::string scratch;
+  };
+  std::map<std::vector<std::string>, Base> bases_;  // by config file list
+  std::size_t last_ = 0;
+  std::string label_;
+};
 
 /// The hash shown for a generated trace that a dry run has not generated: no run has it.
 constexpr const char* kNotGenerated = "(to generate)";
@@ -305,6 +358,7 @@ RunRecord failed_run(const SweepPoint& p, const TraceInfo& trace, const Launch& 
   for (std::size_t i = 0; i < table.decls().size(); ++i) {
     rec.params.push_back({table.decls()[i].key, format_param_value(config.params.values[i]), config.params.origins[i].text});
   }
+  rec.params.push_back(config_label_param(config.label));
   return rec;
 }
 
@@ -603,6 +657,7 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
   // the axes and the constraints between parameters were checked when the sweep file was read).
   const std::vector<TraceInfo> traces = read_traces(spec, points);
   SweepConfigHashes config_hash(spec);
+  SweepConfigLabels config_label;
   auto trace_hash = [&](std::size_t i) -> const std::string& { return traces[points.trace(i)].hash; };
 
   // A dry run writes nothing: it reads the database when there is one, and creates none.
@@ -640,7 +695,8 @@ SweepSummary run_sweep(const SweepSpec& spec, const SweepOptions& opt, std::ostr
     for (std::size_t i = 0; i < points.size(); ++i) {
       const SweepPoint p = points[i];
       out << "  " << std::setw(5) << p.index << "  " << (done_before[i] ? "done  " : "to run") << "  " << p.label
-          << "  (config " << config_label(p) << ", trace " << trace_hash(i) << ")\n";
+          << "  (config " << config_label(p, points.combination(i)) << " [" << config_hash(points.combination(i)) << "], trace "
+          << trace_hash(i) << ")\n";
     }
     summary.not_run = to_run;
     return summary;

@@ -198,6 +198,7 @@ bool ParamTable::has_section(const std::string& name) const {
 ResolvedParams ParamTable::defaults() const {
   for (const auto& d : decls_) check_default(d);
   ResolvedParams p;
+  p.config_name = defaults_name_;
   for (const auto& d : decls_) {
     p.values.push_back(d.default_value);
     p.origins.push_back(ParamOrigin{});
@@ -448,6 +449,27 @@ ResolvedParams ParamTable::resolve(const std::vector<std::string>& config_files,
   for (const auto& f : config_files) apply_config_file(p, f);
   for (const auto& o : overrides) apply_override(p, o);
   return p;
+}
+
+ResolvedParams ParamTable::preset(const std::vector<std::string>& config_files) const {
+  ResolvedParams p = defaults();
+  if (!config_files.empty()) apply_config_file(p, config_files.back());
+  return p;
+}
+
+std::string ParamTable::label(const ResolvedParams& p, const ResolvedParams& preset) const {
+  std::vector<std::string> set;
+  for (std::size_t i = 0; i < decls_.size(); ++i) {
+    const std::string v = format_param_value(p.values[i]);
+    if (v != format_param_value(preset.values[i])) set.push_back(decls_[i].key + "=" + v);
+  }
+  // By key (a key has no '='), as analysis/views.sql's v_config_label orders them.
+  std::sort(set.begin(), set.end(), [](const std::string& a, const std::string& b) {
+    return a.substr(0, a.find('=')) < b.substr(0, b.find('='));
+  });
+  std::string label = p.config_name;
+  for (const auto& s : set) label += " " + s;
+  return label;
 }
 
 std::string ParamTable::hash(const ResolvedParams& p) const {

@@ -127,7 +127,7 @@ struct ParamOrigin {
 struct ResolvedParams {
   std::vector<ParamValue> values;
   std::vector<ParamOrigin> origins;
-  std::string config_name = "default";  ///< stem of the last config file, or "default"
+  std::string config_name = "default";  ///< stem of the last config file, or the defaults' name (ParamTable::name_defaults)
 };
 
 /// The list of declarations, independent of the struct they bind to.
@@ -163,8 +163,19 @@ class ParamTable {
   int find(const std::string& key) const;
   bool has_section(const std::string& name) const;
 
-  /// The defaults, every origin "default".
+  /// The defaults, every origin "default", named as name_defaults() says ("default" unless set).
   ResolvedParams defaults() const;
+  /// Names the defaults (the config_name of a configuration resolved without a config file): the
+  /// preset file that equals them, so that one hardware has one name with and without that file.
+  void name_defaults(std::string name) { defaults_name_ = std::move(name); }
+  /// The preset a configuration is named after: the defaults plus the last of `config_files`
+  /// (config_name: that file's stem), the defaults alone without files.
+  ResolvedParams preset(const std::vector<std::string>& config_files) const;
+  /// The label of a configuration: its config_name followed by " key=value" for every parameter
+  /// whose value differs from `preset`'s (preset(its files)), sorted by key, e.g.
+  /// "series6xt_gx6450 tiling.tile_height=16 tiling.tile_width=16". A function of the values, not
+  /// of how they were set: one hardware and preset, one label (run, sweep, study).
+  std::string label(const ResolvedParams& p, const ResolvedParams& preset) const;
   /// Applies one INI file (Boost.Program_options parser) on top of `p`. Unknown section or key,
   /// malformed line, duplicate key, bad value: InputError naming file:line, key, value, expectation.
   void apply_config_file(ResolvedParams& p, const std::string& path) const;
@@ -181,6 +192,7 @@ class ParamTable {
   std::vector<ParamDecl> decls_;
   std::vector<std::pair<std::string, std::string>> sections_;
   std::vector<std::pair<std::string, std::string>> retired_;  ///< removed key, what replaced it
+  std::string defaults_name_ = "default";                      ///< config_name of the defaults
 };
 
 /// A ParamTable bound to a plain struct `Config`: each declaration also knows how to write its
@@ -233,6 +245,8 @@ class ParamRegistry {
     return table_.declare(std::move(key), ParamType::Text, def_name).choices(std::move(choices));
   }
   void section(std::string name, std::string doc) { table_.section(std::move(name), std::move(doc)); }
+  /// See ParamTable::name_defaults.
+  void name_defaults(std::string name) { table_.name_defaults(std::move(name)); }
   /// See ParamTable::retire.
   void retire(std::string key, std::string replacement) { table_.retire(std::move(key), std::move(replacement)); }
 
