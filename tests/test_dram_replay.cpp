@@ -121,6 +121,13 @@ TEST(DramReplay, BadFilesAreRefusedWithTheirLine) {
   }
   const auto missing = run_cli({"dram-bench", "--replay", (dir / "none.trace").string()});
   EXPECT_EQ(missing.code, 2);
+  // One byte past 256 MiB (a sparse file: nothing is read): refused by its size.
+  const std::string big = write("big.trace", "0x40 READ 0\n");
+  fs::resize_file(big, (std::uintmax_t{1} << 28) + 1);
+  const auto too_big = run_cli({"dram-bench", "--replay", big});
+  EXPECT_EQ(too_big.code, 2);
+  EXPECT_NE(too_big.err.find("268435457 bytes, more than the 268435456 (256 MiB) a replay file may have"), std::string::npos)
+      << too_big.err;
 }
 
 }  // namespace

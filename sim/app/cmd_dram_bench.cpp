@@ -3,6 +3,7 @@
 // printed one per line, and optionally its request or command stream exported (--memory-trace)
 // for DRAMsim3 or DRAMPower (bench/dram_vs_dramsim3.sh, bench/dram_vs_drampower.sh).
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -28,6 +29,9 @@ namespace {
 constexpr std::uint32_t kReplayLineBytes = 64;
 /// Longest accepted line of a replay file: "0x" + 16 hex digits, a kind, a cycle count.
 constexpr std::size_t kMaxReplayLineBytes = 256;
+/// Largest replay file: 256 MiB, about 11 million 32 B transactions (a 1080p deferred frame's
+/// stream is 68 MB); each request read is 32 bytes of memory.
+constexpr std::uintmax_t kMaxReplayFileBytes = std::uintmax_t{1} << 28;
 
 /// Reads a DRAMsim3 trace ("0xADDR READ|WRITE CYCLE" per line, CYCLE in cycles of the configured
 /// DRAM clock, non-decreasing): consecutive transactions of one kind and cycle that continue each
@@ -35,6 +39,11 @@ constexpr std::size_t kMaxReplayLineBytes = 256;
 /// chains, which its export wrote as one transaction per burst).
 std::vector<DramReplayRequest> read_replay(const std::string& path, const HwConfig& hw) {
   check_input_file(path, "replay file");
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (!ec && size > kMaxReplayFileBytes) {
+    throw InputError(path, std::to_string(size) + " bytes, more than the 268435456 (256 MiB) a replay file may have");
+  }
   std::ifstream in(path);
   if (!in) throw InputError(path, "cannot open the replay file");
   const double period_ps = 1e6 / hw.dram.clock_mhz;
