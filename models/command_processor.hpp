@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "models/compute_unit.hpp"
+#include "models/pass_stats.hpp"
 #include "models/frame_work.hpp"
 #include "models/geometry_unit.hpp"
 #include "models/hw_config.hpp"
@@ -23,35 +24,6 @@
 #include "scene/scene.hpp"
 
 namespace tbdr {
-
-/// Statistics of one pass (or, summed, of the frame), one set per unit.
-struct PassStats {
-  GeometryStats geometry;
-  TilerStats tiler;
-  IspStats isp;
-  TspStats tsp;
-  TileMemoryStats tile_memory;
-  RopStats rop;  ///< gpu.mode=imr: the ROP caches (zero otherwise)
-  /// Adds another pass: counts sum, gauges take the larger level.
-  PassStats& operator+=(const PassStats& o) {
-    geometry += o.geometry;
-    tiler += o.tiler;
-    isp += o.isp;
-    tsp += o.tsp;
-    tile_memory += o.tile_memory;
-    rop += o.rop;
-    return *this;
-  }
-  /// Rows "<prefix>/<unit>" for the results database.
-  void collect(const std::string& prefix, std::vector<StatRecord>& out) const {
-    collect_stats(geometry, prefix + "/geometry", out);
-    collect_stats(tiler, prefix + "/tiler", out);
-    collect_stats(isp, prefix + "/isp", out);
-    collect_stats(tsp, prefix + "/tsp", out);
-    collect_stats(tile_memory, prefix + "/tile_memory", out);
-    collect_stats(rop, prefix + "/rop", out);
-  }
-};
 
 /// The frame's unit statistics: render passes and compute dispatches, each summed.
 struct FrameStats {

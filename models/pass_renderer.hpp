@@ -16,7 +16,7 @@
 #include <mutex>
 #include <vector>
 
-#include "models/command_processor.hpp"
+#include "models/pass_stats.hpp"
 #include "models/frame_work.hpp"
 #include "models/geometry_unit.hpp"
 #include "models/hw_config.hpp"

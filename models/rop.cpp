@@ -2,7 +2,7 @@
 
 #include <bit>
 
-#include "models/tile_memory.hpp"
+#include "models/tile_memory.hpp"  // traffic_class_of: an attachment's DRAM class, as the tile memory charges it
 
 namespace tbdr {
 

@@ -1,6 +1,6 @@
 #pragma once
 // The command-line tool: `tbdrsim <command> [options]`. Each command is a function registered in
-// one table (sim/cli.cpp) with its summary; options are parsed with Boost.Program_options.
+// one table (sim/app/cli.cpp) with its summary; options are parsed with Boost.Program_options.
 #include <iosfwd>
 #include <string>
 #include <vector>

@@ -1,5 +1,5 @@
 #pragma once
-// The sub-command entry points and the option helpers they share (see CliCommand in sim/cli.hpp).
+// The sub-command entry points and the option helpers they share (see CliCommand in sim/app/cli.hpp).
 #include <iosfwd>
 #include <string>
 #include <vector>

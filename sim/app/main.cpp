@@ -1,4 +1,4 @@
-// tbdrsim entry point: everything but argument forwarding lives in the core library (sim/cli.cpp).
+// tbdrsim entry point: everything but argument forwarding lives in the core library (sim/app/cli.cpp).
 #include <unistd.h>
 
 #include <cstdlib>

@@ -19,7 +19,7 @@ glm::mat4 Camera::projection(float aspect) const {
 
 namespace {
 
-/// One named atrium viewpoint: eye and target in the atrium's meters (see workloads/atrium.hpp).
+/// One named atrium viewpoint: eye and target in the atrium's meters (see workloads/scene/atrium.hpp).
 struct AtriumView {
   const char* name;
   glm::vec3 eye;
