@@ -18,16 +18,33 @@ constexpr std::uint32_t kLineBytes = 64;
 /// rarely share a row.
 constexpr std::uint64_t kRandomLines = (std::uint64_t{1} << 30) / kLineBytes;
 
+/// Reports the DRAM's requests and commands to `observer` (when given).
+void observe(Dram& dram, DramObserver* observer) {
+  if (observer == nullptr) return;
+  observer->attach(dram);
+  dram.set_observer(observer);
+}
+
+/// The figures of a finished run: first request to last data, the bytes moved (read and written),
+/// their share of the peak bandwidth, energy per bit and the DRAM's statistics.
+DramBenchResult finish(Dram& dram, const EventQueue& eq, const HwConfig& hw) {
+  dram.update_derived_stats();
+  DramBenchResult r;
+  r.ns = static_cast<double>(eq.now().ps()) * 1e-3;
+  r.bytes = static_cast<double>(dram.stats().read_bytes.value() + dram.stats().write_bytes.value());
+  r.efficiency = r.ns > 0 ? r.bytes / (hw.dram.peak_bandwidth_gbps() * r.ns) : 0.0;
+  r.pj_per_bit = dram.stats().energy_per_bit_pj.value();
+  r.stats = dram.stats();
+  return r;
+}
+
 }  // namespace
 
 DramBenchResult run_dram_microbench(const HwConfig& hw, DramPattern pattern, std::uint64_t lines, std::uint64_t seed,
                                     DramObserver* observer) {
   EventQueue eq;
   Dram dram(hw.dram, hw.energy, eq);
-  if (observer != nullptr) {
-    observer->attach(dram);
-    dram.set_observer(observer);
-  }
+  observe(dram, observer);
   // One in-order stream per channel: a refused request waits at its stream's head until the
   // controller reports space on that channel.
   std::vector<std::deque<std::uint64_t>> pending(dram.channels());
@@ -47,24 +64,14 @@ DramBenchResult run_dram_microbench(const HwConfig& hw, DramPattern pattern, std
   dram.set_space_callback(pump);
   for (std::uint32_t c = 0; c < dram.channels(); ++c) pump(c);
   eq.run();
-  dram.update_derived_stats();
-  DramBenchResult r;
-  r.ns = static_cast<double>(eq.now().ps()) * 1e-3;
-  r.bytes = static_cast<double>(dram.stats().read_bytes.value());
-  r.efficiency = r.ns > 0 ? r.bytes / (hw.dram.peak_bandwidth_gbps() * r.ns) : 0.0;
-  r.pj_per_bit = dram.stats().energy_per_bit_pj.value();
-  r.stats = dram.stats();
-  return r;
+  return finish(dram, eq, hw);
 }
 
 DramReplayResult run_dram_replay(const HwConfig& hw, const std::vector<DramReplayRequest>& requests,
                                  DramObserver* observer) {
   EventQueue eq;
   Dram dram(hw.dram, hw.energy, eq);
-  if (observer != nullptr) {
-    observer->attach(dram);
-    dram.set_observer(observer);
-  }
+  observe(dram, observer);
   // Per channel and kind, the requests that arrived and wait for room, oldest first (indices).
   std::vector<std::deque<std::size_t>> waiting(2 * static_cast<std::size_t>(dram.channels()));
   double wait_ps = 0;  // summed over read lines: accepted - arrival
@@ -98,14 +105,8 @@ DramReplayResult run_dram_replay(const HwConfig& hw, const std::vector<DramRepla
   };
   if (!requests.empty()) eq.schedule(requests.front().arrival, [&] { arrive(); });
   eq.run();
-  dram.update_derived_stats();
   DramReplayResult out;
-  DramBenchResult& r = out.bench;
-  r.ns = static_cast<double>(eq.now().ps()) * 1e-3;
-  r.bytes = static_cast<double>(dram.stats().read_bytes.value() + dram.stats().write_bytes.value());
-  r.efficiency = r.ns > 0 ? r.bytes / (hw.dram.peak_bandwidth_gbps() * r.ns) : 0.0;
-  r.pj_per_bit = dram.stats().energy_per_bit_pj.value();
-  r.stats = dram.stats();
+  out.bench = finish(dram, eq, hw);
   out.read_wait_outside_ns = read_lines > 0 ? wait_ps * 1e-3 / static_cast<double>(read_lines) : 0.0;
   return out;
 }

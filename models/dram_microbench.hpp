@@ -22,7 +22,7 @@ enum class DramPattern : std::uint8_t {
 /// What a microbenchmark measured.
 struct DramBenchResult {
   double ns = 0;          ///< first request to last data back
-  double bytes = 0;       ///< bytes read
+  double bytes = 0;       ///< bytes read and written (a microbenchmark only reads)
   double efficiency = 0;  ///< bytes / (dram peak bandwidth x ns), DramParams::peak_bandwidth_gbps
   double pj_per_bit = 0;  ///< all DRAM energy (dynamic, background, refresh) / bits read
   DramStats stats;        ///< the DRAM's statistics at the end (derived ones set)
