@@ -98,13 +98,13 @@ std::vector<ReportTable::Section> default_sections(const std::vector<std::string
   std::optional<std::size_t> dram_total, requested_total, energy_total;
   for (std::size_t i = 0; i < metrics.size(); ++i) {
     const std::string& m = metrics[i];
-    if (m == "dram_total_mb") dram_total = i;
-    if (m == "requested_total_mb") requested_total = i;
-    if (m == "energy_total_mj") energy_total = i;
-    if (m != "dram_total_mb" && starts_ends(m, "dram_", "_mb") && m != "dram_read_mb" && m != "dram_write_mb") {
+    if (m == metric::kDramTotalMb) dram_total = i;
+    if (m == metric::kRequestedTotalMb) requested_total = i;
+    if (m == metric::kEnergyTotalMj) energy_total = i;
+    if (m != metric::kDramTotalMb && starts_ends(m, "dram_", "_mb") && m != metric::kDramReadMb && m != metric::kDramWriteMb) {
       dram.metrics.push_back(i);
       dram.headers.push_back(m.substr(5, m.size() - 8));
-    } else if (m != "energy_total_mj" && starts_ends(m, "energy_", "_mj")) {
+    } else if (m != metric::kEnergyTotalMj && starts_ends(m, "energy_", "_mj")) {
       energy.metrics.push_back(i);
       energy.headers.push_back(m.substr(7, m.size() - 10));
     } else {
@@ -169,13 +169,13 @@ std::string md_field(const std::string& s) {
 }
 
 bool is_optional_default(const std::string& metric) {
-  return metric.rfind("dram_", 0) == 0 || metric.rfind("requested_", 0) == 0 || metric.rfind("energy_", 0) == 0 || metric == "frame_time_ms" ||
-         metric == "cycles";
+  return metric.rfind("dram_", 0) == 0 || metric.rfind("requested_", 0) == 0 || metric.rfind("energy_", 0) == 0 || metric == metric::kFrameTimeMs ||
+         metric == metric::kCycles;
 }
 
 /// The default metrics, in column order (figures absent from every run are dropped later).
 std::vector<std::string> default_report_metrics(const SqlConnection& db) {
-  std::vector<std::string> m = {"frame_time_ms", "cycles", "dram_total_mb", "requested_total_mb"};
+  std::vector<std::string> m = {metric::kFrameTimeMs, metric::kCycles, metric::kDramTotalMb, metric::kRequestedTotalMb};
   std::set<std::string> classes;
   {
     SqlStatement q(db, "SELECT DISTINCT substr(scope, 12) FROM stats WHERE scope GLOB 'frame/dram.*'");
@@ -185,16 +185,16 @@ std::vector<std::string> default_report_metrics(const SqlConnection& db) {
     if (classes.erase(c)) m.push_back(std::string("dram_") + c + "_mb");
   }
   for (const auto& c : classes) m.push_back("dram_" + c + "_mb");
-  m.push_back("energy_total_mj");
+  m.push_back(metric::kEnergyTotalMj);
   {
     SqlStatement q(db,
                    "SELECT DISTINCT substr(name, 1, length(name) - 3) FROM stats WHERE scope = 'frame/energy' "
-                   "AND name GLOB '*_pj' AND name <> 'total_pj' ORDER BY rowid");
+                   "AND substr(name, 1, length(name) - 3) IN (SELECT component FROM v_energy_component) ORDER BY rowid");
     while (q.step()) m.push_back("energy_" + q.text(0) + "_mj");
   }
-  m.push_back("shaded_fragments_per_pixel");
-  m.push_back("overshading");
-  m.push_back("lights_per_pixel");
+  m.push_back(metric::kShadedFragmentsPerPixel);
+  m.push_back(metric::kOvershading);
+  m.push_back(metric::kLightsPerPixel);
   return m;
 }
 

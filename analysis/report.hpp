@@ -12,6 +12,27 @@
 
 namespace tbdr {
 
+/// The names of the v_metric figures (analysis/views.sql, v_metric_def) that C++ code names: the
+/// report's default columns and the study's ranks. Declared here once; tests/test_stat_names.cpp
+/// checks each is in v_metric_def. frame_time_ms is also the name of the statistic it passes
+/// through (frame/timing, sim/app/run_stats.hpp).
+namespace metric {
+inline constexpr const char* kFrameTimeMs = "frame_time_ms";
+inline constexpr const char* kCycles = "cycles";
+inline constexpr const char* kDramTotalMb = "dram_total_mb";
+inline constexpr const char* kDramReadMb = "dram_read_mb";
+inline constexpr const char* kDramWriteMb = "dram_write_mb";
+inline constexpr const char* kRequestedTotalMb = "requested_total_mb";
+inline constexpr const char* kEnergyTotalMj = "energy_total_mj";
+inline constexpr const char* kShadedFragmentsPerPixel = "shaded_fragments_per_pixel";
+inline constexpr const char* kOvershading = "overshading";
+inline constexpr const char* kLightsPerPixel = "lights_per_pixel";
+/// Every name above, for the check against the views.
+inline constexpr const char* kAll[] = {kFrameTimeMs,   kCycles,        kDramTotalMb,           kDramReadMb,
+                                       kDramWriteMb,   kRequestedTotalMb, kEnergyTotalMj, kShadedFragmentsPerPixel,
+                                       kOvershading,   kLightsPerPixel};
+}  // namespace metric
+
 class ResultsDb;
 class SqlConnection;
 

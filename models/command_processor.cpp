@@ -26,16 +26,15 @@ namespace {
 
 
 void collect_dram(const std::string& prefix, const DramTraffic& dram, std::vector<StatRecord>& out) {
-  std::uint64_t r = 0, w = 0;
+  TrafficStats all;
   for (std::size_t c = 0; c < kDramClassCount; ++c) {
-    const std::string scope = prefix + "/dram." + to_string(static_cast<DramClass>(c));
-    out.push_back({scope, "read_bytes", static_cast<double>(dram.read_bytes[c]), "bytes", "DRAM bytes read for this traffic class"});
-    out.push_back({scope, "write_bytes", static_cast<double>(dram.write_bytes[c]), "bytes", "DRAM bytes written for this traffic class"});
-    r += dram.read_bytes[c];
-    w += dram.write_bytes[c];
+    TrafficStats cls;
+    cls.read_bytes.set(dram.read_bytes[c]);
+    cls.write_bytes.set(dram.write_bytes[c]);
+    collect_stats(cls, prefix + TrafficStats::kScopeSuffix + "." + to_string(static_cast<DramClass>(c)), out);
+    all += cls;
   }
-  out.push_back({prefix + "/dram", "read_bytes", static_cast<double>(r), "bytes", "DRAM bytes read, all classes"});
-  out.push_back({prefix + "/dram", "write_bytes", static_cast<double>(w), "bytes", "DRAM bytes written, all classes"});
+  collect_stats(all, prefix + TrafficStats::kScopeSuffix, out);
 }
 
 /// The attachments whose stored surfaces (AttachmentImage::surface) some command of `trace` reads
@@ -182,20 +181,19 @@ class FrameSimulator {
     if (pass_index > 0) result_.totals.render.collect("frame", result_.stats);
     if (dispatches > 0) collect_stats(result_.totals.compute, "frame/compute", result_.stats);
     collect_dram("frame", result_.dram, result_.stats);
-    auto frame_stat = [&](const char* name, double v, const char* unit, const char* desc) {
-      result_.stats.push_back({"frame/frame", name, v, unit, desc});
-    };
-    frame_stat("width", f.width, "pixels", "Frame width");
-    frame_stat("height", f.height, "pixels", "Frame height");
-    frame_stat("samples_per_pixel", f.samples, "samples", "MSAA samples per pixel of the trace");
-    frame_stat("lights", static_cast<double>(trace_.lights.size()), "lights", "Lights in the trace");
-    frame_stat("passes", pass_index, "passes", "Render passes replayed");
-    frame_stat("dispatches", static_cast<double>(dispatches), "dispatches", "Compute dispatches replayed");
-    frame_stat("scene_triangles", static_cast<double>(scene_.triangle_count()), "triangles", "Triangles in the scene");
-    frame_stat("geometry_passes", geometry_passes_, "passes", "Submissions of the scene's opaque geometry");
+    FrameShapeStats shape;
+    shape.width.set(f.width);
+    shape.height.set(f.height);
+    shape.samples_per_pixel.set(f.samples);
+    shape.lights.set(static_cast<double>(trace_.lights.size()));
+    shape.passes.set(static_cast<std::uint64_t>(pass_index));
+    shape.dispatches.set(static_cast<std::uint64_t>(dispatches));
+    shape.scene_triangles.set(static_cast<std::uint64_t>(scene_.triangle_count()));
+    shape.geometry_passes.set(static_cast<std::uint64_t>(geometry_passes_));
     std::uint64_t covered = 0;
     for (auto v : result_.images.counters.shaded) covered += v > 0 ? 1 : 0;
-    frame_stat("covered_pixels", static_cast<double>(covered), "pixels", "Pixels shaded at least once (the visible surface)");
+    shape.covered_pixels.set(covered);
+    collect_stats(shape, FrameShapeStats::kScope, result_.stats);
     return std::move(result_);
   }
 

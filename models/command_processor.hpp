@@ -31,6 +31,36 @@ struct FrameStats {
   ComputeStats compute;
 };
 
+// The frame's shape and what was replayed (scope "frame/frame").
+#define TBDR_FRAME_SHAPE_STATS(X)                                                           \
+  X(Accumulator, width, "pixels", Gauge, "Frame width")                                      \
+  X(Accumulator, height, "pixels", Gauge, "Frame height")                                    \
+  X(Accumulator, samples_per_pixel, "samples", Gauge, "MSAA samples per pixel of the trace") \
+  X(Accumulator, lights, "lights", Gauge, "Lights in the trace")                             \
+  X(Counter, passes, "passes", Sum, "Render passes replayed")                                 \
+  X(Counter, dispatches, "dispatches", Sum, "Compute dispatches replayed")                    \
+  X(Counter, scene_triangles, "triangles", Gauge, "Triangles in the scene")                   \
+  X(Counter, geometry_passes, "passes", Sum, "Submissions of the scene's opaque geometry")     \
+  X(Counter, covered_pixels, "pixels", Gauge, "Pixels shaded at least once (the visible surface)")
+
+/// The frame's size, its trace's lights and samples, and how many commands it replayed.
+struct FrameShapeStats {
+  TBDR_STATS(TBDR_FRAME_SHAPE_STATS)
+  static constexpr const char* kScope = "frame/frame";
+};
+
+// Bytes of one traffic class, or of all (scopes "<command or frame>/dram.<class>" and ".../dram").
+#define TBDR_TRAFFIC_STATS(X)                                    \
+  X(Counter, read_bytes, "bytes", Sum, "Bytes the units requested to read (before the caches)") \
+  X(Counter, write_bytes, "bytes", Sum, "Bytes the units requested to write (before the caches)")
+
+/// Bytes the units requested to read and write for one traffic class (or all), before the caches.
+struct TrafficStats {
+  TBDR_STATS(TBDR_TRAFFIC_STATS)
+  /// The scope of a command's or the frame's traffic: prefix + kScopeSuffix [+ "." + class].
+  static constexpr const char* kScopeSuffix = "/dram";
+};
+
 /// What one pass did, for summaries (the full figures are in FrameResult::stats).
 struct PassSummary {
   std::string name;

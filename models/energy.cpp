@@ -123,25 +123,17 @@ EnergyBreakdown compute_energy(const HwConfig& hw, const FrameStats& frame, cons
 void EnergyBreakdown::collect(std::vector<StatRecord>& out) const {
   for (const auto& t : terms) {
     // Names must be string literals with static storage only for StatDef; records own strings.
-    out.push_back({"frame/energy", t.component + "_pj", t.pj, "pJ", "Energy of " + t.component + ": " + t.counter + " x unit cost"});
+    out.push_back({EnergyFrameStats::kScope, t.component + "_pj", t.pj, "pJ", "Energy of " + t.component + ": " + t.counter + " x unit cost"});
   }
-  out.push_back({"frame/energy", "total_pj", total_pj, "pJ", "Energy of the frame, all components"});
-  out.push_back({"frame/energy", "total_mj", total_pj * 1e-9, "mJ", "Energy of the frame, all components"});
-  // Leakage and the frame period: no name ends in _pj (those are the components above).
-  out.push_back({"frame/energy", "static_power_mw", leakage.total_mw(), "mW",
-                 "Leakage of the configured GPU: logic units + SRAM arrays (static_pj / frame time)"});
-  out.push_back({"frame/energy", "static_logic_mw", leakage.logic_mw, "mW", "Leakage of the USCs, texture and fixed-function units"});
-  out.push_back({"frame/energy", "static_sram_mw", leakage.sram_gated_mw + leakage.sram_retained_mw, "mW",
-                 "Leakage of the on-chip SRAM arrays (CACTI, by configured size)"});
-  out.push_back({"frame/energy", "idle_time_ms", idle_ps * 1e-9, "ms", "gpu.frame_period_us minus the frame time (0: race to idle)"});
-  out.push_back({"frame/energy", "idle_gpu_mj", idle_gpu_pj * 1e-9, "mJ", "GPU leakage over the idle time (gated units, caches)"});
-  out.push_back({"frame/energy", "idle_dram_mj", idle_dram_pj * 1e-9, "mJ",
-                 "DRAM background over the idle time (standby, power-down, self-refresh)"});
-  out.push_back({"frame/energy", "idle_mj", idle_pj() * 1e-9, "mJ", "Energy of the idle time: idle_gpu_mj + idle_dram_mj"});
-  out.push_back({"frame/energy", "idle_power_mw", idle_ps > 0 ? idle_pj() / (idle_ps * kPjPerMwPs) : 0.0, "mW",
-                 "Mean power over the idle time: idle_mj / idle_time_ms"});
-  out.push_back({"frame/energy", "at_period_total_mj", at_period_total_pj() * 1e-9, "mJ",
-                 "Energy of one frame period: total_mj + idle_mj (= total_mj when racing to idle)"});
+  EnergyFrameStats frame;
+  frame.total_pj.set(total_pj);
+  frame.static_power_mw.set(leakage.total_mw());
+  frame.static_logic_mw.set(leakage.logic_mw);
+  frame.static_sram_mw.set(leakage.sram_gated_mw + leakage.sram_retained_mw);
+  frame.idle_ps = idle_ps;
+  frame.idle_gpu_pj = idle_gpu_pj;
+  frame.idle_dram_pj = idle_dram_pj;
+  collect_stats(frame, EnergyFrameStats::kScope, out);
 }
 
 }  // namespace tbdr

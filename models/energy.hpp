@@ -43,6 +43,45 @@ StaticPower static_power(const HwConfig& hw);
 /// (one dram.t_refi_ns at most), then self-refresh (dram.self_refresh_mw; 0: power-down goes on).
 double dram_idle_pj(const DramParams& d, double idle_ps);
 
+
+// The frame's energy totals, leakage and frame-period figures (scope "frame/energy", beside the
+// per-component "<component>_pj" rows of EnergyBreakdown::terms; none of these ends in _pj but the
+// total).
+#define TBDR_ENERGY_FRAME_STATS(X)                                                                         \
+  X(Accumulator, total_pj, "pJ", Sum, "Energy of the frame, all components")                                \
+  X(Accumulator, total_mj, "mJ", Derived, "Energy of the frame, all components: total_pj x 1e-9")            \
+  X(Accumulator, static_power_mw, "mW", Gauge, "Leakage of the configured GPU: logic units + SRAM arrays (static_pj / frame time)") \
+  X(Accumulator, static_logic_mw, "mW", Gauge, "Leakage of the USCs, texture and fixed-function units")     \
+  X(Accumulator, static_sram_mw, "mW", Gauge, "Leakage of the on-chip SRAM arrays (CACTI, by configured size)") \
+  X(Accumulator, idle_time_ms, "ms", Derived, "gpu.frame_period_us minus the frame time (0: race to idle)")  \
+  X(Accumulator, idle_gpu_mj, "mJ", Derived, "GPU leakage over the idle time (gated units, caches)")          \
+  X(Accumulator, idle_dram_mj, "mJ", Derived, "DRAM background over the idle time (standby, power-down, self-refresh)") \
+  X(Accumulator, idle_mj, "mJ", Derived, "Energy of the idle time: idle_gpu_mj + idle_dram_mj")               \
+  X(Accumulator, idle_power_mw, "mW", Derived, "Mean power over the idle time: idle_mj / idle_time_ms")        \
+  X(Accumulator, at_period_total_mj, "mJ", Derived,                                                          \
+    "Energy of one frame period: total_mj + idle_mj (= total_mj when racing to idle)")
+
+/// The frame's energy totals and the figures of a fixed frame period, derived from the breakdown's
+/// idle time and energies.
+struct EnergyFrameStats {
+  TBDR_STATS(TBDR_ENERGY_FRAME_STATS)
+  static constexpr const char* kScope = "frame/energy";
+  double idle_ps = 0;       ///< EnergyBreakdown::idle_ps
+  double idle_gpu_pj = 0;   ///< EnergyBreakdown::idle_gpu_pj
+  double idle_dram_pj = 0;  ///< EnergyBreakdown::idle_dram_pj
+  void derive() {
+    constexpr double kMjPerPj = 1e-9, kMsPerPs = 1e-9, kPjPerMwPs = 1e-3;
+    const double idle_pj = idle_gpu_pj + idle_dram_pj;
+    total_mj.set(total_pj.value() * kMjPerPj);
+    idle_time_ms.set(idle_ps * kMsPerPs);
+    idle_gpu_mj.set(idle_gpu_pj * kMjPerPj);
+    idle_dram_mj.set(idle_dram_pj * kMjPerPj);
+    idle_mj.set(idle_pj * kMjPerPj);
+    idle_power_mw.set(idle_ps > 0 ? idle_pj / (idle_ps * kPjPerMwPs) : 0.0);
+    at_period_total_mj.set((total_pj.value() + idle_pj) * kMjPerPj);
+  }
+};
+
 /// The energy of a frame by component, and of one frame period.
 struct EnergyBreakdown {
   std::vector<EnergyTerm> terms;

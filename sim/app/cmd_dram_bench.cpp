@@ -101,24 +101,25 @@ void print_figures(std::ostream& out, const DramBenchResult& r, const HwConfig& 
     std::snprintf(buf, sizeof buf, "%s %.6g\n", name, v);
     out << buf;
   };
+  const auto stat = [&](auto DramStats::*member) { line(stat_name(member), (s.*member).as_double()); };
   line("elapsed_ns", r.ns);
-  line("read_bytes", static_cast<double>(s.read_bytes.value()));
-  line("write_bytes", static_cast<double>(s.write_bytes.value()));
-  line("achieved_bandwidth_gbps", s.achieved_bandwidth_gbps.value());
-  line("avg_read_latency_ns", s.avg_read_latency_ns.value());
-  line("row_hit_rate", s.row_hit_rate.value());
+  stat(&DramStats::read_bytes);
+  stat(&DramStats::write_bytes);
+  stat(&DramStats::achieved_bandwidth_gbps);
+  stat(&DramStats::avg_read_latency_ns);
+  stat(&DramStats::row_hit_rate);
   line("row_hit_rate_per_burst", row_hits_per_burst(s, hw.dram));
-  line("activates", static_cast<double>(s.activates.value()));
-  line("precharges", static_cast<double>(s.precharges.value()));
-  line("refreshes", static_cast<double>(s.refreshes.value()));
+  stat(&DramStats::activates);
+  stat(&DramStats::precharges);
+  stat(&DramStats::refreshes);
   line("refresh_share", refresh_share(s, hw.dram, r.ns));
-  line("energy_read_pj", s.energy_read_pj.value());
-  line("energy_write_pj", s.energy_write_pj.value());
-  line("energy_io_pj", s.energy_io_pj.value());
-  line("energy_activate_pj", s.energy_activate_pj.value());
-  line("energy_background_pj", s.energy_background_pj.value());
-  line("energy_refresh_pj", s.energy_refresh_pj.value());
-  line("energy_pj", s.energy_pj.value());
+  stat(&DramStats::energy_read_pj);
+  stat(&DramStats::energy_write_pj);
+  stat(&DramStats::energy_io_pj);
+  stat(&DramStats::energy_activate_pj);
+  stat(&DramStats::energy_background_pj);
+  stat(&DramStats::energy_refresh_pj);
+  stat(&DramStats::energy_pj);
 }
 
 }  // namespace

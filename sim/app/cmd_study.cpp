@@ -423,9 +423,15 @@ class StudyResults {
     return v;
   }
 
-  /// DRAM bytes read and written in a scope ("frame/dram", "frame/dram.color").
-  double dram_bytes(std::int64_t run, const std::string& scope) {
-    return stat(run, scope, "read_bytes") + stat(run, scope, "write_bytes");
+  /// A statistic named by its declaration (kernel/stats.hpp stat_name).
+  template <StatSet S, class M>
+  double stat(std::int64_t run, const std::string& scope, M S::*member) {
+    return stat(run, scope, std::string(stat_name(member)));
+  }
+
+  /// Bytes the units requested to read and write in a scope ("frame/dram", "frame/dram.color").
+  double requested_bytes(std::int64_t run, const std::string& scope) {
+    return stat(run, scope, &TrafficStats::read_bytes) + stat(run, scope, &TrafficStats::write_bytes);
   }
 
   /// The derived figures of a run (views.sql).
@@ -476,8 +482,8 @@ void print_comparison(const StudyPlan& plan, const std::vector<StudyPoint>& poin
       row.d = results.derived(*row.run);
       // A PLS light stack that overflows falls back to every light: its frame time is then the
       // overflow's cost, not the technique's; the share of lit fragments that overflowed says so.
-      const double lit = std::max(1.0, results.stat(*row.run, "frame/tsp", "lit_surface_invocations"));
-      row.overflow = 100.0 * results.stat(*row.run, "frame/tsp", "light_stack_overflow_fragments") / lit;
+      const double lit = std::max(1.0, results.stat(*row.run, "frame/tsp", &TspStats::lit_surface_invocations));
+      row.overflow = 100.0 * results.stat(*row.run, "frame/tsp", &TspStats::light_stack_overflow_fragments) / lit;
       if (row.overflow > 0) {
         overflowed.push_back(p.technique + " at " + std::to_string(p.lights) + " lights" + (modes ? " on " + p.mode : "") +
                              ": " + fmt(row.overflow, 1) + " %");
@@ -544,7 +550,7 @@ void print_mode_table(const StudyPlan& plan, const std::vector<StudyPoint>& poin
     if (ids.empty()) continue;
     ReportOptions opt;
     opt.by = {"technique", "gpu.mode"};
-    opt.metrics = {"frame_time_ms", "dram_total_mb", "energy_total_mj", "shaded_fragments_per_pixel"};
+    opt.metrics = {metric::kFrameTimeMs, metric::kDramTotalMb, metric::kEnergyTotalMj, metric::kShadedFragmentsPerPixel};
     opt.where = "run_id IN (" + ids + ")";  // the study's own runs: integers only
     const ReportTable t = build_report(db, opt);
     out << "\nTechnique x GPU mode at " << lights << " lights (" << plan.config_label
@@ -626,7 +632,7 @@ void print_method_table(const StudyPlan& plan, const std::vector<StudyPoint>& po
     if (!run) continue;
     std::string offchip;
     for (const char* cls : {"color", "depth_stencil", "gbuffer", "visibility", "light_lists", "work_lists", "spill"}) {
-      if (results.dram_bytes(*run, std::string("frame/dram.") + cls) > 0) offchip += (offchip.empty() ? "" : ",") + std::string(cls);
+      if (results.requested_bytes(*run, std::string("frame/dram.") + cls) > 0) offchip += (offchip.empty() ? "" : ",") + std::string(cls);
     }
     const std::optional<double> overshading = results.derived(*run).overshading;
     const bool msaa = msaa_techniques.count(p.technique) > 0;
@@ -638,7 +644,7 @@ void print_method_table(const StudyPlan& plan, const std::vector<StudyPoint>& po
       blending = differing_pixels(*reference_color, (fs::path(p.images_dir) / "color.png").string()) <= 0.001 ? "yes" : "no";
     }
     out << std::left << std::setw(30) << p.technique << std::setw(56) << offchip << std::right << std::setw(9)
-        << fmt(results.stat(*run, "frame/frame", "geometry_passes"), 0) << std::setw(14)
+        << fmt(results.stat(*run, FrameShapeStats::kScope, &FrameShapeStats::geometry_passes), 0) << std::setw(14)
         << (fig(overshading, 2) + (overshading && *overshading > kOvershadingYes ? " yes" : " no")) << std::setw(6)
         << (msaa ? "yes" : "no") << std::setw(10) << blending << "\n";
   }

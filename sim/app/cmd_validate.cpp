@@ -21,6 +21,10 @@
 #include "app/cli.hpp"
 #include "app/commands.hpp"
 #include "app/run_driver.hpp"
+#include "app/run_stats.hpp"
+#include "models/command_processor.hpp"
+#include "models/dram.hpp"
+#include "models/memory_system.hpp"
 #include "models/dram_memspec.hpp"
 #include "models/dram_microbench.hpp"
 #include "kernel/errors.hpp"
@@ -119,11 +123,22 @@ double stat(const RunOutcome& r, const std::string& scope, const std::string& na
   return 0.0;
 }
 
+/// A statistic of a run named by its declaration (kernel/stats.hpp stat_name).
+template <StatSet S, class M>
+double stat(const RunOutcome& r, const std::string& scope, M S::*member) {
+  return stat(r, scope, stat_name(member));
+}
+
+/// A cycle of command `command`'s span ("pass1.consume": its "<command>/timing" statistics).
+double command_cycle(const RunOutcome& r, const std::string& command, Accumulator CommandTimingStats::*member) {
+  return stat(r, command + CommandTimingStats::kScopeSuffix, member);
+}
+
 /// Framebuffer traffic the units requested: colour, G-buffer and depth/stencil, read and written.
 double framebuffer_bytes(const RunOutcome& r) {
   double sum = 0;
   for (const char* c : {"frame/dram.color", "frame/dram.gbuffer", "frame/dram.depth_stencil"})
-    sum += stat(r, c, "read_bytes") + stat(r, c, "write_bytes");
+    sum += stat(r, c, &TrafficStats::read_bytes) + stat(r, c, &TrafficStats::write_bytes);
   return sum;
 }
 
@@ -382,7 +397,7 @@ void onchip_gbuffer_savings(Validator& v, std::vector<AnchorRow>& rows) {
                   "shape", martin_gbps >= 1.0});
   // Arm's rule of thumb: DRAM power per GB/s = DRAM energy per byte (1 pJ/B = 1 mW per GB/s).
   const double dram_bytes = static_cast<double>(mem.timing.dram.total_read() + mem.timing.dram.total_written());
-  const double mw_per_gbps = stat(mem, "mem/dram", "energy_pj") / std::max(1.0, dram_bytes);
+  const double mw_per_gbps = stat(mem, "mem/dram", &DramStats::energy_pj) / std::max(1.0, dram_bytes);
   rows.push_back({"Arm rule of thumb: about 100 mW per GB/s of DRAM traffic",
                   "about 100 mW per GB/s",
                   fixed(mw_per_gbps, 0) + " mW per GB/s (" + fixed(mw_per_gbps / 8.0, 1) + " pJ/bit)",
@@ -395,7 +410,7 @@ void onchip_gbuffer_savings(Validator& v, std::vector<AnchorRow>& rows) {
 void burns_hunt(Validator& v, std::vector<AnchorRow>& rows) {
   const RunOutcome r = v.run(v.generate("visibility_8x", {"--technique", "visibility_buffer", "--scene", "atrium:1",
                                                           "--lights", "16", "--resolution", "480x270", "--samples", "8"}));
-  const double per_sample = stat(r, "frame/dram.visibility", "write_bytes") / (480.0 * 270.0 * 8.0);
+  const double per_sample = stat(r, "frame/dram.visibility", &TrafficStats::write_bytes) / (480.0 * 270.0 * 8.0);
   const double at_1080p = per_sample * 1920.0 * 1080.0 * 8.0 / kMiB;
   rows.push_back({"Burns & Hunt, JCGT 2013: visibility buffer bytes per sample", "4 B", fixed(per_sample, 2) + " B",
                   "visibility_buffer, atrium:1 480x270 8x MSAA: visibility bytes stored / samples", "exact",
@@ -422,11 +437,11 @@ HsrView hsr_view(Validator& v, const std::string& scene, const std::string& came
   const RunOutcome imr_late = v.run(t, {"gpu.mode=imr", "isp.early_z=0"});
   const double px = 480.0 * 270.0;
   HsrView h{camera, scene};
-  h.raster = stat(tbdr, "frame/isp", "samples_rasterised") / px;
-  h.imr = stat(imr_late, "frame/tsp", "shader_invocations") / px;
-  h.tbdr = stat(tbdr, "frame/tsp", "shader_invocations") / px;
-  h.tbr = stat(tbr, "frame/tsp", "shader_invocations") / px;
-  h.tbdr_layers = (stat(tbdr, "frame/isp", "punch_through_samples") + stat(tbdr, "frame/isp", "translucent_samples")) / px;
+  h.raster = tbdr.frame.totals.render.isp.samples_rasterised.as_double() / px;
+  h.imr = imr_late.frame.totals.render.tsp.shader_invocations.as_double() / px;
+  h.tbdr = tbdr.frame.totals.render.tsp.shader_invocations.as_double() / px;
+  h.tbr = tbr.frame.totals.render.tsp.shader_invocations.as_double() / px;
+  h.tbdr_layers = (tbdr.frame.totals.render.isp.punch_through_samples.as_double() + tbdr.frame.totals.render.isp.translucent_samples.as_double()) / px;
   return h;
 }
 
@@ -488,8 +503,8 @@ void onchip_cliff(Validator& v, std::vector<AnchorRow>& rows) {
     const std::string t = v.generate("cliff_" + std::to_string(32 * (k + 1)),
                                      {"--technique", "deferred", "--scene", "atrium:2", "--lights", "64", "--resolution",
                                       "480x270", "--option", "gbuffer=" + layout, "--option", "gbuffer_storage=onchip"});
-    ms.push_back(stat(v.run(t, {"usc.count=2", "texture.units=1", "pls.tile_buffer_bits_per_pixel=256"}), "frame/timing",
-                      "frame_time_ms"));
+    ms.push_back(stat(v.run(t, {"usc.count=2", "texture.units=1", "pls.tile_buffer_bits_per_pixel=256"}), FrameTimingStats::kScope,
+                      &FrameTimingStats::frame_time_ms));
   }
   constexpr std::size_t kFlat = 6;  // 96 .. 256 bits
   double tp = 0, tt = 0;
@@ -537,8 +552,8 @@ void rooflines(Validator& v, std::vector<AnchorRow>& rows, const HwConfig& hw) {
                                                         "--resolution", "480x270", "--option", "alu_ops=4000",
                                                         "--option", "tex_fetches=0"}));
     const double rate = static_cast<double>(hw.usc.count * hw.usc.lanes) * hw.usc.alu_ops_per_lane_per_clock;
-    const double bound = (stat(r, "frame/tsp", "fragment_alu_ops") + stat(r, "frame/geometry", "vertex_alu_ops")) / rate;
-    const double cycles = stat(r, "frame/timing", "frame_cycles");
+    const double bound = (r.frame.totals.render.tsp.fragment_alu_ops.as_double() + r.frame.totals.render.geometry.vertex_alu_ops.as_double()) / rate;
+    const double cycles = r.timing.frame_cycles;
     rows.push_back(roofline("Roofline: an ALU-bound frame", bound, fixed(bound, 0) + " cycles (ALU ops / (usc.count x lanes x ops per lane))", cycles, "plain_forward alu_ops=4000, atrium:1 480x270", 1.0));
   }
   // Texture-bound: 64 bilinear fetches per fragment; filtered texels over the texture units' rate.
@@ -550,8 +565,8 @@ void rooflines(Validator& v, std::vector<AnchorRow>& rows, const HwConfig& hw) {
                                                             "--option", "tex_fetches=64"}),
                                {"texture.units=1"});
     const double rate = 1.0 * hw.texture.texels_per_clock;
-    const double bound = stat(r, "frame/tsp", "texels_filtered") / rate;
-    const double cycles = stat(r, "frame/timing", "frame_cycles");
+    const double bound = r.frame.totals.render.tsp.texels_filtered.as_double() / rate;
+    const double cycles = r.timing.frame_cycles;
     rows.push_back(roofline("Roofline: a texture-bound frame", bound, fixed(bound, 0) + " cycles (filtered texels / (units x texels per clock))", cycles, "plain_forward tex_fetches=64, atrium:1 480x270, texture.units=1", 1.0));
   }
 }
@@ -620,8 +635,8 @@ void fill_and_bandwidth_rooflines(Validator& v, std::vector<AnchorRow>& rows, co
     write_trace_file(fill_frame(base, kLayers), path);
     const RunOutcome r = v.run(path);
     const double rate = static_cast<double>(hw.isp.samples_per_clock * hw.isp.raster_pipes);
-    const double bound = stat(r, "frame/isp", "samples_rasterised") / rate;
-    const double cycles = stat(r, "frame/timing", "frame_cycles");
+    const double bound = r.frame.totals.render.isp.samples_rasterised.as_double() / rate;
+    const double cycles = r.timing.frame_cycles;
     rows.push_back(roofline("Roofline: a fill-bound frame", bound, fixed(bound, 0) + " cycles (rasterised samples / (samples per clock x raster pipes))", cycles, "64 fullscreen layers at one depth (63 hidden), 480x270", 1.0));
   }
   // DRAM-bound: 32 passes each storing a 480 x 270 rgba8 image. Each tile's store (4 KB) fills
@@ -635,15 +650,15 @@ void fill_and_bandwidth_rooflines(Validator& v, std::vector<AnchorRow>& rows, co
     const std::string path = v.trace_path("dram_bound");
     write_trace_file(store_frame(base, kPasses), path);
     const RunOutcome r = v.run(path);
-    const double bytes = stat(r, "mem/dram", "write_bytes") + stat(r, "mem/dram", "read_bytes");
+    const double bytes = stat(r, "mem/dram", &DramStats::write_bytes) + stat(r, "mem/dram", &DramStats::read_bytes);
     const auto& d = hw.dram;
     const double cycles_per_ns = hw.gpu.core_clock_mhz * 1e-3;
     const double peak_bytes_per_cycle = d.peak_bandwidth_gbps() / cycles_per_ns;
-    const double opened = stat(r, "mem/dram", "row_misses"), refreshes = stat(r, "mem/dram", "refreshes");
+    const double opened = stat(r, "mem/dram", &DramStats::row_misses), refreshes = stat(r, "mem/dram", &DramStats::refreshes);
     const double bound = bytes / peak_bytes_per_cycle +
                          (opened * (d.t_wr_ns + d.t_rp_ns + d.t_rcd_ns) + refreshes * d.t_rfc_ns) * cycles_per_ns /
                              static_cast<double>(d.channels);
-    const double cycles = stat(r, "frame/timing", "frame_cycles");
+    const double cycles = r.timing.frame_cycles;
     rows.push_back(roofline("Roofline: a DRAM-bound frame", bound, fixed(bound, 0) + " cycles (DRAM bytes / peak bandwidth (dram.clock_mhz x transfers_per_clock x bus_width_bits / 8 x channels) + (rows opened x (tWR + tRP + tRCD) + "
                     "refreshes x tRFC) / channels)", cycles, "32 passes each storing a 480x270 rgba8 image: " + fixed(bytes / kMiB, 1) + " MiB, " + fixed(opened, 0) +
                         " rows opened (one per tile store and after refreshes), " + fixed(refreshes, 0) + " refreshes", 1.0));
@@ -657,13 +672,13 @@ void fill_and_bandwidth_rooflines(Validator& v, std::vector<AnchorRow>& rows, co
     const std::string path = v.trace_path("latency_bound");
     write_trace_file(read_back_frame(base), path);
     const RunOutcome r = v.run(path, {"usc.count=1", "usc.tasks_in_flight=1"});
-    const double lines = stat(r, "mem/client.texture", "completed");
-    const double latency_ns = stat(r, "mem/client.texture", "avg_latency_ns");
+    const double lines = stat(r, "mem/client.texture", &MemoryClientStats::completed);
+    const double latency_ns = stat(r, "mem/client.texture", &MemoryClientStats::avg_latency_ns);
     const double bound = lines * latency_ns * hw.gpu.core_clock_mhz * 1e-3;
     // The reading pass's fragment work starts when it is binned and the producing pass is done
     // (its start_cycle is its binning's, which overlaps the producer).
-    const double cycles = stat(r, "pass1.consume/timing", "end_cycle") -
-                          std::max(stat(r, "pass1.consume/timing", "binning_end_cycle"), stat(r, "pass0.produce/timing", "end_cycle"));
+    const double cycles = command_cycle(r, "pass1.consume", &CommandTimingStats::end_cycle) -
+                          std::max(command_cycle(r, "pass1.consume", &CommandTimingStats::binning_end_cycle), command_cycle(r, "pass0.produce", &CommandTimingStats::end_cycle));
     rows.push_back(roofline("Roofline: a latency-bound pass (Little's law)", bound, fixed(bound, 0) + " cycles (lines read / 1 in flight x mean latency " + fixed(latency_ns, 1) + " ns)", cycles, "a fullscreen pass reading a stored 480x270 rgba8 image at every pixel, usc.count=1, "
                     "usc.tasks_in_flight=1: " + fixed(lines, 0) + " lines", 0.99));
   }
@@ -673,14 +688,14 @@ void fill_and_bandwidth_rooflines(Validator& v, std::vector<AnchorRow>& rows, co
 /// (dispatch<i>.<kernel>/timing), at the configured core clock.
 double dispatch_ms(const RunOutcome& r, const std::string& kernel, double core_clock_mhz) {
   double start = 0, end = 0;
-  const std::string suffix = "." + kernel + "/timing";
+  const std::string suffix = "." + kernel + CommandTimingStats::kScopeSuffix;
   for (const auto& st : r.frame.stats) {
     if (st.scope.rfind("dispatch", 0) != 0 || st.scope.size() < suffix.size() ||
         st.scope.compare(st.scope.size() - suffix.size(), suffix.size(), suffix) != 0) {
       continue;
     }
-    if (st.name == "start_cycle") start -= st.value;
-    if (st.name == "end_cycle") end += st.value;
+    if (st.name == stat_name(&CommandTimingStats::start_cycle)) start -= st.value;
+    if (st.name == stat_name(&CommandTimingStats::end_cycle)) end += st.value;
   }
   return (end + start) / (core_clock_mhz * 1e3);
 }
@@ -705,8 +720,8 @@ void olsson(Validator& v, std::vector<AnchorRow>& rows, const HwConfig& hw) {
   const double clustered_ms = dispatch_ms(r[1], "deferred_shade", mhz);
   const double clustering_ms = dispatch_ms(r[1], "cluster_flag", mhz) + dispatch_ms(r[1], "cluster_light_assign", mhz);
   const double px = 480.0 * 270.0;
-  const double lights_tiled = stat(r[0], "frame/compute", "compute_light_evaluations") / px;
-  const double lights_clustered = stat(r[1], "frame/compute", "compute_light_evaluations") / px;
+  const double lights_tiled = r[0].frame.totals.compute.compute_light_evaluations.as_double() / px;
+  const double lights_clustered = r[1].frame.totals.compute.compute_light_evaluations.as_double() / px;
   rows.push_back({"Olsson, Billeter & Assarsson, HPG 2012: clustered deferred shading time against tiled deferred's",
                   "5.6 vs 17.7 ms of shading (3.2x) + 3.8 vs 1.0 ms of clustering and assignment (about 2,400 lights)",
                   fixed(clustered_ms, 3) + " vs " + fixed(tiled_ms, 3) + " ms of shading (" +
@@ -770,11 +785,11 @@ void dram_memspecs(Validator& v, std::vector<AnchorRow>& rows, const HwConfig& v
   const RunOutcome r = v.run(v.generate("frame_forward_plus", {"--technique", "forward_plus", "--scene", "atrium:3",
                                                                "--lights", "1024", "--resolution", "480x270", "--option",
                                                                "tile_px=16"}));
-  const double bits = 8.0 * (stat(r, "mem/dram", "read_bytes") + stat(r, "mem/dram", "write_bytes"));
-  const double pj_per_bit = stat(r, "mem/dram", "energy_pj") / std::max(1.0, bits);
+  const double bits = 8.0 * (stat(r, "mem/dram", &DramStats::read_bytes) + stat(r, "mem/dram", &DramStats::write_bytes));
+  const double pj_per_bit = stat(r, "mem/dram", &DramStats::energy_pj) / std::max(1.0, bits);
   rows.push_back({"The memspec's range on a frame (" + frame_dram + ")",
                   fixed(frame_low, 1) + " .. " + fixed(frame_high, 1) + " pJ/bit (streaming .. random above)",
-                  fixed(pj_per_bit, 1) + " pJ/bit, row hits " + fixed(100.0 * stat(r, "mem/dram", "row_hit_rate"), 1) + " %",
+                  fixed(pj_per_bit, 1) + " pJ/bit, row hits " + fixed(100.0 * stat(r, "mem/dram", &DramStats::row_hit_rate), 1) + " %",
                   "forward_plus, 16-pixel tiles, atrium:3 480x270, 1024 lights: DRAM energy (dynamic, standby, refresh) / bits transferred", "shape",
                   pj_per_bit >= frame_low && pj_per_bit <= frame_high});
 }

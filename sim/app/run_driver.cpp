@@ -1,4 +1,5 @@
 #include "app/run_driver.hpp"
+#include "app/run_stats.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -226,31 +227,30 @@ std::vector<std::string> write_frame_images(const FrameResult& frame, const std:
 
 void book_timing(const HwConfig& hw, FrameResult& frame, const TimingResult& timing, EnergyBreakdown& energy) {
   auto& st = frame.stats;
-  st.push_back({"frame/timing", "frame_cycles", timing.frame_cycles, "cycles", "Frame time in core clock cycles"});
-  st.push_back({"frame/timing", "frame_time_ms", timing.frame_time_ps * 1e-9, "ms", "Frame time"});
-  st.push_back({"frame/timing", "timing_events", static_cast<double>(timing.events), "events", "Events the timing model executed"});
+  FrameTimingStats f;
+  f.frame_cycles.set(timing.frame_cycles);
+  f.frame_time_ms.set(timing.frame_time_ps * 1e-9);
+  f.timing_events.set(timing.events);
+  collect_stats(f, FrameTimingStats::kScope, st);
   for (const auto& c : timing.commands) {
-    st.push_back({c.name + "/timing", "start_cycle", c.start_cycle, "cycles", "Cycle the command's first work started"});
-    st.push_back({c.name + "/timing", "binning_end_cycle", c.binning_end_cycle, "cycles", "Cycle its last binning finished (passes)"});
-    st.push_back({c.name + "/timing", "end_cycle", c.end_cycle, "cycles", "Cycle its last tile or compute work finished"});
+    CommandTimingStats span;
+    span.start_cycle.set(c.start_cycle);
+    span.binning_end_cycle.set(c.binning_end_cycle);
+    span.end_cycle.set(c.end_cycle);
+    collect_stats(span, c.name + CommandTimingStats::kScopeSuffix, st);
   }
   for (const auto& u : timing.units) {
-    const std::string scope = "frame/unit." + u.name;
-    const double idle = std::max(0.0, timing.frame_cycles - u.busy_cycles - u.stalled_cycles);
-    st.push_back({scope, "busy_cycles", u.busy_cycles, "cycles", "Cycles the unit was working"});
-    st.push_back({scope, "stalled_cycles", u.stalled_cycles, "cycles", "Cycles the unit waited for a full queue downstream or for memory"});
-    st.push_back({scope, "idle_cycles", idle, "cycles", "Cycles the unit had nothing to do"});
-    st.push_back({scope, "utilization", timing.frame_cycles > 0 ? u.busy_cycles / timing.frame_cycles : 0.0, "ratio",
-                  "Busy cycles / frame cycles"});
+    UnitTimeStats time;
+    time.busy_cycles.set(u.busy_cycles);
+    time.stalled_cycles.set(u.stalled_cycles);
+    time.frame_cycles = timing.frame_cycles;
+    collect_stats(time, UnitTimeStats::kScopePrefix + u.name, st);
   }
-  const double accesses = static_cast<double>(timing.texture_line_accesses);
-  const double misses = static_cast<double>(timing.texture_cache_misses);
-  st.push_back({"frame/texture", "line_accesses", accesses, "lines", "Texture lines the shaded quads accessed (distinct per quad and fetch)"});
-  st.push_back({"frame/texture", "footprint_lines", static_cast<double>(timing.texture_footprint_lines), "lines",
-                "Lines of the tiles' texture footprints, each sent once per tile through the texture cache"});
-  st.push_back({"frame/texture", "cache_misses", misses, "lines", "Footprint lines that missed the texture cache"});
-  st.push_back({"frame/texture", "hit_rate_with_tile_reuse", accesses > 0 ? 1.0 - misses / accesses : 0.0, "ratio",
-                "Texture cache hit rate counting reuse within a tile as hits (its footprint is fetched once)"});
+  TextureFetchStats texture;
+  texture.line_accesses.set(timing.texture_line_accesses);
+  texture.footprint_lines.set(timing.texture_footprint_lines);
+  texture.cache_misses.set(timing.texture_cache_misses);
+  collect_stats(texture, TextureFetchStats::kScope, st);
   for (auto& r : timing.memory_stats) st.push_back(r);
   energy = compute_energy(hw, frame.totals, timing.memory, timing.frame_time_ps);
   energy.collect(st);
@@ -483,31 +483,21 @@ RunOutcome run_one(const RunRequest& req) {
   rec.params.push_back(config_label_param(req.config.label));
   for (auto& p : trace_run_params(trace, req.trace_path)) rec.params.push_back(std::move(p));
   rec.stats = outcome.frame.stats;
-  rec.stats.push_back({"frame/host", "load_wall_seconds", outcome.load_seconds, "s",
-                       "Host wall time of reading the trace and loading (or generating) its scene, before the simulation"});
-  rec.stats.push_back({"frame/host", "simulation_wall_seconds", outcome.wall_seconds, "s", "Host wall time of the functional simulation"});
-  rec.stats.push_back({"frame/host", "timing_wall_seconds", outcome.timing_seconds, "s", "Host wall time of the timing model (with more than one thread it runs beside the functional simulation: from that one's start)"});
-  rec.stats.push_back({"frame/host", "simulation_cpu_seconds", outcome.cpu_seconds, "s", "Host CPU time of the functional simulation (its threads; not the timing model's or the image writer's)"});
-  rec.stats.push_back({"frame/host", "timing_cpu_seconds", outcome.timing_cpu_seconds, "s", "Host CPU time of the timing model"});
-  rec.stats.push_back({"frame/host", "timing_wait_seconds", outcome.timing_wait_seconds, "s",
-                       "Host wall time the timing model waited for work the functional simulation had not yet produced "
-                       "(with more than one thread; 0 with one, where it starts after that one ends)"});
-  rec.stats.push_back({"frame/host", "image_cpu_seconds", outcome.image_cpu_seconds, "s",
-                       "Host CPU time of writing the frame's images (colour conversion, heat maps, PNG encoding; all its "
-                       "threads; 0 without --images). The colours themselves are computed in the functional simulation"});
-  rec.stats.push_back({"frame/host", "tile_render_wall_seconds", outcome.frame.host_tile_seconds, "s",
-                       "Host wall time of the functional simulation's tile rendering (the part on --threads threads)"});
-  rec.stats.push_back({"frame/host", "simulation_threads", static_cast<double>(outcome.threads), "threads",
-                       "Threads the functional simulation rendered tiles on (--threads; no other figure depends on it)"});
-  // Whether glibc's allocator hands out transparent huge pages in this process (sim/app/main.cpp
-  // asks for them unless the host takes freed memory back or TBDRSIM_HUGE_PAGES=0): host timings
-  // of runs with and without differ.
-  rec.stats.push_back({"frame/host", "allocator_huge_pages", allocator_huge_pages() ? 1.0 : 0.0, "flag",
-                       "1 where the allocator asked for transparent huge pages (glibc.malloc.hugetlb=1: TBDRSIM_HUGE_PAGES=1, "
-                       "or unset on a host that does not take freed memory back)"});
-  rec.stats.push_back({"frame/host", "host_free_page_reporting", host_reports_free_pages() ? 1.0 : 0.0, "flag",
-                       "1 on a virtual machine that reports freed memory to its host (virtio-balloon free page reporting): "
-                       "fresh huge pages are slow there, so none are asked for by default"});
+  HostRunStats host;
+  host.load_wall_seconds.set(outcome.load_seconds);
+  host.simulation_wall_seconds.set(outcome.wall_seconds);
+  host.timing_wall_seconds.set(outcome.timing_seconds);
+  host.simulation_cpu_seconds.set(outcome.cpu_seconds);
+  host.timing_cpu_seconds.set(outcome.timing_cpu_seconds);
+  host.timing_wait_seconds.set(outcome.timing_wait_seconds);
+  host.image_cpu_seconds.set(outcome.image_cpu_seconds);
+  host.tile_render_wall_seconds.set(outcome.frame.host_tile_seconds);
+  host.simulation_threads.set(static_cast<double>(outcome.threads));
+  // Whether glibc's allocator hands out transparent huge pages in this process, and whether the
+  // host takes freed memory back (sim/app/host_speed.hpp): host timings of runs with and without differ.
+  host.allocator_huge_pages.set(allocator_huge_pages() ? 1.0 : 0.0);
+  host.host_free_page_reporting.set(host_reports_free_pages() ? 1.0 : 0.0);
+  collect_stats(host, HostRunStats::kScope, rec.stats);
   rec.tiles = outcome.timing.tiles;
   as_asked([&] {
     if (!db) open_db();
@@ -567,13 +557,14 @@ void print_run_summary(const RunOutcome& o, std::ostream& out) {
       << std::setw(10) << stat_text(device.total_written() / 1e6) << "   (" << stat_text(f.dram.total_read() / 1e6) << ", "
       << stat_text(f.dram.total_written() / 1e6) << ")\n";
   // The device's side (after the caches) against its peak, which dram.clock_mhz sets.
-  const auto mem_stat = [&](const char* name) {
+  const auto mem_stat = [&](Accumulator DramStats::*member) {
     for (const StatRecord& r : o.timing.memory_stats) {
-      if (r.scope == "mem/dram" && r.name == name) return r.value;
+      if (r.scope == "mem/dram" && r.name == stat_name(member)) return r.value;
     }
     return 0.0;
   };
-  out << "  DRAM bandwidth: " << stat_text(mem_stat("achieved_bandwidth_gbps")) << " GB/s achieved of " << stat_text(mem_stat("peak_bandwidth_gbps")) << " GB/s peak\n";
+  out << "  DRAM bandwidth: " << stat_text(mem_stat(&DramStats::achieved_bandwidth_gbps)) << " GB/s achieved of "
+      << stat_text(mem_stat(&DramStats::peak_bandwidth_gbps)) << " GB/s peak\n";
   if (!o.images_written.empty()) {
     out << "  images: " << o.images_written.size() << " files in "
         << std::filesystem::path(o.images_written.front()).parent_path().string() << "\n";

@@ -16,6 +16,7 @@
 
 #include "analysis/results_db.hpp"
 #include "analysis/sql.hpp"
+#include "app/run_stats.hpp"
 #include "kernel/errors.hpp"
 #include "kernel/output_file.hpp"
 
@@ -209,7 +210,7 @@ struct CommandSpan {
 
 /// The run's passes and dispatches (the stats scopes "<command>/timing"), in the order it stored them.
 std::vector<CommandSpan> command_spans(const ResultsDb& db, std::int64_t run_id) {
-  constexpr std::string_view kTimingSuffix = "/timing";
+  const std::string_view kTimingSuffix = CommandTimingStats::kScopeSuffix;
   std::vector<CommandSpan> commands;
   std::map<std::string, std::size_t> index;
   SqlStatement q(db.sql(),
@@ -222,9 +223,9 @@ std::vector<CommandSpan> command_spans(const ResultsDb& db, std::int64_t run_id)
     if (fresh) commands.push_back({command});
     CommandSpan& c = commands[it->second];
     const std::string name = q.text(1);
-    if (name == "start_cycle") c.start = q.real(2);
-    if (name == "binning_end_cycle") c.binning_end = q.real(2);
-    if (name == "end_cycle") c.end = q.real(2);
+    if (name == stat_name(&CommandTimingStats::start_cycle)) c.start = q.real(2);
+    if (name == stat_name(&CommandTimingStats::binning_end_cycle)) c.binning_end = q.real(2);
+    if (name == stat_name(&CommandTimingStats::end_cycle)) c.end = q.real(2);
   }
   return commands;
 }

@@ -8,6 +8,7 @@
 #include <concepts>
 #include <cstdint>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace tbdr {
@@ -124,12 +125,41 @@ S& operator+=(S& a, const S& b) {
   return a;
 }
 
-/// Appends every statistic of `s` to `out` under `scope`, in declaration order.
+/// A set with derived figures: its `derive()` computes each `Derived` member from the set's other
+/// members (the formula beside the figures it combines, as gem5's Formula statistics).
+template <class S>
+concept DerivingStatSet = StatSet<S> && requires(S& s) { s.derive(); };
+
+/// Appends every statistic of `s` to `out` under `scope`, in declaration order; a set's derived
+/// figures are computed first (DerivingStatSet).
 template <StatSet S>
 void collect_stats(const S& s, const std::string& scope, std::vector<StatRecord>& out) {
-  S::zip(s, s, [&](const auto& x, const auto&, const StatDef& d) {
-    out.push_back({scope, d.name, x.as_double(), d.unit, d.description});
+  if constexpr (DerivingStatSet<S>) {
+    S derived = s;
+    derived.derive();
+    S::zip(derived, derived, [&](const auto& x, const auto&, const StatDef& d) {
+      out.push_back({scope, d.name, x.as_double(), d.unit, d.description});
+    });
+  } else {
+    S::zip(s, s, [&](const auto& x, const auto&, const StatDef& d) {
+      out.push_back({scope, d.name, x.as_double(), d.unit, d.description});
+    });
+  }
+}
+
+/// The stored name of a set's member, from its declaration: `stat_name(&FrameTimingStats::frame_cycles)`
+/// is "frame_cycles". Code that reads a statistic back (from rows or the database) names it so,
+/// never by a string literal of its own.
+template <StatSet S, class M>
+const char* stat_name(M S::*member) {
+  static const S probe{};
+  const char* name = nullptr;
+  S::zip(probe, probe, [&](const auto& x, const auto&, const StatDef& d) {
+    if constexpr (std::is_same_v<std::remove_cvref_t<decltype(x)>, M>) {
+      if (&x == &(probe.*member)) name = d.name;
+    }
   });
+  return name;
 }
 
 /// Every declaration of a set, in order (for tools that print what a unit counts).
