@@ -22,7 +22,7 @@
 #include "db_query.hpp"
 #include "scene/scene_library.hpp"
 #include "scratch_dir.hpp"
-#include "app/allocator_tunables.hpp"
+#include "app/host_speed.hpp"
 #include "techniques/technique.hpp"
 #include "trace/trace.hpp"
 

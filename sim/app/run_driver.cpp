@@ -16,12 +16,11 @@
 #include <ostream>
 #include <sstream>
 
-#include "kernel/cpu_placement.hpp"
 #include "kernel/errors.hpp"
 #include "kernel/params.hpp"
 #include "kernel/thread_pool.hpp"
 #include "models/work_feed.hpp"
-#include "app/allocator_tunables.hpp"
+#include "app/host_speed.hpp"
 #include "app/image_output.hpp"
 #include "analysis/results_db.hpp"
 #include "trace/trace.hpp"
@@ -276,193 +275,276 @@ std::string write_tile_cycles_image(const FrameResult& frame, const TimingResult
   return path;
 }
 
-RunOutcome run_one(const RunRequest& req) {
-  namespace fs = std::filesystem;
-  RunOutcome outcome;
-  const auto t_load = std::chrono::steady_clock::now();
-  const std::string started = utc_now_iso8601();
-  check_results_db_target(req.db_path);  // a bad --db is reported now, not after the simulation
-  // The images folder, and the folders above it this run creates, are removed again when the run
-  // fails (a refused trace, a full disk): a failed run leaves nothing behind. Declared before the
-  // image writer's future, so that it is destroyed after the writer has finished.
-  struct CreatedFolder {
-    std::string path;  ///< the outermost folder this run created; empty once the run succeeded
-    ~CreatedFolder() {
-      std::error_code ec;
-      if (!path.empty()) std::filesystem::remove_all(path, ec);
-    }
-  } created_images_folder;
-  if (!req.images_dir.empty()) {
+namespace {
+
+/// The images folder of a run, and the folders above it the run creates: removed again unless
+/// the run succeeds (a refused trace, a full disk), so a failed run leaves nothing behind.
+class RunImagesFolder {
+ public:
+  /// Creates `dir` (nothing when empty).
+  explicit RunImagesFolder(const std::string& dir) {
+    namespace fs = std::filesystem;
+    if (dir.empty()) return;
     std::error_code ec;
     fs::path outermost;
-    for (fs::path p = fs::path(req.images_dir).lexically_normal(); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    for (fs::path p = fs::path(dir).lexically_normal(); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
       outermost = p;
       if (p == p.parent_path()) break;
     }
-    fs::create_directories(req.images_dir, ec);
-    if (ec || !fs::is_directory(req.images_dir)) throw InputError(req.images_dir, "cannot create the images folder");
-    created_images_folder.path = outermost.string();
+    fs::create_directories(dir, ec);
+    if (ec || !fs::is_directory(dir)) throw InputError(dir, "cannot create the images folder");
+    created_ = outermost.string();
   }
-  const Trace trace = read_trace(req.trace_path);
-  // Colours (and the texels they sample) are computed only for the images that read them: the
-  // statistics are the same either way (tests/test_speed_equivalence.cpp).
-  const bool colour = !req.images_dir.empty();
-  const std::shared_ptr<const Scene> scene_ptr = load_trace_scene(trace, req.trace_path, SceneLoadOptions{.colour_texels = colour});
-  const Scene& scene = *scene_ptr;
-  check_scene_references(trace, scene, req.trace_path);  // sub-mesh and material names, before any work
-  outcome.load_seconds = seconds_since(t_load);
+  RunImagesFolder(const RunImagesFolder&) = delete;
+  RunImagesFolder& operator=(const RunImagesFolder&) = delete;
+  ~RunImagesFolder() {
+    std::error_code ec;
+    if (!created_.empty()) std::filesystem::remove_all(created_, ec);
+  }
+  /// The run is written: its images stay.
+  void keep() { created_.clear(); }
 
-  const auto t_sim = std::chrono::steady_clock::now();
-  const double c_sim = cpu_seconds();
-  outcome.threads = req.threads;
-  // With more than one thread the timing model runs on its own thread beside the functional run,
-  // taking each command as soon as the functional run has completed it (models/work_feed.hpp):
-  // the same results, as it waits for whatever its schedule needs next.
-  const bool pipelined = req.threads > 1;
-  WorkFeed feed;
-  std::future<TimingResult> timed;
-  double timing_thread_cpu = 0;
-  // The caller's thread and the timing model's kept on different CPUs while the frame runs, when
-  // the run has the CPUs to itself (kernel/cpu_placement.hpp).
-  std::optional<CriticalThreadPlacement> placement;
-  if (pipelined) {
-    placement.emplace(req.threads);
-    timed = std::async(std::launch::async, [&req, &feed, &timing_thread_cpu, &placement] {
-      const double c = thread_cpu_seconds();
-      feed.frame();  // the frame has begun: its tile helpers exist, with every CPU the caller had
-      placement->keep_apart();
-      TimingResult r = run_timing(req.config.hw, feed, req.dram_observer);
-      timing_thread_cpu = thread_cpu_seconds() - c;
-      return r;
-    });
+ private:
+  std::string created_;  ///< the outermost folder this run created; empty once kept
+};
+
+/// A run's results database. A new database is made beside its name with the run in it and
+/// linked in at the end (ResultsDb::link_into_place), so a run that fails to write it (a full
+/// disk) leaves no database at all; its errors name the database asked for.
+class RunDatabase {
+ public:
+  explicit RunDatabase(const std::string& asked) : asked_(asked) {
+    std::error_code ec;
+    new_ = !std::filesystem::exists(asked, ec) && !ec;
+    path_ = new_ ? asked + ".run-" + std::to_string(getpid()) : asked;
   }
-  try {
-    outcome.frame = simulate_frame(trace, req.trace_path, scene, req.config.hw,
-                                   FrameOptions{.colour = colour, .threads = req.threads, .feed = pipelined ? &feed : nullptr});
-  } catch (...) {
-    if (placement) placement->restore();
-    // The feed is closed (simulate_frame closes it; again here, whatever failed): the timing
-    // model ends with what it was given; its result is dropped.
-    feed.close();
-    if (timed.valid()) {
-      try {
-        timed.get();
-      } catch (...) {
-      }
-    }
-    throw;
-  }
-  // The caller's thread gets its CPUs back before it starts the image writers (threads inherit them).
-  if (placement) placement->restore();
-  outcome.wall_seconds = seconds_since(t_sim);
-  const double c_functional = cpu_seconds() - c_sim;  // (pipelined: the timing thread's so far too)
-  // Without images nothing reads the frame's pixels again (the statistics are taken): their
-  // memory (stored surfaces, depth, per-pixel counters: about 500 MB for deferred at 3840x2160)
-  // is given back before the timing model builds its streams (its DMA streams there: about
-  // 300 MB), so the two peaks do not add up (with more than one thread the timing model has run
-  // beside the functional run: measured deferred at 3840x2160 228 MB at 2 threads, 166 MB at 1).
-  if (!colour) {
-    FrameImages kept;  // the frame's size, for the summary
-    kept.width = outcome.frame.images.width;
-    kept.height = outcome.frame.images.height;
-    outcome.frame.images = std::move(kept);
-  }
-  // With more than one thread, the frame's images are written while the timing model runs: the
-  // images read FrameResult::images, the timing model FrameResult::work (and appends to stats).
-  std::future<std::vector<std::string>> images;
-  double images_thread_cpu = 0;
-  if (!req.images_dir.empty() && req.threads > 1) {
-    images = std::async(std::launch::async, [&outcome, &req, &images_thread_cpu] {
-      return write_frame_images(outcome.frame, req.images_dir, req.threads, &images_thread_cpu);
-    });
-  }
-  // With more than one thread the results database is opened (a new one created) while the
-  // timing model finishes: the functional run has read every input by now, so an input it
-  // refuses has written nothing; with one, after the timing model, as before.
-  // A new database is made beside its name with the run in it and linked in at the end, so a run
-  // that fails to write it (a full disk) leaves no database at all (ResultsDb::link_into_place).
-  std::error_code db_ec;
-  const bool new_db = !std::filesystem::exists(req.db_path, db_ec) && !db_ec;
-  const std::string db_path = new_db ? req.db_path + ".run-" + std::to_string(getpid()) : req.db_path;
-  struct NewDbGuard {
-    std::string path;
-    ~NewDbGuard() {
-      if (path.empty()) return;
-      std::error_code ec;
-      for (const char* suffix : {"", "-wal", "-shm", "-journal"}) std::filesystem::remove(path + suffix, ec);
-    }
-  } new_db_guard{new_db ? db_path : std::string()};
-  // Errors about the new database's working file name the database asked for.
-  const auto as_asked = [&](auto&& step) {
-    if (!new_db) return step();
+
+ private:
+  /// Runs `step`; an InputError about the new database's working file names the database asked for.
+  template <class Step>
+  auto as_asked(Step&& step) {
+    if (!new_) return step();
     try {
       return step();
     } catch (const InputError& e) {
       auto named = [&](std::string text) {
-        for (auto at = text.find(db_path); at != std::string::npos; at = text.find(db_path, at + req.db_path.size())) {
-          text.replace(at, db_path.size(), req.db_path);
+        for (auto at = text.find(path_); at != std::string::npos; at = text.find(path_, at + asked_.size())) {
+          text.replace(at, path_.size(), asked_);
         }
         return text;
       };
       const std::string where = named(e.where());
       std::string what = named(e.what());
       if (what.rfind(where + ": ", 0) == 0) what = what.substr(where.size() + 2);
-      if (where == req.db_path && what.rfind("cannot create the results database", 0) != 0) {
+      if (where == asked_ && what.rfind("cannot create the results database", 0) != 0) {
         what = "cannot create the results database: " + what + "; nothing written";
       }
       throw InputError(where, what);
     }
-  };
-  std::optional<ResultsDb> db;
-  // The working file is this process's alone: its schema is made in place (no second temporary).
-  const auto open_db = [&] {
-    if (new_db) {
-      db.emplace(db_path, ResultsDb::kSchemaVersion, ResultsDb::InPlace{});
-    } else {
-      db.emplace(db_path);
+  }
+
+
+ public:
+  RunDatabase(const RunDatabase&) = delete;
+  RunDatabase& operator=(const RunDatabase&) = delete;
+  ~RunDatabase() {
+    if (!new_) return;
+    db_.reset();
+    std::error_code ec;
+    for (const char* suffix : {"", "-wal", "-shm", "-journal"}) std::filesystem::remove(path_ + suffix, ec);
+  }
+
+  /// Opens it (a new one created; its schema made in place: the working file is this process's alone).
+  void open() {
+    as_asked([&] { open_now(); });
+  }
+
+  /// Writes the run; reads its derived figures back into `derived` when given. Returns its id.
+  std::int64_t write(const RunRecord& rec, DerivedFigures* derived) {
+    std::int64_t id = 0;
+    as_asked([&] {
+      if (!db_) open_now();
+      id = write_into(rec, derived);
+      if (new_) db_.reset();  // closed: the write-ahead log is folded in
+    });
+    if (new_ && !as_asked([&] { return ResultsDb::link_into_place(path_, asked_); })) {
+      // Another process created the database meanwhile: the run goes into theirs.
+      db_.emplace(asked_);
+      id = write_into(rec, derived);
     }
-  };
-  double db_open_cpu = 0;
-  if (pipelined) {
+    return id;
+  }
+
+ private:
+  void open_now() {
+    if (new_) {
+      db_.emplace(path_, ResultsDb::kSchemaVersion, ResultsDb::InPlace{});
+    } else {
+      db_.emplace(path_);
+    }
+  }
+  std::int64_t write_into(const RunRecord& rec, DerivedFigures* derived) {
+    const std::int64_t id = db_->write_run(rec);
+    if (derived != nullptr) *derived = read_derived_figures(*db_, id);
+    return id;
+  }
+  std::string asked_;  ///< the database the run was asked to write
+  std::string path_;   ///< the file written: asked_, or its working name while new
+  bool new_ = false;
+  std::optional<ResultsDb> db_;
+};
+
+/// A run's trace and the scene it references.
+struct RunInputs {
+  Trace trace;
+  std::shared_ptr<const Scene> scene;
+};
+
+/// Reads the trace and loads its scene; checks the trace's sub-mesh and material names, before any
+/// work. Colours (and the texels they sample) are loaded only for the images that read them: the
+/// statistics are the same either way (tests/test_speed_equivalence.cpp).
+RunInputs load_run_inputs(const RunRequest& req) {
+  RunInputs in{read_trace(req.trace_path), nullptr};
+  in.scene = load_trace_scene(in.trace, req.trace_path, SceneLoadOptions{.colour_texels = !req.images_dir.empty()});
+  check_scene_references(in.trace, *in.scene, req.trace_path);
+  return in;
+}
+
+/// Without images nothing reads the frame's pixels again (the statistics are taken): their memory
+/// (stored surfaces, depth, per-pixel counters: about 500 MB for deferred at 3840x2160) is given
+/// back before the timing model builds its streams (its DMA streams there: about 300 MB), so the
+/// two peaks do not add up (with more than one thread the timing model has run beside the
+/// functional run: measured deferred at 3840x2160 228 MB at 2 threads, 166 MB at 1).
+void release_pixels_without_images(const RunRequest& req, FrameResult& frame) {
+  if (!req.images_dir.empty()) return;
+  FrameImages kept;  // the frame's size, for the summary
+  kept.width = frame.images.width;
+  kept.height = frame.images.height;
+  frame.images = std::move(kept);
+}
+
+/// The frame's images: with more than one thread written on their own threads while the timing
+/// model runs (the images read FrameResult::images, the timing model FrameResult::work), else
+/// after it.
+class FrameImageJob {
+ public:
+  explicit FrameImageJob(const RunRequest& req) : req_(req) {}
+  /// Starts writing beside the timing model, where the run has the threads for it.
+  void start_beside(const FrameResult& frame) {
+    if (!req_.images_dir.empty() && req_.threads > 1) {
+      written_ = std::async(std::launch::async, [this, &frame] { return write_frame_images(frame, req_.images_dir, req_.threads, &cpu_seconds_); });
+    }
+  }
+  /// Waits for the writer started beside the timing model (nothing if none was).
+  void wait() {
+    if (written_.valid()) written_.wait();
+  }
+  /// The files written (written now unless started beside): the frame's images, then the tile cycles.
+  std::vector<std::string> finish(const FrameResult& frame, const TimingResult& timing) {
+    std::vector<std::string> files = written_.valid() ? written_.get() : write_frame_images(frame, req_.images_dir, req_.threads, &cpu_seconds_);
+    files.push_back(write_tile_cycles_image(frame, timing, req_.images_dir));
+    return files;
+  }
+  /// CPU seconds the images took on all their threads.
+  double cpu_seconds() const { return cpu_seconds_; }
+
+ private:
+  const RunRequest& req_;
+  std::future<std::vector<std::string>> written_;
+  double cpu_seconds_ = 0;
+};
+
+/// The functional run and the timing model one after the other, on the caller's thread.
+void simulate_serially(const RunRequest& req, const RunInputs& in, RunOutcome& o) {
+  const auto t_sim = std::chrono::steady_clock::now();
+  const double c_sim = cpu_seconds();
+  o.frame = simulate_frame(in.trace, req.trace_path, *in.scene, req.config.hw,
+                           FrameOptions{.colour = !req.images_dir.empty(), .threads = req.threads, .feed = nullptr});
+  o.wall_seconds = seconds_since(t_sim);
+  o.cpu_seconds = cpu_seconds() - c_sim;
+  release_pixels_without_images(req, o.frame);
+  const auto t_timing = std::chrono::steady_clock::now();
+  const double c_timing = thread_cpu_seconds();
+  o.timing = run_timing(req.config.hw, o.frame.work, req.dram_observer);
+  o.timing_seconds = seconds_since(t_timing);
+  o.timing_cpu_seconds = thread_cpu_seconds() - c_timing;
+}
+
+/// The timing model on its own thread beside the functional run, taking each command as soon as
+/// the functional run has completed it (models/work_feed.hpp): the same results, as it waits for
+/// whatever its schedule needs next. Meanwhile the images start (`images`) and the database is
+/// opened (a new one created: the functional run has read every input by now, so an input it
+/// refuses has written nothing).
+void simulate_pipelined(const RunRequest& req, const RunInputs& in, RunOutcome& o, FrameImageJob& images, RunDatabase& db) {
+  const auto t_sim = std::chrono::steady_clock::now();
+  const double c_sim = cpu_seconds();
+  WorkFeed feed;
+  double timing_thread_cpu = 0;
+  // The caller's thread and the timing model's on different CPUs while the frame runs (host speed
+  // only: app/host_speed.hpp).
+  CriticalThreadPlacement placement(req.threads);
+  std::future<TimingResult> timed = std::async(std::launch::async, [&req, &feed, &timing_thread_cpu, &placement] {
     const double c = thread_cpu_seconds();
-    as_asked([&] { open_db(); });
-    db_open_cpu = thread_cpu_seconds() - c;
-    outcome.timing = timed.get();
-    outcome.frame.work = feed.take();
-    outcome.timing_seconds = seconds_since(t_sim);  // (it ran from the start, beside the functional run)
-    outcome.timing_cpu_seconds = timing_thread_cpu;
-    outcome.timing_wait_seconds = feed.consumer_wait_seconds();
-    // The functional run's CPU: the process's since it started less the timing thread's and the
-    // image writer's (finished first: the main thread does nothing else meanwhile).
-    if (images.valid()) images.wait();
-    outcome.cpu_seconds = std::max(0.0, cpu_seconds() - c_sim - timing_thread_cpu - images_thread_cpu - db_open_cpu);
-  } else {
-    outcome.cpu_seconds = c_functional;
-    const auto t_timing = std::chrono::steady_clock::now();
-    const double c_timing = thread_cpu_seconds();
-    outcome.timing = run_timing(req.config.hw, outcome.frame.work, req.dram_observer);
-    outcome.timing_seconds = seconds_since(t_timing);
-    outcome.timing_cpu_seconds = thread_cpu_seconds() - c_timing;
+    feed.frame();  // the frame has begun: its tile helpers exist, with every CPU the caller had
+    placement.keep_apart();
+    TimingResult r = run_timing(req.config.hw, feed, req.dram_observer);
+    timing_thread_cpu = thread_cpu_seconds() - c;
+    return r;
+  });
+  try {
+    o.frame = simulate_frame(in.trace, req.trace_path, *in.scene, req.config.hw,
+                             FrameOptions{.colour = !req.images_dir.empty(), .threads = req.threads, .feed = &feed});
+  } catch (...) {
+    placement.restore();
+    // The feed is closed (simulate_frame closes it; again here, whatever failed): the timing
+    // model ends with what it was given; its result is dropped.
+    feed.close();
+    try {
+      timed.get();
+    } catch (...) {
+    }
+    throw;
   }
-  // Timed: nothing reads the frame's commands again (RunOutcome). Their tiles' work is tens of
-  // thousands of blocks (freeing them took 2.5-4 ms of the serial end at 1080p): with more than
-  // one thread they are freed on another thread while the results are written.
-  std::future<void> released;
-  if (pipelined) {
-    released = std::async(std::launch::async, [commands = std::move(outcome.frame.work.commands)]() mutable { commands = {}; });
-  }
-  outcome.frame.work.commands = {};  // (freed here at one thread; moved from, at more)
-  book_timing(req.config.hw, outcome.frame, outcome.timing, outcome.energy);
-  outcome.technique = trace.technique.empty() ? "custom" : trace.technique;
-  outcome.scene = scene.source;
+  placement.restore();  // before the image writers start (threads inherit the caller's CPUs)
+  o.wall_seconds = seconds_since(t_sim);
+  release_pixels_without_images(req, o.frame);
+  images.start_beside(o.frame);
+  const double c_db = thread_cpu_seconds();
+  db.open();
+  const double db_open_cpu = thread_cpu_seconds() - c_db;
+  o.timing = timed.get();
+  o.frame.work = feed.take();
+  o.timing_seconds = seconds_since(t_sim);  // (it ran from the start, beside the functional run)
+  o.timing_cpu_seconds = timing_thread_cpu;
+  o.timing_wait_seconds = feed.consumer_wait_seconds();
+  // The functional run's CPU: the process's since it started less the timing thread's and the
+  // image writer's (finished first: the main thread does nothing else meanwhile).
+  images.wait();
+  o.cpu_seconds = std::max(0.0, cpu_seconds() - c_sim - timing_thread_cpu - images.cpu_seconds() - db_open_cpu);
+}
 
-  if (!req.images_dir.empty()) {
-    outcome.images_written =
-        images.valid() ? images.get() : write_frame_images(outcome.frame, req.images_dir, req.threads, &images_thread_cpu);
-    outcome.image_cpu_seconds = images_thread_cpu;
-    outcome.images_written.push_back(write_tile_cycles_image(outcome.frame, outcome.timing, req.images_dir));
-  }
+/// The run's host figures (scope frame/host): no simulated figure depends on them.
+void collect_host_stats(const RunOutcome& o, std::vector<StatRecord>& rows) {
+  HostRunStats host;
+  host.load_wall_seconds.set(o.load_seconds);
+  host.simulation_wall_seconds.set(o.wall_seconds);
+  host.timing_wall_seconds.set(o.timing_seconds);
+  host.simulation_cpu_seconds.set(o.cpu_seconds);
+  host.timing_cpu_seconds.set(o.timing_cpu_seconds);
+  host.timing_wait_seconds.set(o.timing_wait_seconds);
+  host.image_cpu_seconds.set(o.image_cpu_seconds);
+  host.tile_render_wall_seconds.set(o.frame.host_tile_seconds);
+  host.simulation_threads.set(static_cast<double>(o.threads));
+  // Host timings of runs with and without huge pages, on hosts that take freed memory back or not, differ.
+  const HostSpeedFacts facts = host_speed_facts();
+  host.allocator_huge_pages.set(facts.allocator_huge_pages ? 1.0 : 0.0);
+  host.host_free_page_reporting.set(facts.host_free_page_reporting ? 1.0 : 0.0);
+  collect_stats(host, HostRunStats::kScope, rows);
+}
 
+/// The run as the results database stores it: identity, every parameter with its origin, the
+/// frame's statistics and host figures, the tiles.
+RunRecord run_record(const RunRequest& req, const RunInputs& in, const RunOutcome& o, const std::string& started) {
   RunRecord rec;
   rec.started_at = started;
   rec.finished_at = utc_now_iso8601();
@@ -472,49 +554,60 @@ RunOutcome run_one(const RunRequest& req) {
   rec.config_name = req.config.params.config_name;
   rec.config_hash = req.config.hash;
   rec.trace_path = req.trace_path;
-  rec.trace_hash = trace_hash(trace);
-  rec.scene = scene.source;
-  rec.technique = outcome.technique;
+  rec.trace_hash = trace_hash(in.trace);
+  rec.scene = in.scene->source;
+  rec.technique = o.technique;
   rec.status = "ok";
   const auto& table = hw_params().table();
   for (std::size_t i = 0; i < table.decls().size(); ++i) {
     rec.params.push_back({table.decls()[i].key, format_param_value(req.config.params.values[i]), req.config.params.origins[i].text});
   }
   rec.params.push_back(config_label_param(req.config.label));
-  for (auto& p : trace_run_params(trace, req.trace_path)) rec.params.push_back(std::move(p));
-  rec.stats = outcome.frame.stats;
-  HostRunStats host;
-  host.load_wall_seconds.set(outcome.load_seconds);
-  host.simulation_wall_seconds.set(outcome.wall_seconds);
-  host.timing_wall_seconds.set(outcome.timing_seconds);
-  host.simulation_cpu_seconds.set(outcome.cpu_seconds);
-  host.timing_cpu_seconds.set(outcome.timing_cpu_seconds);
-  host.timing_wait_seconds.set(outcome.timing_wait_seconds);
-  host.image_cpu_seconds.set(outcome.image_cpu_seconds);
-  host.tile_render_wall_seconds.set(outcome.frame.host_tile_seconds);
-  host.simulation_threads.set(static_cast<double>(outcome.threads));
-  // Whether glibc's allocator hands out transparent huge pages in this process, and whether the
-  // host takes freed memory back (sim/app/host_speed.hpp): host timings of runs with and without differ.
-  host.allocator_huge_pages.set(allocator_huge_pages() ? 1.0 : 0.0);
-  host.host_free_page_reporting.set(host_reports_free_pages() ? 1.0 : 0.0);
-  collect_stats(host, HostRunStats::kScope, rec.stats);
-  rec.tiles = outcome.timing.tiles;
-  as_asked([&] {
-    if (!db) open_db();
-    outcome.run_id = db->write_run(rec);
-    if (req.summary_figures) outcome.derived = read_derived_figures(*db, outcome.run_id);
-    if (new_db) db.reset();  // closed: the write-ahead log is folded in
-  });
-  if (new_db) {
-    if (!as_asked([&] { return ResultsDb::link_into_place(db_path, req.db_path); })) {
-      // Another process created the database meanwhile: the run goes into theirs.
-      db.emplace(req.db_path);
-      outcome.run_id = db->write_run(rec);
-      if (req.summary_figures) outcome.derived = read_derived_figures(*db, outcome.run_id);
-    }
+  for (auto& p : trace_run_params(in.trace, req.trace_path)) rec.params.push_back(std::move(p));
+  rec.stats = o.frame.stats;
+  collect_host_stats(o, rec.stats);
+  rec.tiles = o.timing.tiles;
+  return rec;
+}
+
+}  // namespace
+
+RunOutcome run_one(const RunRequest& req) {
+  RunOutcome outcome;
+  const auto t_load = std::chrono::steady_clock::now();
+  const std::string started = utc_now_iso8601();
+  check_results_db_target(req.db_path);  // a bad --db is reported now, not after the simulation
+  // Declared before the image writer, so that the folder is removed (on failure) after the writer
+  // has finished; the database likewise.
+  RunImagesFolder images_folder(req.images_dir);
+  const RunInputs in = load_run_inputs(req);
+  outcome.load_seconds = seconds_since(t_load);
+  outcome.threads = req.threads;
+  RunDatabase db(req.db_path);
+  FrameImageJob images(req);
+  if (req.threads > 1) {
+    simulate_pipelined(req, in, outcome, images, db);
+  } else {
+    simulate_serially(req, in, outcome);
   }
+  // Timed: nothing reads the frame's commands again (RunOutcome). Their tiles' work is tens of
+  // thousands of blocks (freeing them took 2.5-4 ms of the serial end at 1080p): with more than
+  // one thread they are freed on another thread while the results are written.
+  std::future<void> released;
+  if (req.threads > 1) {
+    released = std::async(std::launch::async, [commands = std::move(outcome.frame.work.commands)]() mutable { commands = {}; });
+  }
+  outcome.frame.work.commands = {};  // (freed here at one thread; moved from, at more)
+  book_timing(req.config.hw, outcome.frame, outcome.timing, outcome.energy);
+  outcome.technique = in.trace.technique.empty() ? "custom" : in.trace.technique;
+  outcome.scene = in.scene->source;
+  if (!req.images_dir.empty()) {
+    outcome.images_written = images.finish(outcome.frame, outcome.timing);
+    outcome.image_cpu_seconds = images.cpu_seconds();
+  }
+  outcome.run_id = db.write(run_record(req, in, outcome, started), req.summary_figures ? &outcome.derived : nullptr);
   if (released.valid()) released.get();
-  created_images_folder.path.clear();  // the run is written: its images stay
+  images_folder.keep();
   return outcome;
 }
 

@@ -1,11 +1,20 @@
 #pragma once
-// The glibc allocator settings tbdrsim runs with: `main` (sim/app/main.cpp) sets the heap's
-// thresholds in the running process (mallopt) or, where huge pages are wanted, which only
-// GLIBC_TUNABLES can ask for, re-executes the program once with them all in GLIBC_TUNABLES; a run
-// records which it had (run_driver.cpp). Host speed only: no figure depends on them. Why each,
-// with measurements: main.cpp and docs/performance-notes.md, "The allocator".
+// Host-speed machinery, in one place: what tbdrsim does to make the host run it faster. None of it
+// changes a figure (tests/test_speed_equivalence.cpp, tests/test_threads.cpp); it sits outside the
+// simulation's path, and each choice's measurements are in docs/performance-notes.md ("The
+// allocator", "The caller and the timing model on different CPUs").
+//  - The allocator: `main` calls tune_allocator first. glibc's heap thresholds are set in the
+//    running process (mallopt); where huge pages are wanted, which only GLIBC_TUNABLES can ask
+//    for, the program is re-executed once with them all in GLIBC_TUNABLES.
+//  - Thread placement: while a pipelined frame runs (`--threads N`, N > 1), run_one keeps the
+//    caller's thread and the timing model's on different CPUs (CriticalThreadPlacement,
+//    kernel/cpu_placement.hpp, which this header brings in).
+//  - What a run records about them: host_speed_facts, stored with the run's host figures
+//    (HostRunStats, app/run_stats.hpp), since host timings of runs with and without differ.
 #include <cstdlib>
 #include <string>
+
+#include "kernel/cpu_placement.hpp"
 
 namespace tbdr {
 
@@ -53,5 +62,17 @@ inline bool allocator_huge_pages() {
   const char* tunables = std::getenv("GLIBC_TUNABLES");
   return tunables != nullptr && std::string(tunables).find(kHugePageTunable) != std::string::npos;
 }
+
+/// Sets glibc's allocator up for a simulation run, first thing in `main` (`argv`: main's, for the
+/// re-execution). May re-execute the program; returns when this process is the one to run.
+void tune_allocator(char** argv);
+
+/// Host facts a run records beside its host timings.
+struct HostSpeedFacts {
+  bool allocator_huge_pages = false;  ///< this process's allocator asks for huge pages
+  bool host_free_page_reporting = false;  ///< the host takes freed memory back (host_reports_free_pages)
+};
+/// This process's and this host's HostSpeedFacts.
+HostSpeedFacts host_speed_facts();
 
 }  // namespace tbdr
