@@ -235,13 +235,15 @@ TEST(ResultsDb, KilledWriterLeavesOnlyWholeRuns) {
     }
     _exit(0);
   }
-  // Let it write a few runs, then kill it without warning, most likely inside a transaction.
-  for (int i = 0; i < 400 && count(path, "SELECT count(*) FROM runs") < 3; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  std::this_thread::sleep_for(std::chrono::milliseconds(7));
-  kill(child, SIGKILL);
+  // Let it write a few runs (however long that takes: it writes until killed), then kill it without
+  // warning, most likely inside a transaction (it writes all the time). Wherever the kill lands,
+  // only whole runs may be left.
   int status = 0;
+  while (count(path, "SELECT count(*) FROM runs") < 3) {
+    ASSERT_EQ(waitpid(child, &status, WNOHANG), 0) << "the writer ended by itself";
+    std::this_thread::yield();
+  }
+  kill(child, SIGKILL);
   waitpid(child, &status, 0);
   ASSERT_TRUE(WIFSIGNALED(status));
 

@@ -14,6 +14,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -396,22 +397,35 @@ TEST_F(SweepRun, RepetitionsAreKeptAndResumed) {
 }
 
 /// Kills a sweep half-way (SIGKILL: workers die with it; SIGINT: running points finish), reruns it
-/// and checks every point is there exactly once.
+/// and checks every point is there exactly once. No clock decides what "half-way" is: the test
+/// takes the database's write lock (BEGIN IMMEDIATE) as soon as it holds 4 runs or more, so no
+/// further run can be written (the workers wait on the lock, within SQLite's 60 s busy timeout)
+/// until the signal has been sent; the sweep cannot have finished its 36 points by then.
 void kill_and_resume(const fs::path& dir, const std::string& file, int sig) {
   const std::string db = (dir / "r.db").string();
   const std::int64_t n = 36;
+  { ResultsDb create(db); }  // the schema exists, so the test can take the lock from the start
   const pid_t pid = start_tool({"sweep", file, "--db", db, "-j", "2"}, dir / "first.log");
-  const auto t0 = std::chrono::steady_clock::now();
-  std::int64_t at_kill = 0;
-  while (std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60)) {
-    if (fs::exists(db)) {
-      at_kill = scalar(db, "SELECT count(*) FROM runs");
-      if (at_kill >= 4) break;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  std::optional<SqlConnection> lock_holder;
+  std::optional<SqlTransaction> lock;
+  for (;;) {
+    lock_holder.emplace(db);
+    lock.emplace(*lock_holder);
+    SqlStatement count(*lock_holder, "SELECT count(*) FROM runs");
+    ASSERT_TRUE(count.step());
+    if (count.int64(0) >= 4) break;
+    lock.reset();  // rolled back: the sweep writes on
+    lock_holder.reset();
+    std::this_thread::yield();
   }
   kill(pid, sig);
+  if (sig == SIGINT) {  // the running points finish: they need the lock
+    lock.reset();
+    lock_holder.reset();
+  }
   const int code = wait_tool(pid);
+  lock.reset();
+  lock_holder.reset();
   std::ifstream log(dir / "first.log");
   std::stringstream first;
   first << log.rdbuf();
@@ -421,9 +435,8 @@ void kill_and_resume(const fs::path& dir, const std::string& file, int sig) {
   } else {
     EXPECT_EQ(code, 128 + SIGKILL);
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(50));  // let killed workers go
   const auto mid = run_counts(db);
-  EXPECT_LT(mid.all, n) << "the sweep finished before it was killed; the test needs slower points";
+  EXPECT_LT(mid.all, n) << "the sweep finished before it was killed";
   EXPECT_EQ(mid.ok, mid.distinct_ok);
   EXPECT_EQ(mid.all, mid.ok);  // no failed rows: an interrupted point is not a failure
   std::string out;

@@ -50,24 +50,41 @@ WorkerJob function_job(std::size_t id, std::function<int()> f) {
   return j;
 }
 
+// Six jobs on two workers. No clock decides that two run at once: every job waits (in its child)
+// on a pipe that the test writes to only once the pool has reported two running workers.
 TEST(WorkerPool, RunsFunctionsInChildrenAtMostWorkersAtATime) {
   Recorder rec;
   const pid_t self = getpid();
-  auto hooks = rec.hooks(6, [self](std::size_t i) {
-    return function_job(i, [i, self] {
+  int gate[2];
+  ASSERT_EQ(pipe(gate), 0);
+  auto hooks = rec.hooks(6, [self, &gate](std::size_t i) {
+    return function_job(i, [i, self, &gate] {
       std::fprintf(stderr, "job %zu in a child: %s\n", i, getpid() != self ? "yes" : "no");
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      char c = 0;
+      if (read(gate[0], &c, 1) != 1) return 3;
       return static_cast<int>(i % 2);
     });
   });
+  hooks.running = [&rec, &gate](std::size_t r) {
+    if (r == 2 && rec.max_running < 2) {  // both workers busy: every job may go
+      const char go[6] = {};
+      if (write(gate[1], go, sizeof go) != static_cast<ssize_t>(sizeof go)) throw std::runtime_error("write failed");
+    }
+    rec.max_running = std::max(rec.max_running, r);
+  };
+  const auto from = std::chrono::steady_clock::now();
   EXPECT_FALSE(run_worker_pool({2, false}, hooks));
+  const double pool_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - from).count();
+  close(gate[0]);
+  close(gate[1]);
   ASSERT_EQ(rec.ends.size(), 6u);
   EXPECT_EQ(rec.max_running, 2u);
   for (const auto& [i, e] : rec.ends) {
     EXPECT_EQ(e.ok(), i % 2 == 0) << i;
     EXPECT_FALSE(e.killed);
     EXPECT_EQ(e.stderr_text, "job " + std::to_string(i) + " in a child: yes\n");
-    EXPECT_GE(e.seconds, 0.04);
+    EXPECT_GT(e.seconds, 0.0);  // a job's wall time: within the pool's
+    EXPECT_LE(e.seconds, pool_seconds);
   }
 }
 
@@ -93,12 +110,17 @@ TEST(WorkerPool, RunsProgramsAndReportsExceptionsOfFunctions) {
 }
 
 // run_worker_jobs: a fixed list, every job run once, the ends indexed as the list whatever order
-// the jobs end in (job 0 sleeps longest, so it ends last of the first two).
+// the jobs end in. Job 0 ends last whatever the machine's speed: it waits until job 4 (run after
+// jobs 1-3 on the other worker) has left its file.
 TEST(WorkerPool, RunWorkerJobsReturnsTheEndsInTheJobsOrder) {
+  const fs::path last_file = testing_scratch::scratch_dir("pool", "order") / "job4.done";
   std::vector<WorkerJob> jobs;
   for (int i = 0; i < 5; ++i) {
-    jobs.push_back(function_job(99, [i] {
-      std::this_thread::sleep_for(std::chrono::milliseconds(i == 0 ? 150 : 10));
+    jobs.push_back(function_job(99, [i, last_file] {
+      if (i == 0) {
+        while (!fs::exists(last_file)) std::this_thread::yield();
+      }
+      if (i == 4) std::ofstream(last_file) << "done";
       std::fprintf(stderr, "%d", i);
       return i;
     }));
@@ -114,23 +136,22 @@ TEST(WorkerPool, RunWorkerJobsReturnsTheEndsInTheJobsOrder) {
 
 TEST(WorkerPool, AThrowingHookKillsTheRunningChildren) {
   const fs::path pid_file = testing_scratch::scratch_dir("pool", "throw") / "slow.pid";
-  const fs::path finished_file = pid_file.parent_path() / "slow.finished";  // written only if not killed
   WorkerPoolHooks hooks;
   std::size_t next = 0;
   hooks.next = [&]() -> std::optional<WorkerJob> {
     if (next == 2) return std::nullopt;
     const std::size_t i = next++;
     if (i == 0) {
-      return function_job(i, [pid_file, finished_file] {
-        std::ofstream(pid_file) << getpid();
-        std::this_thread::sleep_for(std::chrono::seconds(30));
-        std::ofstream(finished_file) << "finished";
-        return 0;
+      return function_job(i, [pid_file]() -> int {
+        // Written whole, then named: job 1 goes on once the name exists, and the pid is in it.
+        const fs::path part = pid_file.string() + ".part";
+        std::ofstream(part) << getpid();
+        fs::rename(part, pid_file);
+        for (;;) pause();  // until killed: a pool that waited for it would never return
       });
     }
     return function_job(i, [pid_file] {
-      while (!fs::exists(pid_file)) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      while (!fs::exists(pid_file)) std::this_thread::yield();
       return 0;
     });
   };
@@ -141,9 +162,6 @@ TEST(WorkerPool, AThrowingHookKillsTheRunningChildren) {
   ASSERT_GT(slow, 0);
   EXPECT_EQ(kill(slow, 0), -1);  // reaped
   EXPECT_EQ(errno, ESRCH);
-  // ... before its sleep ended: a pool that waited for it instead of killing it would find the
-  // file its job writes after the sleep.
-  EXPECT_FALSE(fs::exists(finished_file));
 }
 
 /// What a pool interrupted by SIGINT did.
