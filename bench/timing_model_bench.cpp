@@ -40,8 +40,23 @@ int main(int argc, char** argv) {
     const double c0 = cpu();
     const TimingResult t = run_timing(hw, frame.work);
     secs.push_back(cpu() - c0);
+    // A hash of every memory statistic (the same rows the database gets, in their order).
     double h = 0;
-    for (const StatRecord& s : t.memory_stats) h = h * 1.000001 + s.value;
+    const auto hash = [&h](const auto& set) {
+      std::vector<tbdr::StatRecord> rows;
+      tbdr::collect_stats(set, "", rows);
+      for (const tbdr::StatRecord& s : rows) h = h * 1.000001 + s.value;
+    };
+    const tbdr::MemorySnapshot& m = t.memory_units;
+    hash(m.stats);
+    for (const auto& c : m.clients) hash(c);
+    for (const auto& cache : m.caches) {
+      hash(cache.stats);
+      for (const auto& cls : cache.classes) hash(cls);
+    }
+    hash(m.dram.stats);
+    for (const auto& ch : m.dram.channels) hash(ch);
+    for (const auto& cls : m.dram.classes) hash(cls);
     std::printf("run %d: %.4f s  events %llu  frame_ps %.0f  memhash %.17g\n", r, secs.back(),
                 static_cast<unsigned long long>(t.events), t.frame_time_ps, h);
   }

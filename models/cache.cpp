@@ -207,12 +207,9 @@ double Cache::energy_pj() const {
   return static_cast<double>(bytes) * pj_per_byte_;
 }
 
-void Cache::collect(std::vector<StatRecord>& out) {
+CacheSnapshot Cache::snapshot() {
   update_derived_stats();
-  collect_stats(stats_, scope_, out);
-  for (std::size_t c = 0; c < kDramClassCount; ++c) {
-    collect_stats(class_stats_[c], scope_ + ".class." + to_string(static_cast<DramClass>(c)), out);
-  }
+  return {scope_, stats_, class_stats_};
 }
 
 void Cache::reset_stats() {

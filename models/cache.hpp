@@ -78,6 +78,13 @@ struct CacheStats {
 };
 
 /// A set-associative, true-LRU, write-back cache (tags only).
+/// A cache's statistics at one moment (Cache::snapshot), with the scope its rows take.
+struct CacheSnapshot {
+  std::string scope;  ///< "mem/cache.texture", ...; a class's rows: scope + ".class." + class
+  CacheStats stats;
+  std::array<CacheClassStats, kDramClassCount> classes;
+};
+
 class Cache {
  public:
   /// Geometry from `p` (line_bytes a power of two, size a multiple of ways x line; otherwise
@@ -132,8 +139,8 @@ class Cache {
   double energy_pj() const;
   /// Sets the derived statistics (hit rate, energy).
   void update_derived_stats();
-  /// Derived statistics, then every group (main, then one per traffic class) appended to `out`.
-  void collect(std::vector<StatRecord>& out);
+  /// Its statistics now, derived ones updated first: the main set and one per traffic class.
+  CacheSnapshot snapshot();
   /// Zeroes the statistics (not the contents).
   void reset_stats();
 

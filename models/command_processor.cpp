@@ -6,6 +6,7 @@
 #include <memory>
 #include <set>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "models/compute_unit.hpp"
 #include "models/geometry_unit.hpp"
@@ -24,18 +25,6 @@ namespace tbdr {
 
 namespace {
 
-
-void collect_dram(const std::string& prefix, const DramTraffic& dram, std::vector<StatRecord>& out) {
-  TrafficStats all;
-  for (std::size_t c = 0; c < kDramClassCount; ++c) {
-    TrafficStats cls;
-    cls.read_bytes.set(dram.read_bytes[c]);
-    cls.write_bytes.set(dram.write_bytes[c]);
-    collect_stats(cls, prefix + TrafficStats::kScopeSuffix + "." + to_string(static_cast<DramClass>(c)), out);
-    all += cls;
-  }
-  collect_stats(all, prefix + TrafficStats::kScopeSuffix, out);
-}
 
 /// The attachments whose stored surfaces (AttachmentImage::surface) some command of `trace` reads
 /// without colours: every image a dispatch reads (its kernels read the surfaces' sites), and the
@@ -177,11 +166,8 @@ class FrameSimulator {
       // (a pass's tiles, binned ahead of the next pass's, before that pass's tiles).
     }
     finish_pending_pass();
-    // Frame totals: every unit's statistics summed over the passes (gauges: the largest level).
-    if (pass_index > 0) result_.totals.render.collect("frame", result_.stats);
-    if (dispatches > 0) collect_stats(result_.totals.compute, "frame/compute", result_.stats);
-    collect_dram("frame", result_.dram, result_.stats);
-    FrameShapeStats shape;
+    // The frame's shape (its totals are summed in result_.totals as the commands complete).
+    FrameShapeStats& shape = result_.shape;
     shape.width.set(f.width);
     shape.height.set(f.height);
     shape.samples_per_pixel.set(f.samples);
@@ -193,7 +179,6 @@ class FrameSimulator {
     std::uint64_t covered = 0;
     for (auto v : result_.images.counters.shaded) covered += v > 0 ? 1 : 0;
     shape.covered_pixels.set(covered);
-    collect_stats(shape, FrameShapeStats::kScope, result_.stats);
     return std::move(result_);
   }
 
@@ -425,7 +410,7 @@ class FrameSimulator {
         result_.images.attachments.erase(image);  // a later pass that loads it starts from what the dispatch wrote
       }
     }
-    collect_stats(stats, prefix + "/compute", result_.stats);
+    command_stats(prefix).compute = stats;
     result_.totals.compute += stats;
     DispatchRun run;
     run.summary.name = prefix;
@@ -665,7 +650,7 @@ class FrameSimulator {
     run.renderer->finish();
     give_back_prims_buffer(std::move(run.ctx.prims));
     result_.host_tile_seconds += run.renderer->tile_seconds();
-    run.ps->collect(run.prefix, result_.stats);
+    command_stats(run.prefix).pass = *run.ps;
     result_.totals.render += *run.ps;
     PassSummary summary;
     summary.name = run.pass->name;
@@ -675,6 +660,16 @@ class FrameSimulator {
     const std::size_t feed_command = run.live ? run.renderer->feed_command() : 0;
     run.renderer.reset();
     finish_command(run.prefix, run.live ? nullptr : &run.cw, std::move(summary), run.dram, feed_command);
+  }
+
+  /// The statistics record of command `name` (made when first asked for: in completion order).
+  CommandStats& command_stats(const std::string& name) {
+    const auto [it, added] = command_index_.try_emplace(name, result_.commands.size());
+    if (added) {
+      CommandStats& s = result_.commands.emplace_back();
+      s.name = name;
+    }
+    return result_.commands[it->second];
   }
 
   PrimitiveStore take_prims_buffer() {
@@ -693,7 +688,7 @@ class FrameSimulator {
   /// work's name), its summary with its traffic, the frame's traffic.
   void finish_command(const std::string& name, CommandWork* cw, PassSummary summary, const DramTraffic& dram,
                       std::size_t feed_command = 0) {
-    collect_dram(name, dram, result_.stats);
+    command_stats(name).requested = dram;
     if (cw == nullptr) {
       options_.feed->close_command(feed_command);
     } else if (options_.feed) {
@@ -764,6 +759,7 @@ class FrameSimulator {
   std::unique_ptr<PassRun> pending_;           ///< a pass binned, its last render's tiles not rendered yet
   ThreadPool pool_;                          ///< the threads the passes' tiles render on
   FrameResult result_;
+  std::unordered_map<std::string, std::size_t> command_index_;  ///< result_.commands by name
 };
 
 }  // namespace

@@ -3,6 +3,7 @@
 // the units in models/ (geometry -> tiler/parameter buffer -> per tile ISP, TSP, tile memory),
 // handles partial renders, and collects every unit's statistics per pass and for the frame.
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -61,7 +62,15 @@ struct TrafficStats {
   static constexpr const char* kScopeSuffix = "/dram";
 };
 
-/// What one pass did, for summaries (the full figures are in FrameResult::stats).
+/// The statistics of one pass or dispatch, typed (the app makes rows of them: sim/app/stat_rows.hpp).
+struct CommandStats {
+  std::string name;                    ///< its work's name: "pass0.gbuffer", "dispatch1.cull"
+  std::optional<PassStats> pass;       ///< a pass: its units' statistics
+  std::optional<ComputeStats> compute; ///< a dispatch: the compute unit's
+  DramTraffic requested;               ///< the bytes it requested per class, before the caches
+};
+
+/// What one pass did, for summaries (the full figures are in FrameResult::commands).
 struct PassSummary {
   std::string name;
   std::uint64_t primitives = 0;
@@ -70,9 +79,10 @@ struct PassSummary {
   DramTraffic dram;
 };
 
-/// The functional result of a frame: statistics, per-pixel counters, the attachment images.
+/// The functional result of a frame: typed statistics, per-pixel counters, the attachment images.
 struct FrameResult {
-  std::vector<StatRecord> stats;   ///< scopes "pass<i>.<name>/<unit>" and "frame/<unit>"
+  std::vector<CommandStats> commands;  ///< each pass's and dispatch's statistics, in the order they completed
+  FrameShapeStats shape;               ///< the frame's size and what was replayed
   std::vector<PassSummary> passes;
   DramTraffic dram;                ///< whole frame, per class
   FrameImages images;

@@ -685,13 +685,11 @@ void Dram::update_derived_stats() {
   for (std::size_t c = 0; c < kDramClassCount; ++c) class_stats_[c].energy_pj.set(energy_pj(static_cast<DramClass>(c)));
 }
 
-void Dram::collect(std::vector<StatRecord>& out) {
+DramSnapshot Dram::snapshot() {
   update_derived_stats();
-  collect_stats(stats_, name_, out);
-  for (std::size_t c = 0; c < channels_.size(); ++c) collect_stats(channels_[c].stats, name_ + ".ch" + std::to_string(c), out);
-  for (std::size_t c = 0; c < kDramClassCount; ++c) {
-    collect_stats(class_stats_[c], name_ + ".class." + to_string(static_cast<DramClass>(c)), out);
-  }
+  DramSnapshot s{name_, stats_, {}, class_stats_};
+  for (const Channel& ch : channels_) s.channels.push_back(ch.stats);
+  return s;
 }
 
 std::string Dram::stall_reason() const {

@@ -183,6 +183,14 @@ struct DramClassStats {
 };
 
 /// The DRAM devices and their memory controller.
+/// The DRAM's statistics at one moment (Dram::snapshot), with the scope its rows take.
+struct DramSnapshot {
+  std::string scope;  ///< "mem/dram"; a channel's rows: scope + ".ch<i>", a class's: scope + ".class." + class
+  DramStats stats;
+  std::vector<DramChannelStats> channels;
+  std::array<DramClassStats, kDramClassCount> classes;
+};
+
 class Dram final : public Unit {
  public:
   /// FR-FCFS starvation cap: once this many younger requests were served while the oldest one
@@ -265,8 +273,8 @@ class Dram final : public Unit {
   bool refresh_enabled() const { return timing_.t_refi_cycles > 0 && timing_.t_rfc_cycles > 0; }
   /// Sets the derived statistics (energy, rates, averages up to now()).
   void update_derived_stats();
-  /// Derived statistics, then the groups (whole DRAM, channels, classes) appended to `out`.
-  void collect(std::vector<StatRecord>& out);
+  /// Its statistics now, derived ones updated first: the whole DRAM, each channel, each class.
+  DramSnapshot snapshot();
 
   // Unit (run-loop watchdog)
   std::string_view name() const override { return name_; }

@@ -120,20 +120,4 @@ EnergyBreakdown compute_energy(const HwConfig& hw, const FrameStats& frame, cons
   return b;
 }
 
-void EnergyBreakdown::collect(std::vector<StatRecord>& out) const {
-  for (const auto& t : terms) {
-    // Names must be string literals with static storage only for StatDef; records own strings.
-    out.push_back({EnergyFrameStats::kScope, t.component + "_pj", t.pj, "pJ", "Energy of " + t.component + ": " + t.counter + " x unit cost"});
-  }
-  EnergyFrameStats frame;
-  frame.total_pj.set(total_pj);
-  frame.static_power_mw.set(leakage.total_mw());
-  frame.static_logic_mw.set(leakage.logic_mw);
-  frame.static_sram_mw.set(leakage.sram_gated_mw + leakage.sram_retained_mw);
-  frame.idle_ps = idle_ps;
-  frame.idle_gpu_pj = idle_gpu_pj;
-  frame.idle_dram_pj = idle_dram_pj;
-  collect_stats(frame, EnergyFrameStats::kScope, out);
-}
-
 }  // namespace tbdr

@@ -92,9 +92,6 @@ struct EnergyBreakdown {
   double idle_dram_pj = 0;    ///< DRAM background over idle_ps
   double idle_pj() const { return idle_gpu_pj + idle_dram_pj; }
   double at_period_total_pj() const { return total_pj + idle_pj(); }
-  /// Statistic records: "frame/energy" <component>_pj, total_pj / total_mj, and the leakage and
-  /// frame-period figures (static_power_mw, idle_mj, at_period_total_mj, ...: none named *_pj).
-  void collect(std::vector<StatRecord>& out) const;
 };
 
 /// Computes the breakdown from the frame's unit statistics, the memory system's energies and the

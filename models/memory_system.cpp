@@ -572,23 +572,20 @@ double MemorySystem::energy_pj() const {
   return texture_->energy_pj() + vertex_->energy_pj() + slc_->energy_pj() + dram_.energy_pj();
 }
 
-void MemorySystem::collect(std::vector<StatRecord>& out) {
+MemorySnapshot MemorySystem::snapshot() {
   dram_.update_derived_stats();  // first: the refreshes an idle channel did up to now count in its energy
   const double caches = texture_->energy_pj() + vertex_->energy_pj() + slc_->energy_pj();
   stats_.cache_energy_pj.set(caches);
   stats_.dram_energy_pj.set(dram_.energy_pj());
   stats_.energy_pj.set(energy_pj());
-  collect_stats(stats_, name_, out);
-  for (std::size_t c = 0; c < kClientCount; ++c) {
-    MemoryClientStats& cs = client_stats_[c];
+  for (MemoryClientStats& cs : client_stats_) {
     const std::uint64_t n = cs.completed.value();
     cs.avg_latency_ns.set(n == 0 ? 0.0 : static_cast<double>(cs.latency_total_ps.value()) * 1e-3 / static_cast<double>(n));
-    collect_stats(cs, name_ + "/client." + to_string(static_cast<Client>(c)), out);
   }
-  texture_->collect(out);
-  vertex_->collect(out);
-  slc_->collect(out);
-  dram_.collect(out);
+  MemorySnapshot s{name_, stats_, client_stats_, {}, {}};
+  s.caches = {texture_->snapshot(), vertex_->snapshot(), slc_->snapshot()};
+  s.dram = dram_.snapshot();
+  return s;
 }
 
 std::string MemorySystem::stall_reason() const {

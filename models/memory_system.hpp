@@ -94,6 +94,16 @@ struct MemorySystemStats {
 };
 
 /// Caches + DRAM behind one interface, in timed and functional flavours.
+/// The memory system's statistics at one moment (MemorySystem::snapshot): its own, each client's,
+/// each cache's and the DRAM's, with the scopes their rows take.
+struct MemorySnapshot {
+  std::string scope;  ///< "mem"; a client's rows: scope + "/client." + client
+  MemorySystemStats stats;
+  std::array<MemoryClientStats, kClientCount> clients;
+  std::vector<CacheSnapshot> caches;  ///< texture, vertex, SLC
+  DramSnapshot dram;
+};
+
 class MemorySystem final : public Unit {
  public:
   /// Builds the caches from hw.cache.*, the DRAM from hw.dram/hw.energy, the core clock from
@@ -160,8 +170,8 @@ class MemorySystem final : public Unit {
   std::uint64_t requests_in_flight() const { return live_txns_; }
   const MemoryClientStats& client_stats(Client c) const { return client_stats_[static_cast<std::size_t>(c)]; }
   const MemorySystemStats& stats() const { return stats_; }
-  /// Every statistic of the memory system (derived ones updated first) appended to `out`.
-  void collect(std::vector<StatRecord>& out);
+  /// Every statistic of the memory system now, derived ones updated first.
+  MemorySnapshot snapshot();
 
   // Unit (run-loop watchdog)
   std::string_view name() const override { return name_; }

@@ -33,15 +33,6 @@ struct PassStats {
     rop += o.rop;
     return *this;
   }
-  /// Rows "<prefix>/<unit>" for the results database.
-  void collect(const std::string& prefix, std::vector<StatRecord>& out) const {
-    collect_stats(geometry, prefix + "/geometry", out);
-    collect_stats(tiler, prefix + "/tiler", out);
-    collect_stats(isp, prefix + "/isp", out);
-    collect_stats(tsp, prefix + "/tsp", out);
-    collect_stats(tile_memory, prefix + "/tile_memory", out);
-    collect_stats(rop, prefix + "/rop", out);
-  }
 };
 
 }  // namespace tbdr

@@ -150,7 +150,7 @@ class TimingSim final : public Unit {
     }
     result_.dram = mem_.traffic();
     result_.requested = mem_.requested();
-    mem_.collect(result_.memory_stats);
+    result_.memory_units = mem_.snapshot();
     result_.memory = mem_.stats();
     result_.events = eq_.events_executed();
     for (const CommandWork* c : commands_) {

@@ -93,7 +93,7 @@ struct TimingResult {
   DramTraffic requested;              ///< bytes the units requested, per class (before the caches)
   DramTraffic dram;                   ///< bytes DRAM transferred, per class (after the caches)
   MemorySystemStats memory;           ///< the memory system's own totals (energies of caches and DRAM)
-  std::vector<StatRecord> memory_stats;  ///< rows of caches, DRAM, clients for the database
+  MemorySnapshot memory_units;        ///< every statistic of the clients, caches and DRAM at the frame's end
   std::vector<TileRecord> tiles;      ///< per tile: cycles, samples, DRAM bytes
   std::uint64_t events = 0;
   /// Texture fetch: lines the shaded quads accessed (distinct per quad and fetch), lines of the

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "app/stat_rows.hpp"
 #include "kernel/stats.hpp"
 
 namespace tbdr {
@@ -19,7 +20,12 @@ inline double stat(const std::vector<StatRecord>& st, const std::string& scope, 
   return -1;
 }
 
-/// The value of the row (scope, name) of a result that holds its rows in `stats` (a FrameResult).
+/// The value of the row (scope, name) of a frame's functional statistics (frame_rows).
+inline double stat(const FrameResult& frame, const std::string& scope, const std::string& name) {
+  return stat(frame_rows(frame), scope, name);
+}
+
+/// The value of the row (scope, name) of a result that holds its rows in `stats` (Timed, RunOutcome).
 template <class Result>
   requires requires(const Result& r) { r.stats; }
 double stat(const Result& result, const std::string& scope, const std::string& name) {

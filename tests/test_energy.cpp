@@ -112,6 +112,7 @@ class EnergyFrame : public ::testing::Test {
     Timed r;
     r.frame = simulate_frame(*trace_, "e.trace", *scene_, hw);
     time_frame(hw, r.frame, r.timing, r.energy);
+    r.stats = run_rows(r.frame, r.timing, r.energy);
     return r;
   }
   static std::unique_ptr<Scene> scene_;
@@ -171,11 +172,11 @@ TEST_F(EnergyFrame, DefaultPowerDownKeepsAnAluBoundFramesDramEnergyPerBitInTheMe
   // ALU-bound frame draw IDD2P/IDD3P instead of IDD2N/IDD3N between requests.
   const Timed on = timed({});
   const Timed off = timed({"dram.powerdown_after_ns=0"});
-  const auto& st = on.frame.stats;
+  const auto& st = on.stats;
   const double bits = (stat(st, "mem/dram", "read_bytes") + stat(st, "mem/dram", "write_bytes")) * 8.0;
   const double per_bit_on = stat(st, "mem/dram", "energy_pj") / bits;
-  const double per_bit_off = stat(off.frame.stats, "mem/dram", "energy_pj") /
-                             ((stat(off.frame.stats, "mem/dram", "read_bytes") + stat(off.frame.stats, "mem/dram", "write_bytes")) * 8.0);
+  const double per_bit_off = stat(off.stats, "mem/dram", "energy_pj") /
+                             ((stat(off.stats, "mem/dram", "read_bytes") + stat(off.stats, "mem/dram", "write_bytes")) * 8.0);
   const double usc_util = stat(st, "frame/unit.usc", "utilization");
   // The range: DRAMPower memspec MICRON_4Gb_LPDDR3-1600_32bit_A through memspec_per_bit (see
   // tests/test_dram_presets.cpp): a streaming read 10.4 pJ/bit (5.14 core + 3.8 I/O + activates +
@@ -220,7 +221,7 @@ TEST_F(EnergyFrame, AFixedFramePeriodAddsIdlePowerTimesIdleTime) {
   EXPECT_NEAR(e.idle_dram_pj, dram_pj, 1e-6 * dram_pj);
   EXPECT_NEAR(e.at_period_total_pj() - race.energy.total_pj, idle_pj, 1e-6 * idle_pj);
   // The records: at_period_total_mj = total_mj + idle_mj; idle_power_mw = idle_mj / idle_time_ms.
-  const auto& st = period.frame.stats;
+  const auto& st = period.stats;
   EXPECT_NEAR(stat(st, "frame/energy", "at_period_total_mj"), stat(st, "frame/energy", "total_mj") + idle_pj * 1e-9, 1e-12);
   EXPECT_NEAR(stat(st, "frame/energy", "idle_power_mw"), idle_pj / (e.idle_ps * 1e-3), 1e-6);
   std::printf("[ figures  ] frame %.3f ms %.4f mJ; at a %.3f ms period %.4f mJ (idle %.1f mW: GPU %.1f, DRAM %.2f)\n",

@@ -65,8 +65,8 @@ TEST(ImmediateMode, OneQuadWritesEachLineOnceWithFastClearAndBigCaches) {
   EXPECT_EQ(dram_of(r, DramClass::DepthStencil, true), kImageBytes);
   EXPECT_EQ(dram_of(r, DramClass::Color, false), 0.0);
   EXPECT_EQ(dram_of(r, DramClass::DepthStencil, false), 0.0);
-  EXPECT_EQ(stat(r.frame.stats, "frame/rop", "fast_cleared_fills"), 2.0 * kImageBytes / 64.0);
-  EXPECT_EQ(stat(r.frame.stats, "frame/rop", "clear_bytes"), 0.0);  // every cleared line was touched
+  EXPECT_EQ(stat(r.stats, "frame/rop", "fast_cleared_fills"), 2.0 * kImageBytes / 64.0);
+  EXPECT_EQ(stat(r.stats, "frame/rop", "clear_bytes"), 0.0);  // every cleared line was touched
   // The timing model moved the same bytes through the SLC to DRAM (nothing stayed dirty in the SLC
   // at the end: the lines were written past it or evicted; the requested bytes are what matters).
   EXPECT_EQ(static_cast<double>(r.timing.requested.writes(DramClass::Color)), kImageBytes);
@@ -84,7 +84,7 @@ TEST(ImmediateMode, WrittenClearsCostTheImageAndItsReadBack) {
   EXPECT_EQ(dram_of(r, DramClass::DepthStencil, true), 2 * kImageBytes);
   EXPECT_EQ(dram_of(r, DramClass::DepthStencil, false), kImageBytes);
   EXPECT_EQ(dram_of(r, DramClass::Color, false), 0.0);
-  EXPECT_EQ(stat(r.frame.stats, "frame/rop", "clear_bytes"), 2 * kImageBytes);
+  EXPECT_EQ(stat(r.stats, "frame/rop", "clear_bytes"), 2 * kImageBytes);
 }
 
 TEST(ImmediateMode, OverdrawCostsAnImrDramAndATbdrNothing) {
@@ -138,10 +138,10 @@ TEST(ImmediateMode, ShadesWhatEarlyZInSubmissionOrderShades) {
   const Timed tbr = run_timed(l.trace, l.scene, {"gpu.mode=tbr"});
   const Timed tbdr = run_timed(l.trace, l.scene, {"gpu.mode=tbdr"});
   const double pixels = kFrame * kFrame;
-  EXPECT_EQ(stat(imr.frame.stats, "frame/tsp", "shaded_samples"), stat(tbr.frame.stats, "frame/tsp", "shaded_samples"));
-  EXPECT_EQ(stat(imr.frame.stats, "frame/isp", "samples_rasterised"), stat(tbr.frame.stats, "frame/isp", "samples_rasterised"));
-  EXPECT_EQ(stat(imr.frame.stats, "frame/tsp", "shaded_samples"), 8 * pixels);
-  EXPECT_EQ(stat(tbdr.frame.stats, "frame/tsp", "shaded_samples"), pixels);
+  EXPECT_EQ(stat(imr.stats, "frame/tsp", "shaded_samples"), stat(tbr.stats, "frame/tsp", "shaded_samples"));
+  EXPECT_EQ(stat(imr.stats, "frame/isp", "samples_rasterised"), stat(tbr.stats, "frame/isp", "samples_rasterised"));
+  EXPECT_EQ(stat(imr.stats, "frame/tsp", "shaded_samples"), 8 * pixels);
+  EXPECT_EQ(stat(tbdr.stats, "frame/tsp", "shaded_samples"), pixels);
 }
 
 TEST(ImmediateMode, BlendingReadsTheColourBuffer) {
@@ -152,11 +152,11 @@ TEST(ImmediateMode, BlendingReadsTheColourBuffer) {
   const Layers l = layers(4, true, "blend", 1, 2);
   const Timed small = run_timed(l.trace, l.scene, {"gpu.mode=imr"});
   const Timed big = run_timed(l.trace, l.scene, with({"gpu.mode=imr"}, kHugeRop));
-  const double fill = stat(small.frame.stats, "frame/rop", "fill_bytes") - dram_of(small, DramClass::DepthStencil, false);
+  const double fill = stat(small.stats, "frame/rop", "fill_bytes") - dram_of(small, DramClass::DepthStencil, false);
   EXPECT_GE(fill, 3 * kImageBytes);
   EXPECT_LE(fill, 3 * kImageBytes * 1.1);
   EXPECT_EQ(dram_of(big, DramClass::Color, false), 0.0);
-  EXPECT_GT(stat(small.frame.stats, "frame/rop", "color_read_misses"), 0.0);
+  EXPECT_GT(stat(small.stats, "frame/rop", "color_read_misses"), 0.0);
 }
 
 TEST(ImmediateMode, UnitsOverlapAsAPipeline) {
@@ -178,7 +178,7 @@ TEST(ImmediateMode, UnitsOverlapAsAPipeline) {
   EXPECT_GE(serial.timing.frame_cycles - piped.timing.frame_cycles, 0.9 * isp)
       << "piped " << piped.timing.frame_cycles << " serial " << serial.timing.frame_cycles;
   // Same work either way: batching moves time, not counts.
-  EXPECT_EQ(stat(serial.frame.stats, "frame/tsp", "fragment_alu_ops"), stat(piped.frame.stats, "frame/tsp", "fragment_alu_ops"));
+  EXPECT_EQ(stat(serial.stats, "frame/tsp", "fragment_alu_ops"), stat(piped.stats, "frame/tsp", "fragment_alu_ops"));
   EXPECT_EQ(serial.frame.dram.total_written(), piped.frame.dram.total_written());
 }
 
@@ -214,23 +214,23 @@ TEST(ImmediateMode, BackToFrontLitLayersHideOneScreenOfSamplesWithEarlyZAndNoneO
   const Timed imr = run_timed(l.trace, l.scene, {"gpu.mode=imr"});
   const Timed tbr = run_timed(l.trace, l.scene, {"gpu.mode=tbr"});
   const Timed tbdr = run_timed(l.trace, l.scene, {"gpu.mode=tbdr"});
-  EXPECT_EQ(stat(imr.frame.stats, "frame/tsp", "lit_surface_invocations"), 2 * screen);
-  EXPECT_EQ(stat(imr.frame.stats, "frame/tsp", "hidden_lit_samples"), screen);
-  EXPECT_EQ(stat(imr.frame.stats, "frame/tsp", "hidden_light_evaluations"), 3 * screen);
-  EXPECT_EQ(stat(tbr.frame.stats, "frame/tsp", "hidden_lit_samples"), screen);  // tbr: the same order
-  EXPECT_EQ(stat(tbdr.frame.stats, "frame/tsp", "lit_surface_invocations"), screen);
-  EXPECT_EQ(stat(tbdr.frame.stats, "frame/tsp", "hidden_lit_samples"), 0.0);
-  EXPECT_EQ(stat(tbdr.frame.stats, "frame/tsp", "hidden_light_evaluations"), 0.0);
+  EXPECT_EQ(stat(imr.stats, "frame/tsp", "lit_surface_invocations"), 2 * screen);
+  EXPECT_EQ(stat(imr.stats, "frame/tsp", "hidden_lit_samples"), screen);
+  EXPECT_EQ(stat(imr.stats, "frame/tsp", "hidden_light_evaluations"), 3 * screen);
+  EXPECT_EQ(stat(tbr.stats, "frame/tsp", "hidden_lit_samples"), screen);  // tbr: the same order
+  EXPECT_EQ(stat(tbdr.stats, "frame/tsp", "lit_surface_invocations"), screen);
+  EXPECT_EQ(stat(tbdr.stats, "frame/tsp", "hidden_lit_samples"), 0.0);
+  EXPECT_EQ(stat(tbdr.stats, "frame/tsp", "hidden_light_evaluations"), 0.0);
   // Front to back, early-Z rejects the far quad: nothing hidden. With the tests after the shader
   // (isp.early_z=0) the far quad is shaded everywhere and fails: one screen hidden again.
   const Layers f = lit_layers(2, false);
-  EXPECT_EQ(stat(run_timed(f.trace, f.scene, {"gpu.mode=imr"}).frame.stats, "frame/tsp", "hidden_lit_samples"), 0.0);
+  EXPECT_EQ(stat(run_timed(f.trace, f.scene, {"gpu.mode=imr"}).stats, "frame/tsp", "hidden_lit_samples"), 0.0);
   const Timed late = run_timed(f.trace, f.scene, {"gpu.mode=imr", "isp.early_z=0"});
-  EXPECT_EQ(stat(late.frame.stats, "frame/tsp", "hidden_lit_samples"), screen);
-  EXPECT_EQ(stat(late.frame.stats, "frame/tsp", "hidden_light_evaluations"), 3 * screen);
+  EXPECT_EQ(stat(late.stats, "frame/tsp", "hidden_lit_samples"), screen);
+  EXPECT_EQ(stat(late.stats, "frame/tsp", "hidden_light_evaluations"), 3 * screen);
   // 4 back-to-front layers on the IMR: each of the first 3 is replaced by the next: 3 screens.
   const Layers four = lit_layers(4, true);
-  EXPECT_EQ(stat(run_timed(four.trace, four.scene, {"gpu.mode=imr"}).frame.stats, "frame/tsp", "hidden_lit_samples"), 3 * screen);
+  EXPECT_EQ(stat(run_timed(four.trace, four.scene, {"gpu.mode=imr"}).stats, "frame/tsp", "hidden_lit_samples"), 3 * screen);
 }
 
 }  // namespace

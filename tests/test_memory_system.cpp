@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "app/stat_rows.hpp"
 #include "models/address_space.hpp"
 #include "models/cache.hpp"
 #include "models/dram.hpp"
@@ -390,7 +391,7 @@ TEST(CacheTest, EnergyAndCollect) {
   c.access(A, 4, true, DramClass::Textures);   // 4 write bytes
   EXPECT_DOUBLE_EQ(c.energy_pj(), (4 + 64 + 4) * 2.5);
   std::vector<StatRecord> out;
-  c.collect(out);
+  append_cache_rows(c.snapshot(), out);
   ASSERT_FALSE(out.empty());
   EXPECT_EQ(out.front().scope, "mem/cache.t");
   bool saw_class = false;
@@ -947,7 +948,7 @@ TEST(DramTest, Deterministic) {
     EventQueue eq;
     Dram d(hw.dram, hw.energy, eq);
     ticks[k] = run_mixed(d, eq, 42, 5000);
-    d.collect(stats[k]);
+    append_dram_rows(d.snapshot(), stats[k]);
   }
   EXPECT_EQ(ticks[0], ticks[1]);
   ASSERT_EQ(stats[0].size(), stats[1].size());
@@ -1526,7 +1527,7 @@ TEST(MemorySystemTest, DeterministicAndCollects) {
     EventQueue eq;
     MemorySystem m(hw, eq, "frame/mem");
     run_timed(m, eq, v, &done[k]);
-    m.collect(stats[k]);
+    append_memory_rows(m.snapshot(), stats[k]);
   }
   EXPECT_EQ(done[0], done[1]);
   ASSERT_EQ(stats[0].size(), stats[1].size());

@@ -1,7 +1,7 @@
 // Every statistic's name is declared once, as a member of a typed statistics set (TBDR_STATS,
 // sim/kernel/stats.hpp), and code that reads a figure back names it through the set
 // (stat_name(&Set::member), a set's kScope) or the database's own definitions (analysis/views.sql).
-// This test holds the project to that: it collects every name a run stores (runs of a TBDR frame,
+// Rows are made from the sets in one place (sim/app/stat_rows.cpp). This test holds the project to that: it collects every name a run stores (runs of a TBDR frame,
 // an IMR frame and compute techniques), reads every string literal of sim/, models/ and analysis/
 // (C++ sources and analysis/views.sql; X-macro declaration lines, where names are identifiers and
 // the literals are units and descriptions, left out), and fails when a statistic's name is spelled
@@ -198,6 +198,21 @@ TEST(StatNames, NoStatisticNameIsSpelledInTwoSourceFiles) {
     ASSERT_TRUE(q.step());
     EXPECT_EQ(q.int64(0), 1) << m;
   }
+}
+
+/// Rows are made in one place: collect_stats is called only in sim/app/stat_rows.cpp (and defined in
+/// sim/kernel/stats.hpp); the models hand over typed sets.
+TEST(StatNames, RowsAreMadeOnlyInStatRows) {
+  const fs::path root = TBDRSIM_SOURCE_DIR;
+  std::set<std::string> callers;
+  for (const char* folder : {"sim", "models", "workloads", "analysis"}) {
+    for (const auto& e : fs::recursive_directory_iterator(root / folder)) {
+      const std::string ext = e.path().extension().string();
+      if (ext != ".cpp" && ext != ".hpp") continue;
+      if (read_text(e.path()).find("collect_stats(") != std::string::npos) callers.insert(fs::relative(e.path(), root).generic_string());
+    }
+  }
+  EXPECT_EQ(callers, (std::set<std::string>{"sim/app/stat_rows.cpp", "sim/kernel/stats.hpp"}));
 }
 
 /// The scanner itself: literals found, comments, char literals and X-macro lines not.

@@ -248,8 +248,8 @@ TEST(TechniqueImages, OnChipDeferredMatchesStoredDeferredWhetherItFitsOrSplits) 
   const FrameResult fits = simulate_frame(onchip, "fits", scene, hw);
   const FrameResult split =
       simulate_frame(onchip, "split", scene, resolve_config({}, {"pls.tile_buffer_bits_per_pixel=64"}).hw);
-  EXPECT_EQ(stat(fits.stats, "frame/tile_memory", "split_renders"), 0.0);
-  EXPECT_EQ(stat(split.stats, "frame/tile_memory", "split_renders"), 1.0);
+  EXPECT_EQ(stat(fits, "frame/tile_memory", "split_renders"), 0.0);
+  EXPECT_EQ(stat(split, "frame/tile_memory", "split_renders"), 1.0);
   // Compared in the rgba8 target's linear values (the sRGB image magnifies 1/255 near black).
   const auto& on = fits.images.attachments.at("color").color;
   const auto& ref = stored_frame.images.attachments.at("color").color;

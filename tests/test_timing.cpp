@@ -79,7 +79,7 @@ TEST(TimingRoofline, FillBoundFrameMatchesTheRasterRate) {
   }
   t.commands.push_back(p);
   const Timed r = run_timed(t, s, {});
-  const double samples = stat(r.frame.stats, "frame/isp", "samples_rasterised");
+  const double samples = stat(r.stats, "frame/isp", "samples_rasterised");
   ASSERT_EQ(samples, 64.0 * 65536);
   const double bound = samples / 32.0;
   EXPECT_NEAR(r.timing.frame_cycles, bound, 0.05 * bound) << "fill bound " << bound;
@@ -91,8 +91,8 @@ TEST(TimingRoofline, AluBoundFrameMatchesTheUscRate) {
   const Timed r = run_wall(wall_frame(256, 4000, 0, -256, 512), {});
   // The quad's two triangles split the 2x2 quads along its diagonal: each launches those quads,
   // so 256 helper lanes run the shader too.
-  EXPECT_EQ(stat(r.frame.stats, "frame/tsp", "helper_lanes"), 256);
-  EXPECT_EQ(stat(r.frame.stats, "frame/tsp", "fragment_alu_ops"), (65536.0 + 256) * 4000);
+  EXPECT_EQ(stat(r.stats, "frame/tsp", "helper_lanes"), 256);
+  EXPECT_EQ(stat(r.stats, "frame/tsp", "fragment_alu_ops"), (65536.0 + 256) * 4000);
   const double bound = (65536.0 + 256) * 4000 / (4 * 16 * 2);
   EXPECT_NEAR(r.timing.frame_cycles, bound, 0.05 * bound) << "ALU bound " << bound;
 }
@@ -218,7 +218,7 @@ TEST(TimingConservation, EnergyIsTheSumOfCountersTimesUnitCosts) {
   const Trace t = atrium_like(s);
   const Timed r = run_timed(t, s, {});
   const HwConfig hw = resolve_config({}, {}).hw;
-  const auto& st = r.frame.stats;
+  const auto& st = r.stats;
   // Tile buffer and tag/depth: reads at the array's CACTI read energy per byte, writes at its write
   // energy (sized by the tile and its tiles in flight, at energy.process_nm).
   const auto pjb = [&](OnChipArray a, bool write) { return on_chip_pj_per_byte(hw, a, write); };
@@ -262,10 +262,10 @@ TEST(TimingDeterminism, SameRunTwiceGivesIdenticalFigures) {
   EXPECT_EQ(a.timing.events, b.timing.events);
   ASSERT_EQ(a.timing.tiles.size(), b.timing.tiles.size());
   for (std::size_t i = 0; i < a.timing.tiles.size(); ++i) EXPECT_EQ(a.timing.tiles[i], b.timing.tiles[i]);
-  ASSERT_EQ(a.frame.stats.size(), b.frame.stats.size());
-  for (std::size_t i = 0; i < a.frame.stats.size(); ++i) {
-    if (a.frame.stats[i].scope == "frame/host") continue;
-    EXPECT_EQ(a.frame.stats[i].value, b.frame.stats[i].value) << a.frame.stats[i].scope << " " << a.frame.stats[i].name;
+  ASSERT_EQ(a.stats.size(), b.stats.size());
+  for (std::size_t i = 0; i < a.stats.size(); ++i) {
+    if (a.stats[i].scope == "frame/host") continue;
+    EXPECT_EQ(a.stats[i].value, b.stats[i].value) << a.stats[i].scope << " " << a.stats[i].name;
   }
 }
 
@@ -372,7 +372,7 @@ SubpassCliff onchip_subpass_cliff(int k_first, int k_last, std::vector<std::stri
     t.commands.push_back(p);
     const Timed r = run_timed(t, s, sets);
     out.cycles.push_back(r.timing.frame_cycles);
-    out.split_renders.push_back(stat(r.frame.stats, "frame/tile_memory", "split_renders"));
+    out.split_renders.push_back(stat(r.stats, "frame/tile_memory", "split_renders"));
     out.gbuffer_written.push_back(static_cast<double>(r.frame.dram.writes(DramClass::Gbuffer)));
     out.gbuffer_read.push_back(static_cast<double>(r.frame.dram.reads(DramClass::Gbuffer)));
   }
@@ -454,11 +454,10 @@ TEST(TimingCaches, ReReadsOfAStoredGbufferComeFromWhereItWasStoredAndHitTheCache
     t.commands = {g, l};
     const Timed r = run_timed(t, s, sets);
     EXPECT_EQ(resolve_config({}, {}).hw.cache.texture.line_bytes, 64);
-    double hits = -1, misses = -1;
-    for (const StatRecord& m : r.timing.memory_stats) {
-      if (m.scope == "mem/cache.texture.class.gbuffer" && m.name == "read_hits") hits = m.value;
-      if (m.scope == "mem/cache.texture.class.gbuffer" && m.name == "read_misses") misses = m.value;
-    }
+    const CacheSnapshot& texture = r.timing.memory_units.caches.front();  // texture, vertex, SLC
+    EXPECT_EQ(texture.scope, "mem/cache.texture");
+    const CacheClassStats& gbuffer = texture.classes[static_cast<std::size_t>(DramClass::Gbuffer)];
+    const double hits = static_cast<double>(gbuffer.read_hits.value()), misses = static_cast<double>(gbuffer.read_misses.value());
     struct Figures {
       double dram, requested, hits, misses, cycles;
     };
@@ -506,7 +505,7 @@ TEST(TimingCliff, FramebufferFetchReadsTheTileBuffer) {
     if (fetch) d.fetch = {"g1"};
     p.draws = {d};
     t.commands.push_back(p);
-    read[fetch] = stat(run_timed(t, s, {}).frame.stats, "frame/tsp", "tile_buffer_read_bytes");
+    read[fetch] = stat(run_timed(t, s, {}).stats, "frame/tsp", "tile_buffer_read_bytes");
   }
   EXPECT_EQ(read[1] - read[0], 256.0 * 256.0 * 4.0);
 }
@@ -544,7 +543,7 @@ TEST(TimingCliff, PixelLocalStorageSharesTheColourStorage) {
   p.draws = {draw_of("wall")};
   t.commands.push_back(p);
   const Timed r = run_timed(t, s, {"pls.tile_buffer_bits_per_pixel=128"});
-  EXPECT_EQ(stat(r.frame.stats, "frame/tile_memory", "onchip_need_bytes_per_pixel"), 16.0);
+  EXPECT_EQ(stat(r.stats, "frame/tile_memory", "onchip_need_bytes_per_pixel"), 16.0);
   EXPECT_EQ(r.frame.dram.reads(DramClass::Spill) + r.frame.dram.writes(DramClass::Spill), 0u);
 }
 

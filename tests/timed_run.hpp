@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "app/run_driver.hpp"
+#include "app/stat_rows.hpp"
 #include "models/command_processor.hpp"
 #include "models/hw_config.hpp"
 
@@ -15,6 +16,7 @@ struct Timed {
   FrameResult frame;
   TimingResult timing;
   EnergyBreakdown energy;
+  std::vector<StatRecord> stats;  ///< every row the run stores but the host's (run_rows)
 };
 
 /// Simulates and times trace `t` on scene `s` with the default hardware plus `sets`.
@@ -23,6 +25,7 @@ inline Timed run_timed(const Trace& t, const Scene& s, const std::vector<std::st
   Timed r;
   r.frame = simulate_frame(t, "t.trace", s, hw);
   time_frame(hw, r.frame, r.timing, r.energy);
+  r.stats = run_rows(r.frame, r.timing, r.energy);
   return r;
 }
 

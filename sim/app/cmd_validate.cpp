@@ -117,7 +117,7 @@ class Validator {
 
 /// A statistic of a run (0 when the unit recorded none).
 double stat(const RunOutcome& r, const std::string& scope, const std::string& name) {
-  for (const auto& s : r.frame.stats) {
+  for (const auto& s : r.stats) {
     if (s.scope == scope && s.name == name) return s.value;
   }
   return 0.0;
@@ -689,7 +689,7 @@ void fill_and_bandwidth_rooflines(Validator& v, std::vector<AnchorRow>& rows, co
 double dispatch_ms(const RunOutcome& r, const std::string& kernel, double core_clock_mhz) {
   double start = 0, end = 0;
   const std::string suffix = "." + kernel + CommandTimingStats::kScopeSuffix;
-  for (const auto& st : r.frame.stats) {
+  for (const auto& st : r.stats) {
     if (st.scope.rfind("dispatch", 0) != 0 || st.scope.size() < suffix.size() ||
         st.scope.compare(st.scope.size() - suffix.size(), suffix.size(), suffix) != 0) {
       continue;

@@ -1,5 +1,6 @@
 #include "app/run_driver.hpp"
 #include "app/run_stats.hpp"
+#include "app/stat_rows.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -224,38 +225,11 @@ std::vector<std::string> write_frame_images(const FrameResult& frame, const std:
   return written;
 }
 
-void book_timing(const HwConfig& hw, FrameResult& frame, const TimingResult& timing, EnergyBreakdown& energy) {
-  auto& st = frame.stats;
-  FrameTimingStats f;
-  f.frame_cycles.set(timing.frame_cycles);
-  f.frame_time_ms.set(timing.frame_time_ps * 1e-9);
-  f.timing_events.set(timing.events);
-  collect_stats(f, FrameTimingStats::kScope, st);
-  for (const auto& c : timing.commands) {
-    CommandTimingStats span;
-    span.start_cycle.set(c.start_cycle);
-    span.binning_end_cycle.set(c.binning_end_cycle);
-    span.end_cycle.set(c.end_cycle);
-    collect_stats(span, c.name + CommandTimingStats::kScopeSuffix, st);
-  }
-  for (const auto& u : timing.units) {
-    UnitTimeStats time;
-    time.busy_cycles.set(u.busy_cycles);
-    time.stalled_cycles.set(u.stalled_cycles);
-    time.frame_cycles = timing.frame_cycles;
-    collect_stats(time, UnitTimeStats::kScopePrefix + u.name, st);
-  }
-  TextureFetchStats texture;
-  texture.line_accesses.set(timing.texture_line_accesses);
-  texture.footprint_lines.set(timing.texture_footprint_lines);
-  texture.cache_misses.set(timing.texture_cache_misses);
-  collect_stats(texture, TextureFetchStats::kScope, st);
-  for (auto& r : timing.memory_stats) st.push_back(r);
+void book_timing(const HwConfig& hw, const FrameResult& frame, const TimingResult& timing, EnergyBreakdown& energy) {
   energy = compute_energy(hw, frame.totals, timing.memory, timing.frame_time_ps);
-  energy.collect(st);
 }
 
-void time_frame(const HwConfig& hw, FrameResult& frame, TimingResult& timing, EnergyBreakdown& energy) {
+void time_frame(const HwConfig& hw, const FrameResult& frame, TimingResult& timing, EnergyBreakdown& energy) {
   timing = run_timing(hw, frame.work);
   book_timing(hw, frame, timing, energy);
 }
@@ -523,7 +497,7 @@ void simulate_pipelined(const RunRequest& req, const RunInputs& in, RunOutcome& 
   o.cpu_seconds = std::max(0.0, cpu_seconds() - c_sim - timing_thread_cpu - images.cpu_seconds() - db_open_cpu);
 }
 
-/// The run's host figures (scope frame/host): no simulated figure depends on them.
+/// Appends the run's host figures (scope frame/host): no simulated figure depends on them.
 void collect_host_stats(const RunOutcome& o, std::vector<StatRecord>& rows) {
   HostRunStats host;
   host.load_wall_seconds.set(o.load_seconds);
@@ -539,7 +513,7 @@ void collect_host_stats(const RunOutcome& o, std::vector<StatRecord>& rows) {
   const HostSpeedFacts facts = host_speed_facts();
   host.allocator_huge_pages.set(facts.allocator_huge_pages ? 1.0 : 0.0);
   host.host_free_page_reporting.set(facts.host_free_page_reporting ? 1.0 : 0.0);
-  collect_stats(host, HostRunStats::kScope, rows);
+  append_host_rows(host, rows);
 }
 
 /// The run as the results database stores it: identity, every parameter with its origin, the
@@ -564,7 +538,7 @@ RunRecord run_record(const RunRequest& req, const RunInputs& in, const RunOutcom
   }
   rec.params.push_back(config_label_param(req.config.label));
   for (auto& p : trace_run_params(in.trace, req.trace_path)) rec.params.push_back(std::move(p));
-  rec.stats = o.frame.stats;
+  rec.stats = o.stats;
   collect_host_stats(o, rec.stats);
   rec.tiles = o.timing.tiles;
   return rec;
@@ -599,6 +573,7 @@ RunOutcome run_one(const RunRequest& req) {
   }
   outcome.frame.work.commands = {};  // (freed here at one thread; moved from, at more)
   book_timing(req.config.hw, outcome.frame, outcome.timing, outcome.energy);
+  outcome.stats = run_rows(outcome.frame, outcome.timing, outcome.energy);
   outcome.technique = in.trace.technique.empty() ? "custom" : in.trace.technique;
   outcome.scene = in.scene->source;
   if (!req.images_dir.empty()) {
@@ -650,14 +625,9 @@ void print_run_summary(const RunOutcome& o, std::ostream& out) {
       << std::setw(10) << stat_text(device.total_written() / 1e6) << "   (" << stat_text(f.dram.total_read() / 1e6) << ", "
       << stat_text(f.dram.total_written() / 1e6) << ")\n";
   // The device's side (after the caches) against its peak, which dram.clock_mhz sets.
-  const auto mem_stat = [&](Accumulator DramStats::*member) {
-    for (const StatRecord& r : o.timing.memory_stats) {
-      if (r.scope == "mem/dram" && r.name == stat_name(member)) return r.value;
-    }
-    return 0.0;
-  };
-  out << "  DRAM bandwidth: " << stat_text(mem_stat(&DramStats::achieved_bandwidth_gbps)) << " GB/s achieved of "
-      << stat_text(mem_stat(&DramStats::peak_bandwidth_gbps)) << " GB/s peak\n";
+  const DramStats& dram = o.timing.memory_units.dram.stats;
+  out << "  DRAM bandwidth: " << stat_text(dram.achieved_bandwidth_gbps.value()) << " GB/s achieved of "
+      << stat_text(dram.peak_bandwidth_gbps.value()) << " GB/s peak\n";
   if (!o.images_written.empty()) {
     out << "  images: " << o.images_written.size() << " files in "
         << std::filesystem::path(o.images_written.front()).parent_path().string() << "\n";

@@ -46,6 +46,7 @@ struct RunOutcome {
   FrameResult frame;              ///< its work without commands: those are released once timed
   TimingResult timing;
   EnergyBreakdown energy;
+  std::vector<StatRecord> stats;  ///< every row of the run but the host's (run_rows)
   std::vector<std::string> images_written;
   DerivedFigures derived;        ///< read back from the database (views.sql defines them) when RunRequest::summary_figures
 };
@@ -74,11 +75,10 @@ std::vector<std::string> write_frame_images(const FrameResult& frame, const std:
 /// Writes the heat map of cycles per tile (summed over the frame's passes).
 std::string write_tile_cycles_image(const FrameResult& frame, const TimingResult& timing, const std::string& dir);
 
-/// Runs the timing and energy models on a functional frame and appends their statistics
-/// (frame/timing, <command>/timing, frame/unit.*, mem/*, frame/energy) to frame.stats.
-void time_frame(const HwConfig& hw, FrameResult& frame, TimingResult& timing, EnergyBreakdown& energy);
-/// time_frame's second half: appends the statistics of `timing` (the timing model's result on
-/// `frame`, e.g. run beside the functional run on a WorkFeed) to frame.stats and computes the energy.
-void book_timing(const HwConfig& hw, FrameResult& frame, const TimingResult& timing, EnergyBreakdown& energy);
+/// Runs the timing and energy models on a functional frame (its rows: run_rows, app/stat_rows.hpp).
+void time_frame(const HwConfig& hw, const FrameResult& frame, TimingResult& timing, EnergyBreakdown& energy);
+/// time_frame's second half: the energy of `frame` timed as `timing` (the timing model's result on
+/// it, e.g. run beside the functional run on a WorkFeed).
+void book_timing(const HwConfig& hw, const FrameResult& frame, const TimingResult& timing, EnergyBreakdown& energy);
 
 }  // namespace tbdr

@@ -1,0 +1,44 @@
+#pragma once
+// Where a run's rows are made. Every statistic the results database stores comes from a typed set
+// (kernel/stats.hpp) that a unit, the timing model, the energy model or the run driver filled; this
+// file alone turns those sets into rows (collect_stats) with their scopes, so that what a figure is
+// called is decided in one place (tests/test_stat_names.cpp checks that nothing else makes rows).
+// The scopes:
+//   <command>/<unit>, <command>/compute    each pass's units (geometry, tiler, isp, tsp,
+//                                          tile_memory, rop) and each dispatch's compute unit
+//   <command>/dram[.<class>]               the bytes a command requested, before the caches
+//   frame/<unit>, frame/compute, frame/dram[.<class>]   the frame's totals
+//   frame/frame                            the frame's shape (FrameShapeStats)
+//   frame/timing, <command>/timing, frame/unit.<unit>, frame/texture   the timing model's figures
+//   mem, mem/client.<client>, mem/cache.<cache>[.class.<class>], mem/dram[.ch<i>|.class.<class>]
+//   frame/energy                           the energy model's components and totals
+//   frame/host                             the host's timings (the run driver's HostRunStats)
+#include <vector>
+
+#include "app/run_stats.hpp"
+#include "kernel/stats.hpp"
+#include "models/command_processor.hpp"
+#include "models/energy.hpp"
+#include "models/timing_model.hpp"
+
+namespace tbdr {
+
+/// The rows of a frame's functional statistics: each command's, the frame's totals and shape.
+std::vector<StatRecord> frame_rows(const FrameResult& frame);
+/// Appends the rows of the timing model's result: the frame's time, each command's span, each
+/// timed unit's time, the texture fetch's reuse, then the memory system's (append_memory_rows).
+void append_timing_rows(const TimingResult& timing, std::vector<StatRecord>& out);
+/// Appends the memory system's rows: its own, each client's, each cache's, the DRAM's.
+void append_memory_rows(const MemorySnapshot& memory, std::vector<StatRecord>& out);
+/// Appends one cache's rows: the main set, then one per traffic class.
+void append_cache_rows(const CacheSnapshot& cache, std::vector<StatRecord>& out);
+/// Appends the DRAM's rows: the whole DRAM, each channel, each traffic class.
+void append_dram_rows(const DramSnapshot& dram, std::vector<StatRecord>& out);
+/// Appends the energy model's rows: one per component (<component>_pj) and the totals.
+void append_energy_rows(const EnergyBreakdown& energy, std::vector<StatRecord>& out);
+/// Appends the host's figures (scope frame/host).
+void append_host_rows(const HostRunStats& host, std::vector<StatRecord>& out);
+/// Every row of a timed frame but the host's: frame_rows, then the timing, memory and energy rows.
+std::vector<StatRecord> run_rows(const FrameResult& frame, const TimingResult& timing, const EnergyBreakdown& energy);
+
+}  // namespace tbdr
