@@ -201,7 +201,8 @@ struct Prelude {
 const std::vector<Prelude> kPreludes = {
     {"docs/queries.md",
      // The report and plot lines read the databases of the example sweeps (docs/sweeps.md): its
-     // traces (3 techniques, 64x36, atrium:1), each sweep into out/NAME.db; `run` lines replay t.trace.
+     // traces (3 techniques, 64x36, atrium:1), each sweep into out/NAME.db (pls_budget on the one
+     // trace the budget changes, the light stack's); `run` lines replay t.trace.
      "mkdir -p out/traces\n"
      "for t in plain_forward deferred forward_light_stack; do for n in 64 256 1024; do\n"
      "  tbdrsim trace --technique $t --scene atrium:1 --lights $n --resolution 64x36 --out out/traces/${t}_l$n.trace\n"
@@ -209,13 +210,15 @@ const std::vector<Prelude> kPreludes = {
      "tbdrsim sweep techniques --trace 'out/traces/*.trace' --db out/techniques.db -j 2 --progress none\n"
      "tbdrsim sweep tile_size --trace 'out/traces/*_l256.trace' --db out/tile_size.db -j 2 --progress none\n"
      "tbdrsim sweep lights --trace 'out/traces/*.trace' --db out/lights.db -j 2 --progress none\n"
-     "tbdrsim sweep pls_budget --trace 'out/traces/*_l1024.trace' --db out/pls.db -j 2 --progress none\n"
+     "tbdrsim sweep pls_budget --trace out/traces/forward_light_stack_l1024.trace --db out/pls.db -j 2 --progress none\n"
      "tbdrsim trace --technique plain_forward --scene atrium:1 --lights 16 --resolution 64x36 --out t.trace\n",
      "reports on docs/sweeps.md's sweep databases and on a trace of the reader's"},
     {"docs/plots.md",
-     // The examples plot the study (README.md: 13 techniques x 256 and 1024 lights), the tile_size
-     // sweep and the light stack sweep (docs/sweeps.md).
-     "tbdrsim study --out study --scene atrium:1 --resolution 64x36 --images none\n"
+     // The examples plot the study (README.md: 13 techniques x 256 and 1024 lights; here 3 of
+     // them, deferred the delta plot's baseline), the tile_size sweep and the light stack sweep
+     // (docs/sweeps.md).
+     "tbdrsim study --out study --scene atrium:1 --resolution 64x36 --images none --technique plain_forward deferred "
+     "tiled_deferred\n"
      "mkdir -p out/traces\n"
      "for t in plain_forward deferred forward_light_stack; do\n"
      "  tbdrsim trace --technique $t --scene atrium:1 --lights 256 --resolution 64x36 --out out/traces/${t}_l256.trace\n"
@@ -273,7 +276,7 @@ struct DocPlan {
 DocPlan plan(const std::string& doc) {
   DocPlan p;
   for (const auto& pre : kPreludes) {
-    if (pre.doc == doc) p.script += "# prelude: " + pre.reason + "\n__doc_line='prelude'\n" + pre.script;
+    if (pre.doc == doc) p.script += "# prelude: " + pre.reason + "\n__doc_at prelude\n" + pre.script;
   }
   for (const auto& block : sh_commands(doc)) {
     for (const Command& c : block) {
@@ -298,7 +301,7 @@ DocPlan plan(const std::string& doc) {
         run = replace_all(run, s.from, s.to, &n);
         p.applied[s.from] += n;
       }
-      p.script += "__doc_line='" + where + "'\n" + run;
+      p.script += "__doc_at '" + where + "'\n" + run;
       ++p.commands_run;
     }
   }
@@ -317,7 +320,9 @@ struct ScriptRun {
 ScriptRun run_script(const std::string& name, const std::string& script) {
   const fs::path dir = testing_scratch::scratch_dir("docs_commands", name);
   EXPECT_EQ(dir.lexically_relative(TBDRSIM_SOURCE_DIR).string().rfind("..", 0), 0u) << "scratch inside the checkout";
+  // __doc_at names the document line that runs next in the log, with the seconds since the start.
   std::ofstream(dir / "doc.sh") << "set -euo pipefail\n__doc_line=''\n"
+                                << "__doc_at() { __doc_line=$1; echo \"[doc line $1, at $SECONDS s]\"; }\n"
                                 << "trap 'echo \"doc line failed (exit $?) at $__doc_line: $BASH_COMMAND\" >&2' ERR\n"
                                 << script;
   const fs::path bin_dir = fs::path(TBDRSIM_BINARY).parent_path();
@@ -413,6 +418,11 @@ TEST_P(DocsCommands, RunAsWrittenFromAnotherFolder) {
   for (char& ch : name) ch = std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
   const ScriptRun r = run_script(name, p.script);
   ASSERT_TRUE(r.ok) << tail(r.log);
+  // Where the time went: the log's line markers.
+  std::stringstream log(r.log);
+  for (std::string line; std::getline(log, line);) {
+    if (line.rfind("[doc line ", 0) == 0) std::cout << line << "\n";
+  }
   for (const auto& x : kExpectations) {
     if (x.doc != doc) continue;
     for (const std::string& line : x.log_lines) EXPECT_TRUE(contains(r.log, line)) << line << "\n" << tail(r.log);
