@@ -310,6 +310,7 @@ DocPlan plan(const std::string& doc) {
   return p;
 }
 
+/// How a script ran: exit status 0, its output, and the folder it ran in.
 struct ScriptRun {
   bool ok;
   std::string log;
@@ -336,7 +337,7 @@ ScriptRun run_script(const std::string& name, const std::string& script) {
 
 std::string tail(const std::string& log) { return log.substr(log.size() > 6000 ? log.size() - 6000 : 0); }
 
-/// The documents that have ```sh blocks, each a parameter of DocsCommands.RunAsWritten.
+/// The documents that have ```sh blocks, each a parameter of DocsCommands.RunAsWrittenFromAnotherFolder.
 const std::vector<std::string> kDocsWithCommands = {
     "README.md",          "docs/capture-import.md", "docs/dram-cross-check.md", "docs/fuzzing.md",
     "docs/install.md",    "docs/plots.md",          "docs/queries.md",          "docs/sweeps.md",
