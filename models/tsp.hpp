@@ -200,8 +200,8 @@ class Tsp {
 
  private:
   /// Texture lines of the quads of one scene triangle's batch (quad_seen_[0, quads)): appended to
-  /// ctx_.texture_lines, counted in stats.texture_line_accesses. Kept out of line: the pixel loop
-  /// of shade() compiles better without it.
+  /// ctx_.texture_lines, counted in stats.texture_line_accesses. Kept out of line: the pixel loops
+  /// of shade() compile better without it.
   [[gnu::noinline]] void texture_addresses(const Primitive& p, std::uint32_t tex_fetches, std::size_t quads,
                                            TspStats& stats);
 
@@ -212,6 +212,57 @@ class Tsp {
   void gather_near_lights(const std::vector<std::uint32_t>& bin, const DrawContext& d, glm::vec3 lo, glm::vec3 hi);
   /// Sum of the contributions of near_'s lights at `s`, in near_'s (ascending) order.
   glm::vec3 near_lighting(const SurfacePoint& s, glm::vec3 eye);
+
+  // The steps of shade(), in the order a batch goes through them (models/tsp.cpp says which
+  // hardware step each models). Those run per fragment are inlined into the loops that call them
+  // (host speed: out of line, each reread the batch's state through a pointer; clustered_forward
+  // at 960x540 ran 3 % more instructions in shade).
+  struct Batch;     ///< one batch's decoded draw state
+  struct Fragment;  ///< one fragment in flight
+  /// Launches the batch's quads; counts invocations, quads, helper lanes, fetches. Returns the quads.
+  [[gnu::always_inline]] inline std::uint64_t launch_quads(const Batch& b, TspStats& stats);
+  /// Remakes target_formats_, pls_formats_ and pls_accum_format_ when the pass changed.
+  void refresh_pass_formats();
+  /// The counting path: fragments with a fixed light count and no surface of their own. Returns the lights evaluated.
+  std::uint64_t shade_counted_fragments(const Batch& b, std::vector<std::uint32_t>* alive, TspStats& stats);
+  /// The counting path's PLS effects of a fragment of a shader without colour outputs.
+  void counted_pls_effects(const Batch& b, std::size_t pixel, const Light* volume_light);
+  /// The general path: every fragment shaded in turn. Returns the lights evaluated.
+  std::uint64_t shade_fragments(const Batch& b, std::vector<std::uint32_t>* alive, TspStats& stats);
+  /// Every fragment's barycentrics and base colour texel into frag_bary_, frag_texel_ (prefetched).
+  void prefetch_base_texels(const Batch& b);
+  /// The surface fragment `f` shades (interpolated or read from a stored surface).
+  [[gnu::always_inline]] inline void fragment_surface(const Batch& b, Fragment& f, TspStats& stats);
+  /// A scene triangle's surface at `f`'s pixel: interpolation, base colour sample, alpha test.
+  [[gnu::always_inline]] inline void interpolate_surface(const Batch& b, Fragment& f, TspStats& stats);
+  /// A stored surface's entry `k` (or only its position, out of reach) into `f`.
+  [[gnu::always_inline]] inline void read_stored_surface(const Batch& b, const SurfaceStore& store, std::size_t k, Fragment& f);
+  /// The lights fragment `f` evaluates (f.fl).
+  [[gnu::always_inline]] inline void select_lights(const Batch& b, Fragment& f, TspStats& stats);
+  /// The sum of `f`'s lights' contributions at its surface.
+  [[gnu::always_inline]] inline glm::vec3 fragment_lighting(const Batch& b, const Fragment& f);
+  /// The batch's surface box (made at the first call; `fallback` when no fragment has a surface).
+  const std::pair<glm::vec3, glm::vec3>& batch_bounds(const Batch& b, const glm::vec3& fallback) const;
+  /// PLS writes of a shader without colour outputs.
+  [[gnu::always_inline]] inline void store_in_pls(const Batch& b, const Fragment& f);
+  /// Fragment `f`'s colour outputs: lit colour blended into the targets, surface to a G-buffer target.
+  [[gnu::always_inline]] inline void write_colour_outputs(const Batch& b, const Fragment& f, TspStats& stats);
+  /// Fragment `f`'s surface into the first G-buffer / visibility target.
+  [[gnu::always_inline]] inline void store_in_surface_target(const Batch& b, const Fragment& f);
+  /// `src` blended into the written samples of the batch's colour targets.
+  void blend_into_colour_targets(const Batch& b, std::size_t pixel, std::uint32_t write_mask, const glm::vec4& src);
+  /// `add` into the pixel's PLS light accumulator, kept as its format holds it.
+  [[gnu::always_inline]] inline void accumulate_in_pls(const Batch& b, std::size_t pixel, const glm::vec3& add);
+  /// Marks the pixel's PLS undefined (a colour output was written).
+  [[gnu::always_inline]] inline void invalidate_pls(std::size_t pixel);
+  /// A surface as the batch's G-buffer targets (`pls`: the PLS variables) keep it.
+  SurfacePoint stored_surface(const Batch& b, bool pls, SurfacePoint q) const;
+  /// One fragment's colour write in the pass's lit-sample ledger.
+  [[gnu::always_inline]] inline void keep_ledger(const Batch& b, const ShadePixel& px, std::uint32_t write_mask, std::uint64_t lights, TspStats& stats);
+  /// Tile buffer traffic of `written` colour samples.
+  [[gnu::always_inline]] inline void charge_written_samples(const Batch& b, std::uint64_t written, TspStats& stats);
+  /// The batch's per-fragment charges, booked once.
+  void charge_batch(const Batch& b, std::uint64_t helpers, std::uint64_t light_sum, TspStats& stats);
 
   RenderContext& ctx_;
   std::vector<std::uint64_t>* texture_lines_out_;  ///< the current tile's texture lines (see bind_outputs)

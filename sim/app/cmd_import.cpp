@@ -225,425 +225,560 @@ void check_png_file(const fs::path& p, const std::string& what) {
   check_png_signature(p, what, reinterpret_cast<const std::uint8_t*>(head), static_cast<std::size_t>(in.gcount()));
 }
 
-}  // namespace
+/// A draw's viewport, [x, y, width, height, min_depth, max_depth] in framebuffer pixels (y down
+/// for Vulkan); the whole frame, depth [0, 1], when the capture gives none.
+struct DrawViewport {
+  float x = 0, y = 0, w = 0, h = 0, min_depth = 0, max_depth = 1;
+  bool full_frame = true;  ///< the whole frame (the simulator's only viewport)
+};
 
-CaptureImport convert_capture(const std::string& frame_json_path, const std::string& glb_name) {
-  const Reader r(frame_json_path);
-  json doc;
+/// One conversion of a capture intermediate: the trace being built, the GLB its geometry and
+/// textures go to, and what the passes share (image formats, stores, distinct shaders).
+class CaptureConverter {
+ public:
+  explicit CaptureConverter(const std::string& frame_json_path)
+      : r_(frame_json_path), dir_(fs::path(frame_json_path).parent_path()), t_(out_.trace) {}
+  /// Parses the intermediate and reads its header: format, clip convention, source, frame size.
+  void read_header();
+  /// The intermediate's passes.
+  const json& passes() const { return r_.array(doc_, "passes", "header"); }
+  /// One pass: its attachments, then its draws.
+  void convert_pass(const json& pj);
+  /// The import: the GLB finished, the trace's scene naming `glb_name`, the summary's first line.
+  CaptureImport finish(const std::string& glb_name);
+
+ private:
+  Attachment convert_attachment(const json& aj, const std::string& awhere, const std::string& pass_name, std::uint64_t index);
+  void name_attachment_image(const json& aj, const std::string& awhere, const std::string& pass_name, std::uint64_t index,
+                             Attachment& a);
+  void note_clear_values(const json& aj, const std::string& awhere, const Attachment& a);
+  void check_pass_attachments(const PassDesc& pass, const std::string& pwhere) const;
+  void convert_draw(const json& dj, const std::string& pwhere, std::size_t color_targets, bool has_depth, PassDesc& pass);
+  DrawViewport read_viewport(const json& dj, const std::string& dwhere) const;
+  void check_scissor(const json& dj, const std::string& dwhere);
+  std::vector<glm::vec4> clip_positions(const json& dj, const std::string& dwhere, const DrawViewport& vp);
+  std::vector<std::uint32_t> vertex_indices(const json& dj, const std::string& dwhere, std::size_t vertices, bool& indexed) const;
+  std::vector<std::uint32_t> triangle_list(const std::vector<std::uint32_t>& idx, const std::string& topo,
+                                           const std::string& dwhere) const;
+  json position_attributes(const std::vector<glm::vec4>& clip);
+  json draw_material(const json& dj, const std::string& dwhere, const std::string& dname, std::size_t vertices, json& attrs,
+                     std::string& texture_note);
+  int texture_of_file(const std::string& file, const std::string& dwhere);
+  std::string draw_shader(const json& sj, const std::string& dwhere, std::size_t color_targets, ShaderDesc& sh);
+  PipelineState draw_pipeline(const json& dj, const std::string& dwhere, std::uint64_t ev, const std::string& shader,
+                              bool has_depth);
+
+  const Reader r_;
+  json doc_;
+  std::string convention_;  ///< clip_convention: vulkan or opengl
+  fs::path dir_;            ///< the intermediate's folder (its textures)
+  CaptureImport out_;
+  Trace& t_;
+  GlbBuilder glb_;
+  json meshes_ = json::array(), nodes_ = json::array(), materials_ = json::array(), textures_ = json::array(),
+       images_ = json::array();
+  std::map<std::string, int> image_of_file_;  ///< texture file -> glTF texture index
+  std::map<std::string, std::string> shader_of_key_;
+  std::map<std::uint64_t, Format> image_format_;  ///< attachment image -> format across passes
+  std::set<std::uint64_t> stored_images_;
+  std::uint32_t max_samples_ = 1;
+};
+
+void CaptureConverter::read_header() {
+  const std::string& path = r_.file();
   {
-    std::ifstream in(frame_json_path, std::ios::binary);
-    if (!in) throw InputError(frame_json_path, "cannot open the capture intermediate");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path, "cannot open the capture intermediate");
     try {
-      doc = json::parse(in);
+      doc_ = json::parse(in);
     } catch (const json::exception& e) {
-      throw InputError(frame_json_path, std::string("not valid JSON (truncated export?): ") + e.what());
+      throw InputError(path, std::string("not valid JSON (truncated export?): ") + e.what());
     }
   }
-  const std::string fmt = r.str(doc, "format", "header");
-  if (fmt != kCaptureFormat) r.fail("header", "format '" + fmt + "', expected '" + kCaptureFormat + "'");
-  const std::string convention = r.str(doc, "clip_convention", "header");
-  if (convention != "vulkan" && convention != "opengl") {
-    r.fail("header", "clip_convention '" + convention + "' (known: vulkan, opengl)");
+  const std::string fmt = r_.str(doc_, "format", "header");
+  if (fmt != kCaptureFormat) r_.fail("header", "format '" + fmt + "', expected '" + kCaptureFormat + "'");
+  convention_ = r_.str(doc_, "clip_convention", "header");
+  if (convention_ != "vulkan" && convention_ != "opengl") {
+    r_.fail("header", "clip_convention '" + convention_ + "' (known: vulkan, opengl)");
   }
-  const fs::path dir = fs::path(frame_json_path).parent_path();
-
-  CaptureImport out;
-  Trace& t = out.trace;
-  t.technique = "capture_import";
-  const json& source = r.get(doc, "source", "header");
+  t_.technique = "capture_import";
+  const json& source = r_.get(doc_, "source", "header");
   for (const char* key : {"tool", "api", "capture"}) {
     if (source.contains(key) && source[key].is_string()) {
       std::string v = source[key].get<std::string>();
       std::replace_if(v.begin(), v.end(), [](char c) { return c == ' ' || c == '"' || c == '#' || c == '\\'; }, '_');
-      if (!v.empty()) t.options[key] = v;
+      if (!v.empty()) t_.options[key] = v;
     }
   }
-  t.frame.width = static_cast<int>(r.uint(doc, "width", "header", kMaxFrameSide));
-  t.frame.height = static_cast<int>(r.uint(doc, "height", "header", kMaxFrameSide));
-  if (t.frame.width == 0 || t.frame.height == 0) r.fail("header", "frame of zero size");
-  t.frame.samples = 1;
-  t.camera = placeholder_camera();
-  t.camera_name = "captured_clip_space";
+  t_.frame.width = static_cast<int>(r_.uint(doc_, "width", "header", kMaxFrameSide));
+  t_.frame.height = static_cast<int>(r_.uint(doc_, "height", "header", kMaxFrameSide));
+  if (t_.frame.width == 0 || t_.frame.height == 0) r_.fail("header", "frame of zero size");
+  t_.frame.samples = 1;
+  t_.camera = placeholder_camera();
+  t_.camera_name = "captured_clip_space";
 
-  for (const auto& u : r.array(doc, "unsupported", "header")) {
-    if (u.is_string()) out.unsupported.push_back(u.get<std::string>());
+  for (const auto& u : r_.array(doc_, "unsupported", "header")) {
+    if (u.is_string()) out_.unsupported.push_back(u.get<std::string>());
   }
-  for (const auto& d : r.array(doc, "dispatches", "header")) {
+  for (const auto& d : r_.array(doc_, "dispatches", "header")) {
     (void)d;  // each is listed in `unsupported` by the exporter (the application's own kernels)
   }
+}
 
-  GlbBuilder glb;
-  json meshes = json::array(), nodes = json::array(), materials = json::array(), textures = json::array(),
-       images = json::array();
-  std::map<std::string, int> image_of_file;  // texture file -> glTF texture index
-  std::map<std::string, std::string> shader_of_key;
-  std::map<std::uint64_t, Format> image_format;  // attachment image -> format across passes
-  std::set<std::uint64_t> stored_images;
-  std::uint32_t max_samples = 1;
-
-  for (const auto& pj : r.array(doc, "passes", "header")) {
-    const std::uint64_t pev = r.uint(pj, "event", "pass", 1ull << 40);
-    const std::string pwhere = "pass at event " + std::to_string(pev);
-    PassDesc pass;
-    pass.name = "pass_" + std::to_string(pev);
-    std::size_t color_targets = 0;
-    for (const auto& aj : r.array(pj, "attachments", pwhere)) {
-      const std::uint64_t index = r.uint(aj, "index", pwhere, 64);
-      const std::string awhere = pwhere + " attachment " + std::to_string(index);
-      Attachment a;
-      const std::string vk = r.str(aj, "vk_format", awhere);
-      const auto f = format_of(vk);
-      if (!f) r.fail(awhere, "format " + vk + " has no trace equivalent (docs/trace-format.md lists the formats)");
-      a.format = *f;
-      a.samples = static_cast<std::uint32_t>(r.uint(aj, "samples", awhere, 8));
-      if (a.samples != 1 && a.samples != 2 && a.samples != 4 && a.samples != 8) r.fail(awhere, "samples must be 1, 2, 4 or 8");
-      max_samples = std::max(max_samples, a.samples);
-      const std::string load = r.str(aj, "load", awhere), store = r.str(aj, "store", awhere);
-      const auto lo = parse_load_op(load);
-      const auto so = parse_store_op(store);
-      if (!lo || !so) r.fail(awhere, "load '" + load + "' / store '" + store + "' not known");
-      a.load = *lo;
-      a.store = *so;
-      a.usage = is_depth_format(a.format) ? AttachmentUsage::Depth : AttachmentUsage::Color;
-      if (aj.contains("image") && aj["image"].is_number_unsigned()) {
-        const std::uint64_t img = aj["image"].get<std::uint64_t>();
-        a.name = "img_" + std::to_string(img);
-        auto [it, fresh] = image_format.emplace(img, a.format);
-        if (!fresh && it->second != a.format) r.fail(awhere, "image " + std::to_string(img) + " changes format between passes");
-        if (a.load == LoadOp::Load && !stored_images.count(img)) {
-          // The trace's rule: load=load needs an earlier store in this frame. The capture's first
-          // pass loads what a previous frame left; it is imported as a clear and said so.
-          out.unsupported.push_back(awhere + ": loads " + a.name + ", which no earlier pass of the frame stored; "
-                                    "imported as load=clear");
-          a.load = LoadOp::Clear;
-        }
-        if (a.store == StoreOp::Store) stored_images.insert(img);
-      } else {
-        a.name = pass.name + "_att" + std::to_string(index);
-        if (a.load == LoadOp::Load) {
-          out.unsupported.push_back(awhere + ": loads an unnamed image; imported as load=clear");
-          a.load = LoadOp::Clear;
-        }
-      }
-      if (a.usage == AttachmentUsage::Depth && aj.contains("clear") && a.load == LoadOp::Clear) {
-        const float depth = r.number(r.get(r.get(aj, "clear", awhere), "depth", awhere), awhere + " clear depth");
-        if (depth != 1.0f) {
-          out.unsupported.push_back(awhere + ": clears depth to " + std::to_string(depth) +
-                                    "; the simulator clears depth to 1.0 (far)");
-        }
-      }
-      if (a.usage == AttachmentUsage::Color && aj.contains("clear") && a.load == LoadOp::Clear) {
-        const json& col = r.array(r.get(aj, "clear", awhere), "color", awhere + " clear");
-        bool black = true;
-        std::string shown;  // the components as the capture's floats read ("0.2", not 0.20000000298023224)
-        for (const auto& c : col) {
-          const float v = r.number(c, awhere + " clear colour");
-          black = black && v == 0.0f;
-          char buf[32];
-          std::snprintf(buf, sizeof buf, "%g", static_cast<double>(v));
-          shown += (shown.empty() ? "" : ", ") + std::string(buf);
-        }
-        if (!black) {
-          out.unsupported.push_back(awhere + ": clears to colour [" + shown + "]" +
-                                    "; the simulator's images clear to black (counts and traffic are unaffected)");
-        }
-      }
-      if (a.usage == AttachmentUsage::Color) ++color_targets;
-      pass.attachments.push_back(a);
-    }
-    if (pass.attachments.empty()) r.fail(pwhere, "has no attachments");
-    for (const Attachment& a : pass.attachments) {
-      if (a.samples != pass.attachments.front().samples) {
-        r.fail(pwhere, "attachments with different sample counts (" + a.name + ": " + std::to_string(a.samples) + ", " +
-                           pass.attachments.front().name + ": " + std::to_string(pass.attachments.front().samples) +
-                           "): MSAA resolve attachments are not imported yet");
-      }
-    }
-    if (std::count_if(pass.attachments.begin(), pass.attachments.end(),
-                      [](const Attachment& a) { return a.usage == AttachmentUsage::Depth; }) > 1) {
-      r.fail(pwhere, "has more than one depth attachment");
-    }
-    const bool has_depth = pass.depth_attachment() != nullptr;
-
-    for (const auto& dj : r.array(pj, "draws", pwhere)) {
-      const std::uint64_t ev = r.uint(dj, "event", pwhere, 1ull << 40);
-      std::string dname = "draw_" + std::to_string(ev);
-      const std::string dwhere = "draw at event " + std::to_string(ev) +
-                                 (dj.contains("name") && dj["name"].is_string() ? " (" + dj["name"].get<std::string>() + ")" : "");
-      // Viewport: [x, y, width, height, min_depth, max_depth] in framebuffer pixels (y down for
-      // Vulkan). The simulator's viewport is the whole frame, so each vertex is moved in clip space
-      // to where the draw's own viewport puts it: with s = size / frame size and
-      // o = (2 origin + size) / frame size - 1, x_ndc' = s x_ndc + o, i.e. x' = s x + o w (same for
-      // y), and depth' = min + (max - min) depth, i.e. z' = (max - min) z + min w (Vulkan depth).
-      const float fw = static_cast<float>(t.frame.width), fh = static_cast<float>(t.frame.height);
-      float vp_x = 0, vp_y = 0, vp_w = fw, vp_h = fh, vmin = 0, vmax = 1;
-      if (dj.contains("viewport")) {
-        const json& vj = r.array(dj, "viewport", dwhere);
-        if (vj.size() != 6) r.fail(dwhere, "viewport is not [x, y, width, height, min_depth, max_depth]");
-        vp_x = r.number(vj[0], dwhere + " viewport");
-        vp_y = r.number(vj[1], dwhere + " viewport");
-        vp_w = r.number(vj[2], dwhere + " viewport");
-        vp_h = r.number(vj[3], dwhere + " viewport");
-        vmin = r.number(vj[4], dwhere + " viewport");
-        vmax = r.number(vj[5], dwhere + " viewport");
-        if (vp_w <= 0.0f || vp_h == 0.0f) r.fail(dwhere, "viewport of zero or negative width");
-      }
-      const bool full_viewport = vp_x == 0.0f && vp_y == 0.0f && vp_w == fw && vp_h == fh;
-      if (dj.contains("scissor")) {
-        const json& sj = r.array(dj, "scissor", dwhere);
-        if (sj.size() != 4) r.fail(dwhere, "scissor is not [x, y, width, height]");
-        const float sx = r.number(sj[0], dwhere + " scissor"), sy = r.number(sj[1], dwhere + " scissor");
-        const float sw = r.number(sj[2], dwhere + " scissor"), sh = r.number(sj[3], dwhere + " scissor");
-        if (sx > 0.0f || sy > 0.0f || sx + sw < fw || sy + sh < fh) {
-          out.unsupported.push_back(dwhere + ": scissor " + sj.dump() + " smaller than the frame; not applied");
-        }
-      }
-      std::size_t beyond_viewport = 0;
-      // Geometry: clip positions (x, y, z, w as the vertex shader wrote them), optional indices.
-      const json& cj = r.array(dj, "clip_positions", dwhere);
-      if (cj.empty()) r.fail(dwhere, "has no vertices");
-      if (cj.size() > kMaxDrawVertices) r.fail(dwhere, std::to_string(cj.size()) + " vertices, more than the import's limit");
-      std::vector<glm::vec4> clip(cj.size());
-      for (std::size_t v = 0; v < cj.size(); ++v) {
-        const std::string vtx = dwhere + " vertex " + std::to_string(v);
-        if (!cj[v].is_array() || cj[v].size() != 4) r.fail(vtx, "clip position is not 4 numbers");
-        glm::vec4 c(r.number(cj[v][0], vtx), r.number(cj[v][1], vtx), r.number(cj[v][2], vtx), r.number(cj[v][3], vtx));
-        if (!full_viewport) {
-          if (std::abs(c.x) > c.w || std::abs(c.y) > c.w) ++beyond_viewport;
-          const float sx = vp_w / fw, ox = (2.0f * vp_x + vp_w) / fw - 1.0f;
-          const float sy = vp_h / fh, oy = (2.0f * vp_y + vp_h) / fh - 1.0f;
-          c = glm::vec4(sx * c.x + ox * c.w, sy * c.y + oy * c.w, c.z, c.w);
-        }
-        if (vmin != 0.0f || vmax != 1.0f) {
-          if (convention != "vulkan") r.fail(dwhere, "a depth range other than [0, 1] is imported for Vulkan captures only");
-          c.z = (vmax - vmin) * c.z + vmin * c.w;
-        }
-        if (convention == "vulkan") {
-          // Vulkan clip space: y points down the framebuffer and depth is z/w in [0, 1]. The
-          // simulator's (OpenGL's): y up, depth (z/w + 1)/2. Same pixel and same depth value:
-          // y' = -y, z' = 2z - w.
-          c = glm::vec4(c.x, -c.y, 2.0f * c.z - c.w, c.w);
-        }
-        clip[v] = c;
-      }
-      if (beyond_viewport > 0) {
-        out.unsupported.push_back(dwhere + ": " + std::to_string(beyond_viewport) + " vertices outside its viewport " +
-                                  "(not the whole frame); the simulator clips to the frame, so they may draw beyond it");
-      }
-      std::vector<std::uint32_t> idx;
-      const bool indexed = dj.contains("indices");
-      if (indexed) {
-        for (const auto& ij : r.array(dj, "indices", dwhere)) {
-          if (!ij.is_number_unsigned() || ij.get<std::uint64_t>() >= clip.size()) {
-            r.fail(dwhere, "index " + ij.dump() + " is out of range (" + std::to_string(clip.size()) + " vertices)");
-          }
-          idx.push_back(ij.get<std::uint32_t>());
-        }
-      } else {
-        idx.resize(clip.size());
-        for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<std::uint32_t>(i);
-      }
-      // Strips and fans become lists here (the winding of each triangle as the API defines it).
-      const std::string topo = r.str(dj, "topology", dwhere);
-      std::vector<std::uint32_t> tri;
-      if (topo == "triangles") {
-        tri.assign(idx.begin(), idx.end() - static_cast<std::ptrdiff_t>(idx.size() % 3));
-      } else if (topo == "triangle_strip" || topo == "triangle_fan") {
-        for (std::size_t i = 0; i + 2 < idx.size(); ++i) {
-          if (topo == "triangle_fan") {
-            tri.insert(tri.end(), {idx[0], idx[i + 1], idx[i + 2]});
-          } else if (i % 2 == 0) {
-            tri.insert(tri.end(), {idx[i], idx[i + 1], idx[i + 2]});
-          } else {
-            tri.insert(tri.end(), {idx[i + 1], idx[i], idx[i + 2]});
-          }
-        }
-      } else {
-        r.fail(dwhere, "topology '" + topo + "' is not imported (triangles, triangle_strip, triangle_fan)");
-      }
-      if (tri.empty()) {
-        out.unsupported.push_back(dwhere + ": no whole triangle; skipped");
-        continue;
-      }
-      // Winding: the simulator's front faces are counter-clockwise in its (y-up, OpenGL) clip space
-      // (clipper.hpp, front_ccw). Vulkan decides facing from the triangle's area in framebuffer
-      // coordinates, whose y runs down, and the y flip above keeps every vertex on its pixel, so a
-      // Vulkan counter-clockwise front face is the simulator's as it is and a clockwise one is
-      // imported by reversing each triangle. Measured on vkcube (cull back, front counter-clockwise):
-      // as is, the visible triangles match RenderDoc's pixel history at 240 of 240 sampled pixels;
-      // reversed, at 84 (the far faces are drawn instead).
-      const bool front_cw = r.str(dj, "front_face", dwhere) == "cw";
-      const bool reverse = front_cw;
-      if (reverse) {
-        for (std::size_t i = 0; i + 2 < tri.size(); i += 3) std::swap(tri[i + 1], tri[i + 2]);
-      }
-      out.triangles += tri.size() / 3;
-
-      // The GLB mesh: POSITION (clip x, y, z: glTF requires it; the simulator uses it only as the
-      // vertex's world position, for lights, and an imported frame has none), _CLIP_POSITION,
-      // TEXCOORD_0 when exported, indices.
-      json attrs;
-      {
-        std::vector<std::uint8_t> bytes;
-        glm::vec3 lo(3.4e38f), hi(-3.4e38f);
-        for (const auto& c : clip) {
-          put(bytes, c.x);
-          put(bytes, c.y);
-          put(bytes, c.z);
-          lo = glm::min(lo, glm::vec3(c));
-          hi = glm::max(hi, glm::vec3(c));
-        }
-        attrs["POSITION"] = glb.accessor({{"bufferView", glb.view(bytes, kGlArrayBuffer)}, {"componentType", kGlFloat},
-                                          {"count", clip.size()}, {"type", "VEC3"},
-                                          {"min", {lo.x, lo.y, lo.z}}, {"max", {hi.x, hi.y, hi.z}}});
-        bytes.clear();
-        for (const auto& c : clip) {
-          put(bytes, c.x);
-          put(bytes, c.y);
-          put(bytes, c.z);
-          put(bytes, c.w);
-        }
-        attrs[kClipPositionAttribute] = glb.accessor({{"bufferView", glb.view(bytes, kGlArrayBuffer)},
-                                                      {"componentType", kGlFloat}, {"count", clip.size()}, {"type", "VEC4"}});
-      }
-      // Texture: the first the fragment shader binds, as the material's base colour, when the
-      // exporter saved it and found uvs for it.
-      json material = {{"name", dname}, {"doubleSided", false}};
-      std::string texture_note = "no texture";
-      const json& texs = r.array(dj, "textures", dwhere);
-      if (dj.contains("uvs") && !texs.empty() && texs[0].contains("file")) {
-        const json& uj = r.array(dj, "uvs", dwhere);
-        if (uj.size() != clip.size()) r.fail(dwhere, "has " + std::to_string(uj.size()) + " uvs for " + std::to_string(clip.size()) + " vertices");
-        std::vector<std::uint8_t> bytes;
-        for (std::size_t v = 0; v < uj.size(); ++v) {
-          const std::string vw = dwhere + " uv " + std::to_string(v);
-          if (!uj[v].is_array() || uj[v].size() != 2) r.fail(vw, "is not 2 numbers");
-          put(bytes, r.number(uj[v][0], vw));
-          put(bytes, r.number(uj[v][1], vw));
-        }
-        attrs["TEXCOORD_0"] = glb.accessor({{"bufferView", glb.view(bytes, kGlArrayBuffer)}, {"componentType", kGlFloat},
-                                            {"count", clip.size()}, {"type", "VEC2"}});
-        const std::string file = r.str(texs[0], "file", dwhere + " texture");
-        if (file.find('/') != std::string::npos || file.find("..") != std::string::npos) {
-          r.fail(dwhere, "texture file '" + file + "' must be a plain name in the intermediate's folder");
-        }
-        auto it = image_of_file.find(file);
-        if (it == image_of_file.end()) {
-          const auto png = read_bytes(dir / file, dwhere + " texture");
-          check_png_signature(dir / file, dwhere + " texture", png.data(), png.size());
-          images.push_back({{"bufferView", glb.view(png, std::nullopt)}, {"mimeType", "image/png"}, {"name", file}});
-          textures.push_back({{"source", images.size() - 1}});
-          it = image_of_file.emplace(file, static_cast<int>(textures.size() - 1)).first;
-        }
-        material["pbrMetallicRoughness"] = {{"baseColorTexture", {{"index", it->second}}}, {"metallicFactor", 0.0}};
-        texture_note = file;
-      } else if (!texs.empty()) {
-        out.unsupported.push_back(dwhere + ": binds " + std::to_string(texs.size()) +
-                                  " texture(s) but no uvs were exported; drawn untextured");
-      }
-      if (texs.size() > 1) {
-        out.unsupported.push_back(dwhere + ": binds " + std::to_string(texs.size()) +
-                                  " textures; only the first is the material's (fetch counts come from the shader)");
-      }
-      materials.push_back(material);
-      json prim = {{"attributes", attrs}, {"material", materials.size() - 1}, {"mode", 4}};
-      const bool need_indices = indexed || topo != "triangles" || reverse;
-      if (need_indices) {
-        std::vector<std::uint8_t> bytes;
-        for (auto i : tri) put(bytes, i);
-        prim["indices"] = glb.accessor({{"bufferView", glb.view(bytes, kGlElementArrayBuffer)},
-                                        {"componentType", kGlUnsignedInt}, {"count", tri.size()}, {"type", "SCALAR"}});
-      }
-      meshes.push_back({{"name", dname}, {"primitives", json::array({prim})}});
-      nodes.push_back({{"name", dname}, {"mesh", meshes.size() - 1}});
-
-      // Shader: the fragment shader's static SPIR-V cost, one declaration per distinct cost.
-      const json& sj = r.get(dj, "shader", dwhere);
-      ShaderDesc sh;
-      sh.alu_ops = static_cast<std::uint32_t>(r.uint(sj, "alu_ops", dwhere + " shader", 1u << 20));
-      sh.tex_fetches = static_cast<std::uint32_t>(r.uint(sj, "tex_fetches", dwhere + " shader", 1u << 16));
-      sh.varyings = static_cast<std::uint32_t>(r.uint(sj, "varyings", dwhere + " shader", 128));
-      sh.discard = r.boolean(sj, "discard", dwhere + " shader");
-      const std::uint64_t outputs = r.uint(sj, "color_outputs", dwhere + " shader", 8);
-      sh.color_outputs = static_cast<std::uint32_t>(std::min<std::uint64_t>(outputs, color_targets));
-      if (outputs > color_targets) {
-        out.unsupported.push_back(dwhere + ": shader writes " + std::to_string(outputs) + " colour outputs, the pass has " +
-                                  std::to_string(color_targets) + " colour targets; counted as " + std::to_string(color_targets));
-      }
-      sh.light_source = LightSource::None;
-      const std::string skey = std::to_string(sh.alu_ops) + "_" + std::to_string(sh.tex_fetches) + "_" +
-                               std::to_string(sh.varyings) + "_" + std::to_string(sh.color_outputs) + (sh.discard ? "_d" : "");
-      auto sit = shader_of_key.find(skey);
-      if (sit == shader_of_key.end()) {
-        sh.name = "fs_" + std::to_string(shader_of_key.size());
-        t.shaders.push_back(sh);
-        sit = shader_of_key.emplace(skey, sh.name).first;
-      }
-      // Pipeline: the draw's own state.
-      PipelineState p;
-      p.name = "p_" + std::to_string(ev);
-      p.shader = sit->second;
-      p.depth_test = r.boolean(dj, "depth_test", dwhere) && has_depth;
-      p.depth_write = p.depth_test && r.boolean(dj, "depth_write", dwhere);
-      if (r.boolean(dj, "depth_test", dwhere) && !has_depth) {
-        out.unsupported.push_back(dwhere + ": depth test enabled without a depth attachment; imported without it");
-      }
-      const auto cmp = parse_compare_op(r.str(dj, "depth_compare", dwhere));
-      const auto blend = parse_blend_mode(r.str(dj, "blend", dwhere));
-      const auto cull = parse_cull_mode(r.str(dj, "cull", dwhere));
-      if (!cmp || !blend || !cull) r.fail(dwhere, "depth_compare, blend or cull not known");
-      p.depth_compare = *cmp;
-      p.blend = *blend;
-      p.cull = *cull;
-      t.pipelines.push_back(p);
-
-      DrawCmd d;
-      d.pipeline = p.name;
-      d.geometry = GeometryKind::Scene;
-      d.submesh = dname;
-      d.lights.all = false;
-      pass.draws.push_back(d);
-      ++out.draws;
-      out.summary.push_back(dwhere + ": " + std::to_string(tri.size() / 3) + " triangles, shader " + sit->second + " (" +
-                            std::to_string(sh.alu_ops) + " ALU, " + std::to_string(sh.tex_fetches) + " tex, " +
-                            std::to_string(sh.varyings) + " varyings; " +
-                            (sj.contains("source") && sj["source"].is_string() ? sj["source"].get<std::string>() : "?") +
-                            "), texture " + texture_note + ", depth " + (p.depth_test ? to_string(p.depth_compare) : "off") +
-                            (p.depth_write ? " write" : "") + ", blend " + to_string(p.blend) + ", cull " + to_string(p.cull));
-    }
-    if (pass.draws.empty()) {
-      out.unsupported.push_back(pwhere + ": no draws (a clear-only pass); imported with its load/store");
-    }
-    t.commands.push_back(std::move(pass));
-    ++out.passes;
+void CaptureConverter::convert_pass(const json& pj) {
+  const std::uint64_t pev = r_.uint(pj, "event", "pass", 1ull << 40);
+  const std::string pwhere = "pass at event " + std::to_string(pev);
+  PassDesc pass;
+  pass.name = "pass_" + std::to_string(pev);
+  std::size_t color_targets = 0;
+  for (const auto& aj : r_.array(pj, "attachments", pwhere)) {
+    const std::uint64_t index = r_.uint(aj, "index", pwhere, 64);
+    const Attachment a = convert_attachment(aj, pwhere + " attachment " + std::to_string(index), pass.name, index);
+    if (a.usage == AttachmentUsage::Color) ++color_targets;
+    pass.attachments.push_back(a);
   }
-  if (out.draws == 0) r.fail("header", "the capture has no draws to import");
-  t.frame.samples = static_cast<int>(max_samples);
+  check_pass_attachments(pass, pwhere);
+  const bool has_depth = pass.depth_attachment() != nullptr;
+  for (const auto& dj : r_.array(pj, "draws", pwhere)) convert_draw(dj, pwhere, color_targets, has_depth, pass);
+  if (pass.draws.empty()) {
+    out_.unsupported.push_back(pwhere + ": no draws (a clear-only pass); imported with its load/store");
+  }
+  t_.commands.emplace_back(std::in_place_type<PassDesc>, std::move(pass));
+  ++out_.passes;
+}
 
-  glb.doc()["meshes"] = meshes;
-  glb.doc()["nodes"] = nodes;
+// One attachment: its format, samples, load and store, image and clear values.
+Attachment CaptureConverter::convert_attachment(const json& aj, const std::string& awhere, const std::string& pass_name,
+                                                std::uint64_t index) {
+  Attachment a;
+  const std::string vk = r_.str(aj, "vk_format", awhere);
+  const auto f = format_of(vk);
+  if (!f) r_.fail(awhere, "format " + vk + " has no trace equivalent (docs/trace-format.md lists the formats)");
+  a.format = *f;
+  a.samples = static_cast<std::uint32_t>(r_.uint(aj, "samples", awhere, 8));
+  if (a.samples != 1 && a.samples != 2 && a.samples != 4 && a.samples != 8) r_.fail(awhere, "samples must be 1, 2, 4 or 8");
+  max_samples_ = std::max(max_samples_, a.samples);
+  const std::string load = r_.str(aj, "load", awhere), store = r_.str(aj, "store", awhere);
+  const auto lo = parse_load_op(load);
+  const auto so = parse_store_op(store);
+  if (!lo || !so) r_.fail(awhere, "load '" + load + "' / store '" + store + "' not known");
+  a.load = *lo;
+  a.store = *so;
+  a.usage = is_depth_format(a.format) ? AttachmentUsage::Depth : AttachmentUsage::Color;
+  name_attachment_image(aj, awhere, pass_name, index, a);
+  note_clear_values(aj, awhere, a);
+  return a;
+}
+
+// The attachment's name (its image's, kept across passes, or the pass's own) and the trace's
+// load rule: load=load needs an earlier store of the image in this frame.
+void CaptureConverter::name_attachment_image(const json& aj, const std::string& awhere, const std::string& pass_name,
+                                             std::uint64_t index, Attachment& a) {
+  if (aj.contains("image") && aj["image"].is_number_unsigned()) {
+    const std::uint64_t img = aj["image"].get<std::uint64_t>();
+    a.name = "img_" + std::to_string(img);
+    auto [it, fresh] = image_format_.emplace(img, a.format);
+    if (!fresh && it->second != a.format) r_.fail(awhere, "image " + std::to_string(img) + " changes format between passes");
+    if (a.load == LoadOp::Load && !stored_images_.count(img)) {
+      // The trace's rule: load=load needs an earlier store in this frame. The capture's first
+      // pass loads what a previous frame left; it is imported as a clear and said so.
+      out_.unsupported.push_back(awhere + ": loads " + a.name + ", which no earlier pass of the frame stored; "
+                                 "imported as load=clear");
+      a.load = LoadOp::Clear;
+    }
+    if (a.store == StoreOp::Store) stored_images_.insert(img);
+  } else {
+    a.name = pass_name + "_att" + std::to_string(index);
+    if (a.load == LoadOp::Load) {
+      out_.unsupported.push_back(awhere + ": loads an unnamed image; imported as load=clear");
+      a.load = LoadOp::Clear;
+    }
+  }
+}
+
+// Clear values the simulator does not take (depth other than 1, colour other than black): noted.
+void CaptureConverter::note_clear_values(const json& aj, const std::string& awhere, const Attachment& a) {
+  if (a.usage == AttachmentUsage::Depth && aj.contains("clear") && a.load == LoadOp::Clear) {
+    const float depth = r_.number(r_.get(r_.get(aj, "clear", awhere), "depth", awhere), awhere + " clear depth");
+    if (depth != 1.0f) {
+      out_.unsupported.push_back(awhere + ": clears depth to " + std::to_string(depth) +
+                                 "; the simulator clears depth to 1.0 (far)");
+    }
+  }
+  if (a.usage == AttachmentUsage::Color && aj.contains("clear") && a.load == LoadOp::Clear) {
+    const json& col = r_.array(r_.get(aj, "clear", awhere), "color", awhere + " clear");
+    bool black = true;
+    std::string shown;  // the components as the capture's floats read ("0.2", not 0.20000000298023224)
+    for (const auto& c : col) {
+      const float v = r_.number(c, awhere + " clear colour");
+      black = black && v == 0.0f;
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%g", static_cast<double>(v));
+      shown += (shown.empty() ? "" : ", ") + std::string(buf);
+    }
+    if (!black) {
+      out_.unsupported.push_back(awhere + ": clears to colour [" + shown + "]" +
+                                 "; the simulator's images clear to black (counts and traffic are unaffected)");
+    }
+  }
+}
+
+// A pass the trace can hold: some attachment, one sample count, at most one depth attachment.
+void CaptureConverter::check_pass_attachments(const PassDesc& pass, const std::string& pwhere) const {
+  if (pass.attachments.empty()) r_.fail(pwhere, "has no attachments");
+  for (const Attachment& a : pass.attachments) {
+    if (a.samples != pass.attachments.front().samples) {
+      r_.fail(pwhere, "attachments with different sample counts (" + a.name + ": " + std::to_string(a.samples) + ", " +
+                          pass.attachments.front().name + ": " + std::to_string(pass.attachments.front().samples) +
+                          "): MSAA resolve attachments are not imported yet");
+    }
+  }
+  if (std::count_if(pass.attachments.begin(), pass.attachments.end(),
+                    [](const Attachment& a) { return a.usage == AttachmentUsage::Depth; }) > 1) {
+    r_.fail(pwhere, "has more than one depth attachment");
+  }
+}
+
+// One draw: its geometry (a GLB mesh), material, shader and pipeline, appended to `pass`.
+void CaptureConverter::convert_draw(const json& dj, const std::string& pwhere, std::size_t color_targets, bool has_depth,
+                                    PassDesc& pass) {
+  const std::uint64_t ev = r_.uint(dj, "event", pwhere, 1ull << 40);
+  std::string dname = "draw_" + std::to_string(ev);
+  const std::string dwhere = "draw at event " + std::to_string(ev) +
+                             (dj.contains("name") && dj["name"].is_string() ? " (" + dj["name"].get<std::string>() + ")" : "");
+  const DrawViewport vp = read_viewport(dj, dwhere);
+  check_scissor(dj, dwhere);
+  const std::vector<glm::vec4> clip = clip_positions(dj, dwhere, vp);
+  bool indexed = false;
+  const std::vector<std::uint32_t> idx = vertex_indices(dj, dwhere, clip.size(), indexed);
+  const std::string topo = r_.str(dj, "topology", dwhere);
+  std::vector<std::uint32_t> tri = triangle_list(idx, topo, dwhere);
+  if (tri.empty()) {
+    out_.unsupported.push_back(dwhere + ": no whole triangle; skipped");
+    return;
+  }
+  // Winding: the simulator's front faces are counter-clockwise in its (y-up, OpenGL) clip space
+  // (clipper.hpp, front_ccw). Vulkan decides facing from the triangle's area in framebuffer
+  // coordinates, whose y runs down, and the y flip of clip_positions keeps every vertex on its
+  // pixel, so a Vulkan counter-clockwise front face is the simulator's as it is and a clockwise
+  // one is imported by reversing each triangle. Measured on vkcube (cull back, front
+  // counter-clockwise): as is, the visible triangles match RenderDoc's pixel history at 240 of
+  // 240 sampled pixels; reversed, at 84 (the far faces are drawn instead).
+  const bool reverse = r_.str(dj, "front_face", dwhere) == "cw";
+  if (reverse) {
+    for (std::size_t i = 0; i + 2 < tri.size(); i += 3) std::swap(tri[i + 1], tri[i + 2]);
+  }
+  out_.triangles += tri.size() / 3;
+
+  json attrs = position_attributes(clip);
+  std::string texture_note;
+  materials_.push_back(draw_material(dj, dwhere, dname, clip.size(), attrs, texture_note));
+  json prim = {{"attributes", attrs}, {"material", materials_.size() - 1}, {"mode", 4}};
+  if (indexed || topo != "triangles" || reverse) {
+    std::vector<std::uint8_t> bytes;
+    for (auto i : tri) put(bytes, i);
+    prim["indices"] = glb_.accessor({{"bufferView", glb_.view(bytes, kGlElementArrayBuffer)},
+                                     {"componentType", kGlUnsignedInt}, {"count", tri.size()}, {"type", "SCALAR"}});
+  }
+  meshes_.push_back({{"name", dname}, {"primitives", json::array({prim})}});
+  nodes_.push_back({{"name", dname}, {"mesh", meshes_.size() - 1}});
+
+  const json& sj = r_.get(dj, "shader", dwhere);
+  ShaderDesc sh;
+  const std::string shader = draw_shader(sj, dwhere, color_targets, sh);
+  const PipelineState p = draw_pipeline(dj, dwhere, ev, shader, has_depth);
+  t_.pipelines.push_back(p);
+
+  DrawCmd d;
+  d.pipeline = p.name;
+  d.geometry = GeometryKind::Scene;
+  d.submesh = dname;
+  d.lights.all = false;
+  pass.draws.push_back(d);
+  ++out_.draws;
+  out_.summary.push_back(dwhere + ": " + std::to_string(tri.size() / 3) + " triangles, shader " + shader + " (" +
+                         std::to_string(sh.alu_ops) + " ALU, " + std::to_string(sh.tex_fetches) + " tex, " +
+                         std::to_string(sh.varyings) + " varyings; " +
+                         (sj.contains("source") && sj["source"].is_string() ? sj["source"].get<std::string>() : "?") +
+                         "), texture " + texture_note + ", depth " + (p.depth_test ? to_string(p.depth_compare) : "off") +
+                         (p.depth_write ? " write" : "") + ", blend " + to_string(p.blend) + ", cull " + to_string(p.cull));
+}
+
+// The draw's viewport (whole frame, depth [0, 1] when none is given).
+DrawViewport CaptureConverter::read_viewport(const json& dj, const std::string& dwhere) const {
+  const float fw = static_cast<float>(t_.frame.width), fh = static_cast<float>(t_.frame.height);
+  DrawViewport vp;
+  vp.w = fw;
+  vp.h = fh;
+  if (dj.contains("viewport")) {
+    const json& vj = r_.array(dj, "viewport", dwhere);
+    if (vj.size() != 6) r_.fail(dwhere, "viewport is not [x, y, width, height, min_depth, max_depth]");
+    vp.x = r_.number(vj[0], dwhere + " viewport");
+    vp.y = r_.number(vj[1], dwhere + " viewport");
+    vp.w = r_.number(vj[2], dwhere + " viewport");
+    vp.h = r_.number(vj[3], dwhere + " viewport");
+    vp.min_depth = r_.number(vj[4], dwhere + " viewport");
+    vp.max_depth = r_.number(vj[5], dwhere + " viewport");
+    if (vp.w <= 0.0f || vp.h == 0.0f) r_.fail(dwhere, "viewport of zero or negative width");
+  }
+  vp.full_frame = vp.x == 0.0f && vp.y == 0.0f && vp.w == fw && vp.h == fh;
+  return vp;
+}
+
+// A scissor smaller than the frame is not applied: noted.
+void CaptureConverter::check_scissor(const json& dj, const std::string& dwhere) {
+  if (!dj.contains("scissor")) return;
+  const float fw = static_cast<float>(t_.frame.width), fh = static_cast<float>(t_.frame.height);
+  const json& sj = r_.array(dj, "scissor", dwhere);
+  if (sj.size() != 4) r_.fail(dwhere, "scissor is not [x, y, width, height]");
+  const float sx = r_.number(sj[0], dwhere + " scissor"), sy = r_.number(sj[1], dwhere + " scissor");
+  const float sw = r_.number(sj[2], dwhere + " scissor"), sh = r_.number(sj[3], dwhere + " scissor");
+  if (sx > 0.0f || sy > 0.0f || sx + sw < fw || sy + sh < fh) {
+    out_.unsupported.push_back(dwhere + ": scissor " + sj.dump() + " smaller than the frame; not applied");
+  }
+}
+
+// The draw's clip positions (x, y, z, w as the vertex shader wrote them) in the simulator's clip
+// space. The simulator's viewport is the whole frame, so each vertex is moved in clip space to
+// where the draw's own viewport puts it: with s = size / frame size and
+// o = (2 origin + size) / frame size - 1, x_ndc' = s x_ndc + o, i.e. x' = s x + o w (same for
+// y), and depth' = min + (max - min) depth, i.e. z' = (max - min) z + min w (Vulkan depth).
+std::vector<glm::vec4> CaptureConverter::clip_positions(const json& dj, const std::string& dwhere, const DrawViewport& vp) {
+  const float fw = static_cast<float>(t_.frame.width), fh = static_cast<float>(t_.frame.height);
+  std::size_t beyond_viewport = 0;
+  const json& cj = r_.array(dj, "clip_positions", dwhere);
+  if (cj.empty()) r_.fail(dwhere, "has no vertices");
+  if (cj.size() > kMaxDrawVertices) r_.fail(dwhere, std::to_string(cj.size()) + " vertices, more than the import's limit");
+  std::vector<glm::vec4> clip(cj.size());
+  for (std::size_t v = 0; v < cj.size(); ++v) {
+    const std::string vtx = dwhere + " vertex " + std::to_string(v);
+    if (!cj[v].is_array() || cj[v].size() != 4) r_.fail(vtx, "clip position is not 4 numbers");
+    glm::vec4 c(r_.number(cj[v][0], vtx), r_.number(cj[v][1], vtx), r_.number(cj[v][2], vtx), r_.number(cj[v][3], vtx));
+    if (!vp.full_frame) {
+      if (std::abs(c.x) > c.w || std::abs(c.y) > c.w) ++beyond_viewport;
+      const float sx = vp.w / fw, ox = (2.0f * vp.x + vp.w) / fw - 1.0f;
+      const float sy = vp.h / fh, oy = (2.0f * vp.y + vp.h) / fh - 1.0f;
+      c = glm::vec4(sx * c.x + ox * c.w, sy * c.y + oy * c.w, c.z, c.w);
+    }
+    if (vp.min_depth != 0.0f || vp.max_depth != 1.0f) {
+      if (convention_ != "vulkan") r_.fail(dwhere, "a depth range other than [0, 1] is imported for Vulkan captures only");
+      c.z = (vp.max_depth - vp.min_depth) * c.z + vp.min_depth * c.w;
+    }
+    if (convention_ == "vulkan") {
+      // Vulkan clip space: y points down the framebuffer and depth is z/w in [0, 1]. The
+      // simulator's (OpenGL's): y up, depth (z/w + 1)/2. Same pixel and same depth value:
+      // y' = -y, z' = 2z - w.
+      c = glm::vec4(c.x, -c.y, 2.0f * c.z - c.w, c.w);
+    }
+    clip[v] = c;
+  }
+  if (beyond_viewport > 0) {
+    out_.unsupported.push_back(dwhere + ": " + std::to_string(beyond_viewport) + " vertices outside its viewport " +
+                               "(not the whole frame); the simulator clips to the frame, so they may draw beyond it");
+  }
+  return clip;
+}
+
+// The draw's indices (each below `vertices`), or 0, 1, ... when it has none (`indexed` false).
+std::vector<std::uint32_t> CaptureConverter::vertex_indices(const json& dj, const std::string& dwhere, std::size_t vertices,
+                                                            bool& indexed) const {
+  std::vector<std::uint32_t> idx;
+  indexed = dj.contains("indices");
+  if (indexed) {
+    for (const auto& ij : r_.array(dj, "indices", dwhere)) {
+      if (!ij.is_number_unsigned() || ij.get<std::uint64_t>() >= vertices) {
+        r_.fail(dwhere, "index " + ij.dump() + " is out of range (" + std::to_string(vertices) + " vertices)");
+      }
+      idx.push_back(ij.get<std::uint32_t>());
+    }
+  } else {
+    idx.resize(vertices);
+    for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<std::uint32_t>(i);
+  }
+  return idx;
+}
+
+// Strips and fans become lists (the winding of each triangle as the API defines it).
+std::vector<std::uint32_t> CaptureConverter::triangle_list(const std::vector<std::uint32_t>& idx, const std::string& topo,
+                                                           const std::string& dwhere) const {
+  std::vector<std::uint32_t> tri;
+  if (topo == "triangles") {
+    tri.assign(idx.begin(), idx.end() - static_cast<std::ptrdiff_t>(idx.size() % 3));
+  } else if (topo == "triangle_strip" || topo == "triangle_fan") {
+    for (std::size_t i = 0; i + 2 < idx.size(); ++i) {
+      if (topo == "triangle_fan") {
+        tri.insert(tri.end(), {idx[0], idx[i + 1], idx[i + 2]});
+      } else if (i % 2 == 0) {
+        tri.insert(tri.end(), {idx[i], idx[i + 1], idx[i + 2]});
+      } else {
+        tri.insert(tri.end(), {idx[i + 1], idx[i], idx[i + 2]});
+      }
+    }
+  } else {
+    r_.fail(dwhere, "topology '" + topo + "' is not imported (triangles, triangle_strip, triangle_fan)");
+  }
+  return tri;
+}
+
+// The GLB mesh's positions: POSITION (clip x, y, z: glTF requires it; the simulator uses it only
+// as the vertex's world position, for lights, and an imported frame has none) and _CLIP_POSITION.
+json CaptureConverter::position_attributes(const std::vector<glm::vec4>& clip) {
+  json attrs;
+  std::vector<std::uint8_t> bytes;
+  glm::vec3 lo(3.4e38f), hi(-3.4e38f);
+  for (const auto& c : clip) {
+    put(bytes, c.x);
+    put(bytes, c.y);
+    put(bytes, c.z);
+    lo = glm::min(lo, glm::vec3(c));
+    hi = glm::max(hi, glm::vec3(c));
+  }
+  attrs["POSITION"] = glb_.accessor({{"bufferView", glb_.view(bytes, kGlArrayBuffer)}, {"componentType", kGlFloat},
+                                     {"count", clip.size()}, {"type", "VEC3"},
+                                     {"min", {lo.x, lo.y, lo.z}}, {"max", {hi.x, hi.y, hi.z}}});
+  bytes.clear();
+  for (const auto& c : clip) {
+    put(bytes, c.x);
+    put(bytes, c.y);
+    put(bytes, c.z);
+    put(bytes, c.w);
+  }
+  attrs[kClipPositionAttribute] = glb_.accessor({{"bufferView", glb_.view(bytes, kGlArrayBuffer)},
+                                                 {"componentType", kGlFloat}, {"count", clip.size()}, {"type", "VEC4"}});
+  return attrs;
+}
+
+// The draw's material: the first texture the fragment shader binds as its base colour, when the
+// exporter saved it and found uvs for it (TEXCOORD_0 added to `attrs`); `texture_note` says which.
+json CaptureConverter::draw_material(const json& dj, const std::string& dwhere, const std::string& dname, std::size_t vertices,
+                                     json& attrs, std::string& texture_note) {
+  json material = {{"name", dname}, {"doubleSided", false}};
+  texture_note = "no texture";
+  const json& texs = r_.array(dj, "textures", dwhere);
+  if (dj.contains("uvs") && !texs.empty() && texs[0].contains("file")) {
+    const json& uj = r_.array(dj, "uvs", dwhere);
+    if (uj.size() != vertices) r_.fail(dwhere, "has " + std::to_string(uj.size()) + " uvs for " + std::to_string(vertices) + " vertices");
+    std::vector<std::uint8_t> bytes;
+    for (std::size_t v = 0; v < uj.size(); ++v) {
+      const std::string vw = dwhere + " uv " + std::to_string(v);
+      if (!uj[v].is_array() || uj[v].size() != 2) r_.fail(vw, "is not 2 numbers");
+      put(bytes, r_.number(uj[v][0], vw));
+      put(bytes, r_.number(uj[v][1], vw));
+    }
+    attrs["TEXCOORD_0"] = glb_.accessor({{"bufferView", glb_.view(bytes, kGlArrayBuffer)}, {"componentType", kGlFloat},
+                                         {"count", vertices}, {"type", "VEC2"}});
+    const std::string file = r_.str(texs[0], "file", dwhere + " texture");
+    material["pbrMetallicRoughness"] = {{"baseColorTexture", {{"index", texture_of_file(file, dwhere)}}}, {"metallicFactor", 0.0}};
+    texture_note = file;
+  } else if (!texs.empty()) {
+    out_.unsupported.push_back(dwhere + ": binds " + std::to_string(texs.size()) +
+                               " texture(s) but no uvs were exported; drawn untextured");
+  }
+  if (texs.size() > 1) {
+    out_.unsupported.push_back(dwhere + ": binds " + std::to_string(texs.size()) +
+                               " textures; only the first is the material's (fetch counts come from the shader)");
+  }
+  return material;
+}
+
+// The glTF texture of a PNG in the intermediate's folder, embedded at its first use.
+int CaptureConverter::texture_of_file(const std::string& file, const std::string& dwhere) {
+  if (file.find('/') != std::string::npos || file.find("..") != std::string::npos) {
+    r_.fail(dwhere, "texture file '" + file + "' must be a plain name in the intermediate's folder");
+  }
+  auto it = image_of_file_.find(file);
+  if (it == image_of_file_.end()) {
+    const auto png = read_bytes(dir_ / file, dwhere + " texture");
+    check_png_signature(dir_ / file, dwhere + " texture", png.data(), png.size());
+    images_.push_back({{"bufferView", glb_.view(png, std::nullopt)}, {"mimeType", "image/png"}, {"name", file}});
+    textures_.push_back({{"source", images_.size() - 1}});
+    it = image_of_file_.emplace(file, static_cast<int>(textures_.size() - 1)).first;
+  }
+  return it->second;
+}
+
+// The draw's fragment shader: its static SPIR-V cost (into `sh`), one declaration per distinct
+// cost; returns the declaration's name.
+std::string CaptureConverter::draw_shader(const json& sj, const std::string& dwhere, std::size_t color_targets, ShaderDesc& sh) {
+  sh.alu_ops = static_cast<std::uint32_t>(r_.uint(sj, "alu_ops", dwhere + " shader", 1u << 20));
+  sh.tex_fetches = static_cast<std::uint32_t>(r_.uint(sj, "tex_fetches", dwhere + " shader", 1u << 16));
+  sh.varyings = static_cast<std::uint32_t>(r_.uint(sj, "varyings", dwhere + " shader", 128));
+  sh.discard = r_.boolean(sj, "discard", dwhere + " shader");
+  const std::uint64_t outputs = r_.uint(sj, "color_outputs", dwhere + " shader", 8);
+  sh.color_outputs = static_cast<std::uint32_t>(std::min<std::uint64_t>(outputs, color_targets));
+  if (outputs > color_targets) {
+    out_.unsupported.push_back(dwhere + ": shader writes " + std::to_string(outputs) + " colour outputs, the pass has " +
+                               std::to_string(color_targets) + " colour targets; counted as " + std::to_string(color_targets));
+  }
+  sh.light_source = LightSource::None;
+  const std::string skey = std::to_string(sh.alu_ops) + "_" + std::to_string(sh.tex_fetches) + "_" +
+                           std::to_string(sh.varyings) + "_" + std::to_string(sh.color_outputs) + (sh.discard ? "_d" : "");
+  auto sit = shader_of_key_.find(skey);
+  if (sit == shader_of_key_.end()) {
+    sh.name = "fs_" + std::to_string(shader_of_key_.size());
+    t_.shaders.push_back(sh);
+    sit = shader_of_key_.emplace(skey, sh.name).first;
+  }
+  return sit->second;
+}
+
+// The draw's own pipeline state (depth test only with a depth attachment).
+PipelineState CaptureConverter::draw_pipeline(const json& dj, const std::string& dwhere, std::uint64_t ev,
+                                              const std::string& shader, bool has_depth) {
+  PipelineState p;
+  p.name = "p_" + std::to_string(ev);
+  p.shader = shader;
+  p.depth_test = r_.boolean(dj, "depth_test", dwhere) && has_depth;
+  p.depth_write = p.depth_test && r_.boolean(dj, "depth_write", dwhere);
+  if (r_.boolean(dj, "depth_test", dwhere) && !has_depth) {
+    out_.unsupported.push_back(dwhere + ": depth test enabled without a depth attachment; imported without it");
+  }
+  const auto cmp = parse_compare_op(r_.str(dj, "depth_compare", dwhere));
+  const auto blend = parse_blend_mode(r_.str(dj, "blend", dwhere));
+  const auto cull = parse_cull_mode(r_.str(dj, "cull", dwhere));
+  if (!cmp || !blend || !cull) r_.fail(dwhere, "depth_compare, blend or cull not known");
+  p.depth_compare = *cmp;
+  p.blend = *blend;
+  p.cull = *cull;
+  return p;
+}
+
+CaptureImport CaptureConverter::finish(const std::string& glb_name) {
+  if (out_.draws == 0) r_.fail("header", "the capture has no draws to import");
+  t_.frame.samples = static_cast<int>(max_samples_);
+  glb_.doc()["meshes"] = meshes_;
+  glb_.doc()["nodes"] = nodes_;
   json scene_nodes = json::array();
-  for (std::size_t i = 0; i < nodes.size(); ++i) scene_nodes.push_back(i);
-  glb.doc()["scenes"] = json::array({{{"nodes", scene_nodes}}});
-  glb.doc()["scene"] = 0;
-  glb.doc()["materials"] = materials;
-  if (!images.empty()) {
-    glb.doc()["images"] = images;
-    glb.doc()["textures"] = textures;
+  for (std::size_t i = 0; i < nodes_.size(); ++i) scene_nodes.push_back(i);
+  glb_.doc()["scenes"] = json::array({{{"nodes", scene_nodes}}});
+  glb_.doc()["scene"] = 0;
+  glb_.doc()["materials"] = materials_;
+  if (!images_.empty()) {
+    glb_.doc()["images"] = images_;
+    glb_.doc()["textures"] = textures_;
   }
-  out.glb = glb.finish();
-  t.scene.kind = SceneKind::Gltf;
-  t.scene.path = glb_name;
+  out_.glb = glb_.finish();
+  t_.scene.kind = SceneKind::Gltf;
+  t_.scene.path = glb_name;
   Fnv1a64 h;
-  h.update(out.glb.data(), out.glb.size());
-  t.scene.content_hash = h.hex();
-  out.summary.insert(out.summary.begin(),
-                     std::to_string(out.passes) + " passes, " + std::to_string(out.draws) + " draws, " +
-                         std::to_string(out.triangles) + " triangles, " + std::to_string(t.frame.width) + "x" +
-                         std::to_string(t.frame.height) + "; shader costs: static SPIR-V counts of each fragment "
-                         "shader (scripts/capture/spirv_cost.py); vertex shading: the hardware parameter "
-                         "geometry.vertex_shader_alu_ops");
-  return out;
+  h.update(out_.glb.data(), out_.glb.size());
+  t_.scene.content_hash = h.hex();
+  out_.summary.insert(out_.summary.begin(),
+                      std::to_string(out_.passes) + " passes, " + std::to_string(out_.draws) + " draws, " +
+                          std::to_string(out_.triangles) + " triangles, " + std::to_string(t_.frame.width) + "x" +
+                          std::to_string(t_.frame.height) + "; shader costs: static SPIR-V counts of each fragment "
+                          "shader (scripts/capture/spirv_cost.py); vertex shading: the hardware parameter "
+                          "geometry.vertex_shader_alu_ops");
+  return std::move(out_);
+}
+
+}  // namespace
+
+CaptureImport convert_capture(const std::string& frame_json_path, const std::string& glb_name) {
+  CaptureConverter converter(frame_json_path);
+  converter.read_header();
+  for (const auto& pj : converter.passes()) converter.convert_pass(pj);
+  return converter.finish(glb_name);
 }
 
 namespace {

@@ -464,24 +464,67 @@ void build_pot(Builder& b, int t) {
   b.grid({-0.3f, 0.5f, 0.3f}, {0.6f, 0, 0}, {0, 0, -0.6f}, 1, 1);
 }
 
-}  // namespace
+/// The atrium being built, part by part: its scene, layout and tessellation, the materials, and
+/// the dimensions the parts share. Each build_* adds one group of parts (sub-meshes and their
+/// instances); make_atrium calls them in a fixed order (the sub-meshes' and instances' order).
+struct AtriumParts {
+  explicit AtriumParts(Atrium& atrium);
 
-Scene make_atrium(int detail, bool colour_texels) {
-  if (detail < kAtriumMinDetail || detail > kAtriumMaxDetail) {
-    throw InputError("atrium:" + std::to_string(detail), "atrium detail must be " + std::to_string(kAtriumMinDetail) +
-                                                             ".." + std::to_string(kAtriumMaxDetail));
-  }
-  Atrium A;
-  A.colour_texels = colour_texels;
-  A.t = 1 << (detail - 1);
-  const int t = A.t;
-  const AtriumLayout& L = A.L;
-  Scene& S = A.scene;
-  S.name = "atrium";
-  S.source = "atrium:" + std::to_string(detail);
-  S.content_hash = fnv1a_hex(S.source + ":generator" + std::to_string(atrium_generator_version));
+  Atrium& A;
+  Scene& S;
+  const AtriumLayout& L;
+  const int t;  ///< tessellation factor
+  std::uint32_t m_stone = 0, m_floor = 0, m_plaster = 0, m_wood = 0, m_terracotta = 0, m_roof = 0, m_cloth_red = 0,
+                m_cloth_green = 0, m_cloth_blue = 0, m_foliage = 0, m_glass = 0;
+  float cell = 0;            ///< wall, ceiling and roof grid cell, meters
+  float depth = 0.75f;       ///< arcade wall thickness
+  float hd = 0;              ///< half of it
+  float ground_spring = 4.2f, upper_spring = 0;  ///< where the arches spring, per storey
+  float ground_ceiling = 0;
+  float arch_r = 0;
+  std::vector<Side> all_sides;
 
-  // Textures (procedural grey patterns the materials tint, and the two masks) and materials.
+  /// Grid cells of about `c` meters along `len` meters (at least one).
+  static int cells_for(float len, float c) { return std::max(1, static_cast<int>(std::ceil(len / c - 1e-4f))); }
+  /// Textures (procedural grey patterns the materials tint, and the two masks) and materials.
+  void add_materials();
+  /// Floor: courtyard and aisles in one tiled slab, 2/t m cells.
+  void build_floor();
+  /// Columns, both storeys, instanced along every side (corner columns once).
+  void build_columns();
+  /// Arcade bays, both storeys; corner piers fill the wall where two arcades meet.
+  void build_arcades();
+  /// Ledges and cornice along the courtyard side of each arcade (stone), attic walls above the
+  /// upper arcade (plaster).
+  void build_ledges_and_attic();
+  /// Aisles: ceilings (plaster), gallery floor (floor tiles), roof (roof tiles).
+  void build_aisles();
+  /// Outer walls (plaster): inner and outer faces, wall tops.
+  void build_outer_walls();
+  /// Wood: ceiling beams across both aisles at every column, doors in the outer walls (the
+  /// handrails are the balustrades').
+  void build_beams_and_doors();
+  /// Glass balustrades between the upper columns, with wooden handrails.
+  void build_balustrades();
+  /// Glass canopy over the entrance at the west end of the courtyard.
+  void build_canopy();
+  /// Banners hanging in front of the upper arcades of the long sides, one per bay, colors cycling.
+  void build_banners();
+  /// Potted plants: in the courtyard along the long arcades and in the ground-floor aisles.
+  void build_plants();
+};
+
+AtriumParts::AtriumParts(Atrium& atrium) : A(atrium), S(atrium.scene), L(atrium.L), t(atrium.t) {
+  add_materials();
+  cell = 4.0f / static_cast<float>(t);
+  hd = depth * 0.5f;
+  upper_spring = L.storey1_height + 3.4f;
+  ground_ceiling = L.storey1_height - 0.4f;
+  arch_r = L.bay_m * 0.5f - hd;
+  all_sides = sides(L);
+}
+
+void AtriumParts::add_materials() {
   const int tex_stone = A.add_texture("stone_albedo", 1024, 1024, 4, 8);        // ashlar blocks
   const int tex_floor = A.add_texture("floor_tiles_albedo", 1024, 1024, 8, 8);  // square tiles
   const int tex_plaster = A.add_texture("plaster_albedo", 1024, 1024, 1, 1);    // noise only
@@ -494,318 +537,320 @@ Scene make_atrium(int detail, bool colour_texels) {
   S.alpha_masks.push_back(leaf_mask(128, 256));
   const int mask_cloth = 0, mask_leaf = 1;
 
-  const std::uint32_t m_stone = A.add_material("stone", AlphaMode::Opaque, {0.72f, 0.68f, 0.60f, 1.0f}, tex_stone);
-  const std::uint32_t m_floor = A.add_material("floor", AlphaMode::Opaque, {0.55f, 0.45f, 0.38f, 1.0f}, tex_floor);
-  const std::uint32_t m_plaster = A.add_material("plaster", AlphaMode::Opaque, {0.85f, 0.80f, 0.70f, 1.0f}, tex_plaster);
-  const std::uint32_t m_wood = A.add_material("wood", AlphaMode::Opaque, {0.42f, 0.27f, 0.14f, 1.0f}, tex_wood);
-  const std::uint32_t m_terracotta =
-      A.add_material("terracotta", AlphaMode::Opaque, {0.70f, 0.36f, 0.22f, 1.0f}, tex_terracotta);
-  const std::uint32_t m_roof = A.add_material("roof_tiles", AlphaMode::Opaque, {0.55f, 0.25f, 0.18f, 1.0f}, tex_roof);
-  const std::uint32_t m_cloth_red =
-      A.add_material("cloth_red", AlphaMode::PunchThrough, {0.65f, 0.08f, 0.07f, 1.0f}, tex_cloth, true, mask_cloth);
-  const std::uint32_t m_cloth_green =
-      A.add_material("cloth_green", AlphaMode::PunchThrough, {0.10f, 0.42f, 0.15f, 1.0f}, tex_cloth, true, mask_cloth);
-  const std::uint32_t m_cloth_blue =
-      A.add_material("cloth_blue", AlphaMode::PunchThrough, {0.10f, 0.16f, 0.55f, 1.0f}, tex_cloth, true, mask_cloth);
-  const std::uint32_t m_foliage =
-      A.add_material("foliage", AlphaMode::PunchThrough, {0.18f, 0.45f, 0.12f, 1.0f}, tex_leaf, true, mask_leaf);
-  const std::uint32_t m_glass = A.add_material("glass", AlphaMode::Translucent, {0.60f, 0.78f, 0.80f, 0.30f}, -1, true);
+  m_stone = A.add_material("stone", AlphaMode::Opaque, {0.72f, 0.68f, 0.60f, 1.0f}, tex_stone);
+  m_floor = A.add_material("floor", AlphaMode::Opaque, {0.55f, 0.45f, 0.38f, 1.0f}, tex_floor);
+  m_plaster = A.add_material("plaster", AlphaMode::Opaque, {0.85f, 0.80f, 0.70f, 1.0f}, tex_plaster);
+  m_wood = A.add_material("wood", AlphaMode::Opaque, {0.42f, 0.27f, 0.14f, 1.0f}, tex_wood);
+  m_terracotta = A.add_material("terracotta", AlphaMode::Opaque, {0.70f, 0.36f, 0.22f, 1.0f}, tex_terracotta);
+  m_roof = A.add_material("roof_tiles", AlphaMode::Opaque, {0.55f, 0.25f, 0.18f, 1.0f}, tex_roof);
+  m_cloth_red = A.add_material("cloth_red", AlphaMode::PunchThrough, {0.65f, 0.08f, 0.07f, 1.0f}, tex_cloth, true, mask_cloth);
+  m_cloth_green = A.add_material("cloth_green", AlphaMode::PunchThrough, {0.10f, 0.42f, 0.15f, 1.0f}, tex_cloth, true, mask_cloth);
+  m_cloth_blue = A.add_material("cloth_blue", AlphaMode::PunchThrough, {0.10f, 0.16f, 0.55f, 1.0f}, tex_cloth, true, mask_cloth);
+  m_foliage = A.add_material("foliage", AlphaMode::PunchThrough, {0.18f, 0.45f, 0.12f, 1.0f}, tex_leaf, true, mask_leaf);
+  m_glass = A.add_material("glass", AlphaMode::Translucent, {0.60f, 0.78f, 0.80f, 0.30f}, -1, true);
+}
 
-  const float cell = 4.0f / static_cast<float>(t);  // wall, ceiling and roof grid cell, meters
-  const float depth = 0.75f;                        // arcade wall thickness
-  const float hd = depth * 0.5f;
-  const float ground_spring = 4.2f, upper_spring = L.storey1_height + 3.4f;
-  const float ground_ceiling = L.storey1_height - 0.4f;
-  const float arch_r = L.bay_m * 0.5f - hd;
-  const std::vector<Side> all_sides = sides(L);
+void AtriumParts::build_floor() {
+  const std::uint32_t id = A.add_submesh("floor", m_floor);
+  Builder b(S.submeshes[id]);
+  const float fx = 2.0f * L.outer_half_x, fz = 2.0f * L.outer_half_z;
+  b.grid({-L.outer_half_x, 0.0f, L.outer_half_z}, {fx, 0, 0}, {0, 0, -fz}, cells_for(fx, 2.0f / t),
+         cells_for(fz, 2.0f / t), 1.0f);
+  A.place(id, glm::mat4(1.0f), "floor");
+}
 
-  auto cells_for = [&](float len, float c) { return std::max(1, static_cast<int>(std::ceil(len / c - 1e-4f))); };
-
-  // Floor: courtyard and aisles in one tiled slab, 2/t m cells.
+void AtriumParts::build_columns() {
+  const std::uint32_t ground = A.add_submesh("column_ground", m_stone);
   {
-    const std::uint32_t id = A.add_submesh("floor", m_floor);
-    Builder b(S.submeshes[id]);
-    const float fx = 2.0f * L.outer_half_x, fz = 2.0f * L.outer_half_z;
-    b.grid({-L.outer_half_x, 0.0f, L.outer_half_z}, {fx, 0, 0}, {0, 0, -fz}, cells_for(fx, 2.0f / t),
-           cells_for(fz, 2.0f / t), 1.0f);
-    A.place(id, glm::mat4(1.0f), "floor");
+    Builder b(S.submeshes[ground]);
+    build_column(b, ground_spring, t);
   }
-
-  // Columns, both storeys, instanced along every side (corner columns once).
+  const std::uint32_t upper = A.add_submesh("column_upper", m_stone);
   {
-    const std::uint32_t ground = A.add_submesh("column_ground", m_stone);
-    {
-      Builder b(S.submeshes[ground]);
-      build_column(b, ground_spring, t);
-    }
-    const std::uint32_t upper = A.add_submesh("column_upper", m_stone);
-    {
-      Builder b(S.submeshes[upper]);
-      build_column(b, upper_spring - L.storey1_height, t);
-    }
-    for (const Side& s : all_sides) {
-      const bool long_side = s.along.x != 0.0f;
-      for (int i = 0; i <= s.bays; ++i) {
-        if (!long_side && (i == 0 || i == s.bays)) continue;  // corners belong to the long sides
-        const glm::vec3 p = s.center + s.along * (-s.half + L.bay_m * static_cast<float>(i));
-        A.place(ground, glm::translate(glm::mat4(1.0f), p), std::string("column_ground_") + s.name + std::to_string(i));
-        A.place(upper, glm::translate(glm::mat4(1.0f), p + glm::vec3(0, L.storey1_height, 0)),
-                std::string("column_upper_") + s.name + std::to_string(i));
-      }
+    Builder b(S.submeshes[upper]);
+    build_column(b, upper_spring - L.storey1_height, t);
+  }
+  for (const Side& s : all_sides) {
+    const bool long_side = s.along.x != 0.0f;
+    for (int i = 0; i <= s.bays; ++i) {
+      if (!long_side && (i == 0 || i == s.bays)) continue;  // corners belong to the long sides
+      const glm::vec3 p = s.center + s.along * (-s.half + L.bay_m * static_cast<float>(i));
+      A.place(ground, glm::translate(glm::mat4(1.0f), p), std::string("column_ground_") + s.name + std::to_string(i));
+      A.place(upper, glm::translate(glm::mat4(1.0f), p + glm::vec3(0, L.storey1_height, 0)),
+              std::string("column_upper_") + s.name + std::to_string(i));
     }
   }
+}
 
-  // Arcade bays, both storeys; corner piers fill the wall where two arcades meet.
+void AtriumParts::build_arcades() {
+  const std::uint32_t ground = A.add_submesh("arcade_ground", m_stone);
   {
-    const std::uint32_t ground = A.add_submesh("arcade_ground", m_stone);
-    {
-      Builder b(S.submeshes[ground]);
-      build_arch_bay(b, L.bay_m, arch_r, ground_ceiling - ground_spring, depth, t);
-    }
-    const std::uint32_t upper = A.add_submesh("arcade_upper", m_stone);
-    {
-      Builder b(S.submeshes[upper]);
-      build_arch_bay(b, L.bay_m, arch_r, L.storey2_height - upper_spring, depth, t);
-    }
-    for (const Side& s : all_sides) {
-      const glm::mat4 rot = side_rotation(s);
-      for (int i = 0; i < s.bays; ++i) {
-        const glm::vec3 p = s.center + s.along * (-s.half + L.bay_m * (static_cast<float>(i) + 0.5f));
-        A.place(ground, glm::translate(glm::mat4(1.0f), p + glm::vec3(0, ground_spring, 0)) * rot,
-                std::string("arcade_ground_") + s.name + std::to_string(i));
-        A.place(upper, glm::translate(glm::mat4(1.0f), p + glm::vec3(0, upper_spring, 0)) * rot,
-                std::string("arcade_upper_") + s.name + std::to_string(i));
-      }
-    }
-    const std::uint32_t piers = A.add_submesh("corner_piers", m_stone);
-    Builder b(S.submeshes[piers]);
-    for (float sx : {-1.0f, 1.0f}) {
-      for (float sz : {-1.0f, 1.0f}) {
-        const glm::vec3 c(sx * L.court_half_x, 0, sz * L.court_half_z);
-        b.box(c + glm::vec3(-hd, ground_spring, -hd), c + glm::vec3(hd, ground_ceiling, hd), cell);
-        b.box(c + glm::vec3(-hd, upper_spring, -hd), c + glm::vec3(hd, L.storey2_height, hd), cell);
-      }
-    }
-    A.place(piers, glm::mat4(1.0f), "corner_piers");
+    Builder b(S.submeshes[ground]);
+    build_arch_bay(b, L.bay_m, arch_r, ground_ceiling - ground_spring, depth, t);
   }
-
-  // Ledges and cornice along the courtyard side of each arcade (stone), attic walls above the
-  // upper arcade (plaster).
+  const std::uint32_t upper = A.add_submesh("arcade_upper", m_stone);
   {
-    const std::uint32_t ledges = A.add_submesh("ledges", m_stone);
-    const std::uint32_t attic = A.add_submesh("attic_walls", m_plaster);
-    struct Band { float y0, y1, back, out; };  // out: protrusion beyond the arcade face
-    const Band bands[] = {{ground_ceiling, L.storey1_height, -hd, 0.20f},
-                          {L.storey2_height, L.storey2_height + 0.5f, -hd, 0.25f},
-                          {L.roof_height - 0.4f, L.roof_height, -hd, 0.40f},
-                          {L.roof_height, L.roof_height + 0.3f, -hd - 0.125f, 0.70f}};
-    for (const Side& s : all_sides) {
-      const bool long_side = s.along.x != 0.0f;
-      for (const Band& band : bands) {
-        const float front = hd + band.out;
-        // Long sides run past the corners; short sides stop where the long ones begin.
-        const float a = long_side ? s.half + front : s.half - front;
-        auto [lo, hi] = side_box(s, -a, a, band.back, front, band.y0, band.y1);
-        Builder(S.submeshes[ledges]).box(lo, hi, 4.0f * cell);
-      }
-      // Attic wall: courtyard face of the wall between the upper ledge and the cornice.
-      const float a = long_side ? s.half + hd : s.half - hd;
-      const float y0 = L.storey2_height + 0.5f, y1 = L.roof_height - 0.4f;
-      const glm::vec3 left = s.center + s.along * (-a) + s.inward * hd;
-      const glm::vec3 right = s.center + s.along * a + s.inward * hd;
-      // Front face toward the courtyard: cross(u, v) must point along `inward`.
-      glm::vec3 u = right - left;
-      const glm::vec3 v(0, y1 - y0, 0);
-      glm::vec3 origin = left + glm::vec3(0, y0, 0);
-      if (glm::dot(glm::cross(u, v), s.inward) < 0.0f) {
-        origin = right + glm::vec3(0, y0, 0);
-        u = -u;
-      }
-      Builder(S.submeshes[attic]).grid(origin, u, v, cells_for(2.0f * a, cell), cells_for(y1 - y0, cell));
-    }
-    A.place(ledges, glm::mat4(1.0f), "ledges");
-    A.place(attic, glm::mat4(1.0f), "attic_walls");
+    Builder b(S.submeshes[upper]);
+    build_arch_bay(b, L.bay_m, arch_r, L.storey2_height - upper_spring, depth, t);
   }
-
-  // Aisles: ceilings (plaster), gallery floor (floor tiles), roof (roof tiles), outer walls.
-  {
-    const std::uint32_t ceilings = A.add_submesh("aisle_ceilings", m_plaster);
-    const std::uint32_t gallery_floor = A.add_submesh("gallery_floor", m_floor);
-    const std::uint32_t roof = A.add_submesh("roof", m_roof);
-    // The aisle band of each side as x/z rectangles: long sides full length, short sides between.
-    struct Rect { float x0, x1, z0, z1; };
-    const float inner_z = L.court_half_z + hd, inner_x = L.court_half_x + hd;
-    const Rect rects[] = {{-L.outer_half_x, L.outer_half_x, inner_z, L.outer_half_z},
-                          {-L.outer_half_x, L.outer_half_x, -L.outer_half_z, -inner_z},
-                          {inner_x, L.outer_half_x, -inner_z, inner_z},
-                          {-L.outer_half_x, -inner_x, -inner_z, inner_z}};
-    for (const Rect& r : rects) {
-      const float w = r.x1 - r.x0, d = r.z1 - r.z0;
-      const int nx = cells_for(w, cell), nz = cells_for(d, cell);
-      // Facing down: u = +x, v = +z gives cross = -y.
-      Builder(S.submeshes[ceilings]).grid({r.x0, ground_ceiling, r.z0}, {w, 0, 0}, {0, 0, d}, nx, nz);
-      Builder(S.submeshes[ceilings]).grid({r.x0, L.storey2_height, r.z0}, {w, 0, 0}, {0, 0, d}, nx, nz);
-      // Facing up: u = +x, v = -z.
-      Builder(S.submeshes[gallery_floor])
-          .grid({r.x0, L.storey1_height, r.z1}, {w, 0, 0}, {0, 0, -d}, cells_for(w, 2.0f / t), cells_for(d, 2.0f / t),
-                1.0f);
-      Builder(S.submeshes[roof]).grid({r.x0, L.roof_height, r.z1}, {w, 0, 0}, {0, 0, -d}, nx, nz);
-    }
-    A.place(ceilings, glm::mat4(1.0f), "aisle_ceilings");
-    A.place(gallery_floor, glm::mat4(1.0f), "gallery_floor");
-    A.place(roof, glm::mat4(1.0f), "roof");
-
-    const std::uint32_t walls = A.add_submesh("outer_walls", m_plaster);
-    Builder wb(S.submeshes[walls]);
-    const float ox = L.outer_half_x, oz = L.outer_half_z, th = 0.5f;
-    const float h_in = L.storey2_height, h_out = L.roof_height;
-    const float outer_cell = 2.0f * cell;
-    // Inner faces (toward the aisles) up to the upper ceiling. Builder::grid's front face points
-    // along cross(u, v) with v = +y: u = -x faces -z, +x faces +z, +z faces -x, -z faces +x.
-    wb.grid({ox, 0, oz}, {-2 * ox, 0, 0}, {0, h_in, 0}, cells_for(2 * ox, cell), cells_for(h_in, cell));      // north, faces -z
-    wb.grid({-ox, 0, -oz}, {2 * ox, 0, 0}, {0, h_in, 0}, cells_for(2 * ox, cell), cells_for(h_in, cell));     // south, faces +z
-    wb.grid({ox, 0, -oz}, {0, 0, 2 * oz}, {0, h_in, 0}, cells_for(2 * oz, cell), cells_for(h_in, cell));      // east, faces -x
-    wb.grid({-ox, 0, oz}, {0, 0, -2 * oz}, {0, h_in, 0}, cells_for(2 * oz, cell), cells_for(h_in, cell));     // west, faces +x
-    // Outer faces (toward the outside), full height, coarser.
-    const float ex = ox + th, ez = oz + th;
-    wb.grid({-ex, 0, ez}, {2 * ex, 0, 0}, {0, h_out, 0}, cells_for(2 * ex, outer_cell), cells_for(h_out, outer_cell));   // north, faces +z
-    wb.grid({ex, 0, -ez}, {-2 * ex, 0, 0}, {0, h_out, 0}, cells_for(2 * ex, outer_cell), cells_for(h_out, outer_cell));  // south, faces -z
-    wb.grid({ex, 0, ez}, {0, 0, -2 * ez}, {0, h_out, 0}, cells_for(2 * ez, outer_cell), cells_for(h_out, outer_cell));   // east, faces +x
-    wb.grid({-ex, 0, -ez}, {0, 0, 2 * ez}, {0, h_out, 0}, cells_for(2 * ez, outer_cell), cells_for(h_out, outer_cell));  // west, faces -x
-    // Wall tops.
-    wb.box({-ex, h_out, oz}, {ex, h_out + 0.3f, ez});
-    wb.box({-ex, h_out, -ez}, {ex, h_out + 0.3f, -oz});
-    wb.box({ox, h_out, -oz}, {ex, h_out + 0.3f, oz});
-    wb.box({-ex, h_out, -oz}, {-ox, h_out + 0.3f, oz});
-    A.place(walls, glm::mat4(1.0f), "outer_walls");
-  }
-
-  // Wood: ceiling beams across both aisles at every column, doors in the outer walls, and the
-  // handrails on the glass balustrades.
-  {
-    const std::uint32_t beam = A.add_submesh("beam", m_wood);
-    const float len = L.aisle_depth - hd;
-    Builder(S.submeshes[beam]).box({0.0f, -0.32f, -0.12f}, {len, 0.0f, 0.12f}, cell);
-    const std::uint32_t doors = A.add_submesh("doors", m_wood);
-    Builder db(S.submeshes[doors]);
-    for (const Side& s : all_sides) {
-      // The beam's local +x points away from the courtyard, toward the outer wall.
-      const glm::vec3 out = -s.inward;
-      const float angle = std::atan2(-out.z, out.x);
-      const glm::mat4 beam_rot = glm::rotate(glm::mat4(1.0f), angle, glm::vec3(0, 1, 0));
-      for (int i = 0; i <= s.bays; ++i) {
-        const glm::vec3 p = s.center + s.along * (-s.half + L.bay_m * static_cast<float>(i)) + out * hd;
-        for (float y : {ground_ceiling, L.storey2_height}) {
-          A.place(beam, glm::translate(glm::mat4(1.0f), p + glm::vec3(0, y, 0)) * beam_rot,
-                  std::string("beam_") + s.name + std::to_string(i));
-        }
-      }
-      // Doors: centered on the outer wall of each side (two on the long sides).
-      const float wall_off = (s.along.x != 0.0f ? L.outer_half_z - L.court_half_z : L.outer_half_x - L.court_half_x);
-      const std::vector<float> at = s.along.x != 0.0f ? std::vector<float>{-7.5f, 7.5f} : std::vector<float>{0.0f};
-      for (float a : at) {
-        auto [lo, hi] = side_box(s, a - 0.8f, a + 0.8f, -wall_off, -wall_off + 0.12f, 0.0f, 2.6f);
-        db.box(lo, hi);
-        auto [flo, fhi] = side_box(s, a - 0.95f, a + 0.95f, -wall_off, -wall_off + 0.06f, 2.6f, 2.8f);
-        db.box(flo, fhi);
-      }
-    }
-    A.place(doors, glm::mat4(1.0f), "doors");
-  }
-
-  // Glass balustrades between the upper columns, with wooden handrails.
-  {
-    const std::uint32_t panel = A.add_submesh("balustrade_glass", m_glass);
-    const float pw = L.bay_m - 0.8f, ph = 1.0f;
-    Builder(S.submeshes[panel]).grid({-pw * 0.5f, 0.0f, 0.0f}, {pw, 0, 0}, {0, ph, 0}, t, t, 1.0f);
-    const std::uint32_t rail = A.add_submesh("handrail", m_wood);
-    Builder(S.submeshes[rail])
-        .box({-L.bay_m * 0.5f + 0.3f, ph, -0.05f}, {L.bay_m * 0.5f - 0.3f, ph + 0.08f, 0.05f}, cell);
-    for (const Side& s : all_sides) {
-      const glm::mat4 rot = side_rotation(s);
-      for (int i = 0; i < s.bays; ++i) {
-        const glm::vec3 p = s.center + s.along * (-s.half + L.bay_m * (static_cast<float>(i) + 0.5f)) +
-                            glm::vec3(0, L.storey1_height, 0);
-        const glm::mat4 w = glm::translate(glm::mat4(1.0f), p) * rot;
-        A.place(panel, w, std::string("balustrade_") + s.name + std::to_string(i));
-        A.place(rail, w, std::string("handrail_") + s.name + std::to_string(i));
-      }
+  for (const Side& s : all_sides) {
+    const glm::mat4 rot = side_rotation(s);
+    for (int i = 0; i < s.bays; ++i) {
+      const glm::vec3 p = s.center + s.along * (-s.half + L.bay_m * (static_cast<float>(i) + 0.5f));
+      A.place(ground, glm::translate(glm::mat4(1.0f), p + glm::vec3(0, ground_spring, 0)) * rot,
+              std::string("arcade_ground_") + s.name + std::to_string(i));
+      A.place(upper, glm::translate(glm::mat4(1.0f), p + glm::vec3(0, upper_spring, 0)) * rot,
+              std::string("arcade_upper_") + s.name + std::to_string(i));
     }
   }
-
-  // Glass canopy over the entrance at the west end of the courtyard.
-  {
-    const std::uint32_t canopy = A.add_submesh("entrance_canopy", m_glass);
-    const float x0 = -L.court_half_x + 0.6f;
-    // Sloping down toward the courtyard; front face up.
-    Builder(S.submeshes[canopy]).grid({x0, 3.6f, 2.5f}, {3.0f, -0.4f, 0.0f}, {0, 0, -5.0f}, 2 * t, 3 * t, 1.0f);
-    A.place(canopy, glm::mat4(1.0f), "entrance_canopy");
-  }
-
-  // Banners hanging in front of the upper arcades of the long sides, one per bay, colors cycling.
-  {
-    const std::uint32_t colors[3] = {m_cloth_red, m_cloth_green, m_cloth_blue};
-    const char* color_names[3] = {"red", "green", "blue"};
-    std::uint32_t banner[3];
-    for (int c = 0; c < 3; ++c) {
-      banner[c] = A.add_submesh(std::string("banner_") + color_names[c], colors[c]);
-      Builder b(S.submeshes[banner[c]]);
-      build_banner(b, 1.9f, 5.0f, 1.3f * static_cast<float>(c), t);
-    }
-    int side_index = 0;
-    for (const Side& s : all_sides) {
-      if (s.along.x == 0.0f) continue;
-      for (int i = 0; i < s.bays; ++i) {
-        const glm::vec3 p = s.center + s.along * (-s.half + L.bay_m * (static_cast<float>(i) + 0.5f)) +
-                            s.inward * (hd + 0.45f) + glm::vec3(0, L.storey2_height - 0.05f, 0);
-        const int c = (i + side_index) % 3;
-        A.place(banner[c], glm::translate(glm::mat4(1.0f), p) * facing(s.inward),
-                std::string("banner_") + s.name + std::to_string(i));
-      }
-      ++side_index;
-    }
-  }
-
-  // Potted plants: in the courtyard along the long arcades and in the ground-floor aisles.
-  {
-    const std::uint32_t pot = A.add_submesh("pot", m_terracotta);
-    {
-      Builder b(S.submeshes[pot]);
-      build_pot(b, t);
-    }
-    const int leaves = 24 * t * t;
-    std::uint32_t foliage[3];
-    for (int v = 0; v < 3; ++v) {
-      foliage[v] = A.add_submesh("foliage_" + std::to_string(v), m_foliage);
-      Builder b(S.submeshes[foliage[v]]);
-      build_foliage(b, leaves, 0xF01A6E00ULL + static_cast<std::uint64_t>(v));
-    }
-    std::vector<glm::vec3> spots;
-    for (const Side& s : all_sides) {
-      if (s.along.x == 0.0f) continue;
-      for (int i = 0; i < s.bays; i += 2) {
-        spots.push_back(s.center + s.along * (-s.half + L.bay_m * (static_cast<float>(i) + 0.5f)) + s.inward * 1.4f);
-      }
-    }
+  const std::uint32_t piers = A.add_submesh("corner_piers", m_stone);
+  Builder b(S.submeshes[piers]);
+  for (float sx : {-1.0f, 1.0f}) {
     for (float sz : {-1.0f, 1.0f}) {
-      for (float x : {-12.0f, 0.0f, 12.0f}) spots.push_back({x, 0.0f, sz * (L.outer_half_z - 1.4f)});
-    }
-    Pcg32 rng(0xA781u, 3);
-    int n = 0;
-    for (const glm::vec3& p : spots) {
-      const float yaw = rng.range(0.0f, 2.0f * pi);
-      const float scale = rng.range(0.9f, 1.2f);
-      const int variant = static_cast<int>(rng.next() % 3u);
-      const glm::mat4 base = glm::translate(glm::mat4(1.0f), p);
-      A.place(pot, base, "pot_" + std::to_string(n));
-      const glm::mat4 crown = glm::translate(glm::mat4(1.0f), p + glm::vec3(0, 0.55f, 0)) *
-                              glm::rotate(glm::mat4(1.0f), yaw, glm::vec3(0, 1, 0)) *
-                              glm::scale(glm::mat4(1.0f), glm::vec3(scale));
-      A.place(foliage[variant], crown, "plant_" + std::to_string(n));
-      ++n;
+      const glm::vec3 c(sx * L.court_half_x, 0, sz * L.court_half_z);
+      b.box(c + glm::vec3(-hd, ground_spring, -hd), c + glm::vec3(hd, ground_ceiling, hd), cell);
+      b.box(c + glm::vec3(-hd, upper_spring, -hd), c + glm::vec3(hd, L.storey2_height, hd), cell);
     }
   }
+  A.place(piers, glm::mat4(1.0f), "corner_piers");
+}
 
+void AtriumParts::build_ledges_and_attic() {
+  const std::uint32_t ledges = A.add_submesh("ledges", m_stone);
+  const std::uint32_t attic = A.add_submesh("attic_walls", m_plaster);
+  struct Band { float y0, y1, back, out; };  // out: protrusion beyond the arcade face
+  const Band bands[] = {{ground_ceiling, L.storey1_height, -hd, 0.20f},
+                        {L.storey2_height, L.storey2_height + 0.5f, -hd, 0.25f},
+                        {L.roof_height - 0.4f, L.roof_height, -hd, 0.40f},
+                        {L.roof_height, L.roof_height + 0.3f, -hd - 0.125f, 0.70f}};
+  for (const Side& s : all_sides) {
+    const bool long_side = s.along.x != 0.0f;
+    for (const Band& band : bands) {
+      const float front = hd + band.out;
+      // Long sides run past the corners; short sides stop where the long ones begin.
+      const float a = long_side ? s.half + front : s.half - front;
+      auto [lo, hi] = side_box(s, -a, a, band.back, front, band.y0, band.y1);
+      Builder(S.submeshes[ledges]).box(lo, hi, 4.0f * cell);
+    }
+    // Attic wall: courtyard face of the wall between the upper ledge and the cornice.
+    const float a = long_side ? s.half + hd : s.half - hd;
+    const float y0 = L.storey2_height + 0.5f, y1 = L.roof_height - 0.4f;
+    const glm::vec3 left = s.center + s.along * (-a) + s.inward * hd;
+    const glm::vec3 right = s.center + s.along * a + s.inward * hd;
+    // Front face toward the courtyard: cross(u, v) must point along `inward`.
+    glm::vec3 u = right - left;
+    const glm::vec3 v(0, y1 - y0, 0);
+    glm::vec3 origin = left + glm::vec3(0, y0, 0);
+    if (glm::dot(glm::cross(u, v), s.inward) < 0.0f) {
+      origin = right + glm::vec3(0, y0, 0);
+      u = -u;
+    }
+    Builder(S.submeshes[attic]).grid(origin, u, v, cells_for(2.0f * a, cell), cells_for(y1 - y0, cell));
+  }
+  A.place(ledges, glm::mat4(1.0f), "ledges");
+  A.place(attic, glm::mat4(1.0f), "attic_walls");
+}
+
+void AtriumParts::build_aisles() {
+  const std::uint32_t ceilings = A.add_submesh("aisle_ceilings", m_plaster);
+  const std::uint32_t gallery_floor = A.add_submesh("gallery_floor", m_floor);
+  const std::uint32_t roof = A.add_submesh("roof", m_roof);
+  // The aisle band of each side as x/z rectangles: long sides full length, short sides between.
+  struct Rect { float x0, x1, z0, z1; };
+  const float inner_z = L.court_half_z + hd, inner_x = L.court_half_x + hd;
+  const Rect rects[] = {{-L.outer_half_x, L.outer_half_x, inner_z, L.outer_half_z},
+                        {-L.outer_half_x, L.outer_half_x, -L.outer_half_z, -inner_z},
+                        {inner_x, L.outer_half_x, -inner_z, inner_z},
+                        {-L.outer_half_x, -inner_x, -inner_z, inner_z}};
+  for (const Rect& r : rects) {
+    const float w = r.x1 - r.x0, d = r.z1 - r.z0;
+    const int nx = cells_for(w, cell), nz = cells_for(d, cell);
+    // Facing down: u = +x, v = +z gives cross = -y.
+    Builder(S.submeshes[ceilings]).grid({r.x0, ground_ceiling, r.z0}, {w, 0, 0}, {0, 0, d}, nx, nz);
+    Builder(S.submeshes[ceilings]).grid({r.x0, L.storey2_height, r.z0}, {w, 0, 0}, {0, 0, d}, nx, nz);
+    // Facing up: u = +x, v = -z.
+    Builder(S.submeshes[gallery_floor])
+        .grid({r.x0, L.storey1_height, r.z1}, {w, 0, 0}, {0, 0, -d}, cells_for(w, 2.0f / t), cells_for(d, 2.0f / t),
+              1.0f);
+    Builder(S.submeshes[roof]).grid({r.x0, L.roof_height, r.z1}, {w, 0, 0}, {0, 0, -d}, nx, nz);
+  }
+  A.place(ceilings, glm::mat4(1.0f), "aisle_ceilings");
+  A.place(gallery_floor, glm::mat4(1.0f), "gallery_floor");
+  A.place(roof, glm::mat4(1.0f), "roof");
+}
+
+void AtriumParts::build_outer_walls() {
+  const std::uint32_t walls = A.add_submesh("outer_walls", m_plaster);
+  Builder wb(S.submeshes[walls]);
+  const float ox = L.outer_half_x, oz = L.outer_half_z, th = 0.5f;
+  const float h_in = L.storey2_height, h_out = L.roof_height;
+  const float outer_cell = 2.0f * cell;
+  // Inner faces (toward the aisles) up to the upper ceiling. Builder::grid's front face points
+  // along cross(u, v) with v = +y: u = -x faces -z, +x faces +z, +z faces -x, -z faces +x.
+  wb.grid({ox, 0, oz}, {-2 * ox, 0, 0}, {0, h_in, 0}, cells_for(2 * ox, cell), cells_for(h_in, cell));      // north, faces -z
+  wb.grid({-ox, 0, -oz}, {2 * ox, 0, 0}, {0, h_in, 0}, cells_for(2 * ox, cell), cells_for(h_in, cell));     // south, faces +z
+  wb.grid({ox, 0, -oz}, {0, 0, 2 * oz}, {0, h_in, 0}, cells_for(2 * oz, cell), cells_for(h_in, cell));      // east, faces -x
+  wb.grid({-ox, 0, oz}, {0, 0, -2 * oz}, {0, h_in, 0}, cells_for(2 * oz, cell), cells_for(h_in, cell));     // west, faces +x
+  // Outer faces (toward the outside), full height, coarser.
+  const float ex = ox + th, ez = oz + th;
+  wb.grid({-ex, 0, ez}, {2 * ex, 0, 0}, {0, h_out, 0}, cells_for(2 * ex, outer_cell), cells_for(h_out, outer_cell));   // north, faces +z
+  wb.grid({ex, 0, -ez}, {-2 * ex, 0, 0}, {0, h_out, 0}, cells_for(2 * ex, outer_cell), cells_for(h_out, outer_cell));  // south, faces -z
+  wb.grid({ex, 0, ez}, {0, 0, -2 * ez}, {0, h_out, 0}, cells_for(2 * ez, outer_cell), cells_for(h_out, outer_cell));   // east, faces +x
+  wb.grid({-ex, 0, -ez}, {0, 0, 2 * ez}, {0, h_out, 0}, cells_for(2 * ez, outer_cell), cells_for(h_out, outer_cell));  // west, faces -x
+  // Wall tops.
+  wb.box({-ex, h_out, oz}, {ex, h_out + 0.3f, ez});
+  wb.box({-ex, h_out, -ez}, {ex, h_out + 0.3f, -oz});
+  wb.box({ox, h_out, -oz}, {ex, h_out + 0.3f, oz});
+  wb.box({-ex, h_out, -oz}, {-ox, h_out + 0.3f, oz});
+  A.place(walls, glm::mat4(1.0f), "outer_walls");
+}
+
+void AtriumParts::build_beams_and_doors() {
+  const std::uint32_t beam = A.add_submesh("beam", m_wood);
+  const float len = L.aisle_depth - hd;
+  Builder(S.submeshes[beam]).box({0.0f, -0.32f, -0.12f}, {len, 0.0f, 0.12f}, cell);
+  const std::uint32_t doors = A.add_submesh("doors", m_wood);
+  Builder db(S.submeshes[doors]);
+  for (const Side& s : all_sides) {
+    // The beam's local +x points away from the courtyard, toward the outer wall.
+    const glm::vec3 out = -s.inward;
+    const float angle = std::atan2(-out.z, out.x);
+    const glm::mat4 beam_rot = glm::rotate(glm::mat4(1.0f), angle, glm::vec3(0, 1, 0));
+    for (int i = 0; i <= s.bays; ++i) {
+      const glm::vec3 p = s.center + s.along * (-s.half + L.bay_m * static_cast<float>(i)) + out * hd;
+      for (float y : {ground_ceiling, L.storey2_height}) {
+        A.place(beam, glm::translate(glm::mat4(1.0f), p + glm::vec3(0, y, 0)) * beam_rot,
+                std::string("beam_") + s.name + std::to_string(i));
+      }
+    }
+    // Doors: centered on the outer wall of each side (two on the long sides).
+    const float wall_off = (s.along.x != 0.0f ? L.outer_half_z - L.court_half_z : L.outer_half_x - L.court_half_x);
+    const std::vector<float> at = s.along.x != 0.0f ? std::vector<float>{-7.5f, 7.5f} : std::vector<float>{0.0f};
+    for (float a : at) {
+      auto [lo, hi] = side_box(s, a - 0.8f, a + 0.8f, -wall_off, -wall_off + 0.12f, 0.0f, 2.6f);
+      db.box(lo, hi);
+      auto [flo, fhi] = side_box(s, a - 0.95f, a + 0.95f, -wall_off, -wall_off + 0.06f, 2.6f, 2.8f);
+      db.box(flo, fhi);
+    }
+  }
+  A.place(doors, glm::mat4(1.0f), "doors");
+}
+
+void AtriumParts::build_balustrades() {
+  const std::uint32_t panel = A.add_submesh("balustrade_glass", m_glass);
+  const float pw = L.bay_m - 0.8f, ph = 1.0f;
+  Builder(S.submeshes[panel]).grid({-pw * 0.5f, 0.0f, 0.0f}, {pw, 0, 0}, {0, ph, 0}, t, t, 1.0f);
+  const std::uint32_t rail = A.add_submesh("handrail", m_wood);
+  Builder(S.submeshes[rail])
+      .box({-L.bay_m * 0.5f + 0.3f, ph, -0.05f}, {L.bay_m * 0.5f - 0.3f, ph + 0.08f, 0.05f}, cell);
+  for (const Side& s : all_sides) {
+    const glm::mat4 rot = side_rotation(s);
+    for (int i = 0; i < s.bays; ++i) {
+      const glm::vec3 p = s.center + s.along * (-s.half + L.bay_m * (static_cast<float>(i) + 0.5f)) +
+                          glm::vec3(0, L.storey1_height, 0);
+      const glm::mat4 w = glm::translate(glm::mat4(1.0f), p) * rot;
+      A.place(panel, w, std::string("balustrade_") + s.name + std::to_string(i));
+      A.place(rail, w, std::string("handrail_") + s.name + std::to_string(i));
+    }
+  }
+}
+
+void AtriumParts::build_canopy() {
+  const std::uint32_t canopy = A.add_submesh("entrance_canopy", m_glass);
+  const float x0 = -L.court_half_x + 0.6f;
+  // Sloping down toward the courtyard; front face up.
+  Builder(S.submeshes[canopy]).grid({x0, 3.6f, 2.5f}, {3.0f, -0.4f, 0.0f}, {0, 0, -5.0f}, 2 * t, 3 * t, 1.0f);
+  A.place(canopy, glm::mat4(1.0f), "entrance_canopy");
+}
+
+void AtriumParts::build_banners() {
+  const std::uint32_t colors[3] = {m_cloth_red, m_cloth_green, m_cloth_blue};
+  const char* color_names[3] = {"red", "green", "blue"};
+  std::uint32_t banner[3];
+  for (int c = 0; c < 3; ++c) {
+    banner[c] = A.add_submesh(std::string("banner_") + color_names[c], colors[c]);
+    Builder b(S.submeshes[banner[c]]);
+    build_banner(b, 1.9f, 5.0f, 1.3f * static_cast<float>(c), t);
+  }
+  int side_index = 0;
+  for (const Side& s : all_sides) {
+    if (s.along.x == 0.0f) continue;
+    for (int i = 0; i < s.bays; ++i) {
+      const glm::vec3 p = s.center + s.along * (-s.half + L.bay_m * (static_cast<float>(i) + 0.5f)) +
+                          s.inward * (hd + 0.45f) + glm::vec3(0, L.storey2_height - 0.05f, 0);
+      const int c = (i + side_index) % 3;
+      A.place(banner[c], glm::translate(glm::mat4(1.0f), p) * facing(s.inward),
+              std::string("banner_") + s.name + std::to_string(i));
+    }
+    ++side_index;
+  }
+}
+
+void AtriumParts::build_plants() {
+  const std::uint32_t pot = A.add_submesh("pot", m_terracotta);
+  {
+    Builder b(S.submeshes[pot]);
+    build_pot(b, t);
+  }
+  const int leaves = 24 * t * t;
+  std::uint32_t foliage[3];
+  for (int v = 0; v < 3; ++v) {
+    foliage[v] = A.add_submesh("foliage_" + std::to_string(v), m_foliage);
+    Builder b(S.submeshes[foliage[v]]);
+    build_foliage(b, leaves, 0xF01A6E00ULL + static_cast<std::uint64_t>(v));
+  }
+  std::vector<glm::vec3> spots;
+  for (const Side& s : all_sides) {
+    if (s.along.x == 0.0f) continue;
+    for (int i = 0; i < s.bays; i += 2) {
+      spots.push_back(s.center + s.along * (-s.half + L.bay_m * (static_cast<float>(i) + 0.5f)) + s.inward * 1.4f);
+    }
+  }
+  for (float sz : {-1.0f, 1.0f}) {
+    for (float x : {-12.0f, 0.0f, 12.0f}) spots.push_back({x, 0.0f, sz * (L.outer_half_z - 1.4f)});
+  }
+  Pcg32 rng(0xA781u, 3);
+  int n = 0;
+  for (const glm::vec3& p : spots) {
+    const float yaw = rng.range(0.0f, 2.0f * pi);
+    const float scale = rng.range(0.9f, 1.2f);
+    const int variant = static_cast<int>(rng.next() % 3u);
+    const glm::mat4 base = glm::translate(glm::mat4(1.0f), p);
+    A.place(pot, base, "pot_" + std::to_string(n));
+    const glm::mat4 crown = glm::translate(glm::mat4(1.0f), p + glm::vec3(0, 0.55f, 0)) *
+                            glm::rotate(glm::mat4(1.0f), yaw, glm::vec3(0, 1, 0)) *
+                            glm::scale(glm::mat4(1.0f), glm::vec3(scale));
+    A.place(foliage[variant], crown, "plant_" + std::to_string(n));
+    ++n;
+  }
+}
+
+}  // namespace
+
+Scene make_atrium(int detail, bool colour_texels) {
+  if (detail < kAtriumMinDetail || detail > kAtriumMaxDetail) {
+    throw InputError("atrium:" + std::to_string(detail), "atrium detail must be " + std::to_string(kAtriumMinDetail) +
+                                                             ".." + std::to_string(kAtriumMaxDetail));
+  }
+  Atrium A;
+  A.colour_texels = colour_texels;
+  A.t = 1 << (detail - 1);
+  Scene& S = A.scene;
+  S.name = "atrium";
+  S.source = "atrium:" + std::to_string(detail);
+  S.content_hash = fnv1a_hex(S.source + ":generator" + std::to_string(atrium_generator_version));
+  AtriumParts parts(A);
+  parts.build_floor();
+  parts.build_columns();
+  parts.build_arcades();
+  parts.build_ledges_and_attic();
+  parts.build_aisles();
+  parts.build_outer_walls();
+  parts.build_beams_and_doors();
+  parts.build_balustrades();
+  parts.build_canopy();
+  parts.build_banners();
+  parts.build_plants();
   update_bounds(S);
   return S;
 }

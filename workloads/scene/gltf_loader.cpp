@@ -630,7 +630,30 @@ class Converter {
   void convert_materials();
   std::uint32_t default_material();
   const std::vector<std::uint32_t>& mesh_submeshes(int mesh);
+  /// Mesh `mesh`'s primitive `prim` as a submesh, its index appended to `out` (nothing for points and lines).
   void convert_primitive(int mesh, int prim, std::vector<std::uint32_t>& out);
+  // The steps of convert_primitive, in order.
+  /// Every attribute's accessor checked (one element per vertex); returns the vertex stride in bytes.
+  std::uint32_t check_attributes(const tinygltf::Primitive& prim, const std::string& where, int pos_acc,
+                                 std::size_t vertex_count) const;
+  /// POSITION into sm.positions.
+  void read_positions(int pos_acc, const std::string& where, std::size_t vertex_count, SubMesh& sm) const;
+  /// NORMAL into sm.normals; false when the primitive has none.
+  bool read_normals(const tinygltf::Primitive& prim, const std::string& where, std::size_t vertex_count, SubMesh& sm) const;
+  /// _CLIP_POSITION into sm.clip_positions, when present.
+  void read_clip_positions(const tinygltf::Primitive& prim, const std::string& where, std::size_t vertex_count,
+                           SubMesh& sm) const;
+  /// The material (sm.material) and the uvs of the set its base colour texture samples; returns that attribute's name.
+  std::string read_uvs(const tinygltf::Primitive& prim, const std::string& where, std::size_t vertex_count, SubMesh& sm);
+  /// The attributes not kept, validated (their bytes lie in their buffer views).
+  void check_other_attributes(const tinygltf::Primitive& prim, const std::string& where, const std::string& uv_attr) const;
+  /// The primitive's indices (0..n-1 when it has none); sets sm.index_bytes.
+  std::vector<std::uint32_t> read_indices(const tinygltf::Primitive& prim, const std::string& where,
+                                          std::size_t vertex_count, SubMesh& sm) const;
+  /// `idx` of topology `mode` as sm.indices, a triangle list.
+  void triangle_list(int mode, std::vector<std::uint32_t> idx, const std::string& where, SubMesh& sm);
+  /// sm.normals made from the triangles' face normals (a primitive without NORMAL).
+  static void smooth_face_normals(std::size_t vertex_count, SubMesh& sm);
   void check_node_graph();
   void place_node(int node, const glm::mat4& parent);
   glm::mat4 local_matrix(int node) const;
@@ -926,11 +949,29 @@ void Converter::convert_primitive(int mesh, int prim_index, std::vector<std::uin
   }
   auto pos_it = prim.attributes.find("POSITION");
   if (pos_it == prim.attributes.end()) fail(where + ": has no POSITION attribute");
-
-  // Every attribute: a valid accessor whose bytes lie in its buffer view, one element per vertex.
   const int pos_acc = pos_it->second;
   check_index(pos_acc, m_.accessors.size(), where + " POSITION", "accessor");
   const std::size_t vertex_count = m_.accessors[static_cast<std::size_t>(pos_acc)].count;
+
+  SubMesh sm;
+  sm.name = gmesh.name.empty() ? "mesh " + std::to_string(mesh) : gmesh.name;
+  if (gmesh.primitives.size() > 1) sm.name += "/" + std::to_string(prim_index);
+  sm.vertex_stride_bytes = check_attributes(prim, where, pos_acc, vertex_count);
+  read_positions(pos_acc, where, vertex_count, sm);
+  const bool has_normals = read_normals(prim, where, vertex_count, sm);
+  read_clip_positions(prim, where, vertex_count, sm);
+  const std::string uv_attr = read_uvs(prim, where, vertex_count, sm);
+  check_other_attributes(prim, where, uv_attr);
+  triangle_list(prim.mode, read_indices(prim, where, vertex_count, sm), where, sm);
+  if (!has_normals) smooth_face_normals(vertex_count, sm);
+
+  out.push_back(static_cast<std::uint32_t>(scene_.submeshes.size()));
+  scene_.submeshes.push_back(std::move(sm));
+}
+
+std::uint32_t Converter::check_attributes(const tinygltf::Primitive& prim, const std::string& where, int pos_acc,
+                                          std::size_t vertex_count) const {
+  // Every attribute: a valid accessor whose bytes lie in its buffer view, one element per vertex.
   std::uint32_t stride_bytes = 0;
   for (const auto& [attr, acc_index] : prim.attributes) {
     check_index(acc_index, m_.accessors.size(), where + " attribute " + attr, "accessor");
@@ -946,74 +987,79 @@ void Converter::convert_primitive(int mesh, int prim_index, std::vector<std::uin
     if (nc == 0) fail(desc + ": invalid type " + std::to_string(acc.type));
     stride_bytes += static_cast<std::uint32_t>(cb * nc);
   }
+  return stride_bytes;
+}
 
-  SubMesh sm;
-  sm.name = gmesh.name.empty() ? "mesh " + std::to_string(mesh) : gmesh.name;
-  if (gmesh.primitives.size() > 1) sm.name += "/" + std::to_string(prim_index);
-  sm.vertex_stride_bytes = stride_bytes;
-
+void Converter::read_positions(int pos_acc, const std::string& where, std::size_t vertex_count, SubMesh& sm) const {
   // POSITION: VEC3 FLOAT, all finite.
-  {
-    const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(pos_acc)];
-    const std::string desc = accessor_desc(pos_acc, "POSITION of " + where);
-    if (acc.type != TINYGLTF_TYPE_VEC3 || acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) {
-      fail(desc + ": POSITION must be VEC3 FLOAT, found " + type_name(acc.type) + " " +
-           component_name(acc.componentType));
-    }
-    const std::vector<float> v = read_accessor<float>(pos_acc, desc);
-    sm.positions.resize(vertex_count);
-    for (std::size_t i = 0; i < vertex_count; ++i) {
-      const glm::vec3 p(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-        std::ostringstream os;
-        os << desc << ": vertex " << i << " has a non-finite coordinate (" << p.x << ", " << p.y << ", " << p.z << ")";
-        fail(os.str());
-      }
-      sm.positions[i] = p;
-    }
+  const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(pos_acc)];
+  const std::string desc = accessor_desc(pos_acc, "POSITION of " + where);
+  if (acc.type != TINYGLTF_TYPE_VEC3 || acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) {
+    fail(desc + ": POSITION must be VEC3 FLOAT, found " + type_name(acc.type) + " " + component_name(acc.componentType));
   }
+  const std::vector<float> v = read_accessor<float>(pos_acc, desc);
+  sm.positions.resize(vertex_count);
+  for (std::size_t i = 0; i < vertex_count; ++i) {
+    const glm::vec3 p(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+      std::ostringstream os;
+      os << desc << ": vertex " << i << " has a non-finite coordinate (" << p.x << ", " << p.y << ", " << p.z << ")";
+      fail(os.str());
+    }
+    sm.positions[i] = p;
+  }
+}
+
+bool Converter::read_normals(const tinygltf::Primitive& prim, const std::string& where, std::size_t vertex_count,
+                             SubMesh& sm) const {
   // NORMAL: VEC3 FLOAT when present.
-  bool has_normals = false;
-  if (auto it = prim.attributes.find("NORMAL"); it != prim.attributes.end()) {
-    const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(it->second)];
-    const std::string desc = accessor_desc(it->second, "NORMAL of " + where);
-    if (acc.type != TINYGLTF_TYPE_VEC3 || acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) {
-      fail(desc + ": NORMAL must be VEC3 FLOAT, found " + type_name(acc.type) + " " +
-           component_name(acc.componentType));
-    }
-    const std::vector<float> v = read_accessor<float>(it->second, desc);
-    sm.normals.resize(vertex_count);
-    for (std::size_t i = 0; i < vertex_count; ++i) {
-      const glm::vec3 n(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
-      if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z)) {
-        fail(desc + ": vertex " + std::to_string(i) + " has a non-finite normal");
-      }
-      sm.normals[i] = n;
-    }
-    has_normals = true;
+  auto it = prim.attributes.find("NORMAL");
+  if (it == prim.attributes.end()) return false;
+  const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(it->second)];
+  const std::string desc = accessor_desc(it->second, "NORMAL of " + where);
+  if (acc.type != TINYGLTF_TYPE_VEC3 || acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) {
+    fail(desc + ": NORMAL must be VEC3 FLOAT, found " + type_name(acc.type) + " " + component_name(acc.componentType));
   }
+  const std::vector<float> v = read_accessor<float>(it->second, desc);
+  sm.normals.resize(vertex_count);
+  for (std::size_t i = 0; i < vertex_count; ++i) {
+    const glm::vec3 n(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+    if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z)) {
+      fail(desc + ": vertex " + std::to_string(i) + " has a non-finite normal");
+    }
+    sm.normals[i] = n;
+  }
+  return true;
+}
+
+void Converter::read_clip_positions(const tinygltf::Primitive& prim, const std::string& where, std::size_t vertex_count,
+                                    SubMesh& sm) const {
   // _CLIP_POSITION (tbdrsim's application-specific attribute, docs/capture-import.md): VEC4 FLOAT
   // clip-space positions a captured vertex shader wrote, all finite (the clipper handles any w).
-  if (auto it = prim.attributes.find(kClipPositionAttribute); it != prim.attributes.end()) {
-    const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(it->second)];
-    const std::string desc = accessor_desc(it->second, std::string(kClipPositionAttribute) + " of " + where);
-    if (acc.type != TINYGLTF_TYPE_VEC4 || acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) {
-      fail(desc + ": " + kClipPositionAttribute + " must be VEC4 FLOAT, found " + type_name(acc.type) + " " +
-           component_name(acc.componentType));
-    }
-    const std::vector<float> v = read_accessor<float>(it->second, desc);
-    sm.clip_positions.resize(vertex_count);
-    for (std::size_t i = 0; i < vertex_count; ++i) {
-      const glm::vec4 c(v[4 * i], v[4 * i + 1], v[4 * i + 2], v[4 * i + 3]);
-      if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z) || !std::isfinite(c.w)) {
-        std::ostringstream os;
-        os << desc << ": vertex " << i << " has a non-finite clip coordinate (" << c.x << ", " << c.y << ", " << c.z
-           << ", " << c.w << ")";
-        fail(os.str());
-      }
-      sm.clip_positions[i] = c;
-    }
+  auto it = prim.attributes.find(kClipPositionAttribute);
+  if (it == prim.attributes.end()) return;
+  const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(it->second)];
+  const std::string desc = accessor_desc(it->second, std::string(kClipPositionAttribute) + " of " + where);
+  if (acc.type != TINYGLTF_TYPE_VEC4 || acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) {
+    fail(desc + ": " + kClipPositionAttribute + " must be VEC4 FLOAT, found " + type_name(acc.type) + " " +
+         component_name(acc.componentType));
   }
+  const std::vector<float> v = read_accessor<float>(it->second, desc);
+  sm.clip_positions.resize(vertex_count);
+  for (std::size_t i = 0; i < vertex_count; ++i) {
+    const glm::vec4 c(v[4 * i], v[4 * i + 1], v[4 * i + 2], v[4 * i + 3]);
+    if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z) || !std::isfinite(c.w)) {
+      std::ostringstream os;
+      os << desc << ": vertex " << i << " has a non-finite clip coordinate (" << c.x << ", " << c.y << ", " << c.z << ", "
+         << c.w << ")";
+      fail(os.str());
+    }
+    sm.clip_positions[i] = c;
+  }
+}
+
+std::string Converter::read_uvs(const tinygltf::Primitive& prim, const std::string& where, std::size_t vertex_count,
+                                SubMesh& sm) {
   // TEXCOORD_n (the set the base color texture uses): VEC2 FLOAT or normalized UBYTE/USHORT.
   std::uint32_t material_index = 0;
   int texcoord_set = 0;
@@ -1047,6 +1093,11 @@ void Converter::convert_primitive(int mesh, int prim_index, std::vector<std::uin
     fail(where + ": its material '" + scene_.materials[material_index].name + "' samples its base colour texture with " +
          uv_attr + " (baseColorTexture.texCoord = " + std::to_string(texcoord_set) + "), which the primitive lacks");
   }
+  return uv_attr;
+}
+
+void Converter::check_other_attributes(const tinygltf::Primitive& prim, const std::string& where,
+                                       const std::string& uv_attr) const {
   // Remaining attributes: validated (byte ranges), not kept.
   for (const auto& [attr, acc_index] : prim.attributes) {
     if (attr == "POSITION" || attr == "NORMAL" || attr == uv_attr || attr == kClipPositionAttribute) continue;
@@ -1058,51 +1109,56 @@ void Converter::convert_primitive(int mesh, int prim_index, std::vector<std::uin
       view_range(acc.bufferView, acc.byteOffset, acc.count, elem, true, desc, nullptr);
     }
   }
+}
 
+std::vector<std::uint32_t> Converter::read_indices(const tinygltf::Primitive& prim, const std::string& where,
+                                                   std::size_t vertex_count, SubMesh& sm) const {
   // Indices: scalar unsigned, all < vertex count. Non-indexed draws get 0..n-1 and index_bytes 0.
   std::vector<std::uint32_t> idx;
-  if (prim.indices >= 0) {
-    check_index(prim.indices, m_.accessors.size(), where + " indices", "accessor");
-    const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(prim.indices)];
-    const std::string desc = accessor_desc(prim.indices, "indices of " + where);
-    if (acc.type != TINYGLTF_TYPE_SCALAR ||
-        (acc.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
-         acc.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
-         acc.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)) {
-      fail(desc + ": indices must be SCALAR UNSIGNED_BYTE/UNSIGNED_SHORT/UNSIGNED_INT, found " + type_name(acc.type) +
-           " " + component_name(acc.componentType));
-    }
-    if (acc.bufferView >= 0 && m_.bufferViews.size() > static_cast<std::size_t>(acc.bufferView) &&
-        m_.bufferViews[static_cast<std::size_t>(acc.bufferView)].byteStride != 0) {
-      fail(desc + ": the buffer view of indices must not have a byteStride");
-    }
-    idx = read_accessor<std::uint32_t>(prim.indices, desc);
-    for (std::size_t i = 0; i < idx.size(); ++i) {
-      if (idx[i] >= vertex_count) {
-        fail(desc + ": index " + std::to_string(idx[i]) + " at position " + std::to_string(i) + " is out of range (" +
-             std::to_string(vertex_count) + " vertices)");
-      }
-    }
-    sm.index_bytes = static_cast<std::uint32_t>(component_bytes(acc.componentType));
-  } else {
+  if (prim.indices < 0) {
     idx.resize(vertex_count);
     for (std::size_t i = 0; i < vertex_count; ++i) idx[i] = static_cast<std::uint32_t>(i);
     sm.index_bytes = 0;
+    return idx;
   }
+  check_index(prim.indices, m_.accessors.size(), where + " indices", "accessor");
+  const tinygltf::Accessor& acc = m_.accessors[static_cast<std::size_t>(prim.indices)];
+  const std::string desc = accessor_desc(prim.indices, "indices of " + where);
+  if (acc.type != TINYGLTF_TYPE_SCALAR ||
+      (acc.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+       acc.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+       acc.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)) {
+    fail(desc + ": indices must be SCALAR UNSIGNED_BYTE/UNSIGNED_SHORT/UNSIGNED_INT, found " + type_name(acc.type) + " " +
+         component_name(acc.componentType));
+  }
+  if (acc.bufferView >= 0 && m_.bufferViews.size() > static_cast<std::size_t>(acc.bufferView) &&
+      m_.bufferViews[static_cast<std::size_t>(acc.bufferView)].byteStride != 0) {
+    fail(desc + ": the buffer view of indices must not have a byteStride");
+  }
+  idx = read_accessor<std::uint32_t>(prim.indices, desc);
+  for (std::size_t i = 0; i < idx.size(); ++i) {
+    if (idx[i] >= vertex_count) {
+      fail(desc + ": index " + std::to_string(idx[i]) + " at position " + std::to_string(i) + " is out of range (" +
+           std::to_string(vertex_count) + " vertices)");
+    }
+  }
+  sm.index_bytes = static_cast<std::uint32_t>(component_bytes(acc.componentType));
+  return idx;
+}
 
+void Converter::triangle_list(int mode, std::vector<std::uint32_t> idx, const std::string& where, SubMesh& sm) {
   // Topology to a triangle list (glTF 2.0 spec, section 3.7.2.1 winding for strips and fans).
   const std::size_t n = idx.size();
-  if (prim.mode == TINYGLTF_MODE_TRIANGLES) {
+  if (mode == TINYGLTF_MODE_TRIANGLES) {
     if (n % 3 != 0) {
-      scene_.warnings.push_back(where + ": " + std::to_string(n) +
-                                " indices is not a multiple of 3; the trailing ones are ignored");
+      scene_.warnings.push_back(where + ": " + std::to_string(n) + " indices is not a multiple of 3; the trailing ones are ignored");
     }
     idx.resize(n - n % 3);
     sm.indices = std::move(idx);
   } else if (n >= 3) {
     sm.indices.reserve((n - 2) * 3);
     for (std::size_t i = 0; i + 2 < n; ++i) {
-      if (prim.mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+      if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
         sm.indices.push_back(idx[i]);
         sm.indices.push_back(idx[i + 1 + i % 2]);
         sm.indices.push_back(idx[i + 2 - i % 2]);
@@ -1113,26 +1169,23 @@ void Converter::convert_primitive(int mesh, int prim_index, std::vector<std::uin
       }
     }
   }
+}
 
+void Converter::smooth_face_normals(std::size_t vertex_count, SubMesh& sm) {
   // Missing normals: each triangle's face normal, area-weighted at shared vertices (exactly the
   // flat normal for non-indexed geometry and wherever a vertex joins coplanar triangles only).
-  if (!has_normals) {
-    sm.normals.assign(vertex_count, glm::vec3(0.0f));
-    for (std::size_t t = 0; t + 2 < sm.indices.size(); t += 3) {
-      const std::uint32_t a = sm.indices[t], b = sm.indices[t + 1], c = sm.indices[t + 2];
-      const glm::vec3 fn = glm::cross(sm.positions[b] - sm.positions[a], sm.positions[c] - sm.positions[a]);
-      sm.normals[a] += fn;
-      sm.normals[b] += fn;
-      sm.normals[c] += fn;
-    }
-    for (glm::vec3& nrm : sm.normals) {
-      const float len = glm::length(nrm);
-      nrm = len > 0.0f && std::isfinite(len) ? nrm / len : glm::vec3(0.0f, 0.0f, 1.0f);
-    }
+  sm.normals.assign(vertex_count, glm::vec3(0.0f));
+  for (std::size_t t = 0; t + 2 < sm.indices.size(); t += 3) {
+    const std::uint32_t a = sm.indices[t], b = sm.indices[t + 1], c = sm.indices[t + 2];
+    const glm::vec3 fn = glm::cross(sm.positions[b] - sm.positions[a], sm.positions[c] - sm.positions[a]);
+    sm.normals[a] += fn;
+    sm.normals[b] += fn;
+    sm.normals[c] += fn;
   }
-
-  out.push_back(static_cast<std::uint32_t>(scene_.submeshes.size()));
-  scene_.submeshes.push_back(std::move(sm));
+  for (glm::vec3& nrm : sm.normals) {
+    const float len = glm::length(nrm);
+    nrm = len > 0.0f && std::isfinite(len) ? nrm / len : glm::vec3(0.0f, 0.0f, 1.0f);
+  }
 }
 
 const std::vector<std::uint32_t>& Converter::mesh_submeshes(int mesh) {
