@@ -4,7 +4,11 @@
 // the tag buffers decide never grows with more of them on every technique (the reference set).
 #include <gtest/gtest.h>
 
+#include <cctype>
+#include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -255,6 +259,35 @@ constexpr const char* kFrameOrderAnomaly = "cascaded_clustered_forward";
 /// +0.29 %, rounded up to 0.5 %.
 constexpr double kFrameOrderAnomalyBound = 0.005;
 
+/// The row of `technique` in docs/hsr-and-tag-buffers.md's reference-set table ("| technique |
+/// flushes | ISP busy cycles | frame cycles |", each cell "a / b / c" for 1 / 2 / 4 buffers, or one
+/// figure for all three): the three figures of each column, empty when the table has no row for it.
+std::vector<std::vector<double>> documented_tag_buffer_row(const std::string& technique) {
+  std::ifstream in(std::string(TBDRSIM_SOURCE_DIR) + "/docs/hsr-and-tag-buffers.md");
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("| " + technique + " |", 0) != 0) continue;
+    std::vector<std::vector<double>> columns;
+    std::stringstream cells(line.substr(technique.size() + 4));
+    for (std::string cell; std::getline(cells, cell, '|');) {
+      if (cell.find_first_of("0123456789") == std::string::npos) continue;
+      std::vector<double> figures;
+      std::stringstream parts(cell);
+      for (std::string part; std::getline(parts, part, '/');) {
+        std::string digits;
+        for (char ch : part) {
+          if (std::isdigit(static_cast<unsigned char>(ch))) digits += ch;
+          if (ch == '(') break;  // "12,134 (all)": one figure for all three
+        }
+        figures.push_back(std::stod(digits));
+      }
+      if (figures.size() == 1) figures.assign(3, figures.front());
+      columns.push_back(figures);
+    }
+    return columns;
+  }
+  return {};
+}
+
 TEST_P(TagBuffersReferenceSet, TheWorkTheTagBuffersDecideNeverGrowsWithMoreBuffers) {
   // What the number of tag buffers decides, per frame: the mid-tile flushes, the ISP's busy
   // cycles (rasterisation plus the waits for punch-through depth resolves), and the shading
@@ -266,6 +299,16 @@ TEST_P(TagBuffersReferenceSet, TheWorkTheTagBuffersDecideNeverGrowsWithMoreBuffe
   const std::string technique = GetParam();
   const Trace trace = generate_trace(technique, testing_support::atrium_entrance_setup(*scene_, 32, 320, 180));
   const std::vector<TagBufferWork> runs = expect_tag_buffer_work_never_grows(trace, *scene_, technique);
+  // The figures docs/hsr-and-tag-buffers.md quotes for this technique are these (not stale).
+  const std::vector<std::vector<double>> doc = documented_tag_buffer_row(technique);
+  if (!doc.empty()) {
+    ASSERT_EQ(doc.size(), 3u) << "flushes, ISP busy cycles, frame cycles";
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      EXPECT_EQ(doc[0][i], static_cast<double>(runs[i].flushes)) << technique << " flushes, docs/hsr-and-tag-buffers.md";
+      EXPECT_EQ(doc[1][i], std::round(runs[i].isp_cycles)) << technique << " ISP busy cycles, docs/hsr-and-tag-buffers.md";
+      EXPECT_EQ(doc[2][i], std::round(runs[i].frame_cycles)) << technique << " frame cycles, docs/hsr-and-tag-buffers.md";
+    }
+  }
   for (std::size_t i = 1; i < runs.size(); ++i) {
     SCOPED_TRACE(technique + ": frame cycles from " + std::to_string(1 << (i - 1)) + " to " + std::to_string(1 << i) + " tag buffers");
     if (technique == kFrameOrderAnomaly) {
