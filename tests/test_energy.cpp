@@ -5,11 +5,18 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <memory>
+#include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "atrium_trace_setup.hpp"
+#include "cli_run.hpp"
+#include "db_query.hpp"
+#include "scratch_dir.hpp"
 #include "app/run_driver.hpp"
 #include "models/dram_memspec.hpp"
 #include "models/dram_microbench.hpp"
@@ -274,6 +281,72 @@ TEST(EnergyParams, EveryEnergyConstantNamesASource) {
     EXPECT_GT(p.source.size(), 10u) << key;
   }
   EXPECT_EQ(seen, 17);  // 14 [energy] keys + the three above
+}
+
+}  // namespace
+}  // namespace tbdr
+
+namespace tbdr {
+namespace {
+
+namespace fs = std::filesystem;
+const testing_scratch::ScratchCleanup energy_docs_scratch_cleanup{"energy"};
+
+/// Whether `measured` rounds to the figure `quoted` (as docs print it: as many decimals as shown).
+bool rounds_to(double measured, const std::string& quoted) {
+  const auto dot = quoted.find('.');
+  const int decimals = dot == std::string::npos ? 0 : static_cast<int>(quoted.size() - dot - 1);
+  return std::fabs(measured - std::stod(quoted)) <= 0.5 * std::pow(10.0, -decimals) + 1e-12;
+}
+
+// docs/energy.md's measured table ("plain_forward, atrium:3, 256 lights, 960x540", usc.count 1, 4,
+// 8) quotes what the model computes now: each "now" figure (total, static and its power, DRAM and
+// its pJ per bit moved, ALU) and the frame times above it, to the decimals printed. A change that
+// moves one of them fails here until the doc is measured again. (The "before" column is history.)
+TEST(DocsEnergyTable, TheMeasuredUscTableIsCurrent) {
+  const std::string doc = [] {
+    std::ifstream in(std::string(TBDRSIM_SOURCE_DIR) + "/docs/energy.md");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  }();
+  const std::regex row(R"(\| (\d+) \| [\d.]+ mJ \| ([\d.]+) mJ \| [\d.]+ -> ([\d.]+) mJ \(([\d.]+) mW\) \| ([\d.]+) mJ \(([\d.]+)(?:; ([\d.]+) mJ of it refresh)?\) \| ([\d.]+) mJ \|)");
+  std::smatch times;
+  ASSERT_TRUE(std::regex_search(doc, times, std::regex(R"(frame times ([\d.]+), ([\d.]+), ([\d.]+) ms)")));
+  const fs::path dir = testing_scratch::scratch_dir("energy", "docs_table");
+  const std::string trace = (dir / "pf.trace").string(), db = (dir / "e.db").string();
+  ASSERT_EQ(testing_support::run_cli({"trace", "--technique", "plain_forward", "--scene", "atrium:3", "--lights", "256",
+                                      "--resolution", "960x540", "--out", trace})
+                .code,
+            0);
+  int rows = 0;
+  for (auto it = std::sregex_iterator(doc.begin(), doc.end(), row); it != std::sregex_iterator(); ++it, ++rows) {
+    const std::smatch& m = *it;
+    const int uscs = std::stoi(m[1]);
+    const int texture_units = uscs == 1 ? 1 : uscs / 2;  // the doc's "texture.units 1, 2, 4"
+    ASSERT_EQ(testing_support::run_cli({"run", "--trace", trace, "--db", db, "--quiet", "--set", "usc.count=" + std::to_string(uscs),
+                                        "--set", "texture.units=" + std::to_string(texture_units)})
+                  .code,
+              0);
+    const std::string last = "(SELECT max(id) FROM runs)";
+    const auto value = [&](const std::string& scope, const std::string& name) {
+      return testing_support::query_number(db, "SELECT value FROM stats WHERE run_id = " + last + " AND scope = '" + scope +
+                                                   "' AND name = '" + name + "'");
+    };
+    SCOPED_TRACE(std::to_string(uscs) + " USCs: docs/energy.md row " + m.str(0));
+    const double bits = (value("mem/dram", "read_bytes") + value("mem/dram", "write_bytes")) * 8.0;
+    EXPECT_TRUE(rounds_to(value("frame/energy", "total_mj"), m[2])) << value("frame/energy", "total_mj");
+    EXPECT_TRUE(rounds_to(value("frame/energy", "static_pj") * 1e-9, m[3])) << value("frame/energy", "static_pj") * 1e-9;
+    EXPECT_TRUE(rounds_to(value("frame/energy", "static_power_mw"), m[4])) << value("frame/energy", "static_power_mw");
+    EXPECT_TRUE(rounds_to(value("frame/energy", "dram_pj") * 1e-9, m[5])) << value("frame/energy", "dram_pj") * 1e-9;
+    EXPECT_TRUE(rounds_to(value("frame/energy", "dram_pj") / bits, m[6])) << value("frame/energy", "dram_pj") / bits;
+    if (m[7].matched) {
+      EXPECT_TRUE(rounds_to(value("mem/dram", "energy_refresh_pj") * 1e-9, m[7])) << value("mem/dram", "energy_refresh_pj") * 1e-9;
+    }
+    EXPECT_TRUE(rounds_to(value("frame/energy", "alu_pj") * 1e-9, m[8])) << value("frame/energy", "alu_pj") * 1e-9;
+    EXPECT_TRUE(rounds_to(value("frame/timing", "frame_time_ms"), times[rows + 1])) << value("frame/timing", "frame_time_ms");
+  }
+  EXPECT_EQ(rows, 3) << "the table's rows for 1, 4 and 8 USCs";
 }
 
 }  // namespace
