@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "file_text.hpp"
 #include "analysis/report.hpp"
 #include "analysis/results_db.hpp"
 #include "analysis/sql.hpp"
@@ -38,10 +39,7 @@ std::string tiny_trace(const fs::path& dir, const std::string& technique = "plai
   return path;
 }
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string((std::istreambuf_iterator<char>(in)), {});
-}
+using testing_support::read_text;
 
 // Item 10: a misspelled option gets the closest option names of that command, not only the usage.
 TEST(CliHonest, MisspelledOptionsAreAnsweredWithASuggestion) {

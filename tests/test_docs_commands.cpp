@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "file_text.hpp"
 #include "scratch_dir.hpp"
 
 namespace tbdr {
@@ -37,12 +38,7 @@ namespace fs = std::filesystem;
 
 const testing_scratch::ScratchCleanup docs_scratch_cleanup{"docs_commands"};
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing_support::read_text;
 
 /// The documents whose command lines run: README.md and every docs/*.md, by path from the checkout.
 std::vector<std::string> all_documents() {

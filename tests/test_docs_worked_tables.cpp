@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "file_text.hpp"
 #include "scratch_dir.hpp"
 
 namespace tbdr {
@@ -23,12 +24,7 @@ namespace fs = std::filesystem;
 
 const testing_scratch::ScratchCleanup worked_tables_scratch_cleanup{"docs_worked_tables"};
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing_support::read_text;
 
 /// The body of the first fenced block labelled `label` after `from` in `text` (npos: none), and
 /// where the search may go on.

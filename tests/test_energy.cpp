@@ -15,6 +15,7 @@
 
 #include "atrium_trace_setup.hpp"
 #include "cli_run.hpp"
+#include "file_text.hpp"
 #include "db_query.hpp"
 #include "scratch_dir.hpp"
 #include "app/run_driver.hpp"
@@ -304,12 +305,7 @@ bool rounds_to(double measured, const std::string& quoted) {
 // its pJ per bit moved, ALU) and the frame times above it, to the decimals printed. A change that
 // moves one of them fails here until the doc is measured again. (The "before" column is history.)
 TEST(DocsEnergyTable, TheMeasuredUscTableIsCurrent) {
-  const std::string doc = [] {
-    std::ifstream in(std::string(TBDRSIM_SOURCE_DIR) + "/docs/energy.md");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  }();
+  const std::string doc = testing_support::read_text(std::string(TBDRSIM_SOURCE_DIR) + "/docs/energy.md");
   const std::regex row(R"(\| (\d+) \| [\d.]+ mJ \| ([\d.]+) mJ \| [\d.]+ -> ([\d.]+) mJ \(([\d.]+) mW\) \| ([\d.]+) mJ \(([\d.]+)(?:; ([\d.]+) mJ of it refresh)?\) \| ([\d.]+) mJ \|)");
   std::smatch times;
   ASSERT_TRUE(std::regex_search(doc, times, std::regex(R"(frame times ([\d.]+), ([\d.]+), ([\d.]+) ms)")));

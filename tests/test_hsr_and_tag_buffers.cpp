@@ -288,6 +288,16 @@ std::vector<std::vector<double>> documented_tag_buffer_row(const std::string& te
   return {};
 }
 
+// The table the parameterised test checks is there, with its five rows (a changed layout that the
+// parser no longer reads would otherwise leave every row unchecked).
+TEST(TagBuffersDoc, TheReferenceSetTableHasItsRows) {
+  for (const char* t : {"deferred", "clustered_deferred", "light_prepass", "visibility_buffer", "cascaded_clustered_forward"}) {
+    const auto row = documented_tag_buffer_row(t);
+    ASSERT_EQ(row.size(), 3u) << t;
+    for (const auto& column : row) EXPECT_EQ(column.size(), 3u) << t;
+  }
+}
+
 TEST_P(TagBuffersReferenceSet, TheWorkTheTagBuffersDecideNeverGrowsWithMoreBuffers) {
   // What the number of tag buffers decides, per frame: the mid-tile flushes, the ISP's busy
   // cycles (rasterisation plus the waits for punch-through depth resolves), and the shading

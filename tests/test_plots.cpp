@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "file_text.hpp"
 #include "analysis/results_db.hpp"
 #include "analysis/sql.hpp"
 #include "app/cli.hpp"
@@ -235,12 +236,7 @@ TEST_F(Plots, CommandRefusesUnknownKindsAndShowsHelp) {
 // problems each pinned.
 
 /// The text of a file.
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing_support::read_text;
 
 /// A shell line split into words ('...' and "..." quoted, a # comment outside quotes ends it).
 std::vector<std::string> shell_words(const std::string& line) {

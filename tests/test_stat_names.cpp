@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "file_text.hpp"
 #include "analysis/report.hpp"
 #include "analysis/results_db.hpp"
 #include "analysis/sql.hpp"
@@ -32,12 +33,7 @@ using testing_support::run_cli;
 
 const testing_scratch::ScratchCleanup stat_names_scratch_cleanup{"stat_names"};
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing_support::read_text;
 
 /// The words quoted with single quotes inside `text` (SQL string literals).
 void single_quoted(const std::string& text, std::vector<std::string>& out) {

@@ -3,6 +3,7 @@
 
 #include <memory>
 
+#include "app/run_stats.hpp"
 #include "kernel/stats.hpp"
 
 namespace tbdr {
@@ -91,6 +92,42 @@ TEST(SlotPool, ReusesTheMostRecentlyReleasedSlot) {
   EXPECT_EQ(pool.acquire(), a);
   EXPECT_EQ(pool.acquire(), 3u);  // no free slot: a new one
   EXPECT_EQ(pool.capacity(), 4u);
+}
+
+// stat_name gives the declared name of a member; members of one type are told apart by address.
+TEST(StatName, IsTheDeclaredNameOfTheMember) {
+  EXPECT_STREQ(stat_name(&FrameTimingStats::frame_cycles), "frame_cycles");
+  EXPECT_STREQ(stat_name(&FrameTimingStats::frame_time_ms), "frame_time_ms");  // the same type as frame_cycles
+  EXPECT_STREQ(stat_name(&CommandTimingStats::end_cycle), "end_cycle");
+  EXPECT_STREQ(stat_name(&UnitTimeStats::utilization), "utilization");
+}
+
+// A set with derive() gets its derived rows computed when collected: busy 30 + stalled 20 cycles of
+// a 100-cycle frame leave idle = 100 - 30 - 20 = 50 and utilization = 30 / 100 = 0.3; the set
+// itself is left as it was (collect_stats derives on a copy).
+TEST(DerivingStatSet, CollectComputesTheDerivedFiguresFromTheirInputs) {
+  UnitTimeStats u;
+  u.busy_cycles.set(30);
+  u.stalled_cycles.set(20);
+  u.frame_cycles = 100;
+  std::vector<StatRecord> rows;
+  collect_stats(u, "frame/unit.usc", rows);
+  ASSERT_EQ(rows.size(), 4u);
+  auto value = [&](const char* name) {
+    for (const auto& r : rows) {
+      if (r.name == name) return r.value;
+    }
+    ADD_FAILURE() << name;
+    return -1.0;
+  };
+  EXPECT_DOUBLE_EQ(value("idle_cycles"), 50.0);
+  EXPECT_DOUBLE_EQ(value("utilization"), 0.3);
+  EXPECT_DOUBLE_EQ(u.idle_cycles.value(), 0.0);
+  // A stalled share past the frame (more than 100 % busy + stalled) leaves no negative idle time.
+  u.stalled_cycles.set(90);
+  rows.clear();
+  collect_stats(u, "frame/unit.usc", rows);
+  EXPECT_DOUBLE_EQ(value("idle_cycles"), 0.0);
 }
 
 // Elements leave in the order they came, across the ring's wrap and its growth (8 slots, then 16).

@@ -134,16 +134,17 @@ concept DerivingStatSet = StatSet<S> && requires(S& s) { s.derive(); };
 /// figures are computed first (DerivingStatSet).
 template <StatSet S>
 void collect_stats(const S& s, const std::string& scope, std::vector<StatRecord>& out) {
+  const auto append = [&](const S& set) {
+    S::zip(set, set, [&](const auto& x, const auto&, const StatDef& d) {
+      out.push_back({scope, d.name, x.as_double(), d.unit, d.description});
+    });
+  };
   if constexpr (DerivingStatSet<S>) {
     S derived = s;
     derived.derive();
-    S::zip(derived, derived, [&](const auto& x, const auto&, const StatDef& d) {
-      out.push_back({scope, d.name, x.as_double(), d.unit, d.description});
-    });
+    append(derived);
   } else {
-    S::zip(s, s, [&](const auto& x, const auto&, const StatDef& d) {
-      out.push_back({scope, d.name, x.as_double(), d.unit, d.description});
-    });
+    append(s);
   }
 }
 
