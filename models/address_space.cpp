@@ -31,6 +31,15 @@ std::uint64_t AddressSpace::allocate_high(std::string name, std::uint64_t size_b
   return place(std::move(name), size_bytes, cls, 0, high_top_, UINT64_MAX);
 }
 
+std::uint64_t AddressSpace::reuse_or_allocate(const std::string& name, std::uint64_t size_bytes, DramClass cls, bool high) {
+  for (int n = 1;; ++n) {
+    const std::string candidate = n == 1 ? name : name + "#" + std::to_string(n);
+    const AddressRegion* r = find(candidate);
+    if (r == nullptr) return high ? allocate_high(candidate, size_bytes, cls) : allocate(candidate, size_bytes, cls);
+    if (r->cls == cls && r->reserved_bytes >= size_bytes && (r->base >= kHighBase) == high) return r->base;
+  }
+}
+
 std::uint64_t AddressSpace::place(std::string name, std::uint64_t size_bytes, DramClass cls, std::uint64_t align_bytes,
                                   std::uint64_t& cursor, std::uint64_t limit) {
   if (name.empty()) throw std::invalid_argument("address space: a region needs a name");

@@ -55,6 +55,12 @@ class AddressSpace {
   /// takes the commands), so that neither range's layout depends on how the two interleave.
   std::uint64_t allocate_high(std::string name, std::uint64_t size_bytes, DramClass cls);
 
+  /// A later frame of a sequence's region: the region `name` (or `name#2`, `name#3`, ... after it)
+  /// when one exists with at least `size_bytes` reserved and class `cls`, as an application
+  /// allocates its render targets and buffers once and uses them every frame; else a new region
+  /// (allocate, or allocate_high with `high`) under the first of those names not taken.
+  std::uint64_t reuse_or_allocate(const std::string& name, std::uint64_t size_bytes, DramClass cls, bool high = false);
+
   /// The region with that name, or nullptr.
   const AddressRegion* find(std::string_view name) const;
   /// The region with that name; throws std::out_of_range when there is none.

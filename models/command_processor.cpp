@@ -1,6 +1,7 @@
 #include "models/command_processor.hpp"
 
 #include <algorithm>
+#include <exception>
 #include <numeric>
 #include <map>
 #include <memory>
@@ -131,12 +132,8 @@ class FrameSimulator {
       }
       result_.work.framebuffer_bytes = rop_->framebuffer_bytes();
     }
-    if (options_.feed) {
-      std::size_t commands = 0;  // every pass and dispatch makes one (barriers make none)
-      for (const auto& cmd : trace_.commands) {
-        commands += std::holds_alternative<PassDesc>(cmd) || std::holds_alternative<DispatchCmd>(cmd) ? 1 : 0;
-      }
-      options_.feed->begin(result_.work, commands);
+    if (options_.feed && options_.sequence_frame == 0) {
+      options_.feed->begin(result_.work, options_.sequence_frames > 1 ? options_.sequence_commands : timed_command_count(trace_));
     }
     surface_readers_ = stored_surface_readers(trace_);
     int pass_index = 0;
@@ -351,9 +348,10 @@ class FrameSimulator {
 
   /// What the timing model knows of a dispatch before it runs: its name and kind (its content
   /// follows once it has run).
-  static CommandWork dispatch_header(const DispatchCmd& d, int index) {
+  CommandWork dispatch_header(const DispatchCmd& d, int index) const {
     CommandWork cw;
     cw.name = "dispatch" + std::to_string(index) + "." + to_string(d.kernel);
+    cw.frame = options_.sequence_frame;
     cw.is_dispatch = true;
     cw.depends_on_previous = true;  // a dispatch follows a barrier on what it reads
     return cw;
@@ -517,6 +515,7 @@ class FrameSimulator {
     ctx.textures = textures_.get();
     CommandWork& cw = run->cw;
     cw.name = run->prefix;
+    cw.frame = options_.sequence_frame;
     if (!early) cw.read_bytes = book_buffer_reads(pass, run->dram).read_bytes;  // buffers read once per pass, at its start
     cw.depends_on_previous = reads_earlier_results(pass);
 
@@ -764,15 +763,25 @@ class FrameSimulator {
 
 }  // namespace
 
+std::size_t timed_command_count(const Trace& trace) {
+  std::size_t commands = 0;
+  for (const auto& cmd : trace.commands) {
+    commands += std::holds_alternative<PassDesc>(cmd) || std::holds_alternative<DispatchCmd>(cmd) ? 1 : 0;
+  }
+  return commands;
+}
+
 FrameResult simulate_frame(const Trace& trace, const std::string& trace_path, const Scene& scene, const HwConfig& hw,
                            const FrameOptions& options) {
-  // The feed is closed however the simulation ends: a timing model waiting on it stops waiting.
+  // The feed is closed however the simulation ends (after a sequence's last frame, or when a
+  // frame fails): a timing model waiting on it stops waiting.
   struct CloseFeed {
     WorkFeed* feed;
+    bool last;
     ~CloseFeed() {
-      if (feed) feed->close();
+      if (feed && (last || std::uncaught_exceptions() > 0)) feed->close();
     }
-  } close_feed{options.feed};
+  } close_feed{options.feed, options.sequence_frame + 1 >= options.sequence_frames};
   if (options.colour) {
     // Colours sample the base colour texels: a scene loaded without them (SceneLoadOptions)
     // would shade every textured surface untextured.

@@ -109,7 +109,16 @@ struct FrameOptions {
   /// frame's fields (WorkFeed::take gives the whole work back). The feed is closed when the
   /// simulation ends, also when it fails.
   WorkFeed* feed = nullptr;
+  /// The frame's place in a sequence of frames that share one feed: the first frame begins it
+  /// with `sequence_commands` commands (every frame's), the last one closes it, and each
+  /// command's work carries its frame (CommandWork::frame). A single frame: 0 of 1.
+  int sequence_frame = 0;
+  int sequence_frames = 1;
+  std::size_t sequence_commands = 0;
 };
+
+/// How many commands the timing model gets from a trace: one per pass and dispatch (barriers make none).
+std::size_t timed_command_count(const Trace& trace);
 
 /// Replays `trace` on `scene` with the hardware `hw`. Input problems (an unsupported kernel or
 /// light source, a load of an attachment nothing stored, inconsistent sample counts, a scene

@@ -53,7 +53,7 @@ double dram_idle_pj(const DramParams& d, double idle_ps) {
 }
 
 EnergyBreakdown compute_energy(const HwConfig& hw, const FrameStats& frame, const MemorySystemStats& memory,
-                               double frame_time_ps) {
+                               double frame_time_ps, int frames) {
   const auto& e = hw.energy;
   const TspStats& tsp = frame.render.tsp;
   const TileMemoryStats& tm = frame.render.tile_memory;
@@ -113,7 +113,7 @@ EnergyBreakdown compute_energy(const HwConfig& hw, const FrameStats& frame, cons
   b.leakage = static_power(hw);
   term("static", "mW x ps", b.leakage.total_mw() * frame_time_ps, kPjPerMwPs);
   // The idle time of a fixed frame period.
-  const double period_ps = hw.gpu.frame_period_us * 1e6;
+  const double period_ps = hw.gpu.frame_period_us * 1e6 * std::max(1, frames);
   b.idle_ps = period_ps > frame_time_ps ? period_ps - frame_time_ps : 0.0;
   b.idle_gpu_pj = b.leakage.idle_mw(e.gated_leakage_fraction) * b.idle_ps * kPjPerMwPs;
   b.idle_dram_pj = dram_idle_pj(hw.dram, b.idle_ps);

@@ -87,7 +87,7 @@ struct EnergyBreakdown {
   std::vector<EnergyTerm> terms;
   double total_pj = 0;        ///< the frame at its own duration (race to idle)
   StaticPower leakage;        ///< what the static term charges over the frame time
-  double idle_ps = 0;         ///< gpu.frame_period_us - frame time (0 when no period or a longer frame)
+  double idle_ps = 0;         ///< gpu.frame_period_us x frames - frame time (0 when no period or a longer frame)
   double idle_gpu_pj = 0;     ///< GPU leakage over idle_ps (gated units and caches)
   double idle_dram_pj = 0;    ///< DRAM background over idle_ps
   double idle_pj() const { return idle_gpu_pj + idle_dram_pj; }
@@ -95,8 +95,9 @@ struct EnergyBreakdown {
 };
 
 /// Computes the breakdown from the frame's unit statistics, the memory system's energies and the
-/// frame time.
+/// frame time; for a sequence of `frames` frames, from their sums and the sequence's time (its
+/// fixed-period figure then covers `frames` periods).
 EnergyBreakdown compute_energy(const HwConfig& hw, const FrameStats& frame, const MemorySystemStats& memory,
-                               double frame_time_ps);
+                               double frame_time_ps, int frames = 1);
 
 }  // namespace tbdr

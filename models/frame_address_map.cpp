@@ -39,7 +39,8 @@ std::uint64_t whole_units(std::uint64_t bytes) { return (bytes + kRegionAlignByt
 void FrameAddressMap::add_command(const CommandWork& cmd) {
   const std::uint64_t slots = std::max<std::uint64_t>(1, cmd.tile_slots);
   fb_stride_.push_back(whole_units(std::max<std::uint64_t>(cmd.tile_slot_bytes, 1)));
-  fb_base_.push_back(cmd.is_dispatch ? 0 : space_.allocate("framebuffer." + cmd.name, fb_stride_.back() * slots, DramClass::Color));
+  frame_.push_back(cmd.frame);
+  fb_base_.push_back(cmd.is_dispatch ? 0 : place(fb_base_.size(), "framebuffer." + cmd.name, fb_stride_.back() * slots, DramClass::Color));
   tile_slots_.push_back(slots);
   partial_stride_.push_back(whole_units(std::max<std::uint64_t>(cmd.partial_slot_bytes, 1)));
   partial_base_.push_back(0);  // allocated at the first partial render
@@ -48,7 +49,7 @@ void FrameAddressMap::add_command(const CommandWork& cmd) {
   spill_stride_.push_back(whole_units(cmd.spill_slot_bytes));
   // Allocated only when the pass spills, so that passes that fit keep their addresses.
   spill_base_.push_back(spill_stride_.back() == 0 ? 0
-                                                  : space_.allocate("tile_spill." + cmd.name, spill_stride_.back() * slots, DramClass::Spill));
+                                                  : place(fb_base_.size() - 1, "tile_spill." + cmd.name, spill_stride_.back() * slots, DramClass::Spill));
   vertex_base_.emplace_back();
   names_.push_back(cmd.name);
   // Whose data it reads: the latest earlier writer of each class.
@@ -62,7 +63,7 @@ void FrameAddressMap::place_buffers(std::size_t command, const CommandWork& cmd)
   // In the high range, in command order (first fragment jobs start in command order), while the
   // other regions are placed as commands are taken: neither order depends on how the two
   // interleave, which the schedule (and so every swept parameter) decides.
-  cmd_base_[command] = space_.allocate_high("buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, kRegionAlignBytes), DramClass::Other);
+  cmd_base_[command] = place(command, "buffers." + cmd.name, std::max<std::uint64_t>(cmd_bytes, kRegionAlignBytes), DramClass::Other, true);
   buffers_placed_[command] = true;
 }
 
@@ -77,13 +78,19 @@ void FrameAddressMap::add_render(std::size_t command, const RenderWork& r) {
     for (const auto& t : r.tiles) vertex_bytes += t.geometry.vertex_fetch_bytes + t.geometry.index_fetch_bytes;
   }
   if (r.partial && partial_base_.at(command) == 0) {
-    partial_base_[command] = space_.allocate("partial_render." + names_[command], partial_stride_[command] * tile_slots_[command], DramClass::Color);
+    partial_base_[command] = place(command, "partial_render." + names_[command], partial_stride_[command] * tile_slots_[command], DramClass::Color);
   }
   auto& bases = vertex_base_.at(command);
   // Allocated only when the render fetches geometry.
   bases.push_back(vertex_bytes == 0 ? 0
-                                    : space_.allocate("vertices." + names_.at(command) + ".render" + std::to_string(bases.size()),
-                                                      vertex_bytes, DramClass::Vertices));
+                                    : place(command, "vertices." + names_.at(command) + ".render" + std::to_string(bases.size()),
+                                            vertex_bytes, DramClass::Vertices));
+}
+
+std::uint64_t FrameAddressMap::place(std::size_t command, const std::string& name, std::uint64_t bytes, DramClass cls, bool high) {
+  // A sequence's later frames use the regions the frames before them allocated under the same name.
+  if (frame_.at(command) > 0) return space_.reuse_or_allocate(name, bytes, cls, high);
+  return high ? space_.allocate_high(name, bytes, cls) : space_.allocate(name, bytes, cls);
 }
 
 void FrameAddressMap::end_command(const CommandWork& cmd) {

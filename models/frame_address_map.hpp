@@ -117,6 +117,9 @@ class FrameAddressMap {
   std::uint64_t produced_bytes(std::size_t command, DramClass k, int tile_index) const;
 
  private:
+  /// Allocates region `name` of `command` (in the high range with `high`); in a later frame of a
+  /// sequence, the region of that name an earlier frame allocated (AddressSpace::reuse_or_allocate).
+  std::uint64_t place(std::size_t command, const std::string& name, std::uint64_t bytes, DramClass cls, bool high = false);
   /// end_command's record of command `c`'s writes (written_, last_writer_).
   void record_writes(std::size_t c, const CommandWork& cmd);
   /// The ranges produced() cycles over for a read of `bytes` in pieces of `piece` (empty: none)
@@ -136,6 +139,7 @@ class FrameAddressMap {
   mutable std::vector<ByteRange> sources_;  ///< sources()'s gathering of a pass's tile ranges
   std::vector<std::vector<std::uint64_t>> vertex_base_;  ///< per command and render
   std::vector<std::string> names_;                       ///< per command (its regions' names)
+  std::vector<int> frame_;                               ///< per command: its frame of the sequence
   std::vector<std::uint64_t> tile_slots_;                ///< per command: its tiles' slots
   /// What one command wrote of one class: per tile index (passes) or one range (dispatches).
   struct Written {

@@ -92,6 +92,9 @@ struct RenderWork {
 /// A pass or a dispatch, in trace order.
 struct CommandWork {
   std::string name;            ///< "pass0.main" / "dispatch1.tile_light_cull"
+  /// The frame of a sequence it belongs to (0 for a single frame): the timing model starts a
+  /// frame's work after the one before it as gpu.frames_in_flight allows.
+  int frame = 0;
   bool is_dispatch = false;
   bool depends_on_previous = false;  ///< reads something an earlier command produced
   /// A pass's renders (a deque: a render published to the timing model stays where it is while

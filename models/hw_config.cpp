@@ -61,6 +61,15 @@ ParamRegistry<HwConfig> make_registry() {
            "frame plus the idle time after it at idle power (gated units' leakage, caches' leakage, DRAM in "
            "power-down then self-refresh); 0 = race to idle only, a frame longer than the period has no idle time")
       .source("a use-case figure, not hardware: 16666.7 us at 60 Hz, 8333.3 us at 120 Hz");
+  r.add(TBDR_PARAM(gpu.frames_in_flight), 2).unit("frames").range(1, 2)
+      .doc("Sequences of frames: 2 = the binning of frame N+1 may start while frame N's tiles render (in the "
+           "parameter buffer the render before the last freed, as between the passes of a frame); 1 = a frame's "
+           "work starts when the frame before it has finished (each frame's first binning exposed as latency). "
+           "With gpu.frame_period_us > 0 frame k starts no earlier than k periods after the first (the "
+           "application submits at the display's rate). No effect on a single frame")
+      .source("Imagination, PowerVR Architecture Guide (tile-based deferred rendering: the tiler processes the "
+              "geometry of the next render while the tiles of the previous one are rendered); two parameter buffers "
+              "of tiling.pb_capacity_bytes, as the timing model allocates them, bound it to 2");
 
   r.section("geometry", "Vertex fetch, vertex shading, clip/cull and viewport transform");
   r.add(TBDR_PARAM(geometry.primitives_per_clock), 1.0).unit("primitives/clock").range(0.01, 64)

@@ -77,6 +77,7 @@ struct GpuParams {
   double core_clock_mhz = 0;
   GpuMode mode = GpuMode::Tbdr;
   double frame_period_us = 0;  ///< display frame period the energy is also reported at (0: race to idle only)
+  std::int64_t frames_in_flight = 2;  ///< frames of a sequence whose work may overlap (1: one after another)
 };
 
 /// [geometry] vertex fetch, vertex shading and primitive setup (clip, cull, viewport).

@@ -149,6 +149,8 @@ class TimingSim final : public Unit {
       result_.dram_bus.push_back(std::move(bus));
     }
     result_.dram = mem_.traffic();
+    // The last frame's bytes include the writes still queued at its end, drained by now.
+    if (!result_.frames.empty()) result_.frames.back().dram_bytes_at_end = result_.dram.total_read() + result_.dram.total_written();
     result_.requested = mem_.requested();
     result_.memory_units = mem_.snapshot();
     result_.memory = mem_.stats();
@@ -223,10 +225,12 @@ class TimingSim final : public Unit {
       // (The previous command may still be rendering: it ends in the address map when the
       // first fragment job after it starts, end_commands_before.)
       const std::size_t c = commands_.size();
+      note_frame(*cmd);
       commands_.push_back(cmd);
       renders_.emplace_back();
       map_.add_command(*cmd);
-      result_.commands.push_back({cmd->name, -1, 0, 0, {}});
+      // A later frame's commands are told apart from the first's of the same name.
+      result_.commands.push_back({cmd->frame > 0 ? "frame" + std::to_string(cmd->frame) + "." + cmd->name : cmd->name, -1, 0, 0, {}});
       busy_.emplace_back(kTimedUnitCount, BusyIntervals(per_command_intervals_));
       if (cmd->is_dispatch) {  // a fragment job only
         frag_jobs_.push_back({c, -1});
@@ -291,6 +295,50 @@ class TimingSim final : public Unit {
     return streams_.back().get();
   }
 
+  // ---- frames of a sequence ----------------------------------------------------------------
+  /// Records the frame `cmd` belongs to when it is taken: the frames come in order, each with its
+  /// first fragment job next.
+  void note_frame(const CommandWork& cmd) {
+    const auto fr = static_cast<std::size_t>(cmd.frame);
+    if (fr < result_.frames.size()) return;
+    if (cmd.frame < 0 || fr != result_.frames.size()) {
+      throw std::logic_error("timing model: command " + cmd.name + " of frame " + std::to_string(cmd.frame) +
+                             " follows frame " + std::to_string(result_.frames.size() - 1));
+    }
+    result_.frames.push_back({-1.0, 0.0, 0});
+    frame_first_frag_.push_back(frag_jobs_.size());
+    frame_wake_.push_back(false);
+  }
+  /// Whether frame `fr`'s work may start now: with gpu.frames_in_flight = 1 once every fragment
+  /// job of the frames before it has finished; with gpu.frame_period_us, no earlier than `fr`
+  /// periods (a wake-up is scheduled then).
+  bool frame_may_start(int fr) {
+    if (fr <= 0) return true;
+    const auto k = static_cast<std::size_t>(fr);
+    if (hw_.gpu.frames_in_flight <= 1) {
+      const std::size_t first = frame_first_frag_[k];
+      if (first > 0 && !frag_done_[first - 1]) return false;
+    }
+    if (hw_.gpu.frame_period_us > 0) {
+      const Tick at{static_cast<std::int64_t>(std::llround(hw_.gpu.frame_period_us * 1e6 * fr))};
+      if (eq_.now() < at) {
+        if (!frame_wake_[k]) {
+          frame_wake_[k] = true;
+          eq_.schedule(at, [this] {
+            try_start_binning();
+            try_start_fragment();
+          });
+        }
+        return false;
+      }
+    }
+    return true;
+  }
+  void frame_started(int fr) {
+    FrameTime& f = result_.frames[static_cast<std::size_t>(fr)];
+    if (f.start_cycle < 0) f.start_cycle = cycles_of(eq_.now());
+  }
+
   // ---- binning -------------------------------------------------------------------------------
   void try_start_binning() {
     if (binning_busy_) return;
@@ -309,11 +357,13 @@ class TimingSim final : public Unit {
     const Job& j = bin_jobs_[k];
     const RenderWork& rw = *renders_[j.command][static_cast<std::size_t>(j.render)];
     if (j.render > 0 && !frag_done_of_bin(k - 1)) return;
+    if (!frame_may_start(commands_[j.command]->frame)) return;
     binning_busy_ = true;
     ++next_bin_;
     const BinningWork& b = rw.binning;
     const Tick start = eq_.now();
     if (result_.commands[j.command].start_cycle < 0) result_.commands[j.command].start_cycle = cycles_of(start);
+    frame_started(commands_[j.command]->frame);
     const Tick compute_end = reserve_geometry(b, j.command, start);
     auto pending = std::make_shared<int>(1);
     auto finish = [this, k, compute_end, pending]() {
@@ -408,6 +458,8 @@ class TimingSim final : public Unit {
     if (frag_busy_ || !has_frag_job(next_frag_)) return;
     const Job& j = frag_jobs_[next_frag_];
     if (j.render >= 0 && !bin_done_[bin_index_of(j)]) return;
+    // (A render's frame was let start by its binning; a dispatch has none.)
+    if (j.render < 0 && !frame_may_start(commands_[j.command]->frame)) return;
     frag_busy_ = true;
     const std::size_t f = next_frag_++;
     // Fragment jobs run in order: every command before this one has finished rendering, so what
@@ -420,6 +472,7 @@ class TimingSim final : public Unit {
     // Its buffer area, from its bytes, known by now (FrameAddressMap::place_buffers).
     if (j.render <= 0) map_.place_buffers(j.command, cmd);
     if (result_.commands[j.command].start_cycle < 0) result_.commands[j.command].start_cycle = cycles_of(eq_.now());
+    frame_started(cmd.frame);
     if (j.render < 0) {
       start_dispatch(f, cmd);
     } else {
@@ -432,6 +485,11 @@ class TimingSim final : public Unit {
     frag_busy_ = false;
     result_.commands[frag_jobs_[f].command].end_cycle = cycles_of(eq_.now());
     end_tick_ = std::max(end_tick_, eq_.now());
+    // Fragment jobs finish in order: the frame's end so far is its last one's.
+    FrameTime& frame = result_.frames[static_cast<std::size_t>(commands_[frag_jobs_[f].command]->frame)];
+    frame.end_cycle = cycles_of(eq_.now());
+    const DramTraffic moved = mem_.traffic();
+    frame.dram_bytes_at_end = moved.total_read() + moved.total_written();
     try_start_binning();
     try_start_fragment();
   }
@@ -822,6 +880,8 @@ class TimingSim final : public Unit {
   std::size_t next_bin_ = 0, next_frag_ = 0;
   bool binning_busy_ = false, frag_busy_ = false;
   Tick end_tick_{0};
+  std::vector<std::size_t> frame_first_frag_;  ///< per frame of the sequence: its first fragment job
+  std::vector<bool> frame_wake_;                ///< per frame: a wake-up at its period's start is scheduled
   std::vector<std::vector<std::uint64_t>> vertex_cursor_;  ///< per command and render: next byte of its vertex range to stream
   std::uint64_t texture_line_bytes_ = 0;  ///< cache.texture.line_bytes
   // The render whose tiles are in flight.

@@ -21,6 +21,9 @@
 //     pls.tile_buffer_bytes_per_clock)), while their texture lines, shader image reads and spilled
 //     tile-buffer bytes go through the caches with the resident tasks' requests in flight;
 //   pixel back end: stored bytes / writeback.bytes_per_clock, while the stores stream to memory.
+// Frames of a sequence (CommandWork::frame) follow each other as gpu.frames_in_flight and
+// gpu.frame_period_us allow: with 2 the next frame's first binning overlaps the last tiles of the
+// frame before, as between passes; with 1 it waits for them; caches, SLC and DRAM keep their state.
 // Phases: a render's tiles start when its binning is done; binning of the next pass overlaps the
 // tiles of the current one (two parameter buffers), but after a partial render the next binning
 // waits (the parameter buffer is only freed when its tiles are done); a command that reads what
@@ -80,11 +83,22 @@ struct CommandTime {
   std::vector<UnitBusy> unit_busy;  ///< the units that worked for it, in TimingResult::units order
 };
 
+/// One frame of a sequence as the timing model ran it (a single frame is a sequence of one).
+struct FrameTime {
+  double start_cycle = 0;  ///< when its first binning or dispatch started
+  double end_cycle = 0;    ///< when its last render or dispatch finished
+  /// Bytes the DRAM had transferred (read + written, every class) when it finished (the last
+  /// frame: at the end of the run, its queued writes drained): a frame's bytes are the difference
+  /// from the frame before (what DRAM moved between their ends).
+  std::uint64_t dram_bytes_at_end = 0;
+};
+
 /// What the timing model measured.
 struct TimingResult {
   double frame_cycles = 0;
   double frame_time_ps = 0;
   std::vector<CommandTime> commands;
+  std::vector<FrameTime> frames;  ///< per frame of the sequence, in order (CommandWork::frame)
   std::vector<UnitTime> units;  ///< one per TimedUnit, in its order
   /// The busy and stalled time of `u`.
   const UnitTime& unit(TimedUnit u) const { return units.at(index_of(u)); }

@@ -62,7 +62,7 @@ void expect_error(const std::string& text, int line, const std::string& token) {
 const DrawCmd& only_draw(const Trace& t) { return std::get<PassDesc>(t.commands.front()).draws.front(); }
 
 TEST(TraceDrawBounds, ScissorAndCullBoxReadAndRoundTrip) {
-  const Trace t = parse(with_draw("draw scene pipeline=p subset=opaque scissor=3,4,60,33 cull_min=-1,-2.5,-3 cull_max=1,2,0.5"));
+  const Trace t = parse(with_draw("draw scene pipeline=p subset=opaque scissor=3,4,60,33 cull_min=-1,-2.5,-3 cull_max=1,2,0.5", 3));
   EXPECT_EQ(t.version, 3);
   const DrawCmd& d = only_draw(t);
   ASSERT_TRUE(d.scissor && d.cull);
@@ -90,7 +90,7 @@ TEST(TraceDrawBounds, OlderVersionsReadButRefuseTheKeys) {
   EXPECT_EQ(parse(with_draw("draw scene pipeline=p", 2)).version, 2);
   expect_error(with_draw("draw scene pipeline=p scissor=0,0,8,8", 2), 12, "'scissor' needs trace version 3 (this trace is version 2)");
   expect_error(with_draw("draw scene pipeline=p cull_min=0,0,0 cull_max=1,1,1", 1), 12, "'cull_min' needs trace version 3");
-  expect_error("tbdrsim-trace 4\n", 1, "trace version 4 is newer than this reader (3)");
+  expect_error("tbdrsim-trace 5\n", 1, "trace version 5 is newer than this reader (4)");
 }
 
 TEST(TraceDrawBounds, MalformedBoundsAreRefusedAtTheirLine) {

@@ -123,6 +123,13 @@ int cmd_trace(const std::vector<std::string>& args, std::ostream& out, std::ostr
   add_trace_setup_options(desc);
   desc.add_options()("technique,t", po::value<std::string>()->default_value("plain_forward"),
                      "technique generator (see --list)")("out", po::value<std::string>(), "output trace file")(
+      "frames", po::value<int>()->default_value(1),
+      ("frames of a sequence, 1.." + std::to_string(kMaxSequenceFrames) + " (docs/trace-format.md, Sequences)").c_str())(
+      "camera-path", po::value<std::string>()->default_value("static"),
+      "how the camera moves over the frames: static, orbit (1 degree per frame about the target's vertical axis), "
+      "flythrough (1 % of the eye-target distance per frame along the view)")(
+      "light-motion", po::value<std::string>()->default_value("static"),
+      "how the lights move over the frames: static, orbit (each circles its place at half its range, 6 degrees per frame)")(
       "list", "list the techniques and their options");
   po::variables_map vm;
   if (!parse_command_options("trace", args, desc, nullptr, vm, out)) return 0;
@@ -136,10 +143,20 @@ int cmd_trace(const std::vector<std::string>& args, std::ostream& out, std::ostr
   if (!vm.count("out")) throw UsageError("tbdrsim trace: --out FILE is required");
   std::shared_ptr<const Scene> scene;
   const TraceSetup setup = trace_setup_from_options(vm, scene);
-  const Trace trace = generate_trace(vm["technique"].as<std::string>(), setup);
-  write_trace_file(trace, vm["out"].as<std::string>());
+  SequenceMotion motion;
+  motion.frames = vm["frames"].as<int>();
+  motion.camera = parse_camera_path(vm["camera-path"].as<std::string>());
+  motion.lights = parse_light_motion(vm["light-motion"].as<std::string>());
+  const std::vector<Trace> frames = generate_sequence(vm["technique"].as<std::string>(), setup, motion);
+  write_trace_frames_file(frames, vm["out"].as<std::string>());
+  const Trace& trace = frames.front();
   out << "wrote " << vm["out"].as<std::string>() << ": technique " << trace.technique << ", " << trace.lights.size()
-      << " lights, " << trace.commands.size() << " commands, hash " << trace_hash(trace) << "\n";
+      << " lights, " << trace.commands.size() << " commands";
+  if (frames.size() > 1) {
+    out << " per frame, " << frames.size() << " frames (camera " << to_string(motion.camera) << ", lights "
+        << to_string(motion.lights) << ")";
+  }
+  out << ", hash " << trace_hash(frames) << "\n";
   return 0;
 }
 

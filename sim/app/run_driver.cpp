@@ -226,7 +226,8 @@ std::vector<std::string> write_frame_images(const FrameResult& frame, const std:
 }
 
 void book_timing(const HwConfig& hw, const FrameResult& frame, const TimingResult& timing, EnergyBreakdown& energy) {
-  energy = compute_energy(hw, frame.totals, timing.memory, timing.frame_time_ps);
+  energy = compute_energy(hw, frame.totals, timing.memory, timing.frame_time_ps,
+                          std::max<int>(1, static_cast<int>(timing.frames.size())));
 }
 
 void time_frame(const HwConfig& hw, const FrameResult& frame, TimingResult& timing, EnergyBreakdown& energy) {
@@ -368,19 +369,21 @@ class RunDatabase {
   std::optional<ResultsDb> db_;
 };
 
-/// A run's trace and the scene it references.
+/// A run's trace (its frames: one, or a sequence) and the scene it references.
 struct RunInputs {
-  Trace trace;
+  std::vector<Trace> frames;
   std::shared_ptr<const Scene> scene;
+  /// The first frame: the technique, scene and options every frame shares.
+  const Trace& trace() const { return frames.front(); }
 };
 
 /// Reads the trace and loads its scene; checks the trace's sub-mesh and material names, before any
 /// work. Colours (and the texels they sample) are loaded only for the images that read them: the
 /// statistics are the same either way (tests/test_speed_equivalence.cpp).
 RunInputs load_run_inputs(const RunRequest& req) {
-  RunInputs in{read_trace(req.trace_path), nullptr};
-  in.scene = load_trace_scene(in.trace, req.trace_path, SceneLoadOptions{.colour_texels = !req.images_dir.empty()});
-  check_scene_references(in.trace, *in.scene, req.trace_path);
+  RunInputs in{read_trace_frames(req.trace_path), nullptr};
+  in.scene = load_trace_scene(in.trace(), req.trace_path, SceneLoadOptions{.colour_texels = !req.images_dir.empty()});
+  for (const Trace& frame : in.frames) check_scene_references(frame, *in.scene, req.trace_path);
   return in;
 }
 
@@ -428,12 +431,68 @@ class FrameImageJob {
   double cpu_seconds_ = 0;
 };
 
-/// The functional run and the timing model one after the other, on the caller's thread.
+/// Adds `next`, a later frame of a sequence, to `sum`, the frames before it: the unit statistics,
+/// each command's (by name: a sequence's pass figures are its frames' sums), the traffic and the
+/// shape's counts; the images become the latest frame's.
+void add_sequence_frame(FrameResult& sum, FrameResult&& next) {
+  sum.totals.render += next.totals.render;
+  sum.totals.compute += next.totals.compute;
+  for (CommandStats& c : next.commands) {
+    auto it = std::find_if(sum.commands.begin(), sum.commands.end(), [&](const CommandStats& s) { return s.name == c.name; });
+    if (it == sum.commands.end()) {
+      sum.commands.push_back(std::move(c));
+      continue;
+    }
+    if (it->pass && c.pass) *it->pass += *c.pass;
+    if (it->compute && c.compute) *it->compute += *c.compute;
+    it->requested += c.requested;
+  }
+  for (PassSummary& p : next.passes) sum.passes.push_back(std::move(p));
+  sum.dram += next.dram;
+  // Counts add up over the frames (covered pixels too: per-pixel figures stay per frame); sizes stay.
+  sum.shape.passes += next.shape.passes;
+  sum.shape.dispatches += next.shape.dispatches;
+  sum.shape.geometry_passes += next.shape.geometry_passes;
+  sum.shape.covered_pixels.set(sum.shape.covered_pixels.value() + next.shape.covered_pixels.value());
+  sum.images = std::move(next.images);
+  sum.final_color = std::move(next.final_color);
+  sum.host_tile_seconds += next.host_tile_seconds;
+}
+
+/// Simulates the run's frames functionally: one frame as simulate_frame does; a sequence frame by
+/// frame into `feed` (which it needs), one feed for all (the first frame begins it, the last
+/// closes it; each command carries its frame), their results added up (add_sequence_frame).
+/// Colours are computed for the last frame only, the one whose images are written.
+FrameResult simulate_frames(const RunRequest& req, const RunInputs& in, WorkFeed* feed) {
+  const int n = static_cast<int>(in.frames.size());
+  FrameOptions options{.colour = !req.images_dir.empty(), .threads = req.threads, .feed = feed};
+  if (n == 1) return simulate_frame(in.trace(), req.trace_path, *in.scene, req.config.hw, options);
+  if (feed == nullptr) throw std::logic_error("simulate_frames: a sequence needs a feed");
+  options.sequence_frames = n;
+  for (const Trace& t : in.frames) options.sequence_commands += timed_command_count(t);
+  FrameResult sum;
+  for (int k = 0; k < n; ++k) {
+    options.sequence_frame = k;
+    options.colour = !req.images_dir.empty() && k == n - 1;
+    FrameResult frame = simulate_frame(in.frames[static_cast<std::size_t>(k)], req.trace_path, *in.scene, req.config.hw, options);
+    if (k == 0) {
+      sum = std::move(frame);
+    } else {
+      add_sequence_frame(sum, std::move(frame));
+    }
+  }
+  return sum;
+}
+
+/// The functional run and the timing model one after the other, on the caller's thread (a
+/// sequence's frames into a feed, which the timing model then reads whole).
 void simulate_serially(const RunRequest& req, const RunInputs& in, RunOutcome& o) {
   const auto t_sim = std::chrono::steady_clock::now();
   const double c_sim = cpu_seconds();
-  o.frame = simulate_frame(in.trace, req.trace_path, *in.scene, req.config.hw,
-                           FrameOptions{.colour = !req.images_dir.empty(), .threads = req.threads, .feed = nullptr});
+  WorkFeed feed;
+  const bool sequence = in.frames.size() > 1;
+  o.frame = simulate_frames(req, in, sequence ? &feed : nullptr);
+  if (sequence) o.frame.work = feed.take();
   o.wall_seconds = seconds_since(t_sim);
   o.cpu_seconds = cpu_seconds() - c_sim;
   release_pixels_without_images(req, o.frame);
@@ -466,8 +525,7 @@ void simulate_pipelined(const RunRequest& req, const RunInputs& in, RunOutcome& 
     return r;
   });
   try {
-    o.frame = simulate_frame(in.trace, req.trace_path, *in.scene, req.config.hw,
-                             FrameOptions{.colour = !req.images_dir.empty(), .threads = req.threads, .feed = &feed});
+    o.frame = simulate_frames(req, in, &feed);
   } catch (...) {
     placement.restore();
     // The feed is closed (simulate_frame closes it; again here, whatever failed): the timing
@@ -528,7 +586,7 @@ RunRecord run_record(const RunRequest& req, const RunInputs& in, const RunOutcom
   rec.config_name = req.config.params.config_name;
   rec.config_hash = req.config.hash;
   rec.trace_path = req.trace_path;
-  rec.trace_hash = trace_hash(in.trace);
+  rec.trace_hash = trace_hash(in.frames);
   rec.scene = in.scene->source;
   rec.technique = o.technique;
   rec.status = "ok";
@@ -537,7 +595,7 @@ RunRecord run_record(const RunRequest& req, const RunInputs& in, const RunOutcom
     rec.params.push_back({table.decls()[i].key, format_param_value(req.config.params.values[i]), req.config.params.origins[i].text});
   }
   rec.params.push_back(config_label_param(req.config.label));
-  for (auto& p : trace_run_params(in.trace, req.trace_path)) rec.params.push_back(std::move(p));
+  for (auto& p : trace_run_params(in.trace(), req.trace_path)) rec.params.push_back(std::move(p));
   rec.stats = o.stats;
   collect_host_stats(o, rec.stats);
   rec.tiles = o.timing.tiles;
@@ -574,7 +632,7 @@ RunOutcome run_one(const RunRequest& req) {
   outcome.frame.work.commands = {};  // (freed here at one thread; moved from, at more)
   book_timing(req.config.hw, outcome.frame, outcome.timing, outcome.energy);
   outcome.stats = run_rows(outcome.frame, outcome.timing, outcome.energy);
-  outcome.technique = in.trace.technique.empty() ? "custom" : in.trace.technique;
+  outcome.technique = in.trace().technique.empty() ? "custom" : in.trace().technique;
   outcome.scene = in.scene->source;
   if (!req.images_dir.empty()) {
     outcome.images_written = images.finish(outcome.frame, outcome.timing);
@@ -608,6 +666,13 @@ void print_run_summary(const RunOutcome& o, std::ostream& out) {
   out << "  frame: " << stat_text(o.timing.frame_cycles) << " cycles, " << stat_text(o.timing.frame_time_ps * 1e-9)
       << " ms, energy " << stat_text(o.energy.total_pj * 1e-9)
       << " mJ (timing model " << stat_text(o.timing_seconds) << " s)\n";
+  if (o.timing.frames.size() > 1) {
+    const SequenceSummaryStats seq = summarize_sequence(o.timing, o.energy.total_pj);
+    out << "  sequence: " << o.timing.frames.size() << " frames (the figures above and below are their sums), steady "
+        << stat_text(seq.steady_interval_ms.value()) << " ms per frame (p95 " << stat_text(seq.p95_interval_ms.value())
+        << ", " << stat_text(seq.steady_fps.value()) << " fps), DRAM " << stat_text(seq.steady_dram_mb_per_frame.value())
+        << " MB per steady frame, energy " << stat_text(seq.energy_per_frame_mj.value()) << " mJ per frame\n";
+  }
   // DRAM per class: what reached the devices (the timing model's memory system, after the caches),
   // beside what the units requested (the functional count at the chip boundary).
   const DramTraffic& device = o.timing.dram;

@@ -74,6 +74,44 @@ struct TextureFetchStats {
   }
 };
 
+// One frame of a sequence (scope "sequence/frame<k>": "sequence/frame0", "sequence/frame1", ...).
+#define TBDR_SEQUENCE_FRAME_STATS(X)                                                                        \
+  X(Accumulator, start_cycle, "cycles", Gauge, "Cycle the frame's first binning or dispatch started")        \
+  X(Accumulator, end_cycle, "cycles", Gauge, "Cycle its last render or dispatch finished")                   \
+  X(Accumulator, interval_cycles, "cycles", Gauge,                                                            \
+    "Its end less the end of the frame before (the first: its end): the frame's share of the sequence")      \
+  X(Accumulator, interval_ms, "ms", Gauge, "interval_cycles in milliseconds")                                 \
+  X(Accumulator, latency_cycles, "cycles", Gauge, "From its start to its end (overlaps the frame before with gpu.frames_in_flight = 2)") \
+  X(Counter, dram_interval_bytes, "bytes", Gauge,                                                             \
+    "Bytes DRAM transferred between the end of the frame before and its end (what reached the devices)")
+
+/// One frame of a sequence as the timing model ran it (TimingResult::frames).
+struct SequenceFrameStats {
+  TBDR_STATS(TBDR_SEQUENCE_FRAME_STATS)
+  /// The scope of frame k: kScopePrefix + k.
+  static constexpr const char* kScopePrefix = "sequence/frame";
+};
+
+// The sequence's summary (scope "sequence/summary"); only runs of more than one frame have it.
+#define TBDR_SEQUENCE_SUMMARY_STATS(X)                                                                        \
+  X(Counter, frames, "frames", Gauge, "Frames in the sequence")                                                 \
+  X(Counter, warmup_frames, "frames", Gauge, "First frames left out of the steady state (cold caches, nothing before to overlap)") \
+  X(Counter, drain_frames, "frames", Gauge, "Last frames left out of the steady state (no later frame's binning overlaps them)") \
+  X(Accumulator, mean_interval_ms, "ms", Gauge, "Mean of the frames' interval_ms (the sequence's time / frames)") \
+  X(Accumulator, steady_interval_ms, "ms", Gauge, "Mean interval_ms of the steady frames (after the warm-up, before the drain)")     \
+  X(Accumulator, p50_interval_ms, "ms", Gauge, "Median interval_ms of the steady frames (nearest rank)") \
+  X(Accumulator, p95_interval_ms, "ms", Gauge, "95th percentile interval_ms of the steady frames (nearest rank)") \
+  X(Accumulator, max_interval_ms, "ms", Gauge, "Longest interval_ms of the steady frames")            \
+  X(Accumulator, steady_fps, "frames/s", Gauge, "1000 / steady_interval_ms")                                      \
+  X(Accumulator, steady_dram_mb_per_frame, "MB", Gauge, "Mean dram_interval_bytes of the steady frames, in MB") \
+  X(Accumulator, energy_per_frame_mj, "mJ", Gauge, "The sequence's energy (frame/energy total) / frames")
+
+/// Frame rate and per-frame figures of a sequence, from its frames' SequenceFrameStats.
+struct SequenceSummaryStats {
+  TBDR_STATS(TBDR_SEQUENCE_SUMMARY_STATS)
+  static constexpr const char* kScope = "sequence/summary";
+};
+
 // The host's side of a run (scope "frame/host"): no simulated figure depends on these.
 #define TBDR_HOST_RUN_STATS(X)                                                                                   \
   X(Accumulator, load_wall_seconds, "s", Gauge,                                                                    \

@@ -1,5 +1,7 @@
 #include "app/stat_rows.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 
 namespace tbdr {
@@ -117,10 +119,81 @@ void append_energy_rows(const EnergyBreakdown& energy, std::vector<StatRecord>& 
 
 void append_host_rows(const HostRunStats& host, std::vector<StatRecord>& out) { collect_stats(host, HostRunStats::kScope, out); }
 
+namespace {
+/// Milliseconds per core cycle of the run (from the timing model's own two figures).
+double ms_per_cycle(const TimingResult& timing) { return timing.frame_time_ps * 1e-9 / timing.frame_cycles; }
+
+/// Frame k of the sequence: its span, interval and DRAM bytes since the frame before.
+SequenceFrameStats sequence_frame(const TimingResult& timing, std::size_t k) {
+  const FrameTime& f = timing.frames[k];
+  const double end_before = k > 0 ? timing.frames[k - 1].end_cycle : 0.0;
+  const std::uint64_t bytes_before = k > 0 ? timing.frames[k - 1].dram_bytes_at_end : 0;
+  SequenceFrameStats s;
+  s.start_cycle.set(f.start_cycle);
+  s.end_cycle.set(f.end_cycle);
+  s.interval_cycles.set(f.end_cycle - end_before);
+  s.interval_ms.set(s.interval_cycles.value() * ms_per_cycle(timing));
+  s.latency_cycles.set(f.end_cycle - f.start_cycle);
+  s.dram_interval_bytes.set(f.dram_bytes_at_end - bytes_before);
+  return s;
+}
+
+/// Whether frame k of n is a steady frame: after the warm-up, before the drain (when frames remain
+/// between them).
+bool steady_frame(std::size_t k, std::size_t n) {
+  if (k < kSequenceWarmupFrames) return false;
+  return n <= kSequenceWarmupFrames + kSequenceDrainFrames || k + kSequenceDrainFrames < n;
+}
+}  // namespace
+
+SequenceSummaryStats summarize_sequence(const TimingResult& timing, double energy_pj) {
+  SequenceSummaryStats summary;
+  const std::size_t n = timing.frames.size();
+  if (n < 2 || timing.frame_cycles <= 0) return summary;
+  summary.frames.set(n);
+  summary.warmup_frames.set(kSequenceWarmupFrames);
+  summary.drain_frames.set(n > kSequenceWarmupFrames + kSequenceDrainFrames ? kSequenceDrainFrames : 0);
+  std::vector<double> steady_ms;
+  double steady_bytes = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!steady_frame(k, n)) continue;
+    const SequenceFrameStats s = sequence_frame(timing, k);
+    steady_ms.push_back(s.interval_ms.value());
+    steady_bytes += s.dram_interval_bytes.as_double();
+  }
+  summary.mean_interval_ms.set(timing.frames.back().end_cycle * ms_per_cycle(timing) / static_cast<double>(n));
+  double sum = 0;
+  for (double v : steady_ms) sum += v;
+  const double mean = sum / static_cast<double>(steady_ms.size());
+  summary.steady_interval_ms.set(mean);
+  std::sort(steady_ms.begin(), steady_ms.end());
+  // Nearest rank: the smallest value with at least p % of the values at or below it.
+  auto percentile = [&](double p) {
+    const auto rank = static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(steady_ms.size())));
+    return steady_ms[std::max<std::size_t>(rank, 1) - 1];
+  };
+  summary.p50_interval_ms.set(percentile(50));
+  summary.p95_interval_ms.set(percentile(95));
+  summary.max_interval_ms.set(steady_ms.back());
+  summary.steady_fps.set(mean > 0 ? 1000.0 / mean : 0.0);
+  summary.steady_dram_mb_per_frame.set(steady_bytes / static_cast<double>(steady_ms.size()) * 1e-6);
+  summary.energy_per_frame_mj.set(energy_pj * 1e-9 / static_cast<double>(n));
+  return summary;
+}
+
+void append_sequence_rows(const TimingResult& timing, double energy_pj, std::vector<StatRecord>& out) {
+  if (timing.frames.size() < 2 || timing.frame_cycles <= 0) return;
+  for (std::size_t k = 0; k < timing.frames.size(); ++k) {
+    collect_stats(sequence_frame(timing, k), SequenceFrameStats::kScopePrefix + std::to_string(k), out);
+  }
+  collect_stats(summarize_sequence(timing, energy_pj), SequenceSummaryStats::kScope, out);
+}
+
 std::vector<StatRecord> run_rows(const FrameResult& frame, const TimingResult& timing, const EnergyBreakdown& energy) {
   std::vector<StatRecord> out = frame_rows(frame);
   append_timing_rows(timing, out);
   append_energy_rows(energy, out);
+  append_sequence_rows(timing, energy.total_pj, out);
   return out;
 }
 

@@ -40,5 +40,21 @@ void append_energy_rows(const EnergyBreakdown& energy, std::vector<StatRecord>& 
 void append_host_rows(const HostRunStats& host, std::vector<StatRecord>& out);
 /// Every row of a timed frame but the host's: frame_rows, then the timing, memory and energy rows.
 std::vector<StatRecord> run_rows(const FrameResult& frame, const TimingResult& timing, const EnergyBreakdown& energy);
+/// Frames of a sequence left out of its steady state: the first, which starts with cold caches,
+/// SLC and DRAM rows and whose binning nothing overlaps; every later frame finds the state the
+/// frame before left.
+inline constexpr std::size_t kSequenceWarmupFrames = 1;
+/// Frames at a sequence's end left out of its steady state (when more than warm-up + drain
+/// frames remain): the last, whose tiles no later frame's binning competes with, so it ends
+/// sooner than a frame in the middle of a run would.
+inline constexpr std::size_t kSequenceDrainFrames = 1;
+/// A sequence's rows (more than one frame): each frame's SequenceFrameStats (its interval from the
+/// end of the frame before, DRAM bytes in that interval) and the SequenceSummaryStats of the
+/// frames after the warm-up; `energy_pj` is the sequence's.
+void append_sequence_rows(const TimingResult& timing, double energy_pj, std::vector<StatRecord>& out);
+/// A sequence's summary (more than one frame; empty otherwise): frames, steady-state interval and
+/// its percentiles, frame rate, DRAM bytes per steady frame, energy per frame (`energy_pj`: the
+/// sequence's).
+SequenceSummaryStats summarize_sequence(const TimingResult& timing, double energy_pj);
 
 }  // namespace tbdr

@@ -46,16 +46,19 @@ struct TraceInfo {
 /// tiling and hidden-surface removal once per draw, so 8 draws is several times the usual point.
 constexpr std::size_t kSlowSceneDraws = 8;
 
-/// Reads a trace for its hash, technique, scene and scene draws.
+/// Reads a trace (every frame of a sequence) for its hash, technique, scene and scene draws.
 TraceInfo read_trace_info(const std::string& path) {
-  const Trace trace = read_trace(path);
+  const std::vector<Trace> frames = read_trace_frames(path);
+  const Trace& trace = frames.front();
   TraceInfo info;
-  info.hash = trace_hash(trace);
+  info.hash = trace_hash(frames);
   info.technique = trace.technique.empty() ? "custom" : trace.technique;
   info.scene = trace.scene.kind == SceneKind::Atrium ? "atrium:" + std::to_string(trace.scene.detail) : trace.scene.path;
-  for (const auto& c : trace.commands) {
-    if (const auto* pass = std::get_if<PassDesc>(&c)) {
-      for (const auto& d : pass->draws) info.scene_draws += d.geometry == GeometryKind::Scene ? 1 : 0;
+  for (const Trace& frame : frames) {
+    for (const auto& c : frame.commands) {
+      if (const auto* pass = std::get_if<PassDesc>(&c)) {
+        for (const auto& d : pass->draws) info.scene_draws += d.geometry == GeometryKind::Scene ? 1 : 0;
+      }
     }
   }
   return info;

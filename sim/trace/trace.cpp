@@ -166,6 +166,12 @@ std::string trace_text(const Trace& trace) {
 
 std::string trace_hash(const Trace& trace) { return fnv1a_hex(trace_text(trace)); }
 
+std::string trace_hash(const std::vector<Trace>& frames) {
+  std::ostringstream out;
+  write_trace_frames(frames, out);
+  return fnv1a_hex(out.str());
+}
+
 namespace {
 
 /// "'a', 'b', 'c' (and 12 more)": the first few names of a list, for an error message.

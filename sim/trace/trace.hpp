@@ -25,13 +25,17 @@
 namespace tbdr {
 
 /// The trace format version this build reads and writes. See docs/trace-format.md for what bumps it.
-inline constexpr int kTraceVersion = 3;
+inline constexpr int kTraceVersion = 4;
 /// The version that lets an attachment name a `content=image` buffer (a pass loading the frame a
 /// dispatch wrote); version 1 readers refuse the name as a duplicate.
 inline constexpr int kImageAttachmentVersion = 2;
 /// The version that gives a draw a scissor rectangle (`scissor=`) and an object-culling box
 /// (`cull_min=`, `cull_max=`); version 2 readers refuse the keys as unknown.
 inline constexpr int kDrawBoundsVersion = 3;
+/// The version that lets a trace hold a sequence of frames (a `frame` line after the commands of
+/// the one before starts the next); version 3 readers refuse the second `frame` line. A
+/// single-frame trace is written as version 3, which every reader since then reads the same.
+inline constexpr int kSequenceVersion = 4;
 
 /// Bytes one light occupies in a GPU light buffer: 3 x vec4 (position+radius, color+intensity,
 /// direction+cos_inner+cos_outer packed with std140 padding). A `content=lights` buffer holds at
@@ -419,17 +423,34 @@ struct Trace {
 // Reading, writing, hashing
 // ---------------------------------------------------------------------------------------------
 
-/// Reads and validates a trace file; every error is an InputError naming path:line and the token.
+/// Reads and validates a trace file of one frame; every error is an InputError naming path:line
+/// and the token. A trace holding a sequence of frames is refused at its second `frame` line
+/// (read_trace_frames reads those).
 Trace read_trace(const std::string& path);
 /// Same, from a stream; `name` is used in error messages in place of the file name. A stream
 /// longer than kMaxTraceBytes is refused when the reader gets there.
 Trace parse_trace(std::istream& in, const std::string& name);
+/// Reads every frame of a trace file, in order (version 4 may hold several, docs/trace-format.md
+/// "Sequences"): each a complete Trace with the header lines and every declaration made before
+/// its commands (declarations are made once and stay visible in the frames after).
+std::vector<Trace> read_trace_frames(const std::string& path);
+/// Same, from a stream.
+std::vector<Trace> parse_trace_frames(std::istream& in, const std::string& name);
 /// Checks what a trace names in its scene, once the scene is loaded and before any work: every
 /// draw's `submesh=` and `material=` must name a sub-mesh or material the scene has. InputError
 /// naming path:line of the draw, the name and some of the names the scene has.
 void check_scene_references(const Trace& trace, const Scene& scene, const std::string& path);
 /// Writes the canonical text of a trace (parse_trace of it gives a trace that writes identically).
 void write_trace(const Trace& trace, std::ostream& out);
+/// Writes the canonical text of a sequence of frames (parse_trace_frames gives them back): the
+/// first frame as write_trace does, then per later frame its `frame`, `camera` and `light` lines,
+/// the declarations it adds and its commands. The frames share technique, scene and frame size;
+/// a declaration of a later frame must equal the earlier one of that name. One frame: write_trace.
+void write_trace_frames(const std::vector<Trace>& frames, std::ostream& out);
+/// Writes a sequence's canonical text to a file (whole or not at all).
+void write_trace_frames_file(const std::vector<Trace>& frames, const std::string& path);
+/// Hash of a sequence's canonical text (one frame: trace_hash of it).
+std::string trace_hash(const std::vector<Trace>& frames);
 /// The canonical text as a string.
 std::string trace_text(const Trace& trace);
 /// Writes the canonical text to a file; throws InputError if the file cannot be written.

@@ -67,7 +67,7 @@ class Reader {
  public:
   explicit Reader(std::string name) : name_(std::move(name)) {}
 
-  Trace run(std::istream& in);
+  std::vector<Trace> run(std::istream& in);
 
  private:
   [[noreturn]] void fail(int line, const std::string& msg) const {
@@ -132,6 +132,11 @@ class Reader {
   void on_dispatch(const Line& l);
   void on_barrier(const Line& l);
   void finish_layout();
+  /// Checks the frame being read as complete (`last_line`: where it ends) and keeps it.
+  void finish_frame(int last_line);
+  /// Starts the next frame of a sequence at `frame_line`: the frame read so far is kept; the new
+  /// one keeps the header lines and the declarations, and has no camera, light or command yet.
+  void next_frame(int frame_line);
   void finish(int last_line);
   /// Counts one more pass, dispatch or barrier against kMaxTraceCommands.
   void count_command(const Line& l);
@@ -163,6 +168,7 @@ class Reader {
 
   std::string name_;
   Trace trace_;
+  std::vector<Trace> frames_;  ///< the sequence's frames read before the current one
   bool have_scene_ = false, have_frame_ = false, have_camera_ = false;
   int first_command_line_ = 0;
   std::optional<std::size_t> current_pass_;
@@ -555,6 +561,15 @@ void Reader::on_scene(const Line& l) {
 }
 
 void Reader::on_frame(const Line& l) {
+  if (have_frame_ && !current_pass_) {
+    if (trace_.version < kSequenceVersion)
+      fail(l.number, "duplicate 'frame' line (first at line " + std::to_string(trace_.frame.line) +
+                         "); a trace of several frames needs version " + std::to_string(kSequenceVersion));
+    if (!first_command_line_)
+      fail(l.number, "the frame begun at line " + std::to_string(trace_.frame.line) +
+                         " has no pass, dispatch or barrier before the next 'frame' line");
+    next_frame(l.number);
+  }
   declaration_allowed(l, true);
   if (have_frame_) fail(l.number, "duplicate 'frame' line (first at line " + std::to_string(trace_.frame.line) + ")");
   no_positional(l);
@@ -573,6 +588,14 @@ void Reader::on_frame(const Line& l) {
                        std::to_string(f.samples) + " samples holds " + std::to_string(frame_samples) +
                        " samples; the largest accepted is " + std::to_string(kMaxFrameSamples) + " (docs/limits.md)");
   f.line = l.number;
+  if (!frames_.empty()) {
+    const TraceFrame& first = frames_.front().frame;
+    if (f.width != first.width || f.height != first.height || f.samples != first.samples)
+      fail(l.number, "frame " + std::to_string(f.width) + "x" + std::to_string(f.height) + " at " + std::to_string(f.samples) +
+                         " samples differs from the first frame's " + std::to_string(first.width) + "x" +
+                         std::to_string(first.height) + " at " + std::to_string(first.samples) + " (line " +
+                         std::to_string(first.line) + "): the frames of a sequence share one size");
+  }
   trace_.frame = f;
   have_frame_ = true;
 }
@@ -1049,6 +1072,32 @@ constexpr std::uint64_t kMaxWorkgroupsPerPixel = 256;
 void Reader::finish(int last_line) {
   if (current_pass_)
     fail(pass().line, "pass " + q(pass().name) + " is not closed (missing 'end' before the end of the file)");
+  finish_frame(last_line);
+}
+
+void Reader::next_frame(int frame_line) {
+  finish_frame(frame_line - 1);
+  // What a frame declared stays declared; what it did (its commands and what they wrote, its
+  // camera and lights) is its own: each frame replays on its own, so it writes what it reads.
+  trace_.commands.clear();
+  trace_.lights.clear();
+  trace_.light_lines.clear();
+  trace_.camera = Camera{};
+  trace_.camera_name.clear();
+  trace_.camera_line = 0;
+  have_frame_ = false;
+  have_camera_ = false;
+  first_command_line_ = 0;
+  pass_lines_.clear();
+  images_.clear();
+  written_buffers_.clear();
+  for (const BufferDesc& b : trace_.buffers) {
+    if (b.upload) written_buffers_.insert(b.name);  // the CPU fills it again before each frame
+  }
+  pending_.clear();
+}
+
+void Reader::finish_frame(int last_line) {
   const int at = last_line > 0 ? last_line : 1;
   if (!have_scene_) fail(at, "missing required 'scene' line");
   if (!have_frame_) fail(at, "missing required 'frame' line");
@@ -1072,6 +1121,7 @@ void Reader::finish(int last_line) {
                        "; the trace's " + std::to_string(trace_.lights.size()) + " lights need " +
                        std::to_string(light_bytes) + " (" + std::to_string(kLightBufferBytesPerLight) + " bytes each)");
   }
+  frames_.push_back(trace_);
 }
 
 void Reader::count_command(const Line& l) {
@@ -1121,7 +1171,7 @@ bool read_line_bounded(std::istream& in, std::string& out, std::uint64_t max_byt
 /// 7 bytes each, 6.9 MB); the bound keeps a stream without newlines (/dev/zero) to 16 MiB held.
 constexpr std::uint64_t kMaxTraceLineBytes = 16ull << 20;
 
-Trace Reader::run(std::istream& in) {
+std::vector<Trace> Reader::run(std::istream& in) {
   std::string text;
   int number = 0;
   bool have_header = false;
@@ -1150,14 +1200,25 @@ Trace Reader::run(std::istream& in) {
   if (in.bad()) fail(number, "read error");
   if (!have_header) fail(1, "empty file: expected 'tbdrsim-trace " + std::to_string(kTraceVersion) + "' on the first line");
   finish(number);
-  return std::move(trace_);
+  return std::move(frames_);
 }
 
 }  // namespace
 
-Trace parse_trace(std::istream& in, const std::string& name) { return Reader(name).run(in); }
+std::vector<Trace> parse_trace_frames(std::istream& in, const std::string& name) { return Reader(name).run(in); }
 
-Trace read_trace(const std::string& path) {
+Trace parse_trace(std::istream& in, const std::string& name) {
+  std::vector<Trace> frames = parse_trace_frames(in, name);
+  if (frames.size() > 1)
+    throw InputError(name, frames[1].frame.line,
+                     "the trace holds a sequence of " + std::to_string(frames.size()) +
+                         " frames; this command reads one frame ('tbdrsim run' replays sequences)");
+  return std::move(frames.front());
+}
+
+namespace {
+/// Opens a trace file for reading, refusing what cannot be a trace (a folder, a file too large).
+std::ifstream open_trace_file(const std::string& path) {
   // Streams (a FIFO, /dev/stdin) are read too: the bounded line reader keeps them to kMaxTraceBytes.
   check_input_file(path, "trace", /*allow_special=*/true);
   std::ifstream in(path, std::ios::binary);
@@ -1168,7 +1229,18 @@ Trace read_trace(const std::string& path) {
     throw InputError(path, "the trace is " + std::to_string(size) + " bytes; the largest accepted is " +
                                std::to_string(kMaxTraceBytes) + " (docs/limits.md)");
   }
+  return in;
+}
+}  // namespace
+
+Trace read_trace(const std::string& path) {
+  std::ifstream in = open_trace_file(path);
   return parse_trace(in, path);
+}
+
+std::vector<Trace> read_trace_frames(const std::string& path) {
+  std::ifstream in = open_trace_file(path);
+  return parse_trace_frames(in, path);
 }
 
 }  // namespace tbdr

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <ostream>
 #include <sstream>
+#include <stdexcept>
 #include <system_error>
 
 #include "kernel/errors.hpp"
@@ -100,16 +101,14 @@ void write_pass(const PassDesc& p, std::ostream& out) {
   out << "end\n";
 }
 
-}  // namespace
-
-void write_trace(const Trace& t, std::ostream& out) {
-  out << "tbdrsim-trace " << kTraceVersion << "\n";
+/// The header lines a sequence's frames share: version, technique, scene.
+void write_header(const Trace& t, int version, std::ostream& out) {
+  out << "tbdrsim-trace " << version << "\n";
   if (!t.technique.empty()) {
     out << "technique " << t.technique;
     for (const auto& [k, v] : t.options) out << " " << k << "=" << quote_if_needed(v);
     out << "\n";
   }
-
   const auto& s = t.scene;
   if (s.kind == SceneKind::Atrium) {
     out << "scene atrium detail=" << s.detail;
@@ -118,16 +117,17 @@ void write_trace(const Trace& t, std::ostream& out) {
   }
   if (!s.content_hash.empty()) out << " hash=" << s.content_hash;
   out << "\n";
+}
 
+/// What each frame has of its own: its `frame`, `camera` and `light` lines.
+void write_frame_view(const Trace& t, std::ostream& out) {
   out << "frame width=" << t.frame.width << " height=" << t.frame.height << " samples=" << t.frame.samples << "\n";
-
   const auto& c = t.camera;
   out << "camera eye=" << fmt_vec3(c.eye) << " target=" << fmt_vec3(c.target) << " up=" << fmt_vec3(c.up)
       << " fov_y_deg=" << fmt_float(c.fov_y_deg) << " near=" << fmt_float(c.near_plane)
       << " far=" << fmt_float(c.far_plane);
   if (!t.camera_name.empty()) out << " name=" << quote_if_needed(t.camera_name);
   out << "\n";
-
   for (const auto& l : t.lights) {
     const bool spot = l.type == Light::Type::Spot;
     out << "light " << (spot ? "spot" : "point") << " position=" << fmt_vec3(l.position)
@@ -138,27 +138,59 @@ void write_trace(const Trace& t, std::ostream& out) {
           << " cos_outer=" << fmt_float(l.cos_outer);
     out << "\n";
   }
+}
 
-  for (const auto& b : t.buffers)
-    out << "buffer " << b.name << " bytes=" << b.bytes << " traffic=" << buffer_traffic_name(b.traffic)
-        << " content=" << to_string(b.content) << " upload=" << yes_no(b.upload) << "\n";
+void write_buffer(const BufferDesc& b, std::ostream& out) {
+  out << "buffer " << b.name << " bytes=" << b.bytes << " traffic=" << buffer_traffic_name(b.traffic)
+      << " content=" << to_string(b.content) << " upload=" << yes_no(b.upload) << "\n";
+}
 
-  for (const auto& sh : t.shaders)
-    out << "shader " << sh.name << " alu_ops=" << sh.alu_ops << " tex_fetches=" << sh.tex_fetches
-        << " varyings=" << sh.varyings << " light_alu_ops=" << sh.light_alu_ops
-        << " light_source=" << to_string(sh.light_source) << " color_outputs=" << sh.color_outputs
-        << " pls=" << to_string(sh.pls) << " discard=" << yes_no(sh.discard) << "\n";
+void write_shader(const ShaderDesc& sh, std::ostream& out) {
+  out << "shader " << sh.name << " alu_ops=" << sh.alu_ops << " tex_fetches=" << sh.tex_fetches
+      << " varyings=" << sh.varyings << " light_alu_ops=" << sh.light_alu_ops
+      << " light_source=" << to_string(sh.light_source) << " color_outputs=" << sh.color_outputs
+      << " pls=" << to_string(sh.pls) << " discard=" << yes_no(sh.discard) << "\n";
+}
 
-  for (const auto& p : t.pipelines)
-    out << "pipeline " << p.name << " shader=" << p.shader << " depth_test=" << yes_no(p.depth_test)
-        << " depth_write=" << yes_no(p.depth_write) << " depth_compare=" << to_string(p.depth_compare)
-        << " stencil_test=" << yes_no(p.stencil_test) << " stencil_compare=" << to_string(p.stencil_compare)
-        << " stencil_fail_op=" << to_string(p.stencil_fail_op)
-        << " stencil_depth_fail_op=" << to_string(p.stencil_depth_fail_op)
-        << " stencil_pass_op=" << to_string(p.stencil_pass_op) << " stencil_ref=" << p.stencil_ref
-        << " blend=" << to_string(p.blend) << " cull=" << to_string(p.cull) << " alpha=" << to_string(p.alpha)
-        << "\n";
+void write_pipeline(const PipelineState& p, std::ostream& out) {
+  out << "pipeline " << p.name << " shader=" << p.shader << " depth_test=" << yes_no(p.depth_test)
+      << " depth_write=" << yes_no(p.depth_write) << " depth_compare=" << to_string(p.depth_compare)
+      << " stencil_test=" << yes_no(p.stencil_test) << " stencil_compare=" << to_string(p.stencil_compare)
+      << " stencil_fail_op=" << to_string(p.stencil_fail_op)
+      << " stencil_depth_fail_op=" << to_string(p.stencil_depth_fail_op)
+      << " stencil_pass_op=" << to_string(p.stencil_pass_op) << " stencil_ref=" << p.stencil_ref
+      << " blend=" << to_string(p.blend) << " cull=" << to_string(p.cull) << " alpha=" << to_string(p.alpha)
+      << "\n";
+}
 
+template <typename T>
+std::string declaration_text(const T& d, void (*write)(const T&, std::ostream&)) {
+  std::ostringstream s;
+  write(d, s);
+  return s.str();
+}
+
+/// Writes the declarations of `now` that `before` (the previous frame, or none) does not have:
+/// a frame's declarations are the earlier frame's followed by its own (the reader appends them).
+/// Throws std::invalid_argument when a declaration the earlier frame made differs (by name or
+/// text): a name means one thing for the whole sequence.
+template <typename T>
+void write_new_declarations(const std::vector<T>& now, const std::vector<T>* before, const char* what, int frame,
+                            void (*write)(const T&, std::ostream&), std::ostream& out) {
+  const std::size_t shared = before ? before->size() : 0;
+  if (now.size() < shared) {
+    throw std::invalid_argument("sequence frame " + std::to_string(frame) + " declares fewer " + what + "s than the frame before it");
+  }
+  for (std::size_t i = 0; i < shared; ++i) {
+    if (declaration_text(now[i], write) != declaration_text((*before)[i], write)) {
+      throw std::invalid_argument("sequence frame " + std::to_string(frame) + " declares " + what + " '" + now[i].name +
+                                  "' differently from the frame before it");
+    }
+  }
+  for (std::size_t i = shared; i < now.size(); ++i) write(now[i], out);
+}
+
+void write_commands(const Trace& t, std::ostream& out) {
   for (const auto& cmd : t.commands) {
     if (const auto* p = std::get_if<PassDesc>(&cmd)) {
       write_pass(*p, out);
@@ -173,6 +205,45 @@ void write_trace(const Trace& t, std::ostream& out) {
       out << "barrier resources=" << (b->all ? std::string("all") : fmt_list(b->resources)) << "\n";
     }
   }
+}
+
+/// Writes frame `k` of a sequence (`before`: frame k - 1, or none for the first).
+void write_frame(const Trace& t, const Trace* before, int k, std::ostream& out) {
+  write_frame_view(t, out);
+  write_new_declarations(t.buffers, before ? &before->buffers : nullptr, "buffer", k, write_buffer, out);
+  write_new_declarations(t.shaders, before ? &before->shaders : nullptr, "shader", k, write_shader, out);
+  write_new_declarations(t.pipelines, before ? &before->pipelines : nullptr, "pipeline", k, write_pipeline, out);
+  write_commands(t, out);
+}
+
+}  // namespace
+
+void write_trace(const Trace& t, std::ostream& out) {
+  // One frame needs nothing version 4 added: written as version 3, which older readers read.
+  write_header(t, kDrawBoundsVersion, out);
+  write_frame(t, nullptr, 0, out);
+}
+
+void write_trace_frames(const std::vector<Trace>& frames, std::ostream& out) {
+  if (frames.empty()) throw std::invalid_argument("write_trace_frames: a sequence has at least one frame");
+  if (frames.size() == 1) return write_trace(frames.front(), out);
+  const Trace& first = frames.front();
+  write_header(first, kSequenceVersion, out);
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const Trace& t = frames[k];
+    if (k > 0 && (t.technique != first.technique || t.options != first.options || t.scene.kind != first.scene.kind ||
+                  t.scene.detail != first.scene.detail || t.scene.path != first.scene.path ||
+                  t.scene.content_hash != first.scene.content_hash || t.frame.width != first.frame.width ||
+                  t.frame.height != first.frame.height || t.frame.samples != first.frame.samples)) {
+      throw std::invalid_argument("sequence frame " + std::to_string(k) +
+                                  " differs from the first in technique, scene or frame size, which a sequence shares");
+    }
+    write_frame(t, k > 0 ? &frames[k - 1] : nullptr, static_cast<int>(k), out);
+  }
+}
+
+void write_trace_frames_file(const std::vector<Trace>& frames, const std::string& path) {
+  write_output_file(path, "the trace file", [&](std::ostream& out) { write_trace_frames(frames, out); });
 }
 
 void write_trace_file(const Trace& trace, const std::string& path) {

@@ -105,4 +105,43 @@ Camera framing_camera(const Scene& scene) {
   return cam;
 }
 
+const char* to_string(CameraPath p) {
+  switch (p) {
+    case CameraPath::Static: return "static";
+    case CameraPath::Orbit: return "orbit";
+    case CameraPath::Flythrough: return "flythrough";
+  }
+  return "?";
+}
+
+CameraPath parse_camera_path(const std::string& name) {
+  for (CameraPath p : {CameraPath::Static, CameraPath::Orbit, CameraPath::Flythrough}) {
+    if (name == to_string(p)) return p;
+  }
+  throw InputError("--camera-path " + name, "unknown camera path; valid: static, orbit, flythrough");
+}
+
+Camera camera_on_path(const Camera& first, CameraPath path, int frame) {
+  Camera c = first;
+  switch (path) {
+    case CameraPath::Static:
+      break;
+    case CameraPath::Orbit: {
+      // About the world's vertical axis (y) through the target: the eye keeps its height and distance.
+      const float angle = glm::radians(kOrbitDegreesPerFrame * static_cast<float>(frame));
+      const glm::vec3 offset = first.eye - first.target;
+      const float cs = std::cos(angle), sn = std::sin(angle);
+      c.eye = first.target + glm::vec3(cs * offset.x + sn * offset.z, offset.y, -sn * offset.x + cs * offset.z);
+      break;
+    }
+    case CameraPath::Flythrough: {
+      const glm::vec3 step = (first.target - first.eye) * (kFlythroughStepFraction * static_cast<float>(frame));
+      c.eye = first.eye + step;
+      c.target = first.target + step;
+      break;
+    }
+  }
+  return c;
+}
+
 }  // namespace tbdr

@@ -1,6 +1,7 @@
 #pragma once
 // Cameras: a pinhole camera with a right-handed view and an OpenGL-style projection
 // (clip-space z in [-w, w]); named viewpoints for the built-in atrium; a framing default for glTF.
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -29,5 +30,24 @@ std::vector<std::string> atrium_viewpoint_names();
 Camera atrium_viewpoint(const std::string& name, const Scene& atrium);
 /// A camera that frames the scene's bounds from the front (+z looking to -z), near/far from bounds.
 Camera framing_camera(const Scene& scene);
+
+/// How the camera of a frame sequence moves from its first frame's viewpoint.
+enum class CameraPath : std::uint8_t {
+  Static,      ///< the same camera every frame (what transaction elimination and warm caches are measured on)
+  Orbit,       ///< the eye turns about the vertical axis through the target, kOrbitDegreesPerFrame per frame
+  Flythrough,  ///< eye and target move together along the view direction, kFlythroughStepFraction of
+               ///< the eye-target distance per frame (a walk forward through the scene)
+};
+/// Degrees the orbit turns per frame: 360 degrees in 6 s at 60 frames per second.
+inline constexpr float kOrbitDegreesPerFrame = 1.0f;
+/// Fraction of the first frame's eye-target distance the flythrough moves per frame: after 100
+/// frames the eye stands where the target was.
+inline constexpr float kFlythroughStepFraction = 0.01f;
+/// The path's name as `tbdrsim trace --camera-path` takes it ("static", "orbit", "flythrough").
+const char* to_string(CameraPath p);
+/// The path of that name; throws InputError listing the names otherwise.
+CameraPath parse_camera_path(const std::string& name);
+/// The camera of frame `frame` (0: `first`) of a sequence along `path`.
+Camera camera_on_path(const Camera& first, CameraPath path, int frame);
 
 }  // namespace tbdr

@@ -246,4 +246,30 @@ LightSet read_light_file(const std::string& path) {
   return set;
 }
 
+const char* to_string(LightMotion m) { return m == LightMotion::Static ? "static" : "orbit"; }
+
+LightMotion parse_light_motion(const std::string& name) {
+  for (LightMotion m : {LightMotion::Static, LightMotion::Orbit}) {
+    if (name == to_string(m)) return m;
+  }
+  throw InputError("--light-motion " + name, "unknown light motion; valid: static, orbit");
+}
+
+LightSet lights_in_motion(const LightSet& first, LightMotion motion, int frame) {
+  LightSet set = first;
+  if (motion == LightMotion::Static) return set;
+  // A light's first place is on its circle (at its start angle), so frame 0 is where it was put.
+  constexpr float kStartAngleStepDeg = 137.5f;  // the golden angle: neighbours' start angles spread evenly
+  for (std::size_t i = 0; i < set.lights.size(); ++i) {
+    Light& l = set.lights[i];
+    const float r = kLightOrbitRadiusFraction * first.lights[i].radius;
+    const float start = glm::radians(kStartAngleStepDeg * static_cast<float>(i % 360));
+    const float dir = i % 2 == 0 ? 1.0f : -1.0f;
+    const float a = start + dir * glm::radians(kLightOrbitDegreesPerFrame * static_cast<float>(frame));
+    const glm::vec3 centre = first.lights[i].position - r * glm::vec3(std::cos(start), 0.0f, std::sin(start));
+    l.position = centre + r * glm::vec3(std::cos(a), 0.0f, std::sin(a));
+  }
+  return set;
+}
+
 }  // namespace tbdr

@@ -48,6 +48,25 @@ struct LightSet {
   std::vector<Light> lights;
 };
 
+/// How the lights of a frame sequence move from their first frame's places.
+enum class LightMotion : std::uint8_t {
+  Static,  ///< every light where it was
+  Orbit,   ///< each light circles its first position in the horizontal plane, at a radius of
+           ///< kLightOrbitRadiusFraction of its range, kLightOrbitDegreesPerFrame per frame (every
+           ///< other light the other way), starting at an angle set by its index
+};
+/// The orbit's radius as a fraction of the light's range: it keeps lighting what it lit, and the
+/// tiles and clusters it touches change from frame to frame.
+inline constexpr float kLightOrbitRadiusFraction = 0.5f;
+/// Degrees a light turns per frame: once round in 1 s at 60 frames per second.
+inline constexpr float kLightOrbitDegreesPerFrame = 6.0f;
+/// The motion's name as `tbdrsim trace --light-motion` takes it ("static", "orbit").
+const char* to_string(LightMotion m);
+/// The motion of that name; throws InputError listing the names otherwise.
+LightMotion parse_light_motion(const std::string& name);
+/// The lights of frame `frame` (0: `first`) of a sequence under `motion`.
+LightSet lights_in_motion(const LightSet& first, LightMotion motion, int frame);
+
 /// Deterministic light placement: same scene, spec and seed give the same lights on any machine.
 LightSet generate_lights(const Scene& scene, const LightSetSpec& spec);
 /// Reads a light file (format in docs/lights.md); errors name file:line and the token.

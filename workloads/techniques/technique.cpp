@@ -820,4 +820,36 @@ Trace generate_trace(const std::string& technique, const TraceSetup& setup) {
   return parse_trace(text, "<generated " + technique + ">");
 }
 
+std::vector<Trace> generate_sequence(const std::string& technique, const TraceSetup& setup, const SequenceMotion& motion) {
+  if (motion.frames < 1 || motion.frames > kMaxSequenceFrames)
+    throw InputError("--frames " + std::to_string(motion.frames), "expected 1.." + std::to_string(kMaxSequenceFrames) + " frames");
+  std::vector<Trace> frames;
+  frames.reserve(static_cast<std::size_t>(motion.frames));
+  for (int k = 0; k < motion.frames; ++k) {
+    TraceSetup at = setup;
+    at.camera = camera_on_path(setup.camera, motion.camera, k);
+    at.lights = lights_in_motion(setup.lights, motion.lights, k);
+    frames.push_back(generate_trace(technique, at));
+  }
+  // One allocation per buffer for the whole sequence: the largest any frame needs.
+  for (std::size_t k = 1; k < frames.size(); ++k) {
+    if (frames[k].buffers.size() != frames[0].buffers.size())
+      throw std::logic_error("generate_sequence: frame " + std::to_string(k) + " of " + technique + " declares another set of buffers");
+    for (std::size_t b = 0; b < frames[0].buffers.size(); ++b) {
+      if (frames[k].buffers[b].name != frames[0].buffers[b].name)
+        throw std::logic_error("generate_sequence: frame " + std::to_string(k) + " of " + technique + " declares buffer '" +
+                               frames[k].buffers[b].name + "' where the first declares '" + frames[0].buffers[b].name + "'");
+      frames[0].buffers[b].bytes = std::max(frames[0].buffers[b].bytes, frames[k].buffers[b].bytes);
+    }
+  }
+  for (auto& f : frames) f.buffers = frames[0].buffers;
+  std::stringstream text;
+  try {
+    write_trace_frames(frames, text);
+  } catch (const std::invalid_argument& e) {
+    throw std::logic_error(std::string("generate_sequence of ") + technique + ": " + e.what());
+  }
+  return parse_trace_frames(text, "<generated " + technique + " sequence>");
+}
+
 }  // namespace tbdr

@@ -85,6 +85,21 @@ const TechniqueInfo& find_technique(const std::string& name);
 /// technique (listing the known ones), an unknown or malformed option, or an unusable setup.
 Trace generate_trace(const std::string& technique, const TraceSetup& setup);
 
+/// How a frame sequence's camera and lights move (`tbdrsim trace --frames`).
+struct SequenceMotion {
+  int frames = 1;                         ///< frames in the sequence, 1..kMaxSequenceFrames
+  CameraPath camera = CameraPath::Static;
+  LightMotion lights = LightMotion::Static;
+};
+/// The most frames `tbdrsim trace --frames` writes: 10 s at 60 frames per second.
+inline constexpr int kMaxSequenceFrames = 600;
+/// Generates the frames of `technique` along `motion`: frame k is the technique's trace of `setup`
+/// with the camera and lights moved to frame k, validated through the reader as one sequence.
+/// A buffer whose size a generator derives from what the frame sees (its light lists) is
+/// declared at the largest size any frame needs, as an application allocates it once; any other
+/// declaration that differs between frames is a generator bug (std::logic_error).
+std::vector<Trace> generate_sequence(const std::string& technique, const TraceSetup& setup, const SequenceMotion& motion);
+
 // ---- starting a trace -----------------------------------------------------------------------------
 
 /// What a technique cannot do, checked by begin_trace() before anything is written.

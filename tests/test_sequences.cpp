@@ -1,0 +1,296 @@
+// Frame sequences (docs/sequences.md): traces of several frames (version 4), the camera paths and
+// light motions that generate them, and their replay: frames in flight (gpu.frames_in_flight),
+// the display period (gpu.frame_period_us), caches and DRAM that keep their state from one frame
+// to the next, and the per-frame and summary rows (sequence/frame<k>, sequence/summary).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "app/run_driver.hpp"
+#include "app/stat_rows.hpp"
+#include "kernel/errors.hpp"
+#include "models/address_space.hpp"
+#include "models/hw_config.hpp"
+#include "scene/scene_library.hpp"
+#include "techniques/technique.hpp"
+#include "trace/trace.hpp"
+#include "atrium_trace_setup.hpp"
+#include "scratch_dir.hpp"
+#include "stat_lookup.hpp"
+
+namespace tbdr {
+namespace {
+
+testing_scratch::ScratchCleanup cleanup{"sequences"};
+
+const Scene& atrium1() {
+  static const Scene scene = load_scene("atrium:1");
+  return scene;
+}
+
+/// `frames` frames of `technique` on atrium:1 from the entrance, `lights` lights, w x h.
+std::vector<Trace> sequence(const std::string& technique, int frames, CameraPath camera, LightMotion lights, int n_lights = 256,
+                            int w = 320, int h = 180) {
+  const TraceSetup setup = testing_support::atrium_entrance_setup(atrium1(), n_lights, w, h);
+  return generate_sequence(technique, setup, SequenceMotion{frames, camera, lights});
+}
+
+std::string text_of(const std::vector<Trace>& frames) {
+  std::ostringstream out;
+  write_trace_frames(frames, out);
+  return out.str();
+}
+
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+/// Replays `frames` (written to a scratch trace) with the default hardware and `sets`.
+RunOutcome replay(const std::vector<Trace>& frames, const std::vector<std::string>& sets, const std::string& name) {
+  const auto dir = testing_scratch::scratch_dir("sequences", name);
+  const std::string path = (dir / "t.trace").string();
+  std::ofstream(path) << text_of(frames);
+  RunRequest req;
+  req.config = resolve_config({}, sets);
+  req.trace_path = path;
+  req.db_path = (dir / "r.db").string();
+  req.summary_figures = false;
+  return run_one(req);
+}
+
+std::string frame_scope(std::size_t k) { return SequenceFrameStats::kScopePrefix + std::to_string(k); }
+
+double device_bytes(const RunOutcome& o) { return static_cast<double>(o.timing.dram.total_read() + o.timing.dram.total_written()); }
+
+// ---- the trace ----------------------------------------------------------------------------------
+
+TEST(SequenceTrace, FramesRoundTripWithTheirDeclarationsWrittenOnce) {
+  const std::vector<Trace> frames = sequence("plain_forward", 3, CameraPath::Orbit, LightMotion::Orbit, 16, 64, 36);
+  ASSERT_EQ(frames.size(), 3u);
+  const std::string text = text_of(frames);
+  EXPECT_EQ(text.rfind("tbdrsim-trace 4\n", 0), 0u);
+  EXPECT_EQ(count(text, "\nframe "), 3u);
+  EXPECT_EQ(count(text, "\ncamera "), 3u);
+  EXPECT_EQ(count(text, "\nlight "), 3u * 16u);
+  // Declarations once, for every frame.
+  EXPECT_EQ(count(text, "\nshader "), frames[0].shaders.size());
+  EXPECT_EQ(count(text, "\npipeline "), frames[0].pipelines.size());
+  std::istringstream in(text);
+  const std::vector<Trace> back = parse_trace_frames(in, "seq.trace");
+  ASSERT_EQ(back.size(), 3u);
+  EXPECT_EQ(text_of(back), text);
+  for (const Trace& f : back) EXPECT_EQ(f.shaders.size(), frames[0].shaders.size());
+  const Camera expected = camera_on_path(frames[0].camera, CameraPath::Orbit, 2);
+  EXPECT_EQ(back[2].camera.eye, expected.eye);
+  EXPECT_NE(back[2].camera.eye, back[0].camera.eye);
+  EXPECT_NE(back[1].lights[0].position, back[0].lights[0].position);
+}
+
+TEST(SequenceTrace, OneFrameIsWrittenAsVersion3ThatOlderReadersRead) {
+  const std::vector<Trace> frames = sequence("plain_forward", 1, CameraPath::Orbit, LightMotion::Static, 4, 64, 36);
+  const std::string text = text_of(frames);
+  EXPECT_EQ(text.rfind("tbdrsim-trace 3\n", 0), 0u);
+  EXPECT_EQ(text, trace_text(frames[0]));
+  EXPECT_EQ(trace_hash(frames), trace_hash(frames[0]));
+}
+
+/// The error text of reading `text` as a sequence ("" if it reads).
+std::string sequence_error(const std::string& text) {
+  std::istringstream in(text);
+  try {
+    parse_trace_frames(in, "seq.trace");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SequenceTrace, ABadSequenceIsRefusedAtItsLine) {
+  const std::string text = text_of(sequence("plain_forward", 2, CameraPath::Static, LightMotion::Static, 4, 64, 36));
+  const std::size_t second = text.find("\nframe ", text.find("\nframe ") + 1) + 1;
+  const int second_line = static_cast<int>(count(text.substr(0, second), "\n")) + 1;
+  // A version 3 trace holds one frame.
+  std::string v3 = text;
+  v3.replace(0, 16, "tbdrsim-trace 3\n");
+  EXPECT_NE(sequence_error(v3).find("seq.trace:" + std::to_string(second_line) + ": duplicate 'frame' line"), std::string::npos)
+      << sequence_error(v3);
+  EXPECT_NE(sequence_error(v3).find("needs version 4"), std::string::npos);
+  // The frames share one size.
+  std::string resized = text;
+  resized.replace(second, std::string("frame width=64").size(), "frame width=65");
+  EXPECT_NE(sequence_error(resized).find("seq.trace:" + std::to_string(second_line) + ": frame 65x36"), std::string::npos)
+      << sequence_error(resized);
+  EXPECT_NE(sequence_error(resized).find("share one size"), std::string::npos);
+  // A frame with no command before the next.
+  const std::size_t first = text.find("\nframe ") + 1;
+  const std::string frame_line = text.substr(first, text.find('\n', first) - first + 1);
+  std::string empty = text;
+  empty.insert(second, frame_line);
+  EXPECT_NE(sequence_error(empty).find("has no pass, dispatch or barrier before the next 'frame' line"), std::string::npos)
+      << sequence_error(empty);
+  // A command that reads one frame says so, naming the second frame's line.
+  std::istringstream in(text);
+  try {
+    parse_trace(in, "seq.trace");
+    ADD_FAILURE() << "a sequence read as one frame";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("seq.trace:" + std::to_string(second_line) + ": the trace holds a sequence of 2 frames"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// ---- camera paths and light motion ------------------------------------------------------------
+
+TEST(SequenceMotion, TheOrbitTurnsOneDegreePerFrameAboutTheTarget) {
+  const Camera first = atrium_viewpoint("entrance", atrium1());
+  for (int k : {0, 1, 30, 90}) {
+    const Camera c = camera_on_path(first, CameraPath::Orbit, k);
+    const glm::vec3 a = first.eye - first.target, b = c.eye - c.target;
+    EXPECT_EQ(c.target, first.target);
+    EXPECT_NEAR(b.y, a.y, 1e-4);  // same height
+    EXPECT_NEAR(glm::length(b), glm::length(a), 1e-3 * glm::length(a));
+    const float cosine = glm::dot(glm::vec2(a.x, a.z), glm::vec2(b.x, b.z)) / glm::dot(glm::vec2(a.x, a.z), glm::vec2(a.x, a.z));
+    EXPECT_NEAR(std::acos(std::min(1.0f, cosine)), glm::radians(kOrbitDegreesPerFrame * static_cast<float>(k)), 1e-3) << k;
+  }
+  // The flythrough walks 1 % of the eye-target distance per frame; after 100 frames the eye is
+  // where the target was.
+  const Camera walked = camera_on_path(first, CameraPath::Flythrough, 100);
+  EXPECT_NEAR(glm::length(walked.eye - first.target), 0.0f, 1e-3f * glm::length(first.eye - first.target));
+  EXPECT_EQ(camera_on_path(first, CameraPath::Static, 57).eye, first.eye);
+}
+
+TEST(SequenceMotion, LightsCircleTheirFirstPlaceAtHalfTheirRange) {
+  LightSetSpec spec;
+  spec.count = 8;
+  const LightSet first = generate_lights(atrium1(), spec);
+  const LightSet at0 = lights_in_motion(first, LightMotion::Orbit, 0);
+  const LightSet at15 = lights_in_motion(first, LightMotion::Orbit, 15);
+  for (std::size_t i = 0; i < first.lights.size(); ++i) {
+    EXPECT_NEAR(glm::length(at0.lights[i].position - first.lights[i].position), 0.0f, 1e-4f);
+    const float moved = glm::length(at15.lights[i].position - first.lights[i].position);
+    // A chord of the circle of radius r = 0.5 x range for 15 x 6 = 90 degrees: r x sqrt(2).
+    const float r = kLightOrbitRadiusFraction * first.lights[i].radius;
+    EXPECT_NEAR(moved, r * std::sqrt(2.0f), 1e-3f * r) << i;
+    EXPECT_EQ(at15.lights[i].position.y, first.lights[i].position.y);
+    EXPECT_EQ(at15.lights[i].radius, first.lights[i].radius);
+  }
+  EXPECT_EQ(lights_in_motion(first, LightMotion::Static, 15).lights[3].position, first.lights[3].position);
+}
+
+// ---- replay -----------------------------------------------------------------------------------
+
+TEST(SequenceReplay, TheFirstFrameIsTheFrameAloneAndTheFramesAddUpToTheSequence) {
+  const std::vector<Trace> frames = sequence("forward_plus", 3, CameraPath::Orbit, LightMotion::Orbit);
+  const RunOutcome seq = replay(frames, {"gpu.frames_in_flight=1"}, "first_alone");
+  ASSERT_EQ(seq.timing.frames.size(), 3u);
+  double invocations = 0, covered = 0;
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const RunOutcome alone = replay({frames[k]}, {"gpu.frames_in_flight=1"}, "alone" + std::to_string(k));
+    invocations += alone.frame.totals.render.tsp.shader_invocations.as_double();
+    covered += alone.frame.shape.covered_pixels.as_double();
+    if (k == 0) {
+      // Nothing runs before the first frame with one frame in flight: its time and DRAM bytes are
+      // the frame's alone, to the cycle and the byte.
+      EXPECT_NEAR(stat(seq, frame_scope(0), "end_cycle"), alone.timing.frame_cycles, 1.0);
+      // Its DRAM bytes are the frame's alone but the writes still queued at its end (posted: the
+      // pixel back end is done when the DRAM accepts them), which DRAM moves in the next frame's
+      // interval: at most a full write queue of lines per channel.
+      const HwConfig hw = resolve_config({}, {}).hw;
+      const double queued = device_bytes(alone) - stat(seq, frame_scope(0), "dram_interval_bytes");
+      EXPECT_GE(queued, 0);
+      EXPECT_LE(queued, static_cast<double>(hw.dram.channels * hw.dram.write_queue_entries * 64));
+    }
+  }
+  // The functional figures of a sequence are its frames' sums (per-pixel ratios stay per frame).
+  EXPECT_EQ(seq.frame.totals.render.tsp.shader_invocations.as_double(), invocations);
+  EXPECT_EQ(seq.frame.shape.covered_pixels.as_double(), covered);
+  // The frames' intervals add up to the sequence's time, their DRAM bytes to what DRAM moved.
+  double cycles = 0, bytes = 0;
+  for (std::size_t k = 0; k < 3; ++k) {
+    cycles += stat(seq, frame_scope(k), "interval_cycles");
+    bytes += stat(seq, frame_scope(k), "dram_interval_bytes");
+  }
+  EXPECT_NEAR(cycles, seq.timing.frame_cycles, 1e-6 * cycles);
+  EXPECT_EQ(bytes, device_bytes(seq));
+  EXPECT_EQ(stat(seq, SequenceSummaryStats::kScope, "frames"), 3);
+  // Steady frames: frame 1 (frame 0 is the warm-up, frame 2 the drain).
+  EXPECT_NEAR(stat(seq, SequenceSummaryStats::kScope, "steady_interval_ms"), stat(seq, frame_scope(1), "interval_ms"), 1e-12);
+}
+
+TEST(SequenceReplay, ASecondFrameInFlightHidesMostOfTheNextFramesBinning) {
+  // plain_forward, atrium:1 320x180, 64 lights, camera and lights orbiting, 4 frames; steady
+  // frames 1 and 2. The frame is USC-bound (about 1.1 ms). With one frame in flight each frame
+  // starts with its binning (about 51,700 cycles, nothing else running); with two it runs while
+  // the frame before renders its tiles, so the frame's interval shrinks by the part of it that
+  // overlap hides. It cannot shrink by more than the binning (the frame's other work is the same),
+  // and the binning then shares the USCs (its vertex shading) and DRAM with those tiles, so it
+  // hides less than all of it: measured 46,900 of 51,700 cycles (1.0943 -> 1.0163 ms per frame at
+  // 600 MHz). (A DRAM-bound frame gains less or loses: docs/sequences.md.)
+  const std::vector<Trace> frames = sequence("plain_forward", 4, CameraPath::Orbit, LightMotion::Orbit, 64);
+  const RunOutcome one = replay(frames, {"gpu.frames_in_flight=1"}, "fif1");
+  const RunOutcome two = replay(frames, {"gpu.frames_in_flight=2"}, "fif2");
+  const double steady1 = stat(one, SequenceSummaryStats::kScope, "steady_interval_ms");
+  const double steady2 = stat(two, SequenceSummaryStats::kScope, "steady_interval_ms");
+  const double ms_per_cycle = one.timing.frame_time_ps * 1e-9 / one.timing.frame_cycles;
+  // Frame 1's first binning with one frame in flight: from the frame's start to its pre-pass's binning end.
+  double binning_cycles = -1;
+  for (const CommandTime& c : one.timing.commands) {
+    if (c.name == "frame1.pass0.main") binning_cycles = c.binning_end_cycle - c.start_cycle;
+  }
+  ASSERT_GT(binning_cycles, 0);
+  EXPECT_EQ(stat(one, frame_scope(1), "start_cycle"), stat(one, frame_scope(0), "end_cycle"));
+  EXPECT_LT(stat(two, frame_scope(1), "start_cycle"), stat(two, frame_scope(0), "end_cycle"));  // overlapped
+  const double saved_cycles = (steady1 - steady2) / ms_per_cycle;
+  EXPECT_GT(saved_cycles, 0.5 * binning_cycles) << steady1 << " -> " << steady2 << " ms, binning " << binning_cycles;
+  EXPECT_LE(saved_cycles, binning_cycles);
+}
+
+TEST(SequenceReplay, AStaticViewFindsTheCachesWarmAfterTheFirstFrame) {
+  // The same frame twice, one frame in flight: the second finds in the SLC and the texture cache
+  // what the first left (the same buffers at the same addresses), so DRAM moves fewer bytes.
+  const std::vector<Trace> frames = sequence("forward_plus", 3, CameraPath::Static, LightMotion::Static);
+  const RunOutcome o = replay(frames, {"gpu.frames_in_flight=1"}, "warm");
+  const double first = stat(o, frame_scope(0), "dram_interval_bytes");
+  const double second = stat(o, frame_scope(1), "dram_interval_bytes");
+  EXPECT_LT(second, first);
+  EXPECT_LE(stat(o, frame_scope(1), "interval_cycles"), stat(o, frame_scope(0), "interval_cycles"));
+}
+
+TEST(SequenceReplay, TheDisplayPeriodSpacesTheFrames) {
+  // A 1,000 us period (longer than any of these 0.4 ms frames): frame k starts at k periods,
+  // 600,000 cycles apart at 600 MHz, and the sequence lasts 2 periods plus the last frame.
+  const std::vector<Trace> frames = sequence("forward_plus", 3, CameraPath::Orbit, LightMotion::Static);
+  const RunOutcome o = replay(frames, {"gpu.frame_period_us=1000"}, "period");
+  const double cycles_per_period = 1000.0 * o.timing.frame_cycles / (o.timing.frame_time_ps * 1e-6);
+  EXPECT_NEAR(cycles_per_period, 600000, 1);
+  for (std::size_t k = 1; k < 3; ++k) EXPECT_NEAR(stat(o, frame_scope(k), "start_cycle"), k * cycles_per_period, 1) << k;
+  EXPECT_NEAR(o.timing.frame_cycles, 2 * cycles_per_period + stat(o, frame_scope(2), "latency_cycles"), 1);
+  // The period figure covers the 3 periods: idle = 3 ms - the sequence's time.
+  EXPECT_NEAR(o.energy.idle_ps, 3e9 - o.timing.frame_time_ps, 1e3);
+}
+
+TEST(SequenceAddresses, ALaterFrameUsesTheRegionsTheFrameBeforeAllocated) {
+  AddressSpace space;
+  const std::uint64_t a = space.allocate("framebuffer.pass0.main", 10000, DramClass::Color);
+  EXPECT_EQ(space.reuse_or_allocate("framebuffer.pass0.main", 9000, DramClass::Color), a);
+  EXPECT_EQ(space.reuse_or_allocate("framebuffer.pass0.main", 12288, DramClass::Color), a);  // 3 pages reserved
+  const std::uint64_t bigger = space.reuse_or_allocate("framebuffer.pass0.main", 20000, DramClass::Color);
+  EXPECT_NE(bigger, a);
+  EXPECT_NE(space.find("framebuffer.pass0.main#2"), nullptr);
+  EXPECT_EQ(space.reuse_or_allocate("framebuffer.pass0.main", 20000, DramClass::Color), bigger);
+  EXPECT_NE(space.reuse_or_allocate("framebuffer.pass0.main", 100, DramClass::Gbuffer), a);  // another class
+  const std::uint64_t high = space.reuse_or_allocate("buffers.pass1.forward", 64, DramClass::Other, true);
+  EXPECT_GE(high, AddressSpace::kHighBase);
+  EXPECT_EQ(space.reuse_or_allocate("buffers.pass1.forward", 64, DramClass::Other, true), high);
+}
+
+}  // namespace
+}  // namespace tbdr
