@@ -250,6 +250,8 @@ const std::vector<Expectation> kExpectations = {
      {"techniques.md", "techniques.png", "scaling.png", "sens.png", "run.txt", "run.json", "run.trace.json"}},
     {"docs/plots.md", {}, {"time.png", "dram.png", "tiles.png", "tile.png", "budget.png", "stack.png", "stack_bytes.png"}},
     {"docs/sweeps.md", {}, {"stack.db", "tile_size.db", "tile_job/tile_size.sbatch", "tile_job/shard_1.db"}},
+    // Two runs of the 6-frame sequence, each with its summary.
+    {"docs/sequences.md", {"6 frames (camera orbit, lights orbit)", "sequence: 6 frames", "2|steady_interval_ms|"}, {"orbit.trace", "seq.db"}},
 };
 
 std::string replace_all(std::string s, const std::string& from, const std::string& to, int* count = nullptr) {
@@ -336,7 +338,8 @@ std::string tail(const std::string& log) { return log.substr(log.size() > 6000 ?
 /// The documents that have ```sh blocks, each a parameter of DocsCommands.RunAsWrittenFromAnotherFolder.
 const std::vector<std::string> kDocsWithCommands = {
     "README.md",          "docs/capture-import.md", "docs/dram-cross-check.md", "docs/fuzzing.md",
-    "docs/install.md",    "docs/plots.md",          "docs/queries.md",          "docs/sweeps.md",
+    "docs/install.md",    "docs/plots.md",          "docs/queries.md",          "docs/sequences.md",
+    "docs/sweeps.md",
 };
 
 // Every fenced block says what it holds; command lines are in ```sh blocks only, without prompts

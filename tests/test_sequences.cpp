@@ -20,6 +20,7 @@
 #include "techniques/technique.hpp"
 #include "trace/trace.hpp"
 #include "atrium_trace_setup.hpp"
+#include "file_text.hpp"
 #include "scratch_dir.hpp"
 #include "stat_lookup.hpp"
 
@@ -61,11 +62,17 @@ RunOutcome replay(const std::vector<Trace>& frames, const std::vector<std::strin
   req.config = resolve_config({}, sets);
   req.trace_path = path;
   req.db_path = (dir / "r.db").string();
-  req.summary_figures = false;
   return run_one(req);
 }
 
 std::string frame_scope(std::size_t k) { return SequenceFrameStats::kScopePrefix + std::to_string(k); }
+
+/// `v` rounded to a whole number with thousands separators, as the docs print cycles: 51,718.
+std::string with_commas(double v) {
+  std::string digits = std::to_string(static_cast<long long>(std::llround(v)));
+  for (int at = static_cast<int>(digits.size()) - 3; at > 0; at -= 3) digits.insert(static_cast<std::size_t>(at), ",");
+  return digits;
+}
 
 double device_bytes(const RunOutcome& o) { return static_cast<double>(o.timing.dram.total_read() + o.timing.dram.total_written()); }
 
@@ -212,6 +219,8 @@ TEST(SequenceReplay, TheFirstFrameIsTheFrameAloneAndTheFramesAddUpToTheSequence)
   // The functional figures of a sequence are its frames' sums (per-pixel ratios stay per frame).
   EXPECT_EQ(seq.frame.totals.render.tsp.shader_invocations.as_double(), invocations);
   EXPECT_EQ(seq.frame.shape.covered_pixels.as_double(), covered);
+  ASSERT_TRUE(seq.derived.shaded_fragments_per_pixel.has_value());
+  EXPECT_NEAR(*seq.derived.shaded_fragments_per_pixel, invocations / (320.0 * 180.0 * 3.0), 1e-9);  // per frame's pixel
   // The frames' intervals add up to the sequence's time, their DRAM bytes to what DRAM moved.
   double cycles = 0, bytes = 0;
   for (std::size_t k = 0; k < 3; ++k) {
@@ -249,6 +258,11 @@ TEST(SequenceReplay, ASecondFrameInFlightHidesMostOfTheNextFramesBinning) {
   EXPECT_EQ(stat(one, frame_scope(1), "start_cycle"), stat(one, frame_scope(0), "end_cycle"));
   EXPECT_LT(stat(two, frame_scope(1), "start_cycle"), stat(two, frame_scope(0), "end_cycle"));  // overlapped
   const double saved_cycles = (steady1 - steady2) / ms_per_cycle;
+  // docs/sequences.md quotes these three figures.
+  const std::string row = "| cycles | " + with_commas(binning_cycles) + " | " + with_commas(steady1 / ms_per_cycle) + " | " +
+                          with_commas(steady2 / ms_per_cycle) + " |";
+  EXPECT_NE(testing_support::read_text(std::filesystem::path(TBDRSIM_SOURCE_DIR) / "docs/sequences.md").find(row), std::string::npos)
+      << "docs/sequences.md should have the row " << row;
   EXPECT_GT(saved_cycles, 0.5 * binning_cycles) << steady1 << " -> " << steady2 << " ms, binning " << binning_cycles;
   EXPECT_LE(saved_cycles, binning_cycles);
 }
@@ -276,6 +290,25 @@ TEST(SequenceReplay, TheDisplayPeriodSpacesTheFrames) {
   // The period figure covers the 3 periods: idle = 3 ms - the sequence's time.
   EXPECT_NEAR(o.energy.idle_ps, 3e9 - o.timing.frame_time_ps, 1e3);
 }
+
+/// Every technique replays a sequence: 3 frames of an orbit at 96x54, 16 lights, 2 in flight.
+class SequenceEveryTechnique : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(SequenceEveryTechnique, ReplaysFrameAfterFrame) {
+  const std::vector<Trace> frames = sequence(GetParam(), 3, CameraPath::Orbit, LightMotion::Orbit, 16, 96, 54);
+  const RunOutcome o = replay(frames, {}, "every_" + GetParam());
+  ASSERT_EQ(o.timing.frames.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_GT(stat(o, frame_scope(k), "interval_cycles"), 0) << k;
+    if (k > 0) {
+      EXPECT_GE(stat(o, frame_scope(k), "start_cycle"), stat(o, frame_scope(k - 1), "start_cycle")) << k;
+    }
+  }
+  EXPECT_GT(stat(o, SequenceSummaryStats::kScope, "steady_fps"), 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Techniques, SequenceEveryTechnique, ::testing::ValuesIn(technique_names()),
+                         [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
 
 TEST(SequenceAddresses, ALaterFrameUsesTheRegionsTheFrameBeforeAllocated) {
   AddressSpace space;
