@@ -108,7 +108,8 @@ class FrameSimulator {
     });
     inputs_ = FrameInputs{.hw = &hw_, .scene = &scene_, .lights = &trace_.lights, .camera = camera_,
                           .viewport = viewport_, .frustum = &frustum_, .light_bins = &light_bins_, .colour = options_.colour,
-                          .reference_loops = options_.reference_loops};
+                          .reference_loops = options_.reference_loops, .tile_signatures = options_.tile_signatures};
+    if (options_.tile_signatures != nullptr) options_.tile_signatures->begin_frame();
     result_.images.width = f.width;
     result_.images.height = f.height;
 

@@ -18,6 +18,7 @@
 #include "models/rop.hpp"
 #include "models/tiler.hpp"
 #include "models/tsp.hpp"
+#include "models/tile_signatures.hpp"
 #include "models/work_feed.hpp"
 #include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
@@ -115,6 +116,9 @@ struct FrameOptions {
   int sequence_frame = 0;
   int sequence_frames = 1;
   std::size_t sequence_commands = 0;
+  /// writeback.transaction_elimination: the tile signatures of the sequence's frames so far (the
+  /// frame starts a new frame of them; models/tile_signatures.hpp). Needs `colour`.
+  TileSignatures* tile_signatures = nullptr;
 };
 
 /// How many commands the timing model gets from a trace: one per pass and dispatch (barriers make none).

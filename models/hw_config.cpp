@@ -240,6 +240,14 @@ ParamRegistry<HwConfig> make_registry() {
               "Imagination's equivalent; 1 = off");
   r.add(TBDR_PARAM(writeback.bytes_per_clock), 32.0).unit("bytes/clock").range(1, 4096)
       .doc("Pixel back end write throughput").source("no public figure");
+  r.add(TBDR_PARAM(writeback.transaction_elimination), 0).unit("flag").range(0, 1)
+      .doc("1: before storing a colour tile (store op, not transient, a whole tile) the pixel back end compares "
+           "its signature with the one the same tile of the same pass had in the previous frame of a sequence "
+           "and skips the store when they match; the signatures (8 bytes per tile and attachment) are read and "
+           "written in memory. Needs the colours, which the run then computes. No effect on a single frame")
+      .source("Arm, Mali GPU Transaction Elimination (a CRC per tile compared with the previous frame's; Arm "
+              "Mali GPU Best Practices and the Mali Midgard/Bifrost documentation); not a published PowerVR "
+              "Series6XT feature, so 0 by default");
 
   r.section("memory", "The units' DMA streams into the caches and DRAM");
   r.add(TBDR_PARAM(memory.stream_outstanding_requests), 16).unit("requests").range(1, 4096)

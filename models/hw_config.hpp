@@ -157,6 +157,7 @@ struct MemoryParams {
 struct WritebackParams {
   double compression_ratio = 0;
   double bytes_per_clock = 0;
+  std::int64_t transaction_elimination = 0;  ///< 1: skip storing a colour tile whose signature matches the previous frame's
 };
 
 /// [cache.*] one set-associative cache with LRU replacement.

@@ -26,6 +26,8 @@
 
 namespace tbdr {
 
+class TileSignatures;  // models/tile_signatures.hpp
+
 struct TileLightGrid;
 struct ClusterGrid;
 struct DepthBounds;
@@ -317,6 +319,9 @@ struct FrameInputs {
   /// deferred case applies (Isp::render_tile): the reference the tests compare the lean loop
   /// with (tests/test_speed_equivalence.cpp). Every figure and image is the same either way.
   bool reference_loops = false;
+  /// writeback.transaction_elimination: the tile signatures kept across a sequence's frames
+  /// (models/tile_signatures.hpp); null when off.
+  TileSignatures* tile_signatures = nullptr;
 };
 
 /// Everything the fragment units (ISP, TSP, tile memory) read while rendering one pass's tiles:

@@ -1,5 +1,7 @@
 #include "models/tile_memory.hpp"
 
+#include "kernel/hash.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -61,6 +63,18 @@ TileMemory::TileMemory(RenderContext& ctx, TileMemoryStats& stats)
     : ctx_(ctx), stats_(stats), in_memory_(ctx.pass->attachments.size(), 0), evicted_(ctx.pass->attachments.size(), 0) {
   const PassDesc& pass = *ctx.pass;
   check_pls_layout(ctx.hw->pls, pass);
+  signatures_.assign(pass.attachments.size(), nullptr);
+  if (ctx.tile_signatures != nullptr && ctx.hw->writeback.transaction_elimination != 0 && !ctx.framebuffer_in_dram) {
+    const auto tw = static_cast<std::size_t>(ctx.hw->tiling.tile_width), th = static_cast<std::size_t>(ctx.hw->tiling.tile_height);
+    const std::size_t tiles = (static_cast<std::size_t>(ctx.viewport.width_px) + tw - 1) / tw *
+                              ((static_cast<std::size_t>(ctx.viewport.height_px) + th - 1) / th);
+    for (std::size_t ai = 0; ai < pass.attachments.size(); ++ai) {
+      const Attachment& a = pass.attachments[ai];
+      if (a.usage == AttachmentUsage::Color && a.store == StoreOp::Store && !a.transient) {
+        signatures_[ai] = ctx.tile_signatures->prepare(pass.name + "/" + a.name, tiles);
+      }
+    }
+  }
   need_ = onchip_bytes_per_pixel();
   budget_ = static_cast<std::uint32_t>(ctx.hw->pls.tile_buffer_bits_per_pixel / 8);
   // imr: the attachments live in memory behind the ROP caches; there is no tile memory to fit.
@@ -199,11 +213,50 @@ std::uint64_t TileMemory::attachment_bytes(const Attachment& a, const PixelRect&
 std::uint64_t TileMemory::slot_bytes(const PixelRect& r, bool every_attachment) const {
   const double ratio = ctx_.hw->writeback.compression_ratio;
   std::uint64_t total = 0;
-  for (const Attachment& a : ctx_.pass->attachments) {
+  for (std::size_t ai = 0; ai < ctx_.pass->attachments.size(); ++ai) {
+    const Attachment& a = ctx_.pass->attachments[ai];
     if (!every_attachment && (a.transient || (a.load != LoadOp::Load && a.store != StoreOp::Store))) continue;
     total += static_cast<std::uint64_t>(std::ceil(static_cast<double>(attachment_bytes(a, r)) * ratio));
+    if (signatures_[ai] != nullptr) total += kTileSignatureBytes;  // its signature, in the tile's slot
   }
   return total;
+}
+
+long TileMemory::whole_tile_index(const PixelRect& r) const {
+  const int tw = static_cast<int>(ctx_.hw->tiling.tile_width), th = static_cast<int>(ctx_.hw->tiling.tile_height);
+  const int W = ctx_.viewport.width_px, H = ctx_.viewport.height_px;
+  if (r.x0 % tw != 0 || r.y0 % th != 0 || r.x1 != std::min(r.x0 + tw, W) || r.y1 != std::min(r.y0 + th, H)) return -1;
+  const int tiles_x = (W + tw - 1) / tw;
+  return static_cast<long>(r.y0 / th) * tiles_x + r.x0 / tw;
+}
+
+bool TileMemory::eliminate_store(std::size_t ai, const Attachment& a, const PixelRect& r, std::uint64_t compressed,
+                                 DramTraffic& dram, TileMemoryStats& stats) const {
+  TileSignatures::Table* table = signatures_[ai];
+  const long tile = table != nullptr ? whole_tile_index(r) : -1;
+  const AttachmentImage& img = ctx_.images->attachments.at(a.name);
+  if (tile < 0 || img.color.empty()) return false;  // a strip of a tile, or no colours to sign
+  Fnv1a64 h;
+  const int W = ctx_.viewport.width_px;
+  const std::size_t S = img.samples;
+  for (int y = r.y0; y < r.y1; ++y) {
+    const std::size_t row = (static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(r.x0)) * S;
+    h.update(&img.color[row], static_cast<std::size_t>(r.width()) * S * sizeof(glm::vec4));
+  }
+  const auto i = static_cast<std::size_t>(tile);
+  const bool had = table->has_previous[i] != 0;
+  const bool same = had && table->previous[i] == h.value();
+  table->current[i] = h.value();
+  table->has_current[i] = 1;
+  // The previous frame's signature is read to compare (when there is one); this frame's is written.
+  const std::uint64_t sig_read = had ? kTileSignatureBytes : 0;
+  dram.read(traffic_class_of(a.usage), sig_read);
+  dram.write(traffic_class_of(a.usage), kTileSignatureBytes);
+  stats.signature_bytes += sig_read + kTileSignatureBytes;
+  if (!same) return false;
+  stats.eliminated_tile_stores += 1;
+  stats.eliminated_store_bytes += compressed;
+  return true;
 }
 
 void TileMemory::begin_tile(const PixelRect& r, bool resumed, DramTraffic& dram, TileMemoryStats& stats) const {
@@ -289,6 +342,7 @@ void TileMemory::end_tile(const PixelRect& r, bool partial, DramTraffic& dram, T
       stats.resolved_samples += static_cast<std::uint64_t>(r.width()) * static_cast<std::uint64_t>(r.height()) * S;
     }
     if (a.store == StoreOp::Store && !a.transient) {
+      if (eliminate_store(ai, a, r, compressed, dram, stats)) continue;
       stats.tile_store_bytes += bytes;
       stats.writeback_dram_bytes += compressed;
       dram.write(traffic_class_of(a.usage), compressed);

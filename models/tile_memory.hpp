@@ -20,6 +20,7 @@
 
 #include "models/hw_config.hpp"
 #include "models/render_state.hpp"
+#include "models/tile_signatures.hpp"
 #include "models/tsp.hpp"
 #include "trace/traffic.hpp"
 #include "kernel/stats.hpp"
@@ -39,7 +40,10 @@ namespace tbdr {
   X(Counter, partial_render_reload_bytes, "bytes", Sum, "Bytes reloaded after partial renders") \
   X(Counter, spill_bytes, "bytes", Sum, "Tile buffer bytes spilled to DRAM and read back (pls.over_budget = spill)") \
   X(Counter, split_renders, "renders", Sum, "Renders begun at a subpass boundary because the pass does not fit on chip (pls.over_budget = split_render; stores and reloads booked as a partial render's)") \
-  X(Counter, resolved_samples, "samples", Sum, "Multisampled samples averaged into resolve targets")
+  X(Counter, resolved_samples, "samples", Sum, "Multisampled samples averaged into resolve targets") \
+  X(Counter, eliminated_tile_stores, "tiles", Sum, "Colour tile stores skipped because the tile's signature matched the previous frame's (writeback.transaction_elimination)") \
+  X(Counter, eliminated_store_bytes, "bytes", Sum, "Bytes those skipped stores would have sent to DRAM (after compression)") \
+  X(Counter, signature_bytes, "bytes", Sum, "Tile signature bytes read (the previous frame's) and written (this frame's) in memory")
 /// Statistics of tile memory and writeback.
 struct TileMemoryStats {
   TBDR_STATS(TBDR_TILE_MEMORY_STATS)
@@ -125,6 +129,15 @@ class TileMemory {
   std::vector<std::uint8_t> evicted_;    ///< per attachment: stays in memory after the split
   PlsState pls_;  ///< the pass's pixel local storage (empty when it declares none)
   std::unique_ptr<LitSampleLedger> lit_samples_;  ///< the pass's lit colour writes per sample, or null
+  /// writeback.transaction_elimination: per attachment, its signature table (a stored colour
+  /// attachment of a tile-based pass; null for the others, or when off).
+  std::vector<TileSignatures::Table*> signatures_;
+  /// Transaction elimination of `a`'s store of tile `r` (a whole tile, its colours computed):
+  /// books the signatures' traffic and returns true when the store is skipped.
+  bool eliminate_store(std::size_t ai, const Attachment& a, const PixelRect& r, std::uint64_t compressed, DramTraffic& dram,
+                       TileMemoryStats& stats) const;
+  /// The tile index of `r` when it is a whole tile of the frame's grid, else -1.
+  long whole_tile_index(const PixelRect& r) const;
 };
 
 }  // namespace tbdr

@@ -291,6 +291,61 @@ TEST(SequenceReplay, TheDisplayPeriodSpacesTheFrames) {
   EXPECT_NEAR(o.energy.idle_ps, 3e9 - o.timing.frame_time_ps, 1e3);
 }
 
+/// Replays with images into `dir`/img (for the image comparisons).
+RunOutcome replay_with_images(const std::vector<Trace>& frames, const std::vector<std::string>& sets, const std::string& name) {
+  const auto dir = testing_scratch::scratch_dir("sequences", name);
+  const std::string path = (dir / "t.trace").string();
+  std::ofstream(path) << text_of(frames);
+  RunRequest req;
+  req.config = resolve_config({}, sets);
+  req.trace_path = path;
+  req.db_path = (dir / "r.db").string();
+  req.images_dir = (dir / "img").string();
+  return run_one(req);
+}
+
+TEST(TransactionElimination, AStaticViewSkipsEveryColourTileStoreFromTheSecondFrame) {
+  // forward_plus, 3 frames of a static view at 320x180: its forward pass stores one rgba8 colour
+  // attachment, 10 x 6 = 60 tiles of 32x32 (the last row 20 pixels tall), 320 x 180 x 4 = 230,400
+  // bytes a frame. Frames 1 and 2 find every tile's signature equal to the frame before's:
+  //   eliminated stores  2 x 60 = 120, eliminated bytes 2 x 230,400 = 460,800;
+  //   signatures: frame 0 writes 60 x 8, frames 1 and 2 read and write 60 x 8 each:
+  //   480 + 2 x 960 = 2,400 bytes;
+  //   the colour bytes the units request: written 460,800 - 3 x 480 = 459,360 fewer, read 2 x 480 more.
+  const std::vector<Trace> frames = sequence("forward_plus", 3, CameraPath::Static, LightMotion::Static, 64);
+  const RunOutcome off = replay_with_images(frames, {"writeback.transaction_elimination=0"}, "te_off");
+  const RunOutcome on = replay_with_images(frames, {"writeback.transaction_elimination=1"}, "te_on");
+  const TileMemoryStats& tm = on.frame.totals.render.tile_memory;
+  EXPECT_EQ(tm.eliminated_tile_stores.value(), 120u);
+  EXPECT_EQ(tm.eliminated_store_bytes.value(), 460800u);
+  EXPECT_EQ(tm.signature_bytes.value(), 2400u);
+  EXPECT_EQ(off.frame.totals.render.tile_memory.eliminated_tile_stores.value(), 0u);
+  const auto color = static_cast<std::size_t>(DramClass::Color);
+  EXPECT_EQ(off.frame.dram.write_bytes[color] - on.frame.dram.write_bytes[color], 459360u);
+  EXPECT_EQ(on.frame.dram.read_bytes[color] - off.frame.dram.read_bytes[color], 960u);
+  EXPECT_EQ(on.frame.totals.render.tsp.shader_invocations.value(), off.frame.totals.render.tsp.shader_invocations.value());
+  // What the skipped stores leave in memory is what they would have written: the images (the last
+  // frame's attachments, read back as the next frame would) are the same files.
+  for (const std::string& f : on.images_written) {
+    const std::string name = std::filesystem::path(f).filename().string();
+    if (name == "heat_tile_cycles.png") continue;  // the timing differs: that is the point
+    const auto other = std::filesystem::path(off.images_written.front()).parent_path() / name;
+    EXPECT_EQ(testing_support::read_text(f), testing_support::read_text(other)) << name;
+  }
+  // Fewer bytes reach DRAM from the second frame on.
+  EXPECT_LT(stat(on, frame_scope(1), "dram_interval_bytes"), stat(off, frame_scope(1), "dram_interval_bytes"));
+}
+
+TEST(TransactionElimination, AMovingViewStoresTheTilesThatChanged) {
+  // The orbit changes most tiles from frame to frame; a single frame has nothing to compare with.
+  const std::vector<Trace> frames = sequence("forward_plus", 3, CameraPath::Orbit, LightMotion::Orbit, 64);
+  const RunOutcome moving = replay(frames, {"writeback.transaction_elimination=1"}, "te_orbit");
+  EXPECT_LT(moving.frame.totals.render.tile_memory.eliminated_tile_stores.value(), 60u);
+  const RunOutcome single = replay({frames[0]}, {"writeback.transaction_elimination=1"}, "te_single");
+  EXPECT_EQ(single.frame.totals.render.tile_memory.eliminated_tile_stores.value(), 0u);
+  EXPECT_EQ(single.frame.totals.render.tile_memory.signature_bytes.value(), 480u);  // 60 written
+}
+
 /// Every technique replays a sequence: 3 frames of an orbit at 96x54, 16 lights, 2 in flight.
 class SequenceEveryTechnique : public ::testing::TestWithParam<std::string> {};
 

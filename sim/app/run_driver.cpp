@@ -369,6 +369,12 @@ class RunDatabase {
   std::optional<ResultsDb> db_;
 };
 
+/// Whether the functional run computes colours for a frame: for the images (of the last frame,
+/// `last`), and for transaction elimination's tile signatures (every frame).
+bool needs_colours(const RunRequest& req, bool last) {
+  return (!req.images_dir.empty() && last) || req.config.hw.writeback.transaction_elimination != 0;
+}
+
 /// A run's trace (its frames: one, or a sequence) and the scene it references.
 struct RunInputs {
   std::vector<Trace> frames;
@@ -382,7 +388,7 @@ struct RunInputs {
 /// statistics are the same either way (tests/test_speed_equivalence.cpp).
 RunInputs load_run_inputs(const RunRequest& req) {
   RunInputs in{read_trace_frames(req.trace_path), nullptr};
-  in.scene = load_trace_scene(in.trace(), req.trace_path, SceneLoadOptions{.colour_texels = !req.images_dir.empty()});
+  in.scene = load_trace_scene(in.trace(), req.trace_path, SceneLoadOptions{.colour_texels = needs_colours(req, true)});
   for (const Trace& frame : in.frames) check_scene_references(frame, *in.scene, req.trace_path);
   return in;
 }
@@ -465,7 +471,9 @@ void add_sequence_frame(FrameResult& sum, FrameResult&& next) {
 /// Colours are computed for the last frame only, the one whose images are written.
 FrameResult simulate_frames(const RunRequest& req, const RunInputs& in, WorkFeed* feed) {
   const int n = static_cast<int>(in.frames.size());
-  FrameOptions options{.colour = !req.images_dir.empty(), .threads = req.threads, .feed = feed};
+  FrameOptions options{.colour = needs_colours(req, true), .threads = req.threads, .feed = feed};
+  TileSignatures signatures;  // writeback.transaction_elimination: from one frame to the next
+  if (req.config.hw.writeback.transaction_elimination != 0) options.tile_signatures = &signatures;
   if (n == 1) return simulate_frame(in.trace(), req.trace_path, *in.scene, req.config.hw, options);
   if (feed == nullptr) throw std::logic_error("simulate_frames: a sequence needs a feed");
   options.sequence_frames = n;
@@ -473,7 +481,7 @@ FrameResult simulate_frames(const RunRequest& req, const RunInputs& in, WorkFeed
   FrameResult sum;
   for (int k = 0; k < n; ++k) {
     options.sequence_frame = k;
-    options.colour = !req.images_dir.empty() && k == n - 1;
+    options.colour = needs_colours(req, k == n - 1);
     FrameResult frame = simulate_frame(in.frames[static_cast<std::size_t>(k)], req.trace_path, *in.scene, req.config.hw, options);
     if (k == 0) {
       sum = std::move(frame);
