@@ -59,6 +59,9 @@ struct TileWork {
   std::uint64_t samples = 0;              ///< samples rasterised and depth tested
   std::uint64_t invocations = 0;          ///< fragment shader invocations
   std::uint64_t quads = 0;
+  /// Of `quads`, those of batches with nothing to run (TspStats::idle_quads): their tasks retire as
+  /// soon as they are issued and hold no task slot while the tile's other tasks work.
+  std::uint64_t idle_quads = 0;
   std::uint64_t alu_ops = 0;              ///< fragment ALU ops (helpers included)
   std::uint64_t texels = 0;              ///< bilinear-filtered texels (texture.texels_per_clock's unit)
   /// Part of alu_ops / texels the ISP waited for before it could go on (punch-through depth

@@ -336,6 +336,7 @@ PassRenderer::TileResult PassRenderer::render_tile(TileWorker& w, int t, const P
   tw.samples = tile_isp.samples_rasterised.value();
   tw.invocations = tile_tsp.shader_invocations.value();
   tw.quads = tile_tsp.shaded_quads.value();
+  tw.idle_quads = tile_tsp.idle_quads.value();
   tw.alu_ops = tile_tsp.fragment_alu_ops.value();
   tw.texels = tile_tsp.texels_filtered.value();
   tw.isp_wait_alu_ops = tile_isp.resolve_wait_alu_ops.value();

@@ -658,10 +658,15 @@ class TimingSim final : public Unit {
     finish();
   }
 
-  /// Tasks of a tile's fragment shading: its shaded quads' lanes in tasks of usc.threads_per_task.
+  /// Quads of a tile whose tasks have work to run: a task of a shader with nothing to run (a
+  /// depth-only shader: no ALU op, fetch or output) retires as soon as it is issued, so it holds no
+  /// slot while the tile's other tasks compute and wait for memory.
+  static std::uint64_t working_quads(const TileWork& t) { return t.quads - std::min(t.idle_quads, t.quads); }
+  /// Tasks of a tile's fragment shading that stay resident: its working quads' lanes in tasks of
+  /// usc.threads_per_task.
   std::uint64_t tasks_of(const TileWork& t) const {
     const auto threads = static_cast<std::uint64_t>(hw_.usc.threads_per_task);
-    return (t.quads * kLanesPerQuad + threads - 1) / threads;
+    return (working_quads(t) * kLanesPerQuad + threads - 1) / threads;
   }
 
   void request_slots(std::size_t i) {
@@ -784,8 +789,10 @@ class TimingSim final : public Unit {
     // and waits for them: the lines in flight are the resident tasks' lines, a task's share of the
     // tile's per-quad line accesses (quads of one task share lines, so this is an upper bound).
     const auto quads_per_task = static_cast<std::uint64_t>(hw_.usc.threads_per_task) / kLanesPerQuad;
+    // (Over the working quads: a quad with nothing to run fetches nothing.)
+    const std::uint64_t quads = working_quads(t);
     const std::uint64_t lines_per_task =
-        t.quads == 0 ? 1 : std::max<std::uint64_t>(1, (t.texture_line_accesses * std::max<std::uint64_t>(1, quads_per_task) + t.quads - 1) / t.quads);
+        quads == 0 ? 1 : std::max<std::uint64_t>(1, (t.texture_line_accesses * std::max<std::uint64_t>(1, quads_per_task) + quads - 1) / quads);
     const auto outstanding = static_cast<std::uint32_t>(std::clamp<std::uint64_t>(
         std::max<std::uint64_t>(1, tiles_[i].slots) * lines_per_task, 1, static_cast<std::uint64_t>(hw_.texture.outstanding_requests)));
     DmaStream* s = new_stream(Client::Texture, false, DramClass::Textures, outstanding);

@@ -699,12 +699,19 @@ void Tsp::shade(std::uint32_t prim_index, std::span<const ShadePixel> pixels, st
   if (pixels.empty()) return;
   refresh_pass_formats();
   const Batch b(ctx_, prim_index, pixels, texture_lines_out_ != nullptr, pls_accum_format_);
+  // The batch's work, to tell a batch with nothing to run (idle_quads) afterwards.
+  const auto work = [&stats] {
+    return stats.fragment_alu_ops.value() + stats.texels_filtered.value() + stats.pls_bytes_accessed.value() +
+           stats.tile_buffer_read_bytes.value() + stats.tile_buffer_write_bytes.value();
+  };
+  const std::uint64_t work_before = work();
   const std::uint64_t quads = launch_quads(b, stats);
   if (alive) alive->assign(pixels.size(), 0);
   if (b.texture_footprint) texture_addresses(b.p, b.sh.tex_fetches, static_cast<std::size_t>(quads), stats);
   near_.bin = nullptr;  // gathered for another batch
   const std::uint64_t light_sum = b.counts_only ? shade_counted_fragments(b, alive, stats) : shade_fragments(b, alive, stats);
   charge_batch(b, quads * 4 - pixels.size(), light_sum, stats);
+  if (work() == work_before && b.d.per_pixel_reads.empty()) stats.idle_quads += quads;
 }
 
 // Quad launch on the USCs: 2x2 pixel blocks aligned to even coordinates, every lane of a launched

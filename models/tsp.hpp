@@ -29,6 +29,7 @@ namespace tbdr {
   X(Counter, shader_invocations, "fragments", Sum, "Fragment shader invocations on covered pixels (helpers excluded)") \
   X(Counter, shaded_quads, "quads", Sum, "2x2 quads launched") \
   X(Counter, helper_lanes, "lanes", Sum, "Lanes of launched quads with no covered pixel (helpers)") \
+  X(Counter, idle_quads, "quads", Sum, "Launched quads of batches with nothing to run (no ALU op, texel, tile-buffer or PLS byte, image read: a depth-only shader); part of shaded_quads") \
   X(Counter, lit_surface_invocations, "fragments", Sum, "Invocations on scene geometry whose shader evaluates lights (not proxies)") \
   X(Counter, shaded_samples, "samples", Sum, "Samples whose color a shader wrote") \
   X(Counter, fragment_alu_ops, "ops", Sum, "Fragment shader ALU ops, helper lanes included") \

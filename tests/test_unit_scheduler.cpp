@@ -114,6 +114,24 @@ TEST(UnitScheduler, FullTaskSlotsStallTheIsp) {
   EXPECT_NEAR(two.unit(TimedUnit::Isp).stalled_cycles, 800.0, kTickRounding);
 }
 
+TEST(UnitScheduler, QuadsWithNothingToRunHoldNoTaskSlots) {
+  // The three tiles above with 1792 quads each, of which 896 idle (a depth-only shader's:
+  // TileWork::idle_quads): their tasks retire at once, so a tile holds 896 x 4 / 32 = 112 of the
+  // 224 slots. Tiles 0 and 1 are resident together; tile 2, resolved at 300, waits for tile 0 to
+  // leave at 1100: 800 stalled instead of 1800 (every quad working: 224 slots a tile). The frame
+  // is the USCs' 100 + 3 x 1000 = 3100 either way.
+  std::vector<TileWork> tiles = {tile_work(0, 0, 1, 3200, 128000), tile_work(1, 0, 1, 3200, 128000),
+                                 tile_work(0, 1, 1, 3200, 128000)};
+  for (auto& t : tiles) t.quads = 1792;
+  const TimingResult working = run_schedule(one_render(tiles));
+  EXPECT_NEAR(working.unit(TimedUnit::Isp).stalled_cycles, 1800.0, kTickRounding);
+  for (auto& t : tiles) t.idle_quads = 896;
+  const TimingResult half_idle = run_schedule(one_render(tiles));
+  EXPECT_NEAR(half_idle.unit(TimedUnit::Isp).stalled_cycles, 800.0, kTickRounding);
+  EXPECT_EQ(half_idle.frame_cycles, 3100.0);
+  EXPECT_EQ(working.frame_cycles, 3100.0);
+}
+
 TEST(UnitScheduler, VertexShadingCompetesWithFragmentShadingForTheUscs) {
   // Pass a: one 1000-cycle ALU tile. Pass b bins 1000 primitives (1000 cycles on the binning
   // engine) whose vertex shaders need 128000 ops = 1000 USC cycles. b's binning starts at 0

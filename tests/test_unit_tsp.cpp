@@ -58,6 +58,28 @@ TEST(UnitTsp, OnePixelLaunchesAQuadWithThreeHelperLanes) {
   EXPECT_EQ(rig.tsp_stats.tile_buffer_write_bytes.value(), 4u);
 }
 
+TEST(UnitTsp, QuadsOfABatchWithNothingToRunAreIdle) {
+  // One quad (2x2 at (4,4)) per draw. A depth-only shader (0 ALU ops, no fetch, no colour output,
+  // no PLS) has nothing to run: its quad is idle (a task that retires at once, the timing model's
+  // task slots). 1 ALU op (4 on the quad's lanes), one colour output (4 samples x 4 B of tile
+  // buffer) or one fetch (4 texels) is work: those quads are not idle. 4 quads, 1 idle.
+  RenderRig rig;
+  const std::uint32_t depth_only = rig.add_draw(make_shader(0, 0, LightSource::None, 0, 0));
+  const std::uint32_t alu = rig.add_draw(make_shader(1, 0, LightSource::None, 0, 0));
+  const std::uint32_t output = rig.add_draw(make_shader(0, 0, LightSource::None, 1, 0));
+  const std::uint32_t fetch = rig.add_draw(make_shader(0, 0, LightSource::None, 0, 1));
+  for (const std::uint32_t d : {depth_only, alu, output, fetch}) {
+    ScreenTri t = kUpperLeft;
+    t.draw = d;
+    rig.shade(rig.add_triangle(t), block(4, 4, 5, 5));
+  }
+  EXPECT_EQ(rig.tsp_stats.shaded_quads.value(), 4u);
+  EXPECT_EQ(rig.tsp_stats.idle_quads.value(), 1u);
+  EXPECT_EQ(rig.tsp_stats.fragment_alu_ops.value(), 4u);
+  EXPECT_EQ(rig.tsp_stats.tile_buffer_write_bytes.value(), 16u);
+  EXPECT_EQ(rig.tsp_stats.texels_filtered.value(), 4u);
+}
+
 TEST(UnitTsp, QuadsAreAlignedToEvenPixels) {
   // 2x2 pixels at (4,4): one quad, no helper. The same 2x2 at (5,5) straddles 4 quads: 16 lanes,
   // 12 helpers. 3x3 at (1,1)..(3,3): quads x 0..1, y 0..1 = 4 quads, 16 - 9 = 7 helpers.
