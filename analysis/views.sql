@@ -70,7 +70,7 @@ WITH f AS (
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'hidden_lit_samples') AS hidden_lit_samples,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/tsp' AND name = 'hidden_light_evaluations') AS hidden_light_evaluations,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'covered_pixels') AS covered_pixels,
-    -- A sequence's frames (docs/sequences.md: its frame/ figures are their sums); 1 for one frame.
+    -- The frames of a sequence (docs/sequences.md: its frame/ figures are their sums); 1 for one frame.
     coalesce((SELECT value FROM stats WHERE run_id = r.id AND scope = 'sequence/summary' AND name = 'frames'), 1) AS frames,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/compute' AND name = 'compute_light_evaluations') AS compute_light_evaluations,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/isp' AND name = 'samples_rasterised') AS samples_rasterised,

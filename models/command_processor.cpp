@@ -124,6 +124,7 @@ class FrameSimulator {
     textures_ = std::make_unique<TextureLayout>(&scene_, hw_, slots);
     result_.work.texture_bytes = textures_->total_bytes();
     result_.work.immediate = hw_.gpu.mode == GpuMode::Imr;
+    result_.work.frames = options_.sequence_frames;
     if (result_.work.immediate) {
       rop_ = std::make_unique<RenderOutputUnit>(hw_, f.width, f.height);
       // Every image gets its place before the first pass runs: the framebuffer's size is known

@@ -150,6 +150,7 @@ struct FrameWork {
   int tiles_x = 0;
   std::uint64_t texture_bytes = 0;  ///< size of the texture address space TileWork::texture_lines index
   bool immediate = false;           ///< gpu.mode=imr: tiles are primitive batches over the whole frame
+  int frames = 1;                   ///< frames of the sequence the commands belong to (CommandWork::frame)
   std::uint64_t framebuffer_bytes = 0;  ///< size of the address space FramebufferAccess::offset indexes
   std::vector<CommandWork> commands;
 };

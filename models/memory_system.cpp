@@ -572,12 +572,17 @@ double MemorySystem::energy_pj() const {
   return texture_->energy_pj() + vertex_->energy_pj() + slc_->energy_pj() + dram_.energy_pj();
 }
 
-MemorySnapshot MemorySystem::snapshot() {
+MemorySystemStats MemorySystem::energy_stats() {
   dram_.update_derived_stats();  // first: the refreshes an idle channel did up to now count in its energy
   const double caches = texture_->energy_pj() + vertex_->energy_pj() + slc_->energy_pj();
   stats_.cache_energy_pj.set(caches);
   stats_.dram_energy_pj.set(dram_.energy_pj());
   stats_.energy_pj.set(energy_pj());
+  return stats_;
+}
+
+MemorySnapshot MemorySystem::snapshot() {
+  energy_stats();
   for (MemoryClientStats& cs : client_stats_) {
     const std::uint64_t n = cs.completed.value();
     cs.avg_latency_ns.set(n == 0 ? 0.0 : static_cast<double>(cs.latency_total_ps.value()) * 1e-3 / static_cast<double>(n));

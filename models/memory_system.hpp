@@ -172,6 +172,9 @@ class MemorySystem final : public Unit {
   const MemorySystemStats& stats() const { return stats_; }
   /// Every statistic of the memory system now, derived ones updated first.
   MemorySnapshot snapshot();
+  /// Its own statistics now, the caches' and DRAM's energies up to now included (a sequence's
+  /// frame ends: the energy of a frame is the difference from the frame before).
+  MemorySystemStats energy_stats();
 
   // Unit (run-loop watchdog)
   std::string_view name() const override { return name_; }

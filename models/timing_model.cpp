@@ -154,6 +154,7 @@ class TimingSim final : public Unit {
     result_.requested = mem_.requested();
     result_.memory_units = mem_.snapshot();
     result_.memory = mem_.stats();
+    if (result_.frames.size() > 1) result_.frames.back().memory_at_end = result_.memory;  // at the run's end, as its bytes
     result_.events = eq_.events_executed();
     for (const CommandWork* c : commands_) {
       const CommandWork& cmd = *c;
@@ -305,7 +306,7 @@ class TimingSim final : public Unit {
       throw std::logic_error("timing model: command " + cmd.name + " of frame " + std::to_string(cmd.frame) +
                              " follows frame " + std::to_string(result_.frames.size() - 1));
     }
-    result_.frames.push_back({-1.0, 0.0, 0});
+    result_.frames.push_back({-1.0, 0.0, 0, {}});
     frame_first_frag_.push_back(frag_jobs_.size());
     frame_wake_.push_back(false);
   }
@@ -490,6 +491,7 @@ class TimingSim final : public Unit {
     frame.end_cycle = cycles_of(eq_.now());
     const DramTraffic moved = mem_.traffic();
     frame.dram_bytes_at_end = moved.total_read() + moved.total_written();
+    if (work_.frames > 1) frame.memory_at_end = mem_.energy_stats();
     try_start_binning();
     try_start_fragment();
   }

@@ -91,6 +91,9 @@ struct FrameTime {
   /// frame: at the end of the run, its queued writes drained): a frame's bytes are the difference
   /// from the frame before (what DRAM moved between their ends).
   std::uint64_t dram_bytes_at_end = 0;
+  /// The memory system's statistics when it finished (as dram_bytes_at_end; a sequence of more
+  /// than one frame only): the caches' and DRAM's energy of a frame is the difference.
+  MemorySystemStats memory_at_end;
 };
 
 /// What the timing model measured.

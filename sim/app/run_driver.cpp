@@ -230,6 +230,20 @@ void book_timing(const HwConfig& hw, const FrameResult& frame, const TimingResul
                           std::max<int>(1, static_cast<int>(timing.frames.size())));
 }
 
+std::vector<EnergyBreakdown> sequence_frame_energy(const HwConfig& hw, const std::vector<FrameStats>& frames,
+                                                   const TimingResult& timing) {
+  std::vector<EnergyBreakdown> out;
+  if (timing.frames.size() < 2 || frames.size() != timing.frames.size() || timing.frame_cycles <= 0) return out;
+  const double ps_per_cycle = timing.frame_time_ps / timing.frame_cycles;
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const FrameTime& f = timing.frames[k];
+    const MemorySystemStats memory = k > 0 ? f.memory_at_end - timing.frames[k - 1].memory_at_end : f.memory_at_end;
+    const double interval_ps = (f.end_cycle - (k > 0 ? timing.frames[k - 1].end_cycle : 0.0)) * ps_per_cycle;
+    out.push_back(compute_energy(hw, frames[k], memory, interval_ps, 1));
+  }
+  return out;
+}
+
 void time_frame(const HwConfig& hw, const FrameResult& frame, TimingResult& timing, EnergyBreakdown& energy) {
   timing = run_timing(hw, frame.work);
   book_timing(hw, frame, timing, energy);
@@ -469,7 +483,7 @@ void add_sequence_frame(FrameResult& sum, FrameResult&& next) {
 /// frame into `feed` (which it needs), one feed for all (the first frame begins it, the last
 /// closes it; each command carries its frame), their results added up (add_sequence_frame).
 /// Colours are computed for the last frame only, the one whose images are written.
-FrameResult simulate_frames(const RunRequest& req, const RunInputs& in, WorkFeed* feed) {
+FrameResult simulate_frames(const RunRequest& req, const RunInputs& in, WorkFeed* feed, std::vector<FrameStats>& frame_totals) {
   const int n = static_cast<int>(in.frames.size());
   FrameOptions options{.colour = needs_colours(req, true), .threads = req.threads, .feed = feed};
   TileSignatures signatures;  // writeback.transaction_elimination: from one frame to the next
@@ -483,6 +497,7 @@ FrameResult simulate_frames(const RunRequest& req, const RunInputs& in, WorkFeed
     options.sequence_frame = k;
     options.colour = needs_colours(req, k == n - 1);
     FrameResult frame = simulate_frame(in.frames[static_cast<std::size_t>(k)], req.trace_path, *in.scene, req.config.hw, options);
+    frame_totals.push_back(frame.totals);
     if (k == 0) {
       sum = std::move(frame);
     } else {
@@ -499,7 +514,7 @@ void simulate_serially(const RunRequest& req, const RunInputs& in, RunOutcome& o
   const double c_sim = cpu_seconds();
   WorkFeed feed;
   const bool sequence = in.frames.size() > 1;
-  o.frame = simulate_frames(req, in, sequence ? &feed : nullptr);
+  o.frame = simulate_frames(req, in, sequence ? &feed : nullptr, o.frame_totals);
   if (sequence) o.frame.work = feed.take();
   o.wall_seconds = seconds_since(t_sim);
   o.cpu_seconds = cpu_seconds() - c_sim;
@@ -533,7 +548,7 @@ void simulate_pipelined(const RunRequest& req, const RunInputs& in, RunOutcome& 
     return r;
   });
   try {
-    o.frame = simulate_frames(req, in, &feed);
+    o.frame = simulate_frames(req, in, &feed, o.frame_totals);
   } catch (...) {
     placement.restore();
     // The feed is closed (simulate_frame closes it; again here, whatever failed): the timing
@@ -639,7 +654,8 @@ RunOutcome run_one(const RunRequest& req) {
   }
   outcome.frame.work.commands = {};  // (freed here at one thread; moved from, at more)
   book_timing(req.config.hw, outcome.frame, outcome.timing, outcome.energy);
-  outcome.stats = run_rows(outcome.frame, outcome.timing, outcome.energy);
+  outcome.frame_energy = sequence_frame_energy(req.config.hw, outcome.frame_totals, outcome.timing);
+  outcome.stats = run_rows(outcome.frame, outcome.timing, outcome.energy, outcome.frame_energy);
   outcome.technique = in.trace().technique.empty() ? "custom" : in.trace().technique;
   outcome.scene = in.scene->source;
   if (!req.images_dir.empty()) {
@@ -675,11 +691,11 @@ void print_run_summary(const RunOutcome& o, std::ostream& out) {
       << " ms, energy " << stat_text(o.energy.total_pj * 1e-9)
       << " mJ (timing model " << stat_text(o.timing_seconds) << " s)\n";
   if (o.timing.frames.size() > 1) {
-    const SequenceSummaryStats seq = summarize_sequence(o.timing, o.energy.total_pj);
+    const SequenceSummaryStats seq = summarize_sequence(o.timing, o.energy.total_pj, o.frame_energy);
     out << "  sequence: " << o.timing.frames.size() << " frames (the figures above and below are their sums), steady "
         << stat_text(seq.steady_interval_ms.value()) << " ms per frame (p95 " << stat_text(seq.p95_interval_ms.value())
         << ", " << stat_text(seq.steady_fps.value()) << " fps), DRAM " << stat_text(seq.steady_dram_mb_per_frame.value())
-        << " MB per steady frame, energy " << stat_text(seq.energy_per_frame_mj.value()) << " mJ per frame\n";
+        << " MB per steady frame, energy " << stat_text(seq.steady_energy_per_frame_mj.value()) << " mJ per steady frame\n";
   }
   // DRAM per class: what reached the devices (the timing model's memory system, after the caches),
   // beside what the units requested (the functional count at the chip boundary).

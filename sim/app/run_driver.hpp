@@ -46,6 +46,10 @@ struct RunOutcome {
   FrameResult frame;              ///< its work without commands: those are released once timed
   TimingResult timing;
   EnergyBreakdown energy;
+  /// A sequence (more than one frame): each frame's unit statistics (`frame` holds their sums) and
+  /// its energy (sequence_frame_energy); empty for a single frame.
+  std::vector<FrameStats> frame_totals;
+  std::vector<EnergyBreakdown> frame_energy;
   std::vector<StatRecord> stats;  ///< every row of the run but the host's (run_rows)
   std::vector<std::string> images_written;
   DerivedFigures derived;        ///< read back from the database (views.sql defines them) when RunRequest::summary_figures
@@ -80,5 +84,10 @@ void time_frame(const HwConfig& hw, const FrameResult& frame, TimingResult& timi
 /// time_frame's second half: the energy of `frame` timed as `timing` (the timing model's result on
 /// it, e.g. run beside the functional run on a WorkFeed).
 void book_timing(const HwConfig& hw, const FrameResult& frame, const TimingResult& timing, EnergyBreakdown& energy);
+/// Each frame's energy of a sequence: its unit statistics (`frames`, in order), the memory
+/// system's energy between the end of the frame before and its end, and leakage over that
+/// interval (TimingResult::frames); they add up to the sequence's. Empty for a single frame.
+std::vector<EnergyBreakdown> sequence_frame_energy(const HwConfig& hw, const std::vector<FrameStats>& frames,
+                                                   const TimingResult& timing);
 
 }  // namespace tbdr

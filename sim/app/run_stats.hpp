@@ -83,7 +83,11 @@ struct TextureFetchStats {
   X(Accumulator, interval_ms, "ms", Gauge, "interval_cycles in milliseconds")                                 \
   X(Accumulator, latency_cycles, "cycles", Gauge, "From its start to its end (overlaps the frame before with gpu.frames_in_flight = 2)") \
   X(Counter, dram_interval_bytes, "bytes", Gauge,                                                             \
-    "Bytes DRAM transferred between the end of the frame before and its end (what reached the devices)")
+    "Bytes DRAM transferred between the end of the frame before and its end (what reached the devices)")      \
+  X(Accumulator, energy_mj, "mJ", Gauge,                                                                      \
+    "Its energy: its units' work, the caches' and DRAM's energy in its interval, leakage over its interval")  \
+  X(Accumulator, at_period_energy_mj, "mJ", Gauge,                                                            \
+    "energy_mj plus the idle power over gpu.frame_period_us - its interval (= energy_mj without a period)")
 
 /// One frame of a sequence as the timing model ran it (TimingResult::frames).
 struct SequenceFrameStats {
@@ -104,7 +108,9 @@ struct SequenceFrameStats {
   X(Accumulator, max_interval_ms, "ms", Gauge, "Longest interval_ms of the steady frames")            \
   X(Accumulator, steady_fps, "frames/s", Gauge, "1000 / steady_interval_ms")                                      \
   X(Accumulator, steady_dram_mb_per_frame, "MB", Gauge, "Mean dram_interval_bytes of the steady frames, in MB") \
-  X(Accumulator, energy_per_frame_mj, "mJ", Gauge, "The sequence's energy (frame/energy total) / frames")
+  X(Accumulator, energy_per_frame_mj, "mJ", Gauge, "The sequence's energy (frame/energy total) / frames")       \
+  X(Accumulator, steady_energy_per_frame_mj, "mJ", Gauge, "Mean energy_mj of the steady frames")                   \
+  X(Accumulator, steady_at_period_energy_per_frame_mj, "mJ", Gauge, "Mean at_period_energy_mj of the steady frames")
 
 /// Frame rate and per-frame figures of a sequence, from its frames' SequenceFrameStats.
 struct SequenceSummaryStats {
