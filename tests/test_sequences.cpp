@@ -20,6 +20,7 @@
 #include "techniques/technique.hpp"
 #include "trace/trace.hpp"
 #include "atrium_trace_setup.hpp"
+#include "cli_run.hpp"
 #include "file_text.hpp"
 #include "scratch_dir.hpp"
 #include "stat_lookup.hpp"
@@ -379,6 +380,37 @@ TEST_P(SequenceEveryTechnique, ReplaysFrameAfterFrame) {
 
 INSTANTIATE_TEST_SUITE_P(Techniques, SequenceEveryTechnique, ::testing::ValuesIn(technique_names()),
                          [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
+
+TEST(SequenceStudy, PrintsTheColdFrameBesideTheSteadyState) {
+  const auto dir = testing_scratch::scratch_dir("sequences", "study");
+  const auto r = testing_support::run_cli({"study", "--technique", "forward_plus", "--technique", "plain_forward", "--lights", "16",
+                                           "--resolution", "96x54", "--scene", "atrium:1", "--frames", "4", "--images", "none",
+                                           "--jobs", "1", "--out", (dir / "s").string()});
+  ASSERT_EQ(r.code, 0) << r.err << r.out;
+  const auto at = r.out.find("\nSequences (4 frames, camera orbit, lights orbiting");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  // Its rows: technique, lights, cold ms, steady ms, p95 ms, fps, DRAM MB/f, mJ/f, cold mJ.
+  for (const std::string t : {"forward_plus", "plain_forward"}) {
+    const auto row = r.out.find("\n" + t + " ", at);
+    ASSERT_NE(row, std::string::npos) << t;
+    std::istringstream line(r.out.substr(row + 1, r.out.find('\n', row + 1) - row - 1));
+    std::string name;
+    double lights = 0, cold = 0, steady = 0, p95 = 0, fps = 0, mb = 0, mj = 0, cold_mj = 0;
+    line >> name >> lights >> cold >> steady >> p95 >> fps >> mb >> mj >> cold_mj;
+    EXPECT_EQ(lights, 16);
+    EXPECT_GT(cold, 0);
+    EXPECT_GT(steady, 0);
+    EXPECT_GE(p95, steady * 0.999);
+    EXPECT_NEAR(fps, 1000.0 / steady, 0.01 * fps);  // (both printed rounded)
+    EXPECT_GT(mb, 0);
+    EXPECT_GT(mj, 0);
+    EXPECT_GT(cold_mj, 0);
+  }
+  // The method table counts geometry passes per frame: forward_plus's depth pre-pass and forward pass.
+  const auto method = r.out.find("\nforward_plus ", r.out.find("Method table"));
+  ASSERT_NE(method, std::string::npos);
+  EXPECT_NE(r.out.substr(method, 120).find("  2  "), std::string::npos) << r.out.substr(method, 120);
+}
 
 TEST(SequenceAddresses, ALaterFrameUsesTheRegionsTheFrameBeforeAllocated) {
   AddressSpace space;

@@ -32,6 +32,7 @@
 #include "app/commands.hpp"
 #include "app/image_output.hpp"
 #include "app/run_driver.hpp"
+#include "app/run_stats.hpp"
 #include "app/worker_pool.hpp"
 #include "kernel/errors.hpp"
 #include "models/hardware_checks.hpp"
@@ -66,6 +67,10 @@ struct StudyPlan {
   std::string config_label;  ///< the configuration's label (preset and what is set on top of it)
   /// Technique options given with --option TECHNIQUE:KEY=VALUE: technique -> "KEY=VALUE" list.
   std::map<std::string, std::vector<std::string>> options;
+  /// Frames of each trace (--frames; 1: one cold frame), the camera moving along camera_path and
+  /// the lights orbiting (docs/sequences.md).
+  int frames = 1;
+  std::string camera_path = "orbit";
 };
 
 /// One point of the study: a technique at a light count, on one of the configurations (modes).
@@ -218,6 +223,12 @@ StudyPlan plan_from_options(const po::variables_map& vm) {
       plan.options[technique].push_back(o.substr(colon + 1));
     }
   }
+  plan.frames = vm["frames"].as<int>();
+  if (plan.frames < 1 || plan.frames > kMaxSequenceFrames) {
+    throw InputError("--frames " + std::to_string(plan.frames), "expected 1.." + std::to_string(kMaxSequenceFrames) + " frames");
+  }
+  plan.camera_path = vm["camera-path"].as<std::string>();
+  parse_camera_path(plan.camera_path);  // InputError naming the valid paths
   plan.max_lights = *std::max_element(plan.light_counts.begin(), plan.light_counts.end());
   plan.db_path = (fs::path(plan.dir) / "study.db").string();
   return plan;
@@ -235,7 +246,11 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
   std::vector<StudyPoint> points;
   std::vector<StudyPoint> traces;                  // one point per trace, in the study's order
   std::vector<std::vector<std::string>> generate;  // its `tbdrsim trace` arguments
-  const std::vector<std::string> trace_args = {"--scene", plan.scene, "--resolution", plan.resolution};
+  std::vector<std::string> trace_args = {"--scene", plan.scene, "--resolution", plan.resolution};
+  if (plan.frames > 1) {
+    trace_args.insert(trace_args.end(), {"--frames", std::to_string(plan.frames), "--camera-path", plan.camera_path,
+                                         "--light-motion", "orbit"});
+  }
   for (int n : plan.light_counts) {
     for (const auto& t : plan.techniques) {
       StudyPoint p;
@@ -244,6 +259,7 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
       // The trace's name carries its options, so that studies with other options into the same
       // folder keep each trace (and the runs that name it) apart.
       std::string stem = t + "_" + std::to_string(n);
+      if (plan.frames > 1) stem += "_" + plan.camera_path + std::to_string(plan.frames);  // a sequence's trace apart
       const auto given = plan.options.find(t);
       if (given != plan.options.end()) {
         for (const auto& kv : given->second) {
@@ -294,10 +310,13 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
     throw InputError("study", failed);
   }
   for (StudyPoint& p : traces) {
-    const Trace trace = read_trace(p.trace_path);
-    for (const TraceCommand& c : trace.commands) {
-      if (const auto* pass = std::get_if<PassDesc>(&c)) {
-        for (const DrawCmd& d : pass->draws) p.scene_draws += d.geometry == GeometryKind::Scene ? 1 : 0;
+    const std::vector<Trace> frames = read_trace_frames(p.trace_path);
+    const Trace& trace = frames.front();
+    for (const Trace& frame : frames) {
+      for (const TraceCommand& c : frame.commands) {
+        if (const auto* pass = std::get_if<PassDesc>(&c)) {
+          for (const DrawCmd& d : pass->draws) p.scene_draws += d.geometry == GeometryKind::Scene ? 1 : 0;
+        }
       }
     }
     for (std::size_t c = 0; c < plan.configs.size(); ++c) {
@@ -444,6 +463,36 @@ class StudyResults {
 };
 
 std::string fig(const std::optional<double>& v, int decimals) { return v ? fmt(*v, decimals) : std::string("-"); }
+
+/// With --frames above 1: each point's cold first frame beside its steady state (sequence/frame0,
+/// sequence/summary), in the comparison table's order of points.
+void print_sequence_table(const StudyPlan& plan, const std::vector<StudyPoint>& points, StudyResults& results,
+                          std::ostream& out) {
+  if (plan.frames <= 1) return;
+  const bool modes = plan.configs.size() > 1;
+  out << "\nSequences (" << plan.frames << " frames, camera " << plan.camera_path << ", lights orbiting, "
+      << plan.config_label << "): the comparison above sums the frames; here the cold first frame beside the steady "
+      << "frames (after the first, before the last; docs/sequences.md)\n";
+  out << std::left << std::setw(30) << "technique" << std::right << std::setw(7) << "lights";
+  if (modes) out << std::setw(6) << "mode";
+  out << std::setw(11) << "cold ms" << std::setw(11) << "steady ms" << std::setw(9) << "p95 ms" << std::setw(9) << "fps"
+      << std::setw(12) << "DRAM MB/f" << std::setw(10) << "mJ/f" << std::setw(11) << "cold mJ" << "\n";
+  const std::string summary = SequenceSummaryStats::kScope;
+  const std::string first = SequenceFrameStats::kScopePrefix + std::string("0");
+  for (const StudyPoint& p : points) {
+    const std::optional<std::int64_t> run = results.run_of(p);
+    if (!run) continue;
+    out << std::left << std::setw(30) << p.technique << std::right << std::setw(7) << p.lights;
+    if (modes) out << std::setw(6) << p.mode;
+    out << std::setw(11) << fmt(results.stat(*run, first, &SequenceFrameStats::interval_ms), 3)
+        << std::setw(11) << fmt(results.stat(*run, summary, &SequenceSummaryStats::steady_interval_ms), 3)
+        << std::setw(9) << fmt(results.stat(*run, summary, &SequenceSummaryStats::p95_interval_ms), 3)
+        << std::setw(9) << fmt(results.stat(*run, summary, &SequenceSummaryStats::steady_fps), 1)
+        << std::setw(12) << fmt(results.stat(*run, summary, &SequenceSummaryStats::steady_dram_mb_per_frame), 2)
+        << std::setw(10) << fmt(results.stat(*run, summary, &SequenceSummaryStats::steady_energy_per_frame_mj), 3)
+        << std::setw(11) << fmt(results.stat(*run, first, &SequenceFrameStats::energy_mj), 3) << "\n";
+  }
+}
 
 /// The comparison table: the latest run of each point.
 void print_comparison(const StudyPlan& plan, const std::vector<StudyPoint>& points, StudyResults& results,
@@ -644,7 +693,8 @@ void print_method_table(const StudyPlan& plan, const std::vector<StudyPoint>& po
       blending = differing_pixels(*reference_color, (fs::path(p.images_dir) / "color.png").string()) <= 0.001 ? "yes" : "no";
     }
     out << std::left << std::setw(30) << p.technique << std::setw(56) << offchip << std::right << std::setw(9)
-        << fmt(results.stat(*run, FrameShapeStats::kScope, &FrameShapeStats::geometry_passes), 0) << std::setw(14)
+        << fmt(results.stat(*run, FrameShapeStats::kScope, &FrameShapeStats::geometry_passes) / plan.frames, 0)  // per frame
+        << std::setw(14)
         << (fig(overshading, 2) + (overshading && *overshading > kOvershadingYes ? " yes" : " no")) << std::setw(6)
         << (msaa ? "yes" : "no") << std::setw(10) << blending << "\n";
   }
@@ -685,7 +735,12 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
       "TECHNIQUE:KEY=VALUE: a technique option for that technique's traces, e.g. forward_light_stack:pls_bytes=32 "
       "(repeatable; `tbdrsim trace --list` lists the options)")(
       "modes", po::value<std::vector<std::string>>()->multitoken(),
-      "GPU modes to compare (gpu.mode values: tbdr tbr imr); each trace replays on each; default: the configuration's");
+      "GPU modes to compare (gpu.mode values: tbdr tbr imr); each trace replays on each; default: the configuration's")(
+      "frames", po::value<int>()->default_value(1),
+      "frames per trace: 1 = one cold frame; more = a sequence (camera along --camera-path, lights orbiting), and a "
+      "table of the steady frame time, frame rate, DRAM and energy per frame beside the cold first frame "
+      "(docs/sequences.md)")(
+      "camera-path", po::value<std::string>()->default_value("orbit"), "the sequences' camera path: static, orbit, flythrough");
   add_threads_option(desc, "the cores this process may use divided between the --jobs workers, at least 1, so "
                            "that jobs x threads <= cores");
   po::variables_map vm;
@@ -757,6 +812,7 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
     const ResultsDb db(plan.db_path);
     StudyResults results(db, plan);
     print_comparison(plan, points, results, out);
+    print_sequence_table(plan, points, results, out);
     print_mode_table(plan, points, results, db, out);
     print_method_table(plan, points, results, out);
   }
