@@ -54,8 +54,10 @@ std::size_t count(const std::string& text, const std::string& what) {
   return n;
 }
 
-/// Replays `frames` (written to a scratch trace) with the default hardware and `sets`.
-RunOutcome replay(const std::vector<Trace>& frames, const std::vector<std::string>& sets, const std::string& name) {
+/// Replays `frames` (written to a scratch trace) with the default hardware and `sets`; with
+/// `images`, writing the images into the scratch folder's img/.
+RunOutcome replay(const std::vector<Trace>& frames, const std::vector<std::string>& sets, const std::string& name,
+                  bool images = false) {
   const auto dir = testing_scratch::scratch_dir("sequences", name);
   const std::string path = (dir / "t.trace").string();
   std::ofstream(path) << text_of(frames);
@@ -63,6 +65,7 @@ RunOutcome replay(const std::vector<Trace>& frames, const std::vector<std::strin
   req.config = resolve_config({}, sets);
   req.trace_path = path;
   req.db_path = (dir / "r.db").string();
+  if (images) req.images_dir = (dir / "img").string();
   return run_one(req);
 }
 
@@ -307,19 +310,6 @@ TEST(SequenceReplay, TheDisplayPeriodSpacesTheFrames) {
   EXPECT_NEAR(o.energy.idle_ps, 3e9 - o.timing.frame_time_ps, 1e3);
 }
 
-/// Replays with images into `dir`/img (for the image comparisons).
-RunOutcome replay_with_images(const std::vector<Trace>& frames, const std::vector<std::string>& sets, const std::string& name) {
-  const auto dir = testing_scratch::scratch_dir("sequences", name);
-  const std::string path = (dir / "t.trace").string();
-  std::ofstream(path) << text_of(frames);
-  RunRequest req;
-  req.config = resolve_config({}, sets);
-  req.trace_path = path;
-  req.db_path = (dir / "r.db").string();
-  req.images_dir = (dir / "img").string();
-  return run_one(req);
-}
-
 TEST(TransactionElimination, AStaticViewSkipsEveryColourTileStoreFromTheSecondFrame) {
   // forward_plus, 3 frames of a static view at 320x180: its forward pass stores one rgba8 colour
   // attachment, 10 x 6 = 60 tiles of 32x32 (the last row 20 pixels tall), 320 x 180 x 4 = 230,400
@@ -329,8 +319,8 @@ TEST(TransactionElimination, AStaticViewSkipsEveryColourTileStoreFromTheSecondFr
   //   480 + 2 x 960 = 2,400 bytes;
   //   the colour bytes the units request: written 460,800 - 3 x 480 = 459,360 fewer, read 2 x 480 more.
   const std::vector<Trace> frames = sequence("forward_plus", 3, CameraPath::Static, LightMotion::Static, 64);
-  const RunOutcome off = replay_with_images(frames, {"writeback.transaction_elimination=0"}, "te_off");
-  const RunOutcome on = replay_with_images(frames, {"writeback.transaction_elimination=1"}, "te_on");
+  const RunOutcome off = replay(frames, {"writeback.transaction_elimination=0"}, "te_off", true);
+  const RunOutcome on = replay(frames, {"writeback.transaction_elimination=1"}, "te_on", true);
   const TileMemoryStats& tm = on.frame.totals.render.tile_memory;
   EXPECT_EQ(tm.eliminated_tile_stores.value(), 120u);
   EXPECT_EQ(tm.eliminated_store_bytes.value(), 460800u);
