@@ -39,7 +39,7 @@ const Scene& atrium1() {
 std::vector<Trace> sequence(const std::string& technique, int frames, CameraPath camera, LightMotion lights, int n_lights = 256,
                             int w = 320, int h = 180) {
   const TraceSetup setup = testing_support::atrium_entrance_setup(atrium1(), n_lights, w, h);
-  return generate_sequence(technique, setup, SequenceMotion{frames, camera, lights});
+  return generate_sequence(technique, setup, SequenceMotion{frames, camera, lights, {}});
 }
 
 std::string text_of(const std::vector<Trace>& frames) {
@@ -194,6 +194,55 @@ TEST(SequenceMotion, LightsCircleTheirFirstPlaceAtHalfTheirRange) {
     EXPECT_EQ(at15.lights[i].radius, first.lights[i].radius);
   }
   EXPECT_EQ(lights_in_motion(first, LightMotion::Static, 15).lights[3].position, first.lights[3].position);
+}
+
+TEST(SequenceMotion, ACameraPathFileGivesEachFrameItsCamera) {
+  const auto dir = testing_scratch::scratch_dir("sequences", "camera_file");
+  const std::string path = (dir / "walk.txt").string();
+  std::ofstream(path) << "tbdrsim-camera-path 1\n# eye target [fov]\n0 1.6 9  0 1.5 0\n\n1 1.6 8.5  0 1.5 0  50\n";
+  const Camera first = atrium_viewpoint("entrance", atrium1());
+  const std::vector<Camera> cams = read_camera_path_file(path, first);
+  ASSERT_EQ(cams.size(), 2u);
+  EXPECT_EQ(cams[0].eye, glm::vec3(0, 1.6f, 9));
+  EXPECT_EQ(cams[0].fov_y_deg, first.fov_y_deg);  // none given: the viewpoint's
+  EXPECT_EQ(cams[1].fov_y_deg, 50.0f);
+  EXPECT_EQ(cams[1].near_plane, first.near_plane);
+  // Through the command line: two frames, each with its camera; a third is more than the file holds.
+  const auto ok = testing_support::run_cli({"trace", "--technique", "plain_forward", "--scene", "atrium:1", "--lights", "4",
+                                            "--resolution", "64x36", "--frames", "2", "--camera-path", path, "--out",
+                                            (dir / "w.trace").string()});
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  const std::vector<Trace> frames = read_trace_frames((dir / "w.trace").string());
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[1].camera.eye, glm::vec3(1, 1.6f, 8.5f));
+  const auto more = testing_support::run_cli({"trace", "--technique", "plain_forward", "--scene", "atrium:1", "--frames", "3",
+                                              "--camera-path", path, "--out", (dir / "x.trace").string()});
+  EXPECT_EQ(more.code, 2);
+  EXPECT_NE(more.err.find("holds 2 cameras, fewer than the frames asked for"), std::string::npos) << more.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.trace"));
+  // Bad lines are refused at their line.
+  auto error_of = [&](const std::string& text) {
+    std::ofstream(path) << text;
+    try {
+      read_camera_path_file(path, first);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error_of("tbdrsim-camera-path 1\n0 1 2 0 1 2\n").find("walk.txt:2: the eye is on the target"), std::string::npos);
+  EXPECT_NE(error_of("tbdrsim-camera-path 1\n0 1 2 0 1\n").find("walk.txt:2: a camera needs 6 numbers"), std::string::npos);
+  EXPECT_NE(error_of("tbdrsim-camera-path 1\n0 x 2 0 1 0\n").find("walk.txt:2: expected a finite number for eye_y, got 'x'"),
+            std::string::npos);
+  EXPECT_NE(error_of("tbdrsim-camera-path 1\n0 5 0 0 1 0\n").find("along the camera's up vector"), std::string::npos);
+  EXPECT_NE(error_of("tbdrsim-camera-path 1\n0 1 5 0 1 0 200\n").find("fov_y_deg '200' is outside"), std::string::npos);
+  EXPECT_NE(error_of("tbdrsim-camera-path 2\n").find("walk.txt:1: unsupported camera path file version '2'"), std::string::npos);
+  EXPECT_NE(error_of("tbdrsim-camera-path 1\n").find("no camera"), std::string::npos);
+  const auto missing = testing_support::run_cli({"trace", "--frames", "2", "--camera-path", "orbti", "--out", (dir / "y.trace").string()});
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_NE(missing.err.find("--camera-path orbti: neither a camera path (static, orbit, flythrough) nor a camera path file"),
+            std::string::npos)
+      << missing.err;
 }
 
 // ---- replay -----------------------------------------------------------------------------------

@@ -127,7 +127,8 @@ int cmd_trace(const std::vector<std::string>& args, std::ostream& out, std::ostr
       ("frames of a sequence, 1.." + std::to_string(kMaxSequenceFrames) + " (docs/trace-format.md, Sequences)").c_str())(
       "camera-path", po::value<std::string>()->default_value("static"),
       "how the camera moves over the frames: static, orbit (1 degree per frame about the target's vertical axis), "
-      "flythrough (1 % of the eye-target distance per frame along the view)")(
+      "flythrough (1 % of the eye-target distance per frame along the view), or a camera path file (one camera per "
+      "frame: docs/sequences.md)")(
       "light-motion", po::value<std::string>()->default_value("static"),
       "how the lights move over the frames: static, orbit (each circles its place at half its range, 6 degrees per frame)")(
       "list", "list the techniques and their options");
@@ -145,7 +146,14 @@ int cmd_trace(const std::vector<std::string>& args, std::ostream& out, std::ostr
   const TraceSetup setup = trace_setup_from_options(vm, scene);
   SequenceMotion motion;
   motion.frames = vm["frames"].as<int>();
-  motion.camera = parse_camera_path(vm["camera-path"].as<std::string>());
+  const std::string camera_path = vm["camera-path"].as<std::string>();
+  if (const auto named = camera_path_named(camera_path)) {
+    motion.camera = *named;
+  } else if (std::filesystem::is_regular_file(camera_path)) {
+    motion.cameras = read_camera_path_file(camera_path, setup.camera);  // (InputError naming file:line)
+  } else {
+    throw InputError("--camera-path " + camera_path, "neither a camera path (static, orbit, flythrough) nor a camera path file");
+  }
   motion.lights = parse_light_motion(vm["light-motion"].as<std::string>());
   const std::vector<Trace> frames = generate_sequence(vm["technique"].as<std::string>(), setup, motion);
   write_trace_frames_file(frames, vm["out"].as<std::string>());
@@ -153,7 +161,8 @@ int cmd_trace(const std::vector<std::string>& args, std::ostream& out, std::ostr
   out << "wrote " << vm["out"].as<std::string>() << ": technique " << trace.technique << ", " << trace.lights.size()
       << " lights, " << trace.commands.size() << " commands";
   if (frames.size() > 1) {
-    out << " per frame, " << frames.size() << " frames (camera " << to_string(motion.camera) << ", lights "
+    out << " per frame, " << frames.size() << " frames (camera " << (motion.cameras.empty() ? to_string(motion.camera) : camera_path)
+        << ", lights "
         << to_string(motion.lights) << ")";
   }
   out << ", hash " << trace_hash(frames) << "\n";

@@ -228,7 +228,8 @@ StudyPlan plan_from_options(const po::variables_map& vm) {
     throw InputError("--frames " + std::to_string(plan.frames), "expected 1.." + std::to_string(kMaxSequenceFrames) + " frames");
   }
   plan.camera_path = vm["camera-path"].as<std::string>();
-  parse_camera_path(plan.camera_path);  // InputError naming the valid paths
+  // A path's name, or a camera path file (the generators read it: an error names its line).
+  if (!camera_path_named(plan.camera_path) && !fs::is_regular_file(plan.camera_path)) parse_camera_path(plan.camera_path);
   plan.max_lights = *std::max_element(plan.light_counts.begin(), plan.light_counts.end());
   plan.db_path = (fs::path(plan.dir) / "study.db").string();
   return plan;
@@ -259,7 +260,13 @@ std::vector<StudyPoint> generate_traces(const StudyPlan& plan) {
       // The trace's name carries its options, so that studies with other options into the same
       // folder keep each trace (and the runs that name it) apart.
       std::string stem = t + "_" + std::to_string(n);
-      if (plan.frames > 1) stem += "_" + plan.camera_path + std::to_string(plan.frames);  // a sequence's trace apart
+      if (plan.frames > 1) {  // a sequence's trace apart: its path (a file's stem) and frames
+        std::string path = camera_path_named(plan.camera_path) ? plan.camera_path : fs::path(plan.camera_path).stem().string();
+        for (char& c : path) {
+          if (!std::isalnum(static_cast<unsigned char>(c))) c = '-';
+        }
+        stem += "_" + path + std::to_string(plan.frames);
+      }
       const auto given = plan.options.find(t);
       if (given != plan.options.end()) {
         for (const auto& kv : given->second) {
@@ -740,7 +747,7 @@ int cmd_study(const std::vector<std::string>& args, std::ostream& out, std::ostr
       "frames per trace: 1 = one cold frame; more = a sequence (camera along --camera-path, lights orbiting), and a "
       "table of the steady frame time, frame rate, DRAM and energy per frame beside the cold first frame "
       "(docs/sequences.md)")(
-      "camera-path", po::value<std::string>()->default_value("orbit"), "the sequences' camera path: static, orbit, flythrough");
+      "camera-path", po::value<std::string>()->default_value("orbit"), "the sequences' camera path: static, orbit, flythrough, or a camera path file (docs/sequences.md)");
   add_threads_option(desc, "the cores this process may use divided between the --jobs workers, at least 1, so "
                            "that jobs x threads <= cores");
   po::variables_map vm;

@@ -6,6 +6,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "kernel/errors.hpp"
+#include "scene/number_file.hpp"
 #include "scene/atrium.hpp"
 
 namespace tbdr {
@@ -114,11 +115,50 @@ const char* to_string(CameraPath p) {
   return "?";
 }
 
-CameraPath parse_camera_path(const std::string& name) {
+std::optional<CameraPath> camera_path_named(const std::string& name) {
   for (CameraPath p : {CameraPath::Static, CameraPath::Orbit, CameraPath::Flythrough}) {
     if (name == to_string(p)) return p;
   }
+  return std::nullopt;
+}
+
+CameraPath parse_camera_path(const std::string& name) {
+  if (const auto p = camera_path_named(name)) return *p;
   throw InputError("--camera-path " + name, "unknown camera path; valid: static, orbit, flythrough");
+}
+
+std::vector<Camera> read_camera_path_file(const std::string& path, const Camera& first) {
+  // The trace reader's bounds (docs/limits.md): coordinates within 1e9, a field of view in
+  // [0.01, 179] degrees, a view at least asin(1e-3) (0.06 degrees) away from `up`.
+  constexpr float kMaxCoordinate = 1e9f, kMinFov = 0.01f, kMaxFov = 179.0f, kMinUpSine = 1e-3f;
+  NumberFile file(path, "tbdrsim-camera-path", 1, "camera path file");
+  static const char* names[] = {"eye_x", "eye_y", "eye_z", "target_x", "target_y", "target_z", "fov_y_deg"};
+  std::vector<Camera> cameras;
+  std::vector<std::string> words;
+  while (file.next(words)) {
+    if (words.size() != 6 && words.size() != 7) {
+      file.fail("a camera needs 6 numbers (eye, target) and optionally a 7th (fov_y_deg), got " + std::to_string(words.size()));
+    }
+    float v[7] = {};
+    for (std::size_t k = 0; k < words.size(); ++k) {
+      v[k] = file.number(words[k], names[k]);
+      if (k < 6 && std::abs(v[k]) > kMaxCoordinate) file.fail(std::string(names[k]) + " '" + words[k] + "' is beyond +-1e+09");
+    }
+    Camera c = first;
+    c.eye = {v[0], v[1], v[2]};
+    c.target = {v[3], v[4], v[5]};
+    if (words.size() == 7) {
+      if (v[6] < kMinFov || v[6] > kMaxFov) file.fail("fov_y_deg '" + words[6] + "' is outside [0.01, 179]");
+      c.fov_y_deg = v[6];
+    }
+    const glm::vec3 view = c.target - c.eye;
+    if (!(glm::length(view) > 0.0f)) file.fail("the eye is on the target: no view direction");
+    const float sine = glm::length(glm::cross(glm::normalize(view), glm::normalize(c.up)));
+    if (sine < kMinUpSine) file.fail("the view direction is along the camera's up vector (no camera basis)");
+    cameras.push_back(c);
+  }
+  if (cameras.empty()) file.fail("no camera: a camera path file holds one camera per frame");
+  return cameras;
 }
 
 Camera camera_on_path(const Camera& first, CameraPath path, int frame) {

@@ -2,6 +2,7 @@
 // Cameras: a pinhole camera with a right-handed view and an OpenGL-style projection
 // (clip-space z in [-w, w]); named viewpoints for the built-in atrium; a framing default for glTF.
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,14 @@ inline constexpr float kFlythroughStepFraction = 0.01f;
 const char* to_string(CameraPath p);
 /// The path of that name; throws InputError listing the names otherwise.
 CameraPath parse_camera_path(const std::string& name);
+/// The path of that name, or none (`tbdrsim trace --camera-path` then takes it as a file).
+std::optional<CameraPath> camera_path_named(const std::string& name);
+/// Reads a camera path file (docs/sequences.md): after the header `tbdrsim-camera-path 1`, the
+/// camera of frame k on its k-th line, `eye_x eye_y eye_z target_x target_y target_z
+/// [fov_y_deg]`; up, near and far (and the field of view where a line gives none) are `first`'s.
+/// InputError naming file:line for a malformed number, a coordinate beyond 1e9, an eye on its
+/// target, a view along `up`, a field of view outside [0.01, 179] degrees, or no camera at all.
+std::vector<Camera> read_camera_path_file(const std::string& path, const Camera& first);
 /// The camera of frame `frame` (0: `first`) of a sequence along `path`.
 Camera camera_on_path(const Camera& first, CameraPath path, int frame);
 

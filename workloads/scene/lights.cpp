@@ -8,6 +8,7 @@
 
 #include "kernel/errors.hpp"
 #include "kernel/random.hpp"
+#include "scene/number_file.hpp"
 
 namespace tbdr {
 
@@ -90,19 +91,6 @@ std::string format_float(float f) {
   return std::string(buf, res.ptr);
 }
 
-std::vector<std::string> split_ws(const std::string& line) {
-  std::vector<std::string> out;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-    if (i < line.size() && line[i] == '#') break;  // a word starting with # comments out the rest
-    const std::size_t start = i;
-    while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
-    if (i > start) out.push_back(line.substr(start, i - start));
-  }
-  return out;
-}
-
 }  // namespace
 
 LightSet generate_lights(const Scene& scene, const LightSetSpec& spec) {
@@ -167,28 +155,10 @@ LightSet generate_lights(const Scene& scene, const LightSetSpec& spec) {
 }
 
 LightSet read_light_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "cannot open light file");
+  NumberFile file(path, "tbdrsim-lights", 1, "light file");
   LightSet set;
-  std::string line;
-  long line_no = 0;
-  bool header = false;
-  while (std::getline(in, line)) {
-    ++line_no;
-    const std::vector<std::string> tok = split_ws(line);
-    if (tok.empty()) continue;
-    if (!header) {
-      if (tok[0] != "tbdrsim-lights") {
-        throw InputError(path, line_no, "expected the header 'tbdrsim-lights 1', got '" + tok[0] + "'");
-      }
-      if (tok.size() != 2 || tok[1] != "1") {
-        throw InputError(path, line_no,
-                         "unsupported light file version '" + (tok.size() > 1 ? tok[1] : std::string()) +
-                             "' (this build reads version 1)");
-      }
-      header = true;
-      continue;
-    }
+  std::vector<std::string> tok;
+  while (file.next(tok)) {
     Light l;
     std::size_t expected = 0;
     if (tok[0] == "point") {
@@ -198,51 +168,37 @@ LightSet read_light_file(const std::string& path) {
       l.type = Light::Type::Spot;
       expected = 14;
     } else {
-      throw InputError(path, line_no, "unknown light type '" + tok[0] + "' (expected 'point' or 'spot')");
+      file.fail("unknown light type '" + tok[0] + "' (expected 'point' or 'spot')");
     }
     if (tok.size() != expected) {
-      throw InputError(path, line_no,
-                       tok[0] + " light needs " + std::to_string(expected - 1) + " numbers, got " +
-                           std::to_string(tok.size() - 1) + (tok.size() > expected ? " (extra token '" + tok[expected] + "')" : ""));
+      file.fail(tok[0] + " light needs " + std::to_string(expected - 1) + " numbers, got " + std::to_string(tok.size() - 1) +
+                (tok.size() > expected ? " (extra token '" + tok[expected] + "')" : ""));
     }
     static const char* names[] = {"type", "x", "y", "z", "radius", "r", "g", "b", "intensity",
                                   "dx", "dy", "dz", "cos_inner", "cos_outer"};
     float v[14] = {};
-    for (std::size_t k = 1; k < expected; ++k) {
-      const std::string& s = tok[k];
-      float f = 0.0f;
-      const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), f);
-      if (ec != std::errc() || ptr != s.data() + s.size() || !std::isfinite(f)) {
-        throw InputError(path, line_no, std::string("expected a finite number for ") + names[k] + ", got '" + s + "'");
-      }
-      v[k] = f;
-    }
+    for (std::size_t k = 1; k < expected; ++k) v[k] = file.number(tok[k], names[k]);
     l.position = {v[1], v[2], v[3]};
     l.radius = v[4];
     l.color = {v[5], v[6], v[7]};
     l.intensity = v[8];
-    if (!(l.radius > 0.0f)) throw InputError(path, line_no, "radius must be > 0, got '" + tok[4] + "'");
+    if (!(l.radius > 0.0f)) file.fail("radius must be > 0, got '" + tok[4] + "'");
     for (int k = 5; k <= 8; ++k) {
-      if (v[k] < 0.0f) throw InputError(path, line_no, std::string(names[k]) + " must be >= 0, got '" + tok[static_cast<std::size_t>(k)] + "'");
+      if (v[k] < 0.0f) file.fail(std::string(names[k]) + " must be >= 0, got '" + tok[static_cast<std::size_t>(k)] + "'");
     }
     if (l.type == Light::Type::Spot) {
       l.direction = {v[9], v[10], v[11]};
       l.cos_inner = v[12];
       l.cos_outer = v[13];
       const float len = glm::length(l.direction);
-      if (std::abs(len - 1.0f) > 1e-3f) {
-        throw InputError(path, line_no, "spot direction must be a unit vector (length " + format_float(len) + ")");
-      }
+      if (std::abs(len - 1.0f) > 1e-3f) file.fail("spot direction must be a unit vector (length " + format_float(len) + ")");
       if (l.cos_inner < -1.0f || l.cos_inner > 1.0f || l.cos_outer < -1.0f || l.cos_outer > 1.0f ||
           l.cos_inner < l.cos_outer) {
-        throw InputError(path, line_no,
-                         "spot cones need -1 <= cos_outer <= cos_inner <= 1, got cos_inner '" + tok[12] +
-                             "' cos_outer '" + tok[13] + "'");
+        file.fail("spot cones need -1 <= cos_outer <= cos_inner <= 1, got cos_inner '" + tok[12] + "' cos_outer '" + tok[13] + "'");
       }
     }
     set.lights.push_back(l);
   }
-  if (!header) throw InputError(path, line_no + 1, "empty light file: missing the header 'tbdrsim-lights 1'");
   return set;
 }
 

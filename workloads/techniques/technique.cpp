@@ -823,11 +823,15 @@ Trace generate_trace(const std::string& technique, const TraceSetup& setup) {
 std::vector<Trace> generate_sequence(const std::string& technique, const TraceSetup& setup, const SequenceMotion& motion) {
   if (motion.frames < 1 || motion.frames > kMaxSequenceFrames)
     throw InputError("--frames " + std::to_string(motion.frames), "expected 1.." + std::to_string(kMaxSequenceFrames) + " frames");
+  if (!motion.cameras.empty() && motion.cameras.size() < static_cast<std::size_t>(motion.frames)) {
+    throw InputError("--frames " + std::to_string(motion.frames), "the camera path file holds " + std::to_string(motion.cameras.size()) +
+                                                                      " cameras, fewer than the frames asked for");
+  }
   std::vector<Trace> frames;
   frames.reserve(static_cast<std::size_t>(motion.frames));
   for (int k = 0; k < motion.frames; ++k) {
     TraceSetup at = setup;
-    at.camera = camera_on_path(setup.camera, motion.camera, k);
+    at.camera = motion.cameras.empty() ? camera_on_path(setup.camera, motion.camera, k) : motion.cameras[static_cast<std::size_t>(k)];
     at.lights = lights_in_motion(setup.lights, motion.lights, k);
     frames.push_back(generate_trace(technique, at));
   }

@@ -90,6 +90,8 @@ struct SequenceMotion {
   int frames = 1;                         ///< frames in the sequence, 1..kMaxSequenceFrames
   CameraPath camera = CameraPath::Static;
   LightMotion lights = LightMotion::Static;
+  /// Frame k's camera, when given (a camera path file: read_camera_path_file), instead of `camera`'s path.
+  std::vector<Camera> cameras;
 };
 /// The most frames `tbdrsim trace --frames` writes: 10 s at 60 frames per second.
 inline constexpr int kMaxSequenceFrames = 600;
