@@ -251,7 +251,8 @@ const std::vector<Expectation> kExpectations = {
     {"docs/plots.md", {}, {"time.png", "dram.png", "tiles.png", "tile.png", "budget.png", "stack.png", "stack_bytes.png"}},
     {"docs/sweeps.md", {}, {"stack.db", "tile_size.db", "tile_job/tile_size.sbatch", "tile_job/shard_1.db"}},
     // Two runs of the 6-frame sequence, each with its summary.
-    {"docs/sequences.md", {"6 frames (camera orbit, lights orbit)", "sequence: 6 frames", "2|steady_interval_ms|"}, {"orbit.trace", "seq.db"}},
+    {"docs/sequences.md", {"6 frames (camera orbit, lights orbit)", "sequence: 6 frames", "2|steady_interval_ms|"},
+     {"orbit.trace", "seq.db", "seq.png"}},
 };
 
 std::string replace_all(std::string s, const std::string& from, const std::string& to, int* count = nullptr) {

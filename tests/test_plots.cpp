@@ -425,6 +425,7 @@ TEST_F(DocumentedPlots, EveryKindWithItsOptionsOnAStudyDrawsOrRefusesInOneLine) 
       {"sensitivity", "--param", "technique.pls_bytes", "--linear", "--lights", "8"},
       {"delta", "--baseline", "technique=plain_forward", "--ratio", "--lights", "8"},
       {"tiles", "--lights", "8", "--value", "dram_bytes", "--pass", "0", "--log", "--where", "technique <> 'deferred'"},
+      {"sequence", "--lights", "8"},  // a study of single frames: refused in one line
   };
   for (auto args : options) {
     args.insert(args.begin() + 1, {"--db", db});

@@ -47,6 +47,7 @@ constexpr PlotKind kPlotKinds[] = {
     {"sensitivity", "plot_sensitivity.py", "a figure against hardware parameters (--param), a line per technique"},
     {"delta", "plot_delta.py", "change of a figure against a baseline (--baseline KEY=VALUE), per technique"},
     {"tiles", "plot_tiles.py", "per-tile heat maps (cycles, samples, DRAM bytes), one per technique"},
+    {"sequence", "plot_sequence.py", "a sequence's frames: interval, DRAM and energy per frame, a line per technique"},
 };
 
 /// The interpreter: Debian's, which has pandas and matplotlib (scripts/install_deps.sh installs
