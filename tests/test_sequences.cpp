@@ -57,7 +57,7 @@ std::size_t count(const std::string& text, const std::string& what) {
 /// Replays `frames` (written to a scratch trace) with the default hardware and `sets`; with
 /// `images`, writing the images into the scratch folder's img/.
 RunOutcome replay(const std::vector<Trace>& frames, const std::vector<std::string>& sets, const std::string& name,
-                  bool images = false) {
+                  bool images = false, unsigned threads = 1) {
   const auto dir = testing_scratch::scratch_dir("sequences", name);
   const std::string path = (dir / "t.trace").string();
   std::ofstream(path) << text_of(frames);
@@ -66,6 +66,7 @@ RunOutcome replay(const std::vector<Trace>& frames, const std::vector<std::strin
   req.trace_path = path;
   req.db_path = (dir / "r.db").string();
   if (images) req.images_dir = (dir / "img").string();
+  req.threads = threads;
   return run_one(req);
 }
 
@@ -449,6 +450,21 @@ TEST(SequenceStudy, PrintsTheColdFrameBesideTheSteadyState) {
   const auto method = r.out.find("\nforward_plus ", r.out.find("Method table"));
   ASSERT_NE(method, std::string::npos);
   EXPECT_NE(r.out.substr(method, 120).find("  2  "), std::string::npos) << r.out.substr(method, 120);
+}
+
+TEST(SequenceReplay, EveryRowIsTheSameAtOneAndTwoThreads) {
+  // With two threads the timing model runs beside the functional run, fed frame after frame; with
+  // one, after it: the same rows (transaction elimination on, so the tile signatures are compared
+  // across frames on the tile threads too).
+  const std::vector<Trace> frames = sequence("deferred", 3, CameraPath::Orbit, LightMotion::Orbit, 16, 160, 96);
+  const RunOutcome one = replay(frames, {"writeback.transaction_elimination=1"}, "threads1", false, 1);
+  const RunOutcome two = replay(frames, {"writeback.transaction_elimination=1"}, "threads2", false, 2);
+  ASSERT_EQ(one.stats.size(), two.stats.size());
+  for (std::size_t i = 0; i < one.stats.size(); ++i) {
+    EXPECT_EQ(one.stats[i].scope, two.stats[i].scope);
+    EXPECT_EQ(one.stats[i].name, two.stats[i].name);
+    EXPECT_EQ(one.stats[i].value, two.stats[i].value) << one.stats[i].scope << " " << one.stats[i].name;
+  }
 }
 
 TEST(SequenceAddresses, ALaterFrameUsesTheRegionsTheFrameBeforeAllocated) {
