@@ -481,8 +481,10 @@ void add_sequence_frame(FrameResult& sum, FrameResult&& next) {
 
 /// Simulates the run's frames functionally: one frame as simulate_frame does; a sequence frame by
 /// frame into `feed` (which it needs), one feed for all (the first frame begins it, the last
-/// closes it; each command carries its frame), their results added up (add_sequence_frame).
-/// Colours are computed for the last frame only, the one whose images are written.
+/// closes it; each command carries its frame), their results added up (add_sequence_frame), each
+/// frame's unit statistics kept in `frame_totals` (a sequence only). Colours are computed where
+/// needs_colours says: the last frame's for its images, every frame's for transaction elimination
+/// (whose tile signatures this function keeps from one frame to the next).
 FrameResult simulate_frames(const RunRequest& req, const RunInputs& in, WorkFeed* feed, std::vector<FrameStats>& frame_totals) {
   const int n = static_cast<int>(in.frames.size());
   FrameOptions options{.colour = needs_colours(req, true), .threads = req.threads, .feed = feed};
