@@ -288,9 +288,17 @@ TEST(SequenceReplay, TheFirstFrameIsTheFrameAloneAndTheFramesAddUpToTheSequence)
   double mj = 0;
   for (std::size_t k = 0; k < 3; ++k) {
     mj += stat(seq, frame_scope(k), "energy_mj");
-    EXPECT_GT(seq.frame_energy[k].total_pj, 0) << k;
+    EXPECT_GT(seq.sequence.energy[k].total_pj, 0) << k;
   }
   EXPECT_NEAR(mj, seq.energy.total_pj * 1e-9, 1e-9 * mj);
+  // Each frame's own counts (what changed from frame to frame), adding up to the sequence's.
+  double frame_invocations = 0, frame_primitives = 0;
+  for (std::size_t k = 0; k < 3; ++k) {
+    frame_invocations += stat(seq, frame_scope(k), "shader_invocations");
+    frame_primitives += stat(seq, frame_scope(k), "primitives_out");
+  }
+  EXPECT_EQ(frame_invocations, invocations);
+  EXPECT_EQ(frame_primitives, seq.frame.totals.render.geometry.primitives_out.as_double());
   EXPECT_EQ(stat(seq, SequenceSummaryStats::kScope, "frames"), 3);
   // Steady frames: frame 1 (frame 0 is the warm-up, frame 2 the drain).
   EXPECT_NEAR(stat(seq, SequenceSummaryStats::kScope, "steady_interval_ms"), stat(seq, frame_scope(1), "interval_ms"), 1e-12);

@@ -516,7 +516,7 @@ void simulate_serially(const RunRequest& req, const RunInputs& in, RunOutcome& o
   const double c_sim = cpu_seconds();
   WorkFeed feed;
   const bool sequence = in.frames.size() > 1;
-  o.frame = simulate_frames(req, in, sequence ? &feed : nullptr, o.frame_totals);
+  o.frame = simulate_frames(req, in, sequence ? &feed : nullptr, o.sequence.totals);
   if (sequence) o.frame.work = feed.take();
   o.wall_seconds = seconds_since(t_sim);
   o.cpu_seconds = cpu_seconds() - c_sim;
@@ -550,7 +550,7 @@ void simulate_pipelined(const RunRequest& req, const RunInputs& in, RunOutcome& 
     return r;
   });
   try {
-    o.frame = simulate_frames(req, in, &feed, o.frame_totals);
+    o.frame = simulate_frames(req, in, &feed, o.sequence.totals);
   } catch (...) {
     placement.restore();
     // The feed is closed (simulate_frame closes it; again here, whatever failed): the timing
@@ -656,8 +656,8 @@ RunOutcome run_one(const RunRequest& req) {
   }
   outcome.frame.work.commands = {};  // (freed here at one thread; moved from, at more)
   book_timing(req.config.hw, outcome.frame, outcome.timing, outcome.energy);
-  outcome.frame_energy = sequence_frame_energy(req.config.hw, outcome.frame_totals, outcome.timing);
-  outcome.stats = run_rows(outcome.frame, outcome.timing, outcome.energy, outcome.frame_energy);
+  outcome.sequence.energy = sequence_frame_energy(req.config.hw, outcome.sequence.totals, outcome.timing);
+  outcome.stats = run_rows(outcome.frame, outcome.timing, outcome.energy, outcome.sequence);
   outcome.technique = in.trace().technique.empty() ? "custom" : in.trace().technique;
   outcome.scene = in.scene->source;
   if (!req.images_dir.empty()) {
@@ -693,7 +693,7 @@ void print_run_summary(const RunOutcome& o, std::ostream& out) {
       << " ms, energy " << stat_text(o.energy.total_pj * 1e-9)
       << " mJ (timing model " << stat_text(o.timing_seconds) << " s)\n";
   if (o.timing.frames.size() > 1) {
-    const SequenceSummaryStats seq = summarize_sequence(o.timing, o.energy.total_pj, o.frame_energy);
+    const SequenceSummaryStats seq = summarize_sequence(o.timing, o.energy.total_pj, o.sequence);
     out << "  sequence: " << o.timing.frames.size() << " frames (the figures above and below are their sums), steady "
         << stat_text(seq.steady_interval_ms.value()) << " ms per frame (p95 " << stat_text(seq.p95_interval_ms.value())
         << ", " << stat_text(seq.steady_fps.value()) << " fps), DRAM " << stat_text(seq.steady_dram_mb_per_frame.value())

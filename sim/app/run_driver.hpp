@@ -12,6 +12,7 @@
 #include "models/command_processor.hpp"
 #include "analysis/report.hpp"
 #include "analysis/results_db.hpp"
+#include "app/stat_rows.hpp"
 #include "trace/trace.hpp"
 
 namespace tbdr {
@@ -48,8 +49,7 @@ struct RunOutcome {
   EnergyBreakdown energy;
   /// A sequence (more than one frame): each frame's unit statistics (`frame` holds their sums) and
   /// its energy (sequence_frame_energy); empty for a single frame.
-  std::vector<FrameStats> frame_totals;
-  std::vector<EnergyBreakdown> frame_energy;
+  SequenceFrames sequence;
   std::vector<StatRecord> stats;  ///< every row of the run but the host's (run_rows)
   std::vector<std::string> images_written;
   DerivedFigures derived;        ///< read back from the database (views.sql defines them) when RunRequest::summary_figures

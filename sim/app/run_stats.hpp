@@ -87,7 +87,10 @@ struct TextureFetchStats {
   X(Accumulator, energy_mj, "mJ", Gauge,                                                                      \
     "Its energy: its units' work, the caches' and DRAM's energy in its interval, leakage over its interval")  \
   X(Accumulator, at_period_energy_mj, "mJ", Gauge,                                                            \
-    "energy_mj plus the idle power over gpu.frame_period_us - its interval (= energy_mj without a period)")
+    "energy_mj plus the idle power over gpu.frame_period_us - its interval (= energy_mj without a period)")    \
+  X(Counter, primitives_out, "primitives", Gauge, "The frame's primitives after clipping and culling (geometry primitives_out)") \
+  X(Counter, shader_invocations, "fragments", Gauge, "The frame's fragment shader invocations (tsp shader_invocations)") \
+  X(Counter, light_evaluations, "evaluations", Gauge, "The frame's light evaluations, fragment and compute (tsp light_evaluations + compute_light_evaluations)")
 
 /// One frame of a sequence as the timing model ran it (TimingResult::frames).
 struct SequenceFrameStats {

@@ -124,7 +124,7 @@ namespace {
 double ms_per_cycle(const TimingResult& timing) { return timing.frame_time_ps * 1e-9 / timing.frame_cycles; }
 
 /// Frame k of the sequence: its span, interval, DRAM bytes since the frame before and energy.
-SequenceFrameStats sequence_frame(const TimingResult& timing, const std::vector<EnergyBreakdown>& frame_energy, std::size_t k) {
+SequenceFrameStats sequence_frame(const TimingResult& timing, const SequenceFrames& sequence, std::size_t k) {
   const FrameTime& f = timing.frames[k];
   const double end_before = k > 0 ? timing.frames[k - 1].end_cycle : 0.0;
   const std::uint64_t bytes_before = k > 0 ? timing.frames[k - 1].dram_bytes_at_end : 0;
@@ -135,9 +135,15 @@ SequenceFrameStats sequence_frame(const TimingResult& timing, const std::vector<
   s.interval_ms.set(s.interval_cycles.value() * ms_per_cycle(timing));
   s.latency_cycles.set(f.end_cycle - f.start_cycle);
   s.dram_interval_bytes.set(f.dram_bytes_at_end - bytes_before);
-  if (k < frame_energy.size()) {
-    s.energy_mj.set(frame_energy[k].total_pj * 1e-9);
-    s.at_period_energy_mj.set(frame_energy[k].at_period_total_pj() * 1e-9);
+  if (k < sequence.energy.size()) {
+    s.energy_mj.set(sequence.energy[k].total_pj * 1e-9);
+    s.at_period_energy_mj.set(sequence.energy[k].at_period_total_pj() * 1e-9);
+  }
+  if (k < sequence.totals.size()) {
+    const PassStats& r = sequence.totals[k].render;
+    s.primitives_out.set(r.geometry.primitives_out.value());
+    s.shader_invocations.set(r.tsp.shader_invocations.value());
+    s.light_evaluations.set(r.tsp.light_evaluations.value() + sequence.totals[k].compute.compute_light_evaluations.value());
   }
   return s;
 }
@@ -150,7 +156,7 @@ bool steady_frame(std::size_t k, std::size_t n) {
 }
 }  // namespace
 
-SequenceSummaryStats summarize_sequence(const TimingResult& timing, double energy_pj, const std::vector<EnergyBreakdown>& frame_energy) {
+SequenceSummaryStats summarize_sequence(const TimingResult& timing, double energy_pj, const SequenceFrames& sequence) {
   SequenceSummaryStats summary;
   const std::size_t n = timing.frames.size();
   if (n < 2 || timing.frame_cycles <= 0) return summary;
@@ -161,7 +167,7 @@ SequenceSummaryStats summarize_sequence(const TimingResult& timing, double energ
   double steady_bytes = 0, steady_mj = 0, steady_period_mj = 0;
   for (std::size_t k = 0; k < n; ++k) {
     if (!steady_frame(k, n)) continue;
-    const SequenceFrameStats s = sequence_frame(timing, frame_energy, k);
+    const SequenceFrameStats s = sequence_frame(timing, sequence, k);
     steady_ms.push_back(s.interval_ms.value());
     steady_bytes += s.dram_interval_bytes.as_double();
     steady_mj += s.energy_mj.value();
@@ -184,28 +190,28 @@ SequenceSummaryStats summarize_sequence(const TimingResult& timing, double energ
   summary.steady_fps.set(mean > 0 ? 1000.0 / mean : 0.0);
   summary.steady_dram_mb_per_frame.set(steady_bytes / static_cast<double>(steady_ms.size()) * 1e-6);
   summary.energy_per_frame_mj.set(energy_pj * 1e-9 / static_cast<double>(n));
-  if (!frame_energy.empty()) {
+  if (!sequence.energy.empty()) {
     summary.steady_energy_per_frame_mj.set(steady_mj / static_cast<double>(steady_ms.size()));
     summary.steady_at_period_energy_per_frame_mj.set(steady_period_mj / static_cast<double>(steady_ms.size()));
   }
   return summary;
 }
 
-void append_sequence_rows(const TimingResult& timing, double energy_pj, const std::vector<EnergyBreakdown>& frame_energy,
+void append_sequence_rows(const TimingResult& timing, double energy_pj, const SequenceFrames& sequence,
                           std::vector<StatRecord>& out) {
   if (timing.frames.size() < 2 || timing.frame_cycles <= 0) return;
   for (std::size_t k = 0; k < timing.frames.size(); ++k) {
-    collect_stats(sequence_frame(timing, frame_energy, k), SequenceFrameStats::kScopePrefix + std::to_string(k), out);
+    collect_stats(sequence_frame(timing, sequence, k), SequenceFrameStats::kScopePrefix + std::to_string(k), out);
   }
-  collect_stats(summarize_sequence(timing, energy_pj, frame_energy), SequenceSummaryStats::kScope, out);
+  collect_stats(summarize_sequence(timing, energy_pj, sequence), SequenceSummaryStats::kScope, out);
 }
 
 std::vector<StatRecord> run_rows(const FrameResult& frame, const TimingResult& timing, const EnergyBreakdown& energy,
-                                 const std::vector<EnergyBreakdown>& frame_energy) {
+                                 const SequenceFrames& sequence) {
   std::vector<StatRecord> out = frame_rows(frame);
   append_timing_rows(timing, out);
   append_energy_rows(energy, out);
-  append_sequence_rows(timing, energy.total_pj, frame_energy, out);
+  append_sequence_rows(timing, energy.total_pj, sequence, out);
   return out;
 }
 

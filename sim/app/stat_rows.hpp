@@ -39,9 +39,16 @@ void append_energy_rows(const EnergyBreakdown& energy, std::vector<StatRecord>& 
 /// Appends the host's figures (scope frame/host).
 void append_host_rows(const HostRunStats& host, std::vector<StatRecord>& out);
 /// Every row of a timed frame but the host's: frame_rows, then the timing, memory and energy rows.
-/// `frame_energy`: a sequence's per-frame energy (sequence_frame_energy), or empty.
+/// What a sequence's run keeps of each frame beside the timing model's FrameTime: its unit
+/// statistics and its energy (run_driver's sequence_frame_energy); both empty for a single frame.
+struct SequenceFrames {
+  std::vector<FrameStats> totals;
+  std::vector<EnergyBreakdown> energy;
+};
+
+/// `sequence`: a sequence's per-frame statistics and energy, or empty.
 std::vector<StatRecord> run_rows(const FrameResult& frame, const TimingResult& timing, const EnergyBreakdown& energy,
-                                 const std::vector<EnergyBreakdown>& frame_energy = {});
+                                 const SequenceFrames& sequence = {});
 /// Frames of a sequence left out of its steady state: the first, which starts with cold caches,
 /// SLC and DRAM rows and whose binning nothing overlaps; every later frame finds the state the
 /// frame before left.
@@ -53,13 +60,12 @@ inline constexpr std::size_t kSequenceDrainFrames = 1;
 /// A sequence's rows (more than one frame): each frame's SequenceFrameStats (its interval from the
 /// end of the frame before, DRAM bytes in that interval) and the SequenceSummaryStats of the
 /// frames after the warm-up; `energy_pj` is the sequence's.
-void append_sequence_rows(const TimingResult& timing, double energy_pj, const std::vector<EnergyBreakdown>& frame_energy,
+void append_sequence_rows(const TimingResult& timing, double energy_pj, const SequenceFrames& sequence,
                           std::vector<StatRecord>& out);
 /// A sequence's summary (more than one frame; empty otherwise): frames, steady-state interval and
 /// its percentiles, frame rate, DRAM bytes per steady frame, energy per frame (`energy_pj`: the
 /// sequence's).
-/// `frame_energy`: each frame's (sequence_frame_energy), or empty.
-SequenceSummaryStats summarize_sequence(const TimingResult& timing, double energy_pj,
-                                        const std::vector<EnergyBreakdown>& frame_energy = {});
+/// `sequence`: each frame's statistics and energy, or empty.
+SequenceSummaryStats summarize_sequence(const TimingResult& timing, double energy_pj, const SequenceFrames& sequence = {});
 
 }  // namespace tbdr
