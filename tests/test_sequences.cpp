@@ -159,6 +159,33 @@ TEST(SequenceTrace, ABadSequenceIsRefusedAtItsLine) {
   }
 }
 
+TEST(SequenceTrace, FramesAndTheDeclarationsTheyHoldAreBounded) {
+  // Each frame holds every declaration made before it: frames x declarations is bounded
+  // (kMaxSequenceDeclarations), and so are the frames (kMaxTraceFrames).
+  const std::string head = "tbdrsim-trace 4\nscene atrium detail=1\n";
+  const std::string frame = "frame width=8 height=8 samples=1\ncamera eye=0,0,5 target=0,0,0 up=0,1,0 fov_y_deg=60 near=0.1 far=100\n"
+                            "barrier resources=all\n";
+  std::string many = head;
+  for (std::uint64_t k = 0; k <= kMaxTraceFrames; ++k) many += frame;
+  // Line of frame k: 3 + 3k.
+  EXPECT_NE(sequence_error(many).find("seq.trace:" + std::to_string(3 + 3 * kMaxTraceFrames) + ": more than 1000 frames"),
+            std::string::npos)
+      << sequence_error(many);
+  std::string fewer = head;
+  for (std::uint64_t k = 0; k < 3; ++k) fewer += frame;
+  EXPECT_EQ(sequence_error(fewer), "");
+  // 11,000 shaders before the first frame: the 96th frame (index 95) brings the frames' copies to
+  // 96 x 11,000 = 1,056,000 > 2^20 = 1,048,576.
+  std::string declared = head;
+  for (int i = 0; i < 11000; ++i) {
+    declared += "shader s" + std::to_string(i) + " alu_ops=1 tex_fetches=0 varyings=0 light_alu_ops=0 light_source=none color_outputs=0\n";
+  }
+  for (int k = 0; k < 100; ++k) declared += frame;
+  EXPECT_NE(sequence_error(declared).find("frame 95 brings the declarations the sequence's frames hold to 1056000 (11000 per frame)"),
+            std::string::npos)
+      << sequence_error(declared);
+}
+
 // ---- camera paths and light motion ------------------------------------------------------------
 
 TEST(SequenceMotion, TheOrbitTurnsOneDegreePerFrameAboutTheTarget) {

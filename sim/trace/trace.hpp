@@ -59,6 +59,14 @@ inline constexpr std::uint64_t kMaxTraceCommands = 65536;
 inline constexpr std::uint64_t kMaxTraceDraws = 1ull << 21;
 /// The most lights: the generator's bound (`tbdrsim trace --lights`, 0..1,000,000).
 inline constexpr std::uint64_t kMaxTraceLights = 1'000'000;
+/// The most frames a trace may hold (version 4 sequences): `tbdrsim trace --frames` writes at most
+/// 600 (10 s at 60 Hz); 1,000 leaves room for a longer capture.
+inline constexpr std::uint64_t kMaxTraceFrames = 1'000;
+/// The most declarations (buffers, shaders, pipelines) summed over a sequence's frames: each frame
+/// holds every declaration made before it (the reader copies them), so a file of many frames after
+/// many declarations would hold frames x declarations of them; 2^20 (about 150 MB at worst) is 600
+/// frames of 1,700 declarations, where the techniques declare fewer than 50.
+inline constexpr std::uint64_t kMaxSequenceDeclarations = 1ull << 20;
 /// The widest and tallest frame in pixels: 16384, the largest render target Vulkan drivers of
 /// tile-based GPUs report (maxFramebufferWidth/Height; the Vulkan spec's required minimum is 4096).
 inline constexpr std::uint32_t kMaxFrameSide = 16384;

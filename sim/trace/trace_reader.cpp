@@ -169,6 +169,7 @@ class Reader {
   std::string name_;
   Trace trace_;
   std::vector<Trace> frames_;  ///< the sequence's frames read before the current one
+  std::uint64_t held_declarations_ = 0;  ///< declarations summed over frames_ (kMaxSequenceDeclarations)
   bool have_scene_ = false, have_frame_ = false, have_camera_ = false;
   int first_command_line_ = 0;
   std::optional<std::size_t> current_pass_;
@@ -568,6 +569,8 @@ void Reader::on_frame(const Line& l) {
     if (!first_command_line_)
       fail(l.number, "the frame begun at line " + std::to_string(trace_.frame.line) +
                          " has no pass, dispatch or barrier before the next 'frame' line");
+    if (frames_.size() + 1 >= kMaxTraceFrames)
+      fail(l.number, "more than " + std::to_string(kMaxTraceFrames) + " frames, the most a trace holds (docs/limits.md)");
     next_frame(l.number);
   }
   declaration_allowed(l, true);
@@ -1121,6 +1124,12 @@ void Reader::finish_frame(int last_line) {
                        "; the trace's " + std::to_string(trace_.lights.size()) + " lights need " +
                        std::to_string(light_bytes) + " (" + std::to_string(kLightBufferBytesPerLight) + " bytes each)");
   }
+  const std::uint64_t declarations = trace_.buffers.size() + trace_.shaders.size() + trace_.pipelines.size();
+  held_declarations_ += declarations;
+  if (held_declarations_ > kMaxSequenceDeclarations)
+    fail(trace_.frame.line, "frame " + std::to_string(frames_.size()) + " brings the declarations the sequence's frames hold to " +
+                                std::to_string(held_declarations_) + " (" + std::to_string(declarations) +
+                                " per frame); at most " + std::to_string(kMaxSequenceDeclarations) + " (docs/limits.md)");
   frames_.push_back(trace_);
 }
 
