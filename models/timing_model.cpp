@@ -489,9 +489,12 @@ class TimingSim final : public Unit {
     // Fragment jobs finish in order: the frame's end so far is its last one's.
     FrameTime& frame = result_.frames[static_cast<std::size_t>(commands_[frag_jobs_[f].command]->frame)];
     frame.end_cycle = cycles_of(eq_.now());
-    const DramTraffic moved = mem_.traffic();
-    frame.dram_bytes_at_end = moved.total_read() + moved.total_written();
-    if (work_.frames > 1) frame.memory_at_end = mem_.energy_stats();
+    // A sequence's frame ends are snapshots of the memory system (a single frame's is the run's end).
+    if (work_.frames > 1) {
+      const DramTraffic moved = mem_.traffic();
+      frame.dram_bytes_at_end = moved.total_read() + moved.total_written();
+      frame.memory_at_end = mem_.energy_stats();
+    }
     try_start_binning();
     try_start_fragment();
   }
