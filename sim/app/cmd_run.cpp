@@ -180,6 +180,9 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
       "write the run's statistics to FILE (gem5 stats.txt text; JSON with units and descriptions when FILE ends "
       ".json); repeatable: one run, several files (--stats s.txt --stats s.json)")(
       "timeline", po::value<std::string>(), "write the run's timeline to FILE (Chrome/Perfetto trace-event JSON)")(
+      "sample", po::value<std::size_t>(),
+      "sampled simulation of a sequence: simulate K frames, each standing for a group of frames with similar "
+      "signatures, and estimate the sequence's totals with an error estimate (docs/sequences.md)")(
       "quiet,q", "print nothing but errors");
   add_memory_trace_options(desc);
   add_threads_option(desc, "the cores this process may use, " + std::to_string(default_thread_count()) + " here");
@@ -194,6 +197,15 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   req.command_line = invocation_command_line();
   req.threads = threads_option(vm, default_thread_count());
   req.summary_figures = !vm.count("quiet");  // only the summary reads them (1 ms of the serial end)
+  if (vm.count("sample")) {
+    req.sample_frames = vm["sample"].as<std::size_t>();
+    if (req.sample_frames < 2) throw InputError("--sample", "must be at least 2 (the cold first frame and one more group)");
+    for (const char* option : {"images", "timeline", "memory-trace"}) {
+      if (vm.count(option) && !(std::string(option) == "images" && req.images_dir.empty())) {
+        throw InputError("--sample", std::string("a sampled run simulates no whole sequence: --") + option + " needs a run without --sample");
+      }
+    }
+  }
   const std::vector<std::string> stats_files =
       vm.count("stats") ? vm["stats"].as<std::vector<std::string>>() : std::vector<std::string>{};
   for (std::size_t i = 0; i < stats_files.size(); ++i) {

@@ -1,6 +1,7 @@
 #include "app/run_driver.hpp"
 #include "app/run_stats.hpp"
 #include "app/stat_rows.hpp"
+#include "app/sampled_run.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -21,6 +22,7 @@
 #include "kernel/params.hpp"
 #include "kernel/thread_pool.hpp"
 #include "models/work_feed.hpp"
+#include "models/frame_signature.hpp"
 #include "app/host_speed.hpp"
 #include "app/image_output.hpp"
 #include "analysis/results_db.hpp"
@@ -580,6 +582,55 @@ void simulate_pipelined(const RunRequest& req, const RunInputs& in, RunOutcome& 
   o.cpu_seconds = std::max(0.0, cpu_seconds() - c_sim - timing_thread_cpu - images.cpu_seconds() - db_open_cpu);
 }
 
+/// Signature features whose spread within a group stands for the spread of its frames' figures
+/// (analysis/frame_sampling.hpp extrapolate): the triangles in view, the opaque area and the
+/// lights' (the masked and blended areas are small beside them, and their relative spread large).
+const std::vector<std::size_t> kSampledSpreadFeatures{0, 1, 4, 5};
+
+/// Sampled simulation (RunRequest::sample_frames): every frame's signature, the groups and their
+/// representatives, then each window of frames around the representatives simulated as a sequence
+/// of its own, from cold (simulate_serially; its work released before the next window), and each
+/// representative's figures taken as its window ran it.
+void simulate_sampled(const RunRequest& req, const RunInputs& in, RunOutcome& o) {
+  const auto t_sim = std::chrono::steady_clock::now();
+  const double c_sim = cpu_seconds();
+  const std::size_t n = in.frames.size();
+  SampledSequence sampled;
+  std::vector<std::vector<double>> rows;
+  for (const Trace& frame : in.frames) {
+    sampled.signatures.push_back(frame_signature(frame, *in.scene));
+    const auto v = sampled.signatures.back().values();
+    rows.emplace_back(v.begin(), v.end());
+  }
+  sampled.plan = plan_sampling(rows, req.sample_frames, kSampledSpreadFeatures);
+  sampled.windows = sample_windows(sampled.plan, n);
+  sampled.measured.resize(sampled.plan.groups());
+  RunRequest window_req = req;
+  window_req.images_dir.clear();
+  double timing_cpu = 0;
+  for (const SampleWindow& w : sampled.windows) {
+    const auto first = in.frames.begin() + static_cast<std::ptrdiff_t>(w.first);
+    const RunInputs window{std::vector<Trace>(first, first + static_cast<std::ptrdiff_t>(w.frames())), in.scene};
+    RunOutcome run;
+    simulate_serially(window_req, window, run);
+    timing_cpu += run.timing_cpu_seconds;
+    run.frame.work.commands = {};
+    SequenceFrames frames{std::move(run.sequence.totals), {}};
+    frames.energy = sequence_frame_energy(req.config.hw, frames.totals, run.timing);
+    sampled.ms_per_cycle = run.timing.frame_time_ps * 1e-9 / run.timing.frame_cycles;
+    for (std::size_t g = 0; g < sampled.plan.groups(); ++g) {
+      const std::size_t r = sampled.plan.representative[g];
+      if (r >= w.first && r <= w.last) sampled.measured[g] = sequence_frame_stats(run.timing, frames, r - w.first);
+    }
+  }
+  o.wall_seconds = seconds_since(t_sim);
+  o.timing_seconds = 0;
+  o.timing_cpu_seconds = timing_cpu;
+  o.cpu_seconds = std::max(0.0, cpu_seconds() - c_sim - timing_cpu);
+  o.stats = sampled_rows(sampled);
+  o.sampled = SampledOutcome{summarize_sampled(sampled), summarize_sampled_sequence(sampled)};
+}
+
 /// Appends the run's host figures (scope frame/host): no simulated figure depends on them.
 void collect_host_stats(const RunOutcome& o, std::vector<StatRecord>& rows) {
   HostRunStats host;
@@ -641,6 +692,16 @@ RunOutcome run_one(const RunRequest& req) {
   outcome.load_seconds = seconds_since(t_load);
   outcome.threads = req.threads;
   RunDatabase db(req.db_path);
+  if (req.sample_frames > 0) {
+    if (in.frames.size() < 2) throw InputError(req.trace_path, "--sample needs a sequence (a trace of more than one frame); this trace holds one");
+    if (!req.images_dir.empty()) throw InputError("--images", "a sampled run (--sample) simulates no whole sequence to draw; run without --sample for images");
+    simulate_sampled(req, in, outcome);
+    outcome.technique = in.trace().technique.empty() ? "custom" : in.trace().technique;
+    outcome.scene = in.scene->source;
+    outcome.run_id = db.write(run_record(req, in, outcome, started), nullptr);
+    images_folder.keep();
+    return outcome;
+  }
   FrameImageJob images(req);
   if (req.threads > 1) {
     simulate_pipelined(req, in, outcome, images, db);
@@ -670,7 +731,32 @@ RunOutcome run_one(const RunRequest& req) {
   return outcome;
 }
 
+namespace {
+/// A sampled run's summary: its estimate of the whole sequence and how it was sampled.
+void print_sampled_summary(const RunOutcome& o, std::ostream& out) {
+  const SamplingSummaryStats& e = o.sampled->estimate;
+  const SequenceSummaryStats& q = o.sampled->sequence;
+  out << "run " << o.run_id << ": " << o.technique << " on " << o.scene << ", " << e.frames.value()
+      << " frames sampled: " << e.groups.value() << " groups, " << e.frames_simulated.value() << " frames simulated in "
+      << e.windows.value() << " windows, " << stat_text(o.wall_seconds) << " s\n";
+  out << "  estimated sequence: " << stat_text(e.total_cycles.value()) << " cycles (+-" << stat_text(e.total_cycles_error_pct.value())
+      << " %), " << stat_text(e.total_ms.value()) << " ms; DRAM " << stat_text(e.dram_bytes.value() / 1e6) << " MB (+-"
+      << stat_text(e.dram_bytes_error_pct.value()) << " %); energy " << stat_text(e.energy_mj.value()) << " mJ (+-"
+      << stat_text(e.energy_error_pct.value()) << " %)\n";
+  out << "  estimated frames: steady " << stat_text(q.steady_interval_ms.value()) << " ms per frame (p95 "
+      << stat_text(q.p95_interval_ms.value()) << ", " << stat_text(q.steady_fps.value()) << " fps), DRAM "
+      << stat_text(q.steady_dram_mb_per_frame.value()) << " MB and " << stat_text(q.steady_energy_per_frame_mj.value())
+      << " mJ per steady frame\n";
+  out << "  (+-: two standard errors had each group's frame been drawn at random, spread as its signatures; "
+         "rows sampling/summary and sampling/frame<k>)\n";
+}
+}  // namespace
+
 void print_run_summary(const RunOutcome& o, std::ostream& out) {
+  if (o.sampled) {
+    print_sampled_summary(o, out);
+    return;
+  }
   const FrameResult& f = o.frame;
   const GeometryStats& geometry = f.totals.render.geometry;
   const IspStats& isp = f.totals.render.isp;

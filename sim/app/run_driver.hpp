@@ -3,6 +3,7 @@
 // it references, replays the frame, writes the images, and stores the run (every resolved
 // parameter, every statistic) in one transaction. Used by `run` and, later, by sweeps.
 #include <cstdint>
+#include <optional>
 #include <iosfwd>
 #include <string>
 
@@ -13,6 +14,7 @@
 #include "analysis/report.hpp"
 #include "analysis/results_db.hpp"
 #include "app/stat_rows.hpp"
+#include "app/run_stats.hpp"
 #include "trace/trace.hpp"
 
 namespace tbdr {
@@ -29,6 +31,15 @@ struct RunRequest {
   unsigned threads = 1;      ///< threads the frame's tiles render on (FrameOptions::threads); no figure depends on it
   bool summary_figures = true;  ///< read RunOutcome::derived back from the database (for print_run_summary)
   DramObserver* dram_observer = nullptr;  ///< sees the timing model's DRAM requests and commands (--memory-trace); not owned
+  /// Sampled simulation of a sequence (--sample): the frames simulated to stand for it, each for a
+  /// group of frames with similar signatures (app/sampled_run.hpp); 0: every frame is simulated.
+  std::size_t sample_frames = 0;
+};
+
+/// What a sampled run estimated (RunRequest::sample_frames > 0).
+struct SampledOutcome {
+  SamplingSummaryStats estimate;    ///< sampling/summary
+  SequenceSummaryStats sequence;    ///< sequence/summary over the estimated frames
 };
 
 /// What a run produced.
@@ -53,6 +64,9 @@ struct RunOutcome {
   std::vector<StatRecord> stats;  ///< every row of the run but the host's (run_rows)
   std::vector<std::string> images_written;
   DerivedFigures derived;        ///< read back from the database (views.sql defines them) when RunRequest::summary_figures
+  /// A sampled run's estimate; its `frame`, `timing` and `energy` are then empty: no frame/ rows
+  /// are stored, as no run simulated the whole sequence.
+  std::optional<SampledOutcome> sampled;
 };
 
 /// The configuration's label (ResolvedConfig::label) as the run parameter config.label (origin

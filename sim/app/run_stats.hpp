@@ -121,6 +121,45 @@ struct SequenceSummaryStats {
   static constexpr const char* kScope = "sequence/summary";
 };
 
+// One frame of a sampled run (scope "sampling/frame<k>"; tbdrsim run --sample): its group, whether it
+// was simulated for it, and its figures, measured or its representative's. Its signature's figures
+// (models/frame_signature.hpp) are rows of the same scope.
+#define TBDR_SAMPLED_FRAME_STATS(X)                                                                          \
+  X(Counter, group, "group", Gauge, "The group of frames with similar signatures it belongs to (one simulated per group)") \
+  X(Counter, representative, "flag", Gauge, "1: simulated, and its figures stand for its group; 0: its figures are its representative's") \
+  X(Accumulator, interval_cycles, "cycles", Gauge, "Its interval (sequence/frame<k> interval_cycles): measured, or its representative's") \
+  X(Accumulator, interval_ms, "ms", Gauge, "interval_cycles in milliseconds")                                  \
+  X(Counter, dram_interval_bytes, "bytes", Gauge, "DRAM bytes in its interval: measured, or its representative's") \
+  X(Accumulator, energy_mj, "mJ", Gauge, "Its energy (sequence/frame<k> energy_mj): measured, or its representative's") \
+  X(Accumulator, at_period_energy_mj, "mJ", Gauge, "energy_mj plus the idle power over the rest of gpu.frame_period_us: measured, or its representative's")
+
+/// One frame of a sampled run: its group and its (measured or representative's) figures.
+struct SampledFrameStats {
+  TBDR_STATS(TBDR_SAMPLED_FRAME_STATS)
+  static constexpr const char* kScopePrefix = "sampling/frame";
+};
+
+// A sampled run's estimate of the whole sequence (scope "sampling/summary").
+#define TBDR_SAMPLING_SUMMARY_STATS(X)                                                                        \
+  X(Counter, frames, "frames", Gauge, "Frames in the sequence")                                                 \
+  X(Counter, groups, "groups", Gauge, "Groups of frames, one representative simulated for each (--sample)")     \
+  X(Counter, frames_simulated, "frames", Gauge, "Frames the timing model ran: the representatives and the frame before and after each") \
+  X(Counter, windows, "windows", Gauge, "Runs of consecutive frames simulated, each from cold")                  \
+  X(Counter, signature_triangle_stride, "triangles", Gauge, "The signature projects every n-th triangle (kSignatureTriangleStride)") \
+  X(Accumulator, total_cycles, "cycles", Gauge, "Estimated cycles of the sequence: over groups, members x the representative's interval_cycles") \
+  X(Accumulator, total_cycles_error_pct, "%", Gauge, "Two standard errors of total_cycles had each representative been drawn at random from its group, its spread the group's signature spread") \
+  X(Accumulator, total_ms, "ms", Gauge, "total_cycles in milliseconds")                                          \
+  X(Accumulator, dram_bytes, "bytes", Gauge, "Estimated DRAM bytes of the sequence (what reached the devices): over groups, members x dram_interval_bytes") \
+  X(Accumulator, dram_bytes_error_pct, "%", Gauge, "Two standard errors of dram_bytes, as total_cycles_error_pct") \
+  X(Accumulator, energy_mj, "mJ", Gauge, "Estimated energy of the sequence: over groups, members x energy_mj")    \
+  X(Accumulator, energy_error_pct, "%", Gauge, "Two standard errors of energy_mj, as total_cycles_error_pct")
+
+/// What a sampled run estimates for its whole sequence, and how.
+struct SamplingSummaryStats {
+  TBDR_STATS(TBDR_SAMPLING_SUMMARY_STATS)
+  static constexpr const char* kScope = "sampling/summary";
+};
+
 // The host's side of a run (scope "frame/host"): no simulated figure depends on these.
 #define TBDR_HOST_RUN_STATS(X)                                                                                   \
   X(Accumulator, load_wall_seconds, "s", Gauge,                                                                    \

@@ -123,8 +123,9 @@ namespace {
 /// Milliseconds per core cycle of the run (from the timing model's own two figures).
 double ms_per_cycle(const TimingResult& timing) { return timing.frame_time_ps * 1e-9 / timing.frame_cycles; }
 
-/// Frame k of the sequence: its span, interval, DRAM bytes since the frame before and energy.
-SequenceFrameStats sequence_frame(const TimingResult& timing, const SequenceFrames& sequence, std::size_t k) {
+}  // namespace
+
+SequenceFrameStats sequence_frame_stats(const TimingResult& timing, const SequenceFrames& sequence, std::size_t k) {
   const FrameTime& f = timing.frames[k];
   const double end_before = k > 0 ? timing.frames[k - 1].end_cycle : 0.0;
   const std::uint64_t bytes_before = k > 0 ? timing.frames[k - 1].dram_bytes_at_end : 0;
@@ -148,6 +149,7 @@ SequenceFrameStats sequence_frame(const TimingResult& timing, const SequenceFram
   return s;
 }
 
+namespace {
 /// Whether frame k of n is a steady frame: after the warm-up, before the drain (when frames remain
 /// between them).
 bool steady_frame(std::size_t k, std::size_t n) {
@@ -156,10 +158,10 @@ bool steady_frame(std::size_t k, std::size_t n) {
 }
 }  // namespace
 
-SequenceSummaryStats summarize_sequence(const TimingResult& timing, double energy_pj, const SequenceFrames& sequence) {
+SequenceSummaryStats summarize_frames(const std::vector<SequenceFrameStats>& frames, double total_ms, double energy_pj) {
   SequenceSummaryStats summary;
-  const std::size_t n = timing.frames.size();
-  if (n < 2 || timing.frame_cycles <= 0) return summary;
+  const std::size_t n = frames.size();
+  if (n < 2) return summary;
   summary.frames.set(n);
   summary.warmup_frames.set(kSequenceWarmupFrames);
   summary.drain_frames.set(n > kSequenceWarmupFrames + kSequenceDrainFrames ? kSequenceDrainFrames : 0);
@@ -167,13 +169,13 @@ SequenceSummaryStats summarize_sequence(const TimingResult& timing, double energ
   double steady_bytes = 0, steady_mj = 0, steady_period_mj = 0;
   for (std::size_t k = 0; k < n; ++k) {
     if (!steady_frame(k, n)) continue;
-    const SequenceFrameStats s = sequence_frame(timing, sequence, k);
+    const SequenceFrameStats& s = frames[k];
     steady_ms.push_back(s.interval_ms.value());
     steady_bytes += s.dram_interval_bytes.as_double();
     steady_mj += s.energy_mj.value();
     steady_period_mj += s.at_period_energy_mj.value();
   }
-  summary.mean_interval_ms.set(timing.frames.back().end_cycle * ms_per_cycle(timing) / static_cast<double>(n));
+  summary.mean_interval_ms.set(total_ms / static_cast<double>(n));
   double sum = 0;
   for (double v : steady_ms) sum += v;
   const double mean = sum / static_cast<double>(steady_ms.size());
@@ -190,18 +192,24 @@ SequenceSummaryStats summarize_sequence(const TimingResult& timing, double energ
   summary.steady_fps.set(mean > 0 ? 1000.0 / mean : 0.0);
   summary.steady_dram_mb_per_frame.set(steady_bytes / static_cast<double>(steady_ms.size()) * 1e-6);
   summary.energy_per_frame_mj.set(energy_pj * 1e-9 / static_cast<double>(n));
-  if (!sequence.energy.empty()) {
-    summary.steady_energy_per_frame_mj.set(steady_mj / static_cast<double>(steady_ms.size()));
-    summary.steady_at_period_energy_per_frame_mj.set(steady_period_mj / static_cast<double>(steady_ms.size()));
-  }
+  summary.steady_energy_per_frame_mj.set(steady_mj / static_cast<double>(steady_ms.size()));
+  summary.steady_at_period_energy_per_frame_mj.set(steady_period_mj / static_cast<double>(steady_ms.size()));
   return summary;
+}
+
+SequenceSummaryStats summarize_sequence(const TimingResult& timing, double energy_pj, const SequenceFrames& sequence) {
+  const std::size_t n = timing.frames.size();
+  if (n < 2 || timing.frame_cycles <= 0) return {};
+  std::vector<SequenceFrameStats> frames;
+  for (std::size_t k = 0; k < n; ++k) frames.push_back(sequence_frame_stats(timing, sequence, k));
+  return summarize_frames(frames, timing.frames.back().end_cycle * ms_per_cycle(timing), energy_pj);
 }
 
 void append_sequence_rows(const TimingResult& timing, double energy_pj, const SequenceFrames& sequence,
                           std::vector<StatRecord>& out) {
   if (timing.frames.size() < 2 || timing.frame_cycles <= 0) return;
   for (std::size_t k = 0; k < timing.frames.size(); ++k) {
-    collect_stats(sequence_frame(timing, sequence, k), SequenceFrameStats::kScopePrefix + std::to_string(k), out);
+    collect_stats(sequence_frame_stats(timing, sequence, k), SequenceFrameStats::kScopePrefix + std::to_string(k), out);
   }
   collect_stats(summarize_sequence(timing, energy_pj, sequence), SequenceSummaryStats::kScope, out);
 }

@@ -67,5 +67,11 @@ void append_sequence_rows(const TimingResult& timing, double energy_pj, const Se
 /// sequence's).
 /// `sequence`: each frame's statistics and energy, or empty.
 SequenceSummaryStats summarize_sequence(const TimingResult& timing, double energy_pj, const SequenceFrames& sequence = {});
+/// Frame k of a sequence as the timing model ran it: its span, interval, DRAM bytes since the
+/// frame before, energy (when `sequence` has it) and its own counts.
+SequenceFrameStats sequence_frame_stats(const TimingResult& timing, const SequenceFrames& sequence, std::size_t k);
+/// The summary of a sequence's frames given one by one (summarize_sequence's, and a sampled run's
+/// estimated frames): `total_ms` the sequence's time, `energy_pj` its energy. Empty below 2 frames.
+SequenceSummaryStats summarize_frames(const std::vector<SequenceFrameStats>& frames, double total_ms, double energy_pj);
 
 }  // namespace tbdr

@@ -1,0 +1,49 @@
+#pragma once
+// Sampled simulation of a sequence (tbdrsim run --sample K): which runs of frames the timing model
+// runs for a sampling plan (analysis/frame_sampling.hpp), and the rows of the run that estimate
+// the whole sequence from them. The run driver does the simulating (run_driver.cpp).
+#include <cstddef>
+#include <vector>
+
+#include "analysis/frame_sampling.hpp"
+#include "app/run_stats.hpp"
+#include "kernel/stats.hpp"
+#include "models/frame_signature.hpp"
+
+namespace tbdr {
+
+/// Consecutive frames [first, last] of a sequence simulated together, from cold.
+struct SampleWindow {
+  std::size_t first = 0;
+  std::size_t last = 0;
+  std::size_t frames() const { return last - first + 1; }
+};
+
+/// The windows the timing model runs for `plan` over a sequence of `frames` frames: each
+/// representative with the frame before it (which warms the caches and whose tiles the
+/// representative's binning overlaps) and the frame after it (whose binning competes with the
+/// representative's tiles), windows that overlap or touch merged into one; in frame order.
+std::vector<SampleWindow> sample_windows(const SamplingPlan& plan, std::size_t frames);
+
+/// A sampled run's inputs to its rows.
+struct SampledSequence {
+  SamplingPlan plan;
+  std::vector<FrameSignature> signatures;        ///< per frame
+  std::vector<SequenceFrameStats> measured;      ///< per group: its representative as its window ran it
+  std::vector<SampleWindow> windows;
+  double ms_per_cycle = 0;                       ///< of the GPU's clock
+};
+
+/// The sequence's estimate: totals over groups with their error estimates (analysis/extrapolate).
+SamplingSummaryStats summarize_sampled(const SampledSequence& s);
+
+/// The sequence's summary (sequence/summary) over every frame's figures, measured or its
+/// representative's, with the estimated totals' time and energy.
+SequenceSummaryStats summarize_sampled_sequence(const SampledSequence& s);
+
+/// Every row of a sampled run: sampling/frame<k> for each frame (group, representative, figures,
+/// signature), sampling/summary, sequence/frame<k> for the representatives as measured, and
+/// sequence/summary computed over every frame's figures (measured or its representative's).
+std::vector<StatRecord> sampled_rows(const SampledSequence& s);
+
+}  // namespace tbdr

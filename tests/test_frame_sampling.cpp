@@ -1,0 +1,291 @@
+// Sampled simulation of sequences (docs/sequences.md, "Sampled simulation"): frame signatures
+// (models/frame_signature.hpp), the grouping and extrapolation (analysis/frame_sampling.hpp), the
+// windows simulated (app/sampled_run.hpp) and `tbdrsim run --sample K` against simulating every frame.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "analysis/frame_sampling.hpp"
+#include "app/run_driver.hpp"
+#include "app/sampled_run.hpp"
+#include "models/frame_signature.hpp"
+#include "scene/scene_library.hpp"
+#include "techniques/technique.hpp"
+#include "trace/trace.hpp"
+#include "atrium_trace_setup.hpp"
+#include "cli_run.hpp"
+#include "scratch_dir.hpp"
+#include "stat_lookup.hpp"
+
+namespace tbdr {
+namespace {
+
+testing_scratch::ScratchCleanup cleanup{"frame_sampling"};
+
+/// A scene of one square [-1, 1]^2 at z = 0 facing +z, drawn 8 times over (16 triangles: its
+/// two halves 8 times each, in that order), so that the signature's sample of every 8th triangle
+/// (triangles 0 and 8) sees both halves once; `flip`: wound the other way (facing -z).
+Scene square_scene(bool flip, bool double_sided = false) {
+  Scene s;
+  s.name = "square";
+  Material m;
+  m.double_sided = double_sided;
+  s.materials.push_back(m);
+  SubMesh mesh;
+  mesh.positions = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
+  const std::array<std::uint32_t, 3> a = flip ? std::array<std::uint32_t, 3>{0, 2, 1} : std::array<std::uint32_t, 3>{0, 1, 2};
+  const std::array<std::uint32_t, 3> b = flip ? std::array<std::uint32_t, 3>{0, 3, 2} : std::array<std::uint32_t, 3>{0, 2, 3};
+  for (const auto& half : {a, b}) {
+    for (int copy = 0; copy < 8; ++copy) mesh.indices.insert(mesh.indices.end(), half.begin(), half.end());
+  }
+  s.submeshes.push_back(mesh);
+  s.instances.push_back(Instance{.submesh = 0, .world = glm::mat4(1.0f), .node = "square"});
+  return s;
+}
+
+/// A 100 x 100 frame looking at the origin from (0, 0, 5), 60 degrees vertically.
+Trace square_frame() {
+  Trace t;
+  t.frame.width = 100;
+  t.frame.height = 100;
+  t.camera.eye = {0, 0, 5};
+  t.camera.target = {0, 0, 0};
+  return t;
+}
+
+TEST(FrameSignature, MeasuresTheSquaresAreaAndItsLights) {
+  // The square's half-width in NDC is 1 / (5 tan 30 deg) = 0.34641; it covers 0.34641^2 of the
+  // viewport: 1200 of its 10,000 pixels, drawn 8 times: 9,600 pixels of depth complexity x area.
+  Trace frame = square_frame();
+  Light in_front;
+  in_front.position = {0, 0, 0};
+  in_front.radius = 0.5f;
+  Light behind;  // behind the eye
+  behind.position = {0, 0, 10};
+  behind.radius = 0.5f;
+  frame.lights = {in_front, behind};
+  const FrameSignature s = frame_signature(frame, square_scene(false));
+  EXPECT_EQ(s.triangles_in_view, 16);
+  EXPECT_NEAR(s.opaque_area_px, 9600, 0.5);
+  EXPECT_EQ(s.masked_area_px, 0);
+  EXPECT_EQ(s.blended_area_px, 0);
+  EXPECT_EQ(s.lights_in_view, 1);
+  // The light's rectangle: its sphere's box seen from 4.5..5.5 units, +1 pixel each side: about
+  // (2 x 0.5 / (4.5 tan 30) x 50 + 2)^2 = (19.2 + 2)^2, 450 pixels.
+  EXPECT_GT(s.light_area_px, 350);
+  EXPECT_LT(s.light_area_px, 550);
+}
+
+TEST(FrameSignature, LeavesOutBackFacesUnlessDoubleSidedAndCutsToTheViewport) {
+  const Trace frame = square_frame();
+  EXPECT_EQ(frame_signature(frame, square_scene(true)).opaque_area_px, 0);
+  EXPECT_EQ(frame_signature(frame, square_scene(true)).triangles_in_view, 0);
+  EXPECT_NEAR(frame_signature(frame, square_scene(true, true)).opaque_area_px, 9600, 0.5);
+  // From 0.5 units the square overfills the view: its area is cut to the viewport's 10,000 pixels
+  // (x 8 copies), not the 1.2 million its projection spans.
+  Trace close = frame;
+  close.camera.eye = {0, 0, 0.5f};
+  EXPECT_NEAR(frame_signature(close, square_scene(false)).opaque_area_px, 80000, 0.5);
+}
+
+/// Signatures of `n` frames in three well-separated families (frame k in family k % 3), each
+/// frame a little off its family's centre; frame 0 is like family 0.
+std::vector<std::vector<double>> three_families(std::size_t n) {
+  std::vector<std::vector<double>> s;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double family = static_cast<double>(k % 3) * 100.0;
+    s.push_back({family + static_cast<double>(k % 5) * 0.1, 1000.0 - family});
+  }
+  return s;
+}
+
+TEST(FrameSampling, GroupsFramesBySignatureWithTheColdFrameAlone) {
+  const SamplingPlan plan = plan_sampling(three_families(30), 4);
+  ASSERT_EQ(plan.groups(), 4u);
+  // Frame 0 is a group of its own (it is cold), the others three groups of their family.
+  EXPECT_EQ(plan.representative[plan.group_of[0]], 0u);
+  EXPECT_EQ(plan.members[plan.group_of[0]], 1u);
+  std::size_t total = 0;
+  for (std::size_t g = 0; g < plan.groups(); ++g) total += plan.members[g];
+  EXPECT_EQ(total, 30u);
+  for (std::size_t k = 1; k < 30; ++k) {
+    const std::size_t rep = plan.representative[plan.group_of[k]];
+    EXPECT_EQ(rep % 3, k % 3) << k;  // the same family
+    EXPECT_NE(rep, 0u);
+  }
+  // Families 1 and 2 have 10 members each, family 0 nine (frame 0 is apart).
+  for (std::size_t g = 0; g < plan.groups(); ++g) {
+    if (plan.representative[g] != 0) {
+      EXPECT_EQ(plan.members[g], plan.representative[g] % 3 == 0 ? 9u : 10u);
+    }
+  }
+}
+
+TEST(FrameSampling, AsManyRepresentativesAsFramesSimulatesEveryFrameExactly) {
+  const SamplingPlan plan = plan_sampling(three_families(7), 7);
+  ASSERT_EQ(plan.groups(), 7u);
+  std::vector<double> measured;
+  double sum = 0;
+  for (std::size_t g = 0; g < 7; ++g) {
+    EXPECT_EQ(plan.members[g], 1u);
+    EXPECT_EQ(plan.spread[g], 0);
+    measured.push_back(10.0 + static_cast<double>(g));
+    sum += measured.back();
+  }
+  const SampledTotal t = extrapolate(plan, measured);
+  EXPECT_EQ(t.total, sum);
+  EXPECT_EQ(t.error_pct, 0);
+}
+
+TEST(FrameSampling, ExtrapolationWeighsEachRepresentativeByItsGroup) {
+  // Two groups by hand: 1 frame measured 50, and 3 frames whose signatures spread by 10 %
+  // measured 10. Total = 50 + 3 x 10 = 80. Variance of the second group's term had its frame been
+  // drawn at random: 3^2 x (0.1 x 10)^2 x (3 - 1) / 3 = 6; two standard errors 2 sqrt(6) = 4.899,
+  // 6.124 % of 80.
+  SamplingPlan plan;
+  plan.group_of = {0, 1, 1, 1};
+  plan.representative = {0, 2};
+  plan.members = {1, 3};
+  plan.spread = {0.0, 0.1};
+  const SampledTotal t = extrapolate(plan, {50.0, 10.0});
+  EXPECT_DOUBLE_EQ(t.total, 80.0);
+  EXPECT_NEAR(t.error_pct, 100.0 * 2.0 * std::sqrt(6.0) / 80.0, 1e-12);
+  // The spread is the relative standard deviation of the signature within the group.
+  const SamplingPlan measured_spread = plan_sampling({{1.0}, {9.0}, {11.0}, {10.0}}, 2);
+  ASSERT_EQ(measured_spread.groups(), 2u);
+  const std::size_t g = measured_spread.group_of[1];
+  EXPECT_EQ(measured_spread.members[g], 3u);
+  EXPECT_NEAR(measured_spread.spread[g], std::sqrt(2.0 / 3.0) / 10.0, 1e-12);  // sd of {9, 11, 10} / 10
+}
+
+TEST(FrameSampling, WindowsHoldTheFrameBeforeAndAfterEachRepresentativeMerged) {
+  SamplingPlan plan;
+  plan.representative = {0, 20, 5, 6, 21};
+  const std::vector<SampleWindow> w = sample_windows(plan, 22);
+  ASSERT_EQ(w.size(), 3u);
+  EXPECT_EQ(w[0].first, 0u);
+  EXPECT_EQ(w[0].last, 1u);
+  EXPECT_EQ(w[1].first, 4u);
+  EXPECT_EQ(w[1].last, 7u);
+  EXPECT_EQ(w[2].first, 19u);
+  EXPECT_EQ(w[2].last, 21u);  // the last frame has no frame after it
+}
+
+const Scene& atrium1() {
+  static const Scene scene = load_scene("atrium:1");
+  return scene;
+}
+
+/// Writes `frames` of forward_plus (atrium:1 entrance, 160x90, 32 lights, camera and lights
+/// orbiting) to a scratch trace and returns its path.
+std::string orbit_trace(int frames, const std::string& name) {
+  const TraceSetup setup = testing_support::atrium_entrance_setup(atrium1(), 32, 160, 90);
+  const std::vector<Trace> seq = generate_sequence("forward_plus", setup, SequenceMotion{frames, CameraPath::Orbit, LightMotion::Orbit, {}});
+  const auto dir = testing_scratch::scratch_dir("frame_sampling", name);
+  const std::string path = (dir / "t.trace").string();
+  std::ofstream out(path);
+  write_trace_frames(seq, out);
+  return path;
+}
+
+RunOutcome run_trace(const std::string& path, std::size_t sample, const std::string& db) {
+  RunRequest req;
+  req.config = resolve_config({}, {});
+  req.trace_path = path;
+  req.db_path = db;
+  req.sample_frames = sample;
+  return run_one(req);
+}
+
+double device_bytes(const RunOutcome& o) { return static_cast<double>(o.timing.dram.total_read() + o.timing.dram.total_written()); }
+
+TEST(SampledRun, SamplingEveryFrameIsTheFullRun) {
+  // With as many representatives as frames every frame is a group of its own; the windows merge
+  // into the whole sequence, simulated once: the estimate is the full run's, to the cycle and byte.
+  const std::string path = orbit_trace(5, "every");
+  const std::string db = (std::filesystem::path(path).parent_path() / "r.db").string();
+  const RunOutcome full = run_trace(path, 0, db);
+  const RunOutcome sampled = run_trace(path, 5, db);
+  ASSERT_TRUE(sampled.sampled.has_value());
+  const SamplingSummaryStats& e = sampled.sampled->estimate;
+  EXPECT_EQ(e.groups.value(), 5u);
+  EXPECT_EQ(e.frames_simulated.value(), 5u);
+  EXPECT_EQ(e.windows.value(), 1u);
+  EXPECT_NEAR(e.total_cycles.value(), full.timing.frame_cycles, 1e-9 * full.timing.frame_cycles);
+  EXPECT_EQ(e.dram_bytes.value(), device_bytes(full));
+  EXPECT_NEAR(e.energy_mj.value(), full.energy.total_pj * 1e-9, 1e-9 * e.energy_mj.value());
+  EXPECT_EQ(e.total_cycles_error_pct.value(), 0);
+  // Its sequence summary is the full run's.
+  EXPECT_NEAR(stat(sampled, SequenceSummaryStats::kScope, "steady_interval_ms"), stat(full, SequenceSummaryStats::kScope, "steady_interval_ms"), 1e-12);
+  EXPECT_NEAR(stat(sampled, SequenceSummaryStats::kScope, "p95_interval_ms"), stat(full, SequenceSummaryStats::kScope, "p95_interval_ms"), 1e-12);
+  // Every frame has its sampling row with its signature; no frame/ row is stored.
+  for (int k = 0; k < 5; ++k) EXPECT_EQ(stat(sampled, "sampling/frame" + std::to_string(k), "representative"), 1);
+  EXPECT_GT(stat(sampled, "sampling/frame2", "opaque_area_px"), 0);
+  for (const StatRecord& r : sampled.stats) EXPECT_NE(r.scope.rfind("frame/", 0), 0u) << r.scope << " " << r.name;
+}
+
+TEST(SampledRun, FewerRepresentativesSimulateFewerFramesAndStayNearTheFullRun) {
+  // 16 orbiting frames, 4 representatives (frame 0 and 3 groups): at most 4 windows of 3 frames.
+  // The estimate is within its own error estimate of the full run (measured: cycles +0.2 %, the
+  // estimate +-3 %); the test allows the error estimate or 2 %, whichever is larger.
+  const std::string path = orbit_trace(16, "fewer");
+  const std::string db = (std::filesystem::path(path).parent_path() / "r.db").string();
+  const RunOutcome full = run_trace(path, 0, db);
+  const RunOutcome sampled = run_trace(path, 4, db);
+  ASSERT_TRUE(sampled.sampled.has_value());
+  const SamplingSummaryStats& e = sampled.sampled->estimate;
+  EXPECT_EQ(e.groups.value(), 4u);
+  EXPECT_LE(e.frames_simulated.value(), 11u);  // frame 0's window [0, 1] and 3 of 3 frames
+  auto within = [](double estimate, double truth, double error_pct) {
+    return std::abs(estimate / truth - 1.0) * 100.0 <= std::max(2.0, error_pct);
+  };
+  EXPECT_TRUE(within(e.total_cycles.value(), full.timing.frame_cycles, e.total_cycles_error_pct.value()))
+      << e.total_cycles.value() << " vs " << full.timing.frame_cycles << " +-" << e.total_cycles_error_pct.value() << " %";
+  EXPECT_TRUE(within(e.dram_bytes.value(), device_bytes(full), e.dram_bytes_error_pct.value()))
+      << e.dram_bytes.value() << " vs " << device_bytes(full);
+  EXPECT_TRUE(within(e.energy_mj.value(), full.energy.total_pj * 1e-9, e.energy_error_pct.value()))
+      << e.energy_mj.value() << " vs " << full.energy.total_pj * 1e-9;
+  // Each representative's measured frame is stored as sequence/frame<k>; the others are not.
+  std::size_t measured = 0;
+  for (int k = 0; k < 16; ++k) {
+    const bool rep = stat(sampled, "sampling/frame" + std::to_string(k), "representative") == 1;
+    bool has_row = false;
+    for (const StatRecord& r : sampled.stats) has_row = has_row || r.scope == SequenceFrameStats::kScopePrefix + std::to_string(k);
+    EXPECT_EQ(rep, has_row) << k;
+    measured += rep ? 1 : 0;
+  }
+  EXPECT_EQ(measured, 4u);
+}
+
+TEST(SampledRun, BadRequestsExit2AndWriteNothing) {
+  using testing_support::run_cli;
+  const std::string path = orbit_trace(3, "bad");
+  const auto dir = std::filesystem::path(path).parent_path();
+  const std::string db = (dir / "bad.db").string();
+  const auto one = run_cli({"run", "--trace", path, "--db", db, "--sample", "1"});
+  EXPECT_EQ(one.code, 2);
+  EXPECT_NE(one.err.find("--sample"), std::string::npos) << one.err;
+  const auto images = run_cli({"run", "--trace", path, "--db", db, "--sample", "2", "--images", (dir / "img").string()});
+  EXPECT_EQ(images.code, 2);
+  EXPECT_NE(images.err.find("--images"), std::string::npos) << images.err;
+  // One frame is no sequence.
+  const TraceSetup setup = testing_support::atrium_entrance_setup(atrium1(), 8, 64, 64);
+  const std::string single = (dir / "one.trace").string();
+  {
+    std::ofstream out(single);
+    write_trace(generate_trace("forward_plus", setup), out);
+  }
+  const auto alone = run_cli({"run", "--trace", single, "--db", db, "--sample", "2"});
+  EXPECT_EQ(alone.code, 2);
+  EXPECT_NE(alone.err.find("one.trace"), std::string::npos) << alone.err;
+  EXPECT_FALSE(std::filesystem::exists(db));
+  EXPECT_FALSE(std::filesystem::exists(dir / "img"));
+}
+
+}  // namespace
+}  // namespace tbdr
