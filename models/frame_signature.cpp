@@ -47,26 +47,17 @@ double signed_area(const NdcPolygon& p) {
 
 }  // namespace
 
-const std::array<FrameSignature::Feature, FrameSignature::kFeatures>& FrameSignature::features() {
-  static const std::array<Feature, kFeatures> f{{
-      {"triangles_in_view", "triangles", "Signature: scene triangles the frame's view does not reject (frustum, facing), sampled"},
-      {"opaque_area_px", "pixels", "Signature: screen area of its opaque triangles before hidden-surface removal, sampled"},
-      {"masked_area_px", "pixels", "Signature: screen area of its punch-through triangles before hidden-surface removal, sampled"},
-      {"blended_area_px", "pixels", "Signature: screen area of its translucent triangles, sampled"},
-      {"lights_in_view", "lights", "Signature: lights whose screen rectangle is not empty"},
-      {"light_area_px", "pixels", "Signature: sum of the lights' screen rectangles"},
-  }};
-  return f;
-}
-
-std::array<double, FrameSignature::kFeatures> FrameSignature::values() const {
-  return {triangles_in_view, opaque_area_px, masked_area_px, blended_area_px, lights_in_view, light_area_px};
+std::vector<double> FrameSignature::values() const {
+  std::vector<double> v;
+  zip(*this, *this, [&v](const auto& x, const auto&, const StatDef&) { v.push_back(x.as_double()); });
+  return v;
 }
 
 FrameSignature frame_signature(const Trace& frame, const Scene& scene) {
-  FrameSignature s;
+  FrameSignature out;
   const int width = frame.frame.width, height = frame.frame.height;
-  if (width <= 0 || height <= 0) return s;
+  if (width <= 0 || height <= 0) return out;
+  double in_view = 0, opaque = 0, masked = 0, blended = 0, lights = 0, light_area = 0;
   const CameraXform camera = CameraXform::from(frame.camera, static_cast<float>(width) / static_cast<float>(height));
   const Viewport viewport{.width_px = width, .height_px = height};
   // One NDC unit of area is a quarter of the viewport's pixels.
@@ -78,11 +69,11 @@ FrameSignature frame_signature(const Trace& frame, const Scene& scene) {
     const Material& material = scene.materials[mesh.material];
     const bool captured = !mesh.clip_positions.empty();
     const glm::mat4 to_clip = camera.view_proj * inst.world;
-    double* area = material.alpha_mode == AlphaMode::Opaque         ? &s.opaque_area_px
-                   : material.alpha_mode == AlphaMode::PunchThrough ? &s.masked_area_px
-                                                                    : &s.blended_area_px;
-    const std::size_t triangles = mesh.indices.size() / 3;
-    for (std::size_t t = 0; t < triangles; t += kSignatureTriangleStride) {
+    double* area = material.alpha_mode == AlphaMode::Opaque         ? &opaque
+                   : material.alpha_mode == AlphaMode::PunchThrough ? &masked
+                                                                    : &blended;
+    const std::size_t mesh_triangles = mesh.indices.size() / 3;
+    for (std::size_t t = 0; t < mesh_triangles; t += kSignatureTriangleStride) {
       ClipTriangle clip;
       for (std::size_t k = 0; k < 3; ++k) {
         const std::uint32_t index = mesh.indices[3 * t + k];
@@ -99,7 +90,7 @@ FrameSignature frame_signature(const Trace& frame, const Scene& scene) {
       // Facing from the whole (uncut) projected polygon: GL front is counter-clockwise.
       const double facing = signed_area(ndc);
       if (facing == 0 || (!material.double_sided && facing < 0)) continue;
-      s.triangles_in_view += stride;
+      in_view += stride;
       NdcPolygon cut_poly = ndc;
       for (int axis = 0; axis < 2 && cut_poly.count >= 3; ++axis) {
         cut_poly = cut(cut(cut_poly, axis, 1.0), axis, -1.0);
@@ -110,10 +101,16 @@ FrameSignature frame_signature(const Trace& frame, const Scene& scene) {
   for (const Light& light : frame.lights) {
     const PixelRect r = light_screen_rect(light, camera, viewport);
     if (r.empty()) continue;
-    s.lights_in_view += 1;
-    s.light_area_px += static_cast<double>(r.x1 - r.x0) * static_cast<double>(r.y1 - r.y0);
+    lights += 1;
+    light_area += static_cast<double>(r.x1 - r.x0) * static_cast<double>(r.y1 - r.y0);
   }
-  return s;
+  out.triangles_in_view.set(in_view);
+  out.opaque_area_px.set(opaque);
+  out.masked_area_px.set(masked);
+  out.blended_area_px.set(blended);
+  out.lights_in_view.set(lights);
+  out.light_area_px.set(light_area);
+  return out;
 }
 
 }  // namespace tbdr

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "kernel/stats.hpp"
 #include "scene/lights.hpp"
 #include "scene/scene.hpp"
 #include "trace/trace.hpp"
@@ -22,25 +23,23 @@ namespace tbdr {
 /// area is a sum over thousands of triangles, so the sampling moves it by well under 1 %.
 inline constexpr std::uint32_t kSignatureTriangleStride = 8;
 
-/// What one frame draws, as the signature sees it (all figures scaled to the whole scene).
-struct FrameSignature {
-  double triangles_in_view = 0;   ///< triangles not rejected by the view frustum or face culling
-  double opaque_area_px = 0;      ///< screen area of the opaque materials' visible-facing triangles, pixels (depth complexity x pixels)
-  double masked_area_px = 0;      ///< the same for punch-through (alpha-masked) materials
-  double blended_area_px = 0;     ///< the same for translucent (blended) materials
-  double lights_in_view = 0;      ///< lights whose screen rectangle is not empty
-  double light_area_px = 0;       ///< sum of the lights' screen rectangles, pixels (the pixels each light may touch)
+// What one frame draws, as the signature sees it (all figures scaled to the whole scene; rows of
+// scope sampling/frame<k>).
+#define TBDR_FRAME_SIGNATURE_STATS(X)                                                                      \
+  X(Accumulator, triangles_in_view, "triangles", Gauge,                                                     \
+    "Signature: scene triangles its view does not reject (frustum, facing), from every kSignatureTriangleStride-th") \
+  X(Accumulator, opaque_area_px, "pixels", Gauge,                                                          \
+    "Signature: screen area of its opaque triangles before hidden-surface removal (depth complexity x pixels), sampled") \
+  X(Accumulator, masked_area_px, "pixels", Gauge, "Signature: the same for punch-through (alpha-masked) materials") \
+  X(Accumulator, blended_area_px, "pixels", Gauge, "Signature: the same for translucent (blended) materials")     \
+  X(Accumulator, lights_in_view, "lights", Gauge, "Signature: lights whose screen rectangle is not empty")          \
+  X(Accumulator, light_area_px, "pixels", Gauge, "Signature: sum of the lights' screen rectangles (the pixels each may touch)")
 
-  /// Number of figures; each one's row name, unit and meaning (in the database: sampling/frame<k>),
-  /// and the values in that order.
-  static constexpr std::size_t kFeatures = 6;
-  struct Feature {
-    const char* name;
-    const char* unit;
-    const char* description;
-  };
-  static const std::array<Feature, kFeatures>& features();
-  std::array<double, kFeatures> values() const;
+/// A frame's signature.
+struct FrameSignature {
+  TBDR_STATS(TBDR_FRAME_SIGNATURE_STATS)
+  /// The figures in declaration order (the features sampling compares).
+  std::vector<double> values() const;
 };
 
 /// The signature of one frame of a trace (its camera, lights and size) over `scene`: every

@@ -70,27 +70,27 @@ TEST(FrameSignature, MeasuresTheSquaresAreaAndItsLights) {
   behind.radius = 0.5f;
   frame.lights = {in_front, behind};
   const FrameSignature s = frame_signature(frame, square_scene(false));
-  EXPECT_EQ(s.triangles_in_view, 16);
-  EXPECT_NEAR(s.opaque_area_px, 9600, 0.5);
-  EXPECT_EQ(s.masked_area_px, 0);
-  EXPECT_EQ(s.blended_area_px, 0);
-  EXPECT_EQ(s.lights_in_view, 1);
+  EXPECT_EQ(s.triangles_in_view.value(), 16);
+  EXPECT_NEAR(s.opaque_area_px.value(), 9600, 0.5);
+  EXPECT_EQ(s.masked_area_px.value(), 0);
+  EXPECT_EQ(s.blended_area_px.value(), 0);
+  EXPECT_EQ(s.lights_in_view.value(), 1);
   // The light's rectangle: its sphere's box seen from 4.5..5.5 units, +1 pixel each side: about
   // (2 x 0.5 / (4.5 tan 30) x 50 + 2)^2 = (19.2 + 2)^2, 450 pixels.
-  EXPECT_GT(s.light_area_px, 350);
-  EXPECT_LT(s.light_area_px, 550);
+  EXPECT_GT(s.light_area_px.value(), 350);
+  EXPECT_LT(s.light_area_px.value(), 550);
 }
 
 TEST(FrameSignature, LeavesOutBackFacesUnlessDoubleSidedAndCutsToTheViewport) {
   const Trace frame = square_frame();
-  EXPECT_EQ(frame_signature(frame, square_scene(true)).opaque_area_px, 0);
-  EXPECT_EQ(frame_signature(frame, square_scene(true)).triangles_in_view, 0);
-  EXPECT_NEAR(frame_signature(frame, square_scene(true, true)).opaque_area_px, 9600, 0.5);
+  EXPECT_EQ(frame_signature(frame, square_scene(true)).opaque_area_px.value(), 0);
+  EXPECT_EQ(frame_signature(frame, square_scene(true)).triangles_in_view.value(), 0);
+  EXPECT_NEAR(frame_signature(frame, square_scene(true, true)).opaque_area_px.value(), 9600, 0.5);
   // From 0.5 units the square overfills the view: its area is cut to the viewport's 10,000 pixels
   // (x 8 copies), not the 1.2 million its projection spans.
   Trace close = frame;
   close.camera.eye = {0, 0, 0.5f};
-  EXPECT_NEAR(frame_signature(close, square_scene(false)).opaque_area_px, 80000, 0.5);
+  EXPECT_NEAR(frame_signature(close, square_scene(false)).opaque_area_px.value(), 80000, 0.5);
 }
 
 /// Signatures of `n` frames in three well-separated families (frame k in family k % 3), each

@@ -599,8 +599,7 @@ void simulate_sampled(const RunRequest& req, const RunInputs& in, RunOutcome& o)
   std::vector<std::vector<double>> rows;
   for (const Trace& frame : in.frames) {
     sampled.signatures.push_back(frame_signature(frame, *in.scene));
-    const auto v = sampled.signatures.back().values();
-    rows.emplace_back(v.begin(), v.end());
+    rows.push_back(sampled.signatures.back().values());
   }
   sampled.plan = plan_sampling(rows, req.sample_frames, kSampledSpreadFeatures);
   sampled.windows = sample_windows(sampled.plan, n);

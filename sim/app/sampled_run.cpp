@@ -22,10 +22,7 @@ std::vector<SampleWindow> sample_windows(const SamplingPlan& plan, std::size_t f
   return out;
 }
 
-namespace {
-
-/// Each frame's figures: its own where it was simulated for its group, else its representative's.
-std::vector<SequenceFrameStats> frame_figures(const SampledSequence& s) {
+std::vector<SequenceFrameStats> sampled_frame_figures(const SampledSequence& s) {
   std::vector<SequenceFrameStats> frames;
   for (std::size_t k = 0; k < s.plan.group_of.size(); ++k) {
     const SequenceFrameStats& m = s.measured[s.plan.group_of[k]];
@@ -39,6 +36,8 @@ std::vector<SequenceFrameStats> frame_figures(const SampledSequence& s) {
   }
   return frames;
 }
+
+namespace {
 
 /// One figure of each group's representative.
 template <typename Get>
@@ -74,37 +73,7 @@ SamplingSummaryStats summarize_sampled(const SampledSequence& s) {
 
 SequenceSummaryStats summarize_sampled_sequence(const SampledSequence& s) {
   const SamplingSummaryStats summary = summarize_sampled(s);
-  return summarize_frames(frame_figures(s), summary.total_ms.value(), summary.energy_mj.value() * 1e9);
-}
-
-std::vector<StatRecord> sampled_rows(const SampledSequence& s) {
-  std::vector<StatRecord> out;
-  const std::vector<SequenceFrameStats> frames = frame_figures(s);
-  for (std::size_t k = 0; k < frames.size(); ++k) {
-    const std::size_t g = s.plan.group_of[k];
-    SampledFrameStats f;
-    f.group.set(g);
-    f.representative.set(s.plan.representative[g] == k ? 1 : 0);
-    f.interval_cycles.set(frames[k].interval_cycles.value());
-    f.interval_ms.set(frames[k].interval_ms.value());
-    f.dram_interval_bytes.set(frames[k].dram_interval_bytes.value());
-    f.energy_mj.set(frames[k].energy_mj.value());
-    f.at_period_energy_mj.set(frames[k].at_period_energy_mj.value());
-    const std::string scope = SampledFrameStats::kScopePrefix + std::to_string(k);
-    collect_stats(f, scope, out);
-    const auto values = s.signatures[k].values();
-    for (std::size_t i = 0; i < FrameSignature::kFeatures; ++i) {
-      const FrameSignature::Feature& feature = FrameSignature::features()[i];
-      out.push_back({scope, feature.name, values[i], feature.unit, feature.description});
-    }
-  }
-  const SamplingSummaryStats summary = summarize_sampled(s);
-  collect_stats(summary, SamplingSummaryStats::kScope, out);
-  for (std::size_t g = 0; g < s.plan.groups(); ++g) {
-    collect_stats(s.measured[g], SequenceFrameStats::kScopePrefix + std::to_string(s.plan.representative[g]), out);
-  }
-  collect_stats(summarize_sampled_sequence(s), SequenceSummaryStats::kScope, out);
-  return out;
+  return summarize_frames(sampled_frame_figures(s), summary.total_ms.value(), summary.energy_mj.value() * 1e9);
 }
 
 }  // namespace tbdr

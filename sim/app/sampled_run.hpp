@@ -41,9 +41,8 @@ SamplingSummaryStats summarize_sampled(const SampledSequence& s);
 /// representative's, with the estimated totals' time and energy.
 SequenceSummaryStats summarize_sampled_sequence(const SampledSequence& s);
 
-/// Every row of a sampled run: sampling/frame<k> for each frame (group, representative, figures,
-/// signature), sampling/summary, sequence/frame<k> for the representatives as measured, and
-/// sequence/summary computed over every frame's figures (measured or its representative's).
-std::vector<StatRecord> sampled_rows(const SampledSequence& s);
+/// Each frame's figures (interval, DRAM bytes, energy): its own where it was simulated for its
+/// group, else its representative's.
+std::vector<SequenceFrameStats> sampled_frame_figures(const SampledSequence& s);
 
 }  // namespace tbdr

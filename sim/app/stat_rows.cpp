@@ -223,4 +223,29 @@ std::vector<StatRecord> run_rows(const FrameResult& frame, const TimingResult& t
   return out;
 }
 
+std::vector<StatRecord> sampled_rows(const SampledSequence& s) {
+  std::vector<StatRecord> out;
+  const std::vector<SequenceFrameStats> frames = sampled_frame_figures(s);
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const std::size_t g = s.plan.group_of[k];
+    SampledFrameStats f;
+    f.group.set(g);
+    f.representative.set(s.plan.representative[g] == k ? 1 : 0);
+    f.interval_cycles.set(frames[k].interval_cycles.value());
+    f.interval_ms.set(frames[k].interval_ms.value());
+    f.dram_interval_bytes.set(frames[k].dram_interval_bytes.value());
+    f.energy_mj.set(frames[k].energy_mj.value());
+    f.at_period_energy_mj.set(frames[k].at_period_energy_mj.value());
+    const std::string scope = SampledFrameStats::kScopePrefix + std::to_string(k);
+    collect_stats(f, scope, out);
+    collect_stats(s.signatures[k], scope, out);
+  }
+  collect_stats(summarize_sampled(s), SamplingSummaryStats::kScope, out);
+  for (std::size_t g = 0; g < s.plan.groups(); ++g) {
+    collect_stats(s.measured[g], SequenceFrameStats::kScopePrefix + std::to_string(s.plan.representative[g]), out);
+  }
+  collect_stats(summarize_sampled_sequence(s), SequenceSummaryStats::kScope, out);
+  return out;
+}
+
 }  // namespace tbdr

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "app/run_stats.hpp"
+#include "app/sampled_run.hpp"
 #include "kernel/stats.hpp"
 #include "models/command_processor.hpp"
 #include "models/energy.hpp"
@@ -73,5 +74,10 @@ SequenceFrameStats sequence_frame_stats(const TimingResult& timing, const Sequen
 /// The summary of a sequence's frames given one by one (summarize_sequence's, and a sampled run's
 /// estimated frames): `total_ms` the sequence's time, `energy_pj` its energy. Empty below 2 frames.
 SequenceSummaryStats summarize_frames(const std::vector<SequenceFrameStats>& frames, double total_ms, double energy_pj);
+/// Every row of a sampled run (app/sampled_run.hpp): sampling/frame<k> for each frame (group,
+/// representative, figures, signature), sampling/summary, sequence/frame<k> for the
+/// representatives as their windows ran them, and sequence/summary over every frame's figures
+/// (measured or its representative's).
+std::vector<StatRecord> sampled_rows(const SampledSequence& s);
 
 }  // namespace tbdr
