@@ -93,6 +93,20 @@ DramClass AddressSpace::class_at(std::uint64_t addr) const {
   return r == nullptr ? DramClass::Other : r->cls;
 }
 
+void AddressSpace::adopt(const std::vector<AddressRegion>& regions) {
+  if (!regions_.empty()) throw std::logic_error("address space: adopt needs an empty space");
+  for (const AddressRegion& r : regions) {
+    if (by_name_.count(r.name) != 0) throw std::invalid_argument("address space: region '" + r.name + "' adopted twice");
+    std::uint64_t& cursor = r.base >= kHighBase ? high_top_ : top_;
+    cursor = std::max(cursor, r.base + r.reserved_bytes);
+    reserved_ += r.reserved_bytes;
+    by_name_.emplace(r.name, r.base);
+    const auto at = std::upper_bound(regions_.begin(), regions_.end(), r.base,
+                                     [](std::uint64_t a, const AddressRegion& x) { return a < x.base; });
+    regions_.insert(at, r);
+  }
+}
+
 void AddressSpace::clear() {
   regions_.clear();
   by_name_.clear();

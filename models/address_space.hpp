@@ -81,6 +81,11 @@ class AddressSpace {
   std::uint64_t reserved_bytes() const { return reserved_; }
   /// Forgets every region; the next allocation starts at the base again.
   void clear();
+  /// Takes the regions of another address space of the same page size (its regions(), as a
+  /// sampled window takes the layout the sequence's first frames made: app/sampled_run.hpp), as
+  /// if allocated here in the same order: the same names at the same addresses, each range's
+  /// next allocation after its last. Throws std::logic_error unless this space is empty.
+  void adopt(const std::vector<AddressRegion>& regions);
 
  private:
   /// Allocates from `cursor` (top_ or high_top_), below `limit`.

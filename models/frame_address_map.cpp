@@ -25,11 +25,18 @@ std::uint64_t sum(const std::array<std::uint64_t, kDramClassCount>& a) {
 FrameAddressMap::FrameAddressMap(const FrameWork& frame, std::uint64_t pb_bytes, AddressSpace& space)
     : space_(space), tiles_x_(std::max(1, frame.tiles_x)), immediate_(frame.immediate) {
   last_writer_.fill(-1);
-  if (frame.texture_bytes > 0) texture_base_ = space.allocate("textures", frame.texture_bytes, DramClass::Textures);
-  if (frame.framebuffer_bytes > 0) rop_framebuffer_base_ = space.allocate("framebuffer.imr", frame.framebuffer_bytes, DramClass::Color);
+  if (!frame.address_layout.empty()) {
+    space.adopt(frame.address_layout);
+    reuse_layout_ = true;
+  }
+  auto allocate = [&](const char* name, std::uint64_t bytes, DramClass cls) {
+    return reuse_layout_ ? space.reuse_or_allocate(name, bytes, cls) : space.allocate(name, bytes, cls);
+  };
+  if (frame.texture_bytes > 0) texture_base_ = allocate("textures", frame.texture_bytes, DramClass::Textures);
+  if (frame.framebuffer_bytes > 0) rop_framebuffer_base_ = allocate("framebuffer.imr", frame.framebuffer_bytes, DramClass::Color);
   pb_bytes = std::max(pb_bytes, kMinRegionBytes);
-  pb_base_[0] = space.allocate("parameter_buffer.0", pb_bytes, DramClass::ParameterBuffer);
-  pb_base_[1] = space.allocate("parameter_buffer.1", pb_bytes, DramClass::ParameterBuffer);
+  pb_base_[0] = allocate("parameter_buffer.0", pb_bytes, DramClass::ParameterBuffer);
+  pb_base_[1] = allocate("parameter_buffer.1", pb_bytes, DramClass::ParameterBuffer);
 }
 
 namespace {
@@ -89,7 +96,7 @@ void FrameAddressMap::add_render(std::size_t command, const RenderWork& r) {
 
 std::uint64_t FrameAddressMap::place(std::size_t command, const std::string& name, std::uint64_t bytes, DramClass cls, bool high) {
   // A sequence's later frames use the regions the frames before them allocated under the same name.
-  if (frame_.at(command) > 0) return space_.reuse_or_allocate(name, bytes, cls, high);
+  if (frame_.at(command) > 0 || reuse_layout_) return space_.reuse_or_allocate(name, bytes, cls, high);
   return high ? space_.allocate_high(name, bytes, cls) : space_.allocate(name, bytes, cls);
 }
 

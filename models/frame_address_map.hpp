@@ -127,6 +127,7 @@ class FrameAddressMap {
   std::span<const ByteRange> sources(std::size_t command, DramClass k, int tile_index, std::uint64_t bytes, std::uint64_t piece,
                                      std::uint64_t& start) const;
 
+  bool reuse_layout_ = false;  ///< the space began with FrameWork::address_layout: every frame reuses its regions
   AddressSpace& space_;
   int tiles_x_ = 1;
   std::uint64_t pb_base_[2] = {0, 0};

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "models/address_space.hpp"
+
 #include "models/rasterizer.hpp"
 #include "trace/traffic.hpp"
 
@@ -152,6 +154,10 @@ struct FrameWork {
   bool immediate = false;           ///< gpu.mode=imr: tiles are primitive batches over the whole frame
   int frames = 1;                   ///< frames of the sequence the commands belong to (CommandWork::frame)
   std::uint64_t framebuffer_bytes = 0;  ///< size of the address space FramebufferAccess::offset indexes
+  /// Regions the address space holds before the first command (empty: none), which every frame
+  /// reuses by name as a sequence's later frames do: a sampled window's frames get the addresses
+  /// the sequence's first frames gave their data (TimingResult::address_layout of the first window).
+  std::vector<AddressRegion> address_layout;
   std::vector<CommandWork> commands;
 };
 

@@ -129,6 +129,7 @@ class TimingSim final : public Unit {
     end_commands_before(commands_.size());  // (checks their tiles fit their slots)
     result_.frame_time_ps = static_cast<double>(end_tick_.ps());
     result_.frame_cycles = static_cast<double>(core_.cycles_at(end_tick_).count());
+    result_.address_layout = mem_.address_space().regions();
     result_.units.clear();
     for (std::size_t u = 0; u < kTimedUnitCount; ++u) {
       // The tile fetch is not a server: it is busy while any tile is being fetched.

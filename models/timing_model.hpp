@@ -102,6 +102,9 @@ struct TimingResult {
   double frame_time_ps = 0;
   std::vector<CommandTime> commands;
   std::vector<FrameTime> frames;  ///< per frame of the sequence, in order (CommandWork::frame)
+  /// The address space's regions at the end (FrameWork::address_layout of a later run that is to
+  /// place its frames' data where this run did).
+  std::vector<AddressRegion> address_layout;
   std::vector<UnitTime> units;  ///< one per TimedUnit, in its order
   /// The busy and stalled time of `u`.
   const UnitTime& unit(TimedUnit u) const { return units.at(index_of(u)); }

@@ -183,6 +183,8 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
       "sample", po::value<std::size_t>(),
       "sampled simulation of a sequence: simulate K frames, each standing for a group of frames with similar "
       "signatures, and estimate the sequence's totals with an error estimate (docs/sequences.md)")(
+      "sample-warmup", po::value<std::size_t>()->default_value(1),
+      "with --sample: frames simulated before each representative frame, from cold, to warm the caches and fill the pipeline")(
       "quiet,q", "print nothing but errors");
   add_memory_trace_options(desc);
   add_threads_option(desc, "the cores this process may use, " + std::to_string(default_thread_count()) + " here");
@@ -199,6 +201,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   req.summary_figures = !vm.count("quiet");  // only the summary reads them (1 ms of the serial end)
   if (vm.count("sample")) {
     req.sample_frames = vm["sample"].as<std::size_t>();
+    req.sample_warmup_frames = vm["sample-warmup"].as<std::size_t>();
     if (req.sample_frames < 2) throw InputError("--sample", "must be at least 2 (the cold first frame and one more group)");
     for (const char* option : {"images", "timeline", "memory-trace"}) {
       if (vm.count(option) && !(std::string(option) == "images" && req.images_dir.empty())) {

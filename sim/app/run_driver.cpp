@@ -513,13 +513,15 @@ FrameResult simulate_frames(const RunRequest& req, const RunInputs& in, WorkFeed
 
 /// The functional run and the timing model one after the other, on the caller's thread (a
 /// sequence's frames into a feed, which the timing model then reads whole).
-void simulate_serially(const RunRequest& req, const RunInputs& in, RunOutcome& o) {
+void simulate_serially(const RunRequest& req, const RunInputs& in, RunOutcome& o,
+                       const std::vector<AddressRegion>* address_layout = nullptr) {
   const auto t_sim = std::chrono::steady_clock::now();
   const double c_sim = cpu_seconds();
   WorkFeed feed;
   const bool sequence = in.frames.size() > 1;
   o.frame = simulate_frames(req, in, sequence ? &feed : nullptr, o.sequence.totals);
   if (sequence) o.frame.work = feed.take();
+  if (address_layout != nullptr) o.frame.work.address_layout = *address_layout;
   o.wall_seconds = seconds_since(t_sim);
   o.cpu_seconds = cpu_seconds() - c_sim;
   release_pixels_without_images(req, o.frame);
@@ -602,16 +604,23 @@ void simulate_sampled(const RunRequest& req, const RunInputs& in, RunOutcome& o)
     rows.push_back(sampled.signatures.back().values());
   }
   sampled.plan = plan_sampling(rows, req.sample_frames, kSampledSpreadFeatures);
-  sampled.windows = sample_windows(sampled.plan, n);
+  sampled.windows = sample_windows(sampled.plan, n, req.sample_warmup_frames);
   sampled.measured.resize(sampled.plan.groups());
   RunRequest window_req = req;
   window_req.images_dir.clear();
   double timing_cpu = 0;
+  std::vector<AddressRegion> first_layout;
   for (const SampleWindow& w : sampled.windows) {
     const auto first = in.frames.begin() + static_cast<std::ptrdiff_t>(w.first);
-    const RunInputs window{std::vector<Trace>(first, first + static_cast<std::ptrdiff_t>(w.frames())), in.scene};
+    RunInputs window{std::vector<Trace>(first, first + static_cast<std::ptrdiff_t>(w.frames())), in.scene};
+    const bool last_is_representative = std::find(sampled.plan.representative.begin(), sampled.plan.representative.end(),
+                                                  w.last) != sampled.plan.representative.end();
+    if (!last_is_representative) window.frames.back() = frame_after_representative(window.frames.back());
     RunOutcome run;
-    simulate_serially(window_req, window, run);
+    // Later windows place their data where the sequence's first frames did (the first window, from
+    // frame 0, is the sequence's own beginning): a frame's DRAM timing depends on its addresses.
+    simulate_serially(window_req, window, run, w.first == 0 ? nullptr : &first_layout);
+    if (w.first == 0) first_layout = run.timing.address_layout;
     timing_cpu += run.timing_cpu_seconds;
     run.frame.work.commands = {};
     SequenceFrames frames{std::move(run.sequence.totals), {}};

@@ -34,6 +34,8 @@ struct RunRequest {
   /// Sampled simulation of a sequence (--sample): the frames simulated to stand for it, each for a
   /// group of frames with similar signatures (app/sampled_run.hpp); 0: every frame is simulated.
   std::size_t sample_frames = 0;
+  /// Frames simulated before each representative of a sampled run, from cold (--sample-warmup).
+  std::size_t sample_warmup_frames = 1;
 };
 
 /// What a sampled run estimated (RunRequest::sample_frames > 0).

@@ -2,17 +2,18 @@
 
 #include <algorithm>
 #include <string>
+#include <variant>
 
 #include "app/stat_rows.hpp"
 
 namespace tbdr {
 
-std::vector<SampleWindow> sample_windows(const SamplingPlan& plan, std::size_t frames) {
+std::vector<SampleWindow> sample_windows(const SamplingPlan& plan, std::size_t frames, std::size_t warmup) {
   std::vector<std::size_t> reps = plan.representative;
   std::sort(reps.begin(), reps.end());
   std::vector<SampleWindow> out;
   for (std::size_t r : reps) {
-    const SampleWindow w{r > 0 ? r - 1 : 0, std::min(r + 1, frames - 1)};
+    const SampleWindow w{r > warmup ? r - warmup : 0, std::min(r + 1, frames - 1)};
     if (!out.empty() && w.first <= out.back().last + 1) {
       out.back().last = std::max(out.back().last, w.last);
     } else {
@@ -35,6 +36,14 @@ std::vector<SequenceFrameStats> sampled_frame_figures(const SampledSequence& s) 
     frames.push_back(f);
   }
   return frames;
+}
+
+Trace frame_after_representative(const Trace& frame) {
+  Trace out = frame;
+  const auto first_pass = std::find_if(out.commands.begin(), out.commands.end(),
+                                       [](const TraceCommand& c) { return std::holds_alternative<PassDesc>(c); });
+  if (first_pass != out.commands.end()) out.commands.erase(first_pass + 1, out.commands.end());
+  return out;
 }
 
 namespace {

@@ -9,6 +9,7 @@
 #include "app/run_stats.hpp"
 #include "kernel/stats.hpp"
 #include "models/frame_signature.hpp"
+#include "trace/trace.hpp"
 
 namespace tbdr {
 
@@ -21,9 +22,18 @@ struct SampleWindow {
 
 /// The windows the timing model runs for `plan` over a sequence of `frames` frames: each
 /// representative with the frame before it (which warms the caches and whose tiles the
-/// representative's binning overlaps) and the frame after it (whose binning competes with the
-/// representative's tiles), windows that overlap or touch merged into one; in frame order.
-std::vector<SampleWindow> sample_windows(const SamplingPlan& plan, std::size_t frames);
+/// representative's binning overlaps) and the frame after it (whose first binning competes with
+/// the representative's tiles: frame_after_representative), windows that overlap or touch merged
+/// into one; in frame order.
+/// `warmup`: the frames before each representative (1 by default: kSampledWarmupFrames).
+std::vector<SampleWindow> sample_windows(const SamplingPlan& plan, std::size_t frames, std::size_t warmup = 1);
+
+/// The frame after a representative as its window needs it: its commands up to and including its
+/// first render pass. Only that pass's binning can run before the representative ends (the next
+/// binning needs the parameter buffer of the representative's last pass, free when that pass's
+/// tiles are done, and fragment work runs in frame order), so what the representative's figures
+/// see of the frame after it is the same with or without the rest, which is not simulated.
+Trace frame_after_representative(const Trace& frame);
 
 /// A sampled run's inputs to its rows.
 struct SampledSequence {
