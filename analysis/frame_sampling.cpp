@@ -86,8 +86,7 @@ std::vector<std::size_t> kmeans(const std::vector<std::vector<double>>& points, 
 
 }  // namespace
 
-SamplingPlan plan_sampling(const std::vector<std::vector<double>>& signatures, std::size_t representatives,
-                           const std::vector<std::size_t>& spread_features) {
+SamplingPlan plan_sampling(const std::vector<std::vector<double>>& signatures, std::size_t representatives) {
   const std::size_t n = signatures.size();
   if (n == 0 || representatives == 0) throw std::invalid_argument("plan_sampling: no frames or no representatives");
   for (const auto& s : signatures) {
@@ -96,13 +95,14 @@ SamplingPlan plan_sampling(const std::vector<std::vector<double>>& signatures, s
   SamplingPlan plan;
   plan.group_of.assign(n, 0);
   const std::size_t cold = std::min(kSampledColdFrames, n);
+  const std::size_t drain = n > kSampledColdFrames + kSampledDrainFrames ? kSampledDrainFrames : 0;
   auto add_group = [&plan](std::size_t representative, std::size_t members) {
     plan.representative.push_back(representative);
     plan.members.push_back(members);
   };
   std::vector<std::size_t> order;  // the frames k-means groups
   for (std::size_t i = 0; i < n; ++i) {
-    if (i < cold || representatives >= n) {
+    if (i < cold || i >= n - drain || representatives >= n) {
       plan.group_of[i] = plan.groups();
       add_group(i, 1);
     } else {
@@ -110,7 +110,7 @@ SamplingPlan plan_sampling(const std::vector<std::vector<double>>& signatures, s
     }
   }
   if (!order.empty()) {
-    const std::size_t k = std::max<std::size_t>(1, representatives > cold ? representatives - cold : 1);
+    const std::size_t k = std::max<std::size_t>(1, representatives > cold + drain ? representatives - cold - drain : 1);
     std::vector<std::vector<double>> rows;
     for (std::size_t i : order) rows.push_back(signatures[i]);
     const std::vector<std::vector<double>> points = standardised(rows);
@@ -137,40 +137,95 @@ SamplingPlan plan_sampling(const std::vector<std::vector<double>>& signatures, s
       add_group(order[best], members.size());
     }
   }
-  // Each group's spread: the largest relative standard deviation of a spread feature over its frames.
+  // Each group's mean and standard deviation of each feature over its frames.
   const std::size_t features = signatures.front().size();
-  std::vector<std::size_t> spread_on = spread_features;
-  if (spread_on.empty()) {
-    for (std::size_t j = 0; j < features; ++j) spread_on.push_back(j);
+  plan.feature_mean.assign(plan.groups(), std::vector<double>(features, 0.0));
+  plan.feature_sd.assign(plan.groups(), std::vector<double>(features, 0.0));
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t g = plan.group_of[i];
+    for (std::size_t j = 0; j < features; ++j) plan.feature_mean[g][j] += signatures[i][j] / static_cast<double>(plan.members[g]);
   }
-  plan.spread.assign(plan.groups(), 0.0);
-  for (std::size_t j : spread_on) {
-    if (j >= features) throw std::invalid_argument("plan_sampling: spread feature out of range");
-    std::vector<double> sum(plan.groups(), 0.0), sum2(plan.groups(), 0.0);
-    for (std::size_t i = 0; i < n; ++i) {
-      sum[plan.group_of[i]] += signatures[i][j];
-      sum2[plan.group_of[i]] += signatures[i][j] * signatures[i][j];
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t g = plan.group_of[i];
+    for (std::size_t j = 0; j < features; ++j) {
+      const double d = signatures[i][j] - plan.feature_mean[g][j];
+      plan.feature_sd[g][j] += d * d / static_cast<double>(plan.members[g]);
     }
-    for (std::size_t g = 0; g < plan.groups(); ++g) {
-      const double m = static_cast<double>(plan.members[g]);
-      const double mean = sum[g] / m;
-      if (m < 2 || !(std::abs(mean) > 0)) continue;
-      const double var = std::max(0.0, sum2[g] / m - mean * mean);
-      plan.spread[g] = std::max(plan.spread[g], std::sqrt(var) / std::abs(mean));
-    }
+  }
+  for (auto& sd : plan.feature_sd) {
+    for (double& v : sd) v = std::sqrt(v);
   }
   return plan;
 }
 
-SampledTotal extrapolate(const SamplingPlan& plan, const std::vector<double>& measured) {
+namespace {
+
+/// The least-squares slope of y on x and the squared correlation, or nothing when x does not vary.
+struct Fit {
+  double slope = 0;
+  double r2 = -1;
+};
+Fit least_squares(const std::vector<double>& x, const std::vector<double>& y) {
+  const double n = static_cast<double>(x.size());
+  double mx = 0, my = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    mx += x[i] / n;
+    my += y[i] / n;
+  }
+  double sxx = 0, syy = 0, sxy = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    sxx += (x[i] - mx) * (x[i] - mx);
+    syy += (y[i] - my) * (y[i] - my);
+    sxy += (x[i] - mx) * (y[i] - my);
+  }
+  if (!(sxx > 0)) return {};
+  return {sxy / sxx, syy > 0 ? sxy * sxy / (sxx * syy) : 0.0};
+}
+
+}  // namespace
+
+SampledTotal extrapolate(const SamplingPlan& plan, const std::vector<std::vector<double>>& signatures,
+                         const std::vector<double>& measured) {
   if (measured.size() != plan.groups()) throw std::invalid_argument("extrapolate: one value per group");
   SampledTotal t;
+  for (std::size_t g = 0; g < plan.groups(); ++g) t.total += static_cast<double>(plan.members[g]) * measured[g];
+  // The feature that predicts the figure best over the representatives (not the cold or drain
+  // frames, whose figures their state sets, not what they draw).
+  const std::size_t n_frames = plan.group_of.size();
+  std::vector<std::size_t> fitted;
+  for (std::size_t g = 0; g < plan.groups(); ++g) {
+    const std::size_t r = plan.representative[g];
+    if (r >= kSampledColdFrames && r + kSampledDrainFrames < n_frames) fitted.push_back(g);
+  }
+  const std::size_t features = signatures.empty() ? 0 : signatures.front().size();
+  double slope = 0, best_r2 = -1;
+  if (fitted.size() >= 3) {
+    std::vector<double> y;
+    for (std::size_t g : fitted) y.push_back(measured[g]);
+    for (std::size_t j = 0; j < features; ++j) {
+      std::vector<double> x;
+      for (std::size_t g : fitted) x.push_back(signatures.at(plan.representative[g]).at(j));
+      const Fit f = least_squares(x, y);
+      if (f.r2 > best_r2) {
+        best_r2 = f.r2;
+        slope = f.slope;
+        t.fitted_feature = static_cast<int>(j);
+      }
+    }
+  }
   double variance = 0;
   for (std::size_t g = 0; g < plan.groups(); ++g) {
     const double n = static_cast<double>(plan.members[g]);
-    t.total += n * measured[g];
-    // Var(n x y_r) for a member drawn at random: n^2 sigma^2 (n - 1) / n, sigma = spread x y.
-    const double sigma = plan.spread[g] * std::abs(measured[g]);
+    double sigma = 0;  // the figure's standard deviation over the group's frames, predicted
+    if (t.fitted_feature >= 0) {
+      sigma = std::abs(slope) * plan.feature_sd[g][static_cast<std::size_t>(t.fitted_feature)];
+    } else {
+      for (std::size_t j = 0; j < features; ++j) {
+        const double mean = std::abs(plan.feature_mean[g][j]);
+        if (mean > 0) sigma = std::max(sigma, plan.feature_sd[g][j] / mean * std::abs(measured[g]));
+      }
+    }
+    // Var(n x y_r) for a member drawn at random: n^2 sigma^2 (n - 1) / n.
     variance += n * n * sigma * sigma * (n - 1) / n;
   }
   t.error_pct = std::abs(t.total) > 0 ? 200.0 * std::sqrt(variance) / std::abs(t.total) : 0.0;

@@ -104,24 +104,29 @@ std::vector<std::vector<double>> three_families(std::size_t n) {
   return s;
 }
 
-TEST(FrameSampling, GroupsFramesBySignatureWithTheColdFrameAlone) {
-  const SamplingPlan plan = plan_sampling(three_families(30), 4);
-  ASSERT_EQ(plan.groups(), 4u);
-  // Frame 0 is a group of its own (it is cold), the others three groups of their family.
-  EXPECT_EQ(plan.representative[plan.group_of[0]], 0u);
-  EXPECT_EQ(plan.members[plan.group_of[0]], 1u);
+TEST(FrameSampling, GroupsFramesBySignatureWithTheColdAndLastFramesAlone) {
+  const SamplingPlan plan = plan_sampling(three_families(30), 5);
+  ASSERT_EQ(plan.groups(), 5u);
+  // Frame 0 (cold) and frame 29 (the last) are groups of their own, the others three groups of
+  // their family.
+  for (std::size_t alone : {0u, 29u}) {
+    EXPECT_EQ(plan.representative[plan.group_of[alone]], alone);
+    EXPECT_EQ(plan.members[plan.group_of[alone]], 1u);
+  }
   std::size_t total = 0;
   for (std::size_t g = 0; g < plan.groups(); ++g) total += plan.members[g];
   EXPECT_EQ(total, 30u);
-  for (std::size_t k = 1; k < 30; ++k) {
+  for (std::size_t k = 1; k < 29; ++k) {
     const std::size_t rep = plan.representative[plan.group_of[k]];
     EXPECT_EQ(rep % 3, k % 3) << k;  // the same family
     EXPECT_NE(rep, 0u);
+    EXPECT_NE(rep, 29u);
   }
-  // Families 1 and 2 have 10 members each, family 0 nine (frame 0 is apart).
+  // Family 1 keeps its 10 frames; families 0 and 2 have 9 (frames 0 and 29 are apart).
   for (std::size_t g = 0; g < plan.groups(); ++g) {
-    if (plan.representative[g] != 0) {
-      EXPECT_EQ(plan.members[g], plan.representative[g] % 3 == 0 ? 9u : 10u);
+    const std::size_t rep = plan.representative[g];
+    if (rep != 0 && rep != 29) {
+      EXPECT_EQ(plan.members[g], rep % 3 == 1 ? 10u : 9u);
     }
   }
 }
@@ -133,34 +138,56 @@ TEST(FrameSampling, AsManyRepresentativesAsFramesSimulatesEveryFrameExactly) {
   double sum = 0;
   for (std::size_t g = 0; g < 7; ++g) {
     EXPECT_EQ(plan.members[g], 1u);
-    EXPECT_EQ(plan.spread[g], 0);
+    EXPECT_EQ(plan.feature_sd[g][0], 0);
     measured.push_back(10.0 + static_cast<double>(g));
     sum += measured.back();
   }
-  const SampledTotal t = extrapolate(plan, measured);
+  const SampledTotal t = extrapolate(plan, three_families(7), measured);
   EXPECT_EQ(t.total, sum);
   EXPECT_EQ(t.error_pct, 0);
 }
 
 TEST(FrameSampling, ExtrapolationWeighsEachRepresentativeByItsGroup) {
-  // Two groups by hand: 1 frame measured 50, and 3 frames whose signatures spread by 10 %
-  // measured 10. Total = 50 + 3 x 10 = 80. Variance of the second group's term had its frame been
-  // drawn at random: 3^2 x (0.1 x 10)^2 x (3 - 1) / 3 = 6; two standard errors 2 sqrt(6) = 4.899,
-  // 6.124 % of 80.
+  // Frame 0 (cold, measured 50), three groups of frames with one feature x, and frame 7 (the
+  // last, measured 30):
+  //   group 1: frames 1-3, x = 9, 10, 11 (sd sqrt(2/3)), representative frame 2 (x 10), measured 20
+  //   group 2: frames 4-5, x = 20, 20 (sd 0), representative frame 4, measured 40
+  //   group 3: frame 6, x = 30, measured 60
+  // Total = 50 + 3 x 20 + 2 x 40 + 60 + 30 = 280. Over the three middle representatives (x 10,
+  // 20, 30; y 20, 40, 60; the cold and last frames left out) the line fits exactly with slope 2:
+  // group 1's frames spread by 2 sqrt(2/3) = 1.633; its term's variance had its frame been drawn
+  // at random: 3^2 x 1.633^2 x (3 - 1) / 3 = 16; the others' 0. Two standard errors: 2 x 4 = 8,
+  // 2.857 % of 280.
   SamplingPlan plan;
-  plan.group_of = {0, 1, 1, 1};
-  plan.representative = {0, 2};
-  plan.members = {1, 3};
-  plan.spread = {0.0, 0.1};
-  const SampledTotal t = extrapolate(plan, {50.0, 10.0});
-  EXPECT_DOUBLE_EQ(t.total, 80.0);
-  EXPECT_NEAR(t.error_pct, 100.0 * 2.0 * std::sqrt(6.0) / 80.0, 1e-12);
-  // The spread is the relative standard deviation of the signature within the group.
-  const SamplingPlan measured_spread = plan_sampling({{1.0}, {9.0}, {11.0}, {10.0}}, 2);
-  ASSERT_EQ(measured_spread.groups(), 2u);
-  const std::size_t g = measured_spread.group_of[1];
-  EXPECT_EQ(measured_spread.members[g], 3u);
-  EXPECT_NEAR(measured_spread.spread[g], std::sqrt(2.0 / 3.0) / 10.0, 1e-12);  // sd of {9, 11, 10} / 10
+  plan.group_of = {0, 1, 1, 1, 2, 2, 3, 4};
+  plan.representative = {0, 2, 4, 6, 7};
+  plan.members = {1, 3, 2, 1, 1};
+  plan.feature_mean = {{5.0}, {10.0}, {20.0}, {30.0}, {1.0}};
+  plan.feature_sd = {{0.0}, {std::sqrt(2.0 / 3.0)}, {0.0}, {0.0}, {0.0}};
+  const std::vector<std::vector<double>> x{{5}, {9}, {10}, {11}, {20}, {20}, {30}, {1}};
+  const SampledTotal t = extrapolate(plan, x, {50.0, 20.0, 40.0, 60.0, 30.0});
+  EXPECT_DOUBLE_EQ(t.total, 280.0);
+  EXPECT_EQ(t.fitted_feature, 0);
+  EXPECT_NEAR(t.error_pct, 800.0 / 280.0, 1e-9);
+  // plan_sampling measures each group's spread of each feature (population standard deviation).
+  const SamplingPlan measured = plan_sampling({{1.0}, {9.0}, {11.0}, {10.0}, {50.0}}, 3);
+  ASSERT_EQ(measured.groups(), 3u);
+  const std::size_t g = measured.group_of[1];
+  EXPECT_EQ(measured.members[g], 3u);
+  EXPECT_NEAR(measured.feature_mean[g][0], 10.0, 1e-12);
+  EXPECT_NEAR(measured.feature_sd[g][0], std::sqrt(2.0 / 3.0), 1e-12);
+  // With fewer than three representatives to fit, the figure spreads like the group's most spread
+  // feature relative to its mean: sd sqrt(2/3) / 10 of 20 per frame: variance 9 x (0.1633)^2 x 2/3.
+  SamplingPlan two = plan;
+  two.group_of = {0, 1, 1, 1, 2};
+  two.representative = {0, 2, 4};
+  two.members = {1, 3, 1};
+  two.feature_mean = {{5.0}, {10.0}, {1.0}};
+  two.feature_sd = {{0.0}, {std::sqrt(2.0 / 3.0)}, {0.0}};
+  const SampledTotal fallback = extrapolate(two, {{5}, {9}, {10}, {11}, {1}}, {50.0, 20.0, 0.0});
+  EXPECT_EQ(fallback.fitted_feature, -1);
+  const double sigma = std::sqrt(2.0 / 3.0) / 10.0 * 20.0;
+  EXPECT_NEAR(fallback.error_pct, 200.0 * std::sqrt(9.0 * sigma * sigma * 2.0 / 3.0) / 110.0, 1e-9);
 }
 
 TEST(FrameSampling, WindowsHoldTheFrameBeforeAndAfterEachRepresentativeMerged) {
@@ -230,7 +257,8 @@ TEST(SampledRun, SamplingEveryFrameIsTheFullRun) {
 }
 
 TEST(SampledRun, FewerRepresentativesSimulateFewerFramesAndStayNearTheFullRun) {
-  // 16 orbiting frames, 4 representatives (frame 0 and 3 groups): at most 4 windows of 3 frames.
+  // 16 orbiting frames, 4 representatives (frame 0, frame 15 and 2 groups): windows [0, 1], two of
+  // 3 frames and [14, 15], at most 10 frames.
   // The estimate is within its own error estimate of the full run (measured: cycles +0.2 %, the
   // estimate +-3 %); the test allows the error estimate or 2 %, whichever is larger.
   const std::string path = orbit_trace(16, "fewer");
@@ -240,7 +268,7 @@ TEST(SampledRun, FewerRepresentativesSimulateFewerFramesAndStayNearTheFullRun) {
   ASSERT_TRUE(sampled.sampled.has_value());
   const SamplingSummaryStats& e = sampled.sampled->estimate;
   EXPECT_EQ(e.groups.value(), 4u);
-  EXPECT_LE(e.frames_simulated.value(), 11u);  // frame 0's window [0, 1] and 3 of 3 frames
+  EXPECT_LE(e.frames_simulated.value(), 10u);
   auto within = [](double estimate, double truth, double error_pct) {
     return std::abs(estimate / truth - 1.0) * 100.0 <= std::max(2.0, error_pct);
   };

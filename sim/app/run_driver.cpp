@@ -584,11 +584,6 @@ void simulate_pipelined(const RunRequest& req, const RunInputs& in, RunOutcome& 
   o.cpu_seconds = std::max(0.0, cpu_seconds() - c_sim - timing_thread_cpu - images.cpu_seconds() - db_open_cpu);
 }
 
-/// Signature features whose spread within a group stands for the spread of its frames' figures
-/// (analysis/frame_sampling.hpp extrapolate): the triangles in view, the opaque area and the
-/// lights' (the masked and blended areas are small beside them, and their relative spread large).
-const std::vector<std::size_t> kSampledSpreadFeatures{0, 1, 4, 5};
-
 /// Sampled simulation (RunRequest::sample_frames): every frame's signature, the groups and their
 /// representatives, then each window of frames around the representatives simulated as a sequence
 /// of its own, from cold (simulate_serially; its work released before the next window), and each
@@ -603,7 +598,7 @@ void simulate_sampled(const RunRequest& req, const RunInputs& in, RunOutcome& o)
     sampled.signatures.push_back(frame_signature(frame, *in.scene));
     rows.push_back(sampled.signatures.back().values());
   }
-  sampled.plan = plan_sampling(rows, req.sample_frames, kSampledSpreadFeatures);
+  sampled.plan = plan_sampling(rows, req.sample_frames);
   sampled.windows = sample_windows(sampled.plan, n, req.sample_warmup_frames);
   sampled.measured.resize(sampled.plan.groups());
   RunRequest window_req = req;
@@ -755,7 +750,7 @@ void print_sampled_summary(const RunOutcome& o, std::ostream& out) {
       << stat_text(q.p95_interval_ms.value()) << ", " << stat_text(q.steady_fps.value()) << " fps), DRAM "
       << stat_text(q.steady_dram_mb_per_frame.value()) << " MB and " << stat_text(q.steady_energy_per_frame_mj.value())
       << " mJ per steady frame\n";
-  out << "  (+-: two standard errors had each group's frame been drawn at random, spread as its signatures; "
+  out << "  (+-: two standard errors had each group's frame been drawn at random from it, its spread predicted from the signatures; "
          "rows sampling/summary and sampling/frame<k>)\n";
 }
 }  // namespace

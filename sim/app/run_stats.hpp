@@ -147,7 +147,7 @@ struct SampledFrameStats {
   X(Counter, windows, "windows", Gauge, "Runs of consecutive frames simulated, each from cold")                  \
   X(Counter, signature_triangle_stride, "triangles", Gauge, "The signature projects every n-th triangle (kSignatureTriangleStride)") \
   X(Accumulator, total_cycles, "cycles", Gauge, "Estimated cycles of the sequence: over groups, members x the representative's interval_cycles") \
-  X(Accumulator, total_cycles_error_pct, "%", Gauge, "Two standard errors of total_cycles had each representative been drawn at random from its group, its spread the group's signature spread") \
+  X(Accumulator, total_cycles_error_pct, "%", Gauge, "Two standard errors of total_cycles had each representative been drawn at random from its group, the group's spread predicted from its signatures (analysis/frame_sampling.hpp)") \
   X(Accumulator, total_ms, "ms", Gauge, "total_cycles in milliseconds")                                          \
   X(Accumulator, dram_bytes, "bytes", Gauge, "Estimated DRAM bytes of the sequence (what reached the devices): over groups, members x dram_interval_bytes") \
   X(Accumulator, dram_bytes_error_pct, "%", Gauge, "Two standard errors of dram_bytes, as total_cycles_error_pct") \
