@@ -27,9 +27,9 @@ namespace {
 
 testing_scratch::ScratchCleanup cleanup{"frame_sampling"};
 
-/// A scene of one square [-1, 1]^2 at z = 0 facing +z, drawn 8 times over (16 triangles: its
-/// two halves 8 times each, in that order), so that the signature's sample of every 8th triangle
-/// (triangles 0 and 8) sees both halves once; `flip`: wound the other way (facing -z).
+/// A scene of one square [-1, 1]^2 at z = 0 facing +z, drawn S = kSignatureTriangleStride times
+/// over (2 S triangles: its two halves S times each, in that order), so that the signature's sample
+/// of every S-th triangle (triangles 0 and S) sees both halves once; `flip`: wound the other way.
 Scene square_scene(bool flip, bool double_sided = false) {
   Scene s;
   s.name = "square";
@@ -41,7 +41,7 @@ Scene square_scene(bool flip, bool double_sided = false) {
   const std::array<std::uint32_t, 3> a = flip ? std::array<std::uint32_t, 3>{0, 2, 1} : std::array<std::uint32_t, 3>{0, 1, 2};
   const std::array<std::uint32_t, 3> b = flip ? std::array<std::uint32_t, 3>{0, 3, 2} : std::array<std::uint32_t, 3>{0, 2, 3};
   for (const auto& half : {a, b}) {
-    for (int copy = 0; copy < 8; ++copy) mesh.indices.insert(mesh.indices.end(), half.begin(), half.end());
+    for (std::uint32_t copy = 0; copy < kSignatureTriangleStride; ++copy) mesh.indices.insert(mesh.indices.end(), half.begin(), half.end());
   }
   s.submeshes.push_back(mesh);
   s.instances.push_back(Instance{.submesh = 0, .world = glm::mat4(1.0f), .node = "square"});
@@ -60,7 +60,8 @@ Trace square_frame() {
 
 TEST(FrameSignature, MeasuresTheSquaresAreaAndItsLights) {
   // The square's half-width in NDC is 1 / (5 tan 30 deg) = 0.34641; it covers 0.34641^2 of the
-  // viewport: 1200 of its 10,000 pixels, drawn 8 times: 9,600 pixels of depth complexity x area.
+  // viewport: 1200 of its 10,000 pixels, drawn S times: 1200 S pixels of depth complexity x area.
+  const double copies = kSignatureTriangleStride;
   Trace frame = square_frame();
   Light in_front;
   in_front.position = {0, 0, 0};
@@ -70,8 +71,8 @@ TEST(FrameSignature, MeasuresTheSquaresAreaAndItsLights) {
   behind.radius = 0.5f;
   frame.lights = {in_front, behind};
   const FrameSignature s = frame_signature(frame, square_scene(false));
-  EXPECT_EQ(s.triangles_in_view.value(), 16);
-  EXPECT_NEAR(s.opaque_area_px.value(), 9600, 0.5);
+  EXPECT_EQ(s.triangles_in_view.value(), 2 * copies);
+  EXPECT_NEAR(s.opaque_area_px.value(), 1200 * copies, 0.5);
   EXPECT_EQ(s.masked_area_px.value(), 0);
   EXPECT_EQ(s.blended_area_px.value(), 0);
   EXPECT_EQ(s.lights_in_view.value(), 1);
@@ -83,14 +84,15 @@ TEST(FrameSignature, MeasuresTheSquaresAreaAndItsLights) {
 
 TEST(FrameSignature, LeavesOutBackFacesUnlessDoubleSidedAndCutsToTheViewport) {
   const Trace frame = square_frame();
+  const double copies = kSignatureTriangleStride;
   EXPECT_EQ(frame_signature(frame, square_scene(true)).opaque_area_px.value(), 0);
   EXPECT_EQ(frame_signature(frame, square_scene(true)).triangles_in_view.value(), 0);
-  EXPECT_NEAR(frame_signature(frame, square_scene(true, true)).opaque_area_px.value(), 9600, 0.5);
+  EXPECT_NEAR(frame_signature(frame, square_scene(true, true)).opaque_area_px.value(), 1200 * copies, 0.5);
   // From 0.5 units the square overfills the view: its area is cut to the viewport's 10,000 pixels
-  // (x 8 copies), not the 1.2 million its projection spans.
+  // (x S copies), not the 1.2 million its projection spans.
   Trace close = frame;
   close.camera.eye = {0, 0, 0.5f};
-  EXPECT_NEAR(frame_signature(close, square_scene(false)).opaque_area_px.value(), 80000, 0.5);
+  EXPECT_NEAR(frame_signature(close, square_scene(false)).opaque_area_px.value(), 10000 * copies, 0.5);
 }
 
 /// Signatures of `n` frames in three well-separated families (frame k in family k % 3), each
