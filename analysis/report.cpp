@@ -91,7 +91,7 @@ bool starts_ends(const std::string& s, const std::string& pre, const std::string
 
 /// The default report's three tables: frame figures, DRAM MB per class, energy mJ per component.
 std::vector<ReportTable::Section> default_sections(const std::vector<std::string>& metrics) {
-  ReportTable::Section frame{"per frame", {}, {}};
+  ReportTable::Section frame{"per run (a sequence: the sum of its frames; its figures per frame: --metric steady_interval_ms, steady_fps, ...)", {}, {}};
   ReportTable::Section dram{"DRAM MB per traffic class (read + written at the DRAM devices, after the caches; "
                             "requested = what the units asked for before them)", {}, {}};
   ReportTable::Section energy{"energy mJ per component", {}, {}};

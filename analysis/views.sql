@@ -79,9 +79,19 @@ WITH f AS (
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/dram' AND name = 'write_bytes') AS requested_write_bytes,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'mem/dram' AND name = 'read_bytes') AS device_read_bytes,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'mem/dram' AND name = 'write_bytes') AS device_write_bytes,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/timing' AND name = 'frame_cycles') AS cycles,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/timing' AND name = 'frame_time_ms') AS frame_time_ms,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'total_mj') AS energy_total_mj,
+    -- A sampled run (docs/sequences.md) has no frame/ figures: its estimates of the whole sequence stand in.
+    coalesce((SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/timing' AND name = 'frame_cycles'),
+             (SELECT value FROM stats WHERE run_id = r.id AND scope = 'sampling/summary' AND name = 'total_cycles')) AS cycles,
+    coalesce((SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/timing' AND name = 'frame_time_ms'),
+             (SELECT value FROM stats WHERE run_id = r.id AND scope = 'sampling/summary' AND name = 'total_ms')) AS frame_time_ms,
+    coalesce((SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'total_mj'),
+             (SELECT value FROM stats WHERE run_id = r.id AND scope = 'sampling/summary' AND name = 'energy_mj')) AS energy_total_mj,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'sampling/summary' AND name = 'dram_bytes') AS sampled_dram_bytes,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'sequence/summary' AND name = 'steady_interval_ms') AS steady_interval_ms,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'sequence/summary' AND name = 'p95_interval_ms') AS p95_interval_ms,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'sequence/summary' AND name = 'steady_fps') AS steady_fps,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'sequence/summary' AND name = 'steady_dram_mb_per_frame') AS steady_dram_mb_per_frame,
+    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'sequence/summary' AND name = 'steady_energy_per_frame_mj') AS steady_energy_per_frame_mj,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'dram_pj') AS e_dram_pj,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'caches_pj') AS e_caches_pj,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/energy' AND name = 'tile_buffer_pj') AS e_tile_buffer_pj,
@@ -174,7 +184,7 @@ SELECT d.*,  -- run_id, dram_<class>_read_mb / _write_mb (device), requested_<cl
   f.light_evaluations / nullif(f.shader_invocations, 0) AS lights_per_fragment,
   f.device_read_bytes / 1e6 AS dram_read_mb,
   f.device_write_bytes / 1e6 AS dram_write_mb,
-  (f.device_read_bytes + f.device_write_bytes) / 1e6 AS dram_total_mb,
+  coalesce((f.device_read_bytes + f.device_write_bytes) / 1e6, f.sampled_dram_bytes / 1e6) AS dram_total_mb,
   f.requested_read_bytes / 1e6 AS requested_read_mb,
   f.requested_write_bytes / 1e6 AS requested_write_mb,
   (f.requested_read_bytes + f.requested_write_bytes) / 1e6 AS requested_total_mb,
@@ -189,6 +199,7 @@ SELECT d.*,  -- run_id, dram_<class>_read_mb / _write_mb (device), requested_<cl
   f.e_static_pj * 1e-9 AS energy_static_mj,
   f.e_rop_caches_pj * 1e-9 AS energy_rop_caches_mj,
   f.energy_at_period_mj, f.static_power_mw,
+  f.frames, f.steady_interval_ms, f.p95_interval_ms, f.steady_fps, f.steady_dram_mb_per_frame, f.steady_energy_per_frame_mj,
   f.sim_wall_seconds
 FROM runs r JOIN g AS f ON f.run_id = r.id JOIN dram d ON d.run_id = r.id JOIN v_config_label l ON l.run_id = r.id;
 
@@ -308,6 +319,12 @@ SELECT column1 AS metric, column2 AS unit, column3 AS description FROM (VALUES
   ('shaded_samples', 'samples', 'Samples whose color a shader wrote'),
   ('samples_rasterised', 'samples', 'Samples the ISP rasterised'),
   ('partial_renders', 'renders', 'Partial renders (parameter buffer full)'),
+  ('frames', 'frames', 'Frames of the run: the frame/ figures of a sequence (frame_time_ms, cycles, DRAM, energy) are their sums'),
+  ('steady_interval_ms', 'ms', 'A sequence: mean frame interval after the warm-up frame and before the last (sequence/summary)'),
+  ('p95_interval_ms', 'ms', 'A sequence: 95th percentile of the steady frames intervals'),
+  ('steady_fps', 'frames/s', 'A sequence: 1000 / steady_interval_ms'),
+  ('steady_dram_mb_per_frame', 'MB', 'A sequence: DRAM MB at the devices per steady frame'),
+  ('steady_energy_per_frame_mj', 'mJ', 'A sequence: energy per steady frame'),
   ('sim_wall_seconds', 's', 'Host wall time of the functional simulation'));
 
 -- Every figure of every run, one row each (metric, value, unit): the derived figures of
@@ -340,6 +357,12 @@ SELECT s.run_id, m.metric,
     WHEN 'shaded_samples' THEN s.shaded_samples
     WHEN 'samples_rasterised' THEN s.samples_rasterised
     WHEN 'partial_renders' THEN s.partial_renders
+    WHEN 'frames' THEN s.frames
+    WHEN 'steady_interval_ms' THEN s.steady_interval_ms
+    WHEN 'p95_interval_ms' THEN s.p95_interval_ms
+    WHEN 'steady_fps' THEN s.steady_fps
+    WHEN 'steady_dram_mb_per_frame' THEN s.steady_dram_mb_per_frame
+    WHEN 'steady_energy_per_frame_mj' THEN s.steady_energy_per_frame_mj
     WHEN 'sim_wall_seconds' THEN s.sim_wall_seconds
   END AS value,
   m.unit

@@ -250,8 +250,9 @@ const std::vector<Expectation> kExpectations = {
      {"techniques.md", "techniques.png", "scaling.png", "sens.png", "run.txt", "run.json", "run.trace.json"}},
     {"docs/plots.md", {}, {"time.png", "dram.png", "tiles.png", "tile.png", "budget.png", "stack.png", "stack_bytes.png"}},
     {"docs/sweeps.md", {}, {"stack.db", "tile_size.db", "tile_job/tile_size.sbatch", "tile_job/shard_1.db"}},
-    // Two runs of the 6-frame sequence, each with its summary.
-    {"docs/sequences.md", {"6 frames (camera orbit, lights orbit)", "sequence: 6 frames", "2|steady_interval_ms|"},
+    // Two runs of the 6-frame sequence, each with its summary, and a sampled run of it.
+    {"docs/sequences.md",
+     {"6 frames (camera orbit, lights orbit)", "sequence: 6 frames", "2|steady_interval_ms|", "6 frames sampled: 4 groups"},
      {"orbit.trace", "seq.db", "seq.png"}},
 };
 

@@ -13,6 +13,7 @@
 #include "analysis/frame_sampling.hpp"
 #include "app/run_driver.hpp"
 #include "app/sampled_run.hpp"
+#include "models/address_space.hpp"
 #include "models/frame_signature.hpp"
 #include "scene/scene_library.hpp"
 #include "techniques/technique.hpp"
@@ -203,6 +204,24 @@ TEST(FrameSampling, WindowsHoldTheFrameBeforeAndAfterEachRepresentativeMerged) {
   EXPECT_EQ(w[1].last, 7u);
   EXPECT_EQ(w[2].first, 19u);
   EXPECT_EQ(w[2].last, 21u);  // the last frame has no frame after it
+}
+
+TEST(SampledWindows, AdoptAnotherSpacesLayoutAndAllocateAfterIt) {
+  // A sampled window starts with the regions the sequence's first frames made: the same names at
+  // the same addresses, and new regions after them in each range.
+  AddressSpace first;
+  const std::uint64_t fb = first.allocate("framebuffer.pass0.main", 10000, DramClass::Color);
+  const std::uint64_t high = first.allocate_high("buffers.pass0.main", 100, DramClass::Other);
+  const std::uint64_t top = first.top();
+  AddressSpace window;
+  window.adopt(first.regions());
+  EXPECT_EQ(window.base_of("framebuffer.pass0.main"), fb);
+  EXPECT_EQ(window.reuse_or_allocate("framebuffer.pass0.main", 9000, DramClass::Color), fb);
+  EXPECT_EQ(window.reuse_or_allocate("buffers.pass0.main", 64, DramClass::Other, true), high);
+  EXPECT_EQ(window.reserved_bytes(), first.reserved_bytes());
+  EXPECT_EQ(window.allocate("vertices.pass0.main.render0", 4096, DramClass::Vertices), top);
+  EXPECT_EQ(window.allocate_high("buffers.pass1.forward", 64, DramClass::Other), high + 4096);
+  EXPECT_THROW(window.adopt(first.regions()), std::logic_error);  // only into an empty space
 }
 
 const Scene& atrium1() {

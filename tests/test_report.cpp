@@ -297,7 +297,7 @@ TEST(Report, GroupsByTechniqueAveragingRepetitions) {
   EXPECT_NE(text.find("1 failed run(s) left out"), std::string::npos) << text;
   // Three titled tables (frame figures, DRAM per class, energy per component), each aligned: every
   // line of a table is equally long (labels left-aligned, numbers right-aligned).
-  EXPECT_NE(text.find("\nper frame\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("\nper run (a sequence: the sum of its frames"), std::string::npos) << text;
   EXPECT_NE(text.find("\nDRAM MB per traffic class"), std::string::npos) << text;
   EXPECT_NE(text.find("\nenergy mJ per component\n"), std::string::npos) << text;
   const auto lines = lines_of(text);

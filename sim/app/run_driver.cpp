@@ -673,8 +673,14 @@ RunRecord run_record(const RunRequest& req, const RunInputs& in, const RunOutcom
   for (std::size_t i = 0; i < table.decls().size(); ++i) {
     rec.params.push_back({table.decls()[i].key, format_param_value(req.config.params.values[i]), req.config.params.origins[i].text});
   }
-  rec.params.push_back(config_label_param(req.config.label));
+  // A sampled run's label says so: its figures are estimates, grouped apart from full runs.
+  rec.params.push_back(config_label_param(req.sample_frames > 0 ? req.config.label + " run.sample=" + std::to_string(req.sample_frames)
+                                                                : req.config.label));
   for (auto& p : trace_run_params(in.trace(), req.trace_path)) rec.params.push_back(std::move(p));
+  if (req.sample_frames > 0) {
+    rec.params.push_back({"run.sample", std::to_string(req.sample_frames), "command line"});
+    rec.params.push_back({"run.sample_warmup", std::to_string(req.sample_warmup_frames), "command line"});
+  }
   rec.stats = o.stats;
   collect_host_stats(o, rec.stats);
   rec.tiles = o.timing.tiles;
@@ -741,7 +747,7 @@ void print_sampled_summary(const RunOutcome& o, std::ostream& out) {
   const SequenceSummaryStats& q = o.sampled->sequence;
   out << "run " << o.run_id << ": " << o.technique << " on " << o.scene << ", " << e.frames.value()
       << " frames sampled: " << e.groups.value() << " groups, " << e.frames_simulated.value() << " frames simulated in "
-      << e.windows.value() << " windows, " << stat_text(o.wall_seconds) << " s\n";
+      << e.windows.value() << (e.windows.value() == 1 ? " window, " : " windows, ") << stat_text(o.wall_seconds) << " s\n";
   out << "  estimated sequence: " << stat_text(e.total_cycles.value()) << " cycles (+-" << stat_text(e.total_cycles_error_pct.value())
       << " %), " << stat_text(e.total_ms.value()) << " ms; DRAM " << stat_text(e.dram_bytes.value() / 1e6) << " MB (+-"
       << stat_text(e.dram_bytes_error_pct.value()) << " %); energy " << stat_text(e.energy_mj.value()) << " mJ (+-"
