@@ -19,6 +19,8 @@
 #include "scene/camera.hpp"
 #include "scene/gltf_loader.hpp"
 #include "scene/scene_library.hpp"
+#include "trace/trace.hpp"
+#include "cli_run.hpp"
 
 namespace tbdr {
 namespace {
@@ -815,6 +817,167 @@ TEST(GltfModels, Suzanne) {
   EXPECT_GT(cam.eye.z, s.bounds.max.z);
   EXPECT_LT(cam.near_plane, cam.eye.z - s.bounds.max.z);
   EXPECT_GT(cam.far_plane, cam.eye.z - s.bounds.min.z);
+}
+
+}  // namespace
+}  // namespace tbdr
+
+// ---- node animation (scene/animation.hpp) ----------------------------------------------------------
+
+namespace tbdr {
+namespace {
+
+/// A quad placed by `child` under `parent` (translation 0, 5, 0); animation 0 moves the child
+/// along x, LINEAR from (0, 0, 0) at 0 s to (10, 0, 0) at 1 s, and turns the parent about z, STEP:
+/// no turn from 0 s, 90 degrees from 0.5 s.
+GltfBuilder animated_quad() {
+  GltfBuilder g;
+  const int pos = g.vec3(quad_positions);
+  const int idx = g.indices16({0, 1, 2, 0, 2, 3});
+  const int m = g.mesh("Quad", {{"attributes", {{"POSITION", pos}}}, {"indices", idx}});
+  const int child = g.node({{"mesh", m}, {"name", "child"}}, false);
+  g.node({{"name", "parent"}, {"children", {child}}, {"translation", {0, 5, 0}}});
+  const std::vector<float> times{0.0f, 1.0f};
+  const int t_in = g.accessor(g.view(times.data(), 8), 5126, 2, "SCALAR");
+  const int t_out = g.vec3({0, 0, 0, 10, 0, 0});
+  const std::vector<float> step_times{0.0f, 0.5f};
+  const int r_in = g.accessor(g.view(step_times.data(), 8), 5126, 2, "SCALAR");
+  const float h = std::sqrt(0.5f);
+  const std::vector<float> quats{0, 0, 0, 1, 0, 0, h, h};
+  const int r_out = g.accessor(g.view(quats.data(), quats.size() * 4), 5126, 2, "VEC4");
+  g.doc()["animations"] = json::array({json{
+      {"name", "slide"},
+      {"channels", json::array({json{{"sampler", 0}, {"target", {{"node", child}, {"path", "translation"}}}},
+                                json{{"sampler", 1}, {"target", {{"node", 1}, {"path", "rotation"}}}}})},
+      {"samplers", json::array({json{{"input", t_in}, {"output", t_out}},
+                                json{{"input", r_in}, {"output", r_out}, {"interpolation", "STEP"}}})}}});
+  return g;
+}
+
+TEST(GltfAnimation, PosesTheInstancesAtATimeThroughTheirParents) {
+  TempDir dir;
+  Scene s = load_gltf(animated_quad().write_gltf(dir, "slide"));
+  ASSERT_EQ(s.animation.animations.size(), 1u);
+  const Animation& a = s.animation.animations[0];
+  EXPECT_EQ(a.name, "slide");
+  ASSERT_EQ(a.channels.size(), 2u);
+  EXPECT_FLOAT_EQ(a.duration_s, 1.0f);
+  ASSERT_EQ(s.instances.size(), 1u);
+  // Rest: (1, 1, 0) of the quad at (1, 6, 0).
+  EXPECT_NEAR((s.instances[0].world * glm::vec4(1, 1, 0, 1)).y, 6.0f, 1e-6f);
+  // 0.25 s: the child 2.5 along x, the parent not turned: (1 + 2.5, 1 + 5, 0).
+  pose_scene(s, 0, 0.25);
+  glm::vec4 p = s.instances[0].world * glm::vec4(1, 1, 0, 1);
+  EXPECT_NEAR(p.x, 3.5f, 1e-5f);
+  EXPECT_NEAR(p.y, 6.0f, 1e-5f);
+  EXPECT_NEAR(s.bounds.max.x, 3.5f, 1e-5f);  // the bounds follow the pose
+  // 0.75 s: the child 7.5 along x, (8.5, 1, 0) in the parent, turned 90 degrees about z: (-1, 8.5),
+  // then up 5: (-1, 13.5, 0).
+  pose_scene(s, 0, 0.75);
+  p = s.instances[0].world * glm::vec4(1, 1, 0, 1);
+  EXPECT_NEAR(p.x, -1.0f, 1e-5f);
+  EXPECT_NEAR(p.y, 13.5f, 1e-5f);
+  // Past the last key: the last value.
+  pose_scene(s, 0, 5.0);
+  EXPECT_NEAR((s.instances[0].world * glm::vec4(0, 0, 0, 1)).y, 15.0f, 1e-5f);
+  EXPECT_THROW(pose_scene(s, 1, 0.0), std::out_of_range);
+}
+
+TEST(GltfAnimation, ChannelsInterpolateLinearlyStepwiseAndAsCubicSplines) {
+  AnimationChannel c;
+  c.path = AnimationPath::Translation;
+  c.times = {0.0f, 2.0f};
+  c.values = {glm::vec4(0.0f), glm::vec4(10.0f, 0, 0, 0)};
+  EXPECT_FLOAT_EQ(sample_channel(c, 0.5f).x, 2.5f);
+  EXPECT_FLOAT_EQ(sample_channel(c, -1.0f).x, 0.0f);
+  c.interpolation = AnimationInterpolation::Step;
+  EXPECT_FLOAT_EQ(sample_channel(c, 1.9f).x, 0.0f);
+  EXPECT_FLOAT_EQ(sample_channel(c, 2.0f).x, 10.0f);
+  // Cubic spline with zero tangents: 10 (3u^2 - 2u^3); at u = 0.25: 10 x (0.1875 - 0.03125) = 1.5625.
+  c.interpolation = AnimationInterpolation::CubicSpline;
+  c.values = {glm::vec4(0.0f), glm::vec4(0.0f), glm::vec4(0.0f), glm::vec4(0.0f), glm::vec4(10.0f, 0, 0, 0), glm::vec4(0.0f)};
+  EXPECT_FLOAT_EQ(sample_channel(c, 0.5f).x, 1.5625f);
+  // Rotations slerp: halfway from none to 90 degrees about y is 45 degrees.
+  AnimationChannel r;
+  r.path = AnimationPath::Rotation;
+  r.times = {0.0f, 1.0f};
+  const float h = std::sqrt(0.5f);
+  r.values = {glm::vec4(0, 0, 0, 1), glm::vec4(0, h, 0, h)};
+  const glm::vec4 q = sample_channel(r, 0.5f);
+  EXPECT_NEAR(q.y, std::sin(glm::radians(22.5f)), 1e-6f);
+  EXPECT_NEAR(q.w, std::cos(glm::radians(22.5f)), 1e-6f);
+}
+
+TEST(GltfAnimation, BadChannelsAreRefusedNamingThem) {
+  TempDir dir;
+  {
+    GltfBuilder g = animated_quad();
+    g.doc()["animations"][0]["samplers"][0]["interpolation"] = "BOUNCE";
+    const std::string path = g.write_gltf(dir, "interp");
+    try {
+      load_gltf(path);
+      ADD_FAILURE() << "loaded";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("animation 0 'slide' sampler 0: interpolation 'BOUNCE'"), std::string::npos) << e.what();
+    }
+  }
+  {
+    GltfBuilder g = animated_quad();
+    g.doc()["animations"][0]["channels"][1]["target"]["path"] = "rotation";
+    g.doc()["animations"][0]["channels"][1]["sampler"] = 0;  // VEC3 values for a rotation
+    EXPECT_THROW(load_gltf(g.write_gltf(dir, "output")), InputError);
+  }
+  {
+    GltfBuilder g = animated_quad();
+    g.doc()["nodes"][1]["matrix"] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 5, 0, 1};
+    g.doc()["nodes"][1].erase("translation");
+    EXPECT_THROW(load_gltf(g.write_gltf(dir, "matrix")), InputError);  // animated nodes use TRS
+  }
+  {
+    GltfBuilder g = animated_quad();
+    g.doc()["animations"][0]["channels"][0]["target"]["path"] = "weights";
+    const Scene s = load_gltf(g.write_gltf(dir, "weights"));
+    EXPECT_EQ(s.animation.animations[0].channels.size(), 1u);
+    EXPECT_TRUE(std::any_of(s.warnings.begin(), s.warnings.end(), [](const std::string& w) { return w.find("weights") != std::string::npos; }));
+  }
+}
+
+TEST(GltfAnimation, ASequencePlaysTheAnimationFrameByFrame) {
+  // Three frames at 2 frames per second of the clock: the child at x = 0, 5 and 10. The camera
+  // frames the scene as it rests (the quad near the origin): by the last frame the quad has left
+  // the view, so it draws fewer primitives than the first.
+  TempDir dir;
+  const std::string scene = animated_quad().write_gltf(dir, "slide");
+  const std::string trace = dir.path("slide.trace");
+  using testing_support::run_cli;
+  const auto made = run_cli({"trace", "--technique", "plain_forward", "--scene", scene, "--lights", "4", "--resolution", "64x64",
+                             "--frames", "3", "--animation", "0", "--animation-fps", "2", "--out", trace});
+  ASSERT_EQ(made.code, 0) << made.err;
+  std::ifstream in(trace);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("pose animation=0 time=0.5\n"), std::string::npos);
+  const std::string db = dir.path("r.db");
+  const auto ran = run_cli({"run", "--trace", trace, "--db", db, "--threads", "1", "--stats", dir.path("s.json")});
+  ASSERT_EQ(ran.code, 0) << ran.err;
+  const std::vector<Trace> frames = read_trace_frames(trace);
+  ASSERT_EQ(frames.size(), 3u);
+  ASSERT_TRUE(frames[2].pose.has_value());
+  EXPECT_DOUBLE_EQ(frames[2].pose->time_s, 1.0);
+  // The frames' own primitives: the quad's two triangles in view at first, not at the end.
+  std::ifstream js(dir.path("s.json"));
+  const json stats = json::parse(js);
+  auto frame_primitives = [&](int k) {
+    return stats["stats"]["sequence/frame" + std::to_string(k)]["primitives_out"]["value"].get<double>();
+  };
+  EXPECT_GT(frame_primitives(0), frame_primitives(2));
+  // A pose the scene has no animation for is refused, naming the line.
+  std::string bad = text;
+  bad.replace(bad.find("pose animation=0"), 16, "pose animation=3");
+  std::ofstream(dir.path("bad.trace")) << bad;
+  const auto refused = run_cli({"run", "--trace", dir.path("bad.trace"), "--db", dir.path("bad.db")});
+  EXPECT_EQ(refused.code, 2);
+  EXPECT_NE(refused.err.find("bad.trace:"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("has 1 animation(s)"), std::string::npos) << refused.err;
 }
 
 }  // namespace

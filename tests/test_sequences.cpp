@@ -284,6 +284,13 @@ TEST(SequenceReplay, TheFirstFrameIsTheFrameAloneAndTheFramesAddUpToTheSequence)
     const RunOutcome alone = replay({frames[k]}, {"gpu.frames_in_flight=1"}, "alone" + std::to_string(k));
     invocations += alone.frame.totals.render.tsp.shader_invocations.as_double();
     covered += alone.frame.shape.covered_pixels.as_double();
+    // Every frame's functional figures are the frame's alone: each is simulated on its own.
+    EXPECT_EQ(stat(seq, frame_scope(k), "shader_invocations"), alone.frame.totals.render.tsp.shader_invocations.as_double()) << k;
+    EXPECT_EQ(stat(seq, frame_scope(k), "primitives_out"), alone.frame.totals.render.geometry.primitives_out.as_double()) << k;
+    EXPECT_EQ(stat(seq, frame_scope(k), "light_evaluations"),
+              alone.frame.totals.render.tsp.light_evaluations.as_double() +
+                  alone.frame.totals.compute.compute_light_evaluations.as_double())
+        << k;
     if (k == 0) {
       // Nothing runs before the first frame with one frame in flight: its time and DRAM bytes are
       // the frame's alone, to the cycle and the byte.

@@ -131,6 +131,10 @@ int cmd_trace(const std::vector<std::string>& args, std::ostream& out, std::ostr
       "frame: docs/sequences.md)")(
       "light-motion", po::value<std::string>()->default_value("static"),
       "how the lights move over the frames: static, orbit (each circles its place at half its range, 6 degrees per frame)")(
+      "animation", po::value<int>(),
+      "play the glTF scene's animation I over the frames: frame k is posed at k / --animation-fps seconds (docs/sequences.md)")(
+      "animation-fps", po::value<double>()->default_value(SequenceMotion::kDefaultAnimationFps),
+      "frames per second of the animation's clock")(
       "list", "list the techniques and their options");
   po::variables_map vm;
   if (!parse_command_options("trace", args, desc, nullptr, vm, out)) return 0;
@@ -155,6 +159,11 @@ int cmd_trace(const std::vector<std::string>& args, std::ostream& out, std::ostr
     throw InputError("--camera-path " + camera_path, "neither a camera path (static, orbit, flythrough) nor a camera path file");
   }
   motion.lights = parse_light_motion(vm["light-motion"].as<std::string>());
+  if (vm.count("animation")) {
+    motion.animation = vm["animation"].as<int>();
+    if (motion.animation < 0) throw InputError("--animation", "expected an animation index, 0 or more");
+    motion.animation_fps = vm["animation-fps"].as<double>();
+  }
   const std::vector<Trace> frames = generate_sequence(vm["technique"].as<std::string>(), setup, motion);
   write_trace_frames_file(frames, vm["out"].as<std::string>());
   const Trace& trace = frames.front();
@@ -162,8 +171,9 @@ int cmd_trace(const std::vector<std::string>& args, std::ostream& out, std::ostr
       << " lights, " << trace.commands.size() << " commands";
   if (frames.size() > 1) {
     out << " per frame, " << frames.size() << " frames (camera " << (motion.cameras.empty() ? to_string(motion.camera) : camera_path)
-        << ", lights "
-        << to_string(motion.lights) << ")";
+        << ", lights " << to_string(motion.lights);
+    if (motion.animation >= 0) out << ", animation " << motion.animation << " at " << motion.animation_fps << " fps";
+    out << ")";
   }
   out << ", hash " << trace_hash(frames) << "\n";
   return 0;

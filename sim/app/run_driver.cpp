@@ -14,6 +14,7 @@
 #include <functional>
 #include <future>
 #include <iomanip>
+#include <map>
 #include <optional>
 #include <ostream>
 #include <sstream>
@@ -395,6 +396,10 @@ bool needs_colours(const RunRequest& req, bool last) {
 struct RunInputs {
   std::vector<Trace> frames;
   std::shared_ptr<const Scene> scene;
+  /// Per frame, the scene it draws: `scene`, or `scene` posed at the frame's `pose` (an animated
+  /// glTF scene, one copy per distinct pose).
+  std::vector<std::shared_ptr<const Scene>> frame_scenes;
+  const Scene& scene_of(std::size_t k) const { return k < frame_scenes.size() ? *frame_scenes[k] : *scene; }
   /// The first frame: the technique, scene and options every frame shares.
   const Trace& trace() const { return frames.front(); }
 };
@@ -403,9 +408,23 @@ struct RunInputs {
 /// work. Colours (and the texels they sample) are loaded only for the images that read them: the
 /// statistics are the same either way (tests/test_speed_equivalence.cpp).
 RunInputs load_run_inputs(const RunRequest& req) {
-  RunInputs in{read_trace_frames(req.trace_path), nullptr};
+  RunInputs in{read_trace_frames(req.trace_path), nullptr, {}};
   in.scene = load_trace_scene(in.trace(), req.trace_path, SceneLoadOptions{.colour_texels = needs_colours(req, true)});
   for (const Trace& frame : in.frames) check_scene_references(frame, *in.scene, req.trace_path);
+  std::map<std::pair<int, double>, std::shared_ptr<const Scene>> poses;
+  for (const Trace& frame : in.frames) {
+    if (!frame.pose) {
+      in.frame_scenes.push_back(in.scene);
+      continue;
+    }
+    auto& posed = poses[{frame.pose->animation, frame.pose->time_s}];
+    if (!posed) {
+      auto copy = std::make_shared<Scene>(*in.scene);
+      pose_scene(*copy, static_cast<std::size_t>(frame.pose->animation), frame.pose->time_s);
+      posed = std::move(copy);
+    }
+    in.frame_scenes.push_back(posed);
+  }
   return in;
 }
 
@@ -492,7 +511,7 @@ FrameResult simulate_frames(const RunRequest& req, const RunInputs& in, WorkFeed
   FrameOptions options{.colour = needs_colours(req, true), .threads = req.threads, .feed = feed};
   TileSignatures signatures;  // writeback.transaction_elimination: from one frame to the next
   if (req.config.hw.writeback.transaction_elimination != 0) options.tile_signatures = &signatures;
-  if (n == 1) return simulate_frame(in.trace(), req.trace_path, *in.scene, req.config.hw, options);
+  if (n == 1) return simulate_frame(in.trace(), req.trace_path, in.scene_of(0), req.config.hw, options);
   if (feed == nullptr) throw std::logic_error("simulate_frames: a sequence needs a feed");
   options.sequence_frames = n;
   for (const Trace& t : in.frames) options.sequence_commands += timed_command_count(t);
@@ -500,7 +519,8 @@ FrameResult simulate_frames(const RunRequest& req, const RunInputs& in, WorkFeed
   for (int k = 0; k < n; ++k) {
     options.sequence_frame = k;
     options.colour = needs_colours(req, k == n - 1);
-    FrameResult frame = simulate_frame(in.frames[static_cast<std::size_t>(k)], req.trace_path, *in.scene, req.config.hw, options);
+    FrameResult frame = simulate_frame(in.frames[static_cast<std::size_t>(k)], req.trace_path, in.scene_of(static_cast<std::size_t>(k)),
+                                       req.config.hw, options);
     frame_totals.push_back(frame.totals);
     if (k == 0) {
       sum = std::move(frame);
@@ -594,8 +614,9 @@ void simulate_sampled(const RunRequest& req, const RunInputs& in, RunOutcome& o)
   const std::size_t n = in.frames.size();
   SampledSequence sampled;
   std::vector<std::vector<double>> rows;
-  for (const Trace& frame : in.frames) {
-    sampled.signatures.push_back(frame_signature(frame, *in.scene));
+  for (std::size_t k = 0; k < n; ++k) {
+    const Trace& frame = in.frames[k];
+    sampled.signatures.push_back(frame_signature(frame, in.scene_of(k)));
     rows.push_back(sampled.signatures.back().values());
   }
   sampled.plan = plan_sampling(rows, req.sample_frames);
@@ -607,7 +628,9 @@ void simulate_sampled(const RunRequest& req, const RunInputs& in, RunOutcome& o)
   std::vector<AddressRegion> first_layout;
   for (const SampleWindow& w : sampled.windows) {
     const auto first = in.frames.begin() + static_cast<std::ptrdiff_t>(w.first);
-    RunInputs window{std::vector<Trace>(first, first + static_cast<std::ptrdiff_t>(w.frames())), in.scene};
+    const auto first_scene = in.frame_scenes.begin() + static_cast<std::ptrdiff_t>(w.first);
+    RunInputs window{std::vector<Trace>(first, first + static_cast<std::ptrdiff_t>(w.frames())), in.scene,
+                     {first_scene, first_scene + static_cast<std::ptrdiff_t>(w.frames())}};
     const bool last_is_representative = std::find(sampled.plan.representative.begin(), sampled.plan.representative.end(),
                                                   w.last) != sampled.plan.representative.end();
     if (!last_is_representative) window.frames.back() = frame_after_representative(window.frames.back());

@@ -186,6 +186,11 @@ std::string some_names(const std::vector<std::string>& names) {
 }  // namespace
 
 void check_scene_references(const Trace& trace, const Scene& scene, const std::string& path) {
+  if (trace.pose && static_cast<std::size_t>(trace.pose->animation) >= scene.animation.animations.size()) {
+    throw InputError(path, trace.pose->line,
+                     "pose animation " + std::to_string(trace.pose->animation) + ": scene " + scene.source + " has " +
+                         std::to_string(scene.animation.animations.size()) + " animation(s)");
+  }
   std::vector<std::string> submeshes, materials;
   for (const auto& sm : scene.submeshes) submeshes.push_back(sm.name);
   for (const auto& m : scene.materials) materials.push_back(m.name);

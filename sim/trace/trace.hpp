@@ -97,6 +97,11 @@ inline constexpr float kMaxFovYDeg = 179.0f;
 inline constexpr float kMinClipDistance = 1e-6f;
 inline constexpr float kMaxClipDistance = 1e9f;
 inline constexpr float kMaxFarNearRatio = 16777216.0f;
+/// Largest animation index a `pose` line may name: a bound on the reader's integers, far above any
+/// file's count (the scene decides whether it has that animation).
+inline constexpr int kMaxPoseAnimation = 65535;
+/// Latest time a `pose` line may name, seconds (a day): keeps the key search in float range.
+inline constexpr double kMaxPoseSeconds = 86400.0;
 inline constexpr float kMinUpViewSine = 1e-3f;
 /// The largest world coordinate (eye, target, light position and radius), 1e9 world units: the
 /// same bound as the far plane, so squared distances stay inside float range.
@@ -417,6 +422,14 @@ struct Trace {
   int camera_line = 0;
   std::vector<Light> lights;
   std::vector<int> light_lines;               ///< source line of each light (same size as lights, or empty)
+  /// The frame's pose of an animated glTF scene (`pose animation=I time=S`): its glTF animation I
+  /// at S seconds (scene/animation.hpp pose_scene); absent: the scene as the file places it.
+  struct Pose {
+    int animation = 0;
+    double time_s = 0.0;
+    int line = 0;
+  };
+  std::optional<Pose> pose;
   std::vector<BufferDesc> buffers;
   std::vector<ShaderDesc> shaders;
   std::vector<PipelineState> pipelines;

@@ -120,6 +120,7 @@ class Reader {
   void on_scene(const Line& l);
   void on_frame(const Line& l);
   void on_camera(const Line& l);
+  void on_pose(const Line& l);
   void on_light(const Line& l);
   void on_buffer(const Line& l);
   void on_shader(const Line& l);
@@ -501,6 +502,7 @@ void Reader::command(const Line& l) {
   if (c == "scene") return on_scene(l);
   if (c == "frame") return on_frame(l);
   if (c == "camera") return on_camera(l);
+  if (c == "pose") return on_pose(l);
   if (c == "light") return on_light(l);
   if (c == "buffer") return on_buffer(l);
   if (c == "shader") return on_shader(l);
@@ -601,6 +603,26 @@ void Reader::on_frame(const Line& l) {
   }
   trace_.frame = f;
   have_frame_ = true;
+}
+
+void Reader::on_pose(const Line& l) {
+  declaration_allowed(l, true);
+  if (trace_.pose) fail(l.number, "duplicate 'pose' line (first at line " + std::to_string(trace_.pose->line) + ")");
+  no_positional(l);
+  check_keys(l, {"animation", "time"});
+  Trace::Pose pose;
+  const float animation = get_float(l, "animation");
+  if (!(animation >= 0 && animation <= static_cast<float>(kMaxPoseAnimation)) || animation != std::floor(animation)) {
+    fail(l.number, "animation " + q(require(l, "animation")) + " must be a whole number from 0 to " + std::to_string(kMaxPoseAnimation) +
+                       " (the glTF animation's index)");
+  }
+  pose.animation = static_cast<int>(animation);
+  pose.time_s = get_float(l, "time");
+  if (!(pose.time_s >= 0.0 && pose.time_s <= kMaxPoseSeconds)) {
+    fail(l.number, "time " + q(require(l, "time")) + " must be from 0 to " + std::to_string(static_cast<long>(kMaxPoseSeconds)) + " seconds");
+  }
+  pose.line = l.number;
+  trace_.pose = pose;
 }
 
 void Reader::on_camera(const Line& l) {
@@ -1088,6 +1110,7 @@ void Reader::next_frame(int frame_line) {
   trace_.camera = Camera{};
   trace_.camera_name.clear();
   trace_.camera_line = 0;
+  trace_.pose.reset();
   have_frame_ = false;
   have_camera_ = false;
   first_command_line_ = 0;

@@ -119,7 +119,7 @@ void write_header(const Trace& t, int version, std::ostream& out) {
   out << "\n";
 }
 
-/// What each frame has of its own: its `frame`, `camera` and `light` lines.
+/// What each frame has of its own: its `frame`, `camera`, `pose` and `light` lines.
 void write_frame_view(const Trace& t, std::ostream& out) {
   out << "frame width=" << t.frame.width << " height=" << t.frame.height << " samples=" << t.frame.samples << "\n";
   const auto& c = t.camera;
@@ -128,6 +128,7 @@ void write_frame_view(const Trace& t, std::ostream& out) {
       << " far=" << fmt_float(c.far_plane);
   if (!t.camera_name.empty()) out << " name=" << quote_if_needed(t.camera_name);
   out << "\n";
+  if (t.pose) out << "pose animation=" << t.pose->animation << " time=" << fmt_float(static_cast<float>(t.pose->time_s)) << "\n";
   for (const auto& l : t.lights) {
     const bool spot = l.type == Light::Type::Spot;
     out << "light " << (spot ? "spot" : "point") << " position=" << fmt_vec3(l.position)

@@ -512,7 +512,23 @@ class JsonTypeCheck {
     array(j, "skins", [&](const nlohmann::json& o, const std::string& p) {
       object(o, p, {{"inverseBindMatrices", JType::Uint}, {"skeleton", JType::Uint}, {"joints", JType::UintArray, true}});
     });
-    array(j, "animations", [&](const nlohmann::json& o, const std::string& p) { object(o, p, {}); });
+    array(j, "animations", [&](const nlohmann::json& o, const std::string& p) {
+      object(o, p, {{"name", JType::String}});
+      for (const char* list : {"channels", "samplers"}) {
+        const auto it = o.find(list);
+        if (it == o.end()) fail(p + "." + list, "required by the glTF 2.0 schema but missing");
+        if (!it->is_array()) fail(p + "." + list, "expected an array, found " + json_kind(*it));
+        for (std::size_t i = 0; i < it->size(); ++i) {
+          const std::string pp = p + "." + list + "[" + std::to_string(i) + "]";
+          if (std::string(list) == "channels") {
+            object((*it)[i], pp, {{"sampler", JType::Uint, true}, {"target", JType::Object, true}});
+            object((*it)[i]["target"], pp + ".target", {{"node", JType::Uint}, {"path", JType::String, true}});
+          } else {
+            object((*it)[i], pp, {{"input", JType::Uint, true}, {"output", JType::Uint, true}, {"interpolation", JType::String}});
+          }
+        }
+      }
+    });
   }
 
  private:
@@ -656,7 +672,11 @@ class Converter {
   static void smooth_face_normals(std::size_t vertex_count, SubMesh& sm);
   void check_node_graph();
   void place_node(int node, const glm::mat4& parent);
+  /// The node's transform in the file (its TRS, or its matrix).
+  NodeTransform node_transform(int node) const;
   glm::mat4 local_matrix(int node) const;
+  /// The node hierarchy and the animations (Scene::animation), after place_node.
+  void convert_animations();
   /// A base colour image decoded once: its texels and, if any texel is not opaque, its alpha mask.
   struct DecodedImage {
     int texels = -1;  ///< index into Scene::base_color_texels (-1: not decoded)
@@ -1241,38 +1261,120 @@ void Converter::check_node_graph() {
   parent_ = std::move(parent);
 }
 
-glm::mat4 Converter::local_matrix(int node_index) const {
+NodeTransform Converter::node_transform(int node_index) const {
   const tinygltf::Node& node = m_.nodes[static_cast<std::size_t>(node_index)];
-  glm::mat4 m(1.0f);
+  NodeTransform t;
   if (node.matrix.size() == 16) {
+    t.has_matrix = true;
     for (int c = 0; c < 4; ++c)
-      for (int r = 0; r < 4; ++r) m[c][r] = static_cast<float>(node.matrix[static_cast<std::size_t>(c * 4 + r)]);
+      for (int r = 0; r < 4; ++r) t.matrix[c][r] = static_cast<float>(node.matrix[static_cast<std::size_t>(c * 4 + r)]);
   } else {
-    glm::vec3 t(0.0f), s(1.0f);
-    glm::quat q(1.0f, 0.0f, 0.0f, 0.0f);
     if (node.translation.size() == 3)
-      t = glm::vec3(static_cast<float>(node.translation[0]), static_cast<float>(node.translation[1]),
-                    static_cast<float>(node.translation[2]));
+      t.translation = glm::vec3(static_cast<float>(node.translation[0]), static_cast<float>(node.translation[1]),
+                                static_cast<float>(node.translation[2]));
     else if (!node.translation.empty())
       fail(node_desc(node_index) + ": translation must have 3 values");
     if (node.rotation.size() == 4)
-      q = glm::quat(static_cast<float>(node.rotation[3]), static_cast<float>(node.rotation[0]),
-                    static_cast<float>(node.rotation[1]), static_cast<float>(node.rotation[2]));
+      t.rotation = glm::quat(static_cast<float>(node.rotation[3]), static_cast<float>(node.rotation[0]),
+                             static_cast<float>(node.rotation[1]), static_cast<float>(node.rotation[2]));
     else if (!node.rotation.empty())
       fail(node_desc(node_index) + ": rotation must have 4 values");
     if (node.scale.size() == 3)
-      s = glm::vec3(static_cast<float>(node.scale[0]), static_cast<float>(node.scale[1]),
-                    static_cast<float>(node.scale[2]));
+      t.scale = glm::vec3(static_cast<float>(node.scale[0]), static_cast<float>(node.scale[1]),
+                          static_cast<float>(node.scale[2]));
     else if (!node.scale.empty())
       fail(node_desc(node_index) + ": scale must have 3 values");
-    const float ql = glm::length(q);
-    if (ql > 0.0f && std::isfinite(ql)) q = q / ql;
-    m = glm::translate(glm::mat4(1.0f), t) * glm::mat4_cast(q) * glm::scale(glm::mat4(1.0f), s);
+    const float ql = glm::length(t.rotation);
+    if (ql > 0.0f && std::isfinite(ql)) t.rotation = t.rotation / ql;
   }
+  return t;
+}
+
+glm::mat4 Converter::local_matrix(int node_index) const {
+  const glm::mat4 m = node_transform(node_index).local();
   for (int c = 0; c < 4; ++c)
     for (int r = 0; r < 4; ++r)
       if (!std::isfinite(m[c][r])) fail(node_desc(node_index) + ": transform has a non-finite value");
   return m;
+}
+
+void Converter::convert_animations() {
+  SceneAnimation& out = scene_.animation;
+  for (std::size_t n = 0; n < m_.nodes.size(); ++n) {
+    out.nodes.push_back(SceneNode{.parent = parent_[n], .rest = node_transform(static_cast<int>(n))});
+  }
+  for (std::size_t a = 0; a < m_.animations.size(); ++a) {
+    const tinygltf::Animation& ga = m_.animations[a];
+    const std::string adesc = "animation " + std::to_string(a) + quoted_name(ga.name);
+    Animation anim;
+    anim.name = ga.name.empty() ? "animation " + std::to_string(a) : ga.name;
+    for (std::size_t c = 0; c < ga.channels.size(); ++c) {
+      const tinygltf::AnimationChannel& gc = ga.channels[c];
+      const std::string cdesc = adesc + " channel " + std::to_string(c);
+      if (gc.target_node < 0) continue;  // targets an extension's object: nothing to move here
+      check_index(gc.target_node, m_.nodes.size(), cdesc + " target", "node");
+      check_index(gc.sampler, ga.samplers.size(), cdesc, "sampler");
+      AnimationChannel ch;
+      ch.node = static_cast<std::uint32_t>(gc.target_node);
+      std::size_t components = 3;
+      if (gc.target_path == "translation") {
+        ch.path = AnimationPath::Translation;
+      } else if (gc.target_path == "rotation") {
+        ch.path = AnimationPath::Rotation;
+        components = 4;
+      } else if (gc.target_path == "scale") {
+        ch.path = AnimationPath::Scale;
+      } else if (gc.target_path == "weights") {
+        scene_.warnings.push_back(cdesc + ": morph target weights are not animated (the mesh keeps its base shape)");
+        continue;
+      } else {
+        fail(cdesc + ": target path '" + gc.target_path + "' is not translation, rotation, scale or weights");
+      }
+      if (out.nodes[ch.node].rest.has_matrix) {
+        fail(cdesc + ": animates " + node_desc(gc.target_node) + ", which has a matrix (glTF 2.0: animated nodes use TRS)");
+      }
+      const tinygltf::AnimationSampler& gs = ga.samplers[static_cast<std::size_t>(gc.sampler)];
+      const std::string sdesc = adesc + " sampler " + std::to_string(gc.sampler);
+      if (gs.interpolation.empty() || gs.interpolation == "LINEAR") {
+        ch.interpolation = AnimationInterpolation::Linear;
+      } else if (gs.interpolation == "STEP") {
+        ch.interpolation = AnimationInterpolation::Step;
+      } else if (gs.interpolation == "CUBICSPLINE") {
+        ch.interpolation = AnimationInterpolation::CubicSpline;
+      } else {
+        fail(sdesc + ": interpolation '" + gs.interpolation + "' is not LINEAR, STEP or CUBICSPLINE");
+      }
+      check_index(gs.input, m_.accessors.size(), sdesc + " input", "accessor");
+      check_index(gs.output, m_.accessors.size(), sdesc + " output", "accessor");
+      if (type_components(m_.accessors[static_cast<std::size_t>(gs.input)].type) != 1) fail(sdesc + " input: key times must be SCALAR");
+      if (static_cast<std::size_t>(type_components(m_.accessors[static_cast<std::size_t>(gs.output)].type)) != components) {
+        fail(sdesc + " output: a " + gc.target_path + " channel needs " + (components == 4 ? "VEC4" : "VEC3") + " values");
+      }
+      ch.times = read_accessor<float>(gs.input, sdesc + " input");
+      for (std::size_t k = 0; k < ch.times.size(); ++k) {
+        if (!std::isfinite(ch.times[k]) || ch.times[k] < 0.0f || (k > 0 && ch.times[k] < ch.times[k - 1])) {
+          fail(sdesc + " input: key time " + std::to_string(k) + " is negative, not finite or before the one before it");
+        }
+      }
+      const std::vector<float> v = read_accessor<float>(gs.output, sdesc + " output");
+      const std::size_t per_key = ch.interpolation == AnimationInterpolation::CubicSpline ? 3 : 1;
+      if (v.size() != ch.times.size() * per_key * components) {
+        fail(sdesc + " output: " + std::to_string(v.size() / components) + " values for " + std::to_string(ch.times.size()) +
+             " key times (" + std::to_string(per_key) + " per key expected)");
+      }
+      for (std::size_t i = 0; i < v.size(); i += components) {
+        glm::vec4 value(v[i], v[i + 1], v[i + 2], components == 4 ? v[i + 3] : 0.0f);
+        for (int k = 0; k < 4; ++k) {
+          if (!std::isfinite(value[k])) fail(sdesc + " output: value " + std::to_string(i / components) + " is not finite");
+        }
+        ch.values.push_back(value);
+      }
+      anim.duration_s = std::max(anim.duration_s, ch.times.back());
+      anim.channels.push_back(std::move(ch));
+    }
+    out.animations.push_back(std::move(anim));
+  }
+  if (!m_.skins.empty()) scene_.warnings.push_back("skins are not applied: skinned meshes keep their bind pose");
 }
 
 void Converter::place_node(int root, const glm::mat4& parent) {
@@ -1290,6 +1392,7 @@ void Converter::place_node(int root, const glm::mat4& parent) {
         inst.world = world;
         inst.node = node.name.empty() ? "node " + std::to_string(node_index) : node.name;
         scene_.instances.push_back(std::move(inst));
+        scene_.animation.instance_node.push_back(node_index);
       }
     }
     for (auto it = node.children.rbegin(); it != node.children.rend(); ++it) stack.emplace_back(*it, world);
@@ -1328,6 +1431,7 @@ void Converter::run() {
       if (!is_child[i]) roots.push_back(static_cast<int>(i));
   }
   for (int r : roots) place_node(r, glm::mat4(1.0f));
+  convert_animations();
   if (m_.nodes.empty() && !m_.meshes.empty()) {
     scene_.warnings.push_back("no nodes: each mesh is placed once at the origin");
     for (std::size_t mi = 0; mi < m_.meshes.size(); ++mi) {

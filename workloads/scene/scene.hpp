@@ -8,6 +8,8 @@
 
 #include <glm/glm.hpp>
 
+#include "scene/animation.hpp"
+
 namespace tbdr {
 
 /// How a material's fragments interact with hidden-surface removal.
@@ -119,6 +121,7 @@ struct Scene {
   std::vector<Instance> instances;
   Bounds bounds;                        ///< world-space bounds of all instances
   std::vector<std::string> warnings;    ///< non-fatal problems (missing textures, skipped lines/points)
+  SceneAnimation animation;             ///< node hierarchy and glTF animations (pose_scene)
 
   std::uint64_t triangle_count() const; ///< over instances
   std::uint64_t vertex_count() const;   ///< over instances

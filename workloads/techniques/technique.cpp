@@ -827,6 +827,16 @@ std::vector<Trace> generate_sequence(const std::string& technique, const TraceSe
     throw InputError("--frames " + std::to_string(motion.frames), "the camera path file holds " + std::to_string(motion.cameras.size()) +
                                                                       " cameras, fewer than the frames asked for");
   }
+  if (motion.animation >= 0) {
+    const std::size_t have = setup.scene != nullptr ? setup.scene->animation.animations.size() : 0;
+    if (static_cast<std::size_t>(motion.animation) >= have) {
+      throw InputError("--animation " + std::to_string(motion.animation),
+                       "scene " + setup.scene_spec + " has " + std::to_string(have) + " animation(s)");
+    }
+    if (!(motion.animation_fps > 0 && motion.animation_fps <= 1000)) {
+      throw InputError("--animation-fps", "expected more than 0 and at most 1000 frames per second");
+    }
+  }
   std::vector<Trace> frames;
   frames.reserve(static_cast<std::size_t>(motion.frames));
   for (int k = 0; k < motion.frames; ++k) {
@@ -834,6 +844,7 @@ std::vector<Trace> generate_sequence(const std::string& technique, const TraceSe
     at.camera = motion.cameras.empty() ? camera_on_path(setup.camera, motion.camera, k) : motion.cameras[static_cast<std::size_t>(k)];
     at.lights = lights_in_motion(setup.lights, motion.lights, k);
     frames.push_back(generate_trace(technique, at));
+    if (motion.animation >= 0) frames.back().pose = Trace::Pose{motion.animation, k / motion.animation_fps, 0};
   }
   // One allocation per buffer for the whole sequence: the largest any frame needs.
   for (std::size_t k = 1; k < frames.size(); ++k) {

@@ -92,6 +92,12 @@ struct SequenceMotion {
   LightMotion lights = LightMotion::Static;
   /// Frame k's camera, when given (a camera path file: read_camera_path_file), instead of `camera`'s path.
   std::vector<Camera> cameras;
+  /// The scene's glTF animation to play (-1: none): frame k is posed at k / animation_fps seconds
+  /// (the trace's `pose` line).
+  int animation = -1;
+  double animation_fps = kDefaultAnimationFps;
+  /// Frames per second of the animation's clock: a 60 Hz display's.
+  static constexpr double kDefaultAnimationFps = 60.0;
 };
 /// The most frames `tbdrsim trace --frames` writes: 10 s at 60 frames per second.
 inline constexpr int kMaxSequenceFrames = 600;
