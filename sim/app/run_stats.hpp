@@ -74,20 +74,26 @@ struct TextureFetchStats {
   }
 };
 
-// One frame of a sequence (scope "sequence/frame<k>": "sequence/frame0", "sequence/frame1", ...).
-#define TBDR_SEQUENCE_FRAME_STATS(X)                                                                        \
-  X(Accumulator, start_cycle, "cycles", Gauge, "Cycle the frame's first binning or dispatch started")        \
-  X(Accumulator, end_cycle, "cycles", Gauge, "Cycle its last render or dispatch finished")                   \
+// A frame's share of a sequence: its interval and what DRAM and energy it took in it (rows of
+// sequence/frame<k>, and of a sampled run's sampling/frame<k>, where a frame not simulated has its
+// representative's).
+#define TBDR_FRAME_INTERVAL_STATS(X)                                                                         \
   X(Accumulator, interval_cycles, "cycles", Gauge,                                                            \
     "Its end less the end of the frame before (the first: its end): the frame's share of the sequence")      \
   X(Accumulator, interval_ms, "ms", Gauge, "interval_cycles in milliseconds")                                 \
-  X(Accumulator, latency_cycles, "cycles", Gauge, "From its start to its end (overlaps the frame before with gpu.frames_in_flight = 2)") \
   X(Counter, dram_interval_bytes, "bytes", Gauge,                                                             \
     "Bytes DRAM transferred between the end of the frame before and its end (what reached the devices)")      \
   X(Accumulator, energy_mj, "mJ", Gauge,                                                                      \
     "Its energy: its units' work, the caches' and DRAM's energy in its interval, leakage over its interval")  \
   X(Accumulator, at_period_energy_mj, "mJ", Gauge,                                                            \
-    "energy_mj plus the idle power over gpu.frame_period_us - its interval (= energy_mj without a period)")    \
+    "energy_mj plus the idle power over gpu.frame_period_us - its interval (= energy_mj without a period)")
+
+// One frame of a sequence (scope "sequence/frame<k>": "sequence/frame0", "sequence/frame1", ...).
+#define TBDR_SEQUENCE_FRAME_STATS(X)                                                                        \
+  X(Accumulator, start_cycle, "cycles", Gauge, "Cycle the frame's first binning or dispatch started")        \
+  X(Accumulator, end_cycle, "cycles", Gauge, "Cycle its last render or dispatch finished")                   \
+  X(Accumulator, latency_cycles, "cycles", Gauge, "From its start to its end (overlaps the frame before with gpu.frames_in_flight = 2)") \
+  TBDR_FRAME_INTERVAL_STATS(X)                                                                                \
   X(Counter, primitives_out, "primitives", Gauge, "The frame's primitives after clipping and culling (geometry primitives_out)") \
   X(Counter, shader_invocations, "fragments", Gauge, "The frame's fragment shader invocations (tsp shader_invocations)") \
   X(Counter, light_evaluations, "evaluations", Gauge, "The frame's light evaluations, fragment and compute (tsp light_evaluations + compute_light_evaluations)")
@@ -127,11 +133,17 @@ struct SequenceSummaryStats {
 #define TBDR_SAMPLED_FRAME_STATS(X)                                                                          \
   X(Counter, group, "group", Gauge, "The group of frames with similar signatures it belongs to (one simulated per group)") \
   X(Counter, representative, "flag", Gauge, "1: simulated, and its figures stand for its group; 0: its figures are its representative's") \
-  X(Accumulator, interval_cycles, "cycles", Gauge, "Its interval (sequence/frame<k> interval_cycles): measured, or its representative's") \
-  X(Accumulator, interval_ms, "ms", Gauge, "interval_cycles in milliseconds")                                  \
-  X(Counter, dram_interval_bytes, "bytes", Gauge, "DRAM bytes in its interval: measured, or its representative's") \
-  X(Accumulator, energy_mj, "mJ", Gauge, "Its energy (sequence/frame<k> energy_mj): measured, or its representative's") \
-  X(Accumulator, at_period_energy_mj, "mJ", Gauge, "energy_mj plus the idle power over the rest of gpu.frame_period_us: measured, or its representative's")
+  TBDR_FRAME_INTERVAL_STATS(X)
+
+/// Copies a frame's interval figures (TBDR_FRAME_INTERVAL_STATS) from one set to another that has them.
+template <class From, class To>
+void copy_frame_interval(const From& from, To& to) {
+  to.interval_cycles = from.interval_cycles;
+  to.interval_ms = from.interval_ms;
+  to.dram_interval_bytes = from.dram_interval_bytes;
+  to.energy_mj = from.energy_mj;
+  to.at_period_energy_mj = from.at_period_energy_mj;
+}
 
 /// One frame of a sampled run: its group and its (measured or representative's) figures.
 struct SampledFrameStats {

@@ -28,11 +28,7 @@ std::vector<SequenceFrameStats> sampled_frame_figures(const SampledSequence& s) 
   for (std::size_t k = 0; k < s.plan.group_of.size(); ++k) {
     const SequenceFrameStats& m = s.measured[s.plan.group_of[k]];
     SequenceFrameStats f;
-    f.interval_cycles.set(m.interval_cycles.value());
-    f.interval_ms.set(m.interval_ms.value());
-    f.dram_interval_bytes.set(m.dram_interval_bytes.value());
-    f.energy_mj.set(m.energy_mj.value());
-    f.at_period_energy_mj.set(m.at_period_energy_mj.value());
+    copy_frame_interval(m, f);
     frames.push_back(f);
   }
   return frames;

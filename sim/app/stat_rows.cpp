@@ -231,11 +231,7 @@ std::vector<StatRecord> sampled_rows(const SampledSequence& s) {
     SampledFrameStats f;
     f.group.set(g);
     f.representative.set(s.plan.representative[g] == k ? 1 : 0);
-    f.interval_cycles.set(frames[k].interval_cycles.value());
-    f.interval_ms.set(frames[k].interval_ms.value());
-    f.dram_interval_bytes.set(frames[k].dram_interval_bytes.value());
-    f.energy_mj.set(frames[k].energy_mj.value());
-    f.at_period_energy_mj.set(frames[k].at_period_energy_mj.value());
+    copy_frame_interval(frames[k], f);
     const std::string scope = SampledFrameStats::kScopePrefix + std::to_string(k);
     collect_stats(f, scope, out);
     collect_stats(s.signatures[k], scope, out);
