@@ -5,7 +5,9 @@ technique (and variant) of one configuration and light count; the steady frames 
 before the last) are the solid part of each line (docs/sequences.md).
 
 Reads a tbdrsim results database (the sequence/frame<k> statistics of runs of traces with more than
-one frame). The selection must hold one configuration, scene, frame size and light count; of
+one frame). A sampled run (tbdrsim run --sample K) is drawn from its sampling/frame<k> rows: every
+frame's figures, its representative's where it was not simulated, with a ring on each simulated
+frame. The selection must hold one configuration, scene, frame size and light count; of
 repetitions, the first run is drawn.
 
     tbdrsim plot sequence --db study/study.db --out sequence.png
@@ -26,9 +28,14 @@ def main():
     _, fixed = pc.facets(runs)  # one configuration, scene, frame and light count
     first = pc.first_per_series(runs)
     ids = pc.int_list(first.run_id)
-    stats = pc.query(db, "SELECT run_id, CAST(substr(scope, 15) AS INTEGER) AS frame, name, value FROM stats "
-                         "WHERE run_id IN (%s) AND scope GLOB 'sequence/frame[0-9]*' AND name IN (%s)"
+    # Both prefixes are 14 characters: the frame number starts at character 15.
+    stats = pc.query(db, "SELECT run_id, substr(scope, 1, 8) AS kind, CAST(substr(scope, 15) AS INTEGER) AS frame, name, value "
+                         "FROM stats WHERE run_id IN (%s) AND (scope GLOB 'sequence/frame[0-9]*' OR scope GLOB 'sampling/frame[0-9]*') "
+                         "AND name IN (%s, 'representative')"
                      % (ids, ", ".join("'%s'" % p[0] for p in PANELS)))
+    # A sampled run: its sampling rows (every frame), not the representatives' sequence rows.
+    sampled = set(stats[stats.kind == "sampling"].run_id)
+    stats = stats[(stats.kind == "sampling") | ~stats.run_id.isin(sampled)]
     if stats.empty:
         pc.fail("no run of a sequence in the selection (a trace of more than one frame: tbdrsim trace --frames N, "
                 "docs/sequences.md)")
@@ -46,7 +53,12 @@ def main():
             x, y = v.frame.to_numpy(), v.value.to_numpy() * scale
             steady = (x >= 1) & ((x < frames - 1) | (frames <= 2))
             ax.plot(x, y, alpha=0.35, **style)
-            ax.plot(x[steady], y[steady], label=r.series, **style)
+            ax.plot(x[steady], y[steady], label=r.series + (" (sampled)" if r.run_id in sampled else ""), **style)
+            if r.run_id in sampled:
+                rep = set(s[(s.name == "representative") & (s.value == 1)].frame)
+                dots = [i for i, f in enumerate(x) if f in rep]
+                ax.plot(x[dots], y[dots], linestyle="none", marker="o", markersize=9, markerfacecolor="none",
+                        markeredgecolor="black", label="simulated frames" if ax is axes[0, 0] else None)
             ax.set_ylabel(label, fontsize=8)
             ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel("frame")

@@ -56,10 +56,15 @@ WITH f AS (
   -- One index lookup per figure (stats is keyed by run_id, scope, name): far faster than
   -- aggregating every statistic of every run.
   SELECT r.id AS run_id,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'width') AS width,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'height') AS height,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'samples_per_pixel') AS samples_per_pixel,
-    (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'lights') AS lights,
+    -- A sampled run has no frame/ rows: the size and lights of its trace are run parameters (trace.*).
+    coalesce((SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'width'),
+             (SELECT CAST(value AS REAL) FROM run_params WHERE run_id = r.id AND key = 'trace.width')) AS width,
+    coalesce((SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'height'),
+             (SELECT CAST(value AS REAL) FROM run_params WHERE run_id = r.id AND key = 'trace.height')) AS height,
+    coalesce((SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'samples_per_pixel'),
+             (SELECT CAST(value AS REAL) FROM run_params WHERE run_id = r.id AND key = 'trace.samples')) AS samples_per_pixel,
+    coalesce((SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'lights'),
+             (SELECT CAST(value AS REAL) FROM run_params WHERE run_id = r.id AND key = 'trace.lights')) AS lights,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'passes') AS passes,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'geometry_passes') AS geometry_passes,
     (SELECT value FROM stats WHERE run_id = r.id AND scope = 'frame/frame' AND name = 'dispatches') AS dispatches,

@@ -253,7 +253,7 @@ const std::vector<Expectation> kExpectations = {
     // Two runs of the 6-frame sequence, each with its summary, and a sampled run of it.
     {"docs/sequences.md",
      {"6 frames (camera orbit, lights orbit)", "sequence: 6 frames", "2|steady_interval_ms|", "6 frames sampled: 4 groups"},
-     {"orbit.trace", "seq.db", "seq.png"}},
+     {"orbit.trace", "seq.db", "seq.png", "sampled.png"}},
 };
 
 std::string replace_all(std::string s, const std::string& from, const std::string& to, int* count = nullptr) {

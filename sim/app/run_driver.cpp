@@ -703,6 +703,14 @@ RunRecord run_record(const RunRequest& req, const RunInputs& in, const RunOutcom
   if (req.sample_frames > 0) {
     rec.params.push_back({"run.sample", std::to_string(req.sample_frames), "command line"});
     rec.params.push_back({"run.sample_warmup", std::to_string(req.sample_warmup_frames), "command line"});
+    // No frame/frame rows (nothing simulated the whole sequence): the trace's size and lights, as
+    // v_param derives them from those rows for other runs.
+    const TraceFrame& f = in.trace().frame;
+    rec.params.push_back({"trace.width", std::to_string(f.width), "trace"});
+    rec.params.push_back({"trace.height", std::to_string(f.height), "trace"});
+    rec.params.push_back({"trace.samples", std::to_string(f.samples), "trace"});
+    rec.params.push_back({"trace.lights", std::to_string(in.trace().lights.size()), "trace"});
+    rec.params.push_back({"trace.resolution", std::to_string(f.width) + "x" + std::to_string(f.height), "trace"});
   }
   rec.stats = o.stats;
   collect_host_stats(o, rec.stats);
