@@ -19,8 +19,6 @@
 #include "scene/camera.hpp"
 #include "scene/gltf_loader.hpp"
 #include "scene/scene_library.hpp"
-#include "trace/trace.hpp"
-#include "cli_run.hpp"
 
 namespace tbdr {
 namespace {
@@ -940,44 +938,6 @@ TEST(GltfAnimation, BadChannelsAreRefusedNamingThem) {
     EXPECT_EQ(s.animation.animations[0].channels.size(), 1u);
     EXPECT_TRUE(std::any_of(s.warnings.begin(), s.warnings.end(), [](const std::string& w) { return w.find("weights") != std::string::npos; }));
   }
-}
-
-TEST(GltfAnimation, ASequencePlaysTheAnimationFrameByFrame) {
-  // Three frames at 2 frames per second of the clock: the child at x = 0, 5 and 10. The camera
-  // frames the scene as it rests (the quad near the origin): by the last frame the quad has left
-  // the view, so it draws fewer primitives than the first.
-  TempDir dir;
-  const std::string scene = animated_quad().write_gltf(dir, "slide");
-  const std::string trace = dir.path("slide.trace");
-  using testing_support::run_cli;
-  const auto made = run_cli({"trace", "--technique", "plain_forward", "--scene", scene, "--lights", "4", "--resolution", "64x64",
-                             "--frames", "3", "--animation", "0", "--animation-fps", "2", "--out", trace});
-  ASSERT_EQ(made.code, 0) << made.err;
-  std::ifstream in(trace);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("pose animation=0 time=0.5\n"), std::string::npos);
-  const std::string db = dir.path("r.db");
-  const auto ran = run_cli({"run", "--trace", trace, "--db", db, "--threads", "1", "--stats", dir.path("s.json")});
-  ASSERT_EQ(ran.code, 0) << ran.err;
-  const std::vector<Trace> frames = read_trace_frames(trace);
-  ASSERT_EQ(frames.size(), 3u);
-  ASSERT_TRUE(frames[2].pose.has_value());
-  EXPECT_DOUBLE_EQ(frames[2].pose->time_s, 1.0);
-  // The frames' own primitives: the quad's two triangles in view at first, not at the end.
-  std::ifstream js(dir.path("s.json"));
-  const json stats = json::parse(js);
-  auto frame_primitives = [&](int k) {
-    return stats["stats"]["sequence/frame" + std::to_string(k)]["primitives_out"]["value"].get<double>();
-  };
-  EXPECT_GT(frame_primitives(0), frame_primitives(2));
-  // A pose the scene has no animation for is refused, naming the line.
-  std::string bad = text;
-  bad.replace(bad.find("pose animation=0"), 16, "pose animation=3");
-  std::ofstream(dir.path("bad.trace")) << bad;
-  const auto refused = run_cli({"run", "--trace", dir.path("bad.trace"), "--db", dir.path("bad.db")});
-  EXPECT_EQ(refused.code, 2);
-  EXPECT_NE(refused.err.find("bad.trace:"), std::string::npos) << refused.err;
-  EXPECT_NE(refused.err.find("has 1 animation(s)"), std::string::npos) << refused.err;
 }
 
 }  // namespace
