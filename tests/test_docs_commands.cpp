@@ -236,7 +236,7 @@ const std::vector<Expectation> kExpectations = {
     // The sweep and its Slurm shards ran the same points: the merged database holds as many
     // finished runs as the sweep's (tile_size: 12 configurations x 3 traces = 36).
     {"README.md",
-     {"sweep tile_size: 36 point(s)", "merged into all.db: 36 run(s) copied"},
+     {"sweep tile_size: 36 point(s)", "merged into all.db: 36 run(s) copied", "30 frames sampled: 8 groups"},
      {"pf.trace", "results.db", "study_mobile/study.db", "sweep.db", "all.db", "tile.png", "slurm/tile_size.sbatch",
       "slurm/shard_0.db", "slurm/shard_1.db", "vkcube.trace", "validation/validation.db"}},
     {"docs/capture-import.md",
