@@ -343,6 +343,25 @@ TEST(SampledRun, WithEnoughWarmUpEachRepresentativeIsItsFrameOfTheFullRun) {
   EXPECT_EQ(reps, 4);
 }
 
+TEST(SampledRun, EveryRowIsTheSameAtOneAndTwoThreads) {
+  const std::string path = orbit_trace(8, "threads");
+  const std::string db = (std::filesystem::path(path).parent_path() / "r.db").string();
+  RunRequest req;
+  req.config = resolve_config({}, {});
+  req.trace_path = path;
+  req.db_path = db;
+  req.sample_frames = 4;
+  const RunOutcome one = run_one(req);
+  req.threads = 2;
+  const RunOutcome two = run_one(req);
+  ASSERT_EQ(one.stats.size(), two.stats.size());
+  for (std::size_t i = 0; i < one.stats.size(); ++i) {
+    EXPECT_EQ(one.stats[i].scope, two.stats[i].scope);
+    EXPECT_EQ(one.stats[i].name, two.stats[i].name);
+    EXPECT_EQ(one.stats[i].value, two.stats[i].value) << one.stats[i].scope << " " << one.stats[i].name;
+  }
+}
+
 TEST(SampledRun, BadRequestsExit2AndWriteNothing) {
   using testing_support::run_cli;
   const std::string path = orbit_trace(3, "bad");
