@@ -32,4 +32,14 @@ double stat(const Result& result, const std::string& scope, const std::string& n
   return stat(result.stats, scope, name);
 }
 
+/// Expects two runs' rows to be the same, row by row: scope, name and value.
+inline void expect_same_rows(const std::vector<StatRecord>& a, const std::vector<StatRecord>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].scope, b[i].scope);
+    EXPECT_EQ(a[i].name, b[i].name);
+    EXPECT_EQ(a[i].value, b[i].value) << a[i].scope << " " << a[i].name;
+  }
+}
+
 }  // namespace tbdr

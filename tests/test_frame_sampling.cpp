@@ -277,11 +277,11 @@ TEST(SampledRun, SamplingEveryFrameIsTheFullRun) {
   for (const StatRecord& r : sampled.stats) EXPECT_NE(r.scope.rfind("frame/", 0), 0u) << r.scope << " " << r.name;
 }
 
-TEST(SampledRun, FewerRepresentativesSimulateFewerFramesAndStayNearTheFullRun) {
+TEST(SampledRun, FewerRepresentativesSimulateFewerFramesAndStayWithinOneAndAHalfPercent) {
   // 16 orbiting frames, 4 representatives (frame 0, frame 15 and 2 groups): windows [0, 1], two of
-  // 3 frames and [14, 15], at most 10 frames.
-  // The estimate is within its own error estimate of the full run (measured: cycles +0.2 %, the
-  // estimate +-3 %); the test allows the error estimate or 2 %, whichever is larger.
+  // 3 frames and [14, 15], at most 10 frames. The estimate is within 1.5 % of the full run on
+  // cycles, DRAM bytes and energy (measured: about +0.35 % on each); its +- here is the fallback
+  // (only two middle groups to fit), far wider, and is checked only to be positive.
   const std::string path = orbit_trace(16, "fewer");
   const std::string db = (std::filesystem::path(path).parent_path() / "r.db").string();
   const RunOutcome full = run_trace(path, 0, db);
@@ -290,15 +290,10 @@ TEST(SampledRun, FewerRepresentativesSimulateFewerFramesAndStayNearTheFullRun) {
   const SamplingSummaryStats& e = sampled.sampled->estimate;
   EXPECT_EQ(e.groups.value(), 4u);
   EXPECT_LE(e.frames_simulated.value(), 10u);
-  auto within = [](double estimate, double truth, double error_pct) {
-    return std::abs(estimate / truth - 1.0) * 100.0 <= std::max(2.0, error_pct);
-  };
-  EXPECT_TRUE(within(e.total_cycles.value(), full.timing.frame_cycles, e.total_cycles_error_pct.value()))
-      << e.total_cycles.value() << " vs " << full.timing.frame_cycles << " +-" << e.total_cycles_error_pct.value() << " %";
-  EXPECT_TRUE(within(e.dram_bytes.value(), device_bytes(full), e.dram_bytes_error_pct.value()))
-      << e.dram_bytes.value() << " vs " << device_bytes(full);
-  EXPECT_TRUE(within(e.energy_mj.value(), full.energy.total_pj * 1e-9, e.energy_error_pct.value()))
-      << e.energy_mj.value() << " vs " << full.energy.total_pj * 1e-9;
+  EXPECT_NEAR(e.total_cycles.value() / full.timing.frame_cycles, 1.0, 0.015);
+  EXPECT_NEAR(e.dram_bytes.value() / device_bytes(full), 1.0, 0.015);
+  EXPECT_NEAR(e.energy_mj.value() / (full.energy.total_pj * 1e-9), 1.0, 0.015);
+  EXPECT_GT(e.total_cycles_error_pct.value(), 0);
   // Each representative's measured frame is stored as sequence/frame<k>; the others are not.
   std::size_t measured = 0;
   for (int k = 0; k < 16; ++k) {
@@ -354,12 +349,7 @@ TEST(SampledRun, EveryRowIsTheSameAtOneAndTwoThreads) {
   const RunOutcome one = run_one(req);
   req.threads = 2;
   const RunOutcome two = run_one(req);
-  ASSERT_EQ(one.stats.size(), two.stats.size());
-  for (std::size_t i = 0; i < one.stats.size(); ++i) {
-    EXPECT_EQ(one.stats[i].scope, two.stats[i].scope);
-    EXPECT_EQ(one.stats[i].name, two.stats[i].name);
-    EXPECT_EQ(one.stats[i].value, two.stats[i].value) << one.stats[i].scope << " " << one.stats[i].name;
-  }
+  expect_same_rows(one.stats, two.stats);
 }
 
 TEST(SampledRun, BadRequestsExit2AndWriteNothing) {

@@ -501,12 +501,7 @@ TEST(SequenceReplay, EveryRowIsTheSameAtOneAndTwoThreads) {
   const std::vector<Trace> frames = sequence("deferred", 3, CameraPath::Orbit, LightMotion::Orbit, 16, 160, 96);
   const RunOutcome one = replay(frames, {"writeback.transaction_elimination=1"}, "threads1", false, 1);
   const RunOutcome two = replay(frames, {"writeback.transaction_elimination=1"}, "threads2", false, 2);
-  ASSERT_EQ(one.stats.size(), two.stats.size());
-  for (std::size_t i = 0; i < one.stats.size(); ++i) {
-    EXPECT_EQ(one.stats[i].scope, two.stats[i].scope);
-    EXPECT_EQ(one.stats[i].name, two.stats[i].name);
-    EXPECT_EQ(one.stats[i].value, two.stats[i].value) << one.stats[i].scope << " " << one.stats[i].name;
-  }
+  expect_same_rows(one.stats, two.stats);
 }
 
 TEST(SequenceAddresses, ALaterFrameUsesTheRegionsTheFrameBeforeAllocated) {

@@ -653,8 +653,9 @@ void simulate_sampled(const RunRequest& req, const RunInputs& in, RunOutcome& o)
   o.timing_seconds = 0;
   o.timing_cpu_seconds = timing_cpu;
   o.cpu_seconds = std::max(0.0, cpu_seconds() - c_sim - timing_cpu);
-  o.stats = sampled_rows(sampled);
-  o.sampled = SampledOutcome{summarize_sampled(sampled), summarize_sampled_sequence(sampled)};
+  const SamplingSummaryStats estimate = summarize_sampled(sampled);
+  o.sampled = SampledOutcome{estimate, summarize_sampled_sequence(sampled, estimate)};
+  o.stats = sampled_rows(sampled, o.sampled->estimate, o.sampled->sequence);
 }
 
 /// Appends the run's host figures (scope frame/host): no simulated figure depends on them.

@@ -78,9 +78,8 @@ SamplingSummaryStats summarize_sampled(const SampledSequence& s) {
   return out;
 }
 
-SequenceSummaryStats summarize_sampled_sequence(const SampledSequence& s) {
-  const SamplingSummaryStats summary = summarize_sampled(s);
-  return summarize_frames(sampled_frame_figures(s), summary.total_ms.value(), summary.energy_mj.value() * 1e9);
+SequenceSummaryStats summarize_sampled_sequence(const SampledSequence& s, const SamplingSummaryStats& estimate) {
+  return summarize_frames(sampled_frame_figures(s), estimate.total_ms.value(), estimate.energy_mj.value() * 1e9);
 }
 
 }  // namespace tbdr

@@ -48,8 +48,8 @@ struct SampledSequence {
 SamplingSummaryStats summarize_sampled(const SampledSequence& s);
 
 /// The sequence's summary (sequence/summary) over every frame's figures, measured or its
-/// representative's, with the estimated totals' time and energy.
-SequenceSummaryStats summarize_sampled_sequence(const SampledSequence& s);
+/// representative's, with the estimated totals' time and energy (`estimate`: summarize_sampled's).
+SequenceSummaryStats summarize_sampled_sequence(const SampledSequence& s, const SamplingSummaryStats& estimate);
 
 /// Each frame's figures (interval, DRAM bytes, energy): its own where it was simulated for its
 /// group, else its representative's.

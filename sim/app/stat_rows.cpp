@@ -223,7 +223,7 @@ std::vector<StatRecord> run_rows(const FrameResult& frame, const TimingResult& t
   return out;
 }
 
-std::vector<StatRecord> sampled_rows(const SampledSequence& s) {
+std::vector<StatRecord> sampled_rows(const SampledSequence& s, const SamplingSummaryStats& estimate, const SequenceSummaryStats& summary) {
   std::vector<StatRecord> out;
   const std::vector<SequenceFrameStats> frames = sampled_frame_figures(s);
   for (std::size_t k = 0; k < frames.size(); ++k) {
@@ -236,11 +236,11 @@ std::vector<StatRecord> sampled_rows(const SampledSequence& s) {
     collect_stats(f, scope, out);
     collect_stats(s.signatures[k], scope, out);
   }
-  collect_stats(summarize_sampled(s), SamplingSummaryStats::kScope, out);
+  collect_stats(estimate, SamplingSummaryStats::kScope, out);
   for (std::size_t g = 0; g < s.plan.groups(); ++g) {
     collect_stats(s.measured[g], SequenceFrameStats::kScopePrefix + std::to_string(s.plan.representative[g]), out);
   }
-  collect_stats(summarize_sampled_sequence(s), SequenceSummaryStats::kScope, out);
+  collect_stats(summary, SequenceSummaryStats::kScope, out);
   return out;
 }
 

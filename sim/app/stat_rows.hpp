@@ -78,6 +78,7 @@ SequenceSummaryStats summarize_frames(const std::vector<SequenceFrameStats>& fra
 /// representative, figures, signature), sampling/summary, sequence/frame<k> for the
 /// representatives as their windows ran them, and sequence/summary over every frame's figures
 /// (measured or its representative's).
-std::vector<StatRecord> sampled_rows(const SampledSequence& s);
+/// `estimate`, `summary`: summarize_sampled's and summarize_sampled_sequence's of `s`.
+std::vector<StatRecord> sampled_rows(const SampledSequence& s, const SamplingSummaryStats& estimate, const SequenceSummaryStats& summary);
 
 }  // namespace tbdr
