@@ -781,12 +781,12 @@ void print_sampled_summary(const RunOutcome& o, std::ostream& out) {
       << " frames sampled: " << e.groups.value() << " groups, " << e.frames_simulated.value() << " frames simulated in "
       << e.windows.value() << (e.windows.value() == 1 ? " window, " : " windows, ") << stat_text(o.wall_seconds) << " s\n";
   out << "  estimated sequence: " << stat_text(e.total_cycles.value()) << " cycles (+-" << stat_text(e.total_cycles_error_pct.value())
-      << " %), " << stat_text(e.total_ms.value()) << " ms; DRAM " << stat_text(e.dram_bytes.value() / 1e6) << " MB (+-"
+      << " %), " << stat_text(e.total_ms.value()) << " ms; DRAM " << stat_text(e.dram_bytes.value() / 1e6) << " MB at the devices (+-"
       << stat_text(e.dram_bytes_error_pct.value()) << " %); energy " << stat_text(e.energy_mj.value()) << " mJ (+-"
       << stat_text(e.energy_error_pct.value()) << " %)\n";
   out << "  estimated frames: steady " << stat_text(q.steady_interval_ms.value()) << " ms per frame (p95 "
       << stat_text(q.p95_interval_ms.value()) << ", " << stat_text(q.steady_fps.value()) << " fps), DRAM "
-      << stat_text(q.steady_dram_mb_per_frame.value()) << " MB and " << stat_text(q.steady_energy_per_frame_mj.value())
+      << stat_text(q.steady_dram_mb_per_frame.value()) << " MB (at the devices) and " << stat_text(q.steady_energy_per_frame_mj.value())
       << " mJ per steady frame\n";
   out << "  (+-: two standard errors had each group's frame been drawn at random from it, its spread predicted from the signatures; "
          "rows sampling/summary and sampling/frame<k>)\n";
