@@ -502,6 +502,9 @@ class FrameSimulator {
     RenderContext& ctx = run->ctx;
     static_cast<FrameInputs&>(ctx) = inputs_;
     ctx.pass = &pass;
+    ctx.render_area = pass.area ? PixelRect{static_cast<int>(pass.area->x0), static_cast<int>(pass.area->y0),
+                                            static_cast<int>(pass.area->x1), static_cast<int>(pass.area->y1)}
+                                : PixelRect{0, 0, viewport_.width_px, viewport_.height_px};
     ctx.images = &result_.images;
     ctx.defer_shading = hw_.gpu.mode == GpuMode::Tbdr;
     ctx.framebuffer_in_dram = hw_.gpu.mode == GpuMode::Imr;

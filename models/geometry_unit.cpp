@@ -470,7 +470,7 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
     e.varyings = draw.shader->varyings;
     e.clip.viewport = viewport_;
     e.clip.cull = mat.double_sided ? FaceCull::None : face_cull_of(draw.pipeline->cull);
-    e.scissor = scissor_of(cmd, viewport_);
+    e.scissor = intersect(scissor_of(cmd, viewport_), area_);
 
     // What vertex shading and clipping make of it: kept from an earlier draw with a cull box,
     // else made now (and kept, for a draw with a cull box, within the budget).
@@ -627,7 +627,7 @@ void GeometryUnit::draw_generated(const DrawContext& draw, std::uint32_t draw_in
   e.varyings = draw.shader->varyings;
   e.clip.viewport = viewport_;
   e.clip.cull = face_cull_of(draw.pipeline->cull);
-  e.scissor = scissor_of(cmd, viewport_);
+  e.scissor = intersect(scissor_of(cmd, viewport_), area_);
   constexpr std::uint64_t kPositionBytes = 16;  // generated vertices: one vec4 position each
   const glm::vec3 zero3[3] = {};
   const glm::vec2 zero2[3] = {};

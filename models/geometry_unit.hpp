@@ -53,6 +53,9 @@ class GeometryUnit {
  public:
   GeometryUnit(const HwConfig& hw, const Scene* scene, const std::vector<Light>& lights, const CameraXform& camera,
                const Viewport& viewport);
+  /// The pass's render area (RenderContext::render_area): every draw's scissor rectangle is cut
+  /// to it. Default: the whole viewport.
+  void set_render_area(const PixelRect& area) { area_ = area; }
 
   /// Processes one draw: delivers its accepted primitives to `out` as they are set up, and
   /// appends one object per drawn instance (or proxy) to `object_lights` (the lights touching the
@@ -188,6 +191,7 @@ class GeometryUnit {
   mutable bool set_up_posted_ = false;  ///< the pool's job is a window's set-up (settle())
   CameraXform camera_;
   Viewport viewport_;
+  PixelRect area_{0, 0, viewport_.width_px, viewport_.height_px};
 };
 
 /// The hidden-surface class of a draw's fragments for a material (kNoMaterial for generated geometry).

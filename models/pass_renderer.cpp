@@ -52,6 +52,12 @@ PassRenderer::PassRenderer(RenderContext& ctx, const HwConfig& frame_hw, PassSta
       tile_memory_(ctx, stats.tile_memory),
       order_(tile_order(tiler_.tiles_x(), tiler_.tiles_y(), hw_.tiling.tile_order)),
       resumed_(static_cast<std::size_t>(tiler_.tile_count()), 0) {
+  // The render area: the draws are scissored to it, and the render has only the tiles that
+  // overlap it (a pass at its own size, as a shadow map or a blur target).
+  if (ctx_.render_area.empty()) ctx_.render_area = {0, 0, ctx_.viewport.width_px, ctx_.viewport.height_px};
+  geometry_.set_render_area(ctx_.render_area);
+  tiler_.set_render_area(ctx_.render_area);
+  std::erase_if(order_, [this](int t) { return !tiler_.in_render_area(t); });
   // After tile_memory_: it points ctx.pls at the pass's pixel local storage, which the TSPs read.
   for (unsigned w = 0; w < pool_.size(); ++w) workers_.push_back(std::make_unique<TileWorker>(ctx_));
   geometry_.use_pool(&pool_);  // binning sets up on the pool when it is free (not while tiles render)
@@ -149,10 +155,9 @@ void PassRenderer::accept(const Primitive& p, const VertexKeys& keys, std::optio
 /// batches (FrameWork::immediate), each carrying its own geometry work. The batches share the
 /// ROP caches in order: they render one after another, on the first worker.
 void PassRenderer::render_batch(bool last) {
-  const PixelRect frame{0, 0, ctx_.viewport.width_px, ctx_.viewport.height_px};
   batch_indices_.resize(ctx_.prims.size());
   std::iota(batch_indices_.begin(), batch_indices_.end(), 0u);
-  TileWork tw = merge(render_tile(*workers_[0], 0, frame, batch_indices_, false, first_batch_, last));
+  TileWork tw = merge(render_tile(*workers_[0], 0, ctx_.render_area, batch_indices_, false, first_batch_, last));
   tw.geometry = binning_since_last_render();
   immediate_.tiles.push_back(std::move(tw));
   first_batch_ = false;
@@ -232,7 +237,7 @@ void PassRenderer::prepare_render(bool partial) {
   jobs_.clear();
   for (int t : order_) {
     if (partial && tiler_.tile_primitives(t).empty()) continue;  // untouched: nothing to render yet
-    for (const PixelRect& r : tile_memory_.strips(tiler_.tile_rect(t))) jobs_.push_back({t, r});
+    for (const PixelRect& r : tile_memory_.strips(intersect(tiler_.tile_rect(t), ctx_.render_area))) jobs_.push_back({t, r});
   }
   // Before the next pass is set up: its draws may read the surfaces this one stores.
   fresh_ = allocate_surfaces();

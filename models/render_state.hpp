@@ -329,6 +329,10 @@ struct FrameInputs {
 struct RenderContext : FrameInputs {
   SamplePattern pattern;
   const PassDesc* pass = nullptr;
+  /// The pass's render area in the frame's pixels (PassDesc::area; the whole viewport when it
+  /// has none): only its pixels are rasterised, loaded, cleared and stored, only the tiles that
+  /// overlap it are rendered.
+  PixelRect render_area;
   FrameImages* images = nullptr;
   bool defer_shading = true;                  ///< tbdr: tag buffer HSR; tbr/imr: shade at early-Z
   bool framebuffer_in_dram = false;           ///< imr: attachments live in DRAM, no tile memory

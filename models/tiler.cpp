@@ -15,8 +15,16 @@ Tiler::Tiler(const HwConfig& hw, const Viewport& viewport, const SamplePattern& 
       tiles_x_((viewport.width_px + tile_w_ - 1) / tile_w_),
       tiles_y_((viewport.height_px + tile_h_ - 1) / tile_h_),
       viewport_(viewport),
+      area_{0, 0, viewport.width_px, viewport.height_px},
+      region_tiles_(static_cast<std::uint64_t>(tiles_x_) * static_cast<std::uint64_t>(tiles_y_)),
       tiles_(static_cast<std::size_t>(tiles_x_) * static_cast<std::size_t>(tiles_y_)),
       open_keys_(static_cast<std::uint32_t>(hw.tiling.prim_block_max_vertices)) {}
+
+void Tiler::set_render_area(const PixelRect& area) {
+  area_ = area;
+  region_tiles_ = 0;
+  for (int t = 0; t < tile_count(); ++t) region_tiles_ += in_render_area(t) ? 1 : 0;
+}
 
 Tiler::BlockVertices::BlockVertices(std::uint32_t max_vertices) {
   // At most half full (a block holds at most max_vertices keys): short probe runs.
@@ -79,7 +87,7 @@ std::uint64_t Tiler::allocated_with(std::uint64_t extra_block_bytes, std::uint64
   const std::uint64_t open_bytes = open_ ? block_bytes(open_keys_.size(), open_prims_, open_varyings_) : 0;
   const std::uint64_t data = closed_block_bytes_ + open_bytes + extra_block_bytes;
   const std::uint64_t ctrl = (ctrl_blocks_ + extra_ctrl_blocks) * static_cast<std::uint64_t>(hw_.tiling.control_stream_block_bytes);
-  const std::uint64_t headers = static_cast<std::uint64_t>(hw_.tiling.region_header_bytes) * tiles_.size();
+  const std::uint64_t headers = static_cast<std::uint64_t>(hw_.tiling.region_header_bytes) * region_tiles_;
   auto pages = [page](std::uint64_t b) { return (b + page - 1) / page * page; };
   return pages(data) + pages(ctrl) + pages(headers);
 }
@@ -191,7 +199,7 @@ void Tiler::finish_render(TilerStats& stats, DramTraffic& dram) {
     o += block_sizes_[b];
   }
   const std::uint64_t ctrl_bytes = ctrl_blocks_ * static_cast<std::uint64_t>(hw_.tiling.control_stream_block_bytes);
-  const std::uint64_t headers = header * tiles_.size();
+  const std::uint64_t headers = header * region_tiles_;  // the layout keeps the grid's places; only the area's are written
   stats.primitive_blocks += block_sizes_.size();
   stats.pb_vertices += block_vertices_total_;
   stats.pb_primitive_block_bytes += closed_block_bytes_;

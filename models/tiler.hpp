@@ -57,6 +57,13 @@ class Tiler {
   int tile_height() const { return tile_h_; }
   /// Pixel rectangle of tile t (clipped to the viewport).
   PixelRect tile_rect(int t) const;
+  /// The render's area (RenderContext::render_area): region headers are written for the tiles
+  /// that overlap it only, as for a render target of that size. Default: the whole viewport.
+  void set_render_area(const PixelRect& area);
+  /// Whether tile t overlaps the render area (the tiles a render has).
+  bool in_render_area(int t) const { return !intersect(tile_rect(t), area_).empty(); }
+  /// The render area.
+  const PixelRect& render_area() const { return area_; }
 
   /// Bins primitive `index` of the render's primitive table, whose vertices are `keys`. Returns
   /// Full, binning nothing, when the page-rounded parameter buffer would exceed its capacity:
@@ -100,6 +107,8 @@ class Tiler {
   TileTest test_;
   int tile_w_, tile_h_, tiles_x_, tiles_y_;
   Viewport viewport_;
+  PixelRect area_;                  ///< the render area (set_render_area)
+  std::uint64_t region_tiles_ = 0;  ///< tiles overlapping it: one region header each
   std::vector<TileBin> tiles_;
   std::vector<std::uint64_t> block_sizes_;  ///< bytes of each closed block
   // The parameter buffer's layout, built by finish_render before the tiles read it (from

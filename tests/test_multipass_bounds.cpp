@@ -90,7 +90,7 @@ TEST(TraceDrawBounds, OlderVersionsReadButRefuseTheKeys) {
   EXPECT_EQ(parse(with_draw("draw scene pipeline=p", 2)).version, 2);
   expect_error(with_draw("draw scene pipeline=p scissor=0,0,8,8", 2), 12, "'scissor' needs trace version 3 (this trace is version 2)");
   expect_error(with_draw("draw scene pipeline=p cull_min=0,0,0 cull_max=1,1,1", 1), 12, "'cull_min' needs trace version 3");
-  expect_error("tbdrsim-trace 5\n", 1, "trace version 5 is newer than this reader (4)");
+  expect_error("tbdrsim-trace 6\n", 1, "trace version 6 is newer than this reader (5)");
 }
 
 TEST(TraceDrawBounds, MalformedBoundsAreRefusedAtTheirLine) {

@@ -335,7 +335,7 @@ TEST(TraceErrors, UnknownVersionIsRefused) {
     parse("tbdrsim-trace 7\n");
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("t.trace:1: trace version 7 is newer than this reader (4)", 0), 0u)
+    EXPECT_EQ(std::string(e.what()).rfind("t.trace:1: trace version 7 is newer than this reader (5)", 0), 0u)
         << e.what();
   }
   expect_error("tbdrsim-trace 0\n", 1, "'0'");

@@ -25,7 +25,7 @@
 namespace tbdr {
 
 /// The trace format version this build reads and writes. See docs/trace-format.md for what bumps it.
-inline constexpr int kTraceVersion = 4;
+inline constexpr int kTraceVersion = 5;
 /// The version that lets an attachment name a `content=image` buffer (a pass loading the frame a
 /// dispatch wrote); version 1 readers refuse the name as a duplicate.
 inline constexpr int kImageAttachmentVersion = 2;
@@ -36,6 +36,9 @@ inline constexpr int kDrawBoundsVersion = 3;
 /// the one before starts the next); version 3 readers refuse the second `frame` line. A
 /// single-frame trace is written as version 3, which every reader since then reads the same.
 inline constexpr int kSequenceVersion = 4;
+/// The version that gives a pass its own render area (`pass NAME area=x0,y0,x1,y1`: a shadow map,
+/// a blur target or a post-processing pass at its own size); version 4 readers refuse the key.
+inline constexpr int kPassAreaVersion = 5;
 
 /// Bytes one light occupies in a GPU light buffer: 3 x vec4 (position+radius, color+intensity,
 /// direction+cos_inner+cos_outer packed with std140 padding). A `content=lights` buffer holds at
@@ -372,6 +375,11 @@ struct PassDesc {
   std::vector<Attachment> attachments;
   std::vector<PlsVariable> pls;
   std::vector<DrawCmd> draws;
+  /// The render area (version 5, Vulkan's VkRenderPassBeginInfo::renderArea): the pass renders,
+  /// loads, clears and stores only the pixels [x0, x1) x [y0, y1) of the frame's grid, and only
+  /// the tiles that overlap it exist for it. Draws keep the frame's viewport (as in Vulkan, the
+  /// area does not rescale them). None: the whole frame.
+  std::optional<ScissorRect> area;
   int line = 0;      ///< the `pass` line
   int end_line = 0;  ///< the `end` line
   /// Bytes of pixel local storage per pixel (sum of the variables).

@@ -99,13 +99,14 @@ class Reader {
   std::string get_ident(const Line& l, std::string_view key) const;
   std::vector<std::string> get_ident_list(const Line& l, std::string_view key) const;
   LightSelection get_lights(const Line& l, std::string_view key) const;
-  /// A draw's `scissor=x0,y0,x1,y1` (version 3): integers up to kMaxFrameSide, x0 < x1, y0 < y1.
-  std::optional<ScissorRect> get_scissor(const Line& l) const;
+  /// A pixel rectangle `key=x0,y0,x1,y1` (a draw's `scissor`, version 3; a pass's `area`,
+  /// version 5): integers up to kMaxFrameSide, x0 < x1, y0 < y1.
+  std::optional<ScissorRect> get_rect(const Line& l, std::string_view key, int version) const;
   /// A scene draw's `cull_min=` and `cull_max=` (version 3, both or neither): min <= max per
   /// component, each within kMaxWorldCoordinate.
   std::optional<CullBox> get_cull_box(const Line& l) const;
-  /// Refuses `key` in a trace older than kDrawBoundsVersion.
-  void need_draw_bounds_version(const Line& l, std::string_view key) const;
+  /// Refuses `key` in a trace older than `version` (kDrawBoundsVersion by default).
+  void need_version(const Line& l, std::string_view key, int version = kDrawBoundsVersion) const;
   template <typename E>
   E get_enum(const Line& l, std::string_view key, std::optional<E> (*parse)(std::string_view),
              std::optional<E> def = std::nullopt) const;
@@ -403,37 +404,37 @@ LightSelection Reader::get_lights(const Line& l, std::string_view key) const {
   return sel;
 }
 
-void Reader::need_draw_bounds_version(const Line& l, std::string_view key) const {
-  if (trace_.version < kDrawBoundsVersion)
-    fail(l.number, "key " + q(key) + " needs trace version " + std::to_string(kDrawBoundsVersion) +
+void Reader::need_version(const Line& l, std::string_view key, int version) const {
+  if (trace_.version < version)
+    fail(l.number, "key " + q(key) + " needs trace version " + std::to_string(version) +
                        " (this trace is version " + std::to_string(trace_.version) + ")");
 }
 
-std::optional<ScissorRect> Reader::get_scissor(const Line& l) const {
-  const auto* v = find(l, "scissor");
+std::optional<ScissorRect> Reader::get_rect(const Line& l, std::string_view key, int version) const {
+  const auto* v = find(l, key);
   if (!v) return std::nullopt;
-  need_draw_bounds_version(l, "scissor");
+  need_version(l, key, version);
   std::uint32_t c[4] = {};
   std::size_t start = 0;
   for (int i = 0; i < 4; ++i) {
     const auto comma = v->find(',', start);
     const bool last = i == 3;
     if (last != (comma == std::string::npos))
-      fail(l.number, "malformed scissor " + q(*v) + " (expected x0,y0,x1,y1 in pixels)");
+      fail(l.number, "malformed " + std::string(key) + " " + q(*v) + " (expected x0,y0,x1,y1 in pixels)");
     c[i] = static_cast<std::uint32_t>(
-        to_u64(l, "scissor", v->substr(start, last ? std::string::npos : comma - start), kMaxFrameSide));
+        to_u64(l, key, v->substr(start, last ? std::string::npos : comma - start), kMaxFrameSide));
     start = comma + 1;
   }
   const ScissorRect r{c[0], c[1], c[2], c[3]};
   if (r.x0 >= r.x1 || r.y0 >= r.y1)
-    fail(l.number, "scissor " + q(*v) + " is empty (it needs x0 < x1 and y0 < y1: pixels [x0,x1) x [y0,y1))");
+    fail(l.number, std::string(key) + " " + q(*v) + " is empty (it needs x0 < x1 and y0 < y1: pixels [x0,x1) x [y0,y1))");
   return r;
 }
 
 std::optional<CullBox> Reader::get_cull_box(const Line& l) const {
   const bool has_min = find(l, "cull_min") != nullptr, has_max = find(l, "cull_max") != nullptr;
   if (!has_min && !has_max) return std::nullopt;
-  need_draw_bounds_version(l, has_min ? "cull_min" : "cull_max");
+  need_version(l, has_min ? "cull_min" : "cull_max");
   if (!has_min) fail(l.number, "cull_max without cull_min (the culling box needs both corners)");
   if (!has_max) fail(l.number, "cull_min without cull_max (the culling box needs both corners)");
   CullBox b;
@@ -807,9 +808,15 @@ void Reader::on_pass(const Line& l) {
   if (current_pass_)
     fail(l.number, "pass " + q(l.positional) + " inside pass " + q(pass().name) + " (missing 'end' for the pass at line " +
                        std::to_string(pass().line) + ")");
-  check_keys(l, {});
+  check_keys(l, {"area"});
   PassDesc p;
   p.name = positional_ident(l, "pass name");
+  p.area = get_rect(l, "area", kPassAreaVersion);
+  if (p.area && (p.area->x1 > static_cast<std::uint32_t>(trace_.frame.width) ||
+                 p.area->y1 > static_cast<std::uint32_t>(trace_.frame.height)))
+    fail(l.number, "area " + q(require(l, "area")) + " reaches beyond the frame (" + std::to_string(trace_.frame.width) +
+                       "x" + std::to_string(trace_.frame.height) +
+                       "): the frame is the largest surface, and every pass's area lies inside it");
   if (auto it = pass_lines_.find(p.name); it != pass_lines_.end())
     fail(l.number, "duplicate pass name " + q(p.name) + " (first at line " + std::to_string(it->second) + ")");
   count_command(l);
@@ -978,7 +985,7 @@ void Reader::on_draw(const Line& l) {
   }
   if (d.geometry == GeometryKind::LightSpheres) d.subdivisions = get_u32_or(l, "subdivisions", 1, 6);
   d.lights = get_lights(l, "lights");
-  d.scissor = get_scissor(l);
+  d.scissor = get_rect(l, "scissor", kDrawBoundsVersion);
   d.cull = get_cull_box(l);
   d.reads = get_ident_list(l, "reads");
   d.fetch = get_ident_list(l, "fetch");

@@ -1,6 +1,7 @@
 // Canonical trace writer: one fixed order and spelling, so that write -> read -> write gives
 // identical bytes and trace_hash() identifies a trace. Floats use the shortest text that reads
 // back to the same float (std::to_chars), so values round-trip exactly.
+#include <algorithm>
 #include <charconv>
 #include <fstream>
 #include <ostream>
@@ -69,8 +70,14 @@ std::string fmt_u32x3(const std::uint32_t (&v)[3]) {
   return std::to_string(v[0]) + "," + std::to_string(v[1]) + "," + std::to_string(v[2]);
 }
 
+std::string fmt_rect(const ScissorRect& r) {
+  return std::to_string(r.x0) + "," + std::to_string(r.y0) + "," + std::to_string(r.x1) + "," + std::to_string(r.y1);
+}
+
 void write_pass(const PassDesc& p, std::ostream& out) {
-  out << "pass " << p.name << "\n";
+  out << "pass " << p.name;
+  if (p.area) out << " area=" << fmt_rect(*p.area);
+  out << "\n";
   for (const auto& a : p.attachments) {
     out << "  attachment " << a.name << " format=" << to_string(a.format) << " samples=" << a.samples
         << " load=" << to_string(a.load) << " store=" << to_string(a.store) << " usage=" << to_string(a.usage)
@@ -92,7 +99,7 @@ void write_pass(const PassDesc& p, std::ostream& out) {
     if (d.geometry == GeometryKind::LightSpheres) out << " subdivisions=" << d.subdivisions;
     if (!d.lights.all) out << " lights=" << fmt_lights(d.lights);
     if (d.scissor)
-      out << " scissor=" << d.scissor->x0 << "," << d.scissor->y0 << "," << d.scissor->x1 << "," << d.scissor->y1;
+      out << " scissor=" << fmt_rect(*d.scissor);
     if (d.cull) out << " cull_min=" << fmt_vec3(d.cull->min) << " cull_max=" << fmt_vec3(d.cull->max);
     if (!d.reads.empty()) out << " reads=" << fmt_list(d.reads);
     if (!d.fetch.empty()) out << " fetch=" << fmt_list(d.fetch);
@@ -217,11 +224,20 @@ void write_frame(const Trace& t, const Trace* before, int k, std::ostream& out) 
   write_commands(t, out);
 }
 
+/// Whether a frame uses what version 5 added (a pass's render area).
+bool uses_pass_areas(const Trace& t) {
+  return std::any_of(t.commands.begin(), t.commands.end(), [](const TraceCommand& c) {
+    const auto* p = std::get_if<PassDesc>(&c);
+    return p != nullptr && p->area.has_value();
+  });
+}
+
 }  // namespace
 
 void write_trace(const Trace& t, std::ostream& out) {
-  // One frame needs nothing version 4 added: written as version 3, which older readers read.
-  write_header(t, kDrawBoundsVersion, out);
+  // One frame needs nothing version 4 added: written as version 3, which older readers read,
+  // unless a pass has its own render area (version 5).
+  write_header(t, uses_pass_areas(t) ? kPassAreaVersion : kDrawBoundsVersion, out);
   write_frame(t, nullptr, 0, out);
 }
 
@@ -229,7 +245,7 @@ void write_trace_frames(const std::vector<Trace>& frames, std::ostream& out) {
   if (frames.empty()) throw std::invalid_argument("write_trace_frames: a sequence has at least one frame");
   if (frames.size() == 1) return write_trace(frames.front(), out);
   const Trace& first = frames.front();
-  write_header(first, kSequenceVersion, out);
+  write_header(first, std::any_of(frames.begin(), frames.end(), uses_pass_areas) ? kPassAreaVersion : kSequenceVersion, out);
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const Trace& t = frames[k];
     if (k > 0 && (t.technique != first.technique || t.options != first.options || t.scene.kind != first.scene.kind ||
