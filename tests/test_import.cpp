@@ -17,7 +17,7 @@
 
 #include "cli_run.hpp"
 #include "app/cli.hpp"
-#include "app/cmd_import.hpp"
+#include "app/capture_convert.hpp"
 #include "kernel/errors.hpp"
 #include "models/command_processor.hpp"
 #include "models/hw_config.hpp"
@@ -280,8 +280,8 @@ TEST(Import, BadCapturesNameTheDrawAndWriteNothing) {
   }
   {
     const fs::path d = scratch_dir("import", "bad_topology");
-    expect_refused(edited_fixture(d, [](nlohmann::json& j) { j["passes"][0]["draws"][0]["topology"] = "lines"; }), out,
-                   "draw at event 11 (vkCmdDraw()): topology 'lines' is not imported");
+    expect_refused(edited_fixture(d, [](nlohmann::json& j) { j["passes"][0]["draws"][0]["topology"] = "patch_list"; }), out,
+                   "draw at event 11 (vkCmdDraw()): topology 'patch_list' is not imported");
   }
   {
     const fs::path d = scratch_dir("import", "bad_format");

@@ -1,11 +1,12 @@
 #pragma once
-// `tbdrsim import`: a frame of a real application, captured with RenderDoc, as a command trace
-// (docs/capture-import.md). A RenderDoc capture (.rdc) is first exported by
-// scripts/capture/rdc_export.py into the capture intermediate (frame.json beside the textures it
-// names); convert_capture() turns that intermediate into a Trace and a GLB file holding each draw's
-// post-vertex-shader clip positions (glTF attribute _CLIP_POSITION), which the trace names by its
-// content hash and the simulator reads back through the validated glTF loader.
+// The capture intermediate of `tbdrsim import` as a trace: a frame of a real application,
+// captured with RenderDoc (docs/capture-import.md). A RenderDoc capture (.rdc) is first exported
+// by scripts/capture/rdc_export.py into the capture intermediate (frame.json beside the textures
+// it names); convert_capture() turns that intermediate into a Trace and a GLB file holding each
+// draw's post-vertex-shader clip positions (glTF attribute _CLIP_POSITION), which the trace names
+// by its content hash and the simulator reads back through the validated glTF loader.
 #include <cstdint>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -29,5 +30,9 @@ struct CaptureImport {
 /// into a trace whose scene line names `glb_name` (a path relative to the trace's folder). Throws
 /// InputError naming the file and the event (draw, pass) at fault; writes nothing.
 CaptureImport convert_capture(const std::string& frame_json_path, const std::string& glb_name);
+
+/// Refuses a file that is not a PNG by its 8-byte signature, before anything decodes it:
+/// InputError naming the file, `what`, and its first bytes.
+void check_png_file(const std::filesystem::path& p, const std::string& what);
 
 }  // namespace tbdr
