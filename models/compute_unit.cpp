@@ -766,6 +766,29 @@ void run_vbuffer_worklists(KernelRun& r) {
 }
 
 /// The kernels: each ComputeKernel and the function that runs it (the flag says which of a pair).
+/// transfer and captured_compute (`alu`): work an application recorded that the simulator knows by
+/// its memory traffic and cost, not by what it computes. Reads its `reads=` buffers (each once, at
+/// the bytes declared or last written) and writes its `writes=` buffers whole. captured_compute
+/// adds `alu_ops` ALU operations and `tex_fetches` texture fetches per thread (a compute shader's
+/// static SPIR-V count); transfer has none: a blit, copy, resolve, clear or fill is a stream of
+/// memory reads and writes (the transfer path's filtering is not costed).
+void run_recorded(KernelRun& r, bool alu) {
+  Dispatch& k = r.k;
+  if (alu) {
+    k.allow({"alu_ops", "tex_fetches"});
+    const std::uint64_t threads = r.cmd.group_count() * r.cmd.group_size[0] * r.cmd.group_size[1] * r.cmd.group_size[2];
+    r.stats.compute_alu_ops += threads * static_cast<std::uint64_t>(k.get_int("alu_ops", 0, 0, 1 << 20));
+    r.stats.compute_texture_fetches += threads * static_cast<std::uint64_t>(k.get_int("tex_fetches", 0, 0, 1 << 16));
+  } else {
+    k.allow({});
+  }
+  for (const auto& n : r.cmd.writes) {
+    const BufferDesc* b = r.ctx.trace->find_buffer(n);
+    if (!b) k.fail("writes '" + n + "', which is not a declared buffer");
+    k.charge_write(n, b->bytes);
+  }
+}
+
 struct KernelDesc {
   ComputeKernel kernel;
   void (*run)(KernelRun&, bool);
@@ -780,6 +803,8 @@ const KernelDesc kKernels[] = {
     {ComputeKernel::DeferredShade, run_surface_shade, false},
     {ComputeKernel::VbufferShade, run_surface_shade, true},
     {ComputeKernel::VbufferWorklists, [](KernelRun& r, bool) { run_vbuffer_worklists(r); }},
+    {ComputeKernel::Transfer, run_recorded, false},
+    {ComputeKernel::CapturedCompute, run_recorded, true},
 };
 
 }  // namespace

@@ -121,6 +121,14 @@ GeometryUnit::GeometryUnit(const HwConfig& hw, const Scene* scene, const std::ve
 
 namespace {
 
+}  // namespace
+
+std::uint64_t GeometryUnit::vertex_alu_ops_of(const ShaderDesc& shader) const {
+  return shader.vertex_alu_ops ? *shader.vertex_alu_ops : static_cast<std::uint64_t>(hw_.geometry.vertex_shader_alu_ops);
+}
+
+namespace {
+
 FaceCull face_cull_of(CullMode m) {
   switch (m) {
     case CullMode::None: return FaceCull::None;
@@ -424,6 +432,7 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
                               DramTraffic& dram) const {
   const DrawCmd& cmd = *draw.cmd;
   const bool wants_object_lists = draw.shader->light_source == LightSource::ObjectList;
+  const std::uint64_t vertex_ops = vertex_alu_ops_of(*draw.shader);
   // The instances this draw submits; translucent ones back to front, as an application sorts them.
   std::vector<std::pair<float, std::size_t>> selected;
   for (std::size_t ii = 0; ii < scene_->instances.size(); ++ii) {
@@ -501,7 +510,7 @@ void GeometryUnit::draw_scene(const DrawContext& draw, std::uint32_t draw_index,
     o.index_bytes = std::uint64_t{sm.index_bytes} * sm.indices.size();
     o.vertex_bytes = ci->shaded * sm.vertex_stride_bytes;
     o.stats.vertices_shaded += ci->shaded;
-    o.stats.vertex_alu_ops += ci->shaded * static_cast<std::uint64_t>(hw_.geometry.vertex_shader_alu_ops);
+    o.stats.vertex_alu_ops += ci->shaded * vertex_ops;
     o.stats.vertex_fetch_bytes += o.vertex_bytes;
     o.stats.index_fetch_bytes += o.index_bytes;
 
@@ -635,7 +644,7 @@ void GeometryUnit::draw_generated(const DrawContext& draw, std::uint32_t draw_in
   // The vertex work of `vertices` generated vertices, counted into `into`; their fetch bytes.
   auto vertex_work = [&](std::uint64_t vertices, GeometryStats& into) {
     into.vertices_shaded += vertices;
-    into.vertex_alu_ops += vertices * static_cast<std::uint64_t>(hw_.geometry.vertex_shader_alu_ops);
+    into.vertex_alu_ops += vertices * vertex_alu_ops_of(*draw.shader);
     into.vertex_fetch_bytes += vertices * kPositionBytes;
     return vertices * kPositionBytes;
   };

@@ -56,6 +56,9 @@ class GeometryUnit {
   /// The pass's render area (RenderContext::render_area): every draw's scissor rectangle is cut
   /// to it. Default: the whole viewport.
   void set_render_area(const PixelRect& area) { area_ = area; }
+  /// ALU operations a vertex of a draw with `shader` costs: the shader's captured vertex cost
+  /// (ShaderDesc::vertex_alu_ops), else the hardware parameter geometry.vertex_shader_alu_ops.
+  std::uint64_t vertex_alu_ops_of(const ShaderDesc& shader) const;
 
   /// Processes one draw: delivers its accepted primitives to `out` as they are set up, and
   /// appends one object per drawn instance (or proxy) to `object_lights` (the lights touching the

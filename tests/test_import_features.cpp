@@ -236,5 +236,53 @@ TEST(ImportMsaa, AResolveAttachmentBecomesTheTracesResolve) {
   EXPECT_EQ(stat(r.result, "frame/tile_memory", "resolved_samples"), 64 * 64 * 4);
 }
 
+TEST(ImportTransfers, BlitsAndCopiesAreMemoryTrafficInSubmissionOrder) {
+  // A pass at event 1, a blit at event 2 (a 64x64 RGBA8 level into its 32x32 half: 16384 bytes
+  // read, 4096 written) and a buffer copy at event 3 (1000 bytes each way): two transfer
+  // dispatches after the pass, booking exactly those bytes. Threads: one per 16 bytes, in groups
+  // of 64: the blit 16384 / 16 = 1024 threads = 16 groups, the copy 63 threads = 1 group.
+  json j = frame(64, 64, json::array({pass(1, 64, 64, 7, json::array({quad(4, 64, 64)}))}));
+  j["passes"][0]["event"] = 1;
+  j["transfers"] = json::array(
+      {{{"event", 2}, {"name", "vkCmdBlitImage()"}, {"kind", "blit"}, {"read_bytes", 16384}, {"write_bytes", 4096},
+        {"src_image", 7}, {"dst_image", 7}, {"src_format", "VK_FORMAT_R8G8B8A8_UNORM"}, {"dst_format", "VK_FORMAT_R8G8B8A8_UNORM"}},
+       {{"event", 3}, {"name", "vkCmdCopyBuffer()"}, {"kind", "copy_buffer"}, {"read_bytes", 1000}, {"write_bytes", 1000},
+        {"src_image", nullptr}, {"dst_image", nullptr}}});
+  const Imported r = import_and_run("transfers", j);
+  ASSERT_EQ(r.cli.code, 0) << r.cli.err;
+  const auto pass_at = r.trace_text.find("pass pass_1"), blit_at = r.trace_text.find("dispatch transfer groups=16,1,1 group_size=64,1,1 reads=xfer_2_src writes=xfer_2_dst");
+  ASSERT_NE(blit_at, std::string::npos) << r.trace_text;
+  EXPECT_LT(pass_at, blit_at);
+  EXPECT_NE(r.trace_text.find("buffer xfer_2_src bytes=16384 traffic=color content=other upload=yes"), std::string::npos) << r.trace_text;
+  EXPECT_NE(r.trace_text.find("dispatch transfer groups=1,1,1 group_size=64,1,1 reads=xfer_3_src writes=xfer_3_dst"), std::string::npos);
+  EXPECT_EQ(stat(r.result, "frame/compute", "dispatches"), 2);
+  EXPECT_EQ(stat(r.result, "frame/compute", "threads"), 16 * 64 + 64);
+  EXPECT_EQ(stat(r.result, "frame/compute", "compute_alu_ops"), 0);
+  EXPECT_NE(r.summary.find("transfer at event 2 (vkCmdBlitImage()): blit, 16384 bytes read, 4096 written"), std::string::npos)
+      << r.summary;
+  j["transfers"][0]["kind"] = "teleport";
+  const Imported bad = import_and_run("transfers_bad", j);
+  EXPECT_EQ(bad.cli.code, 2);
+  EXPECT_NE(bad.cli.err.find("transfer at event 2 (vkCmdBlitImage()): transfer kind 'teleport' is not known"), std::string::npos)
+      << bad.cli.err;
+}
+
+TEST(ImportDispatches, TheApplicationsComputeRunsByItsCapturedCost) {
+  // A dispatch of 4 x 2 x 1 workgroups of 8 x 8 x 1: 512 threads of a 30-ALU shader = 15360 ALU
+  // operations, after the pass that precedes it by event.
+  json j = frame(64, 64, json::array({pass(1, 64, 64, 7, json::array({quad(2, 64, 64)}))}));
+  j["dispatches"] = json::array({{{"event", 5}, {"name", "vkCmdDispatch(4, 2, 1)"}, {"groups", {4, 2, 1}}, {"local_size", {8, 8, 1}},
+                                  {"shader", {{"alu_ops", 30}, {"tex_fetches", 1}, {"source", "spirv static count"}}},
+                                  {"reads_bytes", 4096}, {"writes_bytes", 2048}}});
+  const Imported r = import_and_run("dispatch", j);
+  ASSERT_EQ(r.cli.code, 0) << r.cli.err;
+  EXPECT_NE(r.trace_text.find("dispatch captured_compute groups=4,2,1 group_size=8,8,1 reads=disp_5_in writes=disp_5_out "
+                              "alu_ops=30 tex_fetches=1"),
+            std::string::npos)
+      << r.trace_text;
+  EXPECT_EQ(stat(r.result, "frame/compute", "compute_alu_ops"), 4 * 2 * 64 * 30);
+  EXPECT_EQ(stat(r.result, "frame/compute", "threads"), 512);
+}
+
 }  // namespace
 }  // namespace tbdr

@@ -43,6 +43,19 @@ constexpr const char* kCaptureFormats[] = {"tbdrsim-capture 1", "tbdrsim-capture
 /// frame's draw) bounds the import's memory at a few GB.
 constexpr std::uint64_t kMaxDrawVertices = 1ull << 24;
 
+/// A recorded transfer or dispatch's bytes: at most 2^34 (16 GiB), the trace's buffer limit.
+constexpr std::uint64_t kMaxRecordedBytes = 1ull << 34;
+/// A buffer a recorded command reads is declared `upload=yes` (its contents exist before the
+/// command, however they were made), which the trace bounds at 2^28 bytes (docs/limits.md).
+constexpr std::uint64_t kMaxUploadBufferBytes = 1ull << 28;
+/// A transfer's threads: one 16-byte piece each (four RGBA8 texels, a 128-bit access), in
+/// workgroups of 64, so that its thread count follows its bytes.
+constexpr std::uint64_t kRecordedBytesPerThread = 16;
+constexpr std::uint32_t kRecordedGroupSize = 64;
+/// Vulkan's guaranteed limits on a dispatch (maxComputeWorkGroupCount, maxComputeWorkGroupInvocations).
+constexpr std::uint64_t kMaxWorkgroupCount = 65535;
+constexpr std::uint64_t kMaxWorkgroupInvocations = 1024;
+
 /// A trace camera is required by the format but clip-space geometry never uses it (the geometry
 /// unit takes _CLIP_POSITION as it is); this one is a valid, documented placeholder.
 Camera placeholder_camera() {
@@ -253,6 +266,8 @@ class CaptureConverter {
       : r_(frame_json_path), dir_(fs::path(frame_json_path).parent_path()), t_(out_.trace) {}
   /// Parses the intermediate and reads its header: format, clip convention, source, frame size.
   void read_header();
+  /// The frame's passes, transfers and dispatches, in submission order.
+  void convert_commands();
   /// The intermediate's passes.
   const json& passes() const { return r_.array(doc_, "passes", "header"); }
   /// One pass: its attachments, then its draws.
@@ -261,6 +276,12 @@ class CaptureConverter {
   CaptureImport finish(const std::string& glb_name);
 
  private:
+  void convert_transfer(const json& tj);
+  void convert_dispatch(const json& dj);
+  std::string recorded_buffer(const std::string& where, const std::string& name, std::uint64_t bytes, DramClass traffic,
+                              bool upload);
+  DramClass transfer_traffic(const json& tj, const char* format_key, const char* image_key) const;
+  static void recorded_groups(std::uint64_t bytes, DispatchCmd& d);
   Attachment convert_attachment(const json& aj, const std::string& awhere, const std::string& pass_name, std::uint64_t index);
   void name_attachment_image(const json& aj, const std::string& awhere, const std::string& pass_name, std::uint64_t index,
                              Attachment& a);
@@ -280,7 +301,7 @@ class CaptureConverter {
   json draw_material(const json& dj, const std::string& dwhere, const std::string& dname, const std::vector<glm::vec2>& uvs,
                      json& attrs, std::string& texture_note);
   int texture_of_file(const std::string& file, const std::string& dwhere);
-  std::string draw_shader(const json& sj, const std::string& dwhere, std::size_t color_targets, ShaderDesc& sh);
+  std::string draw_shader(const json& dj, const json& sj, const std::string& dwhere, std::size_t color_targets, ShaderDesc& sh);
   PipelineState draw_pipeline(const json& dj, const std::string& dwhere, std::uint64_t ev, const std::string& shader,
                               bool has_depth);
 
@@ -301,6 +322,8 @@ class CaptureConverter {
   int final_width_ = 0, final_height_ = 0;     ///< the application's final colour target
   PixelBox area_;                              ///< the current pass's render area
   std::uint64_t negative_one_to_one_draws_ = 0;  ///< draws imported with depth clip control's -w..w depth
+  std::uint64_t vertex_costed_draws_ = 0;
+  std::set<std::uint64_t> transfer_images_;      ///< images a transfer wrote (a later load of one is named)        ///< draws whose vertex cost is their captured vertex shader's
 };
 
 void CaptureConverter::read_header() {
@@ -351,9 +374,151 @@ void CaptureConverter::read_header() {
   for (const auto& u : r_.array(doc_, "unsupported", "header")) {
     if (u.is_string()) out_.unsupported.push_back(u.get<std::string>());
   }
-  for (const auto& d : r_.array(doc_, "dispatches", "header")) {
-    (void)d;  // each is listed in `unsupported` by the exporter (the application's own kernels)
+}
+
+// The frame's work in submission order: the intermediate's `commands` list when it has one, else
+// the passes, transfers and dispatches merged by event (format 1 has passes and dispatches only).
+void CaptureConverter::convert_commands() {
+  std::map<std::uint64_t, std::pair<std::string, const json*>> by_event;
+  auto add = [&](const char* key, const char* kind) {
+    if (!doc_.contains(key)) return;
+    for (const auto& j : r_.array(doc_, key, "header")) {
+      const std::uint64_t ev = r_.uint(j, "event", std::string(kind) + " in '" + key + "'", 1ull << 40);
+      if (!by_event.emplace(ev, std::pair{std::string(kind), &j}).second) {
+        r_.fail("header", "two commands at event " + std::to_string(ev));
+      }
+    }
+  };
+  add("passes", "pass");
+  add("transfers", "transfer");
+  add("dispatches", "dispatch");
+  for (const auto& [ev, entry] : by_event) {
+    const auto& [kind, j] = entry;
+    if (kind == "pass") {
+      convert_pass(*j);
+    } else if (kind == "transfer") {
+      convert_transfer(*j);
+    } else {
+      convert_dispatch(*j);
+    }
   }
+}
+
+// A buffer the transfer or dispatch at `ev` reads (`upload` yes: its contents exist before it,
+// whoever made them) or writes, `bytes` long; its name.
+std::string CaptureConverter::recorded_buffer(const std::string& where, const std::string& name, std::uint64_t bytes,
+                                              DramClass traffic, bool upload) {
+  if (upload && bytes > kMaxUploadBufferBytes) {
+    r_.fail(where, "reads " + std::to_string(bytes) + " bytes, more than a trace buffer read whole may hold (" +
+                       std::to_string(kMaxUploadBufferBytes) + ")");
+  }
+  BufferDesc b;
+  b.name = name;
+  b.bytes = bytes;
+  b.traffic = traffic;
+  b.content = BufferContent::Other;
+  b.upload = upload;
+  t_.buffers.push_back(b);
+  return name;
+}
+
+// The traffic class of a transfer's image or buffer: depth for depth formats, colour for other
+// images, `other` for buffers.
+DramClass CaptureConverter::transfer_traffic(const json& tj, const char* format_key, const char* image_key) const {
+  if (!tj.contains(image_key) || tj[image_key].is_null()) return DramClass::Other;
+  if (tj.contains(format_key) && tj[format_key].is_string()) {
+    if (const auto f = format_of(tj[format_key].get<std::string>()); f && is_depth_format(*f)) return DramClass::DepthStencil;
+  }
+  return DramClass::Color;
+}
+
+// Workgroups of kRecordedGroupSize threads, each thread one kRecordedBytesPerThread-byte piece of
+// `bytes`, laid out in x and y within Vulkan's workgroup count limit.
+void CaptureConverter::recorded_groups(std::uint64_t bytes, DispatchCmd& d) {
+  const std::uint64_t threads = std::max<std::uint64_t>(1, (bytes + kRecordedBytesPerThread - 1) / kRecordedBytesPerThread);
+  const std::uint64_t groups = (threads + kRecordedGroupSize - 1) / kRecordedGroupSize;
+  d.groups[0] = static_cast<std::uint32_t>(std::min<std::uint64_t>(groups, kMaxWorkgroupCount));
+  d.groups[1] = static_cast<std::uint32_t>((groups + d.groups[0] - 1) / d.groups[0]);
+  d.group_size[0] = kRecordedGroupSize;
+}
+
+// A blit, copy, resolve, clear or fill outside a render pass: a `transfer` dispatch reading and
+// writing the bytes the exporter computed from the command's regions.
+void CaptureConverter::convert_transfer(const json& tj) {
+  const std::uint64_t ev = r_.uint(tj, "event", "transfer", 1ull << 40);
+  const std::string where = "transfer at event " + std::to_string(ev) +
+                            (tj.contains("name") && tj["name"].is_string() ? " (" + tj["name"].get<std::string>() + ")" : "");
+  const std::string kind = r_.str(tj, "kind", where);
+  static const std::set<std::string> kinds = {"blit", "copy_image", "copy_buffer", "copy_buffer_to_image", "copy_image_to_buffer",
+                                              "resolve", "clear_color_image", "clear_depth_stencil_image", "fill_buffer",
+                                              "update_buffer", "generate_mips"};
+  if (!kinds.count(kind)) r_.fail(where, "transfer kind '" + kind + "' is not known");
+  const std::uint64_t read = r_.uint(tj, "read_bytes", where, kMaxRecordedBytes);
+  const std::uint64_t written = r_.uint(tj, "write_bytes", where, kMaxRecordedBytes);
+  if (read == 0 && written == 0) {
+    out_.unsupported.push_back(where + ": moves no bytes; skipped");
+    return;
+  }
+  DispatchCmd d;
+  d.kernel = ComputeKernel::Transfer;
+  const std::string base = "xfer_" + std::to_string(ev);
+  if (read > 0) d.reads.push_back(recorded_buffer(where, base + "_src", read, transfer_traffic(tj, "src_format", "src_image"), true));
+  if (written > 0) {
+    d.writes.push_back(recorded_buffer(where, base + "_dst", written, transfer_traffic(tj, "dst_format", "dst_image"), false));
+  }
+  recorded_groups(std::max(read, written), d);
+  t_.commands.emplace_back(std::in_place_type<DispatchCmd>, std::move(d));
+  ++out_.transfers;
+  out_.summary.push_back(where + ": " + kind + ", " + std::to_string(read) + " bytes read, " + std::to_string(written) +
+                         " written (a transfer dispatch: memory traffic only)");
+  if (tj.contains("dst_image") && tj["dst_image"].is_number_unsigned()) {
+    transfer_images_.insert(tj["dst_image"].get<std::uint64_t>());
+  }
+}
+
+// The application's own compute dispatch: a `captured_compute` dispatch of its workgroups, costed
+// by its shader's static count, reading and writing the bytes the exporter found bound.
+void CaptureConverter::convert_dispatch(const json& dj) {
+  const std::uint64_t ev = r_.uint(dj, "event", "dispatch", 1ull << 40);
+  const std::string where = "dispatch at event " + std::to_string(ev) +
+                            (dj.contains("name") && dj["name"].is_string() ? " (" + dj["name"].get<std::string>() + ")" : "");
+  if (!dj.contains("shader") || !dj.contains("local_size")) {
+    out_.unsupported.push_back(where + ": no shader cost or workgroup size exported; not replayed");
+    return;
+  }
+  DispatchCmd d;
+  d.kernel = ComputeKernel::CapturedCompute;
+  const json& g = r_.array(dj, "groups", where);
+  const json& l = r_.array(dj, "local_size", where);
+  if (g.size() != 3 || l.size() != 3) r_.fail(where, "groups and local_size are not 3 numbers each");
+  std::uint64_t invocations = 1;
+  for (int i = 0; i < 3; ++i) {
+    if (!g[i].is_number_unsigned() || g[i].get<std::uint64_t>() == 0 || g[i].get<std::uint64_t>() > kMaxWorkgroupCount ||
+        !l[i].is_number_unsigned() || l[i].get<std::uint64_t>() == 0) {
+      r_.fail(where, "groups " + g.dump() + " / local_size " + l.dump() + " are not whole numbers from 1 to " +
+                         std::to_string(kMaxWorkgroupCount));
+    }
+    d.groups[i] = g[i].get<std::uint32_t>();
+    d.group_size[i] = l[i].get<std::uint32_t>();
+    invocations *= d.group_size[i];
+  }
+  if (invocations > kMaxWorkgroupInvocations) r_.fail(where, "local_size " + l.dump() + " holds more than 1024 invocations");
+  const json& sj = r_.get(dj, "shader", where);
+  d.params["alu_ops"] = std::to_string(r_.uint(sj, "alu_ops", where + " shader", 1u << 20));
+  d.params["tex_fetches"] = std::to_string(sj.contains("tex_fetches") ? r_.uint(sj, "tex_fetches", where + " shader", 1u << 16) : 0);
+  const std::string base = "disp_" + std::to_string(ev);
+  if (dj.contains("reads_bytes") && r_.uint(dj, "reads_bytes", where, kMaxRecordedBytes) > 0) {
+    d.reads.push_back(recorded_buffer(where, base + "_in", r_.uint(dj, "reads_bytes", where, kMaxRecordedBytes), DramClass::Other, true));
+  }
+  if (dj.contains("writes_bytes") && r_.uint(dj, "writes_bytes", where, kMaxRecordedBytes) > 0) {
+    d.writes.push_back(recorded_buffer(where, base + "_out", r_.uint(dj, "writes_bytes", where, kMaxRecordedBytes), DramClass::Other, false));
+  } else {
+    out_.unsupported.push_back(where + ": the bytes it writes are not known; its writes are not counted");
+  }
+  if (!dj.contains("reads_bytes")) out_.unsupported.push_back(where + ": the bytes it reads are not known; its reads are not counted");
+  t_.commands.emplace_back(std::in_place_type<DispatchCmd>, std::move(d));
+  ++out_.dispatches;
+  out_.summary.push_back(where + ": " + g.dump() + " workgroups of " + l.dump() + ", " + sj.value("source", std::string("?")));
 }
 
 // A pass's `render_area` [x, y, width, height] (format 2) as pixels [x0, x1) x [y0, y1), or none.
@@ -466,8 +631,8 @@ void CaptureConverter::name_attachment_image(const json& aj, const std::string& 
     if (a.load == LoadOp::Load && !stored_images_.count(img)) {
       // The trace's rule: load=load needs an earlier store in this frame. The capture's first
       // pass loads what a previous frame left; it is imported as a clear and said so.
-      out_.unsupported.push_back(awhere + ": loads " + a.name + ", which no earlier pass of the frame stored; "
-                                 "imported as load=clear");
+      out_.unsupported.push_back(awhere + ": loads " + a.name + ", which no earlier pass of the frame stored" +
+                                 (transfer_images_.count(img) ? " (a transfer wrote it)" : "") + "; imported as load=clear");
       a.load = LoadOp::Clear;
     }
     if (a.store == StoreOp::Store) stored_images_.insert(img);
@@ -580,7 +745,7 @@ void CaptureConverter::convert_draw(const json& dj, const std::string& pwhere, s
 
   const json& sj = r_.get(dj, "shader", dwhere);
   ShaderDesc sh;
-  const std::string shader = draw_shader(sj, dwhere, color_targets, sh);
+  const std::string shader = draw_shader(dj, sj, dwhere, color_targets, sh);
   PipelineState p = draw_pipeline(dj, dwhere, ev, shader, has_depth);
   if (g.lines_or_points) p.cull = CullMode::None;  // lines and points have no facing: never culled
   t_.pipelines.push_back(p);
@@ -898,9 +1063,15 @@ int CaptureConverter::texture_of_file(const std::string& file, const std::string
   return it->second;
 }
 
-// The draw's fragment shader: its static SPIR-V cost (into `sh`), one declaration per distinct
-// cost; returns the declaration's name.
-std::string CaptureConverter::draw_shader(const json& sj, const std::string& dwhere, std::size_t color_targets, ShaderDesc& sh) {
+// The draw's shaders: the fragment shader's static SPIR-V cost (into `sh`) and, when captured, its
+// vertex shader's ALU count (`vertex_alu_ops`); one declaration per distinct cost. Returns the
+// declaration's name.
+std::string CaptureConverter::draw_shader(const json& dj, const json& sj, const std::string& dwhere, std::size_t color_targets,
+                                          ShaderDesc& sh) {
+  if (dj.contains("vertex_shader")) {
+    sh.vertex_alu_ops = static_cast<std::uint32_t>(r_.uint(r_.get(dj, "vertex_shader", dwhere), "alu_ops", dwhere + " vertex_shader", 1u << 20));
+    ++vertex_costed_draws_;
+  }
   sh.alu_ops = static_cast<std::uint32_t>(r_.uint(sj, "alu_ops", dwhere + " shader", 1u << 20));
   sh.tex_fetches = static_cast<std::uint32_t>(r_.uint(sj, "tex_fetches", dwhere + " shader", 1u << 16));
   sh.varyings = static_cast<std::uint32_t>(r_.uint(sj, "varyings", dwhere + " shader", 128));
@@ -913,7 +1084,8 @@ std::string CaptureConverter::draw_shader(const json& sj, const std::string& dwh
   }
   sh.light_source = LightSource::None;
   const std::string skey = std::to_string(sh.alu_ops) + "_" + std::to_string(sh.tex_fetches) + "_" +
-                           std::to_string(sh.varyings) + "_" + std::to_string(sh.color_outputs) + (sh.discard ? "_d" : "");
+                           std::to_string(sh.varyings) + "_" + std::to_string(sh.color_outputs) + (sh.discard ? "_d" : "") +
+                           (sh.vertex_alu_ops ? "_v" + std::to_string(*sh.vertex_alu_ops) : std::string());
   auto sit = shader_of_key_.find(skey);
   if (sit == shader_of_key_.end()) {
     sh.name = "fs_" + std::to_string(shader_of_key_.size());
@@ -964,12 +1136,20 @@ CaptureImport CaptureConverter::finish(const std::string& glb_name) {
   Fnv1a64 h;
   h.update(out_.glb.data(), out_.glb.size());
   t_.scene.content_hash = h.hex();
-  out_.summary.insert(out_.summary.begin(),
-                      std::to_string(out_.passes) + " passes, " + std::to_string(out_.draws) + " draws, " +
-                          std::to_string(out_.triangles) + " triangles, " + std::to_string(t_.frame.width) + "x" +
-                          std::to_string(t_.frame.height) + "; shader costs: static SPIR-V counts of each fragment "
-                          "shader (scripts/capture/spirv_cost.py); vertex shading: the hardware parameter "
-                          "geometry.vertex_shader_alu_ops");
+  const std::string grid = std::to_string(t_.frame.width) + "x" + std::to_string(t_.frame.height);
+  const std::string final_size = std::to_string(final_width_) + "x" + std::to_string(final_height_);
+  out_.summary.insert(
+      out_.summary.begin(),
+      std::to_string(out_.passes) + " passes, " + std::to_string(out_.draws) + " draws, " + std::to_string(out_.triangles) +
+          " triangles, " + std::to_string(out_.transfers) + " transfers, " + std::to_string(out_.dispatches) +
+          " dispatches; frame " + final_size + (grid != final_size ? " in a " + grid + " grid (the largest pass)" : "") +
+          "; shader costs: static SPIR-V counts of each fragment shader (scripts/capture/spirv_cost.py); vertex shading: " +
+          (vertex_costed_draws_ == out_.draws ? std::string("each draw's captured vertex shader, counted the same way")
+           : std::to_string(vertex_costed_draws_) + " draws their captured vertex shader's count, the others the hardware "
+                                                    "parameter geometry.vertex_shader_alu_ops") +
+          (negative_one_to_one_draws_ > 0 ? "; " + std::to_string(negative_one_to_one_draws_) +
+                                                " draws with depth clip control (clip z from -w to w, as zink draws OpenGL)"
+                                          : std::string()));
   return std::move(out_);
 }
 
@@ -978,7 +1158,7 @@ CaptureImport CaptureConverter::finish(const std::string& glb_name) {
 CaptureImport convert_capture(const std::string& frame_json_path, const std::string& glb_name) {
   CaptureConverter converter(frame_json_path);
   converter.read_header();
-  for (const auto& pj : converter.passes()) converter.convert_pass(pj);
+  converter.convert_commands();
   return converter.finish(glb_name);
 }
 

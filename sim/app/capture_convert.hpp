@@ -24,6 +24,8 @@ struct CaptureImport {
   std::uint64_t draws = 0;
   std::uint64_t passes = 0;
   std::uint64_t triangles = 0;
+  std::uint64_t transfers = 0;   ///< blits, copies, resolves, clears and fills, as transfer dispatches
+  std::uint64_t dispatches = 0;  ///< the application's compute dispatches, as captured_compute
 };
 
 /// Converts a capture intermediate (frame.json; the textures it names are read from its folder)

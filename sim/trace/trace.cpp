@@ -49,7 +49,7 @@ constexpr std::array buffer_content_names = {"lights",       "light_index_list",
 constexpr std::array scene_kind_names = {"atrium", "gltf"};
 constexpr std::array compute_kernel_names = {"depth_bounds",   "tile_light_cull",      "cluster_flag",
                                             "cluster_light_assign", "deferred_shade", "tiled_deferred_shade",
-                                            "vbuffer_worklists", "vbuffer_shade"};
+                                            "vbuffer_worklists", "vbuffer_shade", "transfer", "captured_compute"};
 static_assert(compute_kernel_names.size() == kComputeKernelCount);
 
 template <typename E, std::size_t N>

@@ -39,6 +39,8 @@ inline constexpr int kSequenceVersion = 4;
 /// The version that gives a pass its own render area (`pass NAME area=x0,y0,x1,y1`: a shadow map,
 /// a blur target or a post-processing pass at its own size); version 4 readers refuse the key.
 inline constexpr int kPassAreaVersion = 5;
+/// The version that gives a shader its vertex stage's cost (`shader ... vertex_alu_ops=N`).
+inline constexpr int kVertexCostVersion = 5;
 
 /// Bytes one light occupies in a GPU light buffer: 3 x vec4 (position+radius, color+intensity,
 /// direction+cos_inner+cos_outer packed with std140 padding). A `content=lights` buffer holds at
@@ -195,8 +197,10 @@ enum class ComputeKernel : std::uint8_t {
   TiledDeferredShade,  ///< tiled_deferred_shade: Andersson's single-pass tiled deferred shading
   VbufferWorklists,    ///< vbuffer_worklists: per-tile, per-material work lists (Burns & Hunt)
   VbufferShade,        ///< vbuffer_shade: shading from a visibility buffer
+  Transfer,            ///< transfer: an application's blit, copy, resolve, clear or fill (memory traffic)
+  CapturedCompute,     ///< captured_compute: an application's own compute shader, by its captured cost
 };
-inline constexpr std::size_t kComputeKernelCount = 8;
+inline constexpr std::size_t kComputeKernelCount = 10;
 
 /// Every enum above as X(Type, spelling): each has `const char* to_string(Type)` and
 /// `std::optional<Type> parse_<spelling>(std::string_view)`, both from one table of spellings
@@ -276,6 +280,10 @@ struct ShaderDesc {
   std::uint32_t color_outputs = 0;  ///< color attachments written (0..8), in declaration order
   PlsAccess pls = PlsAccess::None;
   bool discard = false;             ///< may discard fragments (alpha test): punch-through behaviour
+  /// FP32 ALU operations per vertex of the vertex shader the draws with this shader run (version
+  /// 5, `vertex_alu_ops=`: a captured vertex shader's cost); none: the hardware parameter
+  /// geometry.vertex_shader_alu_ops.
+  std::optional<std::uint32_t> vertex_alu_ops;
   int line = 0;
 };
 

@@ -754,7 +754,7 @@ void Reader::on_buffer(const Line& l) {
 void Reader::on_shader(const Line& l) {
   declaration_allowed(l, false);
   check_keys(l, {"alu_ops", "tex_fetches", "varyings", "light_alu_ops", "light_source", "color_outputs", "pls",
-                 "discard"});
+                 "discard", "vertex_alu_ops"});
   ShaderDesc s;
   s.name = positional_ident(l, "shader name");
   if (auto it = shader_lines_.find(s.name); it != shader_lines_.end())
@@ -767,6 +767,10 @@ void Reader::on_shader(const Line& l) {
   s.color_outputs = get_u32(l, "color_outputs", 8);
   s.pls = get_enum(l, "pls", parse_pls_access, std::optional(PlsAccess::None));
   s.discard = get_bool(l, "discard", false);
+  if (find(l, "vertex_alu_ops")) {
+    need_version(l, "vertex_alu_ops", kVertexCostVersion);
+    s.vertex_alu_ops = get_u32(l, "vertex_alu_ops", 1000000);
+  }
   if (s.light_source == LightSource::None && s.light_alu_ops != 0)
     fail(l.number, "light_alu_ops=" + std::to_string(s.light_alu_ops) + " with light_source=none");
   s.line = l.number;

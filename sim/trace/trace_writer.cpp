@@ -157,7 +157,9 @@ void write_shader(const ShaderDesc& sh, std::ostream& out) {
   out << "shader " << sh.name << " alu_ops=" << sh.alu_ops << " tex_fetches=" << sh.tex_fetches
       << " varyings=" << sh.varyings << " light_alu_ops=" << sh.light_alu_ops
       << " light_source=" << to_string(sh.light_source) << " color_outputs=" << sh.color_outputs
-      << " pls=" << to_string(sh.pls) << " discard=" << yes_no(sh.discard) << "\n";
+      << " pls=" << to_string(sh.pls) << " discard=" << yes_no(sh.discard);
+  if (sh.vertex_alu_ops) out << " vertex_alu_ops=" << *sh.vertex_alu_ops;
+  out << "\n";
 }
 
 void write_pipeline(const PipelineState& p, std::ostream& out) {
@@ -224,12 +226,14 @@ void write_frame(const Trace& t, const Trace* before, int k, std::ostream& out) 
   write_commands(t, out);
 }
 
-/// Whether a frame uses what version 5 added (a pass's render area).
-bool uses_pass_areas(const Trace& t) {
-  return std::any_of(t.commands.begin(), t.commands.end(), [](const TraceCommand& c) {
-    const auto* p = std::get_if<PassDesc>(&c);
-    return p != nullptr && p->area.has_value();
-  });
+/// Whether a frame uses what version 5 added (a pass's render area, a shader's vertex cost).
+bool uses_version5(const Trace& t) {
+  return std::any_of(t.commands.begin(), t.commands.end(),
+                     [](const TraceCommand& c) {
+                       const auto* p = std::get_if<PassDesc>(&c);
+                       return p != nullptr && p->area.has_value();
+                     }) ||
+         std::any_of(t.shaders.begin(), t.shaders.end(), [](const ShaderDesc& s) { return s.vertex_alu_ops.has_value(); });
 }
 
 }  // namespace
@@ -237,7 +241,7 @@ bool uses_pass_areas(const Trace& t) {
 void write_trace(const Trace& t, std::ostream& out) {
   // One frame needs nothing version 4 added: written as version 3, which older readers read,
   // unless a pass has its own render area (version 5).
-  write_header(t, uses_pass_areas(t) ? kPassAreaVersion : kDrawBoundsVersion, out);
+  write_header(t, uses_version5(t) ? kPassAreaVersion : kDrawBoundsVersion, out);
   write_frame(t, nullptr, 0, out);
 }
 
@@ -245,7 +249,7 @@ void write_trace_frames(const std::vector<Trace>& frames, std::ostream& out) {
   if (frames.empty()) throw std::invalid_argument("write_trace_frames: a sequence has at least one frame");
   if (frames.size() == 1) return write_trace(frames.front(), out);
   const Trace& first = frames.front();
-  write_header(first, std::any_of(frames.begin(), frames.end(), uses_pass_areas) ? kPassAreaVersion : kSequenceVersion, out);
+  write_header(first, std::any_of(frames.begin(), frames.end(), uses_version5) ? kPassAreaVersion : kSequenceVersion, out);
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const Trace& t = frames[k];
     if (k > 0 && (t.technique != first.technique || t.options != first.options || t.scene.kind != first.scene.kind ||

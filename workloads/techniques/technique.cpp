@@ -187,7 +187,8 @@ ShaderDesc make_shader(const std::string& name, std::uint32_t alu_ops, std::uint
                     .light_source = source,
                     .color_outputs = color_outputs,
                     .pls = pls,
-                    .discard = discard};
+                    .discard = discard,
+                    .vertex_alu_ops = std::nullopt};
 }
 
 ShaderDesc masked_variant(const ShaderDesc& s, std::uint32_t alpha_fetches, std::uint32_t uv_varyings) {
