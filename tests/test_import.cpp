@@ -202,6 +202,66 @@ TEST(Import, ReplayMatchesTheApplicationsFrameOnEveryMode) {
   }
 }
 
+/// Imports the committed real-application intermediate tests/data/capture/NAME into a scratch
+/// folder; its trace path.
+fs::path import_example(const std::string& name) {
+  const fs::path dir = scratch_dir("import", "example_" + name);
+  const auto r = run_cli({"import", (kFixture.parent_path() / name).string(), "--out", (dir / (name + ".trace")).string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  return dir / (name + ".trace");
+}
+
+nlohmann::json example_json(const std::string& name) {
+  std::ifstream in(kFixture.parent_path() / name / "frame.json");
+  return nlohmann::json::parse(in);
+}
+
+TEST(Import, RealApplicationsReplayAsTheyRan) {
+  // Two OpenGL frames of glmark2 captured through zink (docs/capture-import.md, "The OpenGL
+  // route"): dynamic rendering, clip z from -w to w (depth clip control), a negative viewport
+  // height. desktop: 11 passes, 4 of them 84x84 blur targets at their own render area, alpha-
+  // blended windows over each other. ideas: 227 draws, 17 of them line strips. The 1200 sampled
+  // pixels of the application's frame (the last draw that changed the pixel, read back from
+  // RenderDoc's replay; its triangle from the exported clip positions, which agreed with
+  // RenderDoc's PixelHistory at 300 of 300 samples of each frame) against the simulated frame on
+  // every mode. Measured: every sample agrees on coverage and every covered one on its triangle
+  // on all three modes; the issue asks for >= 99 % and >= 95 %.
+  for (const std::string name : {"glmark2_desktop", "glmark2_ideas"}) {
+    const fs::path trace_path = import_example(name);
+    const Trace t = read_trace(trace_path.string());
+    const Scene scene = load_gltf((trace_path.parent_path() / (name + ".glb")).string());
+    const nlohmann::json frame = example_json(name);
+    for (const char* mode : {"tbdr", "tbr", "imr"}) {
+      const FrameResult fr = simulate(trace_path, scene, mode);
+      const Agreement a = agreement(frame, fr.images.counters.triangle_id, t.frame.width);
+      EXPECT_EQ(a.samples, 1200u) << name << " " << mode;
+      EXPECT_GE(a.coverage_match, a.samples * 99 / 100) << name << " " << mode;
+      EXPECT_GE(a.triangle_match, a.covered_both * 95 / 100) << name << " " << mode;
+      EXPECT_GT(a.covered_both, 300u) << name << " " << mode;
+    }
+    if (name == "glmark2_desktop") {
+      int small = 0;
+      for (const auto& c : t.commands) {
+        if (const auto* p = std::get_if<PassDesc>(&c); p && p->area) {
+          EXPECT_EQ(*p->area, (ScissorRect{0, 0, 84, 84}));
+          ++small;
+        }
+      }
+      EXPECT_EQ(small, 4) << "the blur passes at their own 84x84";
+    } else {
+      std::ifstream in(trace_path.parent_path() / (name + ".import.txt"));
+      const std::string summary((std::istreambuf_iterator<char>(in)), {});
+      std::size_t lines = 0;
+      for (auto at = summary.find("line segments as rectangles"); at != std::string::npos;
+           at = summary.find("line segments as rectangles", at + 1)) {
+        ++lines;
+      }
+      EXPECT_EQ(lines, 17u) << summary;
+      EXPECT_NE(summary.find("227 draws"), std::string::npos) << summary;
+    }
+  }
+}
+
 TEST(Import, ClipSpaceGeometryIgnoresCameraAndInstanceTransform) {
   const fs::path dir = scratch_dir("import", "clip");
   const fs::path trace_path = import_fixture(dir);

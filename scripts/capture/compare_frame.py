@@ -6,8 +6,9 @@ usage: compare_frame.py CAPTURE_DIR IMAGES_DIR [--out SIDE_BY_SIDE.png]
 CAPTURE_DIR holds the capture intermediate (frame.json with its pixel history samples, and
 reference.png, the application's frame); IMAGES_DIR is what `tbdrsim run --images` wrote
 (color.png, triangle_id.png). Prints:
-- coverage, whole frame: pixels where both frames are background (the reference equals the
-  colour attachment's clear colour, the simulation has no triangle) or both covered;
+- coverage, whole frame: pixels where both frames are background or both covered; the reference's
+  coverage is draw_ids.bin when the export wrote it (format 2: the pixels some draw changed), else
+  the pixels differing from the final colour attachment's clear colour (format 1);
 - triangle, at the sampled pixels: a pixel matches when its captured triangle (RenderDoc pixel
   history: event and primitive id) and its simulated triangle (triangle_id.png colour) are each
   the other's most frequent partner - a one-to-one matching, so one triangle everywhere cannot score;
@@ -34,6 +35,28 @@ def load_rgb(path):
     return np.asarray(Image.open(path).convert("RGB"), dtype=np.int32)
 
 
+def reference_coverage(frame, capture_dir, ref):
+    """(covered pixels of the application's frame, how) or (None, why not). From draw_ids.bin when the
+    export wrote it (format 2: per pixel the event of the last draw that changed it, 0 = none), else
+    the pixels that differ from the final target's clear colour (format 1)."""
+    shape = ref.shape
+    name = frame.get("draw_id_image")
+    if name:
+        path = os.path.join(capture_dir, name)
+        if not os.path.isfile(path):
+            return None, "%s not found" % path
+        ids = np.fromfile(path, dtype="<u4")
+        if ids.size != shape[0] * shape[1]:
+            return None, "%s holds %d pixels, the frame has %dx%d" % (path, ids.size, shape[1], shape[0])
+        return ids.reshape(shape[0], shape[1]) != 0, "pixels a draw changed (%s)" % name
+    for p in frame["passes"]:
+        for att in p["attachments"]:
+            if att.get("image") == frame.get("final_target") and att["load"] == "clear":
+                clear = np.array([round(255 * min(max(c, 0.0), 1.0)) for c in att["clear"]["color"][:3]])
+                return np.any(np.abs(ref - clear) > 1, axis=2), "pixels differing from the clear colour"
+    return None, "the final target is not cleared in the capture; coverage of the reference is unknown"
+
+
 def main(argv):
     ap = argparse.ArgumentParser(prog=PROG)
     ap.add_argument("capture_dir")
@@ -56,28 +79,18 @@ def main(argv):
         print("%s: sizes differ: reference %s, color.png %s, triangle_id.png %s" % (PROG, ref.shape, sim.shape,
                                                                                    ids.shape), file=sys.stderr)
         return 2
-    # Background of the application's frame: the clear colour of the final target's attachment.
-    clear = None
-    for p in frame["passes"]:
-        for att in p["attachments"]:
-            if att.get("image") == frame.get("final_target") and att["load"] == "clear":
-                clear = np.array([round(255 * min(max(c, 0.0), 1.0)) for c in att["clear"]["color"][:3]])
-                break
-        if clear is not None:
-            break
-    if clear is None:
-        print("%s: the final target is not cleared in the capture; coverage of the reference is unknown" % PROG,
-              file=sys.stderr)
+    ref_cov, how = reference_coverage(frame, a.capture_dir, ref)
+    if ref_cov is None:
+        print("%s: %s" % (PROG, how), file=sys.stderr)
         return 2
-    ref_cov = np.any(np.abs(ref - clear) > 1, axis=2)
     sim_cov = np.any(ids != 0, axis=2)
     total = ref_cov.size
     both = ref_cov & sim_cov
     print("frame %dx%d, %d draws in %d passes" % (ref.shape[1], ref.shape[0],
                                                  sum(len(p["draws"]) for p in frame["passes"]), len(frame["passes"])))
-    print("coverage: %d of %d pixels agree (%.2f%%); covered: reference %d, simulated %d, both %d"
+    print("coverage: %d of %d pixels agree (%.2f%%); covered: reference %d, simulated %d, both %d (reference: %s)"
           % ((ref_cov == sim_cov).sum(), total, 100.0 * (ref_cov == sim_cov).mean(), ref_cov.sum(), sim_cov.sum(),
-             both.sum()))
+             both.sum(), how))
     samples = frame.get("pixel_history", {}).get("samples", [])
     if samples:
         pairs = []
@@ -94,9 +107,10 @@ def main(argv):
         match = sum(1 for r, s in pairs if r and s and r2s[r].most_common(1)[0][0] == s
                     and s2r[s].most_common(1)[0][0] == r)
         cov_agree = sum(1 for r, s in pairs if (r is None) == (s is None))
-        print("sampled pixels (RenderDoc pixel history, every %dth): %d; coverage agrees at %d; covered in both %d, "
+        print("sampled pixels (%s, every %dth): %d; coverage agrees at %d; covered in both %d, "
               "triangle matches at %d (%.2f%%); %d captured triangles seen, %d simulated"
-              % (frame["pixel_history"]["step"], len(pairs), cov_agree, covered, match,
+              % ("RenderDoc pixel history" if frame["pixel_history"].get("method", "pixelhistory") == "pixelhistory"
+                 else "draw ids read back, triangles from the clip positions", frame["pixel_history"]["step"], len(pairs), cov_agree, covered, match,
                  100.0 * match / max(covered, 1), len(r2s), len(s2r)))
     if both.any():
         diff = np.abs(ref - sim)[both].mean()

@@ -717,6 +717,13 @@ void CaptureConverter::convert_draw(const json& dj, const std::string& pwhere, s
     return;
   }
   const std::string& topo = g.topology;
+  const bool cull_all = dj.contains("cull") && dj["cull"].is_string() && dj["cull"].get<std::string>() == "front_and_back";
+  if (cull_all && !g.lines_or_points) {
+    // VK_CULL_MODE_FRONT_AND_BACK: no triangle reaches the rasteriser.
+    out_.unsupported.push_back(dwhere + ": culls front and back faces: its " + std::to_string(tri.size() / 3) +
+                               " triangles draw nothing; skipped (its vertex work is not counted)");
+    return;
+  }
   // Winding: the simulator's front faces are counter-clockwise in its (y-up, OpenGL) clip space
   // (clipper.hpp, front_ccw). Vulkan decides facing from the triangle's area in framebuffer
   // coordinates, whose y runs down, and the y flip of clip_positions keeps every vertex on its
@@ -1108,7 +1115,8 @@ PipelineState CaptureConverter::draw_pipeline(const json& dj, const std::string&
   }
   const auto cmp = parse_compare_op(r_.str(dj, "depth_compare", dwhere));
   const auto blend = parse_blend_mode(r_.str(dj, "blend", dwhere));
-  const auto cull = parse_cull_mode(r_.str(dj, "cull", dwhere));
+  const std::string cull_name = r_.str(dj, "cull", dwhere);
+  const auto cull = parse_cull_mode(cull_name == "front_and_back" ? "none" : cull_name);  // lines and points: never culled
   if (!cmp || !blend || !cull) r_.fail(dwhere, "depth_compare, blend or cull not known");
   p.depth_compare = *cmp;
   p.blend = *blend;
