@@ -20,6 +20,7 @@
 #include "synthetic_scene.hpp"
 #include "techniques/technique.hpp"
 #include "trace/trace.hpp"
+#include "trace_parse_errors.hpp"
 #include "atrium_trace_setup.hpp"
 
 namespace tbdr {
@@ -27,10 +28,7 @@ namespace {
 
 // ---- trace: keys, checks, round trip, version ------------------------------------------------------
 
-Trace parse(const std::string& text) {
-  std::istringstream in(text);
-  return parse_trace(in, "t.trace");
-}
+Trace parse(const std::string& text) { return testing_support::parse_text(text); }
 
 /// A version-`version` trace of 12 lines whose line 12 is `draw` (a 64x64 frame, one light).
 std::string with_draw(const std::string& draw, int version = kTraceVersion) {
@@ -50,13 +48,7 @@ std::string with_draw(const std::string& draw, int version = kTraceVersion) {
 }
 
 void expect_error(const std::string& text, int line, const std::string& token) {
-  try {
-    parse(text);
-    ADD_FAILURE() << "no error; expected line " << line << " with " << token;
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), "t.trace:" + std::to_string(line)) << e.what();
-    EXPECT_NE(std::string(e.what()).find(token), std::string::npos) << e.what();
-  }
+  testing_support::expect_trace_error(text, line, token);
 }
 
 const DrawCmd& only_draw(const Trace& t) { return std::get<PassDesc>(t.commands.front()).draws.front(); }

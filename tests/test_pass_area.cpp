@@ -12,14 +12,12 @@
 #include "stat_lookup.hpp"
 #include "timed_run.hpp"
 #include "trace/trace.hpp"
+#include "trace_parse_errors.hpp"
 
 namespace tbdr {
 namespace {
 
-Trace parse(const std::string& text) {
-  std::istringstream in(text);
-  return parse_trace(in, "t.trace");
-}
+Trace parse(const std::string& text) { return testing_support::parse_text(text); }
 
 /// A one-pass trace: a `frame` of w x h, the pass line `pass_line` (line 7), a colour target
 /// cleared and stored, and one full-screen draw whose shader does 8 ALU operations a fragment.
@@ -37,13 +35,7 @@ std::string one_pass(int version, int w, int h, const std::string& pass_line) {
 }
 
 void expect_error(const std::string& text, int line, const std::string& token) {
-  try {
-    parse(text);
-    ADD_FAILURE() << "no error; expected line " << line << " with " << token;
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), "t.trace:" + std::to_string(line)) << e.what();
-    EXPECT_NE(std::string(e.what()).find(token), std::string::npos) << e.what();
-  }
+  testing_support::expect_trace_error(text, line, token);
 }
 
 TEST(TracePassArea, ReadWrittenAsVersion5AndRoundTrips) {

@@ -11,6 +11,7 @@
 
 #include "kernel/errors.hpp"
 #include "trace/trace.hpp"
+#include "trace_parse_errors.hpp"
 #include "techniques/technique.hpp"
 
 namespace tbdr {
@@ -63,24 +64,14 @@ pass lighting
 end
 )";
 
-Trace parse(const std::string& text, const std::string& name = "t.trace") {
-  std::istringstream in(text);
-  return parse_trace(in, name);
-}
+/// The reader on `text` (tests/trace_parse_errors.hpp).
+Trace parse(const std::string& text, const std::string& name = "t.trace") { return testing_support::parse_text(text, name); }
 
 std::string write(const Trace& t) { return trace_text(t); }
 
 // Expects parsing `text` to throw an InputError at `line` whose message contains `token`.
 void expect_error(const std::string& text, int line, const std::string& token) {
-  try {
-    parse(text);
-    ADD_FAILURE() << "no error; expected line " << line << " with " << token << "\n" << text;
-  } catch (const InputError& e) {
-    const std::string what = e.what();
-    const std::string where = "t.trace:" + std::to_string(line);
-    EXPECT_EQ(e.where(), where) << what;
-    EXPECT_NE(what.find(token), std::string::npos) << "message lacks " << token << ": " << what;
-  }
+  testing_support::expect_trace_error(text, line, token);
 }
 
 // A valid prefix of 12 lines (declarations + an open pass) to append error cases to.
