@@ -262,6 +262,58 @@ TEST(Import, RealApplicationsReplayAsTheyRan) {
   }
 }
 
+TEST(Import, SeveralCapturesBecomeOneSequence) {
+  // Two captured frames of the same size imported as one sequence (trace version 4): one GLB
+  // holding both frames' geometry (names prefixed f0_, f1_), each frame its own passes and
+  // declarations. Each frame replays as it did imported alone: the same samples rasterised.
+  const fs::path dir = scratch_dir("import", "sequence");
+  const fs::path data = kFixture.parent_path();
+  const auto r = run_cli({"import", (data / "glmark2_desktop").string(), (data / "glmark2_ideas").string(), "--out",
+                          (dir / "seq.trace").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("2 frames"), std::string::npos) << r.out;
+  const std::vector<Trace> frames = read_trace_frames((dir / "seq.trace").string());
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_TRUE(fs::is_regular_file(dir / "seq.capture" / "frame0" / "frame.json"));
+  EXPECT_TRUE(fs::is_regular_file(dir / "seq.capture" / "frame1" / "frame.json"));
+  const Scene scene = load_gltf((dir / "seq.glb").string());
+  const ResolvedConfig cfg = resolve_config({}, {"gpu.mode=tbdr"});
+  for (std::size_t k = 0; k < 2; ++k) {
+    const std::string name = k == 0 ? "glmark2_desktop" : "glmark2_ideas";
+    const fs::path alone = import_example(name);
+    const FrameResult one = simulate(alone, load_gltf((alone.parent_path() / (name + ".glb")).string()), "tbdr");
+    const FrameResult in_seq = simulate_frame(frames[k], "seq.trace", scene, cfg.hw);
+    EXPECT_EQ(in_seq.images.counters.shaded, one.images.counters.shaded) << name;
+    std::size_t draws = 0;
+    for (const auto& c : frames[k].commands) {
+      if (const auto* p = std::get_if<PassDesc>(&c)) {
+        for (const DrawCmd& d : p->draws) {
+          EXPECT_EQ(d.submesh.rfind("f" + std::to_string(k) + "_draw_", 0), 0u) << d.submesh;
+          ++draws;
+        }
+      }
+    }
+    EXPECT_EQ(draws, k == 0 ? 14u : 227u);
+  }
+  // Frames of different sizes are refused, naming the intermediate; nothing written.
+  const fs::path small = scratch_dir("import", "sequence_small");
+  nlohmann::json j = example_json("glmark2_ideas");
+  j["width"] = 64;
+  j["height"] = 64;
+  for (auto& p : j["passes"]) {
+    p["render_area"] = {0, 0, 64, 64};
+  }
+  std::ofstream(small / "frame.json") << j.dump();
+  const fs::path out = scratch_dir("import", "sequence_out");
+  const auto bad = run_cli({"import", (data / "glmark2_desktop").string(), (small / "frame.json").string(), "--out",
+                            (out / "x.trace").string()});
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("frame 1 is 64x64 at 1 samples, the first 320x240 at 1 samples"), std::string::npos) << bad.err;
+  std::size_t files = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(out)) ++files;
+  EXPECT_EQ(files, 0u);
+}
+
 TEST(Import, ClipSpaceGeometryIgnoresCameraAndInstanceTransform) {
   const fs::path dir = scratch_dir("import", "clip");
   const fs::path trace_path = import_fixture(dir);

@@ -258,12 +258,31 @@ struct DrawGeometry {
   std::string note;              ///< for the summary: what the triangles were made from
 };
 
-/// One conversion of a capture intermediate: the trace being built, the GLB its geometry and
-/// textures go to, and what the passes share (image formats, stores, distinct shaders).
+/// What the frames of one import share: the GLB their geometry and textures go to (one scene for
+/// a sequence) and their distinct shaders.
+struct CaptureScene {
+  GlbBuilder glb;
+  json meshes = json::array(), nodes = json::array(), materials = json::array(), textures = json::array(),
+       images = json::array();
+  std::map<std::string, int> image_of_file;         ///< texture file (its path) -> glTF texture index
+  std::map<std::string, std::string> shader_of_key;  ///< shader cost -> its declaration's name
+};
+
+/// One conversion of a capture intermediate: the trace being built (a frame of the import), the
+/// scene its geometry and textures go to, and what its passes share (image formats, stores).
 class CaptureConverter {
  public:
-  explicit CaptureConverter(const std::string& frame_json_path)
-      : r_(frame_json_path), dir_(fs::path(frame_json_path).parent_path()), t_(out_.trace) {}
+  /// `prefix` starts the names of the frame's sub-meshes, pipelines and buffers (a sequence's
+  /// frames declare them once each); `before`: the frame before it, whose declarations it keeps.
+  CaptureConverter(const std::string& frame_json_path, CaptureScene& scene, std::string prefix, const Trace* before)
+      : r_(frame_json_path), dir_(fs::path(frame_json_path).parent_path()), t_(out_.trace), scene_(scene),
+        prefix_(std::move(prefix)) {
+    if (before != nullptr) {
+      t_.shaders = before->shaders;
+      t_.pipelines = before->pipelines;
+      t_.buffers = before->buffers;
+    }
+  }
   /// Parses the intermediate and reads its header: format, clip convention, source, frame size.
   void read_header();
   /// The frame's passes, transfers and dispatches, in submission order.
@@ -272,8 +291,8 @@ class CaptureConverter {
   const json& passes() const { return r_.array(doc_, "passes", "header"); }
   /// One pass: its attachments, then its draws.
   void convert_pass(const json& pj);
-  /// The import: the GLB finished, the trace's scene naming `glb_name`, the summary's first line.
-  CaptureImport finish(const std::string& glb_name);
+  /// The frame: its trace (without its scene line) and the summary's first line.
+  CaptureImport finish();
 
  private:
   void convert_transfer(const json& tj);
@@ -311,11 +330,8 @@ class CaptureConverter {
   fs::path dir_;            ///< the intermediate's folder (its textures)
   CaptureImport out_;
   Trace& t_;
-  GlbBuilder glb_;
-  json meshes_ = json::array(), nodes_ = json::array(), materials_ = json::array(), textures_ = json::array(),
-       images_ = json::array();
-  std::map<std::string, int> image_of_file_;  ///< texture file -> glTF texture index
-  std::map<std::string, std::string> shader_of_key_;
+  CaptureScene& scene_;
+  std::string prefix_;
   std::map<std::uint64_t, Format> image_format_;  ///< attachment image -> format across passes
   std::set<std::uint64_t> stored_images_;
   std::uint32_t max_samples_ = 1;
@@ -461,7 +477,7 @@ void CaptureConverter::convert_transfer(const json& tj) {
   }
   DispatchCmd d;
   d.kernel = ComputeKernel::Transfer;
-  const std::string base = "xfer_" + std::to_string(ev);
+  const std::string base = prefix_ + "xfer_" + std::to_string(ev);
   if (read > 0) d.reads.push_back(recorded_buffer(where, base + "_src", read, transfer_traffic(tj, "src_format", "src_image"), true));
   if (written > 0) {
     d.writes.push_back(recorded_buffer(where, base + "_dst", written, transfer_traffic(tj, "dst_format", "dst_image"), false));
@@ -506,7 +522,7 @@ void CaptureConverter::convert_dispatch(const json& dj) {
   const json& sj = r_.get(dj, "shader", where);
   d.params["alu_ops"] = std::to_string(r_.uint(sj, "alu_ops", where + " shader", 1u << 20));
   d.params["tex_fetches"] = std::to_string(sj.contains("tex_fetches") ? r_.uint(sj, "tex_fetches", where + " shader", 1u << 16) : 0);
-  const std::string base = "disp_" + std::to_string(ev);
+  const std::string base = prefix_ + "disp_" + std::to_string(ev);
   if (dj.contains("reads_bytes") && r_.uint(dj, "reads_bytes", where, kMaxRecordedBytes) > 0) {
     d.reads.push_back(recorded_buffer(where, base + "_in", r_.uint(dj, "reads_bytes", where, kMaxRecordedBytes), DramClass::Other, true));
   }
@@ -695,7 +711,7 @@ void CaptureConverter::check_pass_attachments(const PassDesc& pass, const std::s
 void CaptureConverter::convert_draw(const json& dj, const std::string& pwhere, std::size_t color_targets, bool has_depth,
                                     PassDesc& pass) {
   const std::uint64_t ev = r_.uint(dj, "event", pwhere, 1ull << 40);
-  std::string dname = "draw_" + std::to_string(ev);
+  std::string dname = prefix_ + "draw_" + std::to_string(ev);
   const std::string dwhere = "draw at event " + std::to_string(ev) +
                              (dj.contains("name") && dj["name"].is_string() ? " (" + dj["name"].get<std::string>() + ")" : "");
   if (dj.contains("refused")) {
@@ -739,16 +755,16 @@ void CaptureConverter::convert_draw(const json& dj, const std::string& pwhere, s
 
   json attrs = position_attributes(clip);
   std::string texture_note;
-  materials_.push_back(draw_material(dj, dwhere, dname, g.uvs, attrs, texture_note));
-  json prim = {{"attributes", attrs}, {"material", materials_.size() - 1}, {"mode", 4}};
+  scene_.materials.push_back(draw_material(dj, dwhere, dname, g.uvs, attrs, texture_note));
+  json prim = {{"attributes", attrs}, {"material", scene_.materials.size() - 1}, {"mode", 4}};
   if (g.indexed || topo != "triangles" || reverse || g.instances > 1) {
     std::vector<std::uint8_t> bytes;
     for (auto i : tri) put(bytes, i);
-    prim["indices"] = glb_.accessor({{"bufferView", glb_.view(bytes, kGlElementArrayBuffer)},
+    prim["indices"] = scene_.glb.accessor({{"bufferView", scene_.glb.view(bytes, kGlElementArrayBuffer)},
                                      {"componentType", kGlUnsignedInt}, {"count", tri.size()}, {"type", "SCALAR"}});
   }
-  meshes_.push_back({{"name", dname}, {"primitives", json::array({prim})}});
-  nodes_.push_back({{"name", dname}, {"mesh", meshes_.size() - 1}});
+  scene_.meshes.push_back({{"name", dname}, {"primitives", json::array({prim})}});
+  scene_.nodes.push_back({{"name", dname}, {"mesh", scene_.meshes.size() - 1}});
 
   const json& sj = r_.get(dj, "shader", dwhere);
   ShaderDesc sh;
@@ -1010,7 +1026,7 @@ json CaptureConverter::position_attributes(const std::vector<glm::vec4>& clip) {
     lo = glm::min(lo, glm::vec3(c));
     hi = glm::max(hi, glm::vec3(c));
   }
-  attrs["POSITION"] = glb_.accessor({{"bufferView", glb_.view(bytes, kGlArrayBuffer)}, {"componentType", kGlFloat},
+  attrs["POSITION"] = scene_.glb.accessor({{"bufferView", scene_.glb.view(bytes, kGlArrayBuffer)}, {"componentType", kGlFloat},
                                      {"count", clip.size()}, {"type", "VEC3"},
                                      {"min", {lo.x, lo.y, lo.z}}, {"max", {hi.x, hi.y, hi.z}}});
   bytes.clear();
@@ -1020,7 +1036,7 @@ json CaptureConverter::position_attributes(const std::vector<glm::vec4>& clip) {
     put(bytes, c.z);
     put(bytes, c.w);
   }
-  attrs[kClipPositionAttribute] = glb_.accessor({{"bufferView", glb_.view(bytes, kGlArrayBuffer)},
+  attrs[kClipPositionAttribute] = scene_.glb.accessor({{"bufferView", scene_.glb.view(bytes, kGlArrayBuffer)},
                                                  {"componentType", kGlFloat}, {"count", clip.size()}, {"type", "VEC4"}});
   return attrs;
 }
@@ -1038,7 +1054,7 @@ json CaptureConverter::draw_material(const json& dj, const std::string& dwhere, 
       put(bytes, uv.x);
       put(bytes, uv.y);
     }
-    attrs["TEXCOORD_0"] = glb_.accessor({{"bufferView", glb_.view(bytes, kGlArrayBuffer)}, {"componentType", kGlFloat},
+    attrs["TEXCOORD_0"] = scene_.glb.accessor({{"bufferView", scene_.glb.view(bytes, kGlArrayBuffer)}, {"componentType", kGlFloat},
                                          {"count", uvs.size()}, {"type", "VEC2"}});
     const std::string file = r_.str(texs[0], "file", dwhere + " texture");
     material["pbrMetallicRoughness"] = {{"baseColorTexture", {{"index", texture_of_file(file, dwhere)}}}, {"metallicFactor", 0.0}};
@@ -1059,13 +1075,14 @@ int CaptureConverter::texture_of_file(const std::string& file, const std::string
   if (file.find('/') != std::string::npos || file.find("..") != std::string::npos) {
     r_.fail(dwhere, "texture file '" + file + "' must be a plain name in the intermediate's folder");
   }
-  auto it = image_of_file_.find(file);
-  if (it == image_of_file_.end()) {
+  const std::string key = (dir_ / file).string();  // a sequence's frames come from several folders
+  auto it = scene_.image_of_file.find(key);
+  if (it == scene_.image_of_file.end()) {
     const auto png = read_bytes(dir_ / file, dwhere + " texture");
     check_png_signature(dir_ / file, dwhere + " texture", png.data(), png.size());
-    images_.push_back({{"bufferView", glb_.view(png, std::nullopt)}, {"mimeType", "image/png"}, {"name", file}});
-    textures_.push_back({{"source", images_.size() - 1}});
-    it = image_of_file_.emplace(file, static_cast<int>(textures_.size() - 1)).first;
+    scene_.images.push_back({{"bufferView", scene_.glb.view(png, std::nullopt)}, {"mimeType", "image/png"}, {"name", file}});
+    scene_.textures.push_back({{"source", scene_.images.size() - 1}});
+    it = scene_.image_of_file.emplace(key, static_cast<int>(scene_.textures.size() - 1)).first;
   }
   return it->second;
 }
@@ -1093,11 +1110,11 @@ std::string CaptureConverter::draw_shader(const json& dj, const json& sj, const 
   const std::string skey = std::to_string(sh.alu_ops) + "_" + std::to_string(sh.tex_fetches) + "_" +
                            std::to_string(sh.varyings) + "_" + std::to_string(sh.color_outputs) + (sh.discard ? "_d" : "") +
                            (sh.vertex_alu_ops ? "_v" + std::to_string(*sh.vertex_alu_ops) : std::string());
-  auto sit = shader_of_key_.find(skey);
-  if (sit == shader_of_key_.end()) {
-    sh.name = "fs_" + std::to_string(shader_of_key_.size());
+  auto sit = scene_.shader_of_key.find(skey);
+  if (sit == scene_.shader_of_key.end()) {
+    sh.name = "fs_" + std::to_string(scene_.shader_of_key.size());
     t_.shaders.push_back(sh);
-    sit = shader_of_key_.emplace(skey, sh.name).first;
+    sit = scene_.shader_of_key.emplace(skey, sh.name).first;
   }
   return sit->second;
 }
@@ -1106,7 +1123,7 @@ std::string CaptureConverter::draw_shader(const json& dj, const json& sj, const 
 PipelineState CaptureConverter::draw_pipeline(const json& dj, const std::string& dwhere, std::uint64_t ev,
                                               const std::string& shader, bool has_depth) {
   PipelineState p;
-  p.name = "p_" + std::to_string(ev);
+  p.name = prefix_ + "p_" + std::to_string(ev);
   p.shader = shader;
   p.depth_test = r_.boolean(dj, "depth_test", dwhere) && has_depth;
   p.depth_write = p.depth_test && r_.boolean(dj, "depth_write", dwhere);
@@ -1124,26 +1141,9 @@ PipelineState CaptureConverter::draw_pipeline(const json& dj, const std::string&
   return p;
 }
 
-CaptureImport CaptureConverter::finish(const std::string& glb_name) {
+CaptureImport CaptureConverter::finish() {
   if (out_.draws == 0) r_.fail("header", "the capture has no draws to import");
   t_.frame.samples = static_cast<int>(max_samples_);
-  glb_.doc()["meshes"] = meshes_;
-  glb_.doc()["nodes"] = nodes_;
-  json scene_nodes = json::array();
-  for (std::size_t i = 0; i < nodes_.size(); ++i) scene_nodes.push_back(i);
-  glb_.doc()["scenes"] = json::array({{{"nodes", scene_nodes}}});
-  glb_.doc()["scene"] = 0;
-  glb_.doc()["materials"] = materials_;
-  if (!images_.empty()) {
-    glb_.doc()["images"] = images_;
-    glb_.doc()["textures"] = textures_;
-  }
-  out_.glb = glb_.finish();
-  t_.scene.kind = SceneKind::Gltf;
-  t_.scene.path = glb_name;
-  Fnv1a64 h;
-  h.update(out_.glb.data(), out_.glb.size());
-  t_.scene.content_hash = h.hex();
   const std::string grid = std::to_string(t_.frame.width) + "x" + std::to_string(t_.frame.height);
   const std::string final_size = std::to_string(final_width_) + "x" + std::to_string(final_height_);
   out_.summary.insert(
@@ -1163,11 +1163,67 @@ CaptureImport CaptureConverter::finish(const std::string& glb_name) {
 
 }  // namespace
 
+namespace {
+
+/// The scene's GLB: every frame's meshes, one node each, materials and textures.
+std::vector<std::uint8_t> finish_scene(CaptureScene& scene) {
+  scene.glb.doc()["meshes"] = scene.meshes;
+  scene.glb.doc()["nodes"] = scene.nodes;
+  json scene_nodes = json::array();
+  for (std::size_t i = 0; i < scene.nodes.size(); ++i) scene_nodes.push_back(i);
+  scene.glb.doc()["scenes"] = json::array({{{"nodes", scene_nodes}}});
+  scene.glb.doc()["scene"] = 0;
+  scene.glb.doc()["materials"] = scene.materials;
+  if (!scene.images.empty()) {
+    scene.glb.doc()["images"] = scene.images;
+    scene.glb.doc()["textures"] = scene.textures;
+  }
+  return scene.glb.finish();
+}
+
+}  // namespace
+
+CaptureSequence convert_captures(const std::vector<std::string>& frame_json_paths, const std::string& glb_name) {
+  CaptureScene scene;
+  CaptureSequence out;
+  for (std::size_t k = 0; k < frame_json_paths.size(); ++k) {
+    CaptureConverter converter(frame_json_paths[k], scene, frame_json_paths.size() > 1 ? "f" + std::to_string(k) + "_" : "",
+                               k > 0 ? &out.frames.back().trace : nullptr);
+    converter.read_header();
+    converter.convert_commands();
+    out.frames.push_back(converter.finish());
+    const Trace& first = out.frames.front().trace;
+    const Trace& t = out.frames.back().trace;
+    if (t.frame.width != first.frame.width || t.frame.height != first.frame.height || t.frame.samples != first.frame.samples) {
+      throw InputError(frame_json_paths[k], "frame " + std::to_string(k) + " is " + std::to_string(t.frame.width) + "x" +
+                                                std::to_string(t.frame.height) + " at " + std::to_string(t.frame.samples) +
+                                                " samples, the first " + std::to_string(first.frame.width) + "x" +
+                                                std::to_string(first.frame.height) + " at " + std::to_string(first.frame.samples) +
+                                                " samples: the frames of a sequence share one size");
+    }
+  }
+  // A sequence shares its technique line: the first capture's, with the number of frames.
+  for (CaptureImport& f : out.frames) {
+    f.trace.technique = out.frames.front().trace.technique;
+    f.trace.options = out.frames.front().trace.options;
+    if (out.frames.size() > 1) f.trace.options["frames"] = std::to_string(out.frames.size());
+  }
+  out.glb = finish_scene(scene);
+  Fnv1a64 h;
+  h.update(out.glb.data(), out.glb.size());
+  for (CaptureImport& f : out.frames) {
+    f.trace.scene.kind = SceneKind::Gltf;
+    f.trace.scene.path = glb_name;
+    f.trace.scene.content_hash = h.hex();
+  }
+  return out;
+}
+
 CaptureImport convert_capture(const std::string& frame_json_path, const std::string& glb_name) {
-  CaptureConverter converter(frame_json_path);
-  converter.read_header();
-  converter.convert_commands();
-  return converter.finish(glb_name);
+  CaptureSequence s = convert_captures({frame_json_path}, glb_name);
+  CaptureImport one = std::move(s.frames.front());
+  one.glb = std::move(s.glb);
+  return one;
 }
 
 }  // namespace tbdr

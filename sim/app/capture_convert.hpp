@@ -33,6 +33,18 @@ struct CaptureImport {
 /// InputError naming the file and the event (draw, pass) at fault; writes nothing.
 CaptureImport convert_capture(const std::string& frame_json_path, const std::string& glb_name);
 
+/// A sequence of captured frames as one import: each frame's trace and summary, and the one GLB
+/// every frame's scene line names (their geometry side by side, each frame's names prefixed f<k>_).
+struct CaptureSequence {
+  std::vector<CaptureImport> frames;
+  std::vector<std::uint8_t> glb;
+};
+
+/// Converts the intermediates of consecutive frames, in order, into the frames of one sequence
+/// (trace version 4): one scene, each frame's passes, transfers and dispatches. The frames must
+/// share one size (InputError naming the intermediate otherwise).
+CaptureSequence convert_captures(const std::vector<std::string>& frame_json_paths, const std::string& glb_name);
+
 /// Refuses a file that is not a PNG by its 8-byte signature, before anything decodes it:
 /// InputError naming the file, `what`, and its first bytes.
 void check_png_file(const std::filesystem::path& p, const std::string& what);

@@ -73,27 +73,51 @@ void write_file(const fs::path& p, const void* data, std::size_t size) {
   if (!f) throw InputError(p.string(), "cannot write file");
 }
 
+/// The intermediate (frame.json) a capture argument names: the folder's frame.json, the file
+/// itself, or an .rdc exported first into `exported` by rdc_export.py. False: the export failed
+/// (its message is on stderr).
+bool intermediate_of(const fs::path& input, const fs::path& exported, unsigned history_samples, fs::path& frame_json) {
+  std::error_code ec;
+  if (fs::is_directory(input, ec)) {
+    frame_json = input / "frame.json";
+  } else if (input.extension() == ".rdc") {
+    const std::string python = std::getenv("TBDRSIM_PYTHON") && *std::getenv("TBDRSIM_PYTHON") ? std::getenv("TBDRSIM_PYTHON")
+                                                                                                 : "/usr/bin/python3";
+    const int rc = run_program({python, exporter_script().string(), input.string(), exported.string(), "--history-samples",
+                                std::to_string(history_samples)});
+    if (rc != 0) return false;
+    frame_json = exported / "frame.json";
+  } else {
+    frame_json = input;
+  }
+  return true;
+}
+
 }  // namespace
 
 int cmd_import(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   namespace po = boost::program_options;
   po::options_description desc("import options");
-  desc.add_options()("capture", po::value<std::string>()->required(),
-                     "a RenderDoc capture (.rdc, Vulkan), or an exported capture intermediate (frame.json or its folder)")(
+  desc.add_options()("capture", po::value<std::vector<std::string>>()->required(),
+                     "a RenderDoc capture (.rdc, Vulkan), or an exported capture intermediate (frame.json or its folder); "
+                     "several, in order: consecutive frames imported as one sequence")(
       "out,o", po::value<std::string>()->required(),
       "the trace to write (FRAME.trace); FRAME.glb, FRAME.import.txt and FRAME.reference.png go beside it")(
       "history-samples", po::value<unsigned>()->default_value(1200),
       "pixels whose triangle RenderDoc's pixel history records in the application's frame (for comparing "
       "images; .rdc only, 0 for none)");
   po::positional_options_description pos;
-  pos.add("capture", 1);
+  pos.add("capture", -1);
   po::variables_map vm;
   if (!parse_command_options("import", args, desc, &pos, vm, out)) return 0;
-  const fs::path input(vm["capture"].as<std::string>());
+  std::vector<fs::path> inputs;
+  for (const auto& c : vm["capture"].as<std::vector<std::string>>()) inputs.emplace_back(c);
   const fs::path trace_path(vm["out"].as<std::string>());
   if (trace_path.extension() != ".trace") throw UsageError("tbdrsim import: --out must name a .trace file");
   std::error_code ec;
-  if (!fs::exists(input, ec)) throw InputError(input.string(), "capture not found");
+  for (const auto& input : inputs) {
+    if (!fs::exists(input, ec)) throw InputError(input.string(), "capture not found");
+  }
   fs::path out_dir = trace_path.parent_path();
   if (out_dir.empty()) out_dir = ".";
   if (!fs::is_directory(out_dir, ec)) throw InputError(out_dir.string(), "output folder does not exist");
@@ -110,71 +134,75 @@ int cmd_import(const std::vector<std::string>& args, std::ostream& out, std::ost
     }
   } cleanup{scratch};
 
-  fs::path frame_json;
-  if (fs::is_directory(input, ec)) {
-    frame_json = input / "frame.json";
-  } else if (input.extension() == ".rdc") {
-    const std::string python = std::getenv("TBDRSIM_PYTHON") && *std::getenv("TBDRSIM_PYTHON") ? std::getenv("TBDRSIM_PYTHON")
-                                                                                                 : "/usr/bin/python3";
-    const fs::path exported = scratch / "export";
-    const int rc = run_program({python, exporter_script().string(), input.string(), exported.string(),
-                                "--history-samples", std::to_string(vm["history-samples"].as<unsigned>())});
-    if (rc != 0) {
-      err << "tbdrsim import: the RenderDoc export of " << input.string() << " failed (its message is above); nothing written\n";
+  const bool sequence = inputs.size() > 1;
+  std::vector<fs::path> frame_jsons(inputs.size());
+  std::vector<std::string> json_paths;
+  for (std::size_t k = 0; k < inputs.size(); ++k) {
+    const fs::path exported = scratch / (sequence ? "export_" + std::to_string(k) : std::string("export"));
+    if (!intermediate_of(inputs[k], exported, vm["history-samples"].as<unsigned>(), frame_jsons[k])) {
+      err << "tbdrsim import: the RenderDoc export of " << inputs[k].string() << " failed (its message is above); nothing written\n";
       return 2;
     }
-    frame_json = exported / "frame.json";
-  } else {
-    frame_json = input;
+    json_paths.push_back(frame_jsons[k].string());
   }
   const std::string stem = trace_path.stem().string();
   const std::string glb_name = stem + ".glb";
-  CaptureImport imp = convert_capture(frame_json.string(), glb_name);
+  CaptureSequence seq = convert_captures(json_paths, glb_name);
+  std::vector<Trace> traces;
+  for (const auto& f : seq.frames) traces.push_back(f.trace);
 
   // Read back what is written through the same reader and loader the simulator uses.
-  write_file(scratch / glb_name, imp.glb.data(), imp.glb.size());
-  const std::string text = trace_text(imp.trace);
-  write_file(scratch / (stem + ".trace"), text.data(), text.size());
+  write_file(scratch / glb_name, seq.glb.data(), seq.glb.size());
+  std::ostringstream text;
+  write_trace_frames(traces, text);
+  write_file(scratch / (stem + ".trace"), text.str().data(), text.str().size());
   {
-    const Trace back = read_trace((scratch / (stem + ".trace")).string());
     const Scene scene = load_gltf((scratch / glb_name).string());
-    check_scene_references(back, scene, trace_path.string());
+    for (const Trace& back : read_trace_frames((scratch / (stem + ".trace")).string())) {
+      check_scene_references(back, scene, trace_path.string());
+    }
   }
   std::ostringstream summary;
-  summary << "tbdrsim import of " << input.string() << "\n";
-  for (const auto& s : imp.summary) summary << "  " << s << "\n";
-  summary << "not carried by the trace (" << imp.unsupported.size() << "):\n";
-  for (const auto& s : imp.unsupported) summary << "  - " << s << "\n";
-  if (imp.unsupported.empty()) summary << "  (nothing)\n";
+  for (std::size_t k = 0; k < seq.frames.size(); ++k) {
+    const CaptureImport& imp = seq.frames[k];
+    summary << "tbdrsim import of " << inputs[k].string() << (sequence ? " (frame " + std::to_string(k) + ")" : "") << "\n";
+    for (const auto& s : imp.summary) summary << "  " << s << "\n";
+    summary << "not carried by the trace (" << imp.unsupported.size() << "):\n";
+    for (const auto& s : imp.unsupported) summary << "  - " << s << "\n";
+    if (imp.unsupported.empty()) summary << "  (nothing)\n";
+  }
   const std::string st = summary.str();
   write_file(scratch / (stem + ".import.txt"), st.data(), st.size());
   std::vector<std::pair<fs::path, fs::path>> moves = {{scratch / glb_name, out_dir / glb_name},
                                                       {scratch / (stem + ".trace"), trace_path},
                                                       {scratch / (stem + ".import.txt"), out_dir / (stem + ".import.txt")}};
-  const fs::path ref = frame_json.parent_path() / "reference.png";
+  // The application's own frame (a sequence's last) beside the trace.
+  const fs::path ref = frame_jsons.back().parent_path() / "reference.png";
   if (fs::is_regular_file(ref, ec)) {
     check_png_file(ref, "the application's frame (copied to " + stem + ".reference.png)");
     fs::copy_file(ref, scratch / (stem + ".reference.png"), fs::copy_options::overwrite_existing);
     moves.push_back({scratch / (stem + ".reference.png"), out_dir / (stem + ".reference.png")});
   }
-  if (input.extension() == ".rdc") {  // keep the intermediate: it is what `tbdrsim import` reads without RenderDoc
-    fs::rename(frame_json.parent_path(), scratch / (stem + ".capture"));
-    fs::remove_all(out_dir / (stem + ".capture"), ec);
-    moves.push_back({scratch / (stem + ".capture"), out_dir / (stem + ".capture")});
-  } else if (fs::is_directory(input, ec)) {
-    // An exported intermediate (the committed vkcube one): copied as STEM.capture/ too, so that both
-    // routes leave the same files (compare_frame.py reads it), without the .rdc capture beside it.
-    const fs::path copy = scratch / (stem + ".capture");
-    fs::create_directories(copy);
-    for (const auto& e : fs::directory_iterator(input)) {
-      if (e.is_regular_file() && e.path().extension() != ".rdc") fs::copy_file(e.path(), copy / e.path().filename());
+  // The intermediates, kept as STEM.capture/ (a sequence's as STEM.capture/frame<k>/): what
+  // `tbdrsim import` reads without RenderDoc and compare_frame.py compares with; never the .rdc.
+  const fs::path kept = scratch / (stem + ".capture");
+  for (std::size_t k = 0; k < inputs.size(); ++k) {
+    const fs::path to = sequence ? kept / ("frame" + std::to_string(k)) : kept;
+    fs::create_directories(to.parent_path());
+    if (inputs[k].extension() == ".rdc") {
+      fs::rename(frame_jsons[k].parent_path(), to);
+    } else {
+      fs::create_directories(to);
+      for (const auto& e : fs::directory_iterator(frame_jsons[k].parent_path())) {
+        if (e.is_regular_file() && e.path().extension() != ".rdc") fs::copy_file(e.path(), to / e.path().filename());
+      }
     }
-    fs::remove_all(out_dir / (stem + ".capture"), ec);
-    moves.push_back({copy, out_dir / (stem + ".capture")});
   }
+  fs::remove_all(out_dir / (stem + ".capture"), ec);
+  moves.push_back({kept, out_dir / (stem + ".capture")});
   for (const auto& [from, to] : moves) fs::rename(from, to);
-  out << st << "wrote " << trace_path.string() << " (scene " << glb_name << ", hash " << imp.trace.scene.content_hash
-      << ")\n";
+  out << st << "wrote " << trace_path.string() << " (scene " << glb_name << ", hash " << traces.front().scene.content_hash
+      << (sequence ? ", " + std::to_string(traces.size()) + " frames" : std::string()) << ")\n";
   return 0;
 }
 
