@@ -179,6 +179,8 @@ const std::vector<Exclusion> kExclusions = {
     {"docs/capture-import.md", "scripts/capture/capture_gl.sh",
      "needs Xvfb, zink, RenderDoc and the application (scripts/install_capture_deps.sh --examples)"},
     {"docs/capture-import.md", "tbdrsim import /tmp/glmark2_shading.rdc", "imports the capture the line above makes"},
+    {"docs/capture-import.md", "tbdrsim import /tmp/shading_0.rdc", "imports the captures the line above makes"},
+    {"docs/capture-import.md", "tbdrsim run --trace shading_seq.trace", "replays the import the line above makes"},
     {"docs/capture-import.md", "gfxrecon-convert", "needs gfxreconstruct"},
     {"docs/dram-cross-check.md", "bash bench/dram_vs_dramsim3.sh", "needs the user's build of DRAMsim3"},
     {"docs/dram-cross-check.md", "bash bench/dram_vs_drampower.sh", "needs the user's build of DRAMPower"},

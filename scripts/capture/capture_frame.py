@@ -2,10 +2,11 @@
 """Captures one frame of a running Vulkan or OpenGL application with RenderDoc (no display needed beyond Xvfb).
 
 usage: xvfb-run -a -s "-screen 0 1280x720x24" /usr/bin/python3 capture_frame.py OUT [--after S | --frame N]
-           [--gl] [--final-png FILE.png] [--timeout S] -- APP [ARGS...]
+           [--count N] [--gl] [--final-png FILE.png] [--timeout S] -- APP [ARGS...]
 
 Launches APP with RenderDoc's capture layer, waits --after seconds (default 1) for it to render, or
-until its frame N (--frame, counted in presents), asks for one frame and prints the capture's path.
+until its frame N (--frame, counted in presents), asks for one frame (or --count consecutive ones:
+a sequence, each frame its own capture, OUT_0.rdc, OUT_1.rdc, ...) and prints the captures' paths.
 OUT is a file template (the capture is OUT_frameN.rdc) or, ending in .rdc, the capture's exact path.
 `renderdoccmd capture` alone cannot choose a frame without a keyboard (it captures on F12/PrtScn),
 hence this script. Exit 2 with one line on failure.
@@ -138,7 +139,9 @@ def connect_vulkan(rd, app, ident):
 
 
 def capture(rd, args, app, connect, proc):
-    """Asks for one frame (after --after seconds or at --frame) and returns the capture's path."""
+    """Asks for --count consecutive frames (after --after seconds or from --frame) and returns the
+    captures' paths, one file a frame, in order."""
+    paths = []
     launched = time.time()
     tc = connect()
     asked = first_ask = None
@@ -147,9 +150,9 @@ def capture(rd, args, app, connect, proc):
             now = time.time()
             if asked is None and (args["frame"] is not None or now - launched >= args["after"]):
                 if args["frame"] is not None:
-                    tc.QueueCapture(args["frame"], 1)
+                    tc.QueueCapture(args["frame"], args["count"])
                 else:
-                    tc.TriggerCapture(1)
+                    tc.TriggerCapture(args["count"])
                 asked = now
                 first_ask = first_ask or now
             if first_ask is not None and now - first_ask > args["timeout"]:
@@ -157,7 +160,10 @@ def capture(rd, args, app, connect, proc):
                               % (app[0], args["timeout"]))
             msg = tc.ReceiveMessage(None)
             if msg.type == rd.TargetControlMessageType.NewCapture:
-                return msg.newCapture.path
+                paths.append(msg.newCapture.path)
+                if len(paths) == args["count"]:
+                    return paths
+                continue
             if msg.type == rd.TargetControlMessageType.Disconnected:
                 tc.Shutdown()
                 tc = None
@@ -167,6 +173,7 @@ def capture(rd, args, app, connect, proc):
                 print("%s: the connection to RenderDoc in %s dropped, reconnecting" % (PROG, app[0]), file=sys.stderr)
                 tc = connect()  # the layer was reloaded (see connect_gl), or the process ended: raises
                 asked = None
+                paths = []
                 continue
             time.sleep(0.05)
     finally:
@@ -235,7 +242,7 @@ def parse(argv):
                       % PROG)
     split = argv.index("--")
     opts, app = argv[:split], argv[split + 1:]
-    args = {"out": opts[0], "after": 1.0, "frame": None, "gl": False, "png": None, "timeout": 120.0}
+    args = {"out": opts[0], "after": 1.0, "frame": None, "gl": False, "png": None, "timeout": 120.0, "count": 1}
     i = 1
     while i < len(opts):
         o = opts[i]
@@ -243,7 +250,7 @@ def parse(argv):
             args["gl"] = True
             i += 1
             continue
-        if o not in ("--after", "--frame", "--final-png", "--timeout") or i + 1 >= len(opts):
+        if o not in ("--after", "--frame", "--final-png", "--timeout", "--count") or i + 1 >= len(opts):
             raise Failure("unknown option or missing value: %s" % o)
         v = opts[i + 1]
         try:
@@ -253,6 +260,10 @@ def parse(argv):
                 args["frame"] = int(v)
             elif o == "--timeout":
                 args["timeout"] = float(v)
+            elif o == "--count":
+                args["count"] = int(v)
+                if not 1 <= args["count"] <= 1000:
+                    raise ValueError(v)
             else:
                 args["png"] = v
         except ValueError:
@@ -286,7 +297,7 @@ def main(argv):
             proc, ident = None, launch_vulkan(rd, app, template)
             connect = lambda: connect_vulkan(rd, app, ident)
         try:
-            path = capture(rd, args, app, connect, proc)
+            paths = capture(rd, args, app, connect, proc)
         finally:
             if proc is not None:
                 proc.terminate()
@@ -295,20 +306,25 @@ def main(argv):
                 except subprocess.TimeoutExpired:
                     proc.kill()
                     proc.wait()
-        # the layer writes the file as it sends NewCapture: wait until its size is stable
-        last = -1
-        for _ in range(100):
-            size = os.path.getsize(path) if os.path.isfile(path) else -1
-            if size > 0 and size == last:
-                break
-            last = size
-            time.sleep(0.1)
-        if exact:
-            os.replace(path, out)
-            path = out
+        written = []
+        for k, path in enumerate(paths):
+            # the layer writes the file as it sends NewCapture: wait until its size is stable
+            last = -1
+            for _ in range(100):
+                size = os.path.getsize(path) if os.path.isfile(path) else -1
+                if size > 0 and size == last:
+                    break
+                last = size
+                time.sleep(0.1)
+            if exact:  # OUT.rdc, or OUT_0.rdc, OUT_1.rdc, ... for --count N
+                target = out if len(paths) == 1 else "%s_%d.rdc" % (out[:-4], k)
+                os.replace(path, target)
+                path = target
+            written.append(path)
         if args["png"]:
-            final_png(rd, path, args["png"])
-        print(path)
+            final_png(rd, written[-1], args["png"])
+        for path in written:
+            print(path)
         return 0
     except Failure as e:
         print("%s: %s" % (PROG, e), file=sys.stderr)

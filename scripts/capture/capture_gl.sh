@@ -3,7 +3,8 @@
 # headless under Xvfb, with RenderDoc's Vulkan capture layer (no other layer). Writes OUT.rdc and
 # the frame's presented image OUT.final.png, prints OUT.rdc's path. Exit 2 with one line on failure.
 #
-# usage: capture_gl.sh OUT.rdc [--after S | --frame N] [--timeout S] [--screen WxHxD] -- APP [ARGS...]
+# usage: capture_gl.sh OUT.rdc [--after S | --frame N] [--count N] [--timeout S] [--screen WxHxD] -- APP [ARGS...]
+#   --count N    N consecutive frames, one capture each: OUT_0.rdc ... (a sequence for tbdrsim import)
 #   --after S    capture the frame after S seconds (default 5; zink on lavapipe starts slowly)
 #   --frame N    capture frame N (counted in presents) instead
 #   --timeout S  give up S seconds after asking for the frame (default 300)
@@ -30,6 +31,7 @@ out=$1
 shift
 case "$out" in *.rdc) ;; *) die "OUT must end in .rdc: $out" ;; esac
 when=(--after 5)
+count=()
 timeout=300
 screen=1280x720x24
 while [ $# -gt 0 ] && [ "$1" != "--" ]; do
@@ -37,6 +39,7 @@ while [ $# -gt 0 ] && [ "$1" != "--" ]; do
   case "$1" in
     --after) when=(--after "$2") ;;
     --frame) when=(--frame "$2") ;;
+    --count) count=(--count "$2") ;;
     --timeout) timeout=$2 ;;
     --screen) screen=$2 ;;
     *) die "unknown option $1" ;;
@@ -48,7 +51,7 @@ shift
 [ -x /usr/bin/python3 ] || die "/usr/bin/python3 missing"
 [ -d "$(dirname "$out")" ] || die "folder $(dirname "$out") does not exist"
 png=${out%.rdc}.final.png
-cmd=(/usr/bin/python3 "$here/capture_frame.py" "$out" --gl "${when[@]}" --timeout "$timeout" --final-png "$png" -- "$@")
+cmd=(/usr/bin/python3 "$here/capture_frame.py" "$out" --gl "${when[@]}" ${count[@]+"${count[@]}"} --timeout "$timeout" --final-png "$png" -- "$@")
 if [ -z "${DISPLAY:-}" ]; then
   # our own Xvfb rather than xvfb-run: xvfb-run leaves its Xvfb running when its own clean-up fails
   # (exit 5, "problem while cleaning up temporary directory", seen twice)
